@@ -1,0 +1,218 @@
+//! A graphics pass whose fragment shader evaluates a polynomial of the fragment position: the
+//! square [-1, 1]² of the plane z = 0, tessellated into triangles and seen through a perspective
+//! camera, coloured by the bivariate cubic of [`super::polynomial`] at every pixel.
+//!
+//! Its CPU reference casts the ray through each pixel centre in f64, intersects the plane,
+//! and evaluates the cubic there: the value the pixel must show if the pass is pixel-exact.
+
+use ash::vk;
+use bytemuck::{Pod, Zeroable};
+use glam::DVec2;
+
+use super::polynomial::BivariateCubic;
+use crate::gpu::{
+    shaders, BindingKind, Buffer, DescriptorSet, Gpu, GpuResult, GraphicsPipeline,
+    GraphicsPipelineDesc, RenderPass, Resource,
+};
+use crate::render::{ramp_coordinate, Camera, Colormap, ColormapTexture};
+
+/// What the fragment shader writes.
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+pub enum FieldOutput {
+    /// (p, x, y, 1) to a float target: the raw value, for checking and EXR files.
+    Value,
+    /// The colour of p through the colour map.
+    Colour,
+}
+
+/// Ramp settings: the value range mapped onto the colour map, linear or logarithmic.
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub struct Ramp {
+    /// Value at the start of the colour map.
+    pub lo: f64,
+    /// Value at its end.
+    pub hi: f64,
+    /// Logarithmic mapping (needs 0 < lo < hi).
+    pub log: bool,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct FieldUniform {
+    coefficients: [f32; 12],
+    ramp: [f32; 4],
+}
+
+/// Triangles covering [-1, 1]² on z = 0: `k`×`k` squares, two triangles each.
+pub fn square_triangles(k: u32) -> Vec<[f32; 3]> {
+    let k = k.max(1);
+    let at = |i: u32| -1.0 + 2.0 * i as f32 / k as f32;
+    let mut v = Vec::with_capacity(6 * (k * k) as usize);
+    for j in 0..k {
+        for i in 0..k {
+            let (x0, x1, y0, y1) = (at(i), at(i + 1), at(j), at(j + 1));
+            v.extend_from_slice(&[
+                [x0, y0, 0.0],
+                [x1, y0, 0.0],
+                [x1, y1, 0.0],
+                [x0, y0, 0.0],
+                [x1, y1, 0.0],
+                [x0, y1, 0.0],
+            ]);
+        }
+    }
+    v
+}
+
+/// The field pass, resident: pipeline, triangles, coefficients, colour map.
+pub struct FieldPass {
+    pipeline: GraphicsPipeline,
+    set: DescriptorSet,
+    vertices: Buffer<[f32; 3]>,
+    _uniform: Buffer<FieldUniform>,
+    _colormap: ColormapTexture,
+}
+
+impl FieldPass {
+    /// Builds the pass for `pass` (the render target's render pass).
+    pub fn new(
+        gpu: &Gpu,
+        pass: &RenderPass,
+        polynomial: &BivariateCubic,
+        tessellation: u32,
+        colormap: &Colormap,
+        ramp: Ramp,
+        output: FieldOutput,
+    ) -> GpuResult<Self> {
+        let mut coefficients = [0f32; 12];
+        for (c, &p) in coefficients.iter_mut().zip(&polynomial.coefficients) {
+            *c = p as f32;
+        }
+        let uniform = FieldUniform {
+            coefficients,
+            ramp: [
+                ramp.lo as f32,
+                ramp.hi as f32,
+                if ramp.log { 1.0 } else { 0.0 },
+                colormap.texels().len() as f32,
+            ],
+        };
+        let uniform = Buffer::from_slice(
+            gpu,
+            "field coefficients",
+            &[uniform],
+            vk::BufferUsageFlags::UNIFORM_BUFFER,
+        )?;
+        let vertices = Buffer::from_slice(
+            gpu,
+            "field triangles",
+            &square_triangles(tessellation),
+            vk::BufferUsageFlags::VERTEX_BUFFER,
+        )?;
+        let texture = colormap.upload(gpu)?;
+        let spec = [u32::from(output == FieldOutput::Value)];
+        let mut desc = GraphicsPipelineDesc::new(
+            "field",
+            shaders::demo::FIELD_VERT,
+            shaders::demo::FIELD_FRAG,
+            pass.raw(),
+        );
+        desc.bindings = &[BindingKind::UniformBuffer, BindingKind::Texture];
+        desc.push_constant_bytes = 64;
+        desc.vertex_stride = 12;
+        desc.vertex_attributes = &[(0, vk::Format::R32G32B32_SFLOAT, 0)];
+        desc.specialization = &spec;
+        let pipeline = GraphicsPipeline::new(gpu, &desc)?;
+        let set = pipeline.bind(
+            gpu,
+            &[
+                Resource::Uniform(crate::gpu::BufferBinding {
+                    buffer: uniform.raw(),
+                    offset: 0,
+                    range: uniform.size_bytes(),
+                }),
+                texture.resource(),
+            ],
+        )?;
+        Ok(Self {
+            pipeline,
+            set,
+            vertices,
+            _uniform: uniform,
+            _colormap: texture,
+        })
+    }
+
+    /// Records the draw (inside the target's render pass).
+    pub fn record(&self, cmd: vk::CommandBuffer, extent: vk::Extent2D, camera: &Camera) {
+        let aspect = f64::from(extent.width) / f64::from(extent.height);
+        let m = camera.view_proj_f32(aspect).to_cols_array();
+        self.pipeline.record_draw(
+            cmd,
+            extent,
+            &self.set,
+            bytemuck::bytes_of(&m),
+            Some(self.vertices.raw()),
+            self.vertices.len() as u32,
+        );
+    }
+}
+
+/// What the CPU reference says a pixel must show.
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub enum Coverage {
+    /// The pixel centre sees the square at (x, y), farther than `margin` pixels from its
+    /// outline: it must be drawn and show p(x, y).
+    Inside {
+        /// The plane point seen through the pixel centre.
+        point: DVec2,
+    },
+    /// The pixel centre is outside the square by more than the margin: background.
+    Outside,
+    /// Within the margin of the outline: rasterisation rules decide; not checked.
+    Edge,
+}
+
+/// CPU f64 reference coverage of every pixel (row-major from the top): the outline is projected
+/// exactly and each pixel centre is classified with a `margin` in pixels.
+pub fn reference_coverage(camera: &Camera, width: u32, height: u32, margin: f64) -> Vec<Coverage> {
+    let corners = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]
+        .map(|(x, y)| camera.project(glam::DVec3::new(x, y, 0.0), width, height))
+        .map(|(x, y)| DVec2::new(x, y));
+    let mut out = Vec::with_capacity((width * height) as usize);
+    for py in 0..height {
+        for px in 0..width {
+            let c = DVec2::new(f64::from(px) + 0.5, f64::from(py) + 0.5);
+            // Signed distance to each projected edge; the quad is convex, its orientation known
+            // from the sign of its area.
+            let area: f64 = (0..4)
+                .map(|i| corners[i].perp_dot(corners[(i + 1) % 4]))
+                .sum();
+            let s = area.signum();
+            let inside = (0..4)
+                .map(|i| {
+                    let (a, b) = (corners[i], corners[(i + 1) % 4]);
+                    s * (b - a).perp_dot(c - a) / (b - a).length()
+                })
+                .fold(f64::INFINITY, f64::min);
+            out.push(if inside > margin {
+                match camera.pixel_on_plane_z(px, py, width, height, 0.0) {
+                    Some(p) => Coverage::Inside {
+                        point: p.truncate(),
+                    },
+                    None => Coverage::Edge,
+                }
+            } else if inside < -margin {
+                Coverage::Outside
+            } else {
+                Coverage::Edge
+            });
+        }
+    }
+    out
+}
+
+/// CPU f64 reference colour of a value: ramp coordinate, then the sampler's linear filtering.
+pub fn reference_colour(colormap: &Colormap, ramp: Ramp, value: f64) -> [f64; 4] {
+    colormap.sample(ramp_coordinate(value, ramp.lo, ramp.hi, ramp.log))
+}

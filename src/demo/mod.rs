@@ -1,0 +1,9 @@
+//! The first real passes, each with its CPU f64 reference: `y ← a·x + y` on the compute side
+//! ([`axpy`]), and a graphics pass whose fragment shader evaluates a polynomial of the fragment
+//! position ([`field`]). `galerkin demo` runs them from a TOML scene ([`scene`]) and writes
+//! `out/*.png`; later capabilities add their own parts to the demo.
+
+pub mod axpy;
+pub mod field;
+pub mod polynomial;
+pub mod scene;

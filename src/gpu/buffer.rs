@@ -1,0 +1,431 @@
+//! Typed buffers. `Buffer<T>` holds `len` elements of a plain-old-data `T`; device-local
+//! buffers are filled and read back through staging buffers in bounded chunks (never relying
+//! on device-local memory being host-visible, which holds on lavapipe but not on discrete GPUs).
+//! Arrays larger than one storage-buffer binding (128 MiB on lavapipe) are bound in chunks:
+//! see [`Buffer::binding_chunks`].
+
+use std::marker::PhantomData;
+use std::sync::Arc;
+
+use ash::vk;
+use bytemuck::Pod;
+use gpu_allocator::vulkan::Allocation;
+
+use super::context::{DeviceShared, Gpu};
+use super::error::{GpuError, GpuResult, VkContext};
+use super::memory::MemoryKind;
+
+/// Bytes per staging chunk for uploads and downloads (two are in flight at once).
+pub const STAGING_CHUNK_BYTES: u64 = 32 << 20;
+
+/// A byte range of a buffer as one descriptor binds it.
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+pub struct BufferBinding {
+    /// The buffer.
+    pub buffer: vk::Buffer,
+    /// Offset in bytes (a multiple of `minStorageBufferOffsetAlignment`).
+    pub offset: u64,
+    /// Length in bytes (at most [`Gpu::max_binding_bytes`] for storage bindings).
+    pub range: u64,
+}
+
+/// One chunk of an array bound as its own descriptor: elements `first .. first + len`.
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+pub struct Chunk {
+    /// Index of the first element.
+    pub first: u64,
+    /// Number of elements.
+    pub len: u64,
+}
+
+/// A typed buffer of `len` elements of `T`.
+pub struct Buffer<T: Pod> {
+    shared: Arc<DeviceShared>,
+    raw: vk::Buffer,
+    allocation: Option<Allocation>,
+    len: u64,
+    bytes: u64,
+    kind: MemoryKind,
+    name: String,
+    _t: PhantomData<T>,
+}
+
+impl<T: Pod> std::fmt::Debug for Buffer<T> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Buffer")
+            .field("name", &self.name)
+            .field("len", &self.len)
+            .field("kind", &self.kind)
+            .finish()
+    }
+}
+
+impl<T: Pod> Buffer<T> {
+    /// Creates a buffer of `len` elements. Device-local buffers also get transfer usage (for
+    /// staging). Sizes over `maxBufferSize` or `maxMemoryAllocationSize` are an error naming
+    /// the buffer.
+    pub fn new(
+        gpu: &Gpu,
+        name: &str,
+        len: u64,
+        usage: vk::BufferUsageFlags,
+        kind: MemoryKind,
+    ) -> GpuResult<Self> {
+        let shared = gpu.shared.clone();
+        let elem = std::mem::size_of::<T>() as u64;
+        let bytes = len.checked_mul(elem).ok_or_else(|| GpuError::OverLimit {
+            name: name.to_string(),
+            requested: len,
+            limit: u64::MAX / elem.max(1),
+            limit_name: "address space",
+            unit: "elements",
+        })?;
+        if bytes > shared.caps.max_buffer_size {
+            return Err(GpuError::OverLimit {
+                name: name.to_string(),
+                requested: bytes,
+                limit: shared.caps.max_buffer_size,
+                limit_name: "maxBufferSize",
+                unit: "bytes",
+            });
+        }
+        let usage = usage | vk::BufferUsageFlags::TRANSFER_SRC | vk::BufferUsageFlags::TRANSFER_DST;
+        let info = vk::BufferCreateInfo::default()
+            .size(bytes.max(4))
+            .usage(usage)
+            .sharing_mode(vk::SharingMode::EXCLUSIVE);
+        // SAFETY: valid create info on this device.
+        let raw = unsafe { shared.raw.create_buffer(&info, None) }.vk("vkCreateBuffer")?;
+        // SAFETY: `raw` is a live buffer of this device.
+        let requirements = unsafe { shared.raw.get_buffer_memory_requirements(raw) };
+        let allocation = match shared.allocate(name, requirements, kind, true) {
+            Ok(a) => a,
+            Err(e) => {
+                // SAFETY: the buffer was never used.
+                unsafe { shared.raw.destroy_buffer(raw, None) };
+                return Err(e);
+            }
+        };
+        // SAFETY: memory comes from a type allowed by `requirements`, at its offset.
+        if let Err(e) = unsafe {
+            shared
+                .raw
+                .bind_buffer_memory(raw, allocation.memory(), allocation.offset())
+        } {
+            // SAFETY: the buffer was never used.
+            unsafe { shared.raw.destroy_buffer(raw, None) };
+            shared.free(allocation);
+            return Err(Err::<(), _>(e).vk("vkBindBufferMemory").unwrap_err());
+        }
+        shared.set_name(raw, name);
+        Ok(Self {
+            shared,
+            raw,
+            allocation: Some(allocation),
+            len,
+            bytes,
+            kind,
+            name: name.to_string(),
+            _t: PhantomData,
+        })
+    }
+
+    /// A device-local buffer holding a copy of `data`.
+    pub fn from_slice(
+        gpu: &Gpu,
+        name: &str,
+        data: &[T],
+        usage: vk::BufferUsageFlags,
+    ) -> GpuResult<Self> {
+        let b = Self::new(gpu, name, data.len() as u64, usage, MemoryKind::GpuOnly)?;
+        b.upload(gpu, 0, data)?;
+        Ok(b)
+    }
+
+    /// The Vulkan handle.
+    pub fn raw(&self) -> vk::Buffer {
+        self.raw
+    }
+
+    /// Number of elements.
+    pub fn len(&self) -> u64 {
+        self.len
+    }
+
+    /// True if the buffer holds no elements.
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    /// Size in bytes.
+    pub fn size_bytes(&self) -> u64 {
+        self.bytes
+    }
+
+    /// The allocation's name.
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+
+    /// Where the memory lives.
+    pub fn kind(&self) -> MemoryKind {
+        self.kind
+    }
+
+    /// The mapped bytes of a host-visible buffer (`CpuToGpu`/`GpuToCpu`), `None` otherwise.
+    pub fn mapped(&self) -> Option<&[T]> {
+        let bytes = self.allocation.as_ref()?.mapped_slice()?;
+        Some(bytemuck::cast_slice(&bytes[..self.bytes as usize]))
+    }
+
+    /// Mutable mapped elements of a host-visible buffer. The caller must not write while the
+    /// device may be reading the buffer.
+    pub fn mapped_mut(&mut self) -> Option<&mut [T]> {
+        let n = self.bytes as usize;
+        let bytes = self.allocation.as_mut()?.mapped_slice_mut()?;
+        Some(bytemuck::cast_slice_mut(&mut bytes[..n]))
+    }
+
+    /// The whole buffer as one binding; an error if it exceeds one storage binding
+    /// (use [`Buffer::binding_chunks`] for large arrays).
+    pub fn binding(&self) -> GpuResult<BufferBinding> {
+        let limit = self.shared.max_binding_bytes;
+        if self.bytes > limit {
+            return Err(GpuError::OverLimit {
+                name: self.name.clone(),
+                requested: self.bytes,
+                limit,
+                limit_name: "maxStorageBufferRange (bind it in chunks)",
+                unit: "bytes",
+            });
+        }
+        Ok(BufferBinding {
+            buffer: self.raw,
+            offset: 0,
+            range: self.bytes.max(4),
+        })
+    }
+
+    /// Elements `chunk.first .. chunk.first + chunk.len` as a binding.
+    pub fn binding_range(&self, chunk: Chunk) -> BufferBinding {
+        let elem = std::mem::size_of::<T>() as u64;
+        assert!(
+            chunk.first + chunk.len <= self.len,
+            "chunk {chunk:?} outside `{}` of {} elements",
+            self.name,
+            self.len
+        );
+        BufferBinding {
+            buffer: self.raw,
+            offset: chunk.first * elem,
+            range: (chunk.len * elem).max(4),
+        }
+    }
+
+    /// Splits the buffer into chunks of at most [`Gpu::max_binding_bytes`] each, starting on
+    /// offsets aligned to `minStorageBufferOffsetAlignment`: how a kernel walks an array larger
+    /// than one binding (`maxStorageBufferRange`, 128 MiB on lavapipe).
+    pub fn binding_chunks(&self) -> Vec<Chunk> {
+        chunk_elements(
+            self.len,
+            std::mem::size_of::<T>() as u64,
+            self.shared.max_binding_bytes,
+            self.shared.caps.min_storage_buffer_offset_alignment,
+        )
+    }
+
+    /// Copies `data` into elements `first ..` through staging buffers (for device-local
+    /// buffers), two chunks in flight; writes host-visible buffers directly. Waits until done.
+    pub fn upload(&self, gpu: &Gpu, first: u64, data: &[T]) -> GpuResult<()> {
+        let elem = std::mem::size_of::<T>() as u64;
+        assert!(
+            first + data.len() as u64 <= self.len,
+            "upload of {} elements at {first} overflows `{}` ({} elements)",
+            data.len(),
+            self.name,
+            self.len
+        );
+        let src: &[u8] = bytemuck::cast_slice(data);
+        if src.is_empty() {
+            return Ok(());
+        }
+        let chunk = STAGING_CHUNK_BYTES.min(src.len() as u64);
+        let mut staging = [
+            Buffer::<u8>::new(
+                gpu,
+                &format!("{} (upload staging 0)", self.name),
+                chunk,
+                vk::BufferUsageFlags::empty(),
+                MemoryKind::CpuToGpu,
+            )?,
+            Buffer::<u8>::new(
+                gpu,
+                &format!("{} (upload staging 1)", self.name),
+                chunk,
+                vk::BufferUsageFlags::empty(),
+                MemoryKind::CpuToGpu,
+            )?,
+        ];
+        let mut in_flight: [Option<super::Submission>; 2] = [None, None];
+        for (i, part) in src.chunks(chunk as usize).enumerate() {
+            let k = i % 2;
+            if let Some(s) = in_flight[k].take() {
+                s.wait()?;
+            }
+            let stage = &mut staging[k];
+            stage.mapped_mut().expect("CpuToGpu memory is mapped")[..part.len()]
+                .copy_from_slice(part);
+            let dst_offset = first * elem + (i as u64) * chunk;
+            let region = vk::BufferCopy {
+                src_offset: 0,
+                dst_offset,
+                size: part.len() as u64,
+            };
+            let (src_buf, dst_buf) = (stage.raw, self.raw);
+            let (s, ()) = gpu.submit(|cmd| {
+                // SAFETY: both buffers are alive until the submission completes (waited below).
+                unsafe {
+                    gpu.device()
+                        .cmd_copy_buffer(cmd, src_buf, dst_buf, &[region])
+                };
+            })?;
+            in_flight[k] = Some(s);
+        }
+        for s in in_flight.into_iter().flatten() {
+            s.wait()?;
+        }
+        Ok(())
+    }
+
+    /// Reads the whole buffer back to the host.
+    pub fn download(&self, gpu: &Gpu) -> GpuResult<Vec<T>> {
+        self.download_range(
+            gpu,
+            Chunk {
+                first: 0,
+                len: self.len,
+            },
+        )
+    }
+
+    /// Reads elements `range.first .. range.first + range.len` back through staging buffers,
+    /// two chunks in flight.
+    pub fn download_range(&self, gpu: &Gpu, range: Chunk) -> GpuResult<Vec<T>> {
+        let elem = std::mem::size_of::<T>() as u64;
+        assert!(
+            range.first + range.len <= self.len,
+            "download {range:?} outside `{}`",
+            self.name
+        );
+        let mut out = vec![T::zeroed(); range.len as usize];
+        let dst: &mut [u8] = bytemuck::cast_slice_mut(&mut out);
+        if dst.is_empty() {
+            return Ok(out);
+        }
+        let chunk = STAGING_CHUNK_BYTES.min(dst.len() as u64);
+        let staging = [
+            Buffer::<u8>::new(
+                gpu,
+                &format!("{} (download staging 0)", self.name),
+                chunk,
+                vk::BufferUsageFlags::empty(),
+                MemoryKind::GpuToCpu,
+            )?,
+            Buffer::<u8>::new(
+                gpu,
+                &format!("{} (download staging 1)", self.name),
+                chunk,
+                vk::BufferUsageFlags::empty(),
+                MemoryKind::GpuToCpu,
+            )?,
+        ];
+        let parts: Vec<&mut [u8]> = dst.chunks_mut(chunk as usize).collect();
+        let mut in_flight: [Option<(super::Submission, usize)>; 2] = [None, None];
+        let mut parts: Vec<Option<&mut [u8]>> = parts.into_iter().map(Some).collect();
+        let n = parts.len();
+        let drain = |slot: &mut Option<(super::Submission, usize)>,
+                     parts: &mut Vec<Option<&mut [u8]>>,
+                     k: usize|
+         -> GpuResult<()> {
+            if let Some((s, i)) = slot.take() {
+                s.wait()?;
+                let part = parts[i].take().expect("each part is read once");
+                let len = part.len();
+                part.copy_from_slice(
+                    &staging[k].mapped().expect("GpuToCpu memory is mapped")[..len],
+                );
+            }
+            Ok(())
+        };
+        for i in 0..n {
+            let k = i % 2;
+            drain(&mut in_flight[k], &mut parts, k)?;
+            let size = parts[i].as_ref().map_or(0, |p| p.len()) as u64;
+            let region = vk::BufferCopy {
+                src_offset: range.first * elem + (i as u64) * chunk,
+                dst_offset: 0,
+                size,
+            };
+            let (src_buf, dst_buf) = (self.raw, staging[k].raw);
+            let (s, ()) = gpu.submit(|cmd| {
+                // SAFETY: both buffers outlive the submission (drained below).
+                unsafe {
+                    gpu.device()
+                        .cmd_copy_buffer(cmd, src_buf, dst_buf, &[region])
+                };
+            })?;
+            in_flight[k] = Some((s, i));
+        }
+        for (k, slot) in in_flight.iter_mut().enumerate() {
+            drain(slot, &mut parts, k)?;
+        }
+        Ok(out)
+    }
+
+    /// Records `vkCmdFillBuffer` of the whole buffer with the 32-bit pattern `word`.
+    pub fn record_fill(&self, cmd: vk::CommandBuffer, word: u32) {
+        // SAFETY: `cmd` is recording on this device; the whole-size fill is always valid.
+        unsafe {
+            self.shared
+                .raw
+                .cmd_fill_buffer(cmd, self.raw, 0, vk::WHOLE_SIZE, word)
+        };
+    }
+}
+
+impl<T: Pod> Drop for Buffer<T> {
+    fn drop(&mut self) {
+        let raw = self.raw;
+        if let Some(allocation) = self.allocation.take() {
+            self.shared.retire(move |dev| {
+                // SAFETY: no engine work in flight uses the buffer any more (retire's contract).
+                unsafe { dev.raw.destroy_buffer(raw, None) };
+                dev.free(allocation);
+            });
+        }
+    }
+}
+
+/// Splits `len` elements of `elem` bytes into chunks of at most `max_bytes` whose byte offsets
+/// are multiples of `align`.
+pub fn chunk_elements(len: u64, elem: u64, max_bytes: u64, align: u64) -> Vec<Chunk> {
+    let lcm = {
+        let (mut a, mut b) = (elem.max(1), align.max(1));
+        while b != 0 {
+            (a, b) = (b, a % b);
+        }
+        elem.max(1) / a * align.max(1)
+    };
+    let per_chunk = ((max_bytes / lcm).max(1) * lcm) / elem.max(1);
+    let mut chunks = Vec::new();
+    let mut first = 0;
+    while first < len {
+        let n = per_chunk.min(len - first);
+        chunks.push(Chunk { first, len: n });
+        first += n;
+    }
+    if chunks.is_empty() {
+        chunks.push(Chunk { first: 0, len: 0 });
+    }
+    chunks
+}

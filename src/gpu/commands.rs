@@ -1,0 +1,341 @@
+//! Submitting work and retiring resources.
+//!
+//! Passes record into a `vk::CommandBuffer` they are handed and never submit. [`Gpu::run`]
+//! is the convenience that records, submits to the engine's queue with its own fence, and
+//! waits on that fence only (never `vkDeviceWaitIdle`, which would also wait on a host's work).
+//! [`Gpu::submit`] returns a [`Submission`] to wait on later.
+//!
+//! Deferred destruction: every engine submission gets a serial that is "in flight" from the
+//! moment its recording begins until its fence is seen signalled. A resource dropped while any
+//! serial is in flight is not destroyed at once: its destructor is queued with the newest serial
+//! and runs when no serial at or below it is in flight. A resource dropped while nothing is in
+//! flight is destroyed immediately.
+
+use std::collections::BTreeSet;
+use std::sync::Arc;
+use std::time::Duration;
+
+use ash::vk;
+
+use super::context::{DeviceShared, Gpu};
+use super::error::{GpuError, GpuResult, VkContext};
+
+/// One submission's command pool (its own, so recording on several threads needs no lock),
+/// its one command buffer and its fence.
+#[derive(Clone, Copy)]
+pub(crate) struct Slot {
+    pub pool: vk::CommandPool,
+    pub cmd: vk::CommandBuffer,
+    pub fence: vk::Fence,
+}
+
+impl Slot {
+    fn new(shared: &DeviceShared) -> GpuResult<Self> {
+        let info = vk::CommandPoolCreateInfo::default().queue_family_index(shared.queue_family);
+        // SAFETY: plain object creation on this device.
+        let pool =
+            unsafe { shared.raw.create_command_pool(&info, None) }.vk("vkCreateCommandPool")?;
+        let alloc = vk::CommandBufferAllocateInfo::default()
+            .command_pool(pool)
+            .level(vk::CommandBufferLevel::PRIMARY)
+            .command_buffer_count(1);
+        // SAFETY: `pool` is new and used by this thread only.
+        let cmd = match unsafe { shared.raw.allocate_command_buffers(&alloc) } {
+            Ok(c) => c[0],
+            Err(e) => {
+                // SAFETY: nothing else uses the new pool.
+                unsafe { shared.raw.destroy_command_pool(pool, None) };
+                return Err(Err::<(), _>(e).vk("vkAllocateCommandBuffers").unwrap_err());
+            }
+        };
+        // SAFETY: plain object creation.
+        match unsafe {
+            shared
+                .raw
+                .create_fence(&vk::FenceCreateInfo::default(), None)
+        } {
+            Ok(fence) => Ok(Self { pool, cmd, fence }),
+            Err(e) => {
+                // SAFETY: the pool (and its buffer) were never submitted.
+                unsafe { shared.raw.destroy_command_pool(pool, None) };
+                Err(Err::<(), _>(e).vk("vkCreateFence").unwrap_err())
+            }
+        }
+    }
+
+    /// Resets the pool (and so the buffer) for reuse; the fence must already be unsignalled.
+    fn reset(&self, shared: &DeviceShared) -> bool {
+        // SAFETY: the slot's work is finished or was never submitted.
+        unsafe {
+            shared
+                .raw
+                .reset_command_pool(self.pool, vk::CommandPoolResetFlags::empty())
+        }
+        .is_ok()
+    }
+
+    /// Destroys the slot's objects.
+    pub(crate) fn destroy(self, shared: &DeviceShared) {
+        // SAFETY: the slot's work is finished or was never submitted.
+        unsafe {
+            shared.raw.destroy_fence(self.fence, None);
+            shared.raw.destroy_command_pool(self.pool, None);
+        }
+    }
+}
+
+/// A destructor waiting for in-flight work.
+pub(crate) type Retirement = Box<dyn FnOnce(&DeviceShared) + Send>;
+
+/// Submission serials in flight and the destructors waiting for them.
+#[derive(Default)]
+pub(crate) struct Tracker {
+    next_serial: u64,
+    in_flight: BTreeSet<u64>,
+    retired: Vec<(u64, Retirement)>,
+    /// Reusable slots, each with an unsignalled fence and a reset pool.
+    pub(crate) free: Vec<Slot>,
+}
+
+impl Tracker {
+    /// Everything still waiting (used at teardown, when nothing can be in flight).
+    pub(crate) fn take_all(&mut self) -> Vec<Retirement> {
+        self.retired.drain(..).map(|(_, f)| f).collect()
+    }
+
+    /// Marks `serial` finished and returns the destructors that may now run.
+    fn complete(&mut self, serial: u64) -> Vec<Retirement> {
+        self.in_flight.remove(&serial);
+        let oldest = self.in_flight.first().copied().unwrap_or(u64::MAX);
+        let (ready, keep): (Vec<_>, Vec<_>) =
+            self.retired.drain(..).partition(|(s, _)| *s < oldest);
+        self.retired = keep;
+        ready.into_iter().map(|(_, f)| f).collect()
+    }
+}
+
+impl DeviceShared {
+    /// Destroys an object now, or after the engine's in-flight work if there is any.
+    pub(crate) fn retire(&self, destroy: impl FnOnce(&DeviceShared) + Send + 'static) {
+        let mut t = self.tracker.lock().unwrap_or_else(|p| p.into_inner());
+        if let Some(&newest) = t.in_flight.last() {
+            t.retired.push((newest, Box::new(destroy)));
+        } else {
+            drop(t);
+            destroy(self);
+        }
+    }
+
+    fn finish(&self, serial: u64, reuse: Option<Slot>) {
+        let ready = {
+            let mut t = self.tracker.lock().unwrap_or_else(|p| p.into_inner());
+            if let Some(pair) = reuse {
+                t.free.push(pair);
+            }
+            t.complete(serial)
+        };
+        for f in ready {
+            f(self);
+        }
+    }
+}
+
+/// Work submitted with [`Gpu::submit`]. Waiting (or dropping) it waits on its own fence.
+#[must_use = "a submission is waited on when dropped; call wait() to see its errors"]
+pub struct Submission {
+    shared: Arc<DeviceShared>,
+    slot: Slot,
+    serial: u64,
+    done: bool,
+}
+
+impl Submission {
+    /// Waits until the work has finished. Device loss and timeouts are errors, not panics.
+    pub fn wait(mut self) -> GpuResult<()> {
+        self.wait_inner()
+    }
+
+    /// True if the work has finished (does not block).
+    pub fn is_done(&self) -> bool {
+        // SAFETY: the fence belongs to this device and is alive until this submission drops.
+        self.done || unsafe { self.shared.raw.get_fence_status(self.slot.fence) }.unwrap_or(false)
+    }
+
+    fn wait_inner(&mut self) -> GpuResult<()> {
+        if self.done {
+            return Ok(());
+        }
+        let timeout = self.shared.fence_timeout;
+        let nanos = u64::try_from(timeout.as_nanos()).unwrap_or(u64::MAX);
+        // SAFETY: the fence was submitted with this work and is owned by the engine.
+        let r = unsafe {
+            self.shared
+                .raw
+                .wait_for_fences(&[self.slot.fence], true, nanos)
+        };
+        match r {
+            Ok(()) => {
+                self.done = true;
+                // SAFETY: the fence is signalled and the queue no longer uses it.
+                let fence_reset =
+                    unsafe { self.shared.raw.reset_fences(&[self.slot.fence]) }.is_ok();
+                let reuse = (fence_reset && self.slot.reset(&self.shared)).then_some(self.slot);
+                if reuse.is_none() {
+                    self.slot.destroy(&self.shared);
+                }
+                self.shared.finish(self.serial, reuse);
+                Ok(())
+            }
+            Err(vk::Result::TIMEOUT) => Err(GpuError::Timeout {
+                during: "Gpu::run",
+                seconds: timeout.as_secs_f64(),
+            }),
+            Err(e) => {
+                // Device lost: nothing will signal again. Retire the serial so drops proceed.
+                self.done = true;
+                self.shared.finish(self.serial, None);
+                Err(Err::<(), _>(e)
+                    .vk("vkWaitForFences (Gpu::run)")
+                    .unwrap_err())
+            }
+        }
+    }
+}
+
+impl Drop for Submission {
+    fn drop(&mut self) {
+        if !self.done {
+            if let Err(e) = self.wait_inner() {
+                // A timed-out submission is leaked rather than destroyed while possibly running.
+                tracing::error!("dropping an unfinished submission: {e}");
+            }
+        }
+    }
+}
+
+impl Gpu {
+    /// Records `record` into a fresh command buffer, submits it to the engine's queue and waits
+    /// for it. Returns what `record` returned.
+    pub fn run<R>(&self, record: impl FnOnce(vk::CommandBuffer) -> R) -> GpuResult<R> {
+        let (submission, r) = self.submit(record)?;
+        submission.wait()?;
+        Ok(r)
+    }
+
+    /// Records and submits without waiting; wait on the returned [`Submission`].
+    pub fn submit<R>(
+        &self,
+        record: impl FnOnce(vk::CommandBuffer) -> R,
+    ) -> GpuResult<(Submission, R)> {
+        let shared = &self.shared;
+        let (slot, serial) = {
+            let mut t = shared.tracker.lock().unwrap_or_else(|p| p.into_inner());
+            let serial = t.next_serial;
+            t.next_serial += 1;
+            t.in_flight.insert(serial);
+            (t.free.pop(), serial)
+        };
+        // Anything failing before the queue owns the work must release the serial and the slot.
+        struct Pending<'a> {
+            shared: &'a DeviceShared,
+            serial: u64,
+            slot: Option<Slot>,
+            armed: bool,
+        }
+        impl Drop for Pending<'_> {
+            fn drop(&mut self) {
+                if self.armed {
+                    let reuse = self.slot.filter(|s| s.reset(self.shared));
+                    if let (Some(s), None) = (self.slot, reuse) {
+                        s.destroy(self.shared);
+                    }
+                    self.shared.finish(self.serial, reuse);
+                }
+            }
+        }
+        let mut pending = Pending {
+            shared,
+            serial,
+            slot,
+            armed: true,
+        };
+        let slot = match pending.slot {
+            Some(s) => s,
+            None => {
+                let s = Slot::new(shared)?;
+                pending.slot = Some(s);
+                s
+            }
+        };
+        let (cmd, fence) = (slot.cmd, slot.fence);
+        let begin = vk::CommandBufferBeginInfo::default()
+            .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
+        // SAFETY: `cmd` is in the initial state (fresh or reset).
+        unsafe { shared.raw.begin_command_buffer(cmd, &begin) }.vk("vkBeginCommandBuffer")?;
+        let r = record(cmd);
+        // SAFETY: `cmd` is recording.
+        unsafe { shared.raw.end_command_buffer(cmd) }.vk("vkEndCommandBuffer")?;
+        let cmds = [cmd];
+        let submit = vk::SubmitInfo::default().command_buffers(&cmds);
+        {
+            let queue = shared.queue.lock().unwrap_or_else(|p| p.into_inner());
+            // SAFETY: the queue is externally synchronised by its mutex; `fence` is unsignalled.
+            unsafe { shared.raw.queue_submit(*queue, &[submit], fence) }.vk("vkQueueSubmit")?;
+        }
+        pending.armed = false;
+        Ok((
+            Submission {
+                shared: shared.clone(),
+                slot,
+                serial,
+                done: false,
+            },
+            r,
+        ))
+    }
+
+    /// Records a global memory barrier (the common case between passes: one pass writes a
+    /// buffer, the next reads it).
+    pub fn memory_barrier(
+        &self,
+        cmd: vk::CommandBuffer,
+        src: (vk::PipelineStageFlags, vk::AccessFlags),
+        dst: (vk::PipelineStageFlags, vk::AccessFlags),
+    ) {
+        let barrier = vk::MemoryBarrier::default()
+            .src_access_mask(src.1)
+            .dst_access_mask(dst.1);
+        // SAFETY: `cmd` is recording on this device (caller's contract for passes).
+        unsafe {
+            self.shared.raw.cmd_pipeline_barrier(
+                cmd,
+                src.0,
+                dst.0,
+                vk::DependencyFlags::empty(),
+                &[barrier],
+                &[],
+                &[],
+            )
+        };
+    }
+
+    /// Compute shader writes → compute shader reads and writes.
+    pub fn compute_to_compute_barrier(&self, cmd: vk::CommandBuffer) {
+        self.memory_barrier(
+            cmd,
+            (
+                vk::PipelineStageFlags::COMPUTE_SHADER,
+                vk::AccessFlags::SHADER_WRITE,
+            ),
+            (
+                vk::PipelineStageFlags::COMPUTE_SHADER,
+                vk::AccessFlags::SHADER_READ | vk::AccessFlags::SHADER_WRITE,
+            ),
+        );
+    }
+
+    /// The default timeout of [`Gpu::run`].
+    pub fn fence_timeout(&self) -> Duration {
+        self.shared.fence_timeout
+    }
+}

@@ -1,0 +1,45 @@
+//! The Vulkan layer: a device context that is either the engine's own or adopted from a host,
+//! memory through gpu-allocator, typed buffers, images, pipelines built from embedded SPIR-V,
+//! descriptor sets, submission with fences, deferred destruction, timestamp scopes, and the
+//! validation canary. It knows nothing of fluids, radiosity or elements.
+//!
+//! Conventions (see `DESIGN.md`):
+//! - The Vulkan handle field is `raw`; shared device state lives in one `Arc<DeviceShared>`
+//!   that every resource holds, so the device outlives its resources.
+//! - Passes record into a `vk::CommandBuffer` they are handed; [`Gpu::run`] submits and waits
+//!   on its own fence, never `vkDeviceWaitIdle`.
+//! - Every object frees itself on `Drop`; objects possibly still used by in-flight engine work
+//!   are destroyed after that work's fence signals.
+//! - Device limits are read once ([`Capabilities`]) and respected: arrays larger than one
+//!   storage binding (128 MiB on lavapipe) are bound in chunks ([`Buffer::binding_chunks`]).
+
+mod buffer;
+mod caps;
+mod commands;
+mod context;
+mod debug;
+mod descriptors;
+mod error;
+mod image;
+mod instance;
+mod memory;
+mod pipeline;
+mod query;
+mod renderpass;
+pub mod shaders;
+
+pub use ash::vk;
+pub use buffer::{chunk_elements, Buffer, BufferBinding, Chunk, STAGING_CHUNK_BYTES};
+pub use caps::Capabilities;
+pub use commands::Submission;
+pub use context::{Gpu, GpuDesc, RawDevice};
+pub use debug::ValidationLog;
+pub use descriptors::{BindingKind, DescriptorSet, DescriptorSetLayout, Resource};
+pub use error::{GpuError, GpuResult};
+pub use image::{record_image_barrier, texel_bytes, Image, ImageDesc, Sampler};
+pub use memory::MemoryKind;
+pub use pipeline::{
+    ComputePipeline, ComputePipelineDesc, GraphicsPipeline, GraphicsPipelineDesc, VertexAttribute,
+};
+pub use query::Profiler;
+pub use renderpass::{ForeignView, Framebuffer, RenderPass};

@@ -1,0 +1,515 @@
+//! Compute and graphics pipelines built from embedded SPIR-V (see [`crate::gpu::shaders`]).
+//! A pipeline owns its descriptor set layout (one set, bindings in order) and its pipeline
+//! layout; descriptions are plain structs with sensible defaults (screen-13 style).
+
+use std::sync::Arc;
+
+use ash::vk;
+
+use super::context::{DeviceShared, Gpu};
+use super::descriptors::{BindingKind, DescriptorSet, DescriptorSetLayout, Resource};
+use super::error::{GpuError, GpuResult, VkContext};
+
+/// A shader module, destroyed as soon as the pipeline using it exists.
+struct ShaderModule<'a> {
+    device: &'a ash::Device,
+    raw: vk::ShaderModule,
+}
+
+impl<'a> ShaderModule<'a> {
+    fn new(device: &'a ash::Device, spirv: &[u32]) -> GpuResult<Self> {
+        let info = vk::ShaderModuleCreateInfo::default().code(spirv);
+        // SAFETY: `spirv` is SPIR-V produced by glslc at build time (or by the caller).
+        let raw = unsafe { device.create_shader_module(&info, None) }.vk("vkCreateShaderModule")?;
+        Ok(Self { device, raw })
+    }
+}
+
+impl Drop for ShaderModule<'_> {
+    fn drop(&mut self) {
+        // SAFETY: modules may be destroyed once pipelines are created from them.
+        unsafe { self.device.destroy_shader_module(self.raw, None) };
+    }
+}
+
+/// Specialization constants `constant_id = 0, 1, …` with 32-bit values.
+fn specialization<'a>(
+    values: &'a [u32],
+    entries: &'a mut Vec<vk::SpecializationMapEntry>,
+) -> vk::SpecializationInfo<'a> {
+    entries.clear();
+    entries.extend((0..values.len()).map(|i| vk::SpecializationMapEntry {
+        constant_id: i as u32,
+        offset: (i * 4) as u32,
+        size: 4,
+    }));
+    vk::SpecializationInfo::default()
+        .map_entries(entries)
+        .data(bytemuck::cast_slice(values))
+}
+
+struct Layouts {
+    set: DescriptorSetLayout,
+    raw: vk::PipelineLayout,
+}
+
+fn layouts(
+    gpu: &Gpu,
+    bindings: &[BindingKind],
+    push_bytes: u32,
+    stages: vk::ShaderStageFlags,
+    name: &str,
+) -> GpuResult<Layouts> {
+    if push_bytes > gpu.caps().max_push_constants_size {
+        return Err(GpuError::OverLimit {
+            name: format!("push constants of `{name}`"),
+            requested: u64::from(push_bytes),
+            limit: u64::from(gpu.caps().max_push_constants_size),
+            limit_name: "maxPushConstantsSize",
+            unit: "bytes",
+        });
+    }
+    let set = DescriptorSetLayout::new(gpu, bindings, stages)?;
+    let ranges = [vk::PushConstantRange {
+        stage_flags: stages,
+        offset: 0,
+        size: push_bytes,
+    }];
+    let set_layouts = [set.raw];
+    let mut info = vk::PipelineLayoutCreateInfo::default().set_layouts(&set_layouts);
+    if push_bytes > 0 {
+        info = info.push_constant_ranges(&ranges);
+    }
+    // SAFETY: valid create info on this device.
+    let raw =
+        unsafe { gpu.device().create_pipeline_layout(&info, None) }.vk("vkCreatePipelineLayout")?;
+    Ok(Layouts { set, raw })
+}
+
+/// How to build a compute pipeline.
+#[derive(Clone, Debug)]
+pub struct ComputePipelineDesc<'a> {
+    /// Name for debugging and errors.
+    pub name: &'a str,
+    /// SPIR-V of the `.comp` shader (entry point `main`).
+    pub spirv: &'a [u32],
+    /// Bindings of set 0, in order.
+    pub bindings: &'a [BindingKind],
+    /// Bytes of push constants (0 for none).
+    pub push_constant_bytes: u32,
+    /// Values of specialization constants 0, 1, ….
+    pub specialization: &'a [u32],
+}
+
+/// A compute pipeline with its layouts.
+pub struct ComputePipeline {
+    shared: Arc<DeviceShared>,
+    raw: vk::Pipeline,
+    layout: vk::PipelineLayout,
+    set_layout: DescriptorSetLayout,
+    push_bytes: u32,
+    name: String,
+}
+
+impl ComputePipeline {
+    /// Builds the pipeline.
+    pub fn new(gpu: &Gpu, desc: &ComputePipelineDesc<'_>) -> GpuResult<Self> {
+        let l = layouts(
+            gpu,
+            desc.bindings,
+            desc.push_constant_bytes,
+            vk::ShaderStageFlags::COMPUTE,
+            desc.name,
+        )?;
+        let module = ShaderModule::new(gpu.device(), desc.spirv)?;
+        let mut entries = Vec::new();
+        let spec = specialization(desc.specialization, &mut entries);
+        let stage = vk::PipelineShaderStageCreateInfo::default()
+            .stage(vk::ShaderStageFlags::COMPUTE)
+            .module(module.raw)
+            .name(c"main")
+            .specialization_info(&spec);
+        let info = vk::ComputePipelineCreateInfo::default()
+            .stage(stage)
+            .layout(l.raw);
+        // SAFETY: valid create info; the module and layout are alive.
+        let raw = unsafe {
+            gpu.device()
+                .create_compute_pipelines(vk::PipelineCache::null(), &[info], None)
+        };
+        let raw = match raw {
+            Ok(p) => p[0],
+            Err((_, e)) => {
+                // SAFETY: the layout is unused.
+                unsafe { gpu.device().destroy_pipeline_layout(l.raw, None) };
+                return Err(Err::<(), _>(e).vk("vkCreateComputePipelines").unwrap_err());
+            }
+        };
+        gpu.shared.set_name(raw, desc.name);
+        Ok(Self {
+            shared: gpu.shared.clone(),
+            raw,
+            layout: l.raw,
+            set_layout: l.set,
+            push_bytes: desc.push_constant_bytes,
+            name: desc.name.to_string(),
+        })
+    }
+
+    /// Binds resources to this pipeline's bindings (see [`DescriptorSet::new`]).
+    pub fn bind(&self, gpu: &Gpu, resources: &[Resource]) -> GpuResult<DescriptorSet> {
+        DescriptorSet::new(gpu, &self.set_layout, resources)
+    }
+
+    /// Records: bind the pipeline and `set`, push `push` (exactly the declared size), dispatch
+    /// `groups` workgroups.
+    pub fn record_dispatch(
+        &self,
+        cmd: vk::CommandBuffer,
+        set: &DescriptorSet,
+        push: &[u8],
+        groups: [u32; 3],
+    ) {
+        assert_eq!(
+            push.len() as u32,
+            self.push_bytes,
+            "push constants of `{}`",
+            self.name
+        );
+        let d = &self.shared.raw;
+        // SAFETY: `cmd` is recording on this device; the set matches this pipeline's layout.
+        unsafe {
+            d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, self.raw);
+            d.cmd_bind_descriptor_sets(
+                cmd,
+                vk::PipelineBindPoint::COMPUTE,
+                self.layout,
+                0,
+                &[set.raw],
+                &[],
+            );
+            if !push.is_empty() {
+                d.cmd_push_constants(cmd, self.layout, vk::ShaderStageFlags::COMPUTE, 0, push);
+            }
+            d.cmd_dispatch(cmd, groups[0], groups[1], groups[2]);
+        }
+    }
+}
+
+impl Drop for ComputePipeline {
+    fn drop(&mut self) {
+        let (raw, layout) = (self.raw, self.layout);
+        self.shared.retire(move |dev| {
+            // SAFETY: nothing in flight uses the pipeline.
+            unsafe {
+                dev.raw.destroy_pipeline(raw, None);
+                dev.raw.destroy_pipeline_layout(layout, None);
+            }
+        });
+    }
+}
+
+/// One vertex attribute: (location, format, byte offset in the vertex).
+pub type VertexAttribute = (u32, vk::Format, u32);
+
+/// How to build a graphics pipeline. Viewport and scissor are dynamic.
+#[derive(Clone, Debug)]
+pub struct GraphicsPipelineDesc<'a> {
+    /// Name for debugging and errors.
+    pub name: &'a str,
+    /// SPIR-V of the vertex shader.
+    pub vertex: &'a [u32],
+    /// SPIR-V of the fragment shader.
+    pub fragment: &'a [u32],
+    /// SPIR-V of an optional geometry shader.
+    pub geometry: Option<&'a [u32]>,
+    /// Bindings of set 0 (visible to every stage).
+    pub bindings: &'a [BindingKind],
+    /// Bytes of push constants (visible to every stage).
+    pub push_constant_bytes: u32,
+    /// Stride of the one vertex buffer (0: no vertex buffer).
+    pub vertex_stride: u32,
+    /// Its attributes.
+    pub vertex_attributes: &'a [VertexAttribute],
+    /// Primitive topology.
+    pub topology: vk::PrimitiveTopology,
+    /// Fill or line.
+    pub polygon_mode: vk::PolygonMode,
+    /// Face culling.
+    pub cull_mode: vk::CullModeFlags,
+    /// Depth test (less-or-equal) and write.
+    pub depth: bool,
+    /// Alpha blending on the colour attachment.
+    pub blend: bool,
+    /// Depth bias (constant, slope) — pulls edge overdraw in front of faces.
+    pub depth_bias: Option<(f32, f32)>,
+    /// Render pass it draws in (subpass 0) and its number of colour attachments.
+    pub render_pass: vk::RenderPass,
+    /// Number of colour attachments of the render pass.
+    pub color_attachments: u32,
+    /// Values of specialization constants 0, 1, … (all stages).
+    pub specialization: &'a [u32],
+}
+
+impl<'a> GraphicsPipelineDesc<'a> {
+    /// Defaults: triangle list, filled, no culling, depth on, no blending, no vertex buffer,
+    /// one colour attachment.
+    pub fn new(
+        name: &'a str,
+        vertex: &'a [u32],
+        fragment: &'a [u32],
+        render_pass: vk::RenderPass,
+    ) -> Self {
+        Self {
+            name,
+            vertex,
+            fragment,
+            geometry: None,
+            bindings: &[],
+            push_constant_bytes: 0,
+            vertex_stride: 0,
+            vertex_attributes: &[],
+            topology: vk::PrimitiveTopology::TRIANGLE_LIST,
+            polygon_mode: vk::PolygonMode::FILL,
+            cull_mode: vk::CullModeFlags::NONE,
+            depth: true,
+            blend: false,
+            depth_bias: None,
+            render_pass,
+            color_attachments: 1,
+            specialization: &[],
+        }
+    }
+}
+
+/// A graphics pipeline with its layouts.
+pub struct GraphicsPipeline {
+    shared: Arc<DeviceShared>,
+    raw: vk::Pipeline,
+    layout: vk::PipelineLayout,
+    set_layout: DescriptorSetLayout,
+    push_bytes: u32,
+    stages: vk::ShaderStageFlags,
+    name: String,
+}
+
+impl GraphicsPipeline {
+    /// Builds the pipeline.
+    pub fn new(gpu: &Gpu, desc: &GraphicsPipelineDesc<'_>) -> GpuResult<Self> {
+        let mut stages = vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT;
+        if desc.geometry.is_some() {
+            if !gpu.caps().geometry_shader {
+                return Err(GpuError::Unsupported(format!(
+                    "geometry shaders (pipeline `{}`)",
+                    desc.name
+                )));
+            }
+            stages |= vk::ShaderStageFlags::GEOMETRY;
+        }
+        if desc.polygon_mode != vk::PolygonMode::FILL && !gpu.caps().fill_mode_non_solid {
+            return Err(GpuError::Unsupported(format!(
+                "fillModeNonSolid (pipeline `{}`)",
+                desc.name
+            )));
+        }
+        let l = layouts(
+            gpu,
+            desc.bindings,
+            desc.push_constant_bytes,
+            stages,
+            desc.name,
+        )?;
+        let device = gpu.device();
+        let vs = ShaderModule::new(device, desc.vertex)?;
+        let fs = ShaderModule::new(device, desc.fragment)?;
+        let gs = desc
+            .geometry
+            .map(|g| ShaderModule::new(device, g))
+            .transpose()?;
+        let mut entries = Vec::new();
+        let spec = specialization(desc.specialization, &mut entries);
+        let mut shader_stages = vec![
+            vk::PipelineShaderStageCreateInfo::default()
+                .stage(vk::ShaderStageFlags::VERTEX)
+                .module(vs.raw)
+                .name(c"main")
+                .specialization_info(&spec),
+            vk::PipelineShaderStageCreateInfo::default()
+                .stage(vk::ShaderStageFlags::FRAGMENT)
+                .module(fs.raw)
+                .name(c"main")
+                .specialization_info(&spec),
+        ];
+        if let Some(gs) = &gs {
+            shader_stages.push(
+                vk::PipelineShaderStageCreateInfo::default()
+                    .stage(vk::ShaderStageFlags::GEOMETRY)
+                    .module(gs.raw)
+                    .name(c"main")
+                    .specialization_info(&spec),
+            );
+        }
+        let bindings = [vk::VertexInputBindingDescription {
+            binding: 0,
+            stride: desc.vertex_stride,
+            input_rate: vk::VertexInputRate::VERTEX,
+        }];
+        let attributes: Vec<_> = desc
+            .vertex_attributes
+            .iter()
+            .map(
+                |&(location, format, offset)| vk::VertexInputAttributeDescription {
+                    location,
+                    binding: 0,
+                    format,
+                    offset,
+                },
+            )
+            .collect();
+        let mut vertex_input = vk::PipelineVertexInputStateCreateInfo::default();
+        if desc.vertex_stride > 0 {
+            vertex_input = vertex_input
+                .vertex_binding_descriptions(&bindings)
+                .vertex_attribute_descriptions(&attributes);
+        }
+        let assembly = vk::PipelineInputAssemblyStateCreateInfo::default().topology(desc.topology);
+        let viewport = vk::PipelineViewportStateCreateInfo::default()
+            .viewport_count(1)
+            .scissor_count(1);
+        let mut raster = vk::PipelineRasterizationStateCreateInfo::default()
+            .polygon_mode(desc.polygon_mode)
+            .cull_mode(desc.cull_mode)
+            .front_face(vk::FrontFace::COUNTER_CLOCKWISE)
+            .line_width(1.0);
+        if let Some((constant, slope)) = desc.depth_bias {
+            raster = raster
+                .depth_bias_enable(true)
+                .depth_bias_constant_factor(constant)
+                .depth_bias_slope_factor(slope);
+        }
+        let multisample = vk::PipelineMultisampleStateCreateInfo::default()
+            .rasterization_samples(vk::SampleCountFlags::TYPE_1);
+        let depth = vk::PipelineDepthStencilStateCreateInfo::default()
+            .depth_test_enable(desc.depth)
+            .depth_write_enable(desc.depth)
+            .depth_compare_op(vk::CompareOp::LESS_OR_EQUAL);
+        let attachment = vk::PipelineColorBlendAttachmentState::default()
+            .blend_enable(desc.blend)
+            .src_color_blend_factor(vk::BlendFactor::SRC_ALPHA)
+            .dst_color_blend_factor(vk::BlendFactor::ONE_MINUS_SRC_ALPHA)
+            .color_blend_op(vk::BlendOp::ADD)
+            .src_alpha_blend_factor(vk::BlendFactor::ONE)
+            .dst_alpha_blend_factor(vk::BlendFactor::ONE_MINUS_SRC_ALPHA)
+            .alpha_blend_op(vk::BlendOp::ADD)
+            .color_write_mask(vk::ColorComponentFlags::RGBA);
+        let attachments = vec![attachment; desc.color_attachments as usize];
+        let blend = vk::PipelineColorBlendStateCreateInfo::default().attachments(&attachments);
+        let dynamic_states = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
+        let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic_states);
+        let info = vk::GraphicsPipelineCreateInfo::default()
+            .stages(&shader_stages)
+            .vertex_input_state(&vertex_input)
+            .input_assembly_state(&assembly)
+            .viewport_state(&viewport)
+            .rasterization_state(&raster)
+            .multisample_state(&multisample)
+            .depth_stencil_state(&depth)
+            .color_blend_state(&blend)
+            .dynamic_state(&dynamic)
+            .layout(l.raw)
+            .render_pass(desc.render_pass)
+            .subpass(0);
+        // SAFETY: every pointer in `info` refers to locals alive during the call.
+        let raw = match unsafe {
+            device.create_graphics_pipelines(vk::PipelineCache::null(), &[info], None)
+        } {
+            Ok(p) => p[0],
+            Err((_, e)) => {
+                // SAFETY: the layout is unused.
+                unsafe { device.destroy_pipeline_layout(l.raw, None) };
+                return Err(Err::<(), _>(e).vk("vkCreateGraphicsPipelines").unwrap_err());
+            }
+        };
+        gpu.shared.set_name(raw, desc.name);
+        Ok(Self {
+            shared: gpu.shared.clone(),
+            raw,
+            layout: l.raw,
+            set_layout: l.set,
+            push_bytes: desc.push_constant_bytes,
+            stages,
+            name: desc.name.to_string(),
+        })
+    }
+
+    /// Binds resources to this pipeline's bindings.
+    pub fn bind(&self, gpu: &Gpu, resources: &[Resource]) -> GpuResult<DescriptorSet> {
+        DescriptorSet::new(gpu, &self.set_layout, resources)
+    }
+
+    /// Records, inside a render pass: bind the pipeline, `set` and the vertex buffer (if any),
+    /// set the viewport and scissor to `extent`, push `push`, and draw `vertex_count` vertices.
+    pub fn record_draw(
+        &self,
+        cmd: vk::CommandBuffer,
+        extent: vk::Extent2D,
+        set: &DescriptorSet,
+        push: &[u8],
+        vertices: Option<vk::Buffer>,
+        vertex_count: u32,
+    ) {
+        assert_eq!(
+            push.len() as u32,
+            self.push_bytes,
+            "push constants of `{}`",
+            self.name
+        );
+        let d = &self.shared.raw;
+        let viewport = vk::Viewport {
+            x: 0.0,
+            y: 0.0,
+            width: extent.width as f32,
+            height: extent.height as f32,
+            min_depth: 0.0,
+            max_depth: 1.0,
+        };
+        let scissor = vk::Rect2D {
+            offset: vk::Offset2D::default(),
+            extent,
+        };
+        // SAFETY: `cmd` is recording inside a render pass compatible with this pipeline.
+        unsafe {
+            d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, self.raw);
+            d.cmd_bind_descriptor_sets(
+                cmd,
+                vk::PipelineBindPoint::GRAPHICS,
+                self.layout,
+                0,
+                &[set.raw],
+                &[],
+            );
+            d.cmd_set_viewport(cmd, 0, &[viewport]);
+            d.cmd_set_scissor(cmd, 0, &[scissor]);
+            if !push.is_empty() {
+                d.cmd_push_constants(cmd, self.layout, self.stages, 0, push);
+            }
+            if let Some(v) = vertices {
+                d.cmd_bind_vertex_buffers(cmd, 0, &[v], &[0]);
+            }
+            d.cmd_draw(cmd, vertex_count, 1, 0, 0);
+        }
+    }
+}
+
+impl Drop for GraphicsPipeline {
+    fn drop(&mut self) {
+        let (raw, layout) = (self.raw, self.layout);
+        self.shared.retire(move |dev| {
+            // SAFETY: nothing in flight uses the pipeline.
+            unsafe {
+                dev.raw.destroy_pipeline(raw, None);
+                dev.raw.destroy_pipeline_layout(layout, None);
+            }
+        });
+    }
+}

@@ -1,0 +1,261 @@
+//! Render passes and framebuffers. galerkin's passes draw into one colour attachment (plus an
+//! optional depth attachment) cleared at the start and left in `TRANSFER_SRC_OPTIMAL` at the
+//! end — ready to be read back, written to a file, or blitted to a window. The same render pass
+//! serves the offscreen path, the viewer (which blits the result to its swapchain) and a host's
+//! own image.
+
+use std::sync::Arc;
+
+use ash::vk;
+
+use super::context::{DeviceShared, Gpu};
+use super::error::{GpuResult, VkContext};
+
+/// A single-subpass render pass: colour (cleared, stored, ends in `TRANSFER_SRC_OPTIMAL`) and
+/// an optional depth attachment (cleared, not stored).
+pub struct RenderPass {
+    shared: Arc<DeviceShared>,
+    raw: vk::RenderPass,
+    color_format: vk::Format,
+    depth_format: Option<vk::Format>,
+}
+
+impl RenderPass {
+    /// Creates the render pass. Its external dependencies order earlier transfer reads of the
+    /// attachment before this pass's writes, and its colour writes before later transfers.
+    pub fn new(
+        gpu: &Gpu,
+        color_format: vk::Format,
+        depth_format: Option<vk::Format>,
+    ) -> GpuResult<Self> {
+        let mut attachments = vec![vk::AttachmentDescription::default()
+            .format(color_format)
+            .samples(vk::SampleCountFlags::TYPE_1)
+            .load_op(vk::AttachmentLoadOp::CLEAR)
+            .store_op(vk::AttachmentStoreOp::STORE)
+            .stencil_load_op(vk::AttachmentLoadOp::DONT_CARE)
+            .stencil_store_op(vk::AttachmentStoreOp::DONT_CARE)
+            .initial_layout(vk::ImageLayout::UNDEFINED)
+            .final_layout(vk::ImageLayout::TRANSFER_SRC_OPTIMAL)];
+        if let Some(df) = depth_format {
+            attachments.push(
+                vk::AttachmentDescription::default()
+                    .format(df)
+                    .samples(vk::SampleCountFlags::TYPE_1)
+                    .load_op(vk::AttachmentLoadOp::CLEAR)
+                    .store_op(vk::AttachmentStoreOp::DONT_CARE)
+                    .stencil_load_op(vk::AttachmentLoadOp::DONT_CARE)
+                    .stencil_store_op(vk::AttachmentStoreOp::DONT_CARE)
+                    .initial_layout(vk::ImageLayout::UNDEFINED)
+                    .final_layout(vk::ImageLayout::DEPTH_STENCIL_ATTACHMENT_OPTIMAL),
+            );
+        }
+        let color_ref = [vk::AttachmentReference {
+            attachment: 0,
+            layout: vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
+        }];
+        let depth_ref = vk::AttachmentReference {
+            attachment: 1,
+            layout: vk::ImageLayout::DEPTH_STENCIL_ATTACHMENT_OPTIMAL,
+        };
+        let mut subpass = vk::SubpassDescription::default()
+            .pipeline_bind_point(vk::PipelineBindPoint::GRAPHICS)
+            .color_attachments(&color_ref);
+        if depth_format.is_some() {
+            subpass = subpass.depth_stencil_attachment(&depth_ref);
+        }
+        let fragment_tests = vk::PipelineStageFlags::EARLY_FRAGMENT_TESTS
+            | vk::PipelineStageFlags::LATE_FRAGMENT_TESTS;
+        let dependencies = [
+            vk::SubpassDependency {
+                src_subpass: vk::SUBPASS_EXTERNAL,
+                dst_subpass: 0,
+                src_stage_mask: vk::PipelineStageFlags::TRANSFER
+                    | vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT
+                    | fragment_tests,
+                dst_stage_mask: vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT | fragment_tests,
+                src_access_mask: vk::AccessFlags::TRANSFER_WRITE
+                    | vk::AccessFlags::COLOR_ATTACHMENT_WRITE
+                    | vk::AccessFlags::DEPTH_STENCIL_ATTACHMENT_WRITE,
+                dst_access_mask: vk::AccessFlags::COLOR_ATTACHMENT_WRITE
+                    | vk::AccessFlags::COLOR_ATTACHMENT_READ
+                    | vk::AccessFlags::DEPTH_STENCIL_ATTACHMENT_READ
+                    | vk::AccessFlags::DEPTH_STENCIL_ATTACHMENT_WRITE,
+                dependency_flags: vk::DependencyFlags::empty(),
+            },
+            vk::SubpassDependency {
+                src_subpass: 0,
+                dst_subpass: vk::SUBPASS_EXTERNAL,
+                src_stage_mask: vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT,
+                dst_stage_mask: vk::PipelineStageFlags::TRANSFER,
+                src_access_mask: vk::AccessFlags::COLOR_ATTACHMENT_WRITE,
+                dst_access_mask: vk::AccessFlags::TRANSFER_READ,
+                dependency_flags: vk::DependencyFlags::empty(),
+            },
+        ];
+        let subpasses = [subpass];
+        let info = vk::RenderPassCreateInfo::default()
+            .attachments(&attachments)
+            .subpasses(&subpasses)
+            .dependencies(&dependencies);
+        // SAFETY: valid create info on this device.
+        let raw =
+            unsafe { gpu.device().create_render_pass(&info, None) }.vk("vkCreateRenderPass")?;
+        Ok(Self {
+            shared: gpu.shared.clone(),
+            raw,
+            color_format,
+            depth_format,
+        })
+    }
+
+    /// The Vulkan handle (pipelines are built against it).
+    pub fn raw(&self) -> vk::RenderPass {
+        self.raw
+    }
+
+    /// Colour attachment format.
+    pub fn color_format(&self) -> vk::Format {
+        self.color_format
+    }
+
+    /// Depth attachment format, if any.
+    pub fn depth_format(&self) -> Option<vk::Format> {
+        self.depth_format
+    }
+
+    /// Records `vkCmdBeginRenderPass` on `framebuffer` clearing colour to `clear` and depth to 1.
+    pub fn record_begin(&self, cmd: vk::CommandBuffer, framebuffer: &Framebuffer, clear: [f32; 4]) {
+        let clears = [
+            vk::ClearValue {
+                color: vk::ClearColorValue { float32: clear },
+            },
+            vk::ClearValue {
+                depth_stencil: vk::ClearDepthStencilValue {
+                    depth: 1.0,
+                    stencil: 0,
+                },
+            },
+        ];
+        let n = if self.depth_format.is_some() { 2 } else { 1 };
+        let info = vk::RenderPassBeginInfo::default()
+            .render_pass(self.raw)
+            .framebuffer(framebuffer.raw)
+            .render_area(vk::Rect2D {
+                offset: vk::Offset2D::default(),
+                extent: framebuffer.extent,
+            })
+            .clear_values(&clears[..n]);
+        // SAFETY: `cmd` is recording outside a render pass; the framebuffer matches this pass.
+        unsafe {
+            self.shared
+                .raw
+                .cmd_begin_render_pass(cmd, &info, vk::SubpassContents::INLINE)
+        };
+    }
+
+    /// Records `vkCmdEndRenderPass`.
+    pub fn record_end(&self, cmd: vk::CommandBuffer) {
+        // SAFETY: `cmd` is inside this render pass.
+        unsafe { self.shared.raw.cmd_end_render_pass(cmd) };
+    }
+}
+
+impl Drop for RenderPass {
+    fn drop(&mut self) {
+        let raw = self.raw;
+        self.shared.retire(move |dev| {
+            // SAFETY: nothing in flight uses it.
+            unsafe { dev.raw.destroy_render_pass(raw, None) }
+        });
+    }
+}
+
+/// A framebuffer of attachment views for a [`RenderPass`].
+pub struct Framebuffer {
+    shared: Arc<DeviceShared>,
+    raw: vk::Framebuffer,
+    extent: vk::Extent2D,
+}
+
+impl Framebuffer {
+    /// Creates a framebuffer; `views` are the colour view then the depth view (if the pass has one).
+    pub fn new(
+        gpu: &Gpu,
+        pass: &RenderPass,
+        views: &[vk::ImageView],
+        extent: vk::Extent2D,
+    ) -> GpuResult<Self> {
+        let info = vk::FramebufferCreateInfo::default()
+            .render_pass(pass.raw)
+            .attachments(views)
+            .width(extent.width)
+            .height(extent.height)
+            .layers(1);
+        // SAFETY: views are live and match the pass's attachments (caller's contract).
+        let raw =
+            unsafe { gpu.device().create_framebuffer(&info, None) }.vk("vkCreateFramebuffer")?;
+        Ok(Self {
+            shared: gpu.shared.clone(),
+            raw,
+            extent,
+        })
+    }
+
+    /// Its size.
+    pub fn extent(&self) -> vk::Extent2D {
+        self.extent
+    }
+}
+
+impl Drop for Framebuffer {
+    fn drop(&mut self) {
+        let raw = self.raw;
+        self.shared.retire(move |dev| {
+            // SAFETY: nothing in flight uses it.
+            unsafe { dev.raw.destroy_framebuffer(raw, None) }
+        });
+    }
+}
+
+/// An image view the engine makes of an image it does not own (a host's image, a swapchain's).
+pub struct ForeignView {
+    shared: Arc<DeviceShared>,
+    raw: vk::ImageView,
+}
+
+impl ForeignView {
+    /// A 2D colour view of `image`.
+    ///
+    /// # Safety
+    /// `image` is a live 2D image of this device with `format`, one mip level and one layer,
+    /// and it outlives the view.
+    pub unsafe fn new(gpu: &Gpu, image: vk::Image, format: vk::Format) -> GpuResult<Self> {
+        let info = vk::ImageViewCreateInfo::default()
+            .image(image)
+            .view_type(vk::ImageViewType::TYPE_2D)
+            .format(format)
+            .subresource_range(super::image::subresource(vk::ImageAspectFlags::COLOR));
+        // SAFETY: the caller guarantees `image` per this function's contract.
+        let raw = unsafe { gpu.device().create_image_view(&info, None) }.vk("vkCreateImageView")?;
+        Ok(Self {
+            shared: gpu.shared.clone(),
+            raw,
+        })
+    }
+
+    /// The view.
+    pub fn raw(&self) -> vk::ImageView {
+        self.raw
+    }
+}
+
+impl Drop for ForeignView {
+    fn drop(&mut self) {
+        let raw = self.raw;
+        self.shared.retire(move |dev| {
+            // SAFETY: nothing in flight uses it; the image itself belongs to someone else.
+            unsafe { dev.raw.destroy_image_view(raw, None) }
+        });
+    }
+}

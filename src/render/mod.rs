@@ -1,0 +1,17 @@
+//! Rendering support shared by every renderer: offscreen render targets and readback, PNG and
+//! EXR writers, colour maps as 1D textures, a camera, and (feature `viewer`) the window.
+
+mod camera;
+mod colormap;
+mod colormap_data;
+mod error;
+mod image_io;
+mod target;
+#[cfg(feature = "viewer")]
+pub mod viewer;
+
+pub use camera::Camera;
+pub use colormap::{ramp_coordinate, ramp_texcoord, Colormap, ColormapTexture, RAMP_TEXELS};
+pub use error::RenderError;
+pub use image_io::{read_png_rgba8, write_exr_rgba, write_png_rgba8};
+pub use target::{ColorFormat, Pixels, RenderTarget};

@@ -1,0 +1,252 @@
+//! Offscreen render targets: a colour attachment (8-bit RGBA for pictures, 32-bit float RGBA
+//! for values), a depth attachment, the render pass and framebuffer, and readback.
+
+use ash::vk;
+
+use crate::gpu::{
+    Buffer, ForeignView, Framebuffer, Gpu, GpuResult, Image, ImageDesc, MemoryKind, RenderPass,
+};
+
+/// Colour formats of a render target.
+#[derive(Copy, Clone, Debug, PartialEq, Eq, Hash)]
+pub enum ColorFormat {
+    /// `R8G8B8A8_UNORM`: colour-mapped pictures (written to PNG as sRGB values).
+    Rgba8,
+    /// `R32G32B32A32_SFLOAT`: raw values (written to EXR).
+    Rgba32F,
+}
+
+impl ColorFormat {
+    /// The Vulkan format.
+    pub fn vk(self) -> vk::Format {
+        match self {
+            Self::Rgba8 => vk::Format::R8G8B8A8_UNORM,
+            Self::Rgba32F => vk::Format::R32G32B32A32_SFLOAT,
+        }
+    }
+
+    fn texel_bytes(self) -> u64 {
+        match self {
+            Self::Rgba8 => 4,
+            Self::Rgba32F => 16,
+        }
+    }
+}
+
+/// Read-back pixels, row-major from the top row.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Pixels {
+    /// 4 bytes per pixel.
+    Rgba8(Vec<u8>),
+    /// 4 floats per pixel.
+    Rgba32F(Vec<f32>),
+}
+
+enum ColorAttachment {
+    Owned(Image),
+    Foreign {
+        image: vk::Image,
+        _view: ForeignView,
+    },
+}
+
+/// Where a pass draws: colour (+ depth) attachments with their render pass and framebuffer.
+pub struct RenderTarget {
+    color: ColorAttachment,
+    _depth: Option<Image>,
+    framebuffer: Framebuffer,
+    pass: RenderPass,
+    format: ColorFormat,
+    extent: vk::Extent2D,
+}
+
+/// Depth format every Vulkan implementation supports as an attachment.
+const DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
+
+impl RenderTarget {
+    /// An offscreen target of `width`×`height` with a depth attachment.
+    pub fn new(
+        gpu: &Gpu,
+        name: &str,
+        width: u32,
+        height: u32,
+        format: ColorFormat,
+    ) -> GpuResult<Self> {
+        let color = Image::new(
+            gpu,
+            &format!("{name} colour"),
+            ImageDesc::color_target(width, height, format.vk()),
+        )?;
+        let depth = Image::new(
+            gpu,
+            &format!("{name} depth"),
+            ImageDesc::depth_target(width, height, DEPTH_FORMAT),
+        )?;
+        let pass = RenderPass::new(gpu, format.vk(), Some(DEPTH_FORMAT))?;
+        let extent = vk::Extent2D { width, height };
+        let framebuffer = Framebuffer::new(gpu, &pass, &[color.view(), depth.view()], extent)?;
+        Ok(Self {
+            color: ColorAttachment::Owned(color),
+            _depth: Some(depth),
+            framebuffer,
+            pass,
+            format,
+            extent,
+        })
+    }
+
+    /// A target drawing into a host's colour image (the engine adds its own depth attachment,
+    /// view and framebuffer, and destroys only those).
+    ///
+    /// # Safety
+    /// `image` is a live 2D image of `gpu`'s device with `format`, `width`×`height`, one level
+    /// and one layer, created with `COLOR_ATTACHMENT` usage (and `TRANSFER_SRC` for readback),
+    /// and it outlives the target. It is cleared at the start of each pass (its prior contents
+    /// and layout are discarded) and left in `TRANSFER_SRC_OPTIMAL`.
+    pub unsafe fn from_host_image(
+        gpu: &Gpu,
+        name: &str,
+        image: vk::Image,
+        format: ColorFormat,
+        width: u32,
+        height: u32,
+    ) -> GpuResult<Self> {
+        // SAFETY: forwarded from this function's contract.
+        let view = unsafe { ForeignView::new(gpu, image, format.vk()) }?;
+        let depth = Image::new(
+            gpu,
+            &format!("{name} depth"),
+            ImageDesc::depth_target(width, height, DEPTH_FORMAT),
+        )?;
+        let pass = RenderPass::new(gpu, format.vk(), Some(DEPTH_FORMAT))?;
+        let extent = vk::Extent2D { width, height };
+        let framebuffer = Framebuffer::new(gpu, &pass, &[view.raw(), depth.view()], extent)?;
+        Ok(Self {
+            color: ColorAttachment::Foreign { image, _view: view },
+            _depth: Some(depth),
+            framebuffer,
+            pass,
+            format,
+            extent,
+        })
+    }
+
+    /// The render pass pipelines drawing here are built against.
+    pub fn render_pass(&self) -> &RenderPass {
+        &self.pass
+    }
+
+    /// Size in pixels.
+    pub fn extent(&self) -> vk::Extent2D {
+        self.extent
+    }
+
+    /// Width / height.
+    pub fn aspect(&self) -> f64 {
+        f64::from(self.extent.width) / f64::from(self.extent.height)
+    }
+
+    /// Colour format.
+    pub fn format(&self) -> ColorFormat {
+        self.format
+    }
+
+    /// The colour image (in `TRANSFER_SRC_OPTIMAL` after a pass).
+    pub fn color_image(&self) -> vk::Image {
+        match &self.color {
+            ColorAttachment::Owned(i) => i.raw(),
+            ColorAttachment::Foreign { image, .. } => *image,
+        }
+    }
+
+    /// Records the start of the render pass, clearing colour to `clear` and depth to 1.
+    pub fn record_begin(&self, cmd: vk::CommandBuffer, clear: [f32; 4]) {
+        self.pass.record_begin(cmd, &self.framebuffer, clear);
+    }
+
+    /// Records the end of the render pass.
+    pub fn record_end(&self, cmd: vk::CommandBuffer) {
+        self.pass.record_end(cmd);
+    }
+
+    /// Records a copy of the colour image (after a pass) into `dst`, tightly packed.
+    pub fn record_readback(&self, gpu: &Gpu, cmd: vk::CommandBuffer, dst: vk::Buffer) {
+        let region = vk::BufferImageCopy {
+            buffer_offset: 0,
+            buffer_row_length: 0,
+            buffer_image_height: 0,
+            image_subresource: vk::ImageSubresourceLayers {
+                aspect_mask: vk::ImageAspectFlags::COLOR,
+                mip_level: 0,
+                base_array_layer: 0,
+                layer_count: 1,
+            },
+            image_offset: vk::Offset3D::default(),
+            image_extent: vk::Extent3D {
+                width: self.extent.width,
+                height: self.extent.height,
+                depth: 1,
+            },
+        };
+        // SAFETY: the colour image is in TRANSFER_SRC_OPTIMAL after the pass; `dst` is large
+        // enough (caller's contract, checked by `readback`).
+        unsafe {
+            gpu.device().cmd_copy_image_to_buffer(
+                cmd,
+                self.color_image(),
+                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                dst,
+                &[region],
+            )
+        };
+    }
+
+    /// Bytes of one full readback.
+    pub fn readback_bytes(&self) -> u64 {
+        self.format.texel_bytes() * u64::from(self.extent.width) * u64::from(self.extent.height)
+    }
+
+    /// Reads the colour image back (run after a pass has drawn into it).
+    pub fn readback(&self, gpu: &Gpu) -> GpuResult<Pixels> {
+        self.render_inner(gpu, None)
+    }
+
+    /// Records the pass `draw` in this target, then the copy of its colour image to a staging
+    /// buffer, in one submission; returns the pixels. The common offscreen case.
+    pub fn render(
+        &self,
+        gpu: &Gpu,
+        clear: [f32; 4],
+        draw: impl FnOnce(vk::CommandBuffer),
+    ) -> GpuResult<Pixels> {
+        self.render_inner(gpu, Some((clear, Box::new(draw))))
+    }
+
+    #[allow(clippy::type_complexity)]
+    fn render_inner(
+        &self,
+        gpu: &Gpu,
+        draw: Option<([f32; 4], Box<dyn FnOnce(vk::CommandBuffer) + '_>)>,
+    ) -> GpuResult<Pixels> {
+        let staging = Buffer::<u8>::new(
+            gpu,
+            "render target readback",
+            self.readback_bytes(),
+            vk::BufferUsageFlags::empty(),
+            MemoryKind::GpuToCpu,
+        )?;
+        gpu.run(|cmd| {
+            if let Some((clear, draw)) = draw {
+                self.record_begin(cmd, clear);
+                draw(cmd);
+                self.record_end(cmd);
+            }
+            self.record_readback(gpu, cmd, staging.raw());
+        })?;
+        let bytes = staging.mapped().expect("GpuToCpu memory is mapped");
+        Ok(match self.format {
+            ColorFormat::Rgba8 => Pixels::Rgba8(bytes.to_vec()),
+            ColorFormat::Rgba32F => Pixels::Rgba32F(bytemuck::pod_collect_to_vec(bytes)),
+        })
+    }
+}

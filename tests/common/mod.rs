@@ -1,0 +1,69 @@
+//! Test harness: every GPU test gets a `Gpu` with the Khronos validation layer (and
+//! synchronization validation) on, and fails if any validation error was recorded — including
+//! leaked-object reports made when the device and instance are destroyed at the end.
+#![allow(dead_code)]
+
+use std::ops::Deref;
+use std::sync::Arc;
+
+use galerkin::gpu::{Gpu, GpuDesc, ValidationLog};
+
+/// A validated `Gpu` that checks its validation log when dropped.
+pub struct TestGpu {
+    gpu: Option<Gpu>,
+    log: Arc<ValidationLog>,
+}
+
+impl Deref for TestGpu {
+    type Target = Gpu;
+    fn deref(&self) -> &Gpu {
+        self.gpu.as_ref().expect("gpu is present until drop")
+    }
+}
+
+impl Drop for TestGpu {
+    fn drop(&mut self) {
+        drop(self.gpu.take());
+        if !std::thread::panicking() {
+            self.log.assert_clean();
+        }
+    }
+}
+
+/// A `Gpu` with validation on; `configure` may adjust the description.
+pub fn gpu_with(configure: impl FnOnce(&mut GpuDesc)) -> TestGpu {
+    let mut desc = GpuDesc {
+        validation: true,
+        ..GpuDesc::default()
+    };
+    configure(&mut desc);
+    let gpu = match Gpu::new(&desc) {
+        Ok(g) => g,
+        Err(e) => panic!("cannot create the test Gpu: {e}"),
+    };
+    let log = gpu.validation_log().expect("validation is on in tests");
+    TestGpu {
+        gpu: Some(gpu),
+        log,
+    }
+}
+
+/// A `Gpu` with validation on.
+pub fn gpu() -> TestGpu {
+    gpu_with(|_| {})
+}
+
+/// Deterministic pseudo-random floats in [-1, 1) (SplitMix64), so tests need no RNG crate.
+pub fn random_f32(n: usize, seed: u64) -> Vec<f32> {
+    let mut s = seed;
+    (0..n)
+        .map(|_| {
+            s = s.wrapping_add(0x9E37_79B9_7F4A_7C15);
+            let mut z = s;
+            z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+            z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+            z ^= z >> 31;
+            ((z >> 40) as f32 / (1u64 << 24) as f32) * 2.0 - 1.0
+        })
+        .collect()
+}
