@@ -1,1 +1,377 @@
-fn main() {}
+//! `galerkin`: the command-line front end. `galerkin demo` runs every capability's demo and
+//! writes `out/*.png`; `galerkin info` describes the device; `galerkin view` opens a window;
+//! `galerkin bench gpu` measures the device's ceilings next to the CPU.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::{bail, Context, Result};
+use clap::{Parser, Subcommand};
+use galerkin::demo::axpy::{axpy_error_ratio, Axpy};
+use galerkin::demo::field::{check_colours, check_values, FieldOutput, FieldPass};
+use galerkin::demo::scene::DemoScene;
+use galerkin::gpu::{shaders, vk, Buffer, Gpu, GpuDesc, Profiler};
+use galerkin::render::{
+    write_exr_rgba, write_png_rgba8, ColorFormat, Colormap, Pixels, RenderTarget,
+};
+
+/// galerkin: reduced simulation by non-polynomial Galerkin projection and pixel-exact
+/// rendering of high-order solutions, on Vulkan.
+///
+/// Environment: GALERKIN_DEVICE=<substring> picks a device by name; GALERKIN_VALIDATION=1
+/// turns on the Khronos validation layer; VK_DRIVER_FILES selects Vulkan drivers (e.g.
+/// /usr/share/vulkan/icd.d/lvp_icd.json for lavapipe); GALERKIN_LOG=debug shows diagnostics.
+#[derive(Parser)]
+#[command(version, about, long_about)]
+struct Cli {
+    /// Use the first device whose name contains this (overrides GALERKIN_DEVICE).
+    #[arg(long, global = true, value_name = "SUBSTRING")]
+    device: Option<String>,
+    /// Enable the Khronos validation layer (same as GALERKIN_VALIDATION=1).
+    #[arg(long, global = true)]
+    validation: bool,
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Describe the device: name, driver, Vulkan version, limits, memory, and compiled shaders.
+    Info,
+    /// Run the demos, check each against its CPU reference, and write images to --out.
+    Demo {
+        /// Scene file (TOML).
+        #[arg(long, default_value = "scenes/demo.toml")]
+        scene: PathBuf,
+        /// Output directory.
+        #[arg(long, default_value = "out")]
+        out: PathBuf,
+    },
+    /// Open a window showing the demo scene (Esc quits, S saves a screenshot PNG,
+    /// arrow keys orbit the camera).
+    View {
+        /// Scene file (TOML).
+        #[arg(long, default_value = "scenes/demo.toml")]
+        scene: PathBuf,
+        /// Quit after presenting this many frames (for scripted runs and tests).
+        #[arg(long)]
+        frames: Option<u64>,
+        /// Where S saves the screenshot; with --frames, also saved just before quitting.
+        #[arg(long, default_value = "out/screenshot.png")]
+        screenshot: PathBuf,
+    },
+    /// Benchmarks.
+    Bench {
+        #[command(subcommand)]
+        what: BenchWhat,
+    },
+}
+
+#[derive(Subcommand)]
+enum BenchWhat {
+    /// The device's ceilings next to their CPU peers: dispatch overhead, upload/download,
+    /// FMA peak, streaming triad, tiled SGEMM (peer: faer). Prints a Markdown table.
+    Gpu {
+        /// Small sizes: seconds instead of a minute or two.
+        #[arg(long)]
+        quick: bool,
+    },
+}
+
+fn main() {
+    let filter = tracing_subscriber::EnvFilter::try_from_env("GALERKIN_LOG")
+        .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("warn,winit=error"));
+    tracing_subscriber::fmt()
+        .with_env_filter(filter)
+        .with_writer(std::io::stderr)
+        .init();
+    let cli = Cli::parse();
+    if let Err(e) = run(cli) {
+        eprintln!("error: {e:#}");
+        std::process::exit(1);
+    }
+}
+
+fn desc(cli: &Cli) -> GpuDesc {
+    let mut d = GpuDesc::default();
+    if let Some(name) = &cli.device {
+        d.device_name = Some(name.clone());
+    }
+    d.validation |= cli.validation;
+    d
+}
+
+fn run(cli: Cli) -> Result<()> {
+    let desc = desc(&cli);
+    match cli.command {
+        Command::Info => info(&desc),
+        Command::Demo { scene, out } => demo(&desc, &scene, &out),
+        Command::View {
+            scene,
+            frames,
+            screenshot,
+        } => view(desc, &scene, frames, &screenshot),
+        Command::Bench {
+            what: BenchWhat::Gpu { quick },
+        } => bench_gpu(&desc, quick),
+    }
+}
+
+/// After the work: fail if validation was on and reported errors.
+fn check_validation(gpu: Gpu) -> Result<()> {
+    let log = gpu.validation_log();
+    drop(gpu);
+    if let Some(log) = log {
+        let errors = log.errors();
+        if !errors.is_empty() {
+            bail!(
+                "{} Vulkan validation error(s); the first: {}",
+                errors.len(),
+                errors[0]
+            );
+        }
+    }
+    Ok(())
+}
+
+fn info(desc: &GpuDesc) -> Result<()> {
+    let gpu = Gpu::new(desc)?;
+    let c = gpu.caps();
+    let mib = |b: u64| b as f64 / (1 << 20) as f64;
+    println!("device        {} ({:?})", c.device_name, c.device_type);
+    println!("driver        {}", c.driver);
+    println!(
+        "vulkan        {}.{}.{}",
+        c.api_version.0, c.api_version.1, c.api_version.2
+    );
+    println!(
+        "ids           vendor {:#06x} device {:#06x}",
+        c.vendor_id, c.device_id
+    );
+    println!("limits");
+    println!(
+        "  maxStorageBufferRange           {:.0} MiB",
+        mib(c.max_storage_buffer_range)
+    );
+    println!(
+        "  maxMemoryAllocationSize         {:.0} MiB",
+        mib(c.max_memory_allocation_size)
+    );
+    println!(
+        "  maxBufferSize                   {:.0} MiB",
+        mib(c.max_buffer_size.min(1 << 50))
+    );
+    println!(
+        "  minStorageBufferOffsetAlignment {}",
+        c.min_storage_buffer_offset_alignment
+    );
+    println!(
+        "  maxComputeWorkGroupCount        {:?}",
+        c.max_compute_work_group_count
+    );
+    println!(
+        "  maxComputeWorkGroupSize         {:?} ({} invocations)",
+        c.max_compute_work_group_size, c.max_compute_work_group_invocations
+    );
+    println!(
+        "  maxComputeSharedMemorySize      {} KiB",
+        c.max_compute_shared_memory_size / 1024
+    );
+    println!("  subgroup size                   {}", c.subgroup_size);
+    println!(
+        "  maxPushConstantsSize            {} B",
+        c.max_push_constants_size
+    );
+    println!(
+        "  maxImageDimension2D             {}",
+        c.max_image_dimension_2d
+    );
+    println!(
+        "  maxFragmentInputComponents      {}",
+        c.max_fragment_input_components
+    );
+    match c.timestamp_period_ns {
+        Some(p) => println!("  timestamps                      {p} ns per tick"),
+        None => println!("  timestamps                      not supported"),
+    }
+    println!(
+        "features      shaderFloat64 {}, geometryShader {}, fillModeNonSolid {}",
+        c.shader_float64, c.geometry_shader, c.fill_mode_non_solid
+    );
+    println!("memory heaps");
+    for (i, (size, flags)) in c.memory_heaps.iter().enumerate() {
+        println!("  {i}: {:.0} MiB {flags:?}", mib(*size));
+    }
+    println!("memory types");
+    for (i, (flags, heap)) in c.memory_types.iter().enumerate() {
+        println!("  {i}: heap {heap} {flags:?}");
+    }
+    println!("shaders ({})", shaders::ALL.len());
+    for (name, words) in shaders::ALL {
+        println!("  {name:<32} {:>6} words", words.len());
+    }
+    check_validation(gpu)
+}
+
+fn demo(desc: &GpuDesc, scene_path: &Path, out: &Path) -> Result<()> {
+    let scene = DemoScene::load(scene_path)?;
+    let gpu = Gpu::new(desc)?;
+    let caps = gpu.caps();
+    println!("device: {} — {}", caps.device_name, caps.driver);
+
+    // Compute: y <- a x + y, every element against the CPU f64 reference.
+    let n = usize::try_from(scene.axpy.n).context("axpy.n does not fit in memory")?;
+    let a = scene.axpy.a;
+    let x: Vec<f32> = (0..n)
+        .map(|i| ((i % 1013) as f32 - 506.0) / 506.0)
+        .collect();
+    let y: Vec<f32> = (0..n).map(|i| ((i % 977) as f32) / 977.0).collect();
+    let xb = Buffer::from_slice(&gpu, "demo x", &x, vk::BufferUsageFlags::STORAGE_BUFFER)?;
+    let yb = Buffer::from_slice(&gpu, "demo y", &y, vk::BufferUsageFlags::STORAGE_BUFFER)?;
+    let axpy = Axpy::new(&gpu)?;
+    let binding = axpy.bind(&gpu, &xb, &yb)?;
+    let mut profiler = Profiler::new(&gpu, 1).ok();
+    let t = Instant::now();
+    gpu.run(|cmd| match profiler.as_mut() {
+        Some(p) => {
+            p.record_reset(cmd);
+            p.scope(cmd, "axpy", || axpy.record(&gpu, cmd, &binding, a as f32));
+        }
+        None => axpy.record(&gpu, cmd, &binding, a as f32),
+    })?;
+    let wall = t.elapsed();
+    let kernel_ms = profiler
+        .as_ref()
+        .and_then(|p| p.results().ok())
+        .and_then(|r| r.first().map(|s| s.1));
+    let result = yb.download(&gpu)?;
+    let (ratio, at) = axpy_error_ratio(a, &x, &y, &result);
+    println!(
+        "axpy: {n} floats in {} binding(s), {} (kernel) / {:.1} ms (submit + wait); worst error {ratio:.2} of the f32 bound at element {at}",
+        binding.chunk_count(),
+        kernel_ms.map_or("n/a".to_string(), |ms| format!("{ms:.1} ms")),
+        wall.as_secs_f64() * 1e3
+    );
+    if ratio > 1.0 {
+        bail!("axpy differs from its CPU reference beyond the f32 bound");
+    }
+    drop((xb, yb, binding, axpy));
+
+    // Graphics: the field, values (checked, EXR) and colours (checked, PNG).
+    let (w, h) = (scene.image.width, scene.image.height);
+    let colormap = Colormap::by_name(&scene.colormap_name())?;
+    let p = scene.field.coefficients;
+    let values = RenderTarget::new(&gpu, "demo field values", w, h, ColorFormat::Rgba32F)?;
+    let pass = FieldPass::new(
+        &gpu,
+        values.render_pass(),
+        &p,
+        scene.field.tessellation,
+        &colormap,
+        scene.ramp(),
+        FieldOutput::Value,
+    )?;
+    let Pixels::Rgba32F(v) = values.render(&gpu, [0.0; 4], |cmd| {
+        pass.record(cmd, values.extent(), &scene.camera)
+    })?
+    else {
+        bail!("float target returned bytes");
+    };
+    let check = check_values(&scene.camera, &p, w, h, &v);
+    write_exr_rgba(&out.join("field.exr"), w, h, &v)?;
+    println!(
+        "field values: {w}×{h}, {} covered pixels checked (worst {:.3} of tolerance), {} background, {} on the outline → {}",
+        check.checked,
+        check.worst,
+        check.background,
+        check.outline,
+        out.join("field.exr").display()
+    );
+    if !check.passed() {
+        bail!(
+            "{} pixels differ from the CPU reference; first: {}",
+            check.failures,
+            check.first_failure.unwrap_or_default()
+        );
+    }
+    let colours = RenderTarget::new(&gpu, "demo field colours", w, h, ColorFormat::Rgba8)?;
+    let pass = FieldPass::new(
+        &gpu,
+        colours.render_pass(),
+        &p,
+        scene.field.tessellation,
+        &colormap,
+        scene.ramp(),
+        FieldOutput::Colour,
+    )?;
+    let background = [0.12, 0.12, 0.14, 1.0];
+    let Pixels::Rgba8(c) = colours.render(&gpu, background, |cmd| {
+        pass.record(cmd, colours.extent(), &scene.camera)
+    })?
+    else {
+        bail!("RGBA8 target returned floats");
+    };
+    let bg = background.map(|v| (v * 255.0f32).round() as u8);
+    let check = check_colours(&scene.camera, &p, &colormap, scene.ramp(), w, h, &c, bg);
+    write_png_rgba8(&out.join("field.png"), w, h, &c)?;
+    println!(
+        "field colours ({}): {} covered pixels checked (worst {:.3} of tolerance) → {}",
+        colormap.name(),
+        check.checked,
+        check.worst,
+        out.join("field.png").display()
+    );
+    if !check.passed() {
+        bail!(
+            "{} pixels differ from the CPU reference; first: {}",
+            check.failures,
+            check.first_failure.unwrap_or_default()
+        );
+    }
+    drop((pass, colours, values));
+    check_validation(gpu)
+}
+
+#[cfg(feature = "viewer")]
+fn view(desc: GpuDesc, scene_path: &Path, frames: Option<u64>, screenshot: &Path) -> Result<()> {
+    let scene = DemoScene::load(scene_path)?;
+    galerkin::render::viewer::run(desc, scene, frames, screenshot.to_path_buf())
+}
+
+#[cfg(not(feature = "viewer"))]
+fn view(_: GpuDesc, _: &Path, _: Option<u64>, _: &Path) -> Result<()> {
+    bail!("this build has no viewer: rebuild with the default `viewer` feature")
+}
+
+fn bench_gpu(desc: &GpuDesc, quick: bool) -> Result<()> {
+    let gpu = Gpu::new(desc)?;
+    let config = if quick {
+        galerkin::bench::BenchConfig::quick()
+    } else {
+        galerkin::bench::BenchConfig::full()
+    };
+    let bar = indicatif::ProgressBar::new(5);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("{bar:30} {pos}/{len} {msg}")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    let mut step = 0;
+    let rows = galerkin::bench::run(&gpu, &config, |name| {
+        bar.set_position(step);
+        bar.set_message(name.to_string());
+        step += 1;
+    })?;
+    bar.finish_and_clear();
+    let c = gpu.caps();
+    println!(
+        "device: {} — {} — Vulkan {}.{}.{}",
+        c.device_name, c.driver, c.api_version.0, c.api_version.1, c.api_version.2
+    );
+    println!(
+        "cpu peers: {} threads; medians of {} runs\n",
+        galerkin::bench::cpu::threads(),
+        config.reps
+    );
+    print!("{}", galerkin::bench::table(&rows));
+    check_validation(gpu)
+}

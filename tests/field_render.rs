@@ -1,20 +1,17 @@
 //! The first graphics pass against its CPU f64 reference, every covered pixel: the value at a
-//! pixel centre must be the cubic evaluated at the plane point seen through that centre, and
-//! the colour must be that value through the colour map.
+//! pixel centre must be the cubic evaluated at the plane point seen through that centre
+//! (tolerance: `value_tolerance`), and the colour must be that value through the colour map
+//! (tolerance: `check_colours`). Background pixels must be untouched; only pixels within
+//! 0.05 px of the square's outline are left to the rasteriser's tie-breaking.
 
 mod common;
 
-use galerkin::demo::field::{
-    reference_colour, reference_coverage, Coverage, FieldOutput, FieldPass, Ramp,
-};
+use galerkin::demo::field::{check_colours, check_values, FieldOutput, FieldPass, Ramp};
 use galerkin::demo::polynomial::BivariateCubic;
 use galerkin::render::{Camera, ColorFormat, Colormap, Pixels, RenderTarget};
 
 const W: u32 = 160;
 const H: u32 = 120;
-/// Pixels whose centre lies within this many pixels of the square's outline are left to the
-/// rasteriser's tie-breaking rules (lavapipe snaps vertices to 1/256 px); all others are checked.
-const MARGIN_PX: f64 = 0.05;
 
 fn scene() -> (Camera, BivariateCubic, Ramp) {
     let camera = Camera {
@@ -30,8 +27,8 @@ fn scene() -> (Camera, BivariateCubic, Ramp) {
         camera,
         p,
         Ramp {
-            lo: -1.5,
-            hi: 1.5,
+            lo: -3.0,
+            hi: 3.0,
             log: false,
         },
     )
@@ -53,55 +50,87 @@ fn field_values_match_the_cpu_reference_at_every_covered_pixel() {
     )
     .unwrap();
     let Pixels::Rgba32F(px) = target
-        .render(&gpu, [0.0, 0.0, 0.0, 0.0], |cmd| {
+        .render(&gpu, [0.0; 4], |cmd| {
             pass.record(cmd, target.extent(), &camera)
         })
         .unwrap()
     else {
-        panic!("float target reads back floats")
+        panic!("a float target reads back floats")
     };
-    let coverage = reference_coverage(&camera, W, H, MARGIN_PX);
-    let (mut inside, mut edge, mut worst) = (0, 0, 0.0f64);
-    for (i, c) in coverage.iter().enumerate() {
-        let got = &px[4 * i..4 * i + 4];
-        match *c {
-            Coverage::Inside { point } => {
-                inside += 1;
-                assert_eq!(got[3], 1.0, "pixel {} must be covered", i);
-                let reference = p.eval(point.x, point.y);
-                // Tolerance: the interpolated position is f32 (relative error ~1e-6 over a
-                // domain of size 1, so |Δx| ≤ 4e-6 with margin) and moves p by |∇p|·|Δx|;
-                // the f32 Horner evaluation adds a few ulps of Σ|c_ij||x|^i|y|^j.
-                let tol = 4e-6 * p.gradient_norm(point.x, point.y)
-                    + 8.0 * f64::from(f32::EPSILON) * p.abs_sum(point.x, point.y);
-                let err = (f64::from(got[0]) - reference).abs();
-                worst = worst.max(err / tol);
-                assert!(
-                    err <= tol,
-                    "pixel ({}, {}): gpu {} vs reference {reference} (tol {tol})",
-                    i as u32 % W,
-                    i as u32 / W,
-                    got[0]
-                );
-            }
-            Coverage::Outside => assert_eq!(got, [0.0; 4], "pixel {} must be background", i),
-            Coverage::Edge => edge += 1,
-        }
-    }
-    // The view must actually show the field, and the unchecked outline must be thin.
+    let check = check_values(&camera, &p, W, H, &px);
     assert!(
-        inside > (W * H / 4) as usize,
-        "only {inside} covered pixels"
+        check.passed(),
+        "{} failures, first: {:?}",
+        check.failures,
+        check.first_failure
     );
-    assert!(edge < 2 * (W + H) as usize, "{edge} pixels on the outline");
-    eprintln!("field values: {inside} pixels checked, {edge} on the outline, worst error {worst:.3} of tolerance");
+    // The view must actually show the field and background, and the unchecked outline be thin.
+    assert!(
+        check.checked > (W * H / 4) as usize,
+        "only {} covered pixels",
+        check.checked
+    );
+    assert!(
+        check.background > (W * H / 10) as usize,
+        "only {} background pixels",
+        check.background
+    );
+    assert!(
+        check.outline < 2 * (W + H) as usize,
+        "{} pixels on the outline",
+        check.outline
+    );
+}
+
+#[test]
+fn a_wrong_polynomial_fails_the_value_check() {
+    // The comparison must be able to fail: perturb one coefficient by 1e-3 in the reference.
+    let gpu = common::gpu();
+    let (camera, p, ramp) = scene();
+    let target = RenderTarget::new(&gpu, "field values", W, H, ColorFormat::Rgba32F).unwrap();
+    let pass = FieldPass::new(
+        &gpu,
+        target.render_pass(),
+        &p,
+        8,
+        &Colormap::grey(),
+        ramp,
+        FieldOutput::Value,
+    )
+    .unwrap();
+    let Pixels::Rgba32F(px) = target
+        .render(&gpu, [0.0; 4], |cmd| {
+            pass.record(cmd, target.extent(), &camera)
+        })
+        .unwrap()
+    else {
+        panic!("a float target reads back floats")
+    };
+    let mut wrong = p;
+    wrong.coefficients[4] += 1e-3;
+    let check = check_values(&camera, &wrong, W, H, &px);
+    assert!(
+        check.failures > check.checked / 2,
+        "only {} of {} pixels failed",
+        check.failures,
+        check.checked
+    );
 }
 
 #[test]
 fn field_colours_match_the_cpu_reference_at_every_covered_pixel() {
     let gpu = common::gpu();
     let (camera, p, ramp) = scene();
-    for colormap in [Colormap::viridis(), Colormap::cool_warm()] {
+    let log_ramp = Ramp {
+        lo: 0.05,
+        hi: 4.0,
+        log: true,
+    };
+    for (colormap, ramp) in [
+        (Colormap::viridis(), ramp),
+        (Colormap::cool_warm(), ramp),
+        (Colormap::grey(), log_ramp),
+    ] {
         let target = RenderTarget::new(&gpu, "field colours", W, H, ColorFormat::Rgba8).unwrap();
         let pass = FieldPass::new(
             &gpu,
@@ -120,40 +149,16 @@ fn field_colours_match_the_cpu_reference_at_every_covered_pixel() {
             })
             .unwrap()
         else {
-            panic!("RGBA8 target reads back bytes")
+            panic!("an RGBA8 target reads back bytes")
         };
-        let coverage = reference_coverage(&camera, W, H, MARGIN_PX);
-        for (i, c) in coverage.iter().enumerate() {
-            let got = &px[4 * i..4 * i + 4];
-            match *c {
-                Coverage::Inside { point } => {
-                    let v = p.eval(point.x, point.y);
-                    // Tolerance: the value's own error (as above, ≤ 1e-4 here) moves the ramp
-                    // coordinate by ≤ 1e-4/3; the ramp's steepest step between adjacent texels
-                    // is a few levels, the sampler's 8-bit subtexel weights and the final 8-bit
-                    // rounding add up to 1.5 levels. Bound it by the colours of v ± 1e-4.
-                    let lo = reference_colour(&colormap, ramp, v - 1e-4);
-                    let hi = reference_colour(&colormap, ramp, v + 1e-4);
-                    for ch in 0..3 {
-                        let g = f64::from(got[ch]) / 255.0;
-                        let (a, b) = (lo[ch].min(hi[ch]), lo[ch].max(hi[ch]));
-                        let slack = 1.5 / 255.0;
-                        assert!(
-                            g >= a - slack && g <= b + slack,
-                            "{}: pixel ({}, {}) channel {ch}: {} not in [{a}, {b}] ± 1.5/255",
-                            colormap.name(),
-                            i as u32 % W,
-                            i as u32 / W,
-                            got[ch]
-                        );
-                    }
-                    assert_eq!(got[3], 255);
-                }
-                Coverage::Outside => {
-                    assert_eq!(got, [64, 64, 64, 255], "pixel {i} must be background")
-                }
-                Coverage::Edge => {}
-            }
-        }
+        let check = check_colours(&camera, &p, &colormap, ramp, W, H, &px, [64, 64, 64, 255]);
+        assert!(
+            check.passed(),
+            "{}: {} failures, first: {:?}",
+            colormap.name(),
+            check.failures,
+            check.first_failure
+        );
+        assert!(check.checked > (W * H / 4) as usize);
     }
 }

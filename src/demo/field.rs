@@ -216,3 +216,154 @@ pub fn reference_coverage(camera: &Camera, width: u32, height: u32, margin: f64)
 pub fn reference_colour(colormap: &Colormap, ramp: Ramp, value: f64) -> [f64; 4] {
     colormap.sample(ramp_coordinate(value, ramp.lo, ramp.hi, ramp.log))
 }
+
+/// Pixels whose centre lies within this many pixels of the square's outline are left to the
+/// rasteriser's tie-breaking rules (vertices snap to 1/256 px on lavapipe); all others are
+/// checked.
+pub const OUTLINE_MARGIN_PX: f64 = 0.05;
+
+/// Tolerance of a value pixel seen at plane point `q`: the interpolated position is f32
+/// (relative error ~1e-6 over a domain of size 1, so |Δx| ≤ 4e-6 with margin) and moves p by
+/// |∇p|·|Δx|; the f32 Horner evaluation adds a few ulps of Σ|c_ij||x|ⁱ|y|ʲ.
+pub fn value_tolerance(p: &BivariateCubic, q: DVec2) -> f64 {
+    4e-6 * p.gradient_norm(q.x, q.y) + 8.0 * f64::from(f32::EPSILON) * p.abs_sum(q.x, q.y)
+}
+
+/// Outcome of comparing a rendered image with the CPU reference, pixel by pixel.
+#[derive(Clone, Debug, Default)]
+pub struct FieldCheck {
+    /// Covered pixels compared.
+    pub checked: usize,
+    /// Background pixels compared.
+    pub background: usize,
+    /// Pixels on the outline, left unchecked.
+    pub outline: usize,
+    /// Largest error as a fraction of its tolerance (≤ 1 passes).
+    pub worst: f64,
+    /// Number of pixels outside tolerance.
+    pub failures: usize,
+    /// The first failing pixel, described.
+    pub first_failure: Option<String>,
+}
+
+impl FieldCheck {
+    fn fail(&mut self, what: String) {
+        self.failures += 1;
+        if self.first_failure.is_none() {
+            self.first_failure = Some(what);
+        }
+    }
+
+    /// True if every checked pixel was within tolerance.
+    pub fn passed(&self) -> bool {
+        self.failures == 0
+    }
+}
+
+/// Compares a value image (RGBA32F from [`FieldOutput::Value`], cleared to zero) with the CPU
+/// reference: covered pixels must hold p at the plane point seen through their centre, within
+/// [`value_tolerance`]; background pixels must be untouched.
+pub fn check_values(
+    camera: &Camera,
+    p: &BivariateCubic,
+    width: u32,
+    height: u32,
+    rgba: &[f32],
+) -> FieldCheck {
+    let mut check = FieldCheck::default();
+    for (i, c) in reference_coverage(camera, width, height, OUTLINE_MARGIN_PX)
+        .into_iter()
+        .enumerate()
+    {
+        let got = &rgba[4 * i..4 * i + 4];
+        let (x, y) = (i as u32 % width, i as u32 / width);
+        match c {
+            Coverage::Inside { point } => {
+                check.checked += 1;
+                let reference = p.eval(point.x, point.y);
+                let tol = value_tolerance(p, point);
+                let ratio = (f64::from(got[0]) - reference).abs() / tol;
+                check.worst = check
+                    .worst
+                    .max(if ratio.is_nan() { f64::INFINITY } else { ratio });
+                if ratio.is_nan() || ratio > 1.0 || got[3] != 1.0 {
+                    check.fail(format!(
+                        "pixel ({x}, {y}): {} vs reference {reference} (tolerance {tol:.2e})",
+                        got[0]
+                    ));
+                }
+            }
+            Coverage::Outside => {
+                check.background += 1;
+                if got != [0.0; 4] {
+                    check.fail(format!(
+                        "pixel ({x}, {y}) should be background, holds {got:?}"
+                    ));
+                }
+            }
+            Coverage::Edge => check.outline += 1,
+        }
+    }
+    check
+}
+
+/// Compares a colour image (RGBA8 from [`FieldOutput::Colour`]) with the CPU reference. A
+/// covered pixel's channels must lie between the reference colours of p ± 1e-4 (p's own error
+/// bound, generously) widened by 1.5/255: the sampler's 8-bit subtexel weights and the final
+/// 8-bit rounding. Background pixels must hold `background`.
+#[allow(clippy::too_many_arguments)]
+pub fn check_colours(
+    camera: &Camera,
+    p: &BivariateCubic,
+    colormap: &Colormap,
+    ramp: Ramp,
+    width: u32,
+    height: u32,
+    rgba: &[u8],
+    background: [u8; 4],
+) -> FieldCheck {
+    let mut check = FieldCheck::default();
+    for (i, c) in reference_coverage(camera, width, height, OUTLINE_MARGIN_PX)
+        .into_iter()
+        .enumerate()
+    {
+        let got = &rgba[4 * i..4 * i + 4];
+        let (x, y) = (i as u32 % width, i as u32 / width);
+        match c {
+            Coverage::Inside { point } => {
+                check.checked += 1;
+                let v = p.eval(point.x, point.y);
+                let (lo, hi) = (
+                    reference_colour(colormap, ramp, v - 1e-4),
+                    reference_colour(colormap, ramp, v + 1e-4),
+                );
+                let slack = 1.5 / 255.0;
+                for ch in 0..3 {
+                    let g = f64::from(got[ch]) / 255.0;
+                    let (a, b) = (lo[ch].min(hi[ch]), lo[ch].max(hi[ch]));
+                    let excess = (a - g).max(g - b).max(0.0);
+                    check.worst = check.worst.max(excess / slack);
+                    if excess > slack {
+                        check.fail(format!(
+                            "pixel ({x}, {y}) channel {ch}: {} outside [{a:.4}, {b:.4}] ± 1.5/255",
+                            got[ch]
+                        ));
+                    }
+                }
+                if got[3] != 255 {
+                    check.fail(format!("pixel ({x}, {y}): alpha {}", got[3]));
+                }
+            }
+            Coverage::Outside => {
+                check.background += 1;
+                if got != background {
+                    check.fail(format!(
+                        "pixel ({x}, {y}) should be background {background:?}, holds {got:?}"
+                    ));
+                }
+            }
+            Coverage::Edge => check.outline += 1,
+        }
+    }
+    check
+}

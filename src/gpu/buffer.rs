@@ -250,21 +250,10 @@ impl<T: Pod> Buffer<T> {
             return Ok(());
         }
         let chunk = STAGING_CHUNK_BYTES.min(src.len() as u64);
+        let pool = &gpu.staging;
         let mut staging = [
-            Buffer::<u8>::new(
-                gpu,
-                &format!("{} (upload staging 0)", self.name),
-                chunk,
-                vk::BufferUsageFlags::empty(),
-                MemoryKind::CpuToGpu,
-            )?,
-            Buffer::<u8>::new(
-                gpu,
-                &format!("{} (upload staging 1)", self.name),
-                chunk,
-                vk::BufferUsageFlags::empty(),
-                MemoryKind::CpuToGpu,
-            )?,
+            pool.take(gpu, MemoryKind::CpuToGpu, chunk)?,
+            pool.take(gpu, MemoryKind::CpuToGpu, chunk)?,
         ];
         let mut in_flight: [Option<super::Submission>; 2] = [None, None];
         for (i, part) in src.chunks(chunk as usize).enumerate() {
@@ -293,6 +282,9 @@ impl<T: Pod> Buffer<T> {
         }
         for s in in_flight.into_iter().flatten() {
             s.wait()?;
+        }
+        for b in staging {
+            pool.give_back(b);
         }
         Ok(())
     }
@@ -323,21 +315,10 @@ impl<T: Pod> Buffer<T> {
             return Ok(out);
         }
         let chunk = STAGING_CHUNK_BYTES.min(dst.len() as u64);
+        let pool = &gpu.staging;
         let staging = [
-            Buffer::<u8>::new(
-                gpu,
-                &format!("{} (download staging 0)", self.name),
-                chunk,
-                vk::BufferUsageFlags::empty(),
-                MemoryKind::GpuToCpu,
-            )?,
-            Buffer::<u8>::new(
-                gpu,
-                &format!("{} (download staging 1)", self.name),
-                chunk,
-                vk::BufferUsageFlags::empty(),
-                MemoryKind::GpuToCpu,
-            )?,
+            pool.take(gpu, MemoryKind::GpuToCpu, chunk)?,
+            pool.take(gpu, MemoryKind::GpuToCpu, chunk)?,
         ];
         let parts: Vec<&mut [u8]> = dst.chunks_mut(chunk as usize).collect();
         let mut in_flight: [Option<(super::Submission, usize)>; 2] = [None, None];
@@ -378,6 +359,9 @@ impl<T: Pod> Buffer<T> {
         }
         for (k, slot) in in_flight.iter_mut().enumerate() {
             drain(slot, &mut parts, k)?;
+        }
+        for b in staging {
+            pool.give_back(b);
         }
         Ok(out)
     }

@@ -227,6 +227,18 @@ impl Gpu {
         &self,
         record: impl FnOnce(vk::CommandBuffer) -> R,
     ) -> GpuResult<(Submission, R)> {
+        self.submit_with_semaphores(&[], &[], record)
+    }
+
+    /// Like [`Gpu::submit`], waiting on `wait` semaphores (each at its stage) before the work
+    /// and signalling `signal` after it — how a frame waits for a swapchain image and tells
+    /// presentation it is done.
+    pub fn submit_with_semaphores<R>(
+        &self,
+        wait: &[(vk::Semaphore, vk::PipelineStageFlags)],
+        signal: &[vk::Semaphore],
+        record: impl FnOnce(vk::CommandBuffer) -> R,
+    ) -> GpuResult<(Submission, R)> {
         let shared = &self.shared;
         let (slot, serial) = {
             let mut t = shared.tracker.lock().unwrap_or_else(|p| p.into_inner());
@@ -276,7 +288,13 @@ impl Gpu {
         // SAFETY: `cmd` is recording.
         unsafe { shared.raw.end_command_buffer(cmd) }.vk("vkEndCommandBuffer")?;
         let cmds = [cmd];
-        let submit = vk::SubmitInfo::default().command_buffers(&cmds);
+        let wait_semaphores: Vec<_> = wait.iter().map(|w| w.0).collect();
+        let wait_stages: Vec<_> = wait.iter().map(|w| w.1).collect();
+        let submit = vk::SubmitInfo::default()
+            .command_buffers(&cmds)
+            .wait_semaphores(&wait_semaphores)
+            .wait_dst_stage_mask(&wait_stages)
+            .signal_semaphores(signal);
         {
             let queue = shared.queue.lock().unwrap_or_else(|p| p.into_inner());
             // SAFETY: the queue is externally synchronised by its mutex; `fence` is unsignalled.

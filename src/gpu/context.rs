@@ -177,6 +177,7 @@ impl Drop for DeviceShared {
 #[derive(Clone)]
 pub struct Gpu {
     pub(crate) shared: Arc<DeviceShared>,
+    pub(crate) staging: Arc<super::staging::StagingPool>,
 }
 
 impl std::fmt::Debug for Gpu {
@@ -308,6 +309,7 @@ impl Gpu {
             .map_or(range, |m| m.clamp(256, range));
         tracing::info!(device = %caps.device_name, driver = %caps.driver, adopted = !p.owns, "galerkin Gpu ready");
         Ok(Self {
+            staging: Arc::default(),
             shared: Arc::new(DeviceShared {
                 entry: p.entry,
                 instance: p.instance,

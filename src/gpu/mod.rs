@@ -27,6 +27,9 @@ mod pipeline;
 mod query;
 mod renderpass;
 pub mod shaders;
+mod staging;
+#[cfg(feature = "viewer")]
+mod swapchain;
 
 pub use ash::vk;
 pub use buffer::{chunk_elements, Buffer, BufferBinding, Chunk, STAGING_CHUNK_BYTES};
@@ -43,3 +46,5 @@ pub use pipeline::{
 };
 pub use query::Profiler;
 pub use renderpass::{ForeignView, Framebuffer, RenderPass};
+#[cfg(feature = "viewer")]
+pub use swapchain::{surface_extensions, Surface, Swapchain};

@@ -1,1 +1,481 @@
-//! The interactive window.
+//! The interactive window (feature `viewer`): winit + an ash-window surface + a swapchain.
+//! Each frame renders the demo scene offscreen with the same render pass and pipeline as
+//! `galerkin demo`, then blits it into the acquired swapchain image, so the window shows exactly
+//! what the PNG would hold. Esc quits, S saves a screenshot (copied back from the presented
+//! swapchain image), arrow keys orbit the camera, +/- zoom. Resizing recreates the swapchain
+//! and the offscreen target. winit allows one event loop per process, so tests run the
+//! `galerkin view` binary as a child under Xvfb.
+
+use std::path::PathBuf;
+
+use anyhow::{anyhow, Context, Result};
+use ash::vk;
+use glam::DVec3;
+use winit::application::ApplicationHandler;
+use winit::event::{ElementState, KeyEvent, WindowEvent};
+use winit::event_loop::{ActiveEventLoop, EventLoop};
+use winit::keyboard::{Key, NamedKey};
+use winit::raw_window_handle::{HasDisplayHandle, HasWindowHandle};
+use winit::window::{Window, WindowId};
+
+use super::{write_png_rgba8, Camera, ColorFormat, Colormap, RenderTarget};
+use crate::demo::field::{FieldOutput, FieldPass};
+use crate::demo::scene::DemoScene;
+use crate::gpu::{
+    record_image_barrier, surface_extensions, Buffer, Gpu, GpuDesc, MemoryKind, Submission,
+    Surface, Swapchain,
+};
+
+/// Opens the window on `scene` and runs until Esc, the window closes, or `frames` frames have
+/// been presented (then saves `screenshot` first).
+pub fn run(
+    desc: GpuDesc,
+    scene: DemoScene,
+    frames: Option<u64>,
+    screenshot: PathBuf,
+) -> Result<()> {
+    let event_loop =
+        EventLoop::new().context("cannot open a window (is DISPLAY or WAYLAND_DISPLAY set?)")?;
+    let mut app = App {
+        desc,
+        scene,
+        frames,
+        screenshot,
+        state: None,
+        error: None,
+        presented: 0,
+        save_next: false,
+    };
+    event_loop.run_app(&mut app).context("window event loop")?;
+    match app.error {
+        Some(e) => Err(e),
+        None => {
+            if let Some(state) = app.state.take() {
+                state.finish()?;
+            }
+            Ok(())
+        }
+    }
+}
+
+struct App {
+    desc: GpuDesc,
+    scene: DemoScene,
+    frames: Option<u64>,
+    screenshot: PathBuf,
+    state: Option<State>,
+    error: Option<anyhow::Error>,
+    presented: u64,
+    save_next: bool,
+}
+
+/// Everything that lives while the window is open. Field order is drop order: the last frame
+/// is waited on first, then the swapchain goes before its surface, the window last.
+struct State {
+    last_frame: Option<Submission>,
+    pass: FieldPass,
+    target: RenderTarget,
+    readback: Option<Buffer<u8>>,
+    swapchain: Option<Swapchain>,
+    surface: Surface,
+    gpu: Gpu,
+    camera: Camera,
+    window: Window,
+}
+
+impl State {
+    fn new(event_loop: &ActiveEventLoop, desc: &GpuDesc, scene: &DemoScene) -> Result<Self> {
+        let attrs = Window::default_attributes()
+            .with_title("galerkin")
+            .with_inner_size(winit::dpi::PhysicalSize::new(
+                scene.image.width,
+                scene.image.height,
+            ));
+        let window = event_loop.create_window(attrs).context("create window")?;
+        let display = window
+            .display_handle()
+            .map_err(|e| anyhow!("display handle: {e}"))?
+            .as_raw();
+        let handle = window
+            .window_handle()
+            .map_err(|e| anyhow!("window handle: {e}"))?
+            .as_raw();
+        let mut desc = desc.clone();
+        desc.instance_extensions
+            .extend(surface_extensions(display)?);
+        desc.swapchain = true;
+        let gpu = Gpu::new(&desc)?;
+        // SAFETY: the handles come from `window`, which outlives the surface (field order).
+        let surface = unsafe { Surface::new(&gpu, display, handle) }?;
+        let size = window.inner_size();
+        let swapchain =
+            Swapchain::new(&gpu, &surface, size.width.max(1), size.height.max(1), None)?;
+        let extent = swapchain.extent();
+        let target = RenderTarget::new(
+            &gpu,
+            "viewer frame",
+            extent.width,
+            extent.height,
+            ColorFormat::Rgba8,
+        )?;
+        let colormap = Colormap::by_name(&scene.colormap_name())?;
+        let pass = FieldPass::new(
+            &gpu,
+            target.render_pass(),
+            &scene.field.coefficients,
+            scene.field.tessellation,
+            &colormap,
+            scene.ramp(),
+            FieldOutput::Colour,
+        )?;
+        Ok(Self {
+            last_frame: None,
+            pass,
+            target,
+            readback: None,
+            swapchain: Some(swapchain),
+            surface,
+            gpu,
+            camera: scene.camera,
+            window,
+        })
+    }
+
+    fn wait_last_frame(&mut self) -> Result<()> {
+        if let Some(f) = self.last_frame.take() {
+            f.wait()?;
+        }
+        Ok(())
+    }
+
+    fn recreate(&mut self) -> Result<()> {
+        self.wait_last_frame()?;
+        let size = self.window.inner_size();
+        if size.width == 0 || size.height == 0 {
+            return Ok(()); // minimised: keep the old one until there is something to show
+        }
+        let old = self.swapchain.take();
+        let swapchain = Swapchain::new(
+            &self.gpu,
+            &self.surface,
+            size.width,
+            size.height,
+            old.as_ref(),
+        )?;
+        drop(old);
+        let e = swapchain.extent();
+        if e != self.target.extent() {
+            // Same formats, so the render pass is compatible and the pipeline can stay.
+            self.target = RenderTarget::new(
+                &self.gpu,
+                "viewer frame",
+                e.width,
+                e.height,
+                ColorFormat::Rgba8,
+            )?;
+        }
+        self.swapchain = Some(swapchain);
+        Ok(())
+    }
+
+    /// Renders and presents one frame; with `save`, also copies the presented image back.
+    /// Returns false if the swapchain had to be recreated instead.
+    fn frame(&mut self, save: bool) -> Result<bool> {
+        self.wait_last_frame()?;
+        let Some(swapchain) = self.swapchain.as_ref() else {
+            return Ok(false);
+        };
+        let Some(index) = swapchain.acquire()? else {
+            self.recreate()?;
+            return Ok(false);
+        };
+        let image = swapchain.images()[index as usize];
+        let extent = swapchain.extent();
+        let readable = save && swapchain.readable();
+        if readable {
+            let bytes = 4 * u64::from(extent.width) * u64::from(extent.height);
+            self.readback = Some(Buffer::new(
+                &self.gpu,
+                "screenshot",
+                bytes,
+                vk::BufferUsageFlags::empty(),
+                MemoryKind::GpuToCpu,
+            )?);
+        }
+        let (gpu, target, pass, camera, readback) = (
+            &self.gpu,
+            &self.target,
+            &self.pass,
+            &self.camera,
+            &self.readback,
+        );
+        let waits = [(swapchain.image_available, vk::PipelineStageFlags::TRANSFER)];
+        let signals = [swapchain.render_finished[index as usize]];
+        let (submission, ()) = gpu.submit_with_semaphores(&waits, &signals, |cmd| {
+            target.record_begin(cmd, [0.12, 0.12, 0.14, 1.0]);
+            pass.record(cmd, target.extent(), camera);
+            target.record_end(cmd);
+            let dev = gpu.device();
+            let color = vk::ImageAspectFlags::COLOR;
+            record_image_barrier(
+                dev,
+                cmd,
+                image,
+                color,
+                (
+                    vk::ImageLayout::UNDEFINED,
+                    vk::PipelineStageFlags::TRANSFER,
+                    vk::AccessFlags::empty(),
+                ),
+                (
+                    vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                    vk::PipelineStageFlags::TRANSFER,
+                    vk::AccessFlags::TRANSFER_WRITE,
+                ),
+            );
+            let te = target.extent();
+            let corner = |w: u32, h: u32| {
+                [
+                    vk::Offset3D::default(),
+                    vk::Offset3D {
+                        x: w as i32,
+                        y: h as i32,
+                        z: 1,
+                    },
+                ]
+            };
+            let layers = vk::ImageSubresourceLayers {
+                aspect_mask: color,
+                mip_level: 0,
+                base_array_layer: 0,
+                layer_count: 1,
+            };
+            let blit = vk::ImageBlit {
+                src_subresource: layers,
+                src_offsets: corner(te.width, te.height),
+                dst_subresource: layers,
+                dst_offsets: corner(extent.width, extent.height),
+            };
+            // SAFETY: the target is in TRANSFER_SRC after its pass; the swapchain image was
+            // just moved to TRANSFER_DST; both are alive until the fence.
+            unsafe {
+                dev.cmd_blit_image(
+                    cmd,
+                    target.color_image(),
+                    vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                    image,
+                    vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                    &[blit],
+                    vk::Filter::NEAREST,
+                )
+            };
+            let mut layout = (
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                vk::PipelineStageFlags::TRANSFER,
+                vk::AccessFlags::TRANSFER_WRITE,
+            );
+            if let (true, Some(buf)) = (readable, readback) {
+                let next = (
+                    vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                    vk::PipelineStageFlags::TRANSFER,
+                    vk::AccessFlags::TRANSFER_READ,
+                );
+                record_image_barrier(dev, cmd, image, color, layout, next);
+                layout = next;
+                let region = vk::BufferImageCopy {
+                    buffer_offset: 0,
+                    buffer_row_length: 0,
+                    buffer_image_height: 0,
+                    image_subresource: layers,
+                    image_offset: vk::Offset3D::default(),
+                    image_extent: vk::Extent3D {
+                        width: extent.width,
+                        height: extent.height,
+                        depth: 1,
+                    },
+                };
+                // SAFETY: the image is in TRANSFER_SRC; the buffer holds the whole image.
+                unsafe {
+                    dev.cmd_copy_image_to_buffer(
+                        cmd,
+                        image,
+                        vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                        buf.raw(),
+                        &[region],
+                    )
+                };
+            }
+            record_image_barrier(
+                dev,
+                cmd,
+                image,
+                color,
+                layout,
+                (
+                    vk::ImageLayout::PRESENT_SRC_KHR,
+                    vk::PipelineStageFlags::BOTTOM_OF_PIPE,
+                    vk::AccessFlags::empty(),
+                ),
+            );
+        })?;
+        self.last_frame = Some(submission);
+        let fresh = swapchain.present(index)?;
+        if readable {
+            self.wait_last_frame()?;
+        }
+        if !fresh {
+            self.recreate()?;
+        }
+        Ok(true)
+    }
+
+    /// Writes the last frame's copy of the presented image as PNG (RGBA; BGRA swapchains
+    /// are swizzled). Falls back to the offscreen frame if the swapchain is not readable.
+    fn save_screenshot(&mut self, path: &std::path::Path) -> Result<()> {
+        self.wait_last_frame()?;
+        let (format, extent) = match &self.swapchain {
+            Some(s) => (s.format(), s.extent()),
+            None => return Ok(()),
+        };
+        let mut rgba = match self.readback.take() {
+            Some(buf) => buf.mapped().map(<[u8]>::to_vec).unwrap_or_default(),
+            None => match self.target.readback(&self.gpu)? {
+                super::Pixels::Rgba8(p) => p,
+                super::Pixels::Rgba32F(_) => unreachable!("viewer target is RGBA8"),
+            },
+        };
+        let (w, h) = if rgba.len() as u64 == 4 * u64::from(extent.width) * u64::from(extent.height)
+        {
+            (extent.width, extent.height)
+        } else {
+            (self.target.extent().width, self.target.extent().height)
+        };
+        if matches!(
+            format,
+            vk::Format::B8G8R8A8_UNORM | vk::Format::B8G8R8A8_SRGB
+        ) {
+            for p in rgba.chunks_exact_mut(4) {
+                p.swap(0, 2);
+            }
+        }
+        write_png_rgba8(path, w, h, &rgba)?;
+        eprintln!("saved {} ({w}×{h})", path.display());
+        Ok(())
+    }
+
+    fn orbit(&mut self, yaw: f64, pitch: f64, zoom: f64) {
+        let target = DVec3::from(self.camera.target);
+        let up = DVec3::from(self.camera.up).normalize();
+        let mut offset = DVec3::from(self.camera.eye) - target;
+        offset = glam::DQuat::from_axis_angle(up, yaw) * offset;
+        let right = offset.cross(up);
+        if right.length() > 1e-9 {
+            let pitched = glam::DQuat::from_axis_angle(right.normalize(), pitch) * offset;
+            if pitched.normalize().dot(up).abs() < 0.995 {
+                offset = pitched;
+            }
+        }
+        self.camera.eye = (target + offset * zoom).to_array();
+    }
+
+    fn finish(mut self) -> Result<()> {
+        self.wait_last_frame()?;
+        let log = self.gpu.validation_log();
+        drop(self);
+        if let Some(errors) = log.map(|l| l.errors()).filter(|e| !e.is_empty()) {
+            return Err(anyhow!(
+                "{} Vulkan validation error(s); the first: {}",
+                errors.len(),
+                errors[0]
+            ));
+        }
+        Ok(())
+    }
+}
+
+impl App {
+    fn fail(&mut self, event_loop: &ActiveEventLoop, e: anyhow::Error) {
+        self.error = Some(e);
+        event_loop.exit();
+    }
+}
+
+impl ApplicationHandler for App {
+    fn resumed(&mut self, event_loop: &ActiveEventLoop) {
+        if self.state.is_some() {
+            return;
+        }
+        match State::new(event_loop, &self.desc, &self.scene) {
+            Ok(s) => {
+                s.window.request_redraw();
+                self.state = Some(s);
+            }
+            Err(e) => self.fail(event_loop, e),
+        }
+    }
+
+    fn window_event(&mut self, event_loop: &ActiveEventLoop, _id: WindowId, event: WindowEvent) {
+        let Some(state) = self.state.as_mut() else {
+            return;
+        };
+        let result: Result<()> = match event {
+            WindowEvent::CloseRequested => {
+                event_loop.exit();
+                Ok(())
+            }
+            WindowEvent::Resized(_) => state.recreate(),
+            WindowEvent::KeyboardInput {
+                event:
+                    KeyEvent {
+                        logical_key,
+                        state: ElementState::Pressed,
+                        ..
+                    },
+                ..
+            } => {
+                let step = 5f64.to_radians();
+                match logical_key.as_ref() {
+                    Key::Named(NamedKey::Escape) => event_loop.exit(),
+                    Key::Named(NamedKey::ArrowLeft) => state.orbit(-step, 0.0, 1.0),
+                    Key::Named(NamedKey::ArrowRight) => state.orbit(step, 0.0, 1.0),
+                    Key::Named(NamedKey::ArrowUp) => state.orbit(0.0, step, 1.0),
+                    Key::Named(NamedKey::ArrowDown) => state.orbit(0.0, -step, 1.0),
+                    Key::Character("+") | Key::Character("=") => state.orbit(0.0, 0.0, 0.9),
+                    Key::Character("-") => state.orbit(0.0, 0.0, 1.0 / 0.9),
+                    Key::Character(c) if c.eq_ignore_ascii_case("s") => self.save_next = true,
+                    _ => {}
+                }
+                state.window.request_redraw();
+                Ok(())
+            }
+            WindowEvent::RedrawRequested => {
+                let save = self.save_next || self.frames.is_some_and(|n| self.presented + 1 >= n);
+                match state.frame(save) {
+                    Ok(true) => {
+                        self.presented += 1;
+                        let mut r = Ok(());
+                        if save {
+                            self.save_next = false;
+                            r = state.save_screenshot(&self.screenshot);
+                        }
+                        if self.frames.is_some_and(|n| self.presented >= n) {
+                            event_loop.exit();
+                        } else if self.frames.is_some() {
+                            state.window.request_redraw();
+                        }
+                        r
+                    }
+                    Ok(false) => {
+                        state.window.request_redraw();
+                        Ok(())
+                    }
+                    Err(e) => Err(e),
+                }
+            }
+            _ => Ok(()),
+        };
+        if let Err(e) = result {
+            self.fail(event_loop, e);
+        }
+    }
+}

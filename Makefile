@@ -1,0 +1,31 @@
+# galerkin — two commands:
+#   make demo   install what is missing, build, run every demo (writes out/*.png)
+#   make test   install what is missing, run every test on Mesa lavapipe with validation on
+# Also: make bench (the device's ceilings, the BENCHMARKS.md table), make lint.
+
+CARGO ?= cargo
+LAVAPIPE_ICD ?= /usr/share/vulkan/icd.d/lvp_icd.json
+
+.PHONY: deps build demo test bench lint
+
+deps:
+	@scripts/install-deps.sh
+
+build: deps
+	$(CARGO) build --release
+
+demo: build
+	$(CARGO) run --release --quiet -- demo
+
+# Tests run on lavapipe (selected by VK_DRIVER_FILES) with the Khronos validation layer on;
+# the viewer test starts its own Xvfb.
+test: deps
+	VK_DRIVER_FILES=$(LAVAPIPE_ICD) VK_ICD_FILENAMES=$(LAVAPIPE_ICD) GALERKIN_VALIDATION=1 \
+		$(CARGO) test --release
+
+bench: deps
+	$(CARGO) run --release --quiet -- bench gpu
+
+lint:
+	$(CARGO) fmt --check
+	$(CARGO) clippy --release --all-targets -- -D warnings

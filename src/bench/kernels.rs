@@ -1,0 +1,263 @@
+//! The ceiling kernels on the device: an empty dispatch, an FMA chain, the STREAM triad and a
+//! shared-memory tiled SGEMM. Each is a small pass (pipeline + bind + record) so that tests can
+//! check its result against the CPU before the benchmark trusts its timing.
+
+use ash::vk;
+use bytemuck::{Pod, Zeroable};
+
+use crate::gpu::{
+    shaders, BindingKind, Buffer, ComputePipeline, ComputePipelineDesc, DescriptorSet, Gpu,
+    GpuResult, Resource,
+};
+
+fn storage(b: &Buffer<f32>) -> GpuResult<Resource> {
+    Ok(Resource::Storage(b.binding()?))
+}
+
+/// Does nothing: measures the cost of one dispatch, submit and wait.
+pub struct EmptyKernel {
+    pipeline: ComputePipeline,
+    set: DescriptorSet,
+    _sink: Buffer<f32>,
+}
+
+impl EmptyKernel {
+    /// Builds it.
+    pub fn new(gpu: &Gpu) -> GpuResult<Self> {
+        let pipeline = ComputePipeline::new(
+            gpu,
+            &ComputePipelineDesc {
+                name: "empty",
+                spirv: shaders::bench::EMPTY,
+                bindings: &[BindingKind::StorageBuffer],
+                push_constant_bytes: 0,
+                specialization: &[],
+            },
+        )?;
+        let sink = Buffer::new(
+            gpu,
+            "empty sink",
+            1,
+            vk::BufferUsageFlags::STORAGE_BUFFER,
+            crate::gpu::MemoryKind::GpuOnly,
+        )?;
+        let set = pipeline.bind(gpu, &[storage(&sink)?])?;
+        Ok(Self {
+            pipeline,
+            set,
+            _sink: sink,
+        })
+    }
+
+    /// Records one 1×1×1 dispatch.
+    pub fn record(&self, cmd: vk::CommandBuffer) {
+        self.pipeline
+            .record_dispatch(cmd, &self.set, &[], [1, 1, 1]);
+    }
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct FmaPush {
+    iterations: u32,
+    a: f32,
+    b: f32,
+}
+
+/// Eight independent FMA chains per invocation (`fma.comp`).
+pub struct FmaKernel {
+    pipeline: ComputePipeline,
+    set: DescriptorSet,
+    /// One float per invocation: the sum of its chains.
+    pub sink: Buffer<f32>,
+    invocations: u32,
+}
+
+/// Invocations per FMA workgroup.
+pub const FMA_LOCAL_SIZE: u32 = 256;
+
+impl FmaKernel {
+    /// Builds it for `groups` workgroups of 256 invocations.
+    pub fn new(gpu: &Gpu, groups: u32) -> GpuResult<Self> {
+        let pipeline = ComputePipeline::new(
+            gpu,
+            &ComputePipelineDesc {
+                name: "fma peak",
+                spirv: shaders::bench::FMA,
+                bindings: &[BindingKind::StorageBuffer],
+                push_constant_bytes: std::mem::size_of::<FmaPush>() as u32,
+                specialization: &[],
+            },
+        )?;
+        let invocations = groups * FMA_LOCAL_SIZE;
+        let sink = Buffer::new(
+            gpu,
+            "fma sink",
+            u64::from(invocations),
+            vk::BufferUsageFlags::STORAGE_BUFFER,
+            crate::gpu::MemoryKind::GpuOnly,
+        )?;
+        let set = pipeline.bind(gpu, &[storage(&sink)?])?;
+        Ok(Self {
+            pipeline,
+            set,
+            sink,
+            invocations,
+        })
+    }
+
+    /// Records the kernel: `iterations` rounds of `v ← v·a + b` on each of 8 chains.
+    pub fn record(&self, cmd: vk::CommandBuffer, iterations: u32, a: f32, b: f32) {
+        let push = FmaPush { iterations, a, b };
+        self.pipeline.record_dispatch(
+            cmd,
+            &self.set,
+            bytemuck::bytes_of(&push),
+            [self.invocations / FMA_LOCAL_SIZE, 1, 1],
+        );
+    }
+
+    /// Floating-point operations of one run.
+    pub fn flops(&self, iterations: u32) -> f64 {
+        2.0 * 8.0 * f64::from(iterations) * f64::from(self.invocations)
+    }
+
+    /// CPU f64 reference of invocation `i`'s output (same start values as the shader).
+    pub fn reference(i: u32, iterations: u32, a: f32, b: f32) -> f64 {
+        let x = f64::from(i as f32 * 1e-7);
+        let mut total = 0.0;
+        for c in 0..8 {
+            let mut v = f64::from((x + f64::from(c) * 0.1) as f32);
+            for _ in 0..iterations {
+                v = v * f64::from(a) + f64::from(b);
+            }
+            total += v;
+        }
+        total
+    }
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct TriadPush {
+    s: f32,
+    n4: u32,
+}
+
+/// STREAM triad `a ← b + s·c` (`triad.comp`).
+pub struct TriadKernel {
+    pipeline: ComputePipeline,
+    set: DescriptorSet,
+    n4: u32,
+}
+
+impl TriadKernel {
+    /// Binds `a`, `b`, `c` (equal lengths, a multiple of 4, each within one binding).
+    pub fn new(gpu: &Gpu, a: &Buffer<f32>, b: &Buffer<f32>, c: &Buffer<f32>) -> GpuResult<Self> {
+        assert!(
+            a.len() == b.len() && b.len() == c.len() && a.len().is_multiple_of(4),
+            "triad arrays: equal lengths, multiple of 4"
+        );
+        let pipeline = ComputePipeline::new(
+            gpu,
+            &ComputePipelineDesc {
+                name: "triad",
+                spirv: shaders::bench::TRIAD,
+                bindings: &[BindingKind::StorageBuffer; 3],
+                push_constant_bytes: std::mem::size_of::<TriadPush>() as u32,
+                specialization: &[],
+            },
+        )?;
+        let set = pipeline.bind(gpu, &[storage(a)?, storage(b)?, storage(c)?])?;
+        Ok(Self {
+            pipeline,
+            set,
+            n4: (a.len() / 4) as u32,
+        })
+    }
+
+    /// Records one sweep.
+    pub fn record(&self, gpu: &Gpu, cmd: vk::CommandBuffer, s: f32) {
+        let push = TriadPush { s, n4: self.n4 };
+        let groups = gpu.caps().groups_1d(u64::from(self.n4), 256);
+        self.pipeline
+            .record_dispatch(cmd, &self.set, bytemuck::bytes_of(&push), [groups, 1, 1]);
+    }
+
+    /// Bytes read and written by one sweep.
+    pub fn bytes(&self) -> f64 {
+        3.0 * 16.0 * f64::from(self.n4)
+    }
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct GemmPush {
+    m: u32,
+    n: u32,
+    k: u32,
+}
+
+/// Tile edge of `sgemm.comp`.
+pub const SGEMM_TILE: u32 = 64;
+
+/// Shared-memory tiled SGEMM `C ← A·B`, row-major (`sgemm.comp`).
+pub struct SgemmKernel {
+    pipeline: ComputePipeline,
+    set: DescriptorSet,
+    m: u32,
+    n: u32,
+    k: u32,
+}
+
+impl SgemmKernel {
+    /// Binds A (m×k), B (k×n) and C (m×n).
+    pub fn new(
+        gpu: &Gpu,
+        a: &Buffer<f32>,
+        b: &Buffer<f32>,
+        c: &Buffer<f32>,
+        m: u32,
+        n: u32,
+        k: u32,
+    ) -> GpuResult<Self> {
+        assert_eq!(a.len(), u64::from(m) * u64::from(k), "A is m×k");
+        assert_eq!(b.len(), u64::from(k) * u64::from(n), "B is k×n");
+        assert_eq!(c.len(), u64::from(m) * u64::from(n), "C is m×n");
+        let pipeline = ComputePipeline::new(
+            gpu,
+            &ComputePipelineDesc {
+                name: "sgemm",
+                spirv: shaders::bench::SGEMM,
+                bindings: &[BindingKind::StorageBuffer; 3],
+                push_constant_bytes: std::mem::size_of::<GemmPush>() as u32,
+                specialization: &[],
+            },
+        )?;
+        let set = pipeline.bind(gpu, &[storage(a)?, storage(b)?, storage(c)?])?;
+        Ok(Self {
+            pipeline,
+            set,
+            m,
+            n,
+            k,
+        })
+    }
+
+    /// Records the product.
+    pub fn record(&self, cmd: vk::CommandBuffer) {
+        let push = GemmPush {
+            m: self.m,
+            n: self.n,
+            k: self.k,
+        };
+        let groups = [self.n.div_ceil(SGEMM_TILE), self.m.div_ceil(SGEMM_TILE), 1];
+        self.pipeline
+            .record_dispatch(cmd, &self.set, bytemuck::bytes_of(&push), groups);
+    }
+
+    /// Floating-point operations of one product.
+    pub fn flops(&self) -> f64 {
+        2.0 * f64::from(self.m) * f64::from(self.n) * f64::from(self.k)
+    }
+}

@@ -1,0 +1,105 @@
+//! The viewer, run as a child process (winit allows one event loop per process) under Xvfb:
+//! it must present frames, save a screenshot copied back from the presented swapchain image,
+//! and exit 0 with validation on; the screenshot's pixels are checked against the CPU reference.
+#![cfg(feature = "viewer")]
+
+use std::io::{BufRead, BufReader};
+use std::path::Path;
+use std::process::{Child, Command, Stdio};
+
+use galerkin::demo::field::check_colours;
+use galerkin::demo::scene::DemoScene;
+use galerkin::render::{read_png_rgba8, Colormap};
+
+/// An Xvfb server on a free display, killed on drop.
+struct Xvfb {
+    child: Child,
+    display: String,
+}
+
+impl Xvfb {
+    fn start() -> Xvfb {
+        let mut child = Command::new("Xvfb")
+            .args([
+                "-displayfd",
+                "1",
+                "-screen",
+                "0",
+                "1024x768x24",
+                "-nolisten",
+                "tcp",
+            ])
+            .stdout(Stdio::piped())
+            .stderr(Stdio::null())
+            .spawn()
+            .expect("Xvfb runs (Debian package xvfb; scripts/install-deps.sh installs it)");
+        let mut line = String::new();
+        BufReader::new(child.stdout.take().unwrap())
+            .read_line(&mut line)
+            .unwrap();
+        let display = format!(":{}", line.trim());
+        assert!(
+            line.trim().parse::<u32>().is_ok(),
+            "Xvfb did not report a display: {line:?}"
+        );
+        Xvfb { child, display }
+    }
+}
+
+impl Drop for Xvfb {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+#[test]
+fn the_viewer_presents_frames_and_its_screenshot_matches_the_reference() {
+    let x = Xvfb::start();
+    let dir = std::env::temp_dir().join(format!("galerkin-viewer-{}", std::process::id()));
+    let shot = dir.join("shot.png");
+    let scene_path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/demo.toml");
+    let out = Command::new(env!("CARGO_BIN_EXE_galerkin"))
+        .args(["view", "--validation", "--frames", "4", "--scene"])
+        .arg(&scene_path)
+        .arg("--screenshot")
+        .arg(&shot)
+        .env("DISPLAY", &x.display)
+        .env_remove("WAYLAND_DISPLAY")
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "galerkin view failed: {stderr}");
+
+    let scene = DemoScene::load(&scene_path).unwrap();
+    let (w, h, rgba) = read_png_rgba8(&shot).unwrap();
+    assert_eq!(
+        (w, h),
+        (scene.image.width, scene.image.height),
+        "window size"
+    );
+    let colormap = Colormap::by_name(&scene.colormap_name()).unwrap();
+    let background = [0.12f32, 0.12, 0.14, 1.0].map(|v| (v * 255.0).round() as u8);
+    let check = check_colours(
+        &scene.camera,
+        &scene.field.coefficients,
+        &colormap,
+        scene.ramp(),
+        w,
+        h,
+        &rgba,
+        background,
+    );
+    assert!(
+        check.passed(),
+        "{} pixels differ; first: {:?}",
+        check.failures,
+        check.first_failure
+    );
+    assert!(
+        check.checked > (w * h / 5) as usize,
+        "only {} covered pixels",
+        check.checked
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
