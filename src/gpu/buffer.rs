@@ -303,16 +303,26 @@ impl<T: Pod> Buffer<T> {
     /// Reads elements `range.first .. range.first + range.len` back through staging buffers,
     /// two chunks in flight.
     pub fn download_range(&self, gpu: &Gpu, range: Chunk) -> GpuResult<Vec<T>> {
+        let mut out = vec![T::zeroed(); range.len as usize];
+        self.download_into(gpu, range.first, &mut out)?;
+        Ok(out)
+    }
+
+    /// Reads elements `first .. first + out.len()` into `out` (reusing the caller's memory).
+    pub fn download_into(&self, gpu: &Gpu, first: u64, out: &mut [T]) -> GpuResult<()> {
         let elem = std::mem::size_of::<T>() as u64;
+        let range = Chunk {
+            first,
+            len: out.len() as u64,
+        };
         assert!(
             range.first + range.len <= self.len,
             "download {range:?} outside `{}`",
             self.name
         );
-        let mut out = vec![T::zeroed(); range.len as usize];
-        let dst: &mut [u8] = bytemuck::cast_slice_mut(&mut out);
+        let dst: &mut [u8] = bytemuck::cast_slice_mut(out);
         if dst.is_empty() {
-            return Ok(out);
+            return Ok(());
         }
         let chunk = STAGING_CHUNK_BYTES.min(dst.len() as u64);
         let pool = &gpu.staging;
@@ -363,7 +373,7 @@ impl<T: Pod> Buffer<T> {
         for b in staging {
             pool.give_back(b);
         }
-        Ok(out)
+        Ok(())
     }
 
     /// Records `vkCmdFillBuffer` of the whole buffer with the 32-bit pattern `word`.
