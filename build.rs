@@ -19,8 +19,7 @@ use std::process::Command;
 const STAGES: [&str; 4] = ["comp", "vert", "frag", "geom"];
 
 fn main() {
-    let root =
-        PathBuf::from(std::env::var("CARGO_MANIFEST_DIR").expect("cargo sets CARGO_MANIFEST_DIR"));
+    let root = PathBuf::from(std::env::var("CARGO_MANIFEST_DIR").expect("cargo sets CARGO_MANIFEST_DIR"));
     let src = root.join("shaders-glsl");
     let out = PathBuf::from(std::env::var("OUT_DIR").expect("cargo sets OUT_DIR"));
     let glslc = std::env::var("GLSLC").unwrap_or_else(|_| "glslc".to_string());
@@ -36,11 +35,7 @@ fn main() {
     let mut failures = Vec::new();
     for rel in &shaders {
         let file = src.join(rel);
-        let ext = rel
-            .extension()
-            .and_then(|e| e.to_str())
-            .unwrap_or_default()
-            .to_string();
+        let ext = rel.extension().and_then(|e| e.to_str()).unwrap_or_default().to_string();
         let stem = rel.file_stem().and_then(|s| s.to_str()).unwrap_or_default();
         let module = rel
             .parent()
@@ -48,19 +43,12 @@ fn main() {
             .filter(|p| !p.is_empty())
             .unwrap_or("root")
             .replace(['/', '\\', '-'], "_");
-        let name = if ext == "comp" {
-            stem.to_uppercase()
-        } else {
-            format!("{}_{}", stem, ext).to_uppercase()
-        }
-        .replace('-', "_");
-        let spv = out
-            .join("spirv")
-            .join(rel)
-            .with_extension(format!("{ext}.spv"));
+        let name =
+            if ext == "comp" { stem.to_uppercase() } else { format!("{}_{}", stem, ext).to_uppercase() }
+                .replace('-', "_");
+        let spv = out.join("spirv").join(rel).with_extension(format!("{ext}.spv"));
         let dep = spv.with_extension("d");
-        std::fs::create_dir_all(spv.parent().expect("spv has a parent"))
-            .expect("create OUT_DIR/spirv");
+        std::fs::create_dir_all(spv.parent().expect("spv has a parent")).expect("create OUT_DIR/spirv");
         println!("cargo:rerun-if-changed={}", file.display());
 
         let result = Command::new(&glslc)
@@ -98,10 +86,7 @@ fn main() {
                 println!("cargo:rerun-if-changed={d}");
             }
         }
-        modules
-            .entry(module)
-            .or_default()
-            .push((name, spv, rel.display().to_string()));
+        modules.entry(module).or_default().push((name, spv, rel.display().to_string()));
     }
     if !failures.is_empty() {
         // glslc prints `path:line: error: ...`; show every failing shader, then fail the build.
@@ -118,16 +103,8 @@ fn main() {
         writeln!(code, "pub mod {module} {{").unwrap();
         for (name, spv, source) in consts {
             let bytes = std::fs::read(spv).expect("read compiled SPIR-V");
-            assert!(
-                bytes.len() % 4 == 0,
-                "{source}: SPIR-V size is not a multiple of 4"
-            );
-            writeln!(
-                code,
-                "    /// SPIR-V of `shaders-glsl/{source}` ({} words).",
-                bytes.len() / 4
-            )
-            .unwrap();
+            assert!(bytes.len() % 4 == 0, "{source}: SPIR-V size is not a multiple of 4");
+            writeln!(code, "    /// SPIR-V of `shaders-glsl/{source}` ({} words).", bytes.len() / 4).unwrap();
             write!(code, "    pub const {name}: &[u32] = &[").unwrap();
             for (i, w) in bytes.chunks_exact(4).enumerate() {
                 if i % 8 == 0 {
@@ -141,17 +118,8 @@ fn main() {
         }
         code.push_str("}\n\n");
     }
-    writeln!(
-        code,
-        "/// Every compiled shader: (path under `shaders-glsl/`, SPIR-V words)."
-    )
-    .unwrap();
-    writeln!(
-        code,
-        "pub const ALL: &[(&str, &[u32])] = &[{}];",
-        all.join(", ")
-    )
-    .unwrap();
+    writeln!(code, "/// Every compiled shader: (path under `shaders-glsl/`, SPIR-V words).").unwrap();
+    writeln!(code, "pub const ALL: &[(&str, &[u32])] = &[{}];", all.join(", ")).unwrap();
     std::fs::write(out.join("shaders.rs"), code).expect("write shaders.rs");
 }
 
@@ -168,11 +136,7 @@ fn collect(base: &Path, dir: &Path, out: &mut Vec<PathBuf>) {
                 println!("cargo:rerun-if-changed={}", path.display());
                 collect(base, &path, out);
             }
-        } else if path
-            .extension()
-            .and_then(|e| e.to_str())
-            .is_some_and(|e| STAGES.contains(&e))
-        {
+        } else if path.extension().and_then(|e| e.to_str()).is_some_and(|e| STAGES.contains(&e)) {
             out.push(rel);
         }
     }

@@ -10,11 +10,8 @@ fn main() {
             std::process::exit(1);
         }
     };
-    let config = if quick {
-        galerkin::bench::BenchConfig::quick()
-    } else {
-        galerkin::bench::BenchConfig::full()
-    };
+    let config =
+        if quick { galerkin::bench::BenchConfig::quick() } else { galerkin::bench::BenchConfig::full() };
     match galerkin::bench::run(&gpu, &config, |step| eprintln!("… {step}")) {
         Ok(rows) => {
             let c = gpu.caps();

@@ -35,9 +35,7 @@ unsafe extern "system" fn host_messenger(
         ERRORS.fetch_add(1, Ordering::SeqCst);
         // SAFETY: the layer passes a valid callback struct and NUL-terminated message.
         let msg = unsafe {
-            data.as_ref()
-                .and_then(|d| d.message_as_c_str())
-                .map(|m| m.to_string_lossy().into_owned())
+            data.as_ref().and_then(|d| d.message_as_c_str()).map(|m| m.to_string_lossy().into_owned())
         };
         if let (Ok(mut first), Some(msg)) = (FIRST_ERROR.lock(), msg) {
             if first.is_empty() {
@@ -74,9 +72,7 @@ fn find_memory(
     // SAFETY: plain query.
     let props = unsafe { instance.get_physical_device_memory_properties(physical) };
     (0..props.memory_type_count)
-        .find(|&i| {
-            bits & (1 << i) != 0 && props.memory_types[i as usize].property_flags.contains(want)
-        })
+        .find(|&i| bits & (1 << i) != 0 && props.memory_types[i as usize].property_flags.contains(want))
         .expect("a suitable memory type")
 }
 
@@ -94,23 +90,12 @@ pub fn run_host(require_validation: bool) -> Result<HostReport, String> {
             .iter()
             .any(|l| l.layer_name_as_c_str() == Ok(layer));
         if require_validation && !validated {
-            return Err(
-                "VK_LAYER_KHRONOS_validation is not installed (vulkan-validationlayers)".into(),
-            );
+            return Err("VK_LAYER_KHRONOS_validation is not installed (vulkan-validationlayers)".into());
         }
-        let layers = if validated {
-            vec![layer.as_ptr()]
-        } else {
-            vec![]
-        };
-        let extensions = if validated {
-            vec![ash::ext::debug_utils::NAME.as_ptr()]
-        } else {
-            vec![]
-        };
-        let app = vk::ApplicationInfo::default()
-            .application_name(c"embed_host")
-            .api_version(vk::API_VERSION_1_2);
+        let layers = if validated { vec![layer.as_ptr()] } else { vec![] };
+        let extensions = if validated { vec![ash::ext::debug_utils::NAME.as_ptr()] } else { vec![] };
+        let app =
+            vk::ApplicationInfo::default().application_name(c"embed_host").api_version(vk::API_VERSION_1_2);
         let instance = entry
             .create_instance(
                 &vk::InstanceCreateInfo::default()
@@ -132,9 +117,7 @@ pub fn run_host(require_validation: bool) -> Result<HostReport, String> {
                         | vk::DebugUtilsMessageTypeFlagsEXT::GENERAL,
                 )
                 .pfn_user_callback(Some(host_messenger));
-            debug
-                .create_debug_utils_messenger(&info, None)
-                .map_err(|e| e.to_string())?
+            debug.create_debug_utils_messenger(&info, None).map_err(|e| e.to_string())?
         } else {
             vk::DebugUtilsMessengerEXT::null()
         };
@@ -147,44 +130,31 @@ pub fn run_host(require_validation: bool) -> Result<HostReport, String> {
                 instance
                     .get_physical_device_queue_family_properties(p)
                     .iter()
-                    .position(|f| {
-                        f.queue_flags
-                            .contains(vk::QueueFlags::GRAPHICS | vk::QueueFlags::COMPUTE)
-                    })
+                    .position(|f| f.queue_flags.contains(vk::QueueFlags::GRAPHICS | vk::QueueFlags::COMPUTE))
                     .map(|f| (p, f as u32))
             })
             .ok_or("no device with a graphics+compute queue")?;
         let priorities = [1.0];
-        let queues = [vk::DeviceQueueCreateInfo::default()
-            .queue_family_index(family)
-            .queue_priorities(&priorities)];
+        let queues =
+            [vk::DeviceQueueCreateInfo::default().queue_family_index(family).queue_priorities(&priorities)];
         let features = vk::PhysicalDeviceFeatures::default();
         let device = instance
             .create_device(
                 physical,
-                &vk::DeviceCreateInfo::default()
-                    .queue_create_infos(&queues)
-                    .enabled_features(&features),
+                &vk::DeviceCreateInfo::default().queue_create_infos(&queues).enabled_features(&features),
                 None,
             )
             .map_err(|e| format!("vkCreateDevice: {e}"))?;
         let queue = device.get_device_queue(family, 0);
         let pool = device
-            .create_command_pool(
-                &vk::CommandPoolCreateInfo::default().queue_family_index(family),
-                None,
-            )
+            .create_command_pool(&vk::CommandPoolCreateInfo::default().queue_family_index(family), None)
             .map_err(|e| e.to_string())?;
         let cmd = device
             .allocate_command_buffers(
-                &vk::CommandBufferAllocateInfo::default()
-                    .command_pool(pool)
-                    .command_buffer_count(1),
+                &vk::CommandBufferAllocateInfo::default().command_pool(pool).command_buffer_count(1),
             )
             .map_err(|e| e.to_string())?[0];
-        let fence = device
-            .create_fence(&vk::FenceCreateInfo::default(), None)
-            .map_err(|e| e.to_string())?;
+        let fence = device.create_fence(&vk::FenceCreateInfo::default(), None).map_err(|e| e.to_string())?;
 
         // The host's colour image and a host-visible buffer to read it back into.
         let image = device
@@ -192,66 +162,47 @@ pub fn run_host(require_validation: bool) -> Result<HostReport, String> {
                 &vk::ImageCreateInfo::default()
                     .image_type(vk::ImageType::TYPE_2D)
                     .format(vk::Format::R8G8B8A8_UNORM)
-                    .extent(vk::Extent3D {
-                        width: W,
-                        height: H,
-                        depth: 1,
-                    })
+                    .extent(vk::Extent3D { width: W, height: H, depth: 1 })
                     .mip_levels(1)
                     .array_layers(1)
                     .samples(vk::SampleCountFlags::TYPE_1)
                     .tiling(vk::ImageTiling::OPTIMAL)
-                    .usage(
-                        vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::TRANSFER_SRC,
-                    ),
+                    .usage(vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::TRANSFER_SRC),
                 None,
             )
             .map_err(|e| e.to_string())?;
         let req = device.get_image_memory_requirements(image);
         let image_memory = device
             .allocate_memory(
-                &vk::MemoryAllocateInfo::default()
-                    .allocation_size(req.size)
-                    .memory_type_index(find_memory(
-                        &instance,
-                        physical,
-                        req.memory_type_bits,
-                        vk::MemoryPropertyFlags::DEVICE_LOCAL,
-                    )),
+                &vk::MemoryAllocateInfo::default().allocation_size(req.size).memory_type_index(find_memory(
+                    &instance,
+                    physical,
+                    req.memory_type_bits,
+                    vk::MemoryPropertyFlags::DEVICE_LOCAL,
+                )),
                 None,
             )
             .map_err(|e| e.to_string())?;
-        device
-            .bind_image_memory(image, image_memory, 0)
-            .map_err(|e| e.to_string())?;
+        device.bind_image_memory(image, image_memory, 0).map_err(|e| e.to_string())?;
         let bytes = u64::from(4 * W * H);
         let readback = device
             .create_buffer(
-                &vk::BufferCreateInfo::default()
-                    .size(bytes)
-                    .usage(vk::BufferUsageFlags::TRANSFER_DST),
+                &vk::BufferCreateInfo::default().size(bytes).usage(vk::BufferUsageFlags::TRANSFER_DST),
                 None,
             )
             .map_err(|e| e.to_string())?;
         let req = device.get_buffer_memory_requirements(readback);
-        let host_visible =
-            vk::MemoryPropertyFlags::HOST_VISIBLE | vk::MemoryPropertyFlags::HOST_COHERENT;
-        let readback_memory = device
-            .allocate_memory(
-                &vk::MemoryAllocateInfo::default()
-                    .allocation_size(req.size)
-                    .memory_type_index(find_memory(
-                        &instance,
-                        physical,
-                        req.memory_type_bits,
-                        host_visible,
-                    )),
-                None,
-            )
-            .map_err(|e| e.to_string())?;
-        device
-            .bind_buffer_memory(readback, readback_memory, 0)
-            .map_err(|e| e.to_string())?;
+        let host_visible = vk::MemoryPropertyFlags::HOST_VISIBLE | vk::MemoryPropertyFlags::HOST_COHERENT;
+        let readback_memory =
+            device
+                .allocate_memory(
+                    &vk::MemoryAllocateInfo::default().allocation_size(req.size).memory_type_index(
+                        find_memory(&instance, physical, req.memory_type_bits, host_visible),
+                    ),
+                    None,
+                )
+                .map_err(|e| e.to_string())?;
+        device.bind_buffer_memory(readback, readback_memory, 0).map_err(|e| e.to_string())?;
 
         // Hand everything to galerkin.
         let gpu = Gpu::from_raw(
@@ -264,10 +215,7 @@ pub fn run_host(require_validation: bool) -> Result<HostReport, String> {
                 queue,
                 enabled_features: features,
             },
-            &GpuDesc {
-                validation: false,
-                ..GpuDesc::default()
-            },
+            &GpuDesc { validation: false, ..GpuDesc::default() },
         )
         .map_err(|e| e.to_string())?;
 
@@ -283,32 +231,14 @@ pub fn run_host(require_validation: bool) -> Result<HostReport, String> {
             .map_err(|e| e.to_string())?;
         let axpy = Axpy::new(&gpu).map_err(|e| e.to_string())?;
         let axpy_set = axpy.bind(&gpu, &xb, &yb).map_err(|e| e.to_string())?;
-        let target =
-            RenderTarget::from_host_image(&gpu, "host image", image, ColorFormat::Rgba8, W, H)
-                .map_err(|e| e.to_string())?;
-        let p = BivariateCubic {
-            coefficients: [0.2, -0.5, 0.9, 0.3, -1.1, 0.25, -0.35, 0.6, 0.15, 0.4],
-        };
-        let ramp = Ramp {
-            lo: -2.0,
-            hi: 2.0,
-            log: false,
-        };
+        let target = RenderTarget::from_host_image(&gpu, "host image", image, ColorFormat::Rgba8, W, H)
+            .map_err(|e| e.to_string())?;
+        let p = BivariateCubic { coefficients: [0.2, -0.5, 0.9, 0.3, -1.1, 0.25, -0.35, 0.6, 0.15, 0.4] };
+        let ramp = Ramp { lo: -2.0, hi: 2.0, log: false };
         let colormap = Colormap::cool_warm();
-        let field = FieldPass::new(
-            &gpu,
-            target.render_pass(),
-            &p,
-            6,
-            &colormap,
-            ramp,
-            FieldOutput::Colour,
-        )
-        .map_err(|e| e.to_string())?;
-        let camera = Camera {
-            eye: [-0.3, -2.4, 2.2],
-            ..Camera::default()
-        };
+        let field = FieldPass::new(&gpu, target.render_pass(), &p, 6, &colormap, ramp, FieldOutput::Colour)
+            .map_err(|e| e.to_string())?;
+        let camera = Camera { eye: [-0.3, -2.4, 2.2], ..Camera::default() };
 
         // The host records its command buffer: galerkin's dispatch and draw, then its own copy.
         device
@@ -325,11 +255,7 @@ pub fn run_host(require_validation: bool) -> Result<HostReport, String> {
                 layer_count: 1,
                 ..Default::default()
             },
-            image_extent: vk::Extent3D {
-                width: W,
-                height: H,
-                depth: 1,
-            },
+            image_extent: vk::Extent3D { width: W, height: H, depth: 1 },
             ..Default::default()
         };
         device.cmd_copy_image_to_buffer(
@@ -354,15 +280,9 @@ pub fn run_host(require_validation: bool) -> Result<HostReport, String> {
         device.end_command_buffer(cmd).map_err(|e| e.to_string())?;
         let cmds = [cmd];
         device
-            .queue_submit(
-                queue,
-                &[vk::SubmitInfo::default().command_buffers(&cmds)],
-                fence,
-            )
+            .queue_submit(queue, &[vk::SubmitInfo::default().command_buffers(&cmds)], fence)
             .map_err(|e| e.to_string())?;
-        device
-            .wait_for_fences(&[fence], true, u64::MAX)
-            .map_err(|e| e.to_string())?;
+        device.wait_for_fences(&[fence], true, u64::MAX).map_err(|e| e.to_string())?;
 
         // The host reads its own image back and checks every pixel against the CPU reference.
         let mapped = device
@@ -380,23 +300,15 @@ pub fn run_host(require_validation: bool) -> Result<HostReport, String> {
 
         // The host's device still works: use it once more, then tear down.
         device.reset_fences(&[fence]).map_err(|e| e.to_string())?;
-        device
-            .reset_command_pool(pool, vk::CommandPoolResetFlags::empty())
-            .map_err(|e| e.to_string())?;
+        device.reset_command_pool(pool, vk::CommandPoolResetFlags::empty()).map_err(|e| e.to_string())?;
         device
             .begin_command_buffer(cmd, &vk::CommandBufferBeginInfo::default())
             .map_err(|e| e.to_string())?;
         device.end_command_buffer(cmd).map_err(|e| e.to_string())?;
         device
-            .queue_submit(
-                queue,
-                &[vk::SubmitInfo::default().command_buffers(&cmds)],
-                fence,
-            )
+            .queue_submit(queue, &[vk::SubmitInfo::default().command_buffers(&cmds)], fence)
             .map_err(|e| e.to_string())?;
-        device
-            .wait_for_fences(&[fence], true, u64::MAX)
-            .map_err(|e| e.to_string())?;
+        device.wait_for_fences(&[fence], true, u64::MAX).map_err(|e| e.to_string())?;
         device.destroy_buffer(readback, None);
         device.free_memory(readback_memory, None);
         device.destroy_image(image, None);

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Installs the system packages galerkin needs, only those that are missing:
 #   Mesa lavapipe (Vulkan on the CPU; Mesa 25 from bookworm-backports on Debian 12),
-#   the Vulkan loader, the Khronos validation layer, glslc, spirv-tools and Xvfb.
+#   the Vulkan loader, the Khronos validation layer, glslc, spirv-tools, Xvfb, and the X11
+#   client libraries the viewer's window (winit) loads at run time.
 # Idempotent and quick when everything is present. No mirror host name is written here:
 # on Debian 12 the bookworm-backports entry is derived from the machine's own apt sources.
 set -euo pipefail
@@ -24,7 +25,8 @@ if ! command -v apt-get >/dev/null 2>&1; then
     exit 0
 fi
 
-for p in libvulkan1 vulkan-validationlayers glslc spirv-tools xvfb; do
+for p in libvulkan1 vulkan-validationlayers glslc spirv-tools xvfb \
+         libx11-xcb1 libxcursor1 libxrandr2 libxi6 libxkbcommon-x11-0; do
     have_pkg "$p" || need+=("$p")
 done
 mesa_ok=1

@@ -11,9 +11,7 @@ use galerkin::demo::axpy::{axpy_error_ratio, Axpy};
 use galerkin::demo::field::{check_colours, check_values, FieldOutput, FieldPass};
 use galerkin::demo::scene::DemoScene;
 use galerkin::gpu::{shaders, vk, Buffer, Gpu, GpuDesc, Profiler};
-use galerkin::render::{
-    write_exr_rgba, write_png_rgba8, ColorFormat, Colormap, Pixels, RenderTarget,
-};
+use galerkin::render::{write_exr_rgba, write_png_rgba8, ColorFormat, Colormap, Pixels, RenderTarget};
 
 /// galerkin: reduced simulation by non-polynomial Galerkin projection and pixel-exact
 /// rendering of high-order solutions, on Vulkan.
@@ -81,10 +79,7 @@ enum BenchWhat {
 fn main() {
     let filter = tracing_subscriber::EnvFilter::try_from_env("GALERKIN_LOG")
         .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("warn,winit=error"));
-    tracing_subscriber::fmt()
-        .with_env_filter(filter)
-        .with_writer(std::io::stderr)
-        .init();
+    tracing_subscriber::fmt().with_env_filter(filter).with_writer(std::io::stderr).init();
     let cli = Cli::parse();
     if let Err(e) = run(cli) {
         eprintln!("error: {e:#}");
@@ -106,14 +101,8 @@ fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Info => info(&desc),
         Command::Demo { scene, out } => demo(&desc, &scene, &out),
-        Command::View {
-            scene,
-            frames,
-            screenshot,
-        } => view(desc, &scene, frames, &screenshot),
-        Command::Bench {
-            what: BenchWhat::Gpu { quick },
-        } => bench_gpu(&desc, quick),
+        Command::View { scene, frames, screenshot } => view(desc, &scene, frames, &screenshot),
+        Command::Bench { what: BenchWhat::Gpu { quick } } => bench_gpu(&desc, quick),
     }
 }
 
@@ -124,11 +113,7 @@ fn check_validation(gpu: Gpu) -> Result<()> {
     if let Some(log) = log {
         let errors = log.errors();
         if !errors.is_empty() {
-            bail!(
-                "{} Vulkan validation error(s); the first: {}",
-                errors.len(),
-                errors[0]
-            );
+            bail!("{} Vulkan validation error(s); the first: {}", errors.len(), errors[0]);
         }
     }
     Ok(())
@@ -140,56 +125,23 @@ fn info(desc: &GpuDesc) -> Result<()> {
     let mib = |b: u64| b as f64 / (1 << 20) as f64;
     println!("device        {} ({:?})", c.device_name, c.device_type);
     println!("driver        {}", c.driver);
-    println!(
-        "vulkan        {}.{}.{}",
-        c.api_version.0, c.api_version.1, c.api_version.2
-    );
-    println!(
-        "ids           vendor {:#06x} device {:#06x}",
-        c.vendor_id, c.device_id
-    );
+    println!("vulkan        {}.{}.{}", c.api_version.0, c.api_version.1, c.api_version.2);
+    println!("ids           vendor {:#06x} device {:#06x}", c.vendor_id, c.device_id);
     println!("limits");
-    println!(
-        "  maxStorageBufferRange           {:.0} MiB",
-        mib(c.max_storage_buffer_range)
-    );
-    println!(
-        "  maxMemoryAllocationSize         {:.0} MiB",
-        mib(c.max_memory_allocation_size)
-    );
-    println!(
-        "  maxBufferSize                   {:.0} MiB",
-        mib(c.max_buffer_size.min(1 << 50))
-    );
-    println!(
-        "  minStorageBufferOffsetAlignment {}",
-        c.min_storage_buffer_offset_alignment
-    );
-    println!(
-        "  maxComputeWorkGroupCount        {:?}",
-        c.max_compute_work_group_count
-    );
+    println!("  maxStorageBufferRange           {:.0} MiB", mib(c.max_storage_buffer_range));
+    println!("  maxMemoryAllocationSize         {:.0} MiB", mib(c.max_memory_allocation_size));
+    println!("  maxBufferSize                   {:.0} MiB", mib(c.max_buffer_size.min(1 << 50)));
+    println!("  minStorageBufferOffsetAlignment {}", c.min_storage_buffer_offset_alignment);
+    println!("  maxComputeWorkGroupCount        {:?}", c.max_compute_work_group_count);
     println!(
         "  maxComputeWorkGroupSize         {:?} ({} invocations)",
         c.max_compute_work_group_size, c.max_compute_work_group_invocations
     );
-    println!(
-        "  maxComputeSharedMemorySize      {} KiB",
-        c.max_compute_shared_memory_size / 1024
-    );
+    println!("  maxComputeSharedMemorySize      {} KiB", c.max_compute_shared_memory_size / 1024);
     println!("  subgroup size                   {}", c.subgroup_size);
-    println!(
-        "  maxPushConstantsSize            {} B",
-        c.max_push_constants_size
-    );
-    println!(
-        "  maxImageDimension2D             {}",
-        c.max_image_dimension_2d
-    );
-    println!(
-        "  maxFragmentInputComponents      {}",
-        c.max_fragment_input_components
-    );
+    println!("  maxPushConstantsSize            {} B", c.max_push_constants_size);
+    println!("  maxImageDimension2D             {}", c.max_image_dimension_2d);
+    println!("  maxFragmentInputComponents      {}", c.max_fragment_input_components);
     match c.timestamp_period_ns {
         Some(p) => println!("  timestamps                      {p} ns per tick"),
         None => println!("  timestamps                      not supported"),
@@ -222,9 +174,7 @@ fn demo(desc: &GpuDesc, scene_path: &Path, out: &Path) -> Result<()> {
     // Compute: y <- a x + y, every element against the CPU f64 reference.
     let n = usize::try_from(scene.axpy.n).context("axpy.n does not fit in memory")?;
     let a = scene.axpy.a;
-    let x: Vec<f32> = (0..n)
-        .map(|i| ((i % 1013) as f32 - 506.0) / 506.0)
-        .collect();
+    let x: Vec<f32> = (0..n).map(|i| ((i % 1013) as f32 - 506.0) / 506.0).collect();
     let y: Vec<f32> = (0..n).map(|i| ((i % 977) as f32) / 977.0).collect();
     let xb = Buffer::from_slice(&gpu, "demo x", &x, vk::BufferUsageFlags::STORAGE_BUFFER)?;
     let yb = Buffer::from_slice(&gpu, "demo y", &y, vk::BufferUsageFlags::STORAGE_BUFFER)?;
@@ -240,10 +190,7 @@ fn demo(desc: &GpuDesc, scene_path: &Path, out: &Path) -> Result<()> {
         None => axpy.record(&gpu, cmd, &binding, a as f32),
     })?;
     let wall = t.elapsed();
-    let kernel_ms = profiler
-        .as_ref()
-        .and_then(|p| p.results().ok())
-        .and_then(|r| r.first().map(|s| s.1));
+    let kernel_ms = profiler.as_ref().and_then(|p| p.results().ok()).and_then(|r| r.first().map(|s| s.1));
     let result = yb.download(&gpu)?;
     let (ratio, at) = axpy_error_ratio(a, &x, &y, &result);
     println!(
@@ -271,9 +218,8 @@ fn demo(desc: &GpuDesc, scene_path: &Path, out: &Path) -> Result<()> {
         scene.ramp(),
         FieldOutput::Value,
     )?;
-    let Pixels::Rgba32F(v) = values.render(&gpu, [0.0; 4], |cmd| {
-        pass.record(cmd, values.extent(), &scene.camera)
-    })?
+    let Pixels::Rgba32F(v) =
+        values.render(&gpu, [0.0; 4], |cmd| pass.record(cmd, values.extent(), &scene.camera))?
     else {
         bail!("float target returned bytes");
     };
@@ -305,9 +251,8 @@ fn demo(desc: &GpuDesc, scene_path: &Path, out: &Path) -> Result<()> {
         FieldOutput::Colour,
     )?;
     let background = [0.12, 0.12, 0.14, 1.0];
-    let Pixels::Rgba8(c) = colours.render(&gpu, background, |cmd| {
-        pass.record(cmd, colours.extent(), &scene.camera)
-    })?
+    let Pixels::Rgba8(c) =
+        colours.render(&gpu, background, |cmd| pass.record(cmd, colours.extent(), &scene.camera))?
     else {
         bail!("RGBA8 target returned floats");
     };
@@ -345,11 +290,8 @@ fn view(_: GpuDesc, _: &Path, _: Option<u64>, _: &Path) -> Result<()> {
 
 fn bench_gpu(desc: &GpuDesc, quick: bool) -> Result<()> {
     let gpu = Gpu::new(desc)?;
-    let config = if quick {
-        galerkin::bench::BenchConfig::quick()
-    } else {
-        galerkin::bench::BenchConfig::full()
-    };
+    let config =
+        if quick { galerkin::bench::BenchConfig::quick() } else { galerkin::bench::BenchConfig::full() };
     let bar = indicatif::ProgressBar::new(5);
     bar.set_style(
         indicatif::ProgressStyle::with_template("{bar:30} {pos}/{len} {msg}")
@@ -367,11 +309,7 @@ fn bench_gpu(desc: &GpuDesc, quick: bool) -> Result<()> {
         "device: {} — {} — Vulkan {}.{}.{}",
         c.device_name, c.driver, c.api_version.0, c.api_version.1, c.api_version.2
     );
-    println!(
-        "cpu peers: {} threads; medians of {} runs\n",
-        galerkin::bench::cpu::threads(),
-        config.reps
-    );
+    println!("cpu peers: {} threads; medians of {} runs\n", galerkin::bench::cpu::threads(), config.reps);
     print!("{}", galerkin::bench::table(&rows));
     check_validation(gpu)
 }

@@ -15,8 +15,7 @@ fn sgemm_matches_a_cpu_f64_product_at_odd_sizes() {
         let usage = vk::BufferUsageFlags::STORAGE_BUFFER;
         let ab = Buffer::from_slice(&gpu, "A", &a, usage).unwrap();
         let bb = Buffer::from_slice(&gpu, "B", &b, usage).unwrap();
-        let cb =
-            Buffer::<f32>::new(&gpu, "C", u64::from(m * n), usage, MemoryKind::GpuOnly).unwrap();
+        let cb = Buffer::<f32>::new(&gpu, "C", u64::from(m * n), usage, MemoryKind::GpuOnly).unwrap();
         let gemm = SgemmKernel::new(&gpu, &ab, &bb, &cb, m, n, k).unwrap();
         gpu.run(|cmd| gemm.record(cmd)).unwrap();
         let c = cb.download(&gpu).unwrap();
@@ -31,10 +30,7 @@ fn sgemm_matches_a_cpu_f64_product_at_odd_sizes() {
                 // f32 accumulation of k products: |error| ≤ k·2⁻²⁴·Σ|a||b| (standard bound).
                 let tol = f64::from(k) * 2f64.powi(-24) * scale + 1e-30;
                 let got = f64::from(c[i * n as usize + j]);
-                assert!(
-                    (got - exact).abs() <= tol,
-                    "{m}x{n}x{k} C[{i}][{j}] = {got} vs {exact} (tol {tol})"
-                );
+                assert!((got - exact).abs() <= tol, "{m}x{n}x{k} C[{i}][{j}] = {got} vs {exact} (tol {tol})");
             }
         }
     }
@@ -56,10 +52,7 @@ fn triad_and_fma_compute_their_references() {
     for i in 0..n {
         // b + 0.5c: the product is exact, one rounding in the sum.
         let exact = f64::from(b[i]) + 0.5 * f64::from(c[i]);
-        assert!(
-            (f64::from(got[i]) - exact).abs() <= 2f64.powi(-24) * exact.abs() + 1e-45,
-            "a[{i}]"
-        );
+        assert!((f64::from(got[i]) - exact).abs() <= 2f64.powi(-24) * exact.abs() + 1e-45, "a[{i}]");
     }
 
     let fma = FmaKernel::new(&gpu, 2).unwrap();
@@ -69,10 +62,7 @@ fn triad_and_fma_compute_their_references() {
     for (i, &s) in sink.iter().enumerate() {
         let want = FmaKernel::reference(i as u32, iters, a, bb);
         // 100 contracting steps (|a| < 1) keep the f32 error near a few ulps of 8.
-        assert!(
-            (f64::from(s) - want).abs() < 1e-5 * want.abs(),
-            "invocation {i}: {s} vs {want}"
-        );
+        assert!((f64::from(s) - want).abs() < 1e-5 * want.abs(), "invocation {i}: {s} vs {want}");
     }
     assert_eq!(fma.flops(iters), 2.0 * 8.0 * 100.0 * 512.0);
 }
@@ -90,14 +80,7 @@ fn timestamp_scopes_measure_work() {
     })
     .unwrap();
     let r = profiler.results().unwrap();
-    assert_eq!(
-        r.iter().map(|s| s.0.as_str()).collect::<Vec<_>>(),
-        ["empty", "fma"]
-    );
-    assert!(
-        r[1].1 > 0.0 && r[1].1 < 60_000.0,
-        "fma scope took {} ms",
-        r[1].1
-    );
+    assert_eq!(r.iter().map(|s| s.0.as_str()).collect::<Vec<_>>(), ["empty", "fma"]);
+    assert!(r[1].1 > 0.0 && r[1].1 < 60_000.0, "fma scope took {} ms", r[1].1);
     assert!(r[0].1 >= 0.0);
 }

@@ -12,53 +12,26 @@ fn staged_round_trip_over_several_chunks_is_exact() {
     // 2.5 staging chunks of f32, so both staging buffers are reused and the last is partial.
     let n = (STAGING_CHUNK_BYTES * 5 / 2 / 4) as usize + 3;
     let data = common::random_f32(n, 3);
-    let b = Buffer::from_slice(
-        &gpu,
-        "round trip",
-        &data,
-        vk::BufferUsageFlags::STORAGE_BUFFER,
-    )
-    .unwrap();
+    let b = Buffer::from_slice(&gpu, "round trip", &data, vk::BufferUsageFlags::STORAGE_BUFFER).unwrap();
     assert_eq!(b.download(&gpu).unwrap(), data);
     // Partial download and upload at an offset.
-    let part = b
-        .download_range(
-            &gpu,
-            galerkin::gpu::Chunk {
-                first: 1000,
-                len: 77,
-            },
-        )
-        .unwrap();
+    let part = b.download_range(&gpu, galerkin::gpu::Chunk { first: 1000, len: 77 }).unwrap();
     assert_eq!(part, data[1000..1077]);
     b.upload(&gpu, 5, &[9.0, 8.0]).unwrap();
-    let again = b
-        .download_range(&gpu, galerkin::gpu::Chunk { first: 4, len: 4 })
-        .unwrap();
+    let again = b.download_range(&gpu, galerkin::gpu::Chunk { first: 4, len: 4 }).unwrap();
     assert_eq!(again, [data[4], 9.0, 8.0, data[7]]);
 }
 
 #[test]
 fn host_visible_buffers_map() {
     let gpu = common::gpu();
-    let mut b = Buffer::<u32>::new(
-        &gpu,
-        "mapped",
-        16,
-        vk::BufferUsageFlags::STORAGE_BUFFER,
-        MemoryKind::CpuToGpu,
-    )
-    .unwrap();
+    let mut b =
+        Buffer::<u32>::new(&gpu, "mapped", 16, vk::BufferUsageFlags::STORAGE_BUFFER, MemoryKind::CpuToGpu)
+            .unwrap();
     b.mapped_mut().unwrap().copy_from_slice(&[3; 16]);
     assert_eq!(b.download(&gpu).unwrap(), vec![3; 16]);
-    let g = Buffer::<u32>::new(
-        &gpu,
-        "device",
-        16,
-        vk::BufferUsageFlags::STORAGE_BUFFER,
-        MemoryKind::GpuOnly,
-    )
-    .unwrap();
+    let g = Buffer::<u32>::new(&gpu, "device", 16, vk::BufferUsageFlags::STORAGE_BUFFER, MemoryKind::GpuOnly)
+        .unwrap();
     assert!(
         g.mapped().is_none() || gpu.caps().memory_types.len() == 1,
         "device-only memory is not promised to map"
@@ -67,22 +40,14 @@ fn host_visible_buffers_map() {
 
 #[test]
 fn binding_chunks_are_aligned_and_cover_everything() {
-    for (len, elem, max, align) in [
-        (1000u64, 4u64, 256u64, 64u64),
-        (12345, 12, 1 << 10, 16),
-        (7, 4, 1 << 20, 256),
-        (0, 4, 64, 16),
-    ] {
+    for (len, elem, max, align) in
+        [(1000u64, 4u64, 256u64, 64u64), (12345, 12, 1 << 10, 16), (7, 4, 1 << 20, 256), (0, 4, 64, 16)]
+    {
         let chunks = chunk_elements(len, elem, max, align);
         let mut next = 0;
         for c in &chunks {
             assert_eq!(c.first, next, "contiguous");
-            assert_eq!(
-                (c.first * elem) % align,
-                0,
-                "offset {} not aligned to {align}",
-                c.first * elem
-            );
+            assert_eq!((c.first * elem) % align, 0, "offset {} not aligned to {align}", c.first * elem);
             assert!(c.len * elem <= max.max(elem * align), "chunk too large");
             next += c.len;
         }
@@ -98,11 +63,7 @@ fn colormap_textures_upload_and_ramps_load() {
         let _texture = map.upload(&gpu).unwrap();
         // The ends of the ramp are its first and last texels.
         let first = map.texels()[0].map(|c| f64::from(c) / 255.0);
-        assert!(map
-            .sample(0.0)
-            .iter()
-            .zip(first)
-            .all(|(a, b)| (a - b).abs() < 1e-12));
+        assert!(map.sample(0.0).iter().zip(first).all(|(a, b)| (a - b).abs() < 1e-12));
     }
     // Viridis starts dark purple and ends yellow; cool-warm goes blue → red.
     assert_eq!(Colormap::viridis().texels()[0], [68, 1, 84, 255]);
@@ -116,10 +77,7 @@ fn colormap_textures_upload_and_ramps_load() {
         &path,
         3,
         2,
-        &[
-            255, 0, 0, 255, 0, 255, 0, 255, 0, 0, 255, 255, 1, 2, 3, 255, 4, 5, 6, 255, 7, 8, 9,
-            255,
-        ],
+        &[255, 0, 0, 255, 0, 255, 0, 255, 0, 0, 255, 255, 1, 2, 3, 255, 4, 5, 6, 255, 7, 8, 9, 255],
     )
     .unwrap();
     let ramp = Colormap::by_name(path.to_str().unwrap()).unwrap();
@@ -131,17 +89,9 @@ fn colormap_textures_upload_and_ramps_load() {
     let mid = ramp.sample(0.5);
     assert!((mid[0] - 4.0 / 255.0).abs() < 1e-12);
     write_png_rgba8(&path, 1, 1, &[0, 0, 0, 255]).unwrap();
-    let err = Colormap::by_name(path.to_str().unwrap())
-        .unwrap_err()
-        .to_string();
-    assert!(
-        err.contains("ramp.png") && err.contains("2 to 4096"),
-        "{err}"
-    );
-    assert!(Colormap::by_name("plasma-ish")
-        .unwrap_err()
-        .to_string()
-        .contains("viridis"));
+    let err = Colormap::by_name(path.to_str().unwrap()).unwrap_err().to_string();
+    assert!(err.contains("ramp.png") && err.contains("2 to 4096"), "{err}");
+    assert!(Colormap::by_name("plasma-ish").unwrap_err().to_string().contains("viridis"));
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
@@ -164,13 +114,8 @@ fn png_and_exr_files_round_trip_without_leftovers() {
     .unwrap();
     let back: Vec<f32> = image.layer_data.channel_data.pixels.concat();
     assert_eq!(back, values);
-    let names: Vec<_> = std::fs::read_dir(&dir)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().into_string().unwrap())
-        .collect();
-    assert!(
-        names.iter().all(|n| !n.ends_with(".tmp")),
-        "temporary files left: {names:?}"
-    );
+    let names: Vec<_> =
+        std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().file_name().into_string().unwrap()).collect();
+    assert!(names.iter().all(|n| !n.ends_with(".tmp")), "temporary files left: {names:?}");
     std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -15,25 +15,16 @@ fn galerkin() -> Command {
 
 #[test]
 fn no_matching_device_names_what_was_seen() {
-    let err = Gpu::new(&GpuDesc {
-        device_name: Some("no such device 42".into()),
-        ..GpuDesc::default()
-    })
-    .unwrap_err();
+    let err = Gpu::new(&GpuDesc { device_name: Some("no such device 42".into()), ..GpuDesc::default() })
+        .unwrap_err();
     let text = err.to_string();
     assert!(matches!(err, GpuError::NoDevice { .. }), "{text}");
-    assert!(
-        text.contains("no such device 42") && text.contains("devices seen"),
-        "{text}"
-    );
+    assert!(text.contains("no such device 42") && text.contains("devices seen"), "{text}");
 }
 
 #[test]
 fn a_missing_loader_names_the_package() {
-    let desc = GpuDesc {
-        loader_path: Some("/nonexistent/libvulkan.so.1".into()),
-        ..GpuDesc::default()
-    };
+    let desc = GpuDesc { loader_path: Some("/nonexistent/libvulkan.so.1".into()), ..GpuDesc::default() };
     let err = Gpu::new(&desc).unwrap_err();
     assert!(matches!(err, GpuError::NoLoader { .. }));
     assert!(err.to_string().contains("libvulkan1"), "{err}");
@@ -41,11 +32,8 @@ fn a_missing_loader_names_the_package() {
 
 #[test]
 fn the_cli_reports_a_missing_validation_layer() {
-    let out = galerkin()
-        .args(["info", "--validation"])
-        .env("VK_LAYER_PATH", "/nonexistent")
-        .output()
-        .unwrap();
+    let out =
+        galerkin().args(["info", "--validation"]).env("VK_LAYER_PATH", "/nonexistent").output().unwrap();
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(1), "{stderr}");
     assert!(stderr.contains("vulkan-validationlayers"), "{stderr}");
@@ -70,19 +58,12 @@ fn the_cli_reports_no_driver() {
 fn the_cli_names_file_and_line_of_a_bad_scene() {
     let dir = std::env::temp_dir().join(format!("galerkin-errors-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    let good =
-        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/demo.toml")).unwrap();
+    let good = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/demo.toml")).unwrap();
     let bad = good.replace("width = 640", "width = -640");
     let path = dir.join("bad.toml");
     std::fs::write(&path, &bad).unwrap();
     let out_dir = dir.join("out");
-    let out = galerkin()
-        .args(["demo", "--scene"])
-        .arg(&path)
-        .arg("--out")
-        .arg(&out_dir)
-        .output()
-        .unwrap();
+    let out = galerkin().args(["demo", "--scene"]).arg(&path).arg("--out").arg(&out_dir).output().unwrap();
     let stderr = String::from_utf8_lossy(&out.stderr);
     let line = bad.lines().position(|l| l.starts_with("width")).unwrap() + 1;
     assert_eq!(out.status.code(), Some(1), "{stderr}");
@@ -94,35 +75,18 @@ fn the_cli_names_file_and_line_of_a_bad_scene() {
 #[test]
 fn requests_over_device_limits_are_errors_naming_the_resource() {
     let gpu = common::gpu();
-    let huge = gpu
-        .caps()
-        .max_buffer_size
-        .min(gpu.caps().max_memory_allocation_size)
-        / 4
-        + 1024;
-    let err = Buffer::<f32>::new(
-        &gpu,
-        "too big",
-        huge,
-        vk::BufferUsageFlags::STORAGE_BUFFER,
-        MemoryKind::GpuOnly,
-    )
-    .unwrap_err();
+    let huge = gpu.caps().max_buffer_size.min(gpu.caps().max_memory_allocation_size) / 4 + 1024;
+    let err =
+        Buffer::<f32>::new(&gpu, "too big", huge, vk::BufferUsageFlags::STORAGE_BUFFER, MemoryKind::GpuOnly)
+            .unwrap_err();
     assert!(matches!(err, GpuError::OverLimit { .. }), "{err}");
     assert!(err.to_string().contains("too big"), "{err}");
 
     let side = gpu.caps().max_image_dimension_2d + 1;
-    let err = Image::new(
-        &gpu,
-        "too wide",
-        ImageDesc::color_target(side, 4, vk::Format::R8G8B8A8_UNORM),
-    )
-    .err()
-    .unwrap();
-    assert!(
-        err.to_string().contains("too wide") && err.to_string().contains("maxImageDimension2D"),
-        "{err}"
-    );
+    let err = Image::new(&gpu, "too wide", ImageDesc::color_target(side, 4, vk::Format::R8G8B8A8_UNORM))
+        .err()
+        .unwrap();
+    assert!(err.to_string().contains("too wide") && err.to_string().contains("maxImageDimension2D"), "{err}");
 
     // One binding cannot cover more than maxStorageBufferRange: an error that says to chunk.
     let gpu_small = common::gpu_with(|d| d.max_binding_bytes = Some(4096));
@@ -135,9 +99,6 @@ fn requests_over_device_limits_are_errors_naming_the_resource() {
     )
     .unwrap();
     let err = b.binding().unwrap_err();
-    assert!(
-        err.to_string().contains("wide binding") && err.to_string().contains("chunks"),
-        "{err}"
-    );
+    assert!(err.to_string().contains("wide binding") && err.to_string().contains("chunks"), "{err}");
     assert_eq!(b.binding_chunks().len(), 2);
 }

@@ -15,12 +15,7 @@ fn glsl_includes_match_their_rust_twins() {
     let gpu = common::gpu();
     // Ramp inputs: linear and log, inside, outside, at the ends, degenerate ranges, v <= 0 on log.
     let mut ramp_in: Vec<[f32; 4]> = Vec::new();
-    for &(lo, hi, log) in &[
-        (-1.5f32, 1.5f32, 0.0f32),
-        (0.01, 100.0, 1.0),
-        (2.0, 2.0, 0.0),
-        (1.0, 0.5, 1.0),
-    ] {
+    for &(lo, hi, log) in &[(-1.5f32, 1.5f32, 0.0f32), (0.01, 100.0, 1.0), (2.0, 2.0, 0.0), (1.0, 0.5, 1.0)] {
         for k in -3..=23 {
             let v = lo + (hi - lo) * (k as f32 / 20.0);
             ramp_in.push([v, lo, hi, log]);
@@ -29,13 +24,9 @@ fn glsl_includes_match_their_rust_twins() {
         ramp_in.push([-1.0, lo, hi, log]);
     }
     let n = ramp_in.len();
-    let xy: Vec<[f32; 2]> = common::random_f32(2 * n, 9)
-        .chunks(2)
-        .map(|c| [c[0] * 1.3, c[1] * 1.3])
-        .collect();
-    let p = BivariateCubic {
-        coefficients: [0.3, -1.2, 0.7, 0.25, 1.5, -0.8, 0.4, -0.6, 0.9, 0.35],
-    };
+    let xy: Vec<[f32; 2]> =
+        common::random_f32(2 * n, 9).chunks(2).map(|c| [c[0] * 1.3, c[1] * 1.3]).collect();
+    let p = BivariateCubic { coefficients: [0.3, -1.2, 0.7, 0.25, 1.5, -0.8, 0.4, -0.6, 0.9, 0.35] };
     let coeffs: Vec<f32> = p.coefficients.iter().map(|&c| c as f32).collect();
 
     let usage = vk::BufferUsageFlags::STORAGE_BUFFER;
@@ -66,12 +57,7 @@ fn glsl_includes_match_their_rust_twins() {
         )
         .unwrap();
     gpu.run(|cmd| {
-        pipeline.record_dispatch(
-            cmd,
-            &set,
-            bytemuck::bytes_of(&(n as u32)),
-            [(n as u32).div_ceil(64), 1, 1],
-        )
+        pipeline.record_dispatch(cmd, &set, bytemuck::bytes_of(&(n as u32)), [(n as u32).div_ceil(64), 1, 1])
     })
     .unwrap();
     let out = ob.download(&gpu).unwrap();
@@ -87,28 +73,15 @@ fn glsl_includes_match_their_rust_twins() {
         );
         // The texcoord step is affine in t: compare on the GPU's own t.
         let u = ramp_texcoord(f64::from(out[i][0]), 256.0);
-        assert!(
-            (f64::from(out[i][1]) - u).abs() < 1e-6,
-            "ramp_texcoord: {} vs {u}",
-            out[i][1]
-        );
+        assert!((f64::from(out[i][1]) - u).abs() < 1e-6, "ramp_texcoord: {} vs {u}", out[i][1]);
         let (x, y) = (f64::from(xy[i][0]), f64::from(xy[i][1]));
         // The GLSL cubic sees f32 coefficients; the Rust twin evaluates those same values in
         // f64. Tolerance: a few ulps of Σ|c||x|^i|y|^j.
         let p32 = BivariateCubic {
-            coefficients: coeffs
-                .iter()
-                .map(|&c| f64::from(c))
-                .collect::<Vec<_>>()
-                .try_into()
-                .unwrap(),
+            coefficients: coeffs.iter().map(|&c| f64::from(c)).collect::<Vec<_>>().try_into().unwrap(),
         };
         let want = p32.eval(x, y);
         let tol = 8.0 * f64::from(f32::EPSILON) * p32.abs_sum(x, y);
-        assert!(
-            (f64::from(out[i][2]) - want).abs() <= tol,
-            "cubic at ({x}, {y}): {} vs {want}",
-            out[i][2]
-        );
+        assert!((f64::from(out[i][2]) - want).abs() <= tol, "cubic at ({x}, {y}): {} vs {want}", out[i][2]);
     }
 }

@@ -7,11 +7,7 @@ mod common;
 use galerkin::gpu::{vk, Buffer, Gpu, GpuDesc, MemoryKind};
 
 fn validated() -> Gpu {
-    Gpu::new(&GpuDesc {
-        validation: true,
-        ..GpuDesc::default()
-    })
-    .expect("gpu")
+    Gpu::new(&GpuDesc { validation: true, ..GpuDesc::default() }).expect("gpu")
 }
 
 #[test]
@@ -23,59 +19,35 @@ fn the_canary_catches_a_misuse() {
     gpu.run(|cmd| {
         gpu.memory_barrier(
             cmd,
-            (
-                vk::PipelineStageFlags::TRANSFER,
-                vk::AccessFlags::SHADER_WRITE,
-            ),
-            (
-                vk::PipelineStageFlags::COMPUTE_SHADER,
-                vk::AccessFlags::SHADER_READ,
-            ),
+            (vk::PipelineStageFlags::TRANSFER, vk::AccessFlags::SHADER_WRITE),
+            (vk::PipelineStageFlags::COMPUTE_SHADER, vk::AccessFlags::SHADER_READ),
         )
     })
     .unwrap();
     drop(gpu);
-    assert!(
-        !log.errors().is_empty(),
-        "the validation layer reported nothing for an invalid barrier"
-    );
+    assert!(!log.errors().is_empty(), "the validation layer reported nothing for an invalid barrier");
 }
 
 #[test]
 fn the_canary_catches_a_leak_at_teardown() {
     let gpu = validated();
     let log = gpu.validation_log().unwrap();
-    let info = vk::BufferCreateInfo::default()
-        .size(64)
-        .usage(vk::BufferUsageFlags::STORAGE_BUFFER);
+    let info = vk::BufferCreateInfo::default().size(64).usage(vk::BufferUsageFlags::STORAGE_BUFFER);
     // SAFETY: a valid buffer, deliberately never destroyed.
     let _leaked = unsafe { gpu.device().create_buffer(&info, None) }.unwrap();
     assert!(log.errors().is_empty());
     drop(gpu);
     let errors = log.errors();
-    assert!(
-        !errors.is_empty(),
-        "destroying a device with a live buffer must be reported"
-    );
-    assert!(
-        errors
-            .iter()
-            .any(|e| e.contains("vkDestroyDevice") || e.contains("VkBuffer")),
-        "{errors:?}"
-    );
+    assert!(!errors.is_empty(), "destroying a device with a live buffer must be reported");
+    assert!(errors.iter().any(|e| e.contains("vkDestroyDevice") || e.contains("VkBuffer")), "{errors:?}");
 }
 
 #[test]
 fn resources_dropped_while_recorded_live_until_the_fence() {
     let gpu = common::gpu();
-    let keep = Buffer::<u32>::new(
-        &gpu,
-        "kept",
-        1024,
-        vk::BufferUsageFlags::STORAGE_BUFFER,
-        MemoryKind::GpuOnly,
-    )
-    .unwrap();
+    let keep =
+        Buffer::<u32>::new(&gpu, "kept", 1024, vk::BufferUsageFlags::STORAGE_BUFFER, MemoryKind::GpuOnly)
+            .unwrap();
     gpu.run(|cmd| {
         // Used by the command buffer, then dropped before submission: destruction must wait.
         let temp = Buffer::<u32>::new(
@@ -96,34 +68,18 @@ fn resources_dropped_while_recorded_live_until_the_fence() {
 #[test]
 fn asynchronous_submission_keeps_dropped_resources_alive() {
     let gpu = common::gpu();
-    let out = Buffer::<u32>::new(
-        &gpu,
-        "out",
-        1 << 20,
-        vk::BufferUsageFlags::STORAGE_BUFFER,
-        MemoryKind::GpuOnly,
-    )
-    .unwrap();
-    let src = Buffer::<u32>::from_slice(
-        &gpu,
-        "src",
-        &vec![5u32; 1 << 20],
-        vk::BufferUsageFlags::STORAGE_BUFFER,
-    )
-    .unwrap();
+    let out =
+        Buffer::<u32>::new(&gpu, "out", 1 << 20, vk::BufferUsageFlags::STORAGE_BUFFER, MemoryKind::GpuOnly)
+            .unwrap();
+    let src =
+        Buffer::<u32>::from_slice(&gpu, "src", &vec![5u32; 1 << 20], vk::BufferUsageFlags::STORAGE_BUFFER)
+            .unwrap();
     let (submission, ()) = gpu
         .submit(|cmd| {
-            let region = vk::BufferCopy {
-                src_offset: 0,
-                dst_offset: 0,
-                size: src.size_bytes(),
-            };
+            let region = vk::BufferCopy { src_offset: 0, dst_offset: 0, size: src.size_bytes() };
             // SAFETY: both buffers are alive at recording; `src` is dropped below while the
             // copy may still run, which deferred destruction must make safe.
-            unsafe {
-                gpu.device()
-                    .cmd_copy_buffer(cmd, src.raw(), out.raw(), &[region])
-            };
+            unsafe { gpu.device().cmd_copy_buffer(cmd, src.raw(), out.raw(), &[region]) };
         })
         .unwrap();
     drop(src);

@@ -20,28 +20,15 @@ struct Xvfb {
 impl Xvfb {
     fn start() -> Xvfb {
         let mut child = Command::new("Xvfb")
-            .args([
-                "-displayfd",
-                "1",
-                "-screen",
-                "0",
-                "1024x768x24",
-                "-nolisten",
-                "tcp",
-            ])
+            .args(["-displayfd", "1", "-screen", "0", "1024x768x24", "-nolisten", "tcp"])
             .stdout(Stdio::piped())
             .stderr(Stdio::null())
             .spawn()
             .expect("Xvfb runs (Debian package xvfb; scripts/install-deps.sh installs it)");
         let mut line = String::new();
-        BufReader::new(child.stdout.take().unwrap())
-            .read_line(&mut line)
-            .unwrap();
+        BufReader::new(child.stdout.take().unwrap()).read_line(&mut line).unwrap();
         let display = format!(":{}", line.trim());
-        assert!(
-            line.trim().parse::<u32>().is_ok(),
-            "Xvfb did not report a display: {line:?}"
-        );
+        assert!(line.trim().parse::<u32>().is_ok(), "Xvfb did not report a display: {line:?}");
         Xvfb { child, display }
     }
 }
@@ -73,11 +60,7 @@ fn the_viewer_presents_frames_and_its_screenshot_matches_the_reference() {
 
     let scene = DemoScene::load(&scene_path).unwrap();
     let (w, h, rgba) = read_png_rgba8(&shot).unwrap();
-    assert_eq!(
-        (w, h),
-        (scene.image.width, scene.image.height),
-        "window size"
-    );
+    assert_eq!((w, h), (scene.image.width, scene.image.height), "window size");
     let colormap = Colormap::by_name(&scene.colormap_name()).unwrap();
     let background = [0.12f32, 0.12, 0.14, 1.0].map(|v| (v * 255.0).round() as u8);
     let check = check_colours(
@@ -90,16 +73,7 @@ fn the_viewer_presents_frames_and_its_screenshot_matches_the_reference() {
         &rgba,
         background,
     );
-    assert!(
-        check.passed(),
-        "{} pixels differ; first: {:?}",
-        check.failures,
-        check.first_failure
-    );
-    assert!(
-        check.checked > (w * h / 5) as usize,
-        "only {} covered pixels",
-        check.checked
-    );
+    assert!(check.passed(), "{} pixels differ; first: {:?}", check.failures, check.first_failure);
+    assert!(check.checked > (w * h / 5) as usize, "only {} covered pixels", check.checked);
     std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -15,23 +15,16 @@ pub fn threads() -> usize {
 pub fn fma_peak(iterations: u64, a: f32, b: f32) -> (f64, f32) {
     let t = threads();
     let sums: Vec<f32> = std::thread::scope(|s| {
-        let handles: Vec<_> = (0..t)
-            .map(|i| s.spawn(move || fma_thread(iterations, a, b, i as f32)))
-            .collect();
-        handles
-            .into_iter()
-            .map(|h| h.join().unwrap_or(f32::NAN))
-            .collect()
+        let handles: Vec<_> =
+            (0..t).map(|i| s.spawn(move || fma_thread(iterations, a, b, i as f32))).collect();
+        handles.into_iter().map(|h| h.join().unwrap_or(f32::NAN)).collect()
     });
     let lanes = match simd() {
         Simd::Avx512 => 16.0,
         Simd::Avx2Fma => 8.0,
         Simd::Portable => 4.0,
     };
-    (
-        2.0 * 8.0 * lanes * iterations as f64 * t as f64,
-        sums.iter().sum(),
-    )
+    (2.0 * 8.0 * lanes * iterations as f64 * t as f64, sums.iter().sum())
 }
 
 /// The widest FMA the CPU has.
@@ -52,8 +45,7 @@ pub fn simd() -> Simd {
         if std::arch::is_x86_feature_detected!("avx512f") {
             return Simd::Avx512;
         }
-        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
-        {
+        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
             return Simd::Avx2Fma;
         }
     }
@@ -128,11 +120,7 @@ pub fn triad(a: &mut [f32], b: &[f32], c: &[f32], s: f32) {
     let t = threads();
     let chunk = a.len().div_ceil(t).max(1);
     std::thread::scope(|scope| {
-        for ((a, b), c) in a
-            .chunks_mut(chunk)
-            .zip(b.chunks(chunk))
-            .zip(c.chunks(chunk))
-        {
+        for ((a, b), c) in a.chunks_mut(chunk).zip(b.chunks(chunk)).zip(c.chunks(chunk)) {
             scope.spawn(move || {
                 for ((a, &b), &c) in a.iter_mut().zip(b).zip(c) {
                     *a = b + s * c;

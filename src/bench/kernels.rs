@@ -6,8 +6,8 @@ use ash::vk;
 use bytemuck::{Pod, Zeroable};
 
 use crate::gpu::{
-    shaders, BindingKind, Buffer, ComputePipeline, ComputePipelineDesc, DescriptorSet, Gpu,
-    GpuResult, Resource,
+    shaders, BindingKind, Buffer, ComputePipeline, ComputePipelineDesc, DescriptorSet, Gpu, GpuResult,
+    Resource,
 };
 
 fn storage(b: &Buffer<f32>) -> GpuResult<Resource> {
@@ -42,17 +42,12 @@ impl EmptyKernel {
             crate::gpu::MemoryKind::GpuOnly,
         )?;
         let set = pipeline.bind(gpu, &[storage(&sink)?])?;
-        Ok(Self {
-            pipeline,
-            set,
-            _sink: sink,
-        })
+        Ok(Self { pipeline, set, _sink: sink })
     }
 
     /// Records one 1×1×1 dispatch.
     pub fn record(&self, cmd: vk::CommandBuffer) {
-        self.pipeline
-            .record_dispatch(cmd, &self.set, &[], [1, 1, 1]);
+        self.pipeline.record_dispatch(cmd, &self.set, &[], [1, 1, 1]);
     }
 }
 
@@ -98,12 +93,7 @@ impl FmaKernel {
             crate::gpu::MemoryKind::GpuOnly,
         )?;
         let set = pipeline.bind(gpu, &[storage(&sink)?])?;
-        Ok(Self {
-            pipeline,
-            set,
-            sink,
-            invocations,
-        })
+        Ok(Self { pipeline, set, sink, invocations })
     }
 
     /// Records the kernel: `iterations` rounds of `v ← v·a + b` on each of 8 chains.
@@ -169,19 +159,14 @@ impl TriadKernel {
             },
         )?;
         let set = pipeline.bind(gpu, &[storage(a)?, storage(b)?, storage(c)?])?;
-        Ok(Self {
-            pipeline,
-            set,
-            n4: (a.len() / 4) as u32,
-        })
+        Ok(Self { pipeline, set, n4: (a.len() / 4) as u32 })
     }
 
     /// Records one sweep.
     pub fn record(&self, gpu: &Gpu, cmd: vk::CommandBuffer, s: f32) {
         let push = TriadPush { s, n4: self.n4 };
         let groups = gpu.caps().groups_1d(u64::from(self.n4), 256);
-        self.pipeline
-            .record_dispatch(cmd, &self.set, bytemuck::bytes_of(&push), [groups, 1, 1]);
+        self.pipeline.record_dispatch(cmd, &self.set, bytemuck::bytes_of(&push), [groups, 1, 1]);
     }
 
     /// Bytes read and written by one sweep.
@@ -235,25 +220,14 @@ impl SgemmKernel {
             },
         )?;
         let set = pipeline.bind(gpu, &[storage(a)?, storage(b)?, storage(c)?])?;
-        Ok(Self {
-            pipeline,
-            set,
-            m,
-            n,
-            k,
-        })
+        Ok(Self { pipeline, set, m, n, k })
     }
 
     /// Records the product.
     pub fn record(&self, cmd: vk::CommandBuffer) {
-        let push = GemmPush {
-            m: self.m,
-            n: self.n,
-            k: self.k,
-        };
+        let push = GemmPush { m: self.m, n: self.n, k: self.k };
         let groups = [self.n.div_ceil(SGEMM_TILE), self.m.div_ceil(SGEMM_TILE), 1];
-        self.pipeline
-            .record_dispatch(cmd, &self.set, bytemuck::bytes_of(&push), groups);
+        self.pipeline.record_dispatch(cmd, &self.set, bytemuck::bytes_of(&push), groups);
     }
 
     /// Floating-point operations of one product.

@@ -117,11 +117,7 @@ fn time<R>(f: impl FnOnce() -> R) -> (Duration, R) {
 }
 
 /// Runs every ceiling benchmark; `progress` is told each step's name as it starts.
-pub fn run(
-    gpu: &Gpu,
-    config: &BenchConfig,
-    mut progress: impl FnMut(&str),
-) -> GpuResult<Vec<BenchRow>> {
+pub fn run(gpu: &Gpu, config: &BenchConfig, mut progress: impl FnMut(&str)) -> GpuResult<Vec<BenchRow>> {
     let mut rows = Vec::new();
     let reps = config.reps.max(1);
 
@@ -173,15 +169,8 @@ pub fn run(
     std::hint::black_box(&sink);
     let gb = config.transfer_bytes as f64 / 1e9;
     let memcpy = gb / median(&mut copy).as_secs_f64();
-    let ok = if back == host {
-        "round trip exact".to_string()
-    } else {
-        "ROUND TRIP MISMATCH".to_string()
-    };
-    for (name, times) in [
-        ("upload (staged)", &mut up),
-        ("download (staged, into a reused Vec)", &mut down),
-    ] {
+    let ok = if back == host { "round trip exact".to_string() } else { "ROUND TRIP MISMATCH".to_string() };
+    for (name, times) in [("upload (staged)", &mut up), ("download (staged, into a reused Vec)", &mut down)] {
         rows.push(BenchRow {
             name: name.into(),
             size: format!("{} MiB", config.transfer_bytes >> 20),
@@ -208,9 +197,7 @@ pub fn run(
         })?;
         g.push(fma.flops(config.fma_iterations) / (profiler.results()?[0].1 * 1e-3) / 1e9);
     }
-    let sink0 = fma
-        .sink
-        .download_range(gpu, crate::gpu::Chunk { first: 0, len: 1 })?[0];
+    let sink0 = fma.sink.download_range(gpu, crate::gpu::Chunk { first: 0, len: 1 })?[0];
     let want = FmaKernel::reference(0, config.fma_iterations, a, b);
     let mut c = Vec::new();
     let cpu_iterations = u64::from(config.fma_iterations) * 4096;
@@ -221,11 +208,7 @@ pub fn run(
     }
     rows.push(BenchRow {
         name: "FMA peak".into(),
-        size: format!(
-            "{} invocations × 8 chains × {}",
-            config.fma_groups * 256,
-            config.fma_iterations
-        ),
+        size: format!("{} invocations × 8 chains × {}", config.fma_groups * 256, config.fma_iterations),
         gpu: median_f64(&mut g),
         cpu: median_f64(&mut c),
         unit: "GFLOP/s",
@@ -243,13 +226,8 @@ pub fn run(
     let len = config.triad_len & !3;
     let bh = vec![1.0f32; len as usize];
     let ch: Vec<f32> = (0..len).map(|i| (i % 97) as f32).collect();
-    let ab = Buffer::<f32>::new(
-        gpu,
-        "triad a",
-        len,
-        vk::BufferUsageFlags::STORAGE_BUFFER,
-        MemoryKind::GpuOnly,
-    )?;
+    let ab =
+        Buffer::<f32>::new(gpu, "triad a", len, vk::BufferUsageFlags::STORAGE_BUFFER, MemoryKind::GpuOnly)?;
     let bb = Buffer::from_slice(gpu, "triad b", &bh, vk::BufferUsageFlags::STORAGE_BUFFER)?;
     let cb = Buffer::from_slice(gpu, "triad c", &ch, vk::BufferUsageFlags::STORAGE_BUFFER)?;
     let triad = TriadKernel::new(gpu, &ab, &bb, &cb)?;
@@ -278,23 +256,15 @@ pub fn run(
         unit: "GB/s",
         peer: "plain Rust loop, all cores",
         lower_is_better: false,
-        check: if exact {
-            "equal to CPU".into()
-        } else {
-            "DIFFERS FROM CPU".into()
-        },
+        check: if exact { "equal to CPU".into() } else { "DIFFERS FROM CPU".into() },
     });
     drop((triad, ab, bb, cb));
 
     progress("tiled SGEMM");
     let nn = config.gemm_size;
     let size = (nn as usize) * (nn as usize);
-    let ah: Vec<f32> = (0..size)
-        .map(|i| ((i * 7919) % 1000) as f32 / 1000.0 - 0.5)
-        .collect();
-    let bh: Vec<f32> = (0..size)
-        .map(|i| ((i * 104_729) % 1000) as f32 / 1000.0 - 0.5)
-        .collect();
+    let ah: Vec<f32> = (0..size).map(|i| ((i * 7919) % 1000) as f32 / 1000.0 - 0.5).collect();
+    let bh: Vec<f32> = (0..size).map(|i| ((i * 104_729) % 1000) as f32 / 1000.0 - 0.5).collect();
     let ad = Buffer::from_slice(gpu, "sgemm A", &ah, vk::BufferUsageFlags::STORAGE_BUFFER)?;
     let bd = Buffer::from_slice(gpu, "sgemm B", &bh, vk::BufferUsageFlags::STORAGE_BUFFER)?;
     let cd = Buffer::<f32>::new(
@@ -321,11 +291,7 @@ pub fn run(
         c.push(gemm.flops() / dt.as_secs_f64() / 1e9);
     }
     let scale = ch.iter().fold(0f32, |m, v| m.max(v.abs()));
-    let err = got
-        .iter()
-        .zip(&ch)
-        .fold(0f32, |m, (g, c)| m.max((g - c).abs()))
-        / scale;
+    let err = got.iter().zip(&ch).fold(0f32, |m, (g, c)| m.max((g - c).abs())) / scale;
     rows.push(BenchRow {
         name: "tiled SGEMM".into(),
         size: format!("{nn}³"),

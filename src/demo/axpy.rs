@@ -5,8 +5,8 @@ use ash::vk;
 use bytemuck::{Pod, Zeroable};
 
 use crate::gpu::{
-    shaders, BindingKind, Buffer, Chunk, ComputePipeline, ComputePipelineDesc, DescriptorSet, Gpu,
-    GpuResult, Resource,
+    shaders, BindingKind, Buffer, Chunk, ComputePipeline, ComputePipelineDesc, DescriptorSet, Gpu, GpuResult,
+    Resource,
 };
 
 /// Workgroup size of `axpy.comp`.
@@ -61,10 +61,7 @@ impl Axpy {
             .map(|c| {
                 let set = self.pipeline.bind(
                     gpu,
-                    &[
-                        Resource::Storage(x.binding_range(c)),
-                        Resource::Storage(y.binding_range(c)),
-                    ],
+                    &[Resource::Storage(x.binding_range(c)), Resource::Storage(y.binding_range(c))],
                 )?;
                 Ok((c, set))
             })
@@ -78,18 +75,14 @@ impl Axpy {
             let n = u32::try_from(chunk.len).expect("a binding chunk holds fewer than 2^32 floats");
             let push = Push { a, n };
             let groups = gpu.caps().groups_1d(chunk.len, LOCAL_SIZE);
-            self.pipeline
-                .record_dispatch(cmd, set, bytemuck::bytes_of(&push), [groups, 1, 1]);
+            self.pipeline.record_dispatch(cmd, set, bytemuck::bytes_of(&push), [groups, 1, 1]);
         }
     }
 }
 
 /// CPU f64 reference: `a·x + y` per element.
 pub fn axpy_reference(a: f64, x: &[f32], y: &[f32]) -> Vec<f64> {
-    x.iter()
-        .zip(y)
-        .map(|(&x, &y)| a * f64::from(x) + f64::from(y))
-        .collect()
+    x.iter().zip(y).map(|(&x, &y)| a * f64::from(x) + f64::from(y)).collect()
 }
 
 /// The largest error relative to the f32 error bound, and where (≤ 1 passes).

@@ -11,8 +11,8 @@ use glam::DVec2;
 
 use super::polynomial::BivariateCubic;
 use crate::gpu::{
-    shaders, BindingKind, Buffer, DescriptorSet, Gpu, GpuResult, GraphicsPipeline,
-    GraphicsPipelineDesc, RenderPass, Resource,
+    shaders, BindingKind, Buffer, DescriptorSet, Gpu, GpuResult, GraphicsPipeline, GraphicsPipelineDesc,
+    RenderPass, Resource,
 };
 use crate::render::{ramp_coordinate, Camera, Colormap, ColormapTexture};
 
@@ -97,12 +97,8 @@ impl FieldPass {
                 colormap.texels().len() as f32,
             ],
         };
-        let uniform = Buffer::from_slice(
-            gpu,
-            "field coefficients",
-            &[uniform],
-            vk::BufferUsageFlags::UNIFORM_BUFFER,
-        )?;
+        let uniform =
+            Buffer::from_slice(gpu, "field coefficients", &[uniform], vk::BufferUsageFlags::UNIFORM_BUFFER)?;
         let vertices = Buffer::from_slice(
             gpu,
             "field triangles",
@@ -134,13 +130,7 @@ impl FieldPass {
                 texture.resource(),
             ],
         )?;
-        Ok(Self {
-            pipeline,
-            set,
-            vertices,
-            _uniform: uniform,
-            _colormap: texture,
-        })
+        Ok(Self { pipeline, set, vertices, _uniform: uniform, _colormap: texture })
     }
 
     /// Records the draw (inside the target's render pass).
@@ -185,9 +175,7 @@ pub fn reference_coverage(camera: &Camera, width: u32, height: u32, margin: f64)
             let c = DVec2::new(f64::from(px) + 0.5, f64::from(py) + 0.5);
             // Signed distance to each projected edge; the quad is convex, its orientation known
             // from the sign of its area.
-            let area: f64 = (0..4)
-                .map(|i| corners[i].perp_dot(corners[(i + 1) % 4]))
-                .sum();
+            let area: f64 = (0..4).map(|i| corners[i].perp_dot(corners[(i + 1) % 4])).sum();
             let s = area.signum();
             let inside = (0..4)
                 .map(|i| {
@@ -197,9 +185,7 @@ pub fn reference_coverage(camera: &Camera, width: u32, height: u32, margin: f64)
                 .fold(f64::INFINITY, f64::min);
             out.push(if inside > margin {
                 match camera.pixel_on_plane_z(px, py, width, height, 0.0) {
-                    Some(p) => Coverage::Inside {
-                        point: p.truncate(),
-                    },
+                    Some(p) => Coverage::Inside { point: p.truncate() },
                     None => Coverage::Edge,
                 }
             } else if inside < -margin {
@@ -260,45 +246,35 @@ impl FieldCheck {
     }
 }
 
-/// Compares a value image (RGBA32F from [`FieldOutput::Value`], cleared to zero) with the CPU
-/// reference: covered pixels must hold p at the plane point seen through their centre, within
-/// [`value_tolerance`]; background pixels must be untouched.
-pub fn check_values(
+/// Walks every pixel against [`reference_coverage`]: covered pixels go to `inside`, which
+/// returns the pixel's error as a fraction of its tolerance and, if out of tolerance, why;
+/// background pixels must equal `background`; outline pixels are counted and skipped.
+fn compare_pixels<T: Copy + PartialEq + std::fmt::Debug>(
     camera: &Camera,
-    p: &BivariateCubic,
     width: u32,
     height: u32,
-    rgba: &[f32],
+    pixels: &[T],
+    background: [T; 4],
+    mut inside: impl FnMut(DVec2, &[T]) -> (f64, Option<String>),
 ) -> FieldCheck {
     let mut check = FieldCheck::default();
-    for (i, c) in reference_coverage(camera, width, height, OUTLINE_MARGIN_PX)
-        .into_iter()
-        .enumerate()
-    {
-        let got = &rgba[4 * i..4 * i + 4];
+    for (i, c) in reference_coverage(camera, width, height, OUTLINE_MARGIN_PX).into_iter().enumerate() {
+        let got = &pixels[4 * i..4 * i + 4];
         let (x, y) = (i as u32 % width, i as u32 / width);
         match c {
             Coverage::Inside { point } => {
                 check.checked += 1;
-                let reference = p.eval(point.x, point.y);
-                let tol = value_tolerance(p, point);
-                let ratio = (f64::from(got[0]) - reference).abs() / tol;
-                check.worst = check
-                    .worst
-                    .max(if ratio.is_nan() { f64::INFINITY } else { ratio });
-                if ratio.is_nan() || ratio > 1.0 || got[3] != 1.0 {
-                    check.fail(format!(
-                        "pixel ({x}, {y}): {} vs reference {reference} (tolerance {tol:.2e})",
-                        got[0]
-                    ));
+                let (ratio, failure) = inside(point, got);
+                check.worst = check.worst.max(if ratio.is_nan() { f64::INFINITY } else { ratio });
+                if let Some(why) = failure {
+                    check.fail(format!("pixel ({x}, {y}): {why}"));
                 }
             }
             Coverage::Outside => {
                 check.background += 1;
-                if got != [0.0; 4] {
-                    check.fail(format!(
-                        "pixel ({x}, {y}) should be background, holds {got:?}"
-                    ));
+                if got != background {
+                    check
+                        .fail(format!("pixel ({x}, {y}) should be background {background:?}, holds {got:?}"));
                 }
             }
             Coverage::Edge => check.outline += 1,
@@ -307,10 +283,29 @@ pub fn check_values(
     check
 }
 
+/// Compares a value image (RGBA32F from [`FieldOutput::Value`], cleared to zero) with the CPU
+/// reference: covered pixels must hold p at the plane point seen through their centre, within
+/// [`value_tolerance`], with alpha 1; background pixels must be untouched.
+pub fn check_values(
+    camera: &Camera,
+    p: &BivariateCubic,
+    width: u32,
+    height: u32,
+    rgba: &[f32],
+) -> FieldCheck {
+    compare_pixels(camera, width, height, rgba, [0.0; 4], |point, got| {
+        let reference = p.eval(point.x, point.y);
+        let tol = value_tolerance(p, point);
+        let ratio = (f64::from(got[0]) - reference).abs() / tol;
+        let ok = ratio <= 1.0 && got[3] == 1.0;
+        (ratio, (!ok).then(|| format!("{got:?} vs reference {reference} (tolerance {tol:.2e})")))
+    })
+}
+
 /// Compares a colour image (RGBA8 from [`FieldOutput::Colour`]) with the CPU reference. A
 /// covered pixel's channels must lie between the reference colours of p ± 1e-4 (p's own error
-/// bound, generously) widened by 1.5/255: the sampler's 8-bit subtexel weights and the final
-/// 8-bit rounding. Background pixels must hold `background`.
+/// bound, generously) widened by 1.5/255 (the sampler's 8-bit subtexel weights and the final
+/// 8-bit rounding), with alpha 255. Background pixels must hold `background`.
 #[allow(clippy::too_many_arguments)]
 pub fn check_colours(
     camera: &Camera,
@@ -322,48 +317,25 @@ pub fn check_colours(
     rgba: &[u8],
     background: [u8; 4],
 ) -> FieldCheck {
-    let mut check = FieldCheck::default();
-    for (i, c) in reference_coverage(camera, width, height, OUTLINE_MARGIN_PX)
-        .into_iter()
-        .enumerate()
-    {
-        let got = &rgba[4 * i..4 * i + 4];
-        let (x, y) = (i as u32 % width, i as u32 / width);
-        match c {
-            Coverage::Inside { point } => {
-                check.checked += 1;
-                let v = p.eval(point.x, point.y);
-                let (lo, hi) = (
-                    reference_colour(colormap, ramp, v - 1e-4),
-                    reference_colour(colormap, ramp, v + 1e-4),
-                );
-                let slack = 1.5 / 255.0;
-                for ch in 0..3 {
-                    let g = f64::from(got[ch]) / 255.0;
-                    let (a, b) = (lo[ch].min(hi[ch]), lo[ch].max(hi[ch]));
-                    let excess = (a - g).max(g - b).max(0.0);
-                    check.worst = check.worst.max(excess / slack);
-                    if excess > slack {
-                        check.fail(format!(
-                            "pixel ({x}, {y}) channel {ch}: {} outside [{a:.4}, {b:.4}] ± 1.5/255",
-                            got[ch]
-                        ));
-                    }
-                }
-                if got[3] != 255 {
-                    check.fail(format!("pixel ({x}, {y}): alpha {}", got[3]));
-                }
+    const SLACK: f64 = 1.5 / 255.0;
+    compare_pixels(camera, width, height, rgba, background, |point, got| {
+        let v = p.eval(point.x, point.y);
+        let lo = reference_colour(colormap, ramp, v - 1e-4);
+        let hi = reference_colour(colormap, ramp, v + 1e-4);
+        let mut worst = 0f64;
+        let mut failure = None;
+        for ch in 0..3 {
+            let g = f64::from(got[ch]) / 255.0;
+            let (a, b) = (lo[ch].min(hi[ch]), lo[ch].max(hi[ch]));
+            let excess = (a - g).max(g - b).max(0.0);
+            worst = worst.max(excess / SLACK);
+            if excess > SLACK && failure.is_none() {
+                failure = Some(format!("channel {ch}: {} outside [{a:.4}, {b:.4}] ± 1.5/255", got[ch]));
             }
-            Coverage::Outside => {
-                check.background += 1;
-                if got != background {
-                    check.fail(format!(
-                        "pixel ({x}, {y}) should be background {background:?}, holds {got:?}"
-                    ));
-                }
-            }
-            Coverage::Edge => check.outline += 1,
         }
-    }
-    check
+        if got[3] != 255 {
+            failure = Some(format!("alpha {}", got[3]));
+        }
+        (worst, failure)
+    })
 }

@@ -26,26 +26,14 @@ impl BivariateCubic {
     /// |∇p| at (x, y), for error bounds: how much p moves per unit of position error.
     pub fn gradient_norm(&self, x: f64, y: f64) -> f64 {
         let c = &self.coefficients;
-        let px = c[1]
-            + 2.0 * c[3] * x
-            + c[4] * y
-            + 3.0 * c[6] * x * x
-            + 2.0 * c[7] * x * y
-            + c[8] * y * y;
-        let py = c[2]
-            + c[4] * x
-            + 2.0 * c[5] * y
-            + c[7] * x * x
-            + 2.0 * c[8] * x * y
-            + 3.0 * c[9] * y * y;
+        let px = c[1] + 2.0 * c[3] * x + c[4] * y + 3.0 * c[6] * x * x + 2.0 * c[7] * x * y + c[8] * y * y;
+        let py = c[2] + c[4] * x + 2.0 * c[5] * y + c[7] * x * x + 2.0 * c[8] * x * y + 3.0 * c[9] * y * y;
         px.hypot(py)
     }
 
     /// Σ |c_ij| |x|ⁱ |y|ʲ: the scale of the rounding error of an f32 evaluation at (x, y).
     pub fn abs_sum(&self, x: f64, y: f64) -> f64 {
-        let abs = BivariateCubic {
-            coefficients: self.coefficients.map(f64::abs),
-        };
+        let abs = BivariateCubic { coefficients: self.coefficients.map(f64::abs) };
         abs.eval(x.abs(), y.abs())
     }
 }
@@ -56,21 +44,8 @@ mod tests {
 
     #[test]
     fn horner_matches_the_monomial_sum() {
-        let p = BivariateCubic {
-            coefficients: [0.3, -1.2, 0.7, 0.25, 1.5, -0.8, 0.4, -0.6, 0.9, 0.35],
-        };
-        let exps = [
-            (0, 0),
-            (1, 0),
-            (0, 1),
-            (2, 0),
-            (1, 1),
-            (0, 2),
-            (3, 0),
-            (2, 1),
-            (1, 2),
-            (0, 3),
-        ];
+        let p = BivariateCubic { coefficients: [0.3, -1.2, 0.7, 0.25, 1.5, -0.8, 0.4, -0.6, 0.9, 0.35] };
+        let exps = [(0, 0), (1, 0), (0, 1), (2, 0), (1, 1), (0, 2), (3, 0), (2, 1), (1, 2), (0, 3)];
         for &(x, y) in &[(0.0, 0.0), (0.5, -0.25), (-1.0, 1.0), (0.9, 0.3)] {
             let direct: f64 = exps
                 .iter()

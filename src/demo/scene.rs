@@ -111,18 +111,11 @@ impl DemoScene {
         scene.dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
         let fail = |key: &str, message: String| {
             let line = text.find(key).map_or(1, line_of);
-            Err(SceneError {
-                path: path.to_path_buf(),
-                line,
-                message,
-            })
+            Err(SceneError { path: path.to_path_buf(), line, message })
         };
         let ImageSize { width, height } = scene.image;
         if !(1..=16384).contains(&width) || !(1..=16384).contains(&height) {
-            return fail(
-                "width",
-                format!("image size {width}x{height} must be 1 to 16384 on each axis"),
-            );
+            return fail("width", format!("image size {width}x{height} must be 1 to 16384 on each axis"));
         }
         if !(1..=512).contains(&scene.field.tessellation) {
             return fail(
@@ -130,30 +123,15 @@ impl DemoScene {
                 format!("tessellation {} must be 1 to 512", scene.field.tessellation),
             );
         }
-        if let Some(i) = scene
-            .field
-            .coefficients
-            .coefficients
-            .iter()
-            .position(|c| !c.is_finite())
-        {
-            return fail(
-                "coefficients",
-                format!("coefficient {i} is not a finite number"),
-            );
+        if let Some(i) = scene.field.coefficients.coefficients.iter().position(|c| !c.is_finite()) {
+            return fail("coefficients", format!("coefficient {i} is not a finite number"));
         }
         let [lo, hi] = scene.colormap.range;
         if !(lo.is_finite() && hi.is_finite() && lo < hi) {
-            return fail(
-                "range",
-                format!("colour range [{lo}, {hi}] must be finite with lo < hi"),
-            );
+            return fail("range", format!("colour range [{lo}, {hi}] must be finite with lo < hi"));
         }
         if scene.colormap.log && lo <= 0.0 {
-            return fail(
-                "range",
-                format!("a logarithmic colour range needs lo > 0, got {lo}"),
-            );
+            return fail("range", format!("a logarithmic colour range needs lo > 0, got {lo}"));
         }
         let c = &scene.camera;
         if (0..3).all(|i| c.eye[i] == c.target[i])
@@ -173,11 +151,7 @@ impl DemoScene {
 
     /// The ramp settings.
     pub fn ramp(&self) -> Ramp {
-        Ramp {
-            lo: self.colormap.range[0],
-            hi: self.colormap.range[1],
-            log: self.colormap.log,
-        }
+        Ramp { lo: self.colormap.range[0], hi: self.colormap.range[1], log: self.colormap.log }
     }
 
     /// The colour map name or ramp path, ramp paths resolved against the scene's directory.
@@ -208,26 +182,16 @@ mod tests {
     fn errors_name_file_and_line() {
         let bad = GOOD.replace("tessellation = 8", "tessellation = \"eight\"");
         let e = DemoScene::parse(&bad, Path::new("x.toml")).unwrap_err();
-        let line = GOOD
-            .lines()
-            .position(|l| l.starts_with("tessellation"))
-            .unwrap()
-            + 1;
+        let line = GOOD.lines().position(|l| l.starts_with("tessellation")).unwrap() + 1;
         assert_eq!(e.line, line, "{e}");
         assert!(e.to_string().starts_with(&format!("x.toml:{line}:")), "{e}");
 
         let bad = GOOD.replace("range = [-1.5, 1.5]", "range = [1.5, -1.5]");
         let e = DemoScene::parse(&bad, Path::new("x.toml")).unwrap_err();
         assert!(e.message.contains("lo < hi"), "{e}");
-        assert_eq!(
-            e.line,
-            GOOD.lines().position(|l| l.starts_with("range")).unwrap() + 1
-        );
+        assert_eq!(e.line, GOOD.lines().position(|l| l.starts_with("range")).unwrap() + 1);
 
         let bad = GOOD.replace("[axpy]", "[axpy]\nbogus = 1");
-        assert!(DemoScene::parse(&bad, Path::new("x.toml"))
-            .unwrap_err()
-            .message
-            .contains("bogus"));
+        assert!(DemoScene::parse(&bad, Path::new("x.toml")).unwrap_err().message.contains("bogus"));
     }
 }

@@ -12,7 +12,7 @@ use bytemuck::Pod;
 use gpu_allocator::vulkan::Allocation;
 
 use super::context::{DeviceShared, Gpu};
-use super::error::{GpuError, GpuResult, VkContext};
+use super::error::{vk_error, GpuError, GpuResult, VkContext};
 use super::memory::MemoryKind;
 
 /// Bytes per staging chunk for uploads and downloads (two are in flight at once).
@@ -107,15 +107,12 @@ impl<T: Pod> Buffer<T> {
             }
         };
         // SAFETY: memory comes from a type allowed by `requirements`, at its offset.
-        if let Err(e) = unsafe {
-            shared
-                .raw
-                .bind_buffer_memory(raw, allocation.memory(), allocation.offset())
-        } {
+        let bound = unsafe { shared.raw.bind_buffer_memory(raw, allocation.memory(), allocation.offset()) };
+        if let Err(e) = bound {
             // SAFETY: the buffer was never used.
             unsafe { shared.raw.destroy_buffer(raw, None) };
             shared.free(allocation);
-            return Err(Err::<(), _>(e).vk("vkBindBufferMemory").unwrap_err());
+            return Err(vk_error("vkBindBufferMemory", e));
         }
         shared.set_name(raw, name);
         Ok(Self {
@@ -131,12 +128,7 @@ impl<T: Pod> Buffer<T> {
     }
 
     /// A device-local buffer holding a copy of `data`.
-    pub fn from_slice(
-        gpu: &Gpu,
-        name: &str,
-        data: &[T],
-        usage: vk::BufferUsageFlags,
-    ) -> GpuResult<Self> {
+    pub fn from_slice(gpu: &Gpu, name: &str, data: &[T], usage: vk::BufferUsageFlags) -> GpuResult<Self> {
         let b = Self::new(gpu, name, data.len() as u64, usage, MemoryKind::GpuOnly)?;
         b.upload(gpu, 0, data)?;
         Ok(b)
@@ -199,11 +191,7 @@ impl<T: Pod> Buffer<T> {
                 unit: "bytes",
             });
         }
-        Ok(BufferBinding {
-            buffer: self.raw,
-            offset: 0,
-            range: self.bytes.max(4),
-        })
+        Ok(BufferBinding { buffer: self.raw, offset: 0, range: self.bytes.max(4) })
     }
 
     /// Elements `chunk.first .. chunk.first + chunk.len` as a binding.
@@ -215,11 +203,7 @@ impl<T: Pod> Buffer<T> {
             self.name,
             self.len
         );
-        BufferBinding {
-            buffer: self.raw,
-            offset: chunk.first * elem,
-            range: (chunk.len * elem).max(4),
-        }
+        BufferBinding { buffer: self.raw, offset: chunk.first * elem, range: (chunk.len * elem).max(4) }
     }
 
     /// Splits the buffer into chunks of at most [`Gpu::max_binding_bytes`] each, starting on
@@ -251,10 +235,8 @@ impl<T: Pod> Buffer<T> {
         }
         let chunk = STAGING_CHUNK_BYTES.min(src.len() as u64);
         let pool = &gpu.staging;
-        let mut staging = [
-            pool.take(gpu, MemoryKind::CpuToGpu, chunk)?,
-            pool.take(gpu, MemoryKind::CpuToGpu, chunk)?,
-        ];
+        let mut staging =
+            [pool.take(gpu, MemoryKind::CpuToGpu, chunk)?, pool.take(gpu, MemoryKind::CpuToGpu, chunk)?];
         let mut in_flight: [Option<super::Submission>; 2] = [None, None];
         for (i, part) in src.chunks(chunk as usize).enumerate() {
             let k = i % 2;
@@ -262,21 +244,13 @@ impl<T: Pod> Buffer<T> {
                 s.wait()?;
             }
             let stage = &mut staging[k];
-            stage.mapped_mut().expect("CpuToGpu memory is mapped")[..part.len()]
-                .copy_from_slice(part);
+            stage.mapped_mut().expect("CpuToGpu memory is mapped")[..part.len()].copy_from_slice(part);
             let dst_offset = first * elem + (i as u64) * chunk;
-            let region = vk::BufferCopy {
-                src_offset: 0,
-                dst_offset,
-                size: part.len() as u64,
-            };
+            let region = vk::BufferCopy { src_offset: 0, dst_offset, size: part.len() as u64 };
             let (src_buf, dst_buf) = (stage.raw, self.raw);
             let (s, ()) = gpu.submit(|cmd| {
                 // SAFETY: both buffers are alive until the submission completes (waited below).
-                unsafe {
-                    gpu.device()
-                        .cmd_copy_buffer(cmd, src_buf, dst_buf, &[region])
-                };
+                unsafe { gpu.device().cmd_copy_buffer(cmd, src_buf, dst_buf, &[region]) };
             })?;
             in_flight[k] = Some(s);
         }
@@ -291,13 +265,7 @@ impl<T: Pod> Buffer<T> {
 
     /// Reads the whole buffer back to the host.
     pub fn download(&self, gpu: &Gpu) -> GpuResult<Vec<T>> {
-        self.download_range(
-            gpu,
-            Chunk {
-                first: 0,
-                len: self.len,
-            },
-        )
+        self.download_range(gpu, Chunk { first: 0, len: self.len })
     }
 
     /// Reads elements `range.first .. range.first + range.len` back through staging buffers,
@@ -311,25 +279,16 @@ impl<T: Pod> Buffer<T> {
     /// Reads elements `first .. first + out.len()` into `out` (reusing the caller's memory).
     pub fn download_into(&self, gpu: &Gpu, first: u64, out: &mut [T]) -> GpuResult<()> {
         let elem = std::mem::size_of::<T>() as u64;
-        let range = Chunk {
-            first,
-            len: out.len() as u64,
-        };
-        assert!(
-            range.first + range.len <= self.len,
-            "download {range:?} outside `{}`",
-            self.name
-        );
+        let range = Chunk { first, len: out.len() as u64 };
+        assert!(range.first + range.len <= self.len, "download {range:?} outside `{}`", self.name);
         let dst: &mut [u8] = bytemuck::cast_slice_mut(out);
         if dst.is_empty() {
             return Ok(());
         }
         let chunk = STAGING_CHUNK_BYTES.min(dst.len() as u64);
         let pool = &gpu.staging;
-        let staging = [
-            pool.take(gpu, MemoryKind::GpuToCpu, chunk)?,
-            pool.take(gpu, MemoryKind::GpuToCpu, chunk)?,
-        ];
+        let staging =
+            [pool.take(gpu, MemoryKind::GpuToCpu, chunk)?, pool.take(gpu, MemoryKind::GpuToCpu, chunk)?];
         let parts: Vec<&mut [u8]> = dst.chunks_mut(chunk as usize).collect();
         let mut in_flight: [Option<(super::Submission, usize)>; 2] = [None, None];
         let mut parts: Vec<Option<&mut [u8]>> = parts.into_iter().map(Some).collect();
@@ -342,9 +301,7 @@ impl<T: Pod> Buffer<T> {
                 s.wait()?;
                 let part = parts[i].take().expect("each part is read once");
                 let len = part.len();
-                part.copy_from_slice(
-                    &staging[k].mapped().expect("GpuToCpu memory is mapped")[..len],
-                );
+                part.copy_from_slice(&staging[k].mapped().expect("GpuToCpu memory is mapped")[..len]);
             }
             Ok(())
         };
@@ -352,18 +309,12 @@ impl<T: Pod> Buffer<T> {
             let k = i % 2;
             drain(&mut in_flight[k], &mut parts, k)?;
             let size = parts[i].as_ref().map_or(0, |p| p.len()) as u64;
-            let region = vk::BufferCopy {
-                src_offset: range.first * elem + (i as u64) * chunk,
-                dst_offset: 0,
-                size,
-            };
+            let region =
+                vk::BufferCopy { src_offset: range.first * elem + (i as u64) * chunk, dst_offset: 0, size };
             let (src_buf, dst_buf) = (self.raw, staging[k].raw);
             let (s, ()) = gpu.submit(|cmd| {
                 // SAFETY: both buffers outlive the submission (drained below).
-                unsafe {
-                    gpu.device()
-                        .cmd_copy_buffer(cmd, src_buf, dst_buf, &[region])
-                };
+                unsafe { gpu.device().cmd_copy_buffer(cmd, src_buf, dst_buf, &[region]) };
             })?;
             in_flight[k] = Some((s, i));
         }
@@ -379,11 +330,7 @@ impl<T: Pod> Buffer<T> {
     /// Records `vkCmdFillBuffer` of the whole buffer with the 32-bit pattern `word`.
     pub fn record_fill(&self, cmd: vk::CommandBuffer, word: u32) {
         // SAFETY: `cmd` is recording on this device; the whole-size fill is always valid.
-        unsafe {
-            self.shared
-                .raw
-                .cmd_fill_buffer(cmd, self.raw, 0, vk::WHOLE_SIZE, word)
-        };
+        unsafe { self.shared.raw.cmd_fill_buffer(cmd, self.raw, 0, vk::WHOLE_SIZE, word) };
     }
 }
 

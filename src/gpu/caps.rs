@@ -75,9 +75,8 @@ impl Capabilities {
         let mut maint3 = vk::PhysicalDeviceMaintenance3Properties::default();
         // SAFETY: `physical` belongs to `instance`; the chained structs outlive the call.
         let api = unsafe { instance.get_physical_device_properties(physical) }.api_version;
-        let mut props2 = vk::PhysicalDeviceProperties2::default()
-            .push_next(&mut subgroup)
-            .push_next(&mut maint3);
+        let mut props2 =
+            vk::PhysicalDeviceProperties2::default().push_next(&mut subgroup).push_next(&mut maint3);
         if vk::api_version_minor(api) >= 2 || vk::api_version_major(api) > 1 {
             props2 = props2.push_next(&mut driver);
         }
@@ -89,14 +88,10 @@ impl Capabilities {
         let memory = unsafe { instance.get_physical_device_memory_properties(physical) };
         // SAFETY: as above.
         let families = unsafe { instance.get_physical_device_queue_family_properties(physical) };
-        let ts_bits = families
-            .get(queue_family as usize)
-            .map_or(0, |f| f.timestamp_valid_bits);
+        let ts_bits = families.get(queue_family as usize).map_or(0, |f| f.timestamp_valid_bits);
         let cstr = |bytes: &[std::ffi::c_char]| {
             // SAFETY: Vulkan strings in these structs are NUL-terminated within their arrays.
-            unsafe { CStr::from_ptr(bytes.as_ptr()) }
-                .to_string_lossy()
-                .into_owned()
+            unsafe { CStr::from_ptr(bytes.as_ptr()) }.to_string_lossy().into_owned()
         };
         let driver_text = {
             let name = cstr(&driver.driver_name);
@@ -121,11 +116,7 @@ impl Capabilities {
         Self {
             device_name: cstr(&props.device_name),
             device_type: props.device_type,
-            api_version: (
-                vk::api_version_major(api),
-                vk::api_version_minor(api),
-                vk::api_version_patch(api),
-            ),
+            api_version: (vk::api_version_major(api), vk::api_version_minor(api), vk::api_version_patch(api)),
             driver: driver_text,
             vendor_id: props.vendor_id,
             device_id: props.device_id,
@@ -152,11 +143,7 @@ impl Capabilities {
                 .iter()
                 .map(|t| (t.property_flags, t.heap_index))
                 .collect(),
-            memory_heaps: memory
-                .memory_heaps_as_slice()
-                .iter()
-                .map(|h| (h.size, h.flags))
-                .collect(),
+            memory_heaps: memory.memory_heaps_as_slice().iter().map(|h| (h.size, h.flags)).collect(),
         }
     }
 

@@ -18,7 +18,7 @@ use std::time::Duration;
 use ash::vk;
 
 use super::context::{DeviceShared, Gpu};
-use super::error::{GpuError, GpuResult, VkContext};
+use super::error::{vk_error, GpuError, GpuResult, VkContext};
 
 /// One submission's command pool (its own, so recording on several threads needs no lock),
 /// its one command buffer and its fence.
@@ -33,8 +33,7 @@ impl Slot {
     fn new(shared: &DeviceShared) -> GpuResult<Self> {
         let info = vk::CommandPoolCreateInfo::default().queue_family_index(shared.queue_family);
         // SAFETY: plain object creation on this device.
-        let pool =
-            unsafe { shared.raw.create_command_pool(&info, None) }.vk("vkCreateCommandPool")?;
+        let pool = unsafe { shared.raw.create_command_pool(&info, None) }.vk("vkCreateCommandPool")?;
         let alloc = vk::CommandBufferAllocateInfo::default()
             .command_pool(pool)
             .level(vk::CommandBufferLevel::PRIMARY)
@@ -45,20 +44,16 @@ impl Slot {
             Err(e) => {
                 // SAFETY: nothing else uses the new pool.
                 unsafe { shared.raw.destroy_command_pool(pool, None) };
-                return Err(Err::<(), _>(e).vk("vkAllocateCommandBuffers").unwrap_err());
+                return Err(vk_error("vkAllocateCommandBuffers", e));
             }
         };
         // SAFETY: plain object creation.
-        match unsafe {
-            shared
-                .raw
-                .create_fence(&vk::FenceCreateInfo::default(), None)
-        } {
+        match unsafe { shared.raw.create_fence(&vk::FenceCreateInfo::default(), None) } {
             Ok(fence) => Ok(Self { pool, cmd, fence }),
             Err(e) => {
                 // SAFETY: the pool (and its buffer) were never submitted.
                 unsafe { shared.raw.destroy_command_pool(pool, None) };
-                Err(Err::<(), _>(e).vk("vkCreateFence").unwrap_err())
+                Err(vk_error("vkCreateFence", e))
             }
         }
     }
@@ -66,12 +61,7 @@ impl Slot {
     /// Resets the pool (and so the buffer) for reuse; the fence must already be unsignalled.
     fn reset(&self, shared: &DeviceShared) -> bool {
         // SAFETY: the slot's work is finished or was never submitted.
-        unsafe {
-            shared
-                .raw
-                .reset_command_pool(self.pool, vk::CommandPoolResetFlags::empty())
-        }
-        .is_ok()
+        unsafe { shared.raw.reset_command_pool(self.pool, vk::CommandPoolResetFlags::empty()) }.is_ok()
     }
 
     /// Destroys the slot's objects.
@@ -107,8 +97,7 @@ impl Tracker {
     fn complete(&mut self, serial: u64) -> Vec<Retirement> {
         self.in_flight.remove(&serial);
         let oldest = self.in_flight.first().copied().unwrap_or(u64::MAX);
-        let (ready, keep): (Vec<_>, Vec<_>) =
-            self.retired.drain(..).partition(|(s, _)| *s < oldest);
+        let (ready, keep): (Vec<_>, Vec<_>) = self.retired.drain(..).partition(|(s, _)| *s < oldest);
         self.retired = keep;
         ready.into_iter().map(|(_, f)| f).collect()
     }
@@ -168,17 +157,12 @@ impl Submission {
         let timeout = self.shared.fence_timeout;
         let nanos = u64::try_from(timeout.as_nanos()).unwrap_or(u64::MAX);
         // SAFETY: the fence was submitted with this work and is owned by the engine.
-        let r = unsafe {
-            self.shared
-                .raw
-                .wait_for_fences(&[self.slot.fence], true, nanos)
-        };
+        let r = unsafe { self.shared.raw.wait_for_fences(&[self.slot.fence], true, nanos) };
         match r {
             Ok(()) => {
                 self.done = true;
                 // SAFETY: the fence is signalled and the queue no longer uses it.
-                let fence_reset =
-                    unsafe { self.shared.raw.reset_fences(&[self.slot.fence]) }.is_ok();
+                let fence_reset = unsafe { self.shared.raw.reset_fences(&[self.slot.fence]) }.is_ok();
                 let reuse = (fence_reset && self.slot.reset(&self.shared)).then_some(self.slot);
                 if reuse.is_none() {
                     self.slot.destroy(&self.shared);
@@ -186,17 +170,14 @@ impl Submission {
                 self.shared.finish(self.serial, reuse);
                 Ok(())
             }
-            Err(vk::Result::TIMEOUT) => Err(GpuError::Timeout {
-                during: "Gpu::run",
-                seconds: timeout.as_secs_f64(),
-            }),
+            Err(vk::Result::TIMEOUT) => {
+                Err(GpuError::Timeout { during: "Gpu::run", seconds: timeout.as_secs_f64() })
+            }
             Err(e) => {
                 // Device lost: nothing will signal again. Retire the serial so drops proceed.
                 self.done = true;
                 self.shared.finish(self.serial, None);
-                Err(Err::<(), _>(e)
-                    .vk("vkWaitForFences (Gpu::run)")
-                    .unwrap_err())
+                Err(vk_error("vkWaitForFences (Gpu::run)", e))
             }
         }
     }
@@ -223,10 +204,7 @@ impl Gpu {
     }
 
     /// Records and submits without waiting; wait on the returned [`Submission`].
-    pub fn submit<R>(
-        &self,
-        record: impl FnOnce(vk::CommandBuffer) -> R,
-    ) -> GpuResult<(Submission, R)> {
+    pub fn submit<R>(&self, record: impl FnOnce(vk::CommandBuffer) -> R) -> GpuResult<(Submission, R)> {
         self.submit_with_semaphores(&[], &[], record)
     }
 
@@ -265,12 +243,7 @@ impl Gpu {
                 }
             }
         }
-        let mut pending = Pending {
-            shared,
-            serial,
-            slot,
-            armed: true,
-        };
+        let mut pending = Pending { shared, serial, slot, armed: true };
         let slot = match pending.slot {
             Some(s) => s,
             None => {
@@ -280,8 +253,7 @@ impl Gpu {
             }
         };
         let (cmd, fence) = (slot.cmd, slot.fence);
-        let begin = vk::CommandBufferBeginInfo::default()
-            .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
+        let begin = vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
         // SAFETY: `cmd` is in the initial state (fresh or reset).
         unsafe { shared.raw.begin_command_buffer(cmd, &begin) }.vk("vkBeginCommandBuffer")?;
         let r = record(cmd);
@@ -301,15 +273,7 @@ impl Gpu {
             unsafe { shared.raw.queue_submit(*queue, &[submit], fence) }.vk("vkQueueSubmit")?;
         }
         pending.armed = false;
-        Ok((
-            Submission {
-                shared: shared.clone(),
-                slot,
-                serial,
-                done: false,
-            },
-            r,
-        ))
+        Ok((Submission { shared: shared.clone(), slot, serial, done: false }, r))
     }
 
     /// Records a global memory barrier (the common case between passes: one pass writes a
@@ -320,9 +284,7 @@ impl Gpu {
         src: (vk::PipelineStageFlags, vk::AccessFlags),
         dst: (vk::PipelineStageFlags, vk::AccessFlags),
     ) {
-        let barrier = vk::MemoryBarrier::default()
-            .src_access_mask(src.1)
-            .dst_access_mask(dst.1);
+        let barrier = vk::MemoryBarrier::default().src_access_mask(src.1).dst_access_mask(dst.1);
         // SAFETY: `cmd` is recording on this device (caller's contract for passes).
         unsafe {
             self.shared.raw.cmd_pipeline_barrier(
@@ -341,10 +303,7 @@ impl Gpu {
     pub fn compute_to_compute_barrier(&self, cmd: vk::CommandBuffer) {
         self.memory_barrier(
             cmd,
-            (
-                vk::PipelineStageFlags::COMPUTE_SHADER,
-                vk::AccessFlags::SHADER_WRITE,
-            ),
+            (vk::PipelineStageFlags::COMPUTE_SHADER, vk::AccessFlags::SHADER_WRITE),
             (
                 vk::PipelineStageFlags::COMPUTE_SHADER,
                 vk::AccessFlags::SHADER_READ | vk::AccessFlags::SHADER_WRITE,

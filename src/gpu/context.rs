@@ -57,9 +57,7 @@ impl Default for GpuDesc {
             app_name: "galerkin".into(),
             validation: flag("GALERKIN_VALIDATION"),
             sync_validation: std::env::var("GALERKIN_SYNC_VALIDATION").map_or(true, |v| v != "0"),
-            device_name: std::env::var("GALERKIN_DEVICE")
-                .ok()
-                .filter(|s| !s.is_empty()),
+            device_name: std::env::var("GALERKIN_DEVICE").ok().filter(|s| !s.is_empty()),
             instance_extensions: Vec::new(),
             swapchain: false,
             fence_timeout: Duration::from_secs(600),
@@ -121,9 +119,7 @@ impl DeviceShared {
             let Ok(name) = std::ffi::CString::new(name.replace('\0', " ")) else {
                 return;
             };
-            let info = vk::DebugUtilsObjectNameInfoEXT::default()
-                .object_handle(handle)
-                .object_name(&name);
+            let info = vk::DebugUtilsObjectNameInfoEXT::default().object_handle(handle).object_name(&name);
             // SAFETY: `handle` is a live object of this device; naming is informational.
             let _ = unsafe { d.set_debug_utils_object_name(&info) };
         }
@@ -133,11 +129,7 @@ impl DeviceShared {
 impl Drop for DeviceShared {
     fn drop(&mut self) {
         // Every Submission holds an Arc to this, so none is in flight; run what is left retired.
-        let leftovers = self
-            .tracker
-            .get_mut()
-            .map(|t| t.take_all())
-            .unwrap_or_default();
+        let leftovers = self.tracker.get_mut().map(|t| t.take_all()).unwrap_or_default();
         for f in leftovers {
             f(self);
         }
@@ -145,11 +137,7 @@ impl Drop for DeviceShared {
         // made on this device has been dropped (they hold this Arc), and the engine destroys only
         // the objects it created.
         unsafe {
-            let slots = self
-                .tracker
-                .get_mut()
-                .map(|t| std::mem::take(&mut t.free))
-                .unwrap_or_default();
+            let slots = self.tracker.get_mut().map(|t| std::mem::take(&mut t.free)).unwrap_or_default();
             for slot in slots {
                 slot.destroy(self);
             }
@@ -196,8 +184,7 @@ impl Gpu {
     pub fn new(desc: &GpuDesc) -> GpuResult<Self> {
         let entry = instance::load_entry(desc)?;
         let log = desc.validation.then(|| Arc::new(ValidationLog::default()));
-        let created =
-            instance::create_instance(&entry, desc, log.as_ref().unwrap_or(&Arc::default()))?;
+        let created = instance::create_instance(&entry, desc, log.as_ref().unwrap_or(&Arc::default()))?;
         // From here on a failure must destroy what was created: wrap in a guard.
         struct InstanceGuard(Option<instance::CreatedInstance>);
         impl Drop for InstanceGuard {
@@ -220,9 +207,8 @@ impl Gpu {
         // SAFETY: queue 0 of the family was requested in `create_device`.
         let queue = unsafe { device.get_device_queue(choice.queue_family, 0) };
         let created = guard.0.take().expect("guard holds the instance");
-        let debug_names = desc
-            .validation
-            .then(|| ash::ext::debug_utils::Device::new(&created.instance, &device));
+        let debug_names =
+            desc.validation.then(|| ash::ext::debug_utils::Device::new(&created.instance, &device));
         Self::assemble(Parts {
             entry,
             instance: created.instance,
@@ -303,10 +289,7 @@ impl Gpu {
             }
         };
         let range = caps.max_storage_buffer_range;
-        let max_binding_bytes = p
-            .desc
-            .max_binding_bytes
-            .map_or(range, |m| m.clamp(256, range));
+        let max_binding_bytes = p.desc.max_binding_bytes.map_or(range, |m| m.clamp(256, range));
         tracing::info!(device = %caps.device_name, driver = %caps.driver, adopted = !p.owns, "galerkin Gpu ready");
         Ok(Self {
             staging: Arc::default(),

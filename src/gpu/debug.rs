@@ -61,13 +61,10 @@ impl ValidationLog {
 
 /// The messenger's create info, pointing at `log`. The caller keeps `log` alive for as long as
 /// the messenger (or the instance it was chained into) exists.
-pub(crate) fn messenger_info(
-    log: &Arc<ValidationLog>,
-) -> vk::DebugUtilsMessengerCreateInfoEXT<'static> {
+pub(crate) fn messenger_info(log: &Arc<ValidationLog>) -> vk::DebugUtilsMessengerCreateInfoEXT<'static> {
     vk::DebugUtilsMessengerCreateInfoEXT::default()
         .message_severity(
-            vk::DebugUtilsMessageSeverityFlagsEXT::ERROR
-                | vk::DebugUtilsMessageSeverityFlagsEXT::WARNING,
+            vk::DebugUtilsMessageSeverityFlagsEXT::ERROR | vk::DebugUtilsMessageSeverityFlagsEXT::WARNING,
         )
         .message_type(
             vk::DebugUtilsMessageTypeFlagsEXT::GENERAL
@@ -98,11 +95,7 @@ unsafe extern "system" fn callback(
             unsafe { CStr::from_ptr(p) }.to_string_lossy().into_owned()
         }
     };
-    let message = format!(
-        "[{kind:?}] {}: {}",
-        text(data.p_message_id_name),
-        text(data.p_message)
-    );
+    let message = format!("[{kind:?}] {}: {}", text(data.p_message_id_name), text(data.p_message));
     log.record(severity, message);
     vk::FALSE
 }

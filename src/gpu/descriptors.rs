@@ -9,7 +9,7 @@ use ash::vk;
 
 use super::buffer::BufferBinding;
 use super::context::{DeviceShared, Gpu};
-use super::error::{GpuError, GpuResult, VkContext};
+use super::error::{vk_error, GpuError, GpuResult, VkContext};
 
 /// The kind of one binding.
 #[derive(Copy, Clone, Debug, PartialEq, Eq, Hash)]
@@ -83,11 +83,7 @@ impl DescriptorSetLayout {
         // SAFETY: valid create info on this device.
         let raw = unsafe { gpu.device().create_descriptor_set_layout(&info, None) }
             .vk("vkCreateDescriptorSetLayout")?;
-        Ok(Self {
-            shared: gpu.shared.clone(),
-            raw,
-            kinds: kinds.to_vec(),
-        })
+        Ok(Self { shared: gpu.shared.clone(), raw, kinds: kinds.to_vec() })
     }
 
     /// The binding kinds, in binding order.
@@ -117,17 +113,9 @@ impl DescriptorSet {
     /// Binds `resources` (one per binding of `layout`, same kinds, in order). A storage range
     /// larger than [`Gpu::max_binding_bytes`] is an error; a kind mismatch is a bug and panics.
     pub fn new(gpu: &Gpu, layout: &DescriptorSetLayout, resources: &[Resource]) -> GpuResult<Self> {
-        assert_eq!(
-            resources.len(),
-            layout.kinds.len(),
-            "descriptor set needs one resource per binding"
-        );
+        assert_eq!(resources.len(), layout.kinds.len(), "descriptor set needs one resource per binding");
         for (i, (r, k)) in resources.iter().zip(&layout.kinds).enumerate() {
-            assert_eq!(
-                r.kind(),
-                *k,
-                "binding {i}: resource kind does not match the layout"
-            );
+            assert_eq!(r.kind(), *k, "binding {i}: resource kind does not match the layout");
             if let Resource::Storage(b) = r {
                 if b.range > gpu.max_binding_bytes() {
                     return Err(GpuError::OverLimit {
@@ -144,39 +132,30 @@ impl DescriptorSet {
         for k in &layout.kinds {
             match sizes.iter_mut().find(|s| s.ty == k.vk()) {
                 Some(s) => s.descriptor_count += 1,
-                None => sizes.push(vk::DescriptorPoolSize {
-                    ty: k.vk(),
-                    descriptor_count: 1,
-                }),
+                None => sizes.push(vk::DescriptorPoolSize { ty: k.vk(), descriptor_count: 1 }),
             }
         }
-        let info = vk::DescriptorPoolCreateInfo::default()
-            .max_sets(1)
-            .pool_sizes(&sizes);
+        let info = vk::DescriptorPoolCreateInfo::default().max_sets(1).pool_sizes(&sizes);
         // SAFETY: valid create info (an empty layout gets a pool with no sizes, which is valid).
-        let pool = unsafe { gpu.device().create_descriptor_pool(&info, None) }
-            .vk("vkCreateDescriptorPool")?;
+        let pool =
+            unsafe { gpu.device().create_descriptor_pool(&info, None) }.vk("vkCreateDescriptorPool")?;
         let layouts = [layout.raw];
-        let alloc = vk::DescriptorSetAllocateInfo::default()
-            .descriptor_pool(pool)
-            .set_layouts(&layouts);
+        let alloc = vk::DescriptorSetAllocateInfo::default().descriptor_pool(pool).set_layouts(&layouts);
         // SAFETY: the pool has room for exactly this set.
         let raw = match unsafe { gpu.device().allocate_descriptor_sets(&alloc) } {
             Ok(s) => s[0],
             Err(e) => {
                 // SAFETY: the pool is unused.
                 unsafe { gpu.device().destroy_descriptor_pool(pool, None) };
-                return Err(Err::<(), _>(e).vk("vkAllocateDescriptorSets").unwrap_err());
+                return Err(vk_error("vkAllocateDescriptorSets", e));
             }
         };
         let buffer_infos: Vec<[vk::DescriptorBufferInfo; 1]> = resources
             .iter()
             .map(|r| match r {
-                Resource::Storage(b) | Resource::Uniform(b) => [vk::DescriptorBufferInfo {
-                    buffer: b.buffer,
-                    offset: b.offset,
-                    range: b.range,
-                }],
+                Resource::Storage(b) | Resource::Uniform(b) => {
+                    [vk::DescriptorBufferInfo { buffer: b.buffer, offset: b.offset, range: b.range }]
+                }
                 Resource::Texture { .. } => [vk::DescriptorBufferInfo::default()],
             })
             .collect();
@@ -207,11 +186,7 @@ impl DescriptorSet {
             .collect();
         // SAFETY: every write targets a binding of matching type; the infos outlive the call.
         unsafe { gpu.device().update_descriptor_sets(&writes, &[]) };
-        Ok(Self {
-            shared: gpu.shared.clone(),
-            pool,
-            raw,
-        })
+        Ok(Self { shared: gpu.shared.clone(), pool, raw })
     }
 
     /// The Vulkan handle.

@@ -58,9 +58,7 @@ pub enum GpuError {
         seconds: f64,
     },
     /// A request is larger than the device allows and cannot be split.
-    #[error(
-        "`{name}` needs {requested} {unit} but the device allows at most {limit} ({limit_name})"
-    )]
+    #[error("`{name}` needs {requested} {unit} but the device allows at most {limit} ({limit_name})")]
     OverLimit {
         /// What was being created.
         name: String,
@@ -98,16 +96,18 @@ pub(crate) trait VkContext<T> {
 
 impl<T> VkContext<T> for Result<T, vk::Result> {
     fn vk(self, call: &'static str) -> GpuResult<T> {
-        self.map_err(|result| match result {
-            vk::Result::ERROR_DEVICE_LOST => GpuError::DeviceLost { during: call },
-            vk::Result::ERROR_OUT_OF_DEVICE_MEMORY | vk::Result::ERROR_OUT_OF_HOST_MEMORY => {
-                GpuError::OutOfMemory {
-                    name: call.to_string(),
-                    bytes: 0,
-                    detail: format!("{result:?}"),
-                }
-            }
-            _ => GpuError::Vk { call, result },
-        })
+        self.map_err(|result| vk_error(call, result))
+    }
+}
+
+/// The error for `result` returned by `call`: device loss and out-of-memory get their own
+/// variants, anything else names the call.
+pub(crate) fn vk_error(call: &'static str, result: vk::Result) -> GpuError {
+    match result {
+        vk::Result::ERROR_DEVICE_LOST => GpuError::DeviceLost { during: call },
+        vk::Result::ERROR_OUT_OF_DEVICE_MEMORY | vk::Result::ERROR_OUT_OF_HOST_MEMORY => {
+            GpuError::OutOfMemory { name: call.to_string(), bytes: 0, detail: format!("{result:?}") }
+        }
+        _ => GpuError::Vk { call, result },
     }
 }

@@ -8,7 +8,7 @@ use gpu_allocator::vulkan::Allocation;
 
 use super::buffer::Buffer;
 use super::context::{DeviceShared, Gpu};
-use super::error::{GpuError, GpuResult, VkContext};
+use super::error::{vk_error, GpuError, GpuResult, VkContext};
 use super::memory::MemoryKind;
 
 /// What image to make.
@@ -51,13 +51,7 @@ impl ImageDesc {
 
     /// A 1D texture sampled by shaders (colour maps).
     pub fn texture_1d(width: u32, format: vk::Format) -> Self {
-        Self {
-            width,
-            height: 1,
-            format,
-            usage: vk::ImageUsageFlags::SAMPLED,
-            dim: vk::ImageType::TYPE_1D,
-        }
+        Self { width, height: 1, format, usage: vk::ImageUsageFlags::SAMPLED, dim: vk::ImageType::TYPE_1D }
     }
 
     fn aspect(&self) -> vk::ImageAspectFlags {
@@ -67,9 +61,7 @@ impl ImageDesc {
             }
             vk::Format::D24_UNORM_S8_UINT
             | vk::Format::D32_SFLOAT_S8_UINT
-            | vk::Format::D16_UNORM_S8_UINT => {
-                vk::ImageAspectFlags::DEPTH | vk::ImageAspectFlags::STENCIL
-            }
+            | vk::Format::D16_UNORM_S8_UINT => vk::ImageAspectFlags::DEPTH | vk::ImageAspectFlags::STENCIL,
             _ => vk::ImageAspectFlags::COLOR,
         }
     }
@@ -117,18 +109,12 @@ impl Image {
         let info = vk::ImageCreateInfo::default()
             .image_type(desc.dim)
             .format(desc.format)
-            .extent(vk::Extent3D {
-                width: desc.width,
-                height: desc.height,
-                depth: 1,
-            })
+            .extent(vk::Extent3D { width: desc.width, height: desc.height, depth: 1 })
             .mip_levels(1)
             .array_layers(1)
             .samples(vk::SampleCountFlags::TYPE_1)
             .tiling(vk::ImageTiling::OPTIMAL)
-            .usage(
-                desc.usage | vk::ImageUsageFlags::TRANSFER_DST | vk::ImageUsageFlags::TRANSFER_SRC,
-            )
+            .usage(desc.usage | vk::ImageUsageFlags::TRANSFER_DST | vk::ImageUsageFlags::TRANSFER_SRC)
             .sharing_mode(vk::SharingMode::EXCLUSIVE)
             .initial_layout(vk::ImageLayout::UNDEFINED);
         // SAFETY: valid create info on this device.
@@ -136,10 +122,7 @@ impl Image {
             vk::Result::ERROR_FORMAT_NOT_SUPPORTED => {
                 GpuError::Unsupported(format!("format {:?} for image `{name}`", desc.format))
             }
-            e => GpuError::Vk {
-                call: "vkCreateImage",
-                result: e,
-            },
+            e => GpuError::Vk { call: "vkCreateImage", result: e },
         })?;
         // SAFETY: `raw` is a live image of this device.
         let requirements = unsafe { shared.raw.get_image_memory_requirements(raw) };
@@ -153,11 +136,7 @@ impl Image {
         };
         let bound = {
             // SAFETY: memory of an allowed type at its offset.
-            unsafe {
-                shared
-                    .raw
-                    .bind_image_memory(raw, allocation.memory(), allocation.offset())
-            }
+            unsafe { shared.raw.bind_image_memory(raw, allocation.memory(), allocation.offset()) }
         };
         let view_type = if desc.dim == vk::ImageType::TYPE_1D {
             vk::ImageViewType::TYPE_1D
@@ -179,18 +158,11 @@ impl Image {
                 // SAFETY: never used.
                 unsafe { shared.raw.destroy_image(raw, None) };
                 shared.free(allocation);
-                return Err(Err::<(), _>(e).vk("vkCreateImageView").unwrap_err());
+                return Err(vk_error("vkCreateImageView", e));
             }
         };
         shared.set_name(raw, name);
-        Ok(Self {
-            shared,
-            raw,
-            view,
-            allocation: Some(allocation),
-            desc,
-            name: name.to_string(),
-        })
+        Ok(Self { shared, raw, view, allocation: Some(allocation), desc, name: name.to_string() })
     }
 
     /// The Vulkan image.
@@ -220,14 +192,7 @@ impl Image {
         from: (vk::ImageLayout, vk::PipelineStageFlags, vk::AccessFlags),
         to: (vk::ImageLayout, vk::PipelineStageFlags, vk::AccessFlags),
     ) {
-        record_image_barrier(
-            &self.shared.raw,
-            cmd,
-            self.raw,
-            self.desc.aspect(),
-            from,
-            to,
-        );
+        record_image_barrier(&self.shared.raw, cmd, self.raw, self.desc.aspect(), from, to);
     }
 
     /// Uploads tightly packed texels and leaves the image in `SHADER_READ_ONLY_OPTIMAL`,
@@ -235,12 +200,7 @@ impl Image {
     pub fn upload(&self, gpu: &Gpu, texels: &[u8]) -> GpuResult<()> {
         let expected = texel_bytes(self.desc.format)
             .map(|b| b * u64::from(self.desc.width) * u64::from(self.desc.height));
-        assert_eq!(
-            Some(texels.len() as u64),
-            expected,
-            "texel data size for image `{}`",
-            self.name
-        );
+        assert_eq!(Some(texels.len() as u64), expected, "texel data size for image `{}`", self.name);
         let staging = Buffer::<u8>::new(
             gpu,
             &format!("{} (staging)", self.name),
@@ -249,18 +209,11 @@ impl Image {
             MemoryKind::CpuToGpu,
         )?;
         let mut staging = staging;
-        staging
-            .mapped_mut()
-            .expect("CpuToGpu memory is mapped")
-            .copy_from_slice(texels);
+        staging.mapped_mut().expect("CpuToGpu memory is mapped").copy_from_slice(texels);
         gpu.run(|cmd| {
             self.record_transition(
                 cmd,
-                (
-                    vk::ImageLayout::UNDEFINED,
-                    vk::PipelineStageFlags::TOP_OF_PIPE,
-                    vk::AccessFlags::empty(),
-                ),
+                (vk::ImageLayout::UNDEFINED, vk::PipelineStageFlags::TOP_OF_PIPE, vk::AccessFlags::empty()),
                 (
                     vk::ImageLayout::TRANSFER_DST_OPTIMAL,
                     vk::PipelineStageFlags::TRANSFER,
@@ -287,8 +240,7 @@ impl Image {
                 ),
                 (
                     vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
-                    vk::PipelineStageFlags::FRAGMENT_SHADER
-                        | vk::PipelineStageFlags::COMPUTE_SHADER,
+                    vk::PipelineStageFlags::FRAGMENT_SHADER | vk::PipelineStageFlags::COMPUTE_SHADER,
                     vk::AccessFlags::SHADER_READ,
                 ),
             );
@@ -323,11 +275,7 @@ impl Image {
                 layer_count: 1,
             },
             image_offset: vk::Offset3D::default(),
-            image_extent: vk::Extent3D {
-                width: self.desc.width,
-                height: self.desc.height,
-                depth: 1,
-            },
+            image_extent: vk::Extent3D { width: self.desc.width, height: self.desc.height, depth: 1 },
         }
     }
 }
@@ -380,15 +328,7 @@ pub fn record_image_barrier(
         .subresource_range(subresource(aspect));
     // SAFETY: `cmd` is recording on `device`; `image` is a live image of it.
     unsafe {
-        device.cmd_pipeline_barrier(
-            cmd,
-            from.1,
-            to.1,
-            vk::DependencyFlags::empty(),
-            &[],
-            &[],
-            &[barrier],
-        )
+        device.cmd_pipeline_barrier(cmd, from.1, to.1, vk::DependencyFlags::empty(), &[], &[], &[barrier])
     };
 }
 
@@ -402,11 +342,7 @@ impl Sampler {
     /// A clamp-to-edge sampler with linear (or nearest) filtering and no mipmaps, as colour
     /// maps use.
     pub fn new(gpu: &Gpu, linear: bool) -> GpuResult<Self> {
-        let filter = if linear {
-            vk::Filter::LINEAR
-        } else {
-            vk::Filter::NEAREST
-        };
+        let filter = if linear { vk::Filter::LINEAR } else { vk::Filter::NEAREST };
         let info = vk::SamplerCreateInfo::default()
             .mag_filter(filter)
             .min_filter(filter)
@@ -417,10 +353,7 @@ impl Sampler {
             .max_lod(0.0);
         // SAFETY: valid create info on this device.
         let raw = unsafe { gpu.device().create_sampler(&info, None) }.vk("vkCreateSampler")?;
-        Ok(Self {
-            shared: gpu.shared.clone(),
-            raw,
-        })
+        Ok(Self { shared: gpu.shared.clone(), raw })
     }
 
     /// The Vulkan handle.

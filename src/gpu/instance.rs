@@ -66,33 +66,25 @@ pub(crate) fn create_instance(
         .api_version(api);
 
     let mut layers: Vec<*const c_char> = Vec::new();
-    let mut extensions: Vec<*const c_char> = desc
-        .instance_extensions
-        .iter()
-        .map(|e| e.as_ptr())
-        .collect();
+    let mut extensions: Vec<*const c_char> = desc.instance_extensions.iter().map(|e| e.as_ptr()).collect();
     let mut sync_validation = false;
     if desc.validation {
         // SAFETY: plain loader query.
         let available = unsafe { entry.enumerate_instance_layer_properties() }
             .vk("vkEnumerateInstanceLayerProperties")?;
-        let found = available
-            .iter()
-            .any(|l| l.layer_name_as_c_str().is_ok_and(|n| n == VALIDATION_LAYER));
+        let found = available.iter().any(|l| l.layer_name_as_c_str().is_ok_and(|n| n == VALIDATION_LAYER));
         if !found {
             return Err(GpuError::NoValidationLayer);
         }
         layers.push(VALIDATION_LAYER.as_ptr());
         extensions.push(ash::ext::debug_utils::NAME.as_ptr());
         // SAFETY: plain loader query for the layer's own extensions.
-        let layer_exts =
-            unsafe { entry.enumerate_instance_extension_properties(Some(VALIDATION_LAYER)) }
-                .unwrap_or_default();
+        let layer_exts = unsafe { entry.enumerate_instance_extension_properties(Some(VALIDATION_LAYER)) }
+            .unwrap_or_default();
         if desc.sync_validation
-            && layer_exts.iter().any(|e| {
-                e.extension_name_as_c_str()
-                    .is_ok_and(|n| n == ash::ext::validation_features::NAME)
-            })
+            && layer_exts
+                .iter()
+                .any(|e| e.extension_name_as_c_str().is_ok_and(|n| n == ash::ext::validation_features::NAME))
         {
             extensions.push(ash::ext::validation_features::NAME.as_ptr());
             sync_validation = true;
@@ -113,20 +105,15 @@ pub(crate) fn create_instance(
         }
     }
     // SAFETY: every pointer in `info` refers to locals that outlive the call.
-    let instance =
-        unsafe { entry.create_instance(&info, None) }.map_err(|result| match result {
-            vk::Result::ERROR_INCOMPATIBLE_DRIVER => GpuError::NoDevice {
-                detail: ": vkCreateInstance found no compatible driver".into(),
-            },
-            vk::Result::ERROR_EXTENSION_NOT_PRESENT => GpuError::Unsupported(format!(
-                "the instance extensions {:?}",
-                desc.instance_extensions
-            )),
-            other => GpuError::Vk {
-                call: "vkCreateInstance",
-                result: other,
-            },
-        })?;
+    let instance = unsafe { entry.create_instance(&info, None) }.map_err(|result| match result {
+        vk::Result::ERROR_INCOMPATIBLE_DRIVER => {
+            GpuError::NoDevice { detail: ": vkCreateInstance found no compatible driver".into() }
+        }
+        vk::Result::ERROR_EXTENSION_NOT_PRESENT => {
+            GpuError::Unsupported(format!("the instance extensions {:?}", desc.instance_extensions))
+        }
+        other => GpuError::Vk { call: "vkCreateInstance", result: other },
+    })?;
 
     let messenger = if desc.validation {
         let loader = ash::ext::debug_utils::Instance::new(entry, &instance);
@@ -137,19 +124,13 @@ pub(crate) fn create_instance(
             Err(e) => {
                 // SAFETY: nothing else was created from this instance yet.
                 unsafe { instance.destroy_instance(None) };
-                return Err(GpuError::Vk {
-                    call: "vkCreateDebugUtilsMessengerEXT",
-                    result: e,
-                });
+                return Err(GpuError::Vk { call: "vkCreateDebugUtilsMessengerEXT", result: e });
             }
         }
     } else {
         None
     };
-    Ok(CreatedInstance {
-        instance,
-        messenger,
-    })
+    Ok(CreatedInstance { instance, messenger })
 }
 
 /// The chosen device and the family of its one queue.
@@ -173,17 +154,13 @@ fn type_rank(t: vk::PhysicalDeviceType) -> u32 {
 /// (from `GALERKIN_DEVICE`) keeps only devices whose name contains it, case-insensitively.
 pub(crate) fn choose_device(instance: &ash::Instance, desc: &GpuDesc) -> GpuResult<Choice> {
     // SAFETY: plain instance query.
-    let devices =
-        unsafe { instance.enumerate_physical_devices() }.vk("vkEnumeratePhysicalDevices")?;
+    let devices = unsafe { instance.enumerate_physical_devices() }.vk("vkEnumeratePhysicalDevices")?;
     let mut seen = Vec::new();
     let mut best: Option<(u32, Choice)> = None;
     for physical in devices {
         // SAFETY: `physical` comes from this instance.
         let props = unsafe { instance.get_physical_device_properties(physical) };
-        let name = props
-            .device_name_as_c_str()
-            .map(|n| n.to_string_lossy().into_owned())
-            .unwrap_or_default();
+        let name = props.device_name_as_c_str().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
         seen.push(name.clone());
         if let Some(want) = &desc.device_name {
             if !name.to_lowercase().contains(&want.to_lowercase()) {
@@ -198,21 +175,15 @@ pub(crate) fn choose_device(instance: &ash::Instance, desc: &GpuDesc) -> GpuResu
         }
         // SAFETY: as above.
         let families = unsafe { instance.get_physical_device_queue_family_properties(physical) };
-        let Some(family) = families.iter().position(|f| {
-            f.queue_flags
-                .contains(vk::QueueFlags::GRAPHICS | vk::QueueFlags::COMPUTE)
-        }) else {
+        let Some(family) = families
+            .iter()
+            .position(|f| f.queue_flags.contains(vk::QueueFlags::GRAPHICS | vk::QueueFlags::COMPUTE))
+        else {
             continue;
         };
         let rank = type_rank(props.device_type);
         if best.as_ref().is_none_or(|(r, _)| rank < *r) {
-            best = Some((
-                rank,
-                Choice {
-                    physical,
-                    queue_family: family as u32,
-                },
-            ));
+            best = Some((rank, Choice { physical, queue_family: family as u32 }));
         }
     }
     best.map(|(_, c)| c).ok_or_else(|| GpuError::NoDevice {
@@ -223,10 +194,9 @@ pub(crate) fn choose_device(instance: &ash::Instance, desc: &GpuDesc) -> GpuResu
                  (devices seen: {})",
                 seen.join(", ")
             ),
-            (None, false) => format!(
-                " with Vulkan 1.2 and a graphics+compute queue (devices seen: {})",
-                seen.join(", ")
-            ),
+            (None, false) => {
+                format!(" with Vulkan 1.2 and a graphics+compute queue (devices seen: {})", seen.join(", "))
+            }
         },
     })
 }
@@ -273,7 +243,6 @@ pub(crate) fn create_device(
         .enabled_extension_names(&extensions)
         .enabled_features(&enabled);
     // SAFETY: `info` points at locals that outlive the call; `choice.physical` is of `instance`.
-    let device =
-        unsafe { instance.create_device(choice.physical, &info, None) }.vk("vkCreateDevice")?;
+    let device = unsafe { instance.create_device(choice.physical, &info, None) }.vk("vkCreateDevice")?;
     Ok((device, enabled))
 }

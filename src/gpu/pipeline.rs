@@ -8,7 +8,7 @@ use ash::vk;
 
 use super::context::{DeviceShared, Gpu};
 use super::descriptors::{BindingKind, DescriptorSet, DescriptorSetLayout, Resource};
-use super::error::{GpuError, GpuResult, VkContext};
+use super::error::{vk_error, GpuError, GpuResult, VkContext};
 
 /// A shader module, destroyed as soon as the pipeline using it exists.
 struct ShaderModule<'a> {
@@ -43,47 +43,112 @@ fn specialization<'a>(
         offset: (i * 4) as u32,
         size: 4,
     }));
-    vk::SpecializationInfo::default()
-        .map_entries(entries)
-        .data(bytemuck::cast_slice(values))
+    vk::SpecializationInfo::default().map_entries(entries).data(bytemuck::cast_slice(values))
 }
 
-struct Layouts {
-    set: DescriptorSetLayout,
+/// A pipeline layout: one descriptor set (bindings in order) and one push-constant range
+/// visible to `stages`.
+struct PipelineLayout {
+    shared: Arc<DeviceShared>,
     raw: vk::PipelineLayout,
-}
-
-fn layouts(
-    gpu: &Gpu,
-    bindings: &[BindingKind],
+    set: DescriptorSetLayout,
     push_bytes: u32,
     stages: vk::ShaderStageFlags,
-    name: &str,
-) -> GpuResult<Layouts> {
-    if push_bytes > gpu.caps().max_push_constants_size {
-        return Err(GpuError::OverLimit {
-            name: format!("push constants of `{name}`"),
-            requested: u64::from(push_bytes),
-            limit: u64::from(gpu.caps().max_push_constants_size),
-            limit_name: "maxPushConstantsSize",
-            unit: "bytes",
+}
+
+impl PipelineLayout {
+    fn new(
+        gpu: &Gpu,
+        bindings: &[BindingKind],
+        push_bytes: u32,
+        stages: vk::ShaderStageFlags,
+        name: &str,
+    ) -> GpuResult<Self> {
+        if push_bytes > gpu.caps().max_push_constants_size {
+            return Err(GpuError::OverLimit {
+                name: format!("push constants of `{name}`"),
+                requested: u64::from(push_bytes),
+                limit: u64::from(gpu.caps().max_push_constants_size),
+                limit_name: "maxPushConstantsSize",
+                unit: "bytes",
+            });
+        }
+        let set = DescriptorSetLayout::new(gpu, bindings, stages)?;
+        let ranges = [vk::PushConstantRange { stage_flags: stages, offset: 0, size: push_bytes }];
+        let set_layouts = [set.raw];
+        let mut info = vk::PipelineLayoutCreateInfo::default().set_layouts(&set_layouts);
+        if push_bytes > 0 {
+            info = info.push_constant_ranges(&ranges);
+        }
+        // SAFETY: valid create info on this device.
+        let raw = unsafe { gpu.device().create_pipeline_layout(&info, None) }.vk("vkCreatePipelineLayout")?;
+        Ok(Self { shared: gpu.shared.clone(), raw, set, push_bytes, stages })
+    }
+}
+
+impl Drop for PipelineLayout {
+    fn drop(&mut self) {
+        let raw = self.raw;
+        self.shared.retire(move |dev| {
+            // SAFETY: nothing in flight uses the layout.
+            unsafe { dev.raw.destroy_pipeline_layout(raw, None) }
         });
     }
-    let set = DescriptorSetLayout::new(gpu, bindings, stages)?;
-    let ranges = [vk::PushConstantRange {
-        stage_flags: stages,
-        offset: 0,
-        size: push_bytes,
-    }];
-    let set_layouts = [set.raw];
-    let mut info = vk::PipelineLayoutCreateInfo::default().set_layouts(&set_layouts);
-    if push_bytes > 0 {
-        info = info.push_constant_ranges(&ranges);
+}
+
+/// What compute and graphics pipelines share: the pipeline, its layout, and the rule that a
+/// recording binds the pipeline, its one descriptor set and exactly the declared push bytes.
+struct PipelineCore {
+    raw: vk::Pipeline,
+    layout: PipelineLayout,
+    bind_point: vk::PipelineBindPoint,
+    name: String,
+}
+
+impl PipelineCore {
+    fn new(
+        gpu: &Gpu,
+        raw: vk::Pipeline,
+        layout: PipelineLayout,
+        bind_point: vk::PipelineBindPoint,
+        name: &str,
+    ) -> Self {
+        gpu.shared.set_name(raw, name);
+        Self { raw, layout, bind_point, name: name.to_string() }
     }
-    // SAFETY: valid create info on this device.
-    let raw =
-        unsafe { gpu.device().create_pipeline_layout(&info, None) }.vk("vkCreatePipelineLayout")?;
-    Ok(Layouts { set, raw })
+
+    fn bind(&self, gpu: &Gpu, resources: &[Resource]) -> GpuResult<DescriptorSet> {
+        DescriptorSet::new(gpu, &self.layout.set, resources)
+    }
+
+    /// Records the pipeline, `set` and `push` (exactly the declared size).
+    fn record_bind(&self, cmd: vk::CommandBuffer, set: &DescriptorSet, push: &[u8]) {
+        let l = &self.layout;
+        assert_eq!(push.len() as u32, l.push_bytes, "push constants of `{}`", self.name);
+        let d = &l.shared.raw;
+        // SAFETY: `cmd` is recording on this device; the set matches this pipeline's layout.
+        unsafe {
+            d.cmd_bind_pipeline(cmd, self.bind_point, self.raw);
+            d.cmd_bind_descriptor_sets(cmd, self.bind_point, l.raw, 0, &[set.raw], &[]);
+            if !push.is_empty() {
+                d.cmd_push_constants(cmd, l.raw, l.stages, 0, push);
+            }
+        }
+    }
+
+    fn device(&self) -> &ash::Device {
+        &self.layout.shared.raw
+    }
+}
+
+impl Drop for PipelineCore {
+    fn drop(&mut self) {
+        let raw = self.raw;
+        self.layout.shared.retire(move |dev| {
+            // SAFETY: nothing in flight uses the pipeline.
+            unsafe { dev.raw.destroy_pipeline(raw, None) }
+        });
+    }
 }
 
 /// How to build a compute pipeline.
@@ -101,20 +166,15 @@ pub struct ComputePipelineDesc<'a> {
     pub specialization: &'a [u32],
 }
 
-/// A compute pipeline with its layouts.
+/// A compute pipeline with its layout.
 pub struct ComputePipeline {
-    shared: Arc<DeviceShared>,
-    raw: vk::Pipeline,
-    layout: vk::PipelineLayout,
-    set_layout: DescriptorSetLayout,
-    push_bytes: u32,
-    name: String,
+    core: PipelineCore,
 }
 
 impl ComputePipeline {
     /// Builds the pipeline.
     pub fn new(gpu: &Gpu, desc: &ComputePipelineDesc<'_>) -> GpuResult<Self> {
-        let l = layouts(
+        let layout = PipelineLayout::new(
             gpu,
             desc.bindings,
             desc.push_constant_bytes,
@@ -129,36 +189,16 @@ impl ComputePipeline {
             .module(module.raw)
             .name(c"main")
             .specialization_info(&spec);
-        let info = vk::ComputePipelineCreateInfo::default()
-            .stage(stage)
-            .layout(l.raw);
+        let info = vk::ComputePipelineCreateInfo::default().stage(stage).layout(layout.raw);
         // SAFETY: valid create info; the module and layout are alive.
-        let raw = unsafe {
-            gpu.device()
-                .create_compute_pipelines(vk::PipelineCache::null(), &[info], None)
-        };
-        let raw = match raw {
-            Ok(p) => p[0],
-            Err((_, e)) => {
-                // SAFETY: the layout is unused.
-                unsafe { gpu.device().destroy_pipeline_layout(l.raw, None) };
-                return Err(Err::<(), _>(e).vk("vkCreateComputePipelines").unwrap_err());
-            }
-        };
-        gpu.shared.set_name(raw, desc.name);
-        Ok(Self {
-            shared: gpu.shared.clone(),
-            raw,
-            layout: l.raw,
-            set_layout: l.set,
-            push_bytes: desc.push_constant_bytes,
-            name: desc.name.to_string(),
-        })
+        let raw = unsafe { gpu.device().create_compute_pipelines(vk::PipelineCache::null(), &[info], None) }
+            .map_err(|(_, e)| vk_error("vkCreateComputePipelines", e))?[0];
+        Ok(Self { core: PipelineCore::new(gpu, raw, layout, vk::PipelineBindPoint::COMPUTE, desc.name) })
     }
 
     /// Binds resources to this pipeline's bindings (see [`DescriptorSet::new`]).
     pub fn bind(&self, gpu: &Gpu, resources: &[Resource]) -> GpuResult<DescriptorSet> {
-        DescriptorSet::new(gpu, &self.set_layout, resources)
+        self.core.bind(gpu, resources)
     }
 
     /// Records: bind the pipeline and `set`, push `push` (exactly the declared size), dispatch
@@ -170,42 +210,9 @@ impl ComputePipeline {
         push: &[u8],
         groups: [u32; 3],
     ) {
-        assert_eq!(
-            push.len() as u32,
-            self.push_bytes,
-            "push constants of `{}`",
-            self.name
-        );
-        let d = &self.shared.raw;
-        // SAFETY: `cmd` is recording on this device; the set matches this pipeline's layout.
-        unsafe {
-            d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, self.raw);
-            d.cmd_bind_descriptor_sets(
-                cmd,
-                vk::PipelineBindPoint::COMPUTE,
-                self.layout,
-                0,
-                &[set.raw],
-                &[],
-            );
-            if !push.is_empty() {
-                d.cmd_push_constants(cmd, self.layout, vk::ShaderStageFlags::COMPUTE, 0, push);
-            }
-            d.cmd_dispatch(cmd, groups[0], groups[1], groups[2]);
-        }
-    }
-}
-
-impl Drop for ComputePipeline {
-    fn drop(&mut self) {
-        let (raw, layout) = (self.raw, self.layout);
-        self.shared.retire(move |dev| {
-            // SAFETY: nothing in flight uses the pipeline.
-            unsafe {
-                dev.raw.destroy_pipeline(raw, None);
-                dev.raw.destroy_pipeline_layout(layout, None);
-            }
-        });
+        self.core.record_bind(cmd, set, push);
+        // SAFETY: `cmd` is recording with this pipeline bound.
+        unsafe { self.core.device().cmd_dispatch(cmd, groups[0], groups[1], groups[2]) };
     }
 }
 
@@ -254,12 +261,7 @@ pub struct GraphicsPipelineDesc<'a> {
 impl<'a> GraphicsPipelineDesc<'a> {
     /// Defaults: triangle list, filled, no culling, depth on, no blending, no vertex buffer,
     /// one colour attachment.
-    pub fn new(
-        name: &'a str,
-        vertex: &'a [u32],
-        fragment: &'a [u32],
-        render_pass: vk::RenderPass,
-    ) -> Self {
+    pub fn new(name: &'a str, vertex: &'a [u32], fragment: &'a [u32], render_pass: vk::RenderPass) -> Self {
         Self {
             name,
             vertex,
@@ -282,15 +284,9 @@ impl<'a> GraphicsPipelineDesc<'a> {
     }
 }
 
-/// A graphics pipeline with its layouts.
+/// A graphics pipeline with its layout.
 pub struct GraphicsPipeline {
-    shared: Arc<DeviceShared>,
-    raw: vk::Pipeline,
-    layout: vk::PipelineLayout,
-    set_layout: DescriptorSetLayout,
-    push_bytes: u32,
-    stages: vk::ShaderStageFlags,
-    name: String,
+    core: PipelineCore,
 }
 
 impl GraphicsPipeline {
@@ -299,33 +295,18 @@ impl GraphicsPipeline {
         let mut stages = vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT;
         if desc.geometry.is_some() {
             if !gpu.caps().geometry_shader {
-                return Err(GpuError::Unsupported(format!(
-                    "geometry shaders (pipeline `{}`)",
-                    desc.name
-                )));
+                return Err(GpuError::Unsupported(format!("geometry shaders (pipeline `{}`)", desc.name)));
             }
             stages |= vk::ShaderStageFlags::GEOMETRY;
         }
         if desc.polygon_mode != vk::PolygonMode::FILL && !gpu.caps().fill_mode_non_solid {
-            return Err(GpuError::Unsupported(format!(
-                "fillModeNonSolid (pipeline `{}`)",
-                desc.name
-            )));
+            return Err(GpuError::Unsupported(format!("fillModeNonSolid (pipeline `{}`)", desc.name)));
         }
-        let l = layouts(
-            gpu,
-            desc.bindings,
-            desc.push_constant_bytes,
-            stages,
-            desc.name,
-        )?;
+        let layout = PipelineLayout::new(gpu, desc.bindings, desc.push_constant_bytes, stages, desc.name)?;
         let device = gpu.device();
         let vs = ShaderModule::new(device, desc.vertex)?;
         let fs = ShaderModule::new(device, desc.fragment)?;
-        let gs = desc
-            .geometry
-            .map(|g| ShaderModule::new(device, g))
-            .transpose()?;
+        let gs = desc.geometry.map(|g| ShaderModule::new(device, g)).transpose()?;
         let mut entries = Vec::new();
         let spec = specialization(desc.specialization, &mut entries);
         let mut shader_stages = vec![
@@ -357,14 +338,12 @@ impl GraphicsPipeline {
         let attributes: Vec<_> = desc
             .vertex_attributes
             .iter()
-            .map(
-                |&(location, format, offset)| vk::VertexInputAttributeDescription {
-                    location,
-                    binding: 0,
-                    format,
-                    offset,
-                },
-            )
+            .map(|&(location, format, offset)| vk::VertexInputAttributeDescription {
+                location,
+                binding: 0,
+                format,
+                offset,
+            })
             .collect();
         let mut vertex_input = vk::PipelineVertexInputStateCreateInfo::default();
         if desc.vertex_stride > 0 {
@@ -373,9 +352,7 @@ impl GraphicsPipeline {
                 .vertex_attribute_descriptions(&attributes);
         }
         let assembly = vk::PipelineInputAssemblyStateCreateInfo::default().topology(desc.topology);
-        let viewport = vk::PipelineViewportStateCreateInfo::default()
-            .viewport_count(1)
-            .scissor_count(1);
+        let viewport = vk::PipelineViewportStateCreateInfo::default().viewport_count(1).scissor_count(1);
         let mut raster = vk::PipelineRasterizationStateCreateInfo::default()
             .polygon_mode(desc.polygon_mode)
             .cull_mode(desc.cull_mode)
@@ -416,35 +393,18 @@ impl GraphicsPipeline {
             .depth_stencil_state(&depth)
             .color_blend_state(&blend)
             .dynamic_state(&dynamic)
-            .layout(l.raw)
+            .layout(layout.raw)
             .render_pass(desc.render_pass)
             .subpass(0);
         // SAFETY: every pointer in `info` refers to locals alive during the call.
-        let raw = match unsafe {
-            device.create_graphics_pipelines(vk::PipelineCache::null(), &[info], None)
-        } {
-            Ok(p) => p[0],
-            Err((_, e)) => {
-                // SAFETY: the layout is unused.
-                unsafe { device.destroy_pipeline_layout(l.raw, None) };
-                return Err(Err::<(), _>(e).vk("vkCreateGraphicsPipelines").unwrap_err());
-            }
-        };
-        gpu.shared.set_name(raw, desc.name);
-        Ok(Self {
-            shared: gpu.shared.clone(),
-            raw,
-            layout: l.raw,
-            set_layout: l.set,
-            push_bytes: desc.push_constant_bytes,
-            stages,
-            name: desc.name.to_string(),
-        })
+        let raw = unsafe { device.create_graphics_pipelines(vk::PipelineCache::null(), &[info], None) }
+            .map_err(|(_, e)| vk_error("vkCreateGraphicsPipelines", e))?[0];
+        Ok(Self { core: PipelineCore::new(gpu, raw, layout, vk::PipelineBindPoint::GRAPHICS, desc.name) })
     }
 
     /// Binds resources to this pipeline's bindings.
     pub fn bind(&self, gpu: &Gpu, resources: &[Resource]) -> GpuResult<DescriptorSet> {
-        DescriptorSet::new(gpu, &self.set_layout, resources)
+        self.core.bind(gpu, resources)
     }
 
     /// Records, inside a render pass: bind the pipeline, `set` and the vertex buffer (if any),
@@ -458,13 +418,8 @@ impl GraphicsPipeline {
         vertices: Option<vk::Buffer>,
         vertex_count: u32,
     ) {
-        assert_eq!(
-            push.len() as u32,
-            self.push_bytes,
-            "push constants of `{}`",
-            self.name
-        );
-        let d = &self.shared.raw;
+        self.core.record_bind(cmd, set, push);
+        let d = self.core.device();
         let viewport = vk::Viewport {
             x: 0.0,
             y: 0.0,
@@ -473,43 +428,15 @@ impl GraphicsPipeline {
             min_depth: 0.0,
             max_depth: 1.0,
         };
-        let scissor = vk::Rect2D {
-            offset: vk::Offset2D::default(),
-            extent,
-        };
+        let scissor = vk::Rect2D { offset: vk::Offset2D::default(), extent };
         // SAFETY: `cmd` is recording inside a render pass compatible with this pipeline.
         unsafe {
-            d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, self.raw);
-            d.cmd_bind_descriptor_sets(
-                cmd,
-                vk::PipelineBindPoint::GRAPHICS,
-                self.layout,
-                0,
-                &[set.raw],
-                &[],
-            );
             d.cmd_set_viewport(cmd, 0, &[viewport]);
             d.cmd_set_scissor(cmd, 0, &[scissor]);
-            if !push.is_empty() {
-                d.cmd_push_constants(cmd, self.layout, self.stages, 0, push);
-            }
             if let Some(v) = vertices {
                 d.cmd_bind_vertex_buffers(cmd, 0, &[v], &[0]);
             }
             d.cmd_draw(cmd, vertex_count, 1, 0, 0);
         }
-    }
-}
-
-impl Drop for GraphicsPipeline {
-    fn drop(&mut self) {
-        let (raw, layout) = (self.raw, self.layout);
-        self.shared.retire(move |dev| {
-            // SAFETY: nothing in flight uses the pipeline.
-            unsafe {
-                dev.raw.destroy_pipeline(raw, None);
-                dev.raw.destroy_pipeline_layout(layout, None);
-            }
-        });
     }
 }

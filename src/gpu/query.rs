@@ -23,60 +23,36 @@ impl Profiler {
     /// A profiler for up to `scopes` scopes per recording. An error if the queue cannot write
     /// timestamps.
     pub fn new(gpu: &Gpu, scopes: u32) -> GpuResult<Self> {
-        let period_ns = gpu.caps().timestamp_period_ns.ok_or_else(|| {
-            GpuError::Unsupported("timestamp queries on the engine's queue".into())
-        })?;
+        let period_ns = gpu
+            .caps()
+            .timestamp_period_ns
+            .ok_or_else(|| GpuError::Unsupported("timestamp queries on the engine's queue".into()))?;
         let info = vk::QueryPoolCreateInfo::default()
             .query_type(vk::QueryType::TIMESTAMP)
             .query_count(2 * scopes.max(1));
         // SAFETY: valid create info on this device.
-        let pool =
-            unsafe { gpu.device().create_query_pool(&info, None) }.vk("vkCreateQueryPool")?;
-        Ok(Self {
-            shared: gpu.shared.clone(),
-            pool,
-            capacity: scopes.max(1),
-            names: Vec::new(),
-            period_ns,
-        })
+        let pool = unsafe { gpu.device().create_query_pool(&info, None) }.vk("vkCreateQueryPool")?;
+        Ok(Self { shared: gpu.shared.clone(), pool, capacity: scopes.max(1), names: Vec::new(), period_ns })
     }
 
     /// Records the reset of every query; call at the start of each recording that uses scopes.
     pub fn record_reset(&mut self, cmd: vk::CommandBuffer) {
         self.names.clear();
         // SAFETY: `cmd` is recording on this device, outside a render pass.
-        unsafe {
-            self.shared
-                .raw
-                .cmd_reset_query_pool(cmd, self.pool, 0, 2 * self.capacity)
-        };
+        unsafe { self.shared.raw.cmd_reset_query_pool(cmd, self.pool, 0, 2 * self.capacity) };
     }
 
     /// Records `record` between two timestamps named `name`. Panics past the capacity.
-    pub fn scope<R>(
-        &mut self,
-        cmd: vk::CommandBuffer,
-        name: &str,
-        record: impl FnOnce() -> R,
-    ) -> R {
+    pub fn scope<R>(&mut self, cmd: vk::CommandBuffer, name: &str, record: impl FnOnce() -> R) -> R {
         let i = self.names.len() as u32;
         assert!(i < self.capacity, "profiler holds {} scopes", self.capacity);
         self.names.push(name.to_string());
         let d = &self.shared.raw;
         // SAFETY: `cmd` is recording; the queries were reset in this recording.
-        unsafe {
-            d.cmd_write_timestamp(cmd, vk::PipelineStageFlags::TOP_OF_PIPE, self.pool, 2 * i)
-        };
+        unsafe { d.cmd_write_timestamp(cmd, vk::PipelineStageFlags::TOP_OF_PIPE, self.pool, 2 * i) };
         let r = record();
         // SAFETY: as above.
-        unsafe {
-            d.cmd_write_timestamp(
-                cmd,
-                vk::PipelineStageFlags::BOTTOM_OF_PIPE,
-                self.pool,
-                2 * i + 1,
-            )
-        };
+        unsafe { d.cmd_write_timestamp(cmd, vk::PipelineStageFlags::BOTTOM_OF_PIPE, self.pool, 2 * i + 1) };
         r
     }
 

@@ -23,11 +23,7 @@ pub struct RenderPass {
 impl RenderPass {
     /// Creates the render pass. Its external dependencies order earlier transfer reads of the
     /// attachment before this pass's writes, and its colour writes before later transfers.
-    pub fn new(
-        gpu: &Gpu,
-        color_format: vk::Format,
-        depth_format: Option<vk::Format>,
-    ) -> GpuResult<Self> {
+    pub fn new(gpu: &Gpu, color_format: vk::Format, depth_format: Option<vk::Format>) -> GpuResult<Self> {
         let mut attachments = vec![vk::AttachmentDescription::default()
             .format(color_format)
             .samples(vk::SampleCountFlags::TYPE_1)
@@ -50,10 +46,8 @@ impl RenderPass {
                     .final_layout(vk::ImageLayout::DEPTH_STENCIL_ATTACHMENT_OPTIMAL),
             );
         }
-        let color_ref = [vk::AttachmentReference {
-            attachment: 0,
-            layout: vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
-        }];
+        let color_ref =
+            [vk::AttachmentReference { attachment: 0, layout: vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL }];
         let depth_ref = vk::AttachmentReference {
             attachment: 1,
             layout: vk::ImageLayout::DEPTH_STENCIL_ATTACHMENT_OPTIMAL,
@@ -64,8 +58,8 @@ impl RenderPass {
         if depth_format.is_some() {
             subpass = subpass.depth_stencil_attachment(&depth_ref);
         }
-        let fragment_tests = vk::PipelineStageFlags::EARLY_FRAGMENT_TESTS
-            | vk::PipelineStageFlags::LATE_FRAGMENT_TESTS;
+        let fragment_tests =
+            vk::PipelineStageFlags::EARLY_FRAGMENT_TESTS | vk::PipelineStageFlags::LATE_FRAGMENT_TESTS;
         let dependencies = [
             vk::SubpassDependency {
                 src_subpass: vk::SUBPASS_EXTERNAL,
@@ -99,14 +93,8 @@ impl RenderPass {
             .subpasses(&subpasses)
             .dependencies(&dependencies);
         // SAFETY: valid create info on this device.
-        let raw =
-            unsafe { gpu.device().create_render_pass(&info, None) }.vk("vkCreateRenderPass")?;
-        Ok(Self {
-            shared: gpu.shared.clone(),
-            raw,
-            color_format,
-            depth_format,
-        })
+        let raw = unsafe { gpu.device().create_render_pass(&info, None) }.vk("vkCreateRenderPass")?;
+        Ok(Self { shared: gpu.shared.clone(), raw, color_format, depth_format })
     }
 
     /// The Vulkan handle (pipelines are built against it).
@@ -127,31 +115,17 @@ impl RenderPass {
     /// Records `vkCmdBeginRenderPass` on `framebuffer` clearing colour to `clear` and depth to 1.
     pub fn record_begin(&self, cmd: vk::CommandBuffer, framebuffer: &Framebuffer, clear: [f32; 4]) {
         let clears = [
-            vk::ClearValue {
-                color: vk::ClearColorValue { float32: clear },
-            },
-            vk::ClearValue {
-                depth_stencil: vk::ClearDepthStencilValue {
-                    depth: 1.0,
-                    stencil: 0,
-                },
-            },
+            vk::ClearValue { color: vk::ClearColorValue { float32: clear } },
+            vk::ClearValue { depth_stencil: vk::ClearDepthStencilValue { depth: 1.0, stencil: 0 } },
         ];
         let n = if self.depth_format.is_some() { 2 } else { 1 };
         let info = vk::RenderPassBeginInfo::default()
             .render_pass(self.raw)
             .framebuffer(framebuffer.raw)
-            .render_area(vk::Rect2D {
-                offset: vk::Offset2D::default(),
-                extent: framebuffer.extent,
-            })
+            .render_area(vk::Rect2D { offset: vk::Offset2D::default(), extent: framebuffer.extent })
             .clear_values(&clears[..n]);
         // SAFETY: `cmd` is recording outside a render pass; the framebuffer matches this pass.
-        unsafe {
-            self.shared
-                .raw
-                .cmd_begin_render_pass(cmd, &info, vk::SubpassContents::INLINE)
-        };
+        unsafe { self.shared.raw.cmd_begin_render_pass(cmd, &info, vk::SubpassContents::INLINE) };
     }
 
     /// Records `vkCmdEndRenderPass`.
@@ -193,13 +167,8 @@ impl Framebuffer {
             .height(extent.height)
             .layers(1);
         // SAFETY: views are live and match the pass's attachments (caller's contract).
-        let raw =
-            unsafe { gpu.device().create_framebuffer(&info, None) }.vk("vkCreateFramebuffer")?;
-        Ok(Self {
-            shared: gpu.shared.clone(),
-            raw,
-            extent,
-        })
+        let raw = unsafe { gpu.device().create_framebuffer(&info, None) }.vk("vkCreateFramebuffer")?;
+        Ok(Self { shared: gpu.shared.clone(), raw, extent })
     }
 
     /// Its size.
@@ -238,10 +207,7 @@ impl ForeignView {
             .subresource_range(super::image::subresource(vk::ImageAspectFlags::COLOR));
         // SAFETY: the caller guarantees `image` per this function's contract.
         let raw = unsafe { gpu.device().create_image_view(&info, None) }.vk("vkCreateImageView")?;
-        Ok(Self {
-            shared: gpu.shared.clone(),
-            raw,
-        })
+        Ok(Self { shared: gpu.shared.clone(), raw })
     }
 
     /// The view.

@@ -39,9 +39,7 @@ impl StagingPool {
                 return Ok(idle.swap_remove(i));
             }
         }
-        let size = bytes
-            .next_power_of_two()
-            .clamp(MIN_BYTES, STAGING_CHUNK_BYTES.max(bytes));
+        let size = bytes.next_power_of_two().clamp(MIN_BYTES, STAGING_CHUNK_BYTES.max(bytes));
         let name = match kind {
             MemoryKind::CpuToGpu => "upload staging",
             _ => "download staging",
@@ -54,9 +52,7 @@ impl StagingPool {
         let mut idle = self.idle.lock().unwrap_or_else(|p| p.into_inner());
         idle.push(buffer);
         let kind = idle.last().map(Buffer::kind);
-        let same: Vec<usize> = (0..idle.len())
-            .filter(|&i| Some(idle[i].kind()) == kind)
-            .collect();
+        let same: Vec<usize> = (0..idle.len()).filter(|&i| Some(idle[i].kind()) == kind).collect();
         if same.len() > KEEP_PER_KIND {
             if let Some(&smallest) = same.iter().min_by_key(|&&i| idle[i].size_bytes()) {
                 drop(idle.swap_remove(smallest));

@@ -8,18 +8,14 @@ use ash::vk;
 use raw_window_handle::{RawDisplayHandle, RawWindowHandle};
 
 use super::context::{DeviceShared, Gpu};
-use super::error::{GpuError, GpuResult, VkContext};
+use super::error::{vk_error, GpuError, GpuResult, VkContext};
 
 /// The instance extensions a window on `display` needs (pass them in
 /// [`super::GpuDesc::instance_extensions`]).
 pub fn surface_extensions(display: RawDisplayHandle) -> GpuResult<Vec<&'static std::ffi::CStr>> {
-    let names =
-        ash_window::enumerate_required_extensions(display).vk("enumerate surface extensions")?;
+    let names = ash_window::enumerate_required_extensions(display).vk("enumerate surface extensions")?;
     // SAFETY: ash-window returns pointers to static NUL-terminated extension names.
-    Ok(names
-        .iter()
-        .map(|&p| unsafe { std::ffi::CStr::from_ptr(p) })
-        .collect())
+    Ok(names.iter().map(|&p| unsafe { std::ffi::CStr::from_ptr(p) }).collect())
 }
 
 /// A window surface.
@@ -36,34 +32,22 @@ impl Surface {
     /// # Safety
     /// The handles are valid and the window outlives the surface; the instance was created
     /// with [`surface_extensions`] of this display.
-    pub unsafe fn new(
-        gpu: &Gpu,
-        display: RawDisplayHandle,
-        window: RawWindowHandle,
-    ) -> GpuResult<Self> {
+    pub unsafe fn new(gpu: &Gpu, display: RawDisplayHandle, window: RawWindowHandle) -> GpuResult<Self> {
         let shared = gpu.shared.clone();
         // SAFETY: forwarded from this function's contract.
-        let raw = unsafe {
-            ash_window::create_surface(&shared.entry, &shared.instance, display, window, None)
-        }
-        .vk("vkCreate*SurfaceKHR")?;
+        let raw =
+            unsafe { ash_window::create_surface(&shared.entry, &shared.instance, display, window, None) }
+                .vk("vkCreate*SurfaceKHR")?;
         let loader = ash::khr::surface::Instance::new(&shared.entry, &shared.instance);
         // SAFETY: the surface and physical device belong to this instance.
-        let ok = unsafe {
-            loader.get_physical_device_surface_support(shared.physical, shared.queue_family, raw)
-        };
+        let ok =
+            unsafe { loader.get_physical_device_surface_support(shared.physical, shared.queue_family, raw) };
         if !matches!(ok, Ok(true)) {
             // SAFETY: nothing uses the new surface.
             unsafe { loader.destroy_surface(raw, None) };
-            return Err(GpuError::Unsupported(
-                "presenting to this window from the engine's queue".into(),
-            ));
+            return Err(GpuError::Unsupported("presenting to this window from the engine's queue".into()));
         }
-        Ok(Self {
-            _shared: shared,
-            loader,
-            raw,
-        })
+        Ok(Self { _shared: shared, loader, raw })
     }
 }
 
@@ -103,19 +87,12 @@ impl Swapchain {
         let shared = gpu.shared.clone();
         let (sl, s, p) = (&surface.loader, surface.raw, shared.physical);
         // SAFETY: plain queries on objects of this instance.
-        let caps = unsafe { sl.get_physical_device_surface_capabilities(p, s) }
-            .vk("surface capabilities")?;
+        let caps = unsafe { sl.get_physical_device_surface_capabilities(p, s) }.vk("surface capabilities")?;
         // SAFETY: as above.
-        let formats =
-            unsafe { sl.get_physical_device_surface_formats(p, s) }.vk("surface formats")?;
+        let formats = unsafe { sl.get_physical_device_surface_formats(p, s) }.vk("surface formats")?;
         let format = formats
             .iter()
-            .find(|f| {
-                matches!(
-                    f.format,
-                    vk::Format::B8G8R8A8_UNORM | vk::Format::R8G8B8A8_UNORM
-                )
-            })
+            .find(|f| matches!(f.format, vk::Format::B8G8R8A8_UNORM | vk::Format::R8G8B8A8_UNORM))
             .or_else(|| formats.first())
             .copied()
             .ok_or_else(|| GpuError::Unsupported("any format on this surface".into()))?;
@@ -131,20 +108,13 @@ impl Swapchain {
         if caps.max_image_count > 0 {
             count = count.min(caps.max_image_count);
         }
-        let readable = caps
-            .supported_usage_flags
-            .contains(vk::ImageUsageFlags::TRANSFER_SRC);
+        let readable = caps.supported_usage_flags.contains(vk::ImageUsageFlags::TRANSFER_SRC);
         let mut usage = vk::ImageUsageFlags::TRANSFER_DST;
         if readable {
             usage |= vk::ImageUsageFlags::TRANSFER_SRC;
         }
-        if !caps
-            .supported_usage_flags
-            .contains(vk::ImageUsageFlags::TRANSFER_DST)
-        {
-            return Err(GpuError::Unsupported(
-                "blitting into swapchain images (TRANSFER_DST)".into(),
-            ));
+        if !caps.supported_usage_flags.contains(vk::ImageUsageFlags::TRANSFER_DST) {
+            return Err(GpuError::Unsupported("blitting into swapchain images (TRANSFER_DST)".into()));
         }
         let alpha = [
             vk::CompositeAlphaFlagsKHR::OPAQUE,
@@ -186,8 +156,7 @@ impl Swapchain {
         me.images = unsafe { me.loader.get_swapchain_images(raw) }.vk("vkGetSwapchainImagesKHR")?;
         let semaphore = |d: &ash::Device| {
             // SAFETY: plain object creation.
-            unsafe { d.create_semaphore(&vk::SemaphoreCreateInfo::default(), None) }
-                .vk("vkCreateSemaphore")
+            unsafe { d.create_semaphore(&vk::SemaphoreCreateInfo::default(), None) }.vk("vkCreateSemaphore")
         };
         me.image_available = semaphore(&me.shared.raw)?;
         for _ in 0..me.images.len() {
@@ -222,16 +191,11 @@ impl Swapchain {
     pub fn acquire(&self) -> GpuResult<Option<u32>> {
         // SAFETY: one frame in flight: the previous wait on `image_available` has completed.
         match unsafe {
-            self.loader.acquire_next_image(
-                self.raw,
-                u64::MAX,
-                self.image_available,
-                vk::Fence::null(),
-            )
+            self.loader.acquire_next_image(self.raw, u64::MAX, self.image_available, vk::Fence::null())
         } {
             Ok((i, _suboptimal)) => Ok(Some(i)),
             Err(vk::Result::ERROR_OUT_OF_DATE_KHR) => Ok(None),
-            Err(e) => Err(Err::<(), _>(e).vk("vkAcquireNextImageKHR").unwrap_err()),
+            Err(e) => Err(vk_error("vkAcquireNextImageKHR", e)),
         }
     }
 
@@ -241,16 +205,14 @@ impl Swapchain {
         let waits = [self.render_finished[index as usize]];
         let chains = [self.raw];
         let indices = [index];
-        let info = vk::PresentInfoKHR::default()
-            .wait_semaphores(&waits)
-            .swapchains(&chains)
-            .image_indices(&indices);
+        let info =
+            vk::PresentInfoKHR::default().wait_semaphores(&waits).swapchains(&chains).image_indices(&indices);
         let queue = self.shared.queue.lock().unwrap_or_else(|p| p.into_inner());
         // SAFETY: the queue is externally synchronised by its mutex; the image was acquired.
         match unsafe { self.loader.queue_present(*queue, &info) } {
             Ok(false) => Ok(true),
             Ok(true) | Err(vk::Result::ERROR_OUT_OF_DATE_KHR) => Ok(false),
-            Err(e) => Err(Err::<(), _>(e).vk("vkQueuePresentKHR").unwrap_err()),
+            Err(e) => Err(vk_error("vkQueuePresentKHR", e)),
         }
     }
 }
@@ -263,9 +225,7 @@ impl Drop for Swapchain {
             for s in self.render_finished.drain(..) {
                 self.shared.raw.destroy_semaphore(s, None);
             }
-            self.shared
-                .raw
-                .destroy_semaphore(self.image_available, None);
+            self.shared.raw.destroy_semaphore(self.image_available, None);
             self.loader.destroy_swapchain(self.raw, None);
         }
     }

@@ -94,9 +94,7 @@ impl Camera {
     /// The world-space ray (origin on the near plane, unit direction) through the centre of
     /// pixel (`px`, `py`) of a `width`×`height` image, pixel (0, 0) at the top left.
     pub fn pixel_ray(&self, px: u32, py: u32, width: u32, height: u32) -> (DVec3, DVec3) {
-        let inv = self
-            .view_proj(f64::from(width) / f64::from(height))
-            .inverse();
+        let inv = self.view_proj(f64::from(width) / f64::from(height)).inverse();
         let x = 2.0 * (f64::from(px) + 0.5) / f64::from(width) - 1.0;
         let y = 2.0 * (f64::from(py) + 0.5) / f64::from(height) - 1.0;
         let near = inv * DVec4::new(x, y, 0.0, 1.0);
@@ -106,14 +104,7 @@ impl Camera {
     }
 
     /// Where the ray through pixel (`px`, `py`) meets the plane z = `z0`, if it does in front.
-    pub fn pixel_on_plane_z(
-        &self,
-        px: u32,
-        py: u32,
-        width: u32,
-        height: u32,
-        z0: f64,
-    ) -> Option<DVec3> {
+    pub fn pixel_on_plane_z(&self, px: u32, py: u32, width: u32, height: u32, z0: f64) -> Option<DVec3> {
         let (o, d) = self.pixel_ray(px, py, width, height);
         if d.z.abs() < 1e-300 {
             return None;
@@ -126,9 +117,6 @@ impl Camera {
     pub fn project(&self, p: DVec3, width: u32, height: u32) -> (f64, f64) {
         let c = self.view_proj(f64::from(width) / f64::from(height)) * p.extend(1.0);
         let (x, y) = (c.x / c.w, c.y / c.w);
-        (
-            (x + 1.0) * 0.5 * f64::from(width),
-            (y + 1.0) * 0.5 * f64::from(height),
-        )
+        ((x + 1.0) * 0.5 * f64::from(width), (y + 1.0) * 0.5 * f64::from(height))
     }
 }

@@ -32,14 +32,8 @@ fn quantise(c: [f64; 3]) -> [u8; 4] {
 impl Colormap {
     /// Viridis (matplotlib's 256 entries).
     pub fn viridis() -> Self {
-        let texels = VIRIDIS
-            .iter()
-            .map(|c| quantise([c[0].into(), c[1].into(), c[2].into()]))
-            .collect();
-        Self {
-            name: "viridis".into(),
-            texels,
-        }
+        let texels = VIRIDIS.iter().map(|c| quantise([c[0].into(), c[1].into(), c[2].into()])).collect();
+        Self { name: "viridis".into(), texels }
     }
 
     /// Moreland's cool-warm diverging map: its 33 control points linearly interpolated to 256.
@@ -54,10 +48,7 @@ impl Colormap {
                 quantise([c(0), c(1), c(2)])
             })
             .collect();
-        Self {
-            name: "cool-warm".into(),
-            texels,
-        }
+        Self { name: "cool-warm".into(), texels }
     }
 
     /// Black to white.
@@ -68,10 +59,7 @@ impl Colormap {
                 quantise([v, v, v])
             })
             .collect();
-        Self {
-            name: "grey".into(),
-            texels,
-        }
+        Self { name: "grey".into(), texels }
     }
 
     /// A ramp read from an image: its middle row, left (t = 0) to right (t = 1), at least 2
@@ -85,14 +73,9 @@ impl Colormap {
             });
         }
         let row = (h / 2) as usize * w as usize * 4;
-        let texels = rgba[row..row + 4 * w as usize]
-            .chunks_exact(4)
-            .map(|p| [p[0], p[1], p[2], p[3]])
-            .collect();
-        Ok(Self {
-            name: path.display().to_string(),
-            texels,
-        })
+        let texels =
+            rgba[row..row + 4 * w as usize].chunks_exact(4).map(|p| [p[0], p[1], p[2], p[3]]).collect();
+        Ok(Self { name: path.display().to_string(), texels })
     }
 
     /// By name (`viridis`, `cool-warm`, `grey`) or, failing that, as the path of a ramp PNG.
@@ -101,16 +84,12 @@ impl Colormap {
             "viridis" => Ok(Self::viridis()),
             "cool-warm" | "coolwarm" => Ok(Self::cool_warm()),
             "grey" | "gray" => Ok(Self::grey()),
-            _ if Path::new(name)
-                .extension()
-                .is_some_and(|e| e.eq_ignore_ascii_case("png")) =>
-            {
+            _ if Path::new(name).extension().is_some_and(|e| e.eq_ignore_ascii_case("png")) => {
                 Self::from_ramp_image(Path::new(name))
             }
             _ => Err(RenderError::Colormap {
                 name: name.to_string(),
-                detail: "not a built-in map (viridis, cool-warm, grey) nor a .png ramp image"
-                    .into(),
+                detail: "not a built-in map (viridis, cool-warm, grey) nor a .png ramp image".into(),
             }),
         }
     }
@@ -145,11 +124,7 @@ impl Colormap {
             ImageDesc::texture_1d(self.texels.len() as u32, vk::Format::R8G8B8A8_UNORM),
         )?;
         image.upload(gpu, bytemuck::cast_slice(&self.texels))?;
-        Ok(ColormapTexture {
-            image,
-            sampler: Sampler::new(gpu, true)?,
-            texels: self.texels.len() as u32,
-        })
+        Ok(ColormapTexture { image, sampler: Sampler::new(gpu, true)?, texels: self.texels.len() as u32 })
     }
 }
 
@@ -163,10 +138,7 @@ pub struct ColormapTexture {
 impl ColormapTexture {
     /// The texture binding for a descriptor set.
     pub fn resource(&self) -> Resource {
-        Resource::Texture {
-            view: self.image.view(),
-            sampler: self.sampler.raw(),
-        }
+        Resource::Texture { view: self.image.view(), sampler: self.sampler.raw() }
     }
 
     /// Number of texels (shaders need it for [`ramp_texcoord`]).

@@ -8,32 +8,17 @@ use std::path::{Path, PathBuf};
 use super::error::RenderError;
 
 fn temp_beside(path: &Path) -> PathBuf {
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
+    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
     path.with_file_name(format!(".{name}.{}.tmp", std::process::id()))
 }
 
 fn io(path: &Path) -> impl FnOnce(std::io::Error) -> RenderError + '_ {
-    move |source| RenderError::Io {
-        path: path.to_path_buf(),
-        source,
-    }
+    move |source| RenderError::Io { path: path.to_path_buf(), source }
 }
 
 /// Writes `rgba` (row-major from the top row, 4 bytes per pixel) as an 8-bit RGBA PNG.
-pub fn write_png_rgba8(
-    path: &Path,
-    width: u32,
-    height: u32,
-    rgba: &[u8],
-) -> Result<(), RenderError> {
-    assert_eq!(
-        rgba.len(),
-        4 * width as usize * height as usize,
-        "PNG pixel buffer size"
-    );
+pub fn write_png_rgba8(path: &Path, width: u32, height: u32, rgba: &[u8]) -> Result<(), RenderError> {
+    assert_eq!(rgba.len(), 4 * width as usize * height as usize, "PNG pixel buffer size");
     if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).map_err(io(dir))?;
     }
@@ -44,10 +29,8 @@ pub fn write_png_rgba8(
         encoder.set_color(png::ColorType::Rgba);
         encoder.set_depth(png::BitDepth::Eight);
         encoder.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
-        let err = |e: png::EncodingError| RenderError::Image {
-            path: path.to_path_buf(),
-            detail: e.to_string(),
-        };
+        let err =
+            |e: png::EncodingError| RenderError::Image { path: path.to_path_buf(), detail: e.to_string() };
         let mut writer = encoder.write_header().map_err(err)?;
         writer.write_image_data(rgba).map_err(err)?;
         writer.finish().map_err(err)?;
@@ -66,26 +49,19 @@ pub fn read_png_rgba8(path: &Path) -> Result<(u32, u32, Vec<u8>), RenderError> {
     decoder.set_transformations(
         png::Transformations::EXPAND | png::Transformations::STRIP_16 | png::Transformations::ALPHA,
     );
-    let bad = |e: png::DecodingError| RenderError::Image {
-        path: path.to_path_buf(),
-        detail: e.to_string(),
-    };
+    let bad = |e: png::DecodingError| RenderError::Image { path: path.to_path_buf(), detail: e.to_string() };
     let mut reader = decoder.read_info().map_err(bad)?;
     let size = reader
         .output_buffer_size()
-        .ok_or_else(|| RenderError::Image {
-            path: path.to_path_buf(),
-            detail: "image too large".into(),
-        })?;
+        .ok_or_else(|| RenderError::Image { path: path.to_path_buf(), detail: "image too large".into() })?;
     let mut buf = vec![0u8; size];
     let info = reader.next_frame(&mut buf).map_err(bad)?;
     buf.truncate(info.buffer_size());
     let rgba = match info.color_type {
         png::ColorType::Rgba => buf,
-        png::ColorType::GrayscaleAlpha => buf
-            .chunks_exact(2)
-            .flat_map(|p| [p[0], p[0], p[0], p[1]])
-            .collect(),
+        png::ColorType::GrayscaleAlpha => {
+            buf.chunks_exact(2).flat_map(|p| [p[0], p[0], p[0], p[1]]).collect()
+        }
         other => {
             return Err(RenderError::Image {
                 path: path.to_path_buf(),
@@ -98,17 +74,8 @@ pub fn read_png_rgba8(path: &Path) -> Result<(u32, u32, Vec<u8>), RenderError> {
 
 /// Writes `rgba` (row-major from the top, 4 floats per pixel) as a 32-bit float RGBA EXR:
 /// the raw field values, for analysis without colour-map quantisation.
-pub fn write_exr_rgba(
-    path: &Path,
-    width: u32,
-    height: u32,
-    rgba: &[f32],
-) -> Result<(), RenderError> {
-    assert_eq!(
-        rgba.len(),
-        4 * width as usize * height as usize,
-        "EXR pixel buffer size"
-    );
+pub fn write_exr_rgba(path: &Path, width: u32, height: u32, rgba: &[f32]) -> Result<(), RenderError> {
+    assert_eq!(rgba.len(), 4 * width as usize * height as usize, "EXR pixel buffer size");
     if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).map_err(io(dir))?;
     }
@@ -118,10 +85,7 @@ pub fn write_exr_rgba(
         let i = 4 * (y * w + x);
         (rgba[i], rgba[i + 1], rgba[i + 2], rgba[i + 3])
     })
-    .map_err(|e| RenderError::Image {
-        path: path.to_path_buf(),
-        detail: e.to_string(),
-    })
+    .map_err(|e| RenderError::Image { path: path.to_path_buf(), detail: e.to_string() })
     .and_then(|()| std::fs::rename(&tmp, path).map_err(io(path)));
     if result.is_err() {
         let _ = std::fs::remove_file(&tmp);

@@ -44,16 +44,13 @@ pub enum Pixels {
 
 enum ColorAttachment {
     Owned(Image),
-    Foreign {
-        image: vk::Image,
-        _view: ForeignView,
-    },
+    Foreign { image: vk::Image, _view: ForeignView },
 }
 
 /// Where a pass draws: colour (+ depth) attachments with their render pass and framebuffer.
 pub struct RenderTarget {
     color: ColorAttachment,
-    _depth: Option<Image>,
+    _depth: Image,
     framebuffer: Framebuffer,
     pass: RenderPass,
     format: ColorFormat,
@@ -65,34 +62,11 @@ const DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
 
 impl RenderTarget {
     /// An offscreen target of `width`×`height` with a depth attachment.
-    pub fn new(
-        gpu: &Gpu,
-        name: &str,
-        width: u32,
-        height: u32,
-        format: ColorFormat,
-    ) -> GpuResult<Self> {
-        let color = Image::new(
-            gpu,
-            &format!("{name} colour"),
-            ImageDesc::color_target(width, height, format.vk()),
-        )?;
-        let depth = Image::new(
-            gpu,
-            &format!("{name} depth"),
-            ImageDesc::depth_target(width, height, DEPTH_FORMAT),
-        )?;
-        let pass = RenderPass::new(gpu, format.vk(), Some(DEPTH_FORMAT))?;
-        let extent = vk::Extent2D { width, height };
-        let framebuffer = Framebuffer::new(gpu, &pass, &[color.view(), depth.view()], extent)?;
-        Ok(Self {
-            color: ColorAttachment::Owned(color),
-            _depth: Some(depth),
-            framebuffer,
-            pass,
-            format,
-            extent,
-        })
+    pub fn new(gpu: &Gpu, name: &str, width: u32, height: u32, format: ColorFormat) -> GpuResult<Self> {
+        let desc = ImageDesc::color_target(width, height, format.vk());
+        let color = Image::new(gpu, &format!("{name} colour"), desc)?;
+        let view = color.view();
+        Self::around(gpu, name, ColorAttachment::Owned(color), view, format, width, height)
     }
 
     /// A target drawing into a host's colour image (the engine adds its own depth attachment,
@@ -113,22 +87,27 @@ impl RenderTarget {
     ) -> GpuResult<Self> {
         // SAFETY: forwarded from this function's contract.
         let view = unsafe { ForeignView::new(gpu, image, format.vk()) }?;
-        let depth = Image::new(
-            gpu,
-            &format!("{name} depth"),
-            ImageDesc::depth_target(width, height, DEPTH_FORMAT),
-        )?;
+        let raw_view = view.raw();
+        let color = ColorAttachment::Foreign { image, _view: view };
+        Self::around(gpu, name, color, raw_view, format, width, height)
+    }
+
+    /// The depth attachment, render pass and framebuffer around a colour attachment.
+    fn around(
+        gpu: &Gpu,
+        name: &str,
+        color: ColorAttachment,
+        color_view: vk::ImageView,
+        format: ColorFormat,
+        width: u32,
+        height: u32,
+    ) -> GpuResult<Self> {
+        let desc = ImageDesc::depth_target(width, height, DEPTH_FORMAT);
+        let depth = Image::new(gpu, &format!("{name} depth"), desc)?;
         let pass = RenderPass::new(gpu, format.vk(), Some(DEPTH_FORMAT))?;
         let extent = vk::Extent2D { width, height };
-        let framebuffer = Framebuffer::new(gpu, &pass, &[view.raw(), depth.view()], extent)?;
-        Ok(Self {
-            color: ColorAttachment::Foreign { image, _view: view },
-            _depth: Some(depth),
-            framebuffer,
-            pass,
-            format,
-            extent,
-        })
+        let framebuffer = Framebuffer::new(gpu, &pass, &[color_view, depth.view()], extent)?;
+        Ok(Self { color, _depth: depth, framebuffer, pass, format, extent })
     }
 
     /// The render pass pipelines drawing here are built against.
@@ -182,11 +161,7 @@ impl RenderTarget {
                 layer_count: 1,
             },
             image_offset: vk::Offset3D::default(),
-            image_extent: vk::Extent3D {
-                width: self.extent.width,
-                height: self.extent.height,
-                depth: 1,
-            },
+            image_extent: vk::Extent3D { width: self.extent.width, height: self.extent.height, depth: 1 },
         };
         // SAFETY: the colour image is in TRANSFER_SRC_OPTIMAL after the pass; `dst` is large
         // enough (caller's contract, checked by `readback`).

@@ -22,30 +22,16 @@ use super::{write_png_rgba8, Camera, ColorFormat, Colormap, RenderTarget};
 use crate::demo::field::{FieldOutput, FieldPass};
 use crate::demo::scene::DemoScene;
 use crate::gpu::{
-    record_image_barrier, surface_extensions, Buffer, Gpu, GpuDesc, MemoryKind, Submission,
-    Surface, Swapchain,
+    record_image_barrier, surface_extensions, Buffer, Gpu, GpuDesc, MemoryKind, Submission, Surface,
+    Swapchain,
 };
 
 /// Opens the window on `scene` and runs until Esc, the window closes, or `frames` frames have
 /// been presented (then saves `screenshot` first).
-pub fn run(
-    desc: GpuDesc,
-    scene: DemoScene,
-    frames: Option<u64>,
-    screenshot: PathBuf,
-) -> Result<()> {
-    let event_loop =
-        EventLoop::new().context("cannot open a window (is DISPLAY or WAYLAND_DISPLAY set?)")?;
-    let mut app = App {
-        desc,
-        scene,
-        frames,
-        screenshot,
-        state: None,
-        error: None,
-        presented: 0,
-        save_next: false,
-    };
+pub fn run(desc: GpuDesc, scene: DemoScene, frames: Option<u64>, screenshot: PathBuf) -> Result<()> {
+    let event_loop = EventLoop::new().context("cannot open a window (is DISPLAY or WAYLAND_DISPLAY set?)")?;
+    let mut app =
+        App { desc, scene, frames, screenshot, state: None, error: None, presented: 0, save_next: false };
     event_loop.run_app(&mut app).context("window event loop")?;
     match app.error {
         Some(e) => Err(e),
@@ -87,37 +73,21 @@ impl State {
     fn new(event_loop: &ActiveEventLoop, desc: &GpuDesc, scene: &DemoScene) -> Result<Self> {
         let attrs = Window::default_attributes()
             .with_title("galerkin")
-            .with_inner_size(winit::dpi::PhysicalSize::new(
-                scene.image.width,
-                scene.image.height,
-            ));
+            .with_inner_size(winit::dpi::PhysicalSize::new(scene.image.width, scene.image.height));
         let window = event_loop.create_window(attrs).context("create window")?;
-        let display = window
-            .display_handle()
-            .map_err(|e| anyhow!("display handle: {e}"))?
-            .as_raw();
-        let handle = window
-            .window_handle()
-            .map_err(|e| anyhow!("window handle: {e}"))?
-            .as_raw();
+        let display = window.display_handle().map_err(|e| anyhow!("display handle: {e}"))?.as_raw();
+        let handle = window.window_handle().map_err(|e| anyhow!("window handle: {e}"))?.as_raw();
         let mut desc = desc.clone();
-        desc.instance_extensions
-            .extend(surface_extensions(display)?);
+        desc.instance_extensions.extend(surface_extensions(display)?);
         desc.swapchain = true;
         let gpu = Gpu::new(&desc)?;
         // SAFETY: the handles come from `window`, which outlives the surface (field order).
         let surface = unsafe { Surface::new(&gpu, display, handle) }?;
         let size = window.inner_size();
-        let swapchain =
-            Swapchain::new(&gpu, &surface, size.width.max(1), size.height.max(1), None)?;
+        let swapchain = Swapchain::new(&gpu, &surface, size.width.max(1), size.height.max(1), None)?;
         let extent = swapchain.extent();
-        let target = RenderTarget::new(
-            &gpu,
-            "viewer frame",
-            extent.width,
-            extent.height,
-            ColorFormat::Rgba8,
-        )?;
+        let target =
+            RenderTarget::new(&gpu, "viewer frame", extent.width, extent.height, ColorFormat::Rgba8)?;
         let colormap = Colormap::by_name(&scene.colormap_name())?;
         let pass = FieldPass::new(
             &gpu,
@@ -155,24 +125,13 @@ impl State {
             return Ok(()); // minimised: keep the old one until there is something to show
         }
         let old = self.swapchain.take();
-        let swapchain = Swapchain::new(
-            &self.gpu,
-            &self.surface,
-            size.width,
-            size.height,
-            old.as_ref(),
-        )?;
+        let swapchain = Swapchain::new(&self.gpu, &self.surface, size.width, size.height, old.as_ref())?;
         drop(old);
         let e = swapchain.extent();
         if e != self.target.extent() {
             // Same formats, so the render pass is compatible and the pipeline can stay.
-            self.target = RenderTarget::new(
-                &self.gpu,
-                "viewer frame",
-                e.width,
-                e.height,
-                ColorFormat::Rgba8,
-            )?;
+            self.target =
+                RenderTarget::new(&self.gpu, "viewer frame", e.width, e.height, ColorFormat::Rgba8)?;
         }
         self.swapchain = Some(swapchain);
         Ok(())
@@ -202,13 +161,8 @@ impl State {
                 MemoryKind::GpuToCpu,
             )?);
         }
-        let (gpu, target, pass, camera, readback) = (
-            &self.gpu,
-            &self.target,
-            &self.pass,
-            &self.camera,
-            &self.readback,
-        );
+        let (gpu, target, pass, camera, readback) =
+            (&self.gpu, &self.target, &self.pass, &self.camera, &self.readback);
         let waits = [(swapchain.image_available, vk::PipelineStageFlags::TRANSFER)];
         let signals = [swapchain.render_finished[index as usize]];
         let (submission, ()) = gpu.submit_with_semaphores(&waits, &signals, |cmd| {
@@ -222,11 +176,7 @@ impl State {
                 cmd,
                 image,
                 color,
-                (
-                    vk::ImageLayout::UNDEFINED,
-                    vk::PipelineStageFlags::TRANSFER,
-                    vk::AccessFlags::empty(),
-                ),
+                (vk::ImageLayout::UNDEFINED, vk::PipelineStageFlags::TRANSFER, vk::AccessFlags::empty()),
                 (
                     vk::ImageLayout::TRANSFER_DST_OPTIMAL,
                     vk::PipelineStageFlags::TRANSFER,
@@ -234,16 +184,8 @@ impl State {
                 ),
             );
             let te = target.extent();
-            let corner = |w: u32, h: u32| {
-                [
-                    vk::Offset3D::default(),
-                    vk::Offset3D {
-                        x: w as i32,
-                        y: h as i32,
-                        z: 1,
-                    },
-                ]
-            };
+            let corner =
+                |w: u32, h: u32| [vk::Offset3D::default(), vk::Offset3D { x: w as i32, y: h as i32, z: 1 }];
             let layers = vk::ImageSubresourceLayers {
                 aspect_mask: color,
                 mip_level: 0,
@@ -288,11 +230,7 @@ impl State {
                     buffer_image_height: 0,
                     image_subresource: layers,
                     image_offset: vk::Offset3D::default(),
-                    image_extent: vk::Extent3D {
-                        width: extent.width,
-                        height: extent.height,
-                        depth: 1,
-                    },
+                    image_extent: vk::Extent3D { width: extent.width, height: extent.height, depth: 1 },
                 };
                 // SAFETY: the image is in TRANSFER_SRC; the buffer holds the whole image.
                 unsafe {
@@ -344,16 +282,12 @@ impl State {
                 super::Pixels::Rgba32F(_) => unreachable!("viewer target is RGBA8"),
             },
         };
-        let (w, h) = if rgba.len() as u64 == 4 * u64::from(extent.width) * u64::from(extent.height)
-        {
+        let (w, h) = if rgba.len() as u64 == 4 * u64::from(extent.width) * u64::from(extent.height) {
             (extent.width, extent.height)
         } else {
             (self.target.extent().width, self.target.extent().height)
         };
-        if matches!(
-            format,
-            vk::Format::B8G8R8A8_UNORM | vk::Format::B8G8R8A8_SRGB
-        ) {
+        if matches!(format, vk::Format::B8G8R8A8_UNORM | vk::Format::B8G8R8A8_SRGB) {
             for p in rgba.chunks_exact_mut(4) {
                 p.swap(0, 2);
             }
@@ -383,11 +317,7 @@ impl State {
         let log = self.gpu.validation_log();
         drop(self);
         if let Some(errors) = log.map(|l| l.errors()).filter(|e| !e.is_empty()) {
-            return Err(anyhow!(
-                "{} Vulkan validation error(s); the first: {}",
-                errors.len(),
-                errors[0]
-            ));
+            return Err(anyhow!("{} Vulkan validation error(s); the first: {}", errors.len(), errors[0]));
         }
         Ok(())
     }
@@ -425,12 +355,7 @@ impl ApplicationHandler for App {
             }
             WindowEvent::Resized(_) => state.recreate(),
             WindowEvent::KeyboardInput {
-                event:
-                    KeyEvent {
-                        logical_key,
-                        state: ElementState::Pressed,
-                        ..
-                    },
+                event: KeyEvent { logical_key, state: ElementState::Pressed, .. },
                 ..
             } => {
                 let step = 5f64.to_radians();

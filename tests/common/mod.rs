@@ -32,20 +32,14 @@ impl Drop for TestGpu {
 
 /// A `Gpu` with validation on; `configure` may adjust the description.
 pub fn gpu_with(configure: impl FnOnce(&mut GpuDesc)) -> TestGpu {
-    let mut desc = GpuDesc {
-        validation: true,
-        ..GpuDesc::default()
-    };
+    let mut desc = GpuDesc { validation: true, ..GpuDesc::default() };
     configure(&mut desc);
     let gpu = match Gpu::new(&desc) {
         Ok(g) => g,
         Err(e) => panic!("cannot create the test Gpu: {e}"),
     };
     let log = gpu.validation_log().expect("validation is on in tests");
-    TestGpu {
-        gpu: Some(gpu),
-        log,
-    }
+    TestGpu { gpu: Some(gpu), log }
 }
 
 /// A `Gpu` with validation on.
