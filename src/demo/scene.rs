@@ -10,6 +10,9 @@ use super::field::Ramp;
 use super::polynomial::BivariateCubic;
 use crate::render::Camera;
 
+/// Largest axpy the demo accepts: 2 arrays of 2 GiB on the host and on the device.
+pub const MAX_AXPY_LEN: u64 = 1 << 29;
+
 /// A bad scene file.
 #[derive(Debug, thiserror::Error)]
 #[error("{path}:{line}: {message}")]
@@ -143,8 +146,8 @@ impl DemoScene {
                 "camera needs eye != target, 1 < fov_y_degrees < 179 and 0 < near < far".into(),
             );
         }
-        if scene.axpy.n == 0 || !scene.axpy.a.is_finite() {
-            return fail("[axpy]", "axpy needs n > 0 and a finite".into());
+        if !(1..=MAX_AXPY_LEN).contains(&scene.axpy.n) || !scene.axpy.a.is_finite() {
+            return fail("[axpy]", format!("axpy needs 1 <= n <= {MAX_AXPY_LEN} and a finite a"));
         }
         Ok(scene)
     }
@@ -186,7 +189,7 @@ mod tests {
         assert_eq!(e.line, line, "{e}");
         assert!(e.to_string().starts_with(&format!("x.toml:{line}:")), "{e}");
 
-        let bad = GOOD.replace("range = [-1.5, 1.5]", "range = [1.5, -1.5]");
+        let bad = GOOD.replace("range = [-2.5, 2.5]", "range = [2.5, -2.5]");
         let e = DemoScene::parse(&bad, Path::new("x.toml")).unwrap_err();
         assert!(e.message.contains("lo < hi"), "{e}");
         assert_eq!(e.line, GOOD.lines().position(|l| l.starts_with("range")).unwrap() + 1);
