@@ -42,6 +42,7 @@ fn glsl_includes_match_their_rust_twins() {
             bindings: &[BindingKind::StorageBuffer; 4],
             push_constant_bytes: 4,
             specialization: &[],
+            shared_bytes: 0,
         },
     )
     .unwrap();

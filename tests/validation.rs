@@ -29,6 +29,32 @@ fn the_canary_catches_a_misuse() {
 }
 
 #[test]
+fn synchronization_validation_catches_a_missing_barrier() {
+    let gpu = validated();
+    let log = gpu.validation_log().unwrap();
+    let a =
+        Buffer::<u32>::new(&gpu, "written", 1024, vk::BufferUsageFlags::STORAGE_BUFFER, MemoryKind::GpuOnly)
+            .unwrap();
+    let b = Buffer::<u32>::new(&gpu, "copy", 1024, vk::BufferUsageFlags::STORAGE_BUFFER, MemoryKind::GpuOnly)
+        .unwrap();
+    gpu.run(|cmd| {
+        a.record_fill(cmd, 1);
+        // Read-after-write with no barrier between the fill and the copy: a hazard that only
+        // synchronization validation reports.
+        let region = vk::BufferCopy { src_offset: 0, dst_offset: 0, size: a.size_bytes() };
+        // SAFETY: valid buffers; the missing barrier is the point of the test.
+        unsafe { gpu.device().cmd_copy_buffer(cmd, a.raw(), b.raw(), &[region]) };
+    })
+    .unwrap();
+    drop((a, b, gpu));
+    let errors = log.errors();
+    assert!(
+        errors.iter().any(|e| e.contains("SYNC-HAZARD")),
+        "no synchronization hazard reported: {errors:?}"
+    );
+}
+
+#[test]
 fn the_canary_catches_a_leak_at_teardown() {
     let gpu = validated();
     let log = gpu.validation_log().unwrap();

@@ -32,6 +32,7 @@ impl EmptyKernel {
                 bindings: &[BindingKind::StorageBuffer],
                 push_constant_bytes: 0,
                 specialization: &[],
+                shared_bytes: 0,
             },
         )?;
         let sink = Buffer::new(
@@ -82,6 +83,7 @@ impl FmaKernel {
                 bindings: &[BindingKind::StorageBuffer],
                 push_constant_bytes: std::mem::size_of::<FmaPush>() as u32,
                 specialization: &[],
+                shared_bytes: 0,
             },
         )?;
         let invocations = groups * FMA_LOCAL_SIZE;
@@ -156,6 +158,7 @@ impl TriadKernel {
                 bindings: &[BindingKind::StorageBuffer; 3],
                 push_constant_bytes: std::mem::size_of::<TriadPush>() as u32,
                 specialization: &[],
+                shared_bytes: 0,
             },
         )?;
         let set = pipeline.bind(gpu, &[storage(a)?, storage(b)?, storage(c)?])?;
@@ -217,6 +220,7 @@ impl SgemmKernel {
                 bindings: &[BindingKind::StorageBuffer; 3],
                 push_constant_bytes: std::mem::size_of::<GemmPush>() as u32,
                 specialization: &[],
+                shared_bytes: 16 * 1024,
             },
         )?;
         let set = pipeline.bind(gpu, &[storage(a)?, storage(b)?, storage(c)?])?;

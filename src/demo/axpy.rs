@@ -47,6 +47,7 @@ impl Axpy {
                 bindings: &[BindingKind::StorageBuffer, BindingKind::StorageBuffer],
                 push_constant_bytes: std::mem::size_of::<Push>() as u32,
                 specialization: &[],
+                shared_bytes: 0,
             },
         )?;
         Ok(Self { pipeline })

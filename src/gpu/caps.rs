@@ -6,6 +6,8 @@ use std::ffi::CStr;
 
 use ash::vk;
 
+use super::error::{GpuError, GpuResult};
+
 /// The device's capabilities as galerkin uses them.
 #[derive(Clone, Debug)]
 pub struct Capabilities {
@@ -151,6 +153,30 @@ impl Capabilities {
     /// prefers the native CPU path.
     pub fn is_cpu(&self) -> bool {
         self.device_type == vk::PhysicalDeviceType::CPU
+    }
+
+    /// Checks that a compute kernel's workgroup fits this device: `invocations` per group and
+    /// `shared_bytes` of shared memory (Vulkan only promises 128 invocations and 16 KiB).
+    pub fn check_workgroup(&self, kernel: &str, invocations: u32, shared_bytes: u32) -> GpuResult<()> {
+        if invocations > self.max_compute_work_group_invocations {
+            return Err(GpuError::OverLimit {
+                name: format!("workgroup of `{kernel}`"),
+                requested: u64::from(invocations),
+                limit: u64::from(self.max_compute_work_group_invocations),
+                limit_name: "maxComputeWorkGroupInvocations",
+                unit: "invocations",
+            });
+        }
+        if shared_bytes > self.max_compute_shared_memory_size {
+            return Err(GpuError::OverLimit {
+                name: format!("shared memory of `{kernel}`"),
+                requested: u64::from(shared_bytes),
+                limit: u64::from(self.max_compute_shared_memory_size),
+                limit_name: "maxComputeSharedMemorySize",
+                unit: "bytes",
+            });
+        }
+        Ok(())
     }
 
     /// Workgroups for `n` items at `local_size` per group on axis x, clamped to the device's

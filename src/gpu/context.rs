@@ -225,9 +225,11 @@ impl Gpu {
         })
     }
 
-    /// Adopts a host application's Vulkan objects. The engine creates its own command pool,
+    /// Adopts a host application's Vulkan objects. The engine creates its own command pools,
     /// fences, allocator and resources on the host's device, submits only from
-    /// [`Gpu::run`]/[`Gpu::submit`], and on drop destroys only those.
+    /// [`Gpu::run`]/[`Gpu::submit`], and on drop destroys only those. Of `desc`, only
+    /// `fence_timeout` and `max_binding_bytes` apply: validation, extensions and device choice
+    /// are the host's (validation messages go to the host's own messenger).
     ///
     /// # Safety
     /// - `raw.instance`, `raw.physical_device` and `raw.device` are valid, belong together, and

@@ -42,7 +42,8 @@ pub use error::{GpuError, GpuResult};
 pub use image::{record_image_barrier, texel_bytes, Image, ImageDesc, Sampler};
 pub use memory::MemoryKind;
 pub use pipeline::{
-    ComputePipeline, ComputePipelineDesc, GraphicsPipeline, GraphicsPipelineDesc, VertexAttribute,
+    spirv_local_size, ComputePipeline, ComputePipelineDesc, GraphicsPipeline, GraphicsPipelineDesc,
+    VertexAttribute,
 };
 pub use query::Profiler;
 pub use renderpass::{ForeignView, Framebuffer, RenderPass};

@@ -164,6 +164,28 @@ pub struct ComputePipelineDesc<'a> {
     pub push_constant_bytes: u32,
     /// Values of specialization constants 0, 1, ….
     pub specialization: &'a [u32],
+    /// Bytes of `shared` memory the shader declares (checked against the device's
+    /// `maxComputeSharedMemorySize`; the workgroup size is read from the SPIR-V itself).
+    pub shared_bytes: u32,
+}
+
+/// The workgroup size of a compute shader: the literal `LocalSize` execution mode
+/// (`OpExecutionMode %main LocalSize x y z`), if the module has one.
+pub fn spirv_local_size(spirv: &[u32]) -> Option<[u32; 3]> {
+    const OP_EXECUTION_MODE: u32 = 16;
+    const LOCAL_SIZE: u32 = 17;
+    let mut i = 5; // past the header
+    while i < spirv.len() {
+        let (count, opcode) = ((spirv[i] >> 16) as usize, spirv[i] & 0xffff);
+        if count == 0 {
+            return None;
+        }
+        if opcode == OP_EXECUTION_MODE && count >= 6 && spirv.get(i + 2) == Some(&LOCAL_SIZE) {
+            return Some([spirv[i + 3], spirv[i + 4], spirv[i + 5]]);
+        }
+        i += count;
+    }
+    None
 }
 
 /// A compute pipeline with its layout.
@@ -172,8 +194,11 @@ pub struct ComputePipeline {
 }
 
 impl ComputePipeline {
-    /// Builds the pipeline.
+    /// Builds the pipeline, after checking its workgroup (size read from the SPIR-V, shared
+    /// memory from the description) fits the device.
     pub fn new(gpu: &Gpu, desc: &ComputePipelineDesc<'_>) -> GpuResult<Self> {
+        let invocations = spirv_local_size(desc.spirv).map_or(1, |[x, y, z]| x * y * z);
+        gpu.caps().check_workgroup(desc.name, invocations, desc.shared_bytes)?;
         let layout = PipelineLayout::new(
             gpu,
             desc.bindings,
@@ -438,5 +463,19 @@ impl GraphicsPipeline {
             }
             d.cmd_draw(cmd, vertex_count, 1, 0, 0);
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::spirv_local_size;
+    use crate::gpu::shaders;
+
+    #[test]
+    fn workgroup_sizes_are_read_from_spirv() {
+        assert_eq!(spirv_local_size(shaders::bench::SGEMM), Some([8, 8, 1]));
+        assert_eq!(spirv_local_size(shaders::demo::AXPY), Some([256, 1, 1]));
+        assert_eq!(spirv_local_size(shaders::demo::FIELD_FRAG), None);
+        assert_eq!(spirv_local_size(&[]), None);
     }
 }
