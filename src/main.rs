@@ -57,6 +57,9 @@ enum Command {
         /// Where S saves the screenshot; with --frames, also saved just before quitting.
         #[arg(long, default_value = "out/screenshot.png")]
         screenshot: PathBuf,
+        /// With --frames: ask for this window size (WIDTHxHEIGHT) halfway through the run.
+        #[arg(long, value_name = "WxH", value_parser = parse_size)]
+        resize_to: Option<(u32, u32)>,
     },
     /// Benchmarks.
     Bench {
@@ -101,7 +104,9 @@ fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Info => info(&desc),
         Command::Demo { scene, out } => demo(&desc, &scene, &out),
-        Command::View { scene, frames, screenshot } => view(desc, &scene, frames, &screenshot),
+        Command::View { scene, frames, screenshot, resize_to } => {
+            view(desc, &scene, frames, screenshot, resize_to)
+        }
         Command::Bench { what: BenchWhat::Gpu { quick } } => bench_gpu(&desc, quick),
     }
 }
@@ -278,14 +283,31 @@ fn demo(desc: &GpuDesc, scene_path: &Path, out: &Path) -> Result<()> {
 }
 
 #[cfg(feature = "viewer")]
-fn view(desc: GpuDesc, scene_path: &Path, frames: Option<u64>, screenshot: &Path) -> Result<()> {
+fn view(
+    desc: GpuDesc,
+    scene_path: &Path,
+    frames: Option<u64>,
+    screenshot: PathBuf,
+    resize_to: Option<(u32, u32)>,
+) -> Result<()> {
     let scene = DemoScene::load(scene_path)?;
-    galerkin::render::viewer::run(desc, scene, frames, screenshot.to_path_buf())
+    let options = galerkin::render::viewer::ViewOptions { frames, screenshot, resize_to };
+    galerkin::render::viewer::run(desc, scene, options)
 }
 
 #[cfg(not(feature = "viewer"))]
-fn view(_: GpuDesc, _: &Path, _: Option<u64>, _: &Path) -> Result<()> {
+fn view(_: GpuDesc, _: &Path, _: Option<u64>, _: PathBuf, _: Option<(u32, u32)>) -> Result<()> {
     bail!("this build has no viewer: rebuild with the default `viewer` feature")
+}
+
+/// Parses `WIDTHxHEIGHT`.
+fn parse_size(s: &str) -> Result<(u32, u32), String> {
+    let (w, h) = s.split_once(['x', 'X']).ok_or_else(|| format!("{s:?} is not WIDTHxHEIGHT"))?;
+    let n = |v: &str| v.trim().parse::<u32>().ok().filter(|&v| (1..=16384).contains(&v));
+    match (n(w), n(h)) {
+        (Some(w), Some(h)) => Ok((w, h)),
+        _ => Err(format!("{s:?}: width and height must be 1 to 16384")),
+    }
 }
 
 fn bench_gpu(desc: &GpuDesc, quick: bool) -> Result<()> {

@@ -40,15 +40,15 @@ impl Drop for Xvfb {
     }
 }
 
-#[test]
-fn the_viewer_presents_frames_and_its_screenshot_matches_the_reference() {
-    let x = Xvfb::start();
-    let dir = std::env::temp_dir().join(format!("galerkin-viewer-{}", std::process::id()));
+/// Runs `galerkin view --frames frames [extra…]` on display `x` and returns the screenshot.
+fn run_viewer(x: &Xvfb, name: &str, frames: u32, extra: &[&str]) -> (u32, u32, Vec<u8>) {
+    let dir = std::env::temp_dir().join(format!("galerkin-viewer-{name}-{}", std::process::id()));
     let shot = dir.join("shot.png");
     let scene_path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/demo.toml");
     let out = Command::new(env!("CARGO_BIN_EXE_galerkin"))
-        .args(["view", "--validation", "--frames", "4", "--scene"])
+        .args(["view", "--validation", "--frames", &frames.to_string(), "--scene"])
         .arg(&scene_path)
+        .args(extra)
         .arg("--screenshot")
         .arg(&shot)
         .env("DISPLAY", &x.display)
@@ -57,10 +57,15 @@ fn the_viewer_presents_frames_and_its_screenshot_matches_the_reference() {
         .unwrap();
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "galerkin view failed: {stderr}");
+    let shot = read_png_rgba8(&shot).unwrap();
+    std::fs::remove_dir_all(&dir).unwrap();
+    shot
+}
 
+/// Checks a screenshot against the CPU reference of the demo scene at its own size.
+fn check_screenshot(w: u32, h: u32, rgba: &[u8]) {
+    let scene_path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/demo.toml");
     let scene = DemoScene::load(&scene_path).unwrap();
-    let (w, h, rgba) = read_png_rgba8(&shot).unwrap();
-    assert_eq!((w, h), (scene.image.width, scene.image.height), "window size");
     let colormap = Colormap::by_name(&scene.colormap_name()).unwrap();
     let background = [0.12f32, 0.12, 0.14, 1.0].map(|v| (v * 255.0).round() as u8);
     let check = check_colours(
@@ -75,5 +80,21 @@ fn the_viewer_presents_frames_and_its_screenshot_matches_the_reference() {
     );
     assert!(check.passed(), "{} pixels differ; first: {:?}", check.failures, check.first_failure);
     assert!(check.checked > (w * h / 5) as usize, "only {} covered pixels", check.checked);
-    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn the_viewer_presents_frames_and_its_screenshot_matches_the_reference() {
+    let x = Xvfb::start();
+    let (w, h, rgba) = run_viewer(&x, "plain", 4, &[]);
+    let scene = DemoScene::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/demo.toml")).unwrap();
+    assert_eq!((w, h), (scene.image.width, scene.image.height), "window size");
+    check_screenshot(w, h, &rgba);
+}
+
+#[test]
+fn the_viewer_follows_a_resize() {
+    let x = Xvfb::start();
+    let (w, h, rgba) = run_viewer(&x, "resize", 8, &["--resize-to", "320x200"]);
+    assert_eq!((w, h), (320, 200), "the swapchain and target follow the new window size");
+    check_screenshot(w, h, &rgba);
 }

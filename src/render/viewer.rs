@@ -26,12 +26,33 @@ use crate::gpu::{
     Swapchain,
 };
 
-/// Opens the window on `scene` and runs until Esc, the window closes, or `frames` frames have
-/// been presented (then saves `screenshot` first).
-pub fn run(desc: GpuDesc, scene: DemoScene, frames: Option<u64>, screenshot: PathBuf) -> Result<()> {
+/// How a viewer run goes: interactive by default, scripted for tests and recordings.
+#[derive(Clone, Debug, Default)]
+pub struct ViewOptions {
+    /// Quit after this many presented frames, saving the screenshot from the last one.
+    pub frames: Option<u64>,
+    /// Where S (and a scripted run's last frame) saves the screenshot.
+    pub screenshot: PathBuf,
+    /// In a scripted run, ask for this window size (width, height) halfway through.
+    pub resize_to: Option<(u32, u32)>,
+}
+
+/// Opens the window on `scene` and runs until Esc, the window closes, or `options.frames`
+/// frames have been presented.
+pub fn run(desc: GpuDesc, scene: DemoScene, options: ViewOptions) -> Result<()> {
+    let ViewOptions { frames, screenshot, resize_to } = options;
     let event_loop = EventLoop::new().context("cannot open a window (is DISPLAY or WAYLAND_DISPLAY set?)")?;
-    let mut app =
-        App { desc, scene, frames, screenshot, state: None, error: None, presented: 0, save_next: false };
+    let mut app = App {
+        desc,
+        scene,
+        frames,
+        screenshot,
+        resize_to,
+        state: None,
+        error: None,
+        presented: 0,
+        save_next: false,
+    };
     event_loop.run_app(&mut app).context("window event loop")?;
     match app.error {
         Some(e) => Err(e),
@@ -49,6 +70,7 @@ struct App {
     scene: DemoScene,
     frames: Option<u64>,
     screenshot: PathBuf,
+    resize_to: Option<(u32, u32)>,
     state: Option<State>,
     error: Option<anyhow::Error>,
     presented: u64,
@@ -382,6 +404,11 @@ impl ApplicationHandler for App {
                         if save {
                             self.save_next = false;
                             r = state.save_screenshot(&self.screenshot);
+                        }
+                        if let (Some(n), Some((w, h))) = (self.frames, self.resize_to) {
+                            if self.presented == n / 2 {
+                                let _ = state.window.request_inner_size(winit::dpi::PhysicalSize::new(w, h));
+                            }
                         }
                         if self.frames.is_some_and(|n| self.presented >= n) {
                             event_loop.exit();
