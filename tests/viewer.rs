@@ -75,7 +75,7 @@ fn check_screenshot(w: u32, h: u32, rgba: &[u8]) {
         scene.ramp(),
         w,
         h,
-        &rgba,
+        rgba,
         background,
     );
     assert!(check.passed(), "{} pixels differ; first: {:?}", check.failures, check.first_failure);
