@@ -19,4 +19,6 @@
 pub mod bench;
 pub mod demo;
 pub mod gpu;
+pub mod reduce;
 pub mod render;
+pub mod tensor;

@@ -1,0 +1,133 @@
+//! Bases: for each axis name, an orthonormal `n × m` matrix `B` with `x = B x̂`, `x̂ = Bᵀ x`
+//! (§3).
+
+use std::collections::BTreeMap;
+
+use super::error::ReduceError;
+use crate::tensor::Tensor;
+
+/// An orthonormal basis: `n` full dimensions, `m ≤ n` reduced ones, stored as `n × m`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Basis {
+    matrix: Tensor,
+}
+
+impl Basis {
+    /// Wraps an `n × m` matrix whose columns are orthonormal to within `tolerance`
+    /// (max |BᵀB − I|); `name` is used in errors.
+    pub fn new(name: &str, matrix: Tensor, tolerance: f64) -> Result<Self, ReduceError> {
+        let bad = |detail: String| ReduceError::BadBasis { basis: name.to_string(), detail };
+        if matrix.order() != 2 {
+            return Err(bad(format!("needs a matrix, got shape {:?}", matrix.shape())));
+        }
+        let (n, m) = (matrix.shape()[0], matrix.shape()[1]);
+        if m > n || m == 0 {
+            return Err(bad(format!("shape {n}×{m}: needs 1 ≤ columns ≤ rows")));
+        }
+        let b = Self { matrix };
+        let err = b.orthonormality_error();
+        if err.is_nan() || err > tolerance {
+            return Err(bad(format!("columns are not orthonormal: max |BᵀB − I| = {err:e} > {tolerance:e}")));
+        }
+        Ok(b)
+    }
+
+    /// An orthonormal basis of the span of `columns` (`n × k`) by Gram–Schmidt done twice
+    /// ("twice is enough": the second pass removes what rounding left of the first). Columns
+    /// whose remainder falls below `1e-12` of their norm are dependent and dropped.
+    pub fn orthonormalize(name: &str, columns: &Tensor) -> Result<Self, ReduceError> {
+        let bad = |detail: String| ReduceError::BadBasis { basis: name.to_string(), detail };
+        if columns.order() != 2 {
+            return Err(bad(format!("needs a matrix, got shape {:?}", columns.shape())));
+        }
+        let (n, k) = (columns.shape()[0], columns.shape()[1]);
+        let mut kept: Vec<Vec<f64>> = Vec::new();
+        for j in 0..k {
+            let mut v: Vec<f64> = (0..n).map(|i| columns.data()[i * k + j]).collect();
+            let norm0 = v.iter().map(|x| x * x).sum::<f64>().sqrt();
+            if !norm0.is_finite() {
+                return Err(bad(format!("column {j} is not finite")));
+            }
+            for _ in 0..2 {
+                for q in &kept {
+                    let d: f64 = q.iter().zip(&v).map(|(a, b)| a * b).sum();
+                    v.iter_mut().zip(q).for_each(|(x, qi)| *x -= d * qi);
+                }
+            }
+            let norm = v.iter().map(|x| x * x).sum::<f64>().sqrt();
+            if norm > 1e-12 * norm0 && norm > 0.0 {
+                v.iter_mut().for_each(|x| *x /= norm);
+                kept.push(v);
+            }
+        }
+        if kept.is_empty() {
+            return Err(bad("every column is zero or dependent".into()));
+        }
+        let m = kept.len();
+        let mut data = vec![0.0; n * m];
+        for (j, q) in kept.iter().enumerate() {
+            for i in 0..n {
+                data[i * m + j] = q[i];
+            }
+        }
+        Ok(Self { matrix: Tensor::from_vec(&[n, m], data).expect("shape matches") })
+    }
+
+    /// The identity basis of `n` dimensions (an axis left unreduced).
+    pub fn identity(n: usize) -> Self {
+        Self { matrix: Tensor::identity(n) }
+    }
+
+    /// Full dimension `n`.
+    pub fn full_dim(&self) -> usize {
+        self.matrix.shape()[0]
+    }
+
+    /// Reduced dimension `m`.
+    pub fn reduced_dim(&self) -> usize {
+        self.matrix.shape()[1]
+    }
+
+    /// The `n × m` matrix.
+    pub fn matrix(&self) -> &Tensor {
+        &self.matrix
+    }
+
+    /// max |BᵀB − I| over all entries.
+    pub fn orthonormality_error(&self) -> f64 {
+        let (n, m) = (self.full_dim(), self.reduced_dim());
+        let d = self.matrix.data();
+        let mut worst = 0f64;
+        for a in 0..m {
+            for b in a..m {
+                let dot: f64 = (0..n).map(|i| d[i * m + a] * d[i * m + b]).sum();
+                let want = if a == b { 1.0 } else { 0.0 };
+                worst = worst.max((dot - want).abs());
+            }
+        }
+        worst
+    }
+
+    /// `x̂ = Bᵀ x`.
+    pub fn project(&self, x: &[f64]) -> Vec<f64> {
+        let m = self.reduced_dim();
+        let mut out = vec![0.0; m];
+        for (i, &xi) in x.iter().enumerate().take(self.full_dim()) {
+            for (o, &b) in out.iter_mut().zip(&self.matrix.data()[i * m..(i + 1) * m]) {
+                *o += b * xi;
+            }
+        }
+        out
+    }
+
+    /// `x = B x̂`.
+    pub fn lift(&self, xhat: &[f64]) -> Vec<f64> {
+        let m = self.reduced_dim();
+        (0..self.full_dim())
+            .map(|i| self.matrix.data()[i * m..(i + 1) * m].iter().zip(xhat).map(|(b, x)| b * x).sum())
+            .collect()
+    }
+}
+
+/// Bases by axis name.
+pub type Bases = BTreeMap<String, Basis>;

@@ -1,0 +1,207 @@
+//! One evaluator for both spaces. The full model and the reduced model differ only in where
+//! their tensors and inputs come from ([`Operands`]); the sequence of operations is the same,
+//! which is the whole point of §4: "computing f̂(x̂) follows exactly the sequence of
+//! operations used to compute f(x)".
+
+use super::error::ReduceError;
+use super::expr::Expr;
+use crate::tensor::{solve, spd_power, transpose, Tensor, TensorError};
+
+/// Where an evaluation takes its tensors and inputs from.
+pub(crate) trait Operands {
+    /// Basis names of a named tensor's axes.
+    fn tensor_axes(&self, name: &str) -> Option<&[String]>;
+    /// Basis name of a named input.
+    fn input_basis(&self, name: &str) -> Option<&str>;
+    /// `name ⊗_a x_a …` computed from the stored form (sparse or dense).
+    fn contract_tensor(&self, name: &str, args: &[(usize, &[f64])]) -> Result<Tensor, TensorError>;
+    /// The named tensor, dense.
+    fn dense_tensor(&self, name: &str) -> Tensor;
+    /// The named input's value.
+    fn input_value(&self, name: &str) -> Result<&[f64], ReduceError>;
+}
+
+fn tensor_err(e: &Expr) -> impl FnOnce(TensorError) -> ReduceError + '_ {
+    move |source| ReduceError::Tensor { context: e.to_string(), source }
+}
+
+/// The basis of every axis of `e`'s value, checking every rule on the way: known names,
+/// matching bases where axes meet, and §4's same-basis rule for inverses and roots.
+pub(crate) fn signature(e: &Expr, ops: &impl Operands) -> Result<Vec<String>, ReduceError> {
+    match e {
+        Expr::Tensor(n) => {
+            ops.tensor_axes(n).map(<[String]>::to_vec).ok_or_else(|| ReduceError::UnknownTensor(n.clone()))
+        }
+        Expr::Input(n) => ops
+            .input_basis(n)
+            .map(|b| vec![b.to_string()])
+            .ok_or_else(|| ReduceError::UnknownInput(n.clone())),
+        Expr::Contract(base, args) => {
+            let axes = signature(base, ops)?;
+            let mut replaced: Vec<Option<Option<String>>> = vec![None; axes.len()];
+            for (axis, a) in args {
+                let what = e.to_string();
+                let slot = replaced.get_mut(*axis).ok_or_else(|| ReduceError::BadContraction {
+                    what: what.clone(),
+                    detail: format!("axis {axis} does not exist: {base} has {} axes", axes.len()),
+                })?;
+                if slot.is_some() {
+                    return Err(ReduceError::BadContraction {
+                        what,
+                        detail: format!("axis {axis} is contracted twice"),
+                    });
+                }
+                let a_axes = signature(a, ops)?;
+                if a_axes.is_empty() || a_axes.len() > 2 {
+                    return Err(ReduceError::BadContraction {
+                        what,
+                        detail: format!("axis {axis} is multiplied by {a}, which has {} axes (a vector or matrix is needed)", a_axes.len()),
+                    });
+                }
+                if a_axes[0] != axes[*axis] {
+                    return Err(ReduceError::BasisMismatch {
+                        what,
+                        axis: *axis,
+                        expected: axes[*axis].clone(),
+                        found: a_axes[0].clone(),
+                    });
+                }
+                *slot = Some(a_axes.get(1).cloned());
+            }
+            Ok(axes
+                .into_iter()
+                .zip(replaced)
+                .filter_map(|(b, r)| match r {
+                    None => Some(b),
+                    Some(None) => None,
+                    Some(Some(new)) => Some(new),
+                })
+                .collect())
+        }
+        Expr::Inverse(m) | Expr::Power(m, _) => {
+            let op = if matches!(e, Expr::Inverse(_)) { "inverse" } else { "root" };
+            let axes = signature(m, ops)?;
+            if axes.len() != 2 {
+                return Err(ReduceError::NotAMatrix { op, what: m.to_string(), order: axes.len() });
+            }
+            if axes[0] != axes[1] {
+                return Err(ReduceError::SameBasisRequired {
+                    op,
+                    what: m.to_string(),
+                    axis0: axes[0].clone(),
+                    axis1: axes[1].clone(),
+                });
+            }
+            Ok(axes)
+        }
+        Expr::Sum(terms) => {
+            let mut first: Option<Vec<String>> = None;
+            for t in terms {
+                let s = signature(t, ops)?;
+                match &first {
+                    None => first = Some(s),
+                    Some(f) => same_axes(e, f, &s)?,
+                }
+            }
+            first.ok_or_else(|| ReduceError::BadContraction {
+                what: "sum".into(),
+                detail: "a sum of nothing".into(),
+            })
+        }
+        Expr::Difference(a, b) => {
+            let (sa, sb) = (signature(a, ops)?, signature(b, ops)?);
+            same_axes(e, &sa, &sb)?;
+            Ok(sa)
+        }
+        Expr::Scale(_, x) => signature(x, ops),
+    }
+}
+
+fn same_axes(e: &Expr, a: &[String], b: &[String]) -> Result<(), ReduceError> {
+    if a.len() != b.len() {
+        return Err(ReduceError::BadContraction {
+            what: e.to_string(),
+            detail: format!("terms have {} and {} axes", a.len(), b.len()),
+        });
+    }
+    match a.iter().zip(b).position(|(x, y)| x != y) {
+        Some(axis) => Err(ReduceError::BasisMismatch {
+            what: e.to_string(),
+            axis,
+            expected: a[axis].clone(),
+            found: b[axis].clone(),
+        }),
+        None => Ok(()),
+    }
+}
+
+/// Evaluates `e` (whose [`signature`] has been checked).
+pub(crate) fn evaluate(e: &Expr, ops: &impl Operands) -> Result<Tensor, ReduceError> {
+    match e {
+        Expr::Tensor(n) => Ok(ops.dense_tensor(n)),
+        Expr::Input(n) => Ok(Tensor::vector(ops.input_value(n)?.to_vec())),
+        Expr::Contract(base, args) => {
+            let values: Vec<(usize, Tensor)> = args
+                .iter()
+                .map(|(axis, a)| Ok((*axis, evaluate(a, ops)?)))
+                .collect::<Result<_, ReduceError>>()?;
+            let all_vectors = values.iter().all(|(_, v)| v.order() == 1);
+            // A named tensor contracted with vectors: straight from its stored (sparse) form.
+            if let (Expr::Tensor(name), true) = (base.as_ref(), all_vectors) {
+                let refs: Vec<(usize, &[f64])> = values.iter().map(|(a, v)| (*a, v.data())).collect();
+                return ops.contract_tensor(name, &refs).map_err(tensor_err(e));
+            }
+            // M⁻¹ ⊗₁ v is a solve, M⁻¹ ⊗₀ v a solve with Mᵀ: never an explicit inverse.
+            if let (Expr::Inverse(m), [(axis, v)]) = (base.as_ref(), values.as_slice()) {
+                if v.order() == 1 {
+                    let mv = evaluate(m, ops)?;
+                    let mv = if *axis == 0 { transpose(&mv) } else { mv };
+                    return solve(&m.to_string(), &mv, v.data()).map(Tensor::vector).map_err(tensor_err(e));
+                }
+            }
+            let mut t = evaluate(base, ops)?;
+            for (axis, v) in values.iter().filter(|(_, v)| v.order() == 2) {
+                t = t.mode_product(*axis, v).map_err(tensor_err(e))?;
+            }
+            let mut vectors: Vec<&(usize, Tensor)> = values.iter().filter(|(_, v)| v.order() == 1).collect();
+            vectors.sort_by_key(|v| std::cmp::Reverse(v.0));
+            for (axis, v) in vectors {
+                t = t.contract(*axis, v.data()).map_err(tensor_err(e))?;
+            }
+            Ok(t)
+        }
+        Expr::Inverse(m) => {
+            // Only reached when the inverse is not applied to a single vector: the matrix itself
+            // is wanted, so solve for every column of the identity.
+            let mv = evaluate(m, ops)?;
+            let n = mv.shape()[0];
+            let mut inv = Tensor::zeros(&[n, n]);
+            for j in 0..n {
+                let mut unit = vec![0.0; n];
+                unit[j] = 1.0;
+                let col = solve(&m.to_string(), &mv, &unit).map_err(tensor_err(e))?;
+                for (i, c) in col.into_iter().enumerate() {
+                    inv.set(&[i, j], c);
+                }
+            }
+            Ok(inv)
+        }
+        Expr::Power(m, p) => spd_power(&m.to_string(), &evaluate(m, ops)?, *p).map_err(tensor_err(e)),
+        Expr::Sum(terms) => {
+            let mut it = terms.iter();
+            let first = it.next().ok_or_else(|| ReduceError::BadContraction {
+                what: "sum".into(),
+                detail: "a sum of nothing".into(),
+            })?;
+            let mut acc = evaluate(first, ops)?;
+            for t in it {
+                acc = acc.add_scaled(&evaluate(t, ops)?, 1.0).map_err(tensor_err(e))?;
+            }
+            Ok(acc)
+        }
+        Expr::Difference(a, b) => {
+            evaluate(a, ops)?.add_scaled(&evaluate(b, ops)?, -1.0).map_err(tensor_err(e))
+        }
+        Expr::Scale(c, x) => Ok(evaluate(x, ops)?.scale(*c)),
+    }
+}

@@ -1,0 +1,240 @@
+//! A function as a [`Model`]: named full-space tensors whose axes carry basis names, named
+//! inputs, and the composition [`Expr`] that computes the output.
+
+use std::collections::BTreeMap;
+
+use super::basis::Bases;
+use super::error::ReduceError;
+use super::eval::{evaluate, signature, Operands};
+use super::expr::Expr;
+use super::premultiply::{premultiply_dense, premultiply_sparse};
+use super::reduced::{ReducedModel, ReducedTensor};
+use crate::tensor::{SparseTensor, Tensor, TensorError};
+
+/// A full-space tensor: dense (small) or sparse (what real models have).
+#[derive(Clone, Debug, PartialEq)]
+pub enum FullTensor {
+    /// Dense.
+    Dense(Tensor),
+    /// Coordinate list.
+    Sparse(SparseTensor),
+}
+
+impl FullTensor {
+    /// Axis lengths.
+    pub fn shape(&self) -> &[usize] {
+        match self {
+            Self::Dense(t) => t.shape(),
+            Self::Sparse(s) => s.shape(),
+        }
+    }
+}
+
+impl From<Tensor> for FullTensor {
+    fn from(t: Tensor) -> Self {
+        Self::Dense(t)
+    }
+}
+
+impl From<SparseTensor> for FullTensor {
+    fn from(s: SparseTensor) -> Self {
+        Self::Sparse(s)
+    }
+}
+
+/// A named tensor: its data and the basis name of each axis (axis 0 first).
+#[derive(Clone, Debug, PartialEq)]
+pub struct TensorDecl {
+    /// Basis name per axis.
+    pub axes: Vec<String>,
+    /// The full-space data.
+    pub data: FullTensor,
+}
+
+/// `y = f(x)` as tensors, inputs and a composition.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Model {
+    tensors: BTreeMap<String, TensorDecl>,
+    inputs: BTreeMap<String, String>,
+    output: Expr,
+}
+
+impl Model {
+    /// A model computing `output`; declare its tensors and inputs next.
+    pub fn new(output: Expr) -> Self {
+        Self { tensors: BTreeMap::new(), inputs: BTreeMap::new(), output }
+    }
+
+    /// Declares tensor `name` with the basis name of each axis.
+    pub fn with_tensor(mut self, name: &str, axes: &[&str], data: impl Into<FullTensor>) -> Self {
+        let decl = TensorDecl { axes: axes.iter().map(|s| s.to_string()).collect(), data: data.into() };
+        self.tensors.insert(name.to_string(), decl);
+        self
+    }
+
+    /// Declares input `name`, a vector in basis `basis`.
+    pub fn with_input(mut self, name: &str, basis: &str) -> Self {
+        self.inputs.insert(name.to_string(), basis.to_string());
+        self
+    }
+
+    /// The composition.
+    pub fn output(&self) -> &Expr {
+        &self.output
+    }
+
+    /// The declared tensors.
+    pub fn tensors(&self) -> &BTreeMap<String, TensorDecl> {
+        &self.tensors
+    }
+
+    /// The declared inputs and their bases.
+    pub fn inputs(&self) -> &BTreeMap<String, String> {
+        &self.inputs
+    }
+
+    /// The full dimension of every basis name, checked to agree across all axes that use it.
+    pub fn dimensions(&self) -> Result<BTreeMap<String, usize>, ReduceError> {
+        let mut dims: BTreeMap<String, usize> = BTreeMap::new();
+        for (name, t) in &self.tensors {
+            let shape = t.data.shape();
+            if shape.len() != t.axes.len() {
+                return Err(ReduceError::AxisLength {
+                    tensor: name.clone(),
+                    axis: shape.len().min(t.axes.len()),
+                    basis: t.axes.get(shape.len()).cloned().unwrap_or_default(),
+                    detail: format!("{} basis names for a tensor of order {}", t.axes.len(), shape.len()),
+                });
+            }
+            for (axis, (b, &n)) in t.axes.iter().zip(shape).enumerate() {
+                match dims.get(b) {
+                    Some(&m) if m != n => {
+                        return Err(ReduceError::AxisLength {
+                            tensor: name.clone(),
+                            axis,
+                            basis: b.clone(),
+                            detail: format!("length {n}, but other axes in this basis have length {m}"),
+                        })
+                    }
+                    _ => {
+                        dims.insert(b.clone(), n);
+                    }
+                }
+            }
+        }
+        Ok(dims)
+    }
+
+    /// Checks the whole model (names, bases where axes meet, §4's same-basis rule, axis
+    /// lengths) and returns the basis of each output axis.
+    pub fn check(&self) -> Result<Vec<String>, ReduceError> {
+        self.dimensions()?;
+        signature(&self.output, &FullOperands { model: self, inputs: &BTreeMap::new() })
+    }
+
+    /// Evaluates `f(x)` in the full space, in f64.
+    pub fn evaluate(&self, inputs: &BTreeMap<&str, &[f64]>) -> Result<Tensor, ReduceError> {
+        let dims = self.dimensions()?;
+        for (name, basis) in &self.inputs {
+            if let (Some(x), Some(&n)) = (inputs.get(name.as_str()), dims.get(basis)) {
+                if x.len() != n {
+                    return Err(ReduceError::InputLength {
+                        input: name.clone(),
+                        basis: basis.clone(),
+                        expected: n,
+                        found: x.len(),
+                    });
+                }
+            }
+        }
+        let ops = FullOperands { model: self, inputs };
+        signature(&self.output, &ops)?;
+        evaluate(&self.output, &ops)
+    }
+
+    /// Premultiplies every tensor by the bases of its axes (Eq. 2 and §4's table:
+    /// `Q̂ = Q ⊗₀ B₀ ⊗₁ B₁ …`) on the CPU, and returns the reduced model. Every axis name needs
+    /// a basis whose full dimension matches the axis.
+    pub fn reduce(&self, bases: &Bases) -> Result<ReducedModel, ReduceError> {
+        let output_axes = self.check()?;
+        let mut reduced = BTreeMap::new();
+        for (name, t) in &self.tensors {
+            let mats = t
+                .axes
+                .iter()
+                .zip(t.data.shape())
+                .enumerate()
+                .map(|(axis, (b, &n))| {
+                    let basis = bases.get(b).ok_or_else(|| ReduceError::UnknownBasis {
+                        basis: b.clone(),
+                        needed_by: format!("tensor `{name}` axis {axis}"),
+                    })?;
+                    if basis.full_dim() != n {
+                        return Err(ReduceError::AxisLength {
+                            tensor: name.clone(),
+                            axis,
+                            basis: b.clone(),
+                            detail: format!(
+                                "length {n}, but the basis has {} full dimensions",
+                                basis.full_dim()
+                            ),
+                        });
+                    }
+                    Ok(basis.matrix())
+                })
+                .collect::<Result<Vec<&Tensor>, ReduceError>>()?;
+            let data = match &t.data {
+                FullTensor::Dense(d) => premultiply_dense(d, &mats),
+                FullTensor::Sparse(s) => premultiply_sparse(s, &mats),
+            }
+            .map_err(|source| ReduceError::Tensor { context: format!("premultiplying `{name}`"), source })?;
+            reduced.insert(name.clone(), ReducedTensor { axes: t.axes.clone(), data });
+        }
+        for (input, b) in &self.inputs {
+            if !bases.contains_key(b) {
+                return Err(ReduceError::UnknownBasis {
+                    basis: b.clone(),
+                    needed_by: format!("input `{input}`"),
+                });
+            }
+        }
+        let used: Vec<&String> = output_axes.iter().chain(self.inputs.values()).collect();
+        let kept =
+            bases.iter().filter(|(k, _)| used.contains(k)).map(|(k, v)| (k.clone(), v.clone())).collect();
+        Ok(ReducedModel::new(reduced, self.inputs.clone(), self.output.clone(), output_axes, kept))
+    }
+}
+
+/// Full-space operands: the model's tensors as declared, the given full inputs.
+pub(crate) struct FullOperands<'a> {
+    pub model: &'a Model,
+    pub inputs: &'a BTreeMap<&'a str, &'a [f64]>,
+}
+
+impl Operands for FullOperands<'_> {
+    fn tensor_axes(&self, name: &str) -> Option<&[String]> {
+        self.model.tensors.get(name).map(|t| t.axes.as_slice())
+    }
+
+    fn input_basis(&self, name: &str) -> Option<&str> {
+        self.model.inputs.get(name).map(String::as_str)
+    }
+
+    fn contract_tensor(&self, name: &str, args: &[(usize, &[f64])]) -> Result<Tensor, TensorError> {
+        match &self.model.tensors[name].data {
+            FullTensor::Dense(t) => t.contract_axes(args),
+            FullTensor::Sparse(s) => s.contract_axes(name, args),
+        }
+    }
+
+    fn dense_tensor(&self, name: &str) -> Tensor {
+        match &self.model.tensors[name].data {
+            FullTensor::Dense(t) => t.clone(),
+            FullTensor::Sparse(s) => s.to_dense(),
+        }
+    }
+
+    fn input_value(&self, name: &str) -> Result<&[f64], ReduceError> {
+        self.inputs.get(name).copied().ok_or_else(|| ReduceError::MissingInput(name.to_string()))
+    }
+}

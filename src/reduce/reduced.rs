@@ -1,0 +1,137 @@
+//! The reduced model: the same composition over premultiplied tensors, evaluated on reduced
+//! inputs, with the bases needed to project inputs and lift outputs.
+
+use std::collections::BTreeMap;
+
+use super::basis::{Bases, Basis};
+use super::error::ReduceError;
+use super::eval::{evaluate, Operands};
+use super::expr::Expr;
+use crate::tensor::{Tensor, TensorError};
+
+/// A premultiplied tensor `Q̂` with the basis name of each axis.
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct ReducedTensor {
+    pub axes: Vec<String>,
+    pub data: Tensor,
+}
+
+/// `f̂(x̂)`: reduced tensors `Q̂ᵢ`, the composition of the full model, and the bases of its
+/// inputs and output.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ReducedModel {
+    tensors: BTreeMap<String, ReducedTensor>,
+    inputs: BTreeMap<String, String>,
+    output: Expr,
+    output_axes: Vec<String>,
+    bases: Bases,
+}
+
+impl ReducedModel {
+    pub(crate) fn new(
+        tensors: BTreeMap<String, ReducedTensor>,
+        inputs: BTreeMap<String, String>,
+        output: Expr,
+        output_axes: Vec<String>,
+        bases: Bases,
+    ) -> Self {
+        Self { tensors, inputs, output, output_axes, bases }
+    }
+
+    /// The reduced tensor `Q̂` called `name`.
+    pub fn tensor(&self, name: &str) -> Option<&Tensor> {
+        self.tensors.get(name).map(|t| &t.data)
+    }
+
+    /// The composition (the full model's, unchanged).
+    pub fn output(&self) -> &Expr {
+        &self.output
+    }
+
+    /// Basis names of the output's axes.
+    pub fn output_axes(&self) -> &[String] {
+        &self.output_axes
+    }
+
+    /// The basis called `name` (those of the inputs and the output are kept).
+    pub fn basis(&self, name: &str) -> Option<&Basis> {
+        self.bases.get(name)
+    }
+
+    /// `x̂ = B_xᵀ x` for input `name`.
+    pub fn project_input(&self, name: &str, x: &[f64]) -> Result<Vec<f64>, ReduceError> {
+        let b = self.inputs.get(name).ok_or_else(|| ReduceError::UnknownInput(name.to_string()))?;
+        let basis = &self.bases[b];
+        if x.len() != basis.full_dim() {
+            return Err(ReduceError::InputLength {
+                input: name.into(),
+                basis: b.clone(),
+                expected: basis.full_dim(),
+                found: x.len(),
+            });
+        }
+        Ok(basis.project(x))
+    }
+
+    /// Evaluates `ŷ = f̂(x̂)` on reduced inputs.
+    pub fn evaluate(&self, inputs: &BTreeMap<&str, &[f64]>) -> Result<Tensor, ReduceError> {
+        for (name, b) in &self.inputs {
+            if let Some(x) = inputs.get(name.as_str()) {
+                let m = self.bases[b].reduced_dim();
+                if x.len() != m {
+                    return Err(ReduceError::InputLength {
+                        input: name.clone(),
+                        basis: b.clone(),
+                        expected: m,
+                        found: x.len(),
+                    });
+                }
+            }
+        }
+        evaluate(&self.output, &ReducedOperands { model: self, inputs })
+    }
+
+    /// `y = B_y ŷ` for a vector output.
+    pub fn lift(&self, yhat: &[f64]) -> Result<Vec<f64>, ReduceError> {
+        match self.output_axes.as_slice() {
+            [b] => Ok(self.bases[b].lift(yhat)),
+            axes => Err(ReduceError::BadContraction {
+                what: self.output.to_string(),
+                detail: format!("only vector outputs lift; this one has {} axes", axes.len()),
+            }),
+        }
+    }
+}
+
+struct ReducedOperands<'a> {
+    model: &'a ReducedModel,
+    inputs: &'a BTreeMap<&'a str, &'a [f64]>,
+}
+
+impl ReducedOperands<'_> {
+    fn dense(&self, name: &str) -> &Tensor {
+        &self.model.tensors[name].data
+    }
+}
+
+impl Operands for ReducedOperands<'_> {
+    fn tensor_axes(&self, name: &str) -> Option<&[String]> {
+        self.model.tensors.get(name).map(|t| t.axes.as_slice())
+    }
+
+    fn input_basis(&self, name: &str) -> Option<&str> {
+        self.model.inputs.get(name).map(String::as_str)
+    }
+
+    fn contract_tensor(&self, name: &str, args: &[(usize, &[f64])]) -> Result<Tensor, TensorError> {
+        self.dense(name).contract_axes(args)
+    }
+
+    fn dense_tensor(&self, name: &str) -> Tensor {
+        self.dense(name).clone()
+    }
+
+    fn input_value(&self, name: &str) -> Result<&[f64], ReduceError> {
+        self.inputs.get(name).copied().ok_or_else(|| ReduceError::MissingInput(name.to_string()))
+    }
+}

@@ -1,0 +1,20 @@
+//! Dense and sparse tensors with their CPU f64 reference operations (seed 000 §3–4).
+//!
+//! Conventions follow the paper: axes are numbered from 0 and axis 0 is the result axis;
+//! `Q ⊗_k X` multiplies tensor `Q` along axis `k` by a vector (contraction: the order drops
+//! by one) or by a matrix (the axis is replaced by the matrix's second axis) — see
+//! [`Tensor::contract`] and [`Tensor::mode_product`]. Storage is row-major: the last axis
+//! varies fastest.
+//!
+//! The operations here are written plainly: they are the test oracle for every fast path
+//! (premultiplication, GPU kernels) and the documentation of the maths.
+
+mod dense;
+mod error;
+mod linalg;
+mod sparse;
+
+pub use dense::{Scalar, Tensor};
+pub use error::TensorError;
+pub use linalg::{matmul, solve, spd_power, symmetric_eigen, transpose};
+pub use sparse::SparseTensor;
