@@ -73,6 +73,28 @@ impl Basis {
         Ok(Self { matrix: Tensor::from_vec(&[n, m], data).expect("shape matches") })
     }
 
+    /// One basis spanning both `a` and `b` (same full dimension), re-orthonormalised — how the
+    /// paper makes the pairs that must share a basis, `B_u = B_p` and `B_s = B_h` (§6.1).
+    pub fn merge(name: &str, a: &Basis, b: &Basis) -> Result<Self, ReduceError> {
+        if a.full_dim() != b.full_dim() {
+            return Err(ReduceError::BadBasis {
+                basis: name.to_string(),
+                detail: format!(
+                    "cannot merge bases of {} and {} full dimensions",
+                    a.full_dim(),
+                    b.full_dim()
+                ),
+            });
+        }
+        let (n, ma, mb) = (a.full_dim(), a.reduced_dim(), b.reduced_dim());
+        let mut data = Vec::with_capacity(n * (ma + mb));
+        for i in 0..n {
+            data.extend_from_slice(&a.matrix.data()[i * ma..(i + 1) * ma]);
+            data.extend_from_slice(&b.matrix.data()[i * mb..(i + 1) * mb]);
+        }
+        Self::orthonormalize(name, &Tensor::from_vec(&[n, ma + mb], data).expect("shape matches"))
+    }
+
     /// The identity basis of `n` dimensions (an axis left unreduced).
     pub fn identity(n: usize) -> Self {
         Self { matrix: Tensor::identity(n) }

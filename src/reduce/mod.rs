@@ -18,6 +18,7 @@ mod error;
 mod eval;
 mod expr;
 mod model;
+mod pca;
 mod premultiply;
 mod reduced;
 
@@ -25,5 +26,6 @@ pub use basis::{Bases, Basis};
 pub use error::ReduceError;
 pub use expr::Expr;
 pub use model::{FullTensor, Model, TensorDecl};
+pub use pca::{pca, Pca, SnapshotFile, SnapshotFn, SnapshotSource, Truncation};
 pub use premultiply::{premultiply_dense, premultiply_sparse, premultiply_sparse_planned, PremultiplyPlan};
 pub use reduced::ReducedModel;

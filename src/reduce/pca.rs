@@ -1,0 +1,209 @@
+//! Bases from snapshots: principal component analysis by the method of snapshots (§6.1, §8.3:
+//! the paper built every basis by PCA of simulation snapshots).
+//!
+//! With snapshots as the columns of `S` (n × k, n ≫ k), the Gram matrix `G = SᵀS` (k × k) has
+//! eigenpairs `G vᵢ = σᵢ² vᵢ`, and `uᵢ = S vᵢ / σᵢ` are the left singular vectors of `S`. The
+//! streaming form reads `S` in blocks of rows, twice — once to accumulate `G`, once to form the
+//! rows of the basis — so the snapshots never need to be in memory together (the paper used an
+//! out-of-core SVD). Truncation keeps the fewest modes whose σ² add up to the requested energy
+//! fraction (energy is σ², not σ), capped at a maximum count.
+
+use std::io::{Read, Seek, SeekFrom};
+use std::ops::Range;
+use std::path::{Path, PathBuf};
+
+use faer::linalg::matmul::matmul;
+use faer::{Accum, MatMut, MatRef, Par};
+
+use super::basis::Basis;
+use super::error::ReduceError;
+use crate::tensor::{symmetric_eigen, Tensor};
+
+/// Where snapshots come from, a block of rows at a time.
+pub trait SnapshotSource {
+    /// Full dimension `n` (rows).
+    fn dim(&self) -> usize;
+    /// Number of snapshots `k` (columns).
+    fn count(&self) -> usize;
+    /// Rows `rows` of every snapshot, as a `rows.len() × k` row-major tensor.
+    fn rows(&mut self, rows: Range<usize>) -> Result<Tensor, ReduceError>;
+}
+
+/// Snapshots held in memory as the columns of an `n × k` matrix.
+impl SnapshotSource for &Tensor {
+    fn dim(&self) -> usize {
+        self.shape()[0]
+    }
+    fn count(&self) -> usize {
+        self.shape()[1]
+    }
+    fn rows(&mut self, rows: Range<usize>) -> Result<Tensor, ReduceError> {
+        let k = self.count();
+        Ok(Tensor::from_vec(&[rows.len(), k], self.data()[rows.start * k..rows.end * k].to_vec())
+            .expect("shape matches"))
+    }
+}
+
+/// Snapshots regenerated on demand: `f(rows)` returns those rows of every snapshot.
+pub struct SnapshotFn<F> {
+    /// Full dimension.
+    pub dim: usize,
+    /// Number of snapshots.
+    pub count: usize,
+    /// The generator.
+    pub rows: F,
+}
+
+impl<F: FnMut(Range<usize>) -> Tensor> SnapshotSource for SnapshotFn<F> {
+    fn dim(&self) -> usize {
+        self.dim
+    }
+    fn count(&self) -> usize {
+        self.count
+    }
+    fn rows(&mut self, rows: Range<usize>) -> Result<Tensor, ReduceError> {
+        let want = [rows.len(), self.count];
+        let t = (self.rows)(rows);
+        if t.shape() != want {
+            return Err(ReduceError::BadBasis {
+                basis: "snapshots".into(),
+                detail: format!("the generator returned shape {:?} for {want:?}", t.shape()),
+            });
+        }
+        Ok(t)
+    }
+}
+
+/// Snapshots in a file of little-endian f64, row-major `n × k` (row `i` holds component `i` of
+/// every snapshot), read a block of rows at a time.
+pub struct SnapshotFile {
+    path: PathBuf,
+    file: std::fs::File,
+    dim: usize,
+    count: usize,
+}
+
+impl SnapshotFile {
+    /// Opens `path` holding `dim × count` f64 values; an error names the file if its size
+    /// disagrees.
+    pub fn open(path: &Path, dim: usize, count: usize) -> Result<Self, ReduceError> {
+        let bad =
+            |detail: String| ReduceError::BadBasis { basis: format!("snapshots {}", path.display()), detail };
+        let file = std::fs::File::open(path).map_err(|e| bad(e.to_string()))?;
+        let len = file.metadata().map_err(|e| bad(e.to_string()))?.len();
+        let want = (dim * count * 8) as u64;
+        if len != want {
+            return Err(bad(format!("{len} bytes, but {dim} × {count} f64 values need {want}")));
+        }
+        Ok(Self { path: path.to_path_buf(), file, dim, count })
+    }
+}
+
+impl SnapshotSource for SnapshotFile {
+    fn dim(&self) -> usize {
+        self.dim
+    }
+    fn count(&self) -> usize {
+        self.count
+    }
+    fn rows(&mut self, rows: Range<usize>) -> Result<Tensor, ReduceError> {
+        let bad = |e: std::io::Error| ReduceError::BadBasis {
+            basis: format!("snapshots {}", self.path.display()),
+            detail: e.to_string(),
+        };
+        let mut bytes = vec![0u8; rows.len() * self.count * 8];
+        self.file.seek(SeekFrom::Start((rows.start * self.count * 8) as u64)).map_err(bad)?;
+        self.file.read_exact(&mut bytes).map_err(bad)?;
+        let data =
+            bytes.chunks_exact(8).map(|b| f64::from_le_bytes(b.try_into().expect("8 bytes"))).collect();
+        Ok(Tensor::from_vec(&[rows.len(), self.count], data).expect("shape matches"))
+    }
+}
+
+/// How many modes to keep.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Truncation {
+    /// Keep the fewest modes whose σ² sum to at least this fraction of the total (0 < e ≤ 1).
+    pub energy: f64,
+    /// And never more than this many.
+    pub max_modes: usize,
+}
+
+impl Default for Truncation {
+    fn default() -> Self {
+        Self { energy: 0.9999, max_modes: usize::MAX }
+    }
+}
+
+/// A PCA basis with its spectrum.
+#[derive(Clone, Debug)]
+pub struct Pca {
+    /// The orthonormal basis (n × m).
+    pub basis: Basis,
+    /// Every singular value σ of the snapshot matrix, descending.
+    pub singular_values: Vec<f64>,
+    /// Fraction of Σσ² the kept modes hold.
+    pub energy: f64,
+}
+
+/// Rows per block when streaming.
+const BLOCK_ROWS: usize = 4096;
+
+/// PCA of the snapshots in `source`, streaming blocks of rows (see the module docs).
+pub fn pca(name: &str, source: &mut impl SnapshotSource, truncation: Truncation) -> Result<Pca, ReduceError> {
+    let (n, k) = (source.dim(), source.count());
+    let bad = |detail: String| ReduceError::BadBasis { basis: name.to_string(), detail };
+    if n == 0 || k == 0 {
+        return Err(bad(format!("no snapshots ({n} × {k})")));
+    }
+    if !(truncation.energy > 0.0 && truncation.energy <= 1.0) || truncation.max_modes == 0 {
+        return Err(bad(format!("truncation needs 0 < energy ≤ 1 and max_modes ≥ 1, got {truncation:?}")));
+    }
+    // Pass 1: G = Σ_blocks Sᵀ_b S_b.
+    let mut gram = vec![0.0; k * k];
+    for start in (0..n).step_by(BLOCK_ROWS) {
+        let block = source.rows(start..(start + BLOCK_ROWS).min(n))?;
+        if let Some(i) = block.data().iter().position(|v| !v.is_finite()) {
+            return Err(bad(format!("snapshot {} row {} is not finite", i % k, start + i / k)));
+        }
+        let s = MatRef::from_row_major_slice(block.data(), block.shape()[0], k);
+        let g = MatMut::from_row_major_slice_mut(&mut gram, k, k);
+        matmul(g, Accum::Add, s.transpose(), s, 1.0, Par::rayon(0));
+    }
+    let (values, vectors) = symmetric_eigen(name, &Tensor::from_vec(&[k, k], gram).expect("k×k"))
+        .map_err(|source| ReduceError::Tensor { context: format!("PCA of `{name}`"), source })?;
+    // Descending; tiny negative eigenvalues of G are rounding.
+    let order: Vec<usize> = (0..k).rev().collect();
+    let sigma2: Vec<f64> = order.iter().map(|&i| values[i].max(0.0)).collect();
+    let total: f64 = sigma2.iter().sum();
+    if total <= 0.0 {
+        return Err(bad("every snapshot is zero".into()));
+    }
+    let floor = sigma2[0] * (k as f64) * f64::EPSILON;
+    let mut m = 0;
+    let mut kept = 0.0;
+    while m < k && m < truncation.max_modes && sigma2[m] > floor && kept < truncation.energy * total {
+        kept += sigma2[m];
+        m += 1;
+    }
+    let m = m.max(1);
+    // Pass 2: the basis rows, B_b = S_b V_m Σ_m⁻¹.
+    let mut vs = vec![0.0; k * m];
+    for (c, &i) in order.iter().take(m).enumerate() {
+        let s = sigma2[c].sqrt();
+        for r in 0..k {
+            vs[r * m + c] = vectors.data()[r * k + i] / s;
+        }
+    }
+    let mut b = vec![0.0; n * m];
+    for start in (0..n).step_by(BLOCK_ROWS) {
+        let end = (start + BLOCK_ROWS).min(n);
+        let block = source.rows(start..end)?;
+        let s = MatRef::from_row_major_slice(block.data(), end - start, k);
+        let out = MatMut::from_row_major_slice_mut(&mut b[start * m..end * m], end - start, m);
+        matmul(out, Accum::Replace, s, MatRef::from_row_major_slice(&vs, k, m), 1.0, Par::rayon(0));
+    }
+    // Small σ amplify rounding in S v / σ: re-orthonormalise (Gram–Schmidt twice).
+    let basis = Basis::orthonormalize(name, &Tensor::from_vec(&[n, m], b).expect("n×m"))?;
+    Ok(Pca { basis, singular_values: sigma2.iter().map(|s| s.sqrt()).collect(), energy: kept / total })
+}
