@@ -99,6 +99,14 @@ pub enum ReduceError {
         /// What is wrong.
         detail: String,
     },
+    /// A reduced-model file that cannot be read or written.
+    #[error("{path}: {detail}")]
+    File {
+        /// The file.
+        path: std::path::PathBuf,
+        /// What is wrong.
+        detail: String,
+    },
     /// A tensor operation failed (singular matrix, non-SPD root, …).
     #[error("{context}: {source}")]
     Tensor {

@@ -14,7 +14,7 @@
 use std::fmt;
 
 /// A value built from named tensors and inputs by §4's operations.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum Expr {
     /// A named tensor of the model (reduced tensors replace it after reduction).
     Tensor(String),

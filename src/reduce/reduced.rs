@@ -20,11 +20,11 @@ pub(crate) struct ReducedTensor {
 /// inputs and output.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ReducedModel {
-    tensors: BTreeMap<String, ReducedTensor>,
-    inputs: BTreeMap<String, String>,
-    output: Expr,
-    output_axes: Vec<String>,
-    bases: Bases,
+    pub(crate) tensors: BTreeMap<String, ReducedTensor>,
+    pub(crate) inputs: BTreeMap<String, String>,
+    pub(crate) output: Expr,
+    pub(crate) output_axes: Vec<String>,
+    pub(crate) bases: Bases,
 }
 
 impl ReducedModel {
@@ -71,6 +71,12 @@ impl ReducedModel {
             });
         }
         Ok(basis.project(x))
+    }
+
+    /// Checks the composition against the reduced tensors (names, bases, §4's rules) and
+    /// returns the output's axis bases.
+    pub fn check(&self) -> Result<Vec<String>, ReduceError> {
+        super::eval::signature(&self.output, &ReducedOperands { model: self, inputs: &BTreeMap::new() })
     }
 
     /// Evaluates `ŷ = f̂(x̂)` on reduced inputs.

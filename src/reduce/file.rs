@@ -1,0 +1,163 @@
+//! Reduced models on disk, as safetensors (so a NumPy user can open them with
+//! `safetensors.numpy.load_file`): every reduced tensor `Q̂` as `tensor/<name>`, the bases that
+//! project inputs and lift outputs as `basis/<name>` (n × m), all f64, and in the metadata the
+//! format name and version, the composition (JSON, and in paper notation for people), each
+//! tensor's axis bases, the inputs and the output's axes. Loading checks the version and that
+//! every shape agrees with the metadata, and says what is wrong with which file.
+
+use std::collections::{BTreeMap, HashMap};
+use std::path::Path;
+
+use safetensors::tensor::{Dtype, SafeTensors, TensorView};
+
+use super::basis::{Bases, Basis};
+use super::error::ReduceError;
+use super::expr::Expr;
+use super::reduced::{ReducedModel, ReducedTensor};
+use crate::tensor::Tensor;
+
+/// The `format` metadata value.
+pub const FORMAT: &str = "galerkin-reduced-model";
+/// The version this build writes and the newest it reads.
+pub const VERSION: u32 = 1;
+
+fn f64_bytes(t: &Tensor) -> Vec<u8> {
+    t.data().iter().flat_map(|v| v.to_le_bytes()).collect()
+}
+
+impl ReducedModel {
+    /// Writes the model to `path` (a temporary file beside it, then renamed: never half-written).
+    pub fn save(&self, path: &Path) -> Result<(), ReduceError> {
+        let fail = |detail: String| ReduceError::File { path: path.to_path_buf(), detail };
+        let json = |v: &dyn erased::Json| v.json().map_err(|e| fail(e.to_string()));
+        let mut meta = HashMap::new();
+        meta.insert("format".to_string(), FORMAT.to_string());
+        meta.insert("version".to_string(), VERSION.to_string());
+        meta.insert("composition".to_string(), json(&self.output)?);
+        meta.insert("composition_text".to_string(), self.output.to_string());
+        meta.insert("inputs".to_string(), json(&self.inputs)?);
+        meta.insert("output_axes".to_string(), json(&self.output_axes)?);
+        let axes: BTreeMap<&String, &Vec<String>> = self.tensors.iter().map(|(n, t)| (n, &t.axes)).collect();
+        meta.insert("tensor_axes".to_string(), json(&axes)?);
+
+        let mut bytes: Vec<(String, Vec<u8>, Vec<usize>)> = Vec::new();
+        for (name, t) in &self.tensors {
+            bytes.push((format!("tensor/{name}"), f64_bytes(&t.data), t.data.shape().to_vec()));
+        }
+        for (name, b) in &self.bases {
+            bytes.push((format!("basis/{name}"), f64_bytes(b.matrix()), b.matrix().shape().to_vec()));
+        }
+        let views = bytes
+            .iter()
+            .map(|(n, b, s)| TensorView::new(Dtype::F64, s.clone(), b).map(|v| (n.clone(), v)))
+            .collect::<Result<Vec<_>, _>>()
+            .map_err(|e| fail(e.to_string()))?;
+        let buffer = safetensors::serialize(views, Some(meta)).map_err(|e| fail(e.to_string()))?;
+        let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+        let tmp = path.with_file_name(format!(".{name}.{}.tmp", std::process::id()));
+        if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+            std::fs::create_dir_all(dir).map_err(|e| fail(e.to_string()))?;
+        }
+        std::fs::write(&tmp, &buffer).map_err(|e| fail(e.to_string()))?;
+        std::fs::rename(&tmp, path).map_err(|e| {
+            let _ = std::fs::remove_file(&tmp);
+            fail(e.to_string())
+        })
+    }
+
+    /// Reads a model written by [`ReducedModel::save`] (this version or older).
+    pub fn load(path: &Path) -> Result<ReducedModel, ReduceError> {
+        let fail = |detail: String| ReduceError::File { path: path.to_path_buf(), detail };
+        let buffer = std::fs::read(path).map_err(|e| fail(e.to_string()))?;
+        let (_, header) = SafeTensors::read_metadata(&buffer)
+            .map_err(|e| fail(format!("not a readable safetensors file ({e})")))?;
+        let file = SafeTensors::deserialize(&buffer)
+            .map_err(|e| fail(format!("not a readable safetensors file ({e})")))?;
+        let meta = header.metadata().clone().unwrap_or_default();
+        let get = |k: &str| meta.get(k).ok_or_else(|| fail(format!("metadata has no `{k}`")));
+        if get("format")? != FORMAT {
+            return Err(fail(format!("not a galerkin reduced model (format `{}`)", get("format")?)));
+        }
+        let version: u32 =
+            get("version")?.parse().map_err(|_| fail(format!("bad version `{}`", meta["version"])))?;
+        if version > VERSION {
+            return Err(fail(format!(
+                "written by a newer galerkin (format version {version}; this build reads up to {VERSION})"
+            )));
+        }
+        let parse = |k: &str| -> Result<serde_json::Value, ReduceError> {
+            serde_json::from_str(get(k)?).map_err(|e| fail(format!("metadata `{k}`: {e}")))
+        };
+        let output: Expr = serde_json::from_value(parse("composition")?)
+            .map_err(|e| fail(format!("metadata `composition`: {e}")))?;
+        let inputs: BTreeMap<String, String> =
+            serde_json::from_value(parse("inputs")?).map_err(|e| fail(format!("metadata `inputs`: {e}")))?;
+        let output_axes: Vec<String> = serde_json::from_value(parse("output_axes")?)
+            .map_err(|e| fail(format!("metadata `output_axes`: {e}")))?;
+        let axes: BTreeMap<String, Vec<String>> = serde_json::from_value(parse("tensor_axes")?)
+            .map_err(|e| fail(format!("metadata `tensor_axes`: {e}")))?;
+
+        let read = |name: &str| -> Result<Tensor, ReduceError> {
+            let view = file.tensor(name).map_err(|e| fail(format!("`{name}`: {e}")))?;
+            if view.dtype() != Dtype::F64 {
+                return Err(fail(format!("`{name}` is {:?}, expected F64", view.dtype())));
+            }
+            let data = view
+                .data()
+                .chunks_exact(8)
+                .map(|b| f64::from_le_bytes(b.try_into().expect("8 bytes")))
+                .collect();
+            Tensor::from_vec(view.shape(), data).map_err(|e| fail(format!("`{name}`: {e}")))
+        };
+        let mut bases = Bases::new();
+        for (name, _) in file.tensors().iter().filter(|(n, _)| n.starts_with("basis/")) {
+            let b = name.trim_start_matches("basis/");
+            bases.insert(b.to_string(), Basis::new(b, read(name)?, 1e-9).map_err(|e| fail(e.to_string()))?);
+        }
+        // Reduced dimension of each basis name, learned from the tensors and checked to agree.
+        let mut dims: BTreeMap<String, usize> =
+            bases.iter().map(|(k, b)| (k.clone(), b.reduced_dim())).collect();
+        let mut tensors = BTreeMap::new();
+        for (name, axis_names) in axes {
+            let data = read(&format!("tensor/{name}"))?;
+            if data.order() != axis_names.len() {
+                return Err(fail(format!(
+                    "tensor `{name}` has {} axes but the metadata names {}",
+                    data.order(),
+                    axis_names.len()
+                )));
+            }
+            for (axis, (b, &m)) in axis_names.iter().zip(data.shape()).enumerate() {
+                match dims.get(b) {
+                    Some(&d) if d != m => {
+                        return Err(fail(format!("tensor `{name}` axis {axis} (basis `{b}`) has length {m}, but `{b}` has {d} reduced dimensions")))
+                    }
+                    _ => {
+                        dims.insert(b.clone(), m);
+                    }
+                }
+            }
+            tensors.insert(name, ReducedTensor { axes: axis_names, data });
+        }
+        for b in output_axes.iter().chain(inputs.values()) {
+            if !bases.contains_key(b) {
+                return Err(fail(format!("basis `{b}` (of an input or the output) is missing")));
+            }
+        }
+        let model = ReducedModel::new(tensors, inputs, output, output_axes, bases);
+        model.check().map_err(|e| fail(format!("the composition does not fit the tensors: {e}")))?;
+        Ok(model)
+    }
+}
+
+/// `serde_json::to_string` behind a trait object, so one closure serves every type.
+mod erased {
+    pub trait Json {
+        fn json(&self) -> serde_json::Result<String>;
+    }
+    impl<T: serde::Serialize> Json for T {
+        fn json(&self) -> serde_json::Result<String> {
+            serde_json::to_string(self)
+        }
+    }
+}
