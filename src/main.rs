@@ -70,6 +70,14 @@ enum Command {
 
 #[derive(Subcommand)]
 enum BenchWhat {
+    /// The reduction core: premultiplication of the fluid volume tensor at the paper's cavity
+    /// size (88,671 cells, m = 128, m_g = 5) next to faer's GEMM of its final stage, reduced
+    /// evaluation per call and per batch, and premultiplication time against cells and m.
+    Reduce {
+        /// Smaller sizes: seconds instead of a minute or two.
+        #[arg(long)]
+        quick: bool,
+    },
     /// The device's ceilings next to their CPU peers: dispatch overhead, upload/download,
     /// FMA peak, streaming triad, tiled SGEMM (peer: faer). Prints a Markdown table.
     Gpu {
@@ -108,6 +116,7 @@ fn run(cli: Cli) -> Result<()> {
             view(desc, &scene, frames, screenshot, resize_to)
         }
         Command::Bench { what: BenchWhat::Gpu { quick } } => bench_gpu(&desc, quick),
+        Command::Bench { what: BenchWhat::Reduce { quick } } => bench_reduce(quick),
     }
 }
 
@@ -334,4 +343,67 @@ fn bench_gpu(desc: &GpuDesc, quick: bool) -> Result<()> {
     println!("cpu peers: {} threads; medians of {} runs\n", galerkin::bench::cpu::threads(), config.reps);
     print!("{}", galerkin::bench::table(&rows));
     check_validation(gpu)
+}
+
+fn bench_reduce(quick: bool) -> Result<()> {
+    use galerkin::bench::reduce::{faer_gemm_gflops, premultiply_volume, reduced_evaluation};
+    let threads = galerkin::bench::cpu::threads();
+    println!("CPU backend (faer, {threads} threads). The GPU backend is not built yet.\n");
+
+    let (cells, m, m_g) = (if quick { 10_000 } else { 88_671 }, 128, 5);
+    let bar = indicatif::ProgressBar::new(1000);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("premultiplying V {bar:30} {percent}% eta {eta}")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    let report = |done: f64, total: f64| bar.set_position((1000.0 * done / total.max(1.0)) as u64);
+    let (run, _) = premultiply_volume(cells, m, m_g, Some(&report))?;
+    bar.finish_and_clear();
+    let peer = faer_gemm_gflops(m, 3 * cells, m * (m_g * (m_g + 1) * (m_g + 2) / 6), 3);
+    println!("## Premultiplication of the volume tensor V (cells {cells}, m_p = m_u = {m}, m_g = {m_g})\n");
+    println!("| stored entries | time | GFLOP/s | faer GEMM of the final stage's shape | ratio |");
+    println!("|---:|---:|---:|---:|---:|");
+    println!(
+        "| {} | {:.2} s | {:.1} | {:.1} GFLOP/s ({m} × {} × {}) | {:.2} |\n",
+        run.entries,
+        run.time.as_secs_f64(),
+        run.gflops(),
+        peer,
+        3 * cells,
+        m * 35,
+        run.gflops() / peer
+    );
+
+    let (batch, reps) = (1024, if quick { 3 } else { 5 });
+    let (single, batched) = reduced_evaluation(10_000, m, batch, reps)?;
+    println!(
+        "## Reduced evaluation û = (V̂ ⊗₂ ĝ ⊗₃ ĝ ⊗₄ ĝ)⁻¹ ⊗₁ p̂ (m = {m}, m_g = {m_g}), medians of {reps}\n"
+    );
+    println!("| per call | per batch of {batch} (all cores) | per input in the batch |");
+    println!("|---:|---:|---:|");
+    println!(
+        "| {:.3} ms | {:.1} ms | {:.3} ms |\n",
+        single.as_secs_f64() * 1e3,
+        batched.as_secs_f64() * 1e3,
+        batched.as_secs_f64() * 1e3 / batch as f64
+    );
+
+    let cell_counts: &[usize] = if quick { &[1_000, 10_000] } else { &[1_000, 10_000, 100_000] };
+    let ms: &[usize] = if quick { &[16, 64] } else { &[16, 32, 64, 128] };
+    println!("## Premultiplication time against cells and m (m_g = {m_g})\n");
+    print!("| cells |");
+    for m in ms {
+        print!(" m = {m} |");
+    }
+    println!();
+    println!("|---:|{}", "---:|".repeat(ms.len()));
+    for &c in cell_counts {
+        print!("| {c} |");
+        for &m in ms {
+            let (run, _) = premultiply_volume(c, m, m_g, None)?;
+            print!(" {:.3} s |", run.time.as_secs_f64());
+        }
+        println!();
+    }
+    Ok(())
 }

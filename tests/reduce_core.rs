@@ -6,7 +6,9 @@ mod common;
 
 use std::collections::BTreeMap;
 
-use galerkin::reduce::{premultiply_sparse_planned, Bases, Basis, Expr, Model, ReduceError};
+use galerkin::reduce::{
+    premultiply_sparse_with, Bases, Basis, Expr, Model, PremultiplyOptions, ReduceError, Unit,
+};
 use galerkin::tensor::{matmul, spd_power, symmetric_eigen, transpose, SparseTensor, Tensor};
 
 /// A random `n × m` orthonormal basis.
@@ -358,14 +360,53 @@ fn sparse_premultiplication_matches_the_dense_reference_for_orders_2_to_5() {
         let bases: Vec<Basis> =
             (0..order).map(|a| random_basis(shape[a], reduced[a], 100 + a as u64)).collect();
         let mats: Vec<&Tensor> = bases.iter().map(Basis::matrix).collect();
-        let (got, plan) = premultiply_sparse_planned(&q, &mats).unwrap();
+        let (got, plan) = premultiply_sparse_with(&q, &mats, PremultiplyOptions::default()).unwrap();
         let want = dense_reference(&q.to_dense(), &mats);
         assert_eq!(got.shape(), reduced.as_slice());
         // f64 sums of a few hundred terms of size ≤ 1: rounding ~1e-15 per term.
         assert!(got.max_abs_diff(&want) < 1e-12 * want.max_abs().max(1.0), "order {order}");
-        let mut sorted = plan.order.clone();
+        let mut sorted: Vec<usize> = plan
+            .stages
+            .iter()
+            .flatten()
+            .map(|u| match u {
+                Unit::Axis(a) => *a,
+                Unit::Group(_) => unreachable!("no symmetric groups here"),
+            })
+            .collect();
         sorted.sort();
         assert_eq!(sorted, (0..order).collect::<Vec<_>>(), "each axis once");
         assert_eq!(*plan.entries.last().unwrap(), 1, "the last stage leaves one dense block");
     }
+}
+
+#[test]
+fn symmetric_axes_are_contracted_packed_and_match_the_dense_reference() {
+    // A V-like tensor: result and velocity axes, three symmetric geometry axes in one basis.
+    let (np, ng) = (12, 9);
+    let mut q = SparseTensor::new(&[np, np, ng, ng, ng]).with_symmetric_axes(&[2, 3, 4]).unwrap();
+    let r = random_vec(600, 77);
+    for (e, &v) in r.iter().enumerate() {
+        let cell = e % 4;
+        let p = 3 * cell + e % 3;
+        // Geometry indices from the cell's own few coordinates (locality), any order.
+        let g = |k: usize| (2 * cell + (e / (3 + k)) % 3) % ng;
+        q.push(&[p, p, g(0), g(1), g(2)], v);
+    }
+    let bp = random_basis(np, 5, 78);
+    let bg = random_basis(ng, 4, 79);
+    let mats = [bp.matrix(), bp.matrix(), bg.matrix(), bg.matrix(), bg.matrix()];
+    let (got, plan) = premultiply_sparse_with(&q, &mats, PremultiplyOptions::default()).unwrap();
+    let want = dense_reference(&q.to_dense(), &mats);
+    assert!(got.max_abs_diff(&want) < 1e-12 * want.max_abs(), "diff {}", got.max_abs_diff(&want));
+    assert!(plan.stages.iter().flatten().any(|u| *u == Unit::Group(vec![2, 3, 4])), "{plan:?}");
+    // The result is symmetric in its last three axes.
+    assert_eq!(got.get(&[1, 2, 0, 1, 3]), got.get(&[1, 2, 3, 0, 1]));
+    // Progress is reported against the plan's total.
+    let last = std::sync::Mutex::new((0.0, 0.0));
+    let report = |done: f64, total: f64| *last.lock().unwrap() = (done, total);
+    let options = PremultiplyOptions { progress: Some(&report), ..PremultiplyOptions::default() };
+    premultiply_sparse_with(&q, &mats, options).unwrap();
+    let (done, total) = *last.lock().unwrap();
+    assert!(total > 0.0 && (done - total).abs() < 1e-6 * total, "{done} of {total}");
 }

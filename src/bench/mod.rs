@@ -1,4 +1,4 @@
-//! The device's ceilings, each next to its CPU peer on the same data: dispatch overhead,
+//! Benchmarks. [`run`]: the device's ceilings, each next to its CPU peer on the same data: dispatch overhead,
 //! upload/download bandwidth, FMA peak, streaming bandwidth and a tiled SGEMM (peer: faer).
 //! `galerkin bench gpu` and `cargo bench` print the table that BENCHMARKS.md records; every
 //! later kernel is judged against these numbers. GPU throughput is timed with timestamp
@@ -6,6 +6,7 @@
 
 pub mod cpu;
 pub mod kernels;
+pub mod reduce;
 
 use std::time::{Duration, Instant};
 

@@ -22,6 +22,7 @@ mod model;
 mod pca;
 mod premultiply;
 mod reduced;
+pub mod synthetic;
 
 pub use basis::{Bases, Basis};
 pub use error::ReduceError;
@@ -29,5 +30,7 @@ pub use expr::Expr;
 pub use file::{FORMAT, VERSION};
 pub use model::{FullTensor, Model, TensorDecl};
 pub use pca::{pca, Pca, SnapshotFile, SnapshotFn, SnapshotSource, Truncation};
-pub use premultiply::{premultiply_dense, premultiply_sparse, premultiply_sparse_planned, PremultiplyPlan};
+pub use premultiply::{
+    premultiply_dense, premultiply_sparse, premultiply_sparse_with, PremultiplyOptions, PremultiplyPlan, Unit,
+};
 pub use reduced::ReducedModel;

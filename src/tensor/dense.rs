@@ -198,11 +198,19 @@ impl<T: Scalar> Tensor<T> {
         let n = self.shape[axis];
         let inner: usize = self.shape[axis + 1..].iter().product();
         let mut out = vec![T::zero(); outer * inner];
-        for o in 0..outer {
-            for (i, &xi) in x.iter().enumerate() {
-                let src = &self.data[(o * n + i) * inner..(o * n + i + 1) * inner];
-                for (d, &s) in out[o * inner..(o + 1) * inner].iter_mut().zip(src) {
-                    *d += s * xi;
+        if inner == 1 {
+            // The last axis: one dot product per output element, over contiguous memory.
+            for (o, row) in out.iter_mut().zip(self.data.chunks_exact(n.max(1))) {
+                *o = row.iter().zip(x).fold(T::zero(), |acc, (&a, &b)| acc + a * b);
+            }
+        } else {
+            for o in 0..outer {
+                let dst = &mut out[o * inner..(o + 1) * inner];
+                for (i, &xi) in x.iter().enumerate() {
+                    let src = &self.data[(o * n + i) * inner..(o * n + i + 1) * inner];
+                    for (d, &s) in dst.iter_mut().zip(src) {
+                        *d += s * xi;
+                    }
                 }
             }
         }
@@ -257,11 +265,14 @@ impl<T: Scalar> Tensor<T> {
                 });
             }
         }
-        let mut t = self.clone();
+        let mut t: Option<Tensor<T>> = None;
         for (axis, x) in order {
-            t = t.contract(*axis, x)?;
+            t = Some(match &t {
+                None => self.contract(*axis, x)?,
+                Some(t) => t.contract(*axis, x)?,
+            });
         }
-        Ok(t)
+        Ok(t.unwrap_or_else(|| self.clone()))
     }
 
     /// Moves axes: `out` axis `i` is `self` axis `perm[i]`.

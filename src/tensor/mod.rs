@@ -17,4 +17,4 @@ mod sparse;
 pub use dense::{Scalar, Tensor};
 pub use error::TensorError;
 pub use linalg::{matmul, solve, spd_power, symmetric_eigen, transpose};
-pub use sparse::SparseTensor;
+pub use sparse::{distinct_permutations, SparseTensor};

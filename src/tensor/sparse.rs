@@ -1,6 +1,11 @@
 //! Sparse full-space tensors as coordinate lists: each nonzero keeps its index on every axis,
 //! so locality survives (a fluid cell's entries touch its 4 faces and 4 vertices, a radiosity
 //! pair's touch 2 faces). Duplicate coordinates add up.
+//!
+//! Groups of axes may be declared symmetric (the fluid volume tensor's three geometry axes):
+//! the tensor then has the same value at every permutation of a group's indices, and only one
+//! entry per multiset is stored, with the group's indices sorted. An entry at (…, 1, 1, 4, …)
+//! in a symmetric group of three stands for the three full entries (1,1,4), (1,4,1), (4,1,1).
 
 use super::dense::{strides, Tensor};
 use super::error::TensorError;
@@ -9,16 +14,104 @@ use super::error::TensorError;
 #[derive(Clone, Debug, PartialEq)]
 pub struct SparseTensor {
     shape: Vec<usize>,
-    /// `nnz × order` indices, entry-major.
+    /// `nnz × order` indices, entry-major; sorted within each symmetric group.
     coords: Vec<u32>,
     values: Vec<f64>,
+    /// Disjoint groups of axes (ascending) whose indices may be permuted freely.
+    symmetric: Vec<Vec<usize>>,
+}
+
+/// Every distinct permutation of `sorted` (ascending), in lexicographic order: each multiset
+/// permutation exactly once (the classic next-permutation walk).
+pub fn distinct_permutations(sorted: &[u32]) -> Vec<Vec<u32>> {
+    let mut p = sorted.to_vec();
+    let mut out = vec![p.clone()];
+    loop {
+        let Some(i) = (1..p.len()).rev().find(|&i| p[i - 1] < p[i]) else { return out };
+        let j = (i..p.len()).rev().find(|&j| p[j] > p[i - 1]).expect("a larger element exists");
+        p.swap(i - 1, j);
+        p[i..].reverse();
+        out.push(p.clone());
+    }
 }
 
 impl SparseTensor {
     /// An empty tensor of `shape` (every axis shorter than 2³²).
     pub fn new(shape: &[usize]) -> Self {
         assert!(shape.iter().all(|&n| n <= u32::MAX as usize), "axis lengths must fit in u32");
-        Self { shape: shape.to_vec(), coords: Vec::new(), values: Vec::new() }
+        Self { shape: shape.to_vec(), coords: Vec::new(), values: Vec::new(), symmetric: Vec::new() }
+    }
+
+    /// Declares `axes` (two or more, equal lengths, not in another group) symmetric: existing
+    /// and later entries have their indices on these axes sorted, and each stands for all its
+    /// distinct permutations.
+    pub fn with_symmetric_axes(mut self, axes: &[usize]) -> Result<Self, TensorError> {
+        let what = "symmetric axes";
+        let mut group = axes.to_vec();
+        group.sort_unstable();
+        group.dedup();
+        if group.len() < 2 || group.len() > 6 {
+            return Err(TensorError::NotFinite {
+                what: what.into(),
+                detail: format!("a group needs 2 to 6 distinct axes, got {axes:?}"),
+            });
+        }
+        for &a in &group {
+            if a >= self.order() {
+                return Err(TensorError::NoSuchAxis { what: what.into(), axis: a, order: self.order() });
+            }
+            if self.shape[a] != self.shape[group[0]] {
+                return Err(TensorError::Shape {
+                    what: what.into(),
+                    axis: a,
+                    expected: self.shape[group[0]],
+                    found: self.shape[a],
+                });
+            }
+            if self.symmetric.iter().any(|g| g.contains(&a)) {
+                return Err(TensorError::NotFinite {
+                    what: what.into(),
+                    detail: format!("axis {a} is already in a symmetric group"),
+                });
+            }
+        }
+        let order = self.order();
+        for c in self.coords.chunks_mut(order.max(1)) {
+            let mut v: Vec<u32> = group.iter().map(|&a| c[a]).collect();
+            v.sort_unstable();
+            for (&a, x) in group.iter().zip(v) {
+                c[a] = x;
+            }
+        }
+        self.symmetric.push(group);
+        Ok(self)
+    }
+
+    /// The symmetric groups of axes.
+    pub fn symmetric_groups(&self) -> &[Vec<usize>] {
+        &self.symmetric
+    }
+
+    /// Every full coordinate entry `e` stands for (one, unless it lies in symmetric groups).
+    pub fn expanded_coords(&self, e: usize) -> Vec<Vec<u32>> {
+        let mut out = vec![self.coords_of(e).to_vec()];
+        for g in &self.symmetric {
+            let sorted: Vec<u32> = g.iter().map(|&a| self.coords_of(e)[a]).collect();
+            let perms = distinct_permutations(&sorted);
+            out = out
+                .into_iter()
+                .flat_map(|c| {
+                    perms.iter().map(move |p| {
+                        let mut c = c.clone();
+                        for (&a, &x) in g.iter().zip(p) {
+                            c[a] = x;
+                        }
+                        c
+                    })
+                })
+                .collect();
+        }
+        out
     }
 
     /// From coordinates (`nnz × order`, entry-major) and values, checking every index.
@@ -56,16 +149,25 @@ impl SparseTensor {
                 detail: format!("entry {entry} is not finite"),
             });
         }
-        Ok(Self { shape: shape.to_vec(), coords, values })
+        Ok(Self { shape: shape.to_vec(), coords, values, symmetric: Vec::new() })
     }
 
     /// Adds `value` at `index` (panics on a bad index: use [`SparseTensor::from_coords`] for
     /// data that comes from users).
     pub fn push(&mut self, index: &[usize], value: f64) {
         assert_eq!(index.len(), self.order(), "index order");
+        let start = self.coords.len();
         for (&i, &n) in index.iter().zip(&self.shape) {
             assert!(i < n, "index {i} out of range for axis length {n}");
             self.coords.push(i as u32);
+        }
+        for g in &self.symmetric {
+            let c = &mut self.coords[start..];
+            let mut v: Vec<u32> = g.iter().map(|&a| c[a]).collect();
+            v.sort_unstable();
+            for (&a, x) in g.iter().zip(v) {
+                c[a] = x;
+            }
         }
         self.values.push(value);
     }
@@ -100,13 +202,15 @@ impl SparseTensor {
         &self.values
     }
 
-    /// The dense equivalent (duplicates summed).
+    /// The dense equivalent (duplicates summed, symmetric groups expanded).
     pub fn to_dense(&self) -> Tensor {
         let mut t = Tensor::zeros(&self.shape);
         let s = strides(&self.shape);
         for e in 0..self.nnz() {
-            let o: usize = self.coords_of(e).iter().zip(&s).map(|(&i, &st)| i as usize * st).sum();
-            t.data_mut()[o] += self.values[e];
+            for c in self.expanded_coords(e) {
+                let o: usize = c.iter().zip(&s).map(|(&i, &st)| i as usize * st).sum();
+                t.data_mut()[o] += self.values[e];
+            }
         }
         t
     }
@@ -136,15 +240,16 @@ impl SparseTensor {
         let out_strides = strides(&out_shape);
         let mut out = Tensor::zeros(&out_shape);
         for e in 0..self.nnz() {
-            let c = self.coords_of(e);
-            let mut v = self.values[e];
-            for (axis, x) in contracted.iter().enumerate() {
-                if let Some(x) = x {
-                    v *= x[c[axis] as usize];
+            for c in self.expanded_coords(e) {
+                let mut v = self.values[e];
+                for (axis, x) in contracted.iter().enumerate() {
+                    if let Some(x) = x {
+                        v *= x[c[axis] as usize];
+                    }
                 }
+                let o: usize = kept.iter().zip(&out_strides).map(|(&a, &s)| c[a] as usize * s).sum();
+                out.data_mut()[o] += v;
             }
-            let o: usize = kept.iter().zip(&out_strides).map(|(&a, &s)| c[a] as usize * s).sum();
-            out.data_mut()[o] += v;
         }
         Ok(out)
     }
@@ -169,5 +274,29 @@ mod tests {
         let r = d.contract_axes(&[(1, &x), (2, &y)]).unwrap();
         assert!(s.max_abs_diff(&r) < 1e-15);
         assert!(SparseTensor::from_coords("Q", &[2, 2], vec![0, 2], vec![1.0]).is_err());
+    }
+
+    #[test]
+    fn distinct_permutations_of_multisets() {
+        assert_eq!(distinct_permutations(&[1, 1, 4]), vec![vec![1, 1, 4], vec![1, 4, 1], vec![4, 1, 1]]);
+        assert_eq!(distinct_permutations(&[0, 1, 2]).len(), 6);
+        assert_eq!(distinct_permutations(&[3, 3, 3]), vec![vec![3, 3, 3]]);
+    }
+
+    #[test]
+    fn a_symmetric_entry_stands_for_its_permutations() {
+        let mut q = SparseTensor::new(&[2, 5, 5, 5]).with_symmetric_axes(&[1, 2, 3]).unwrap();
+        q.push(&[1, 4, 1, 1], 2.0); // stored as (1, 1, 1, 4)
+        assert_eq!(q.coords_of(0), &[1, 1, 1, 4]);
+        let d = q.to_dense();
+        for idx in [[1, 1, 1, 4], [1, 1, 4, 1], [1, 4, 1, 1]] {
+            assert_eq!(d.get(&idx), 2.0);
+        }
+        assert_eq!(d.data().iter().filter(|&&v| v != 0.0).count(), 3);
+        let x = [0.5, -1.0, 2.0, 3.0, 0.25];
+        let s = q.contract_axes("Q", &[(1, &x), (2, &x), (3, &x)]).unwrap();
+        let r = d.contract_axes(&[(1, &x), (2, &x), (3, &x)]).unwrap();
+        assert!(s.max_abs_diff(&r) < 1e-15);
+        assert!(SparseTensor::new(&[2, 3]).with_symmetric_axes(&[0, 1]).is_err(), "unequal lengths");
     }
 }

@@ -1,0 +1,155 @@
+//! `galerkin bench reduce`: the reduction core against its targets (issue: premultiplication of
+//! a V-like tensor at the paper's cavity size in under 60 s on 2 cores; reduced evaluation per
+//! call and per batch; linear growth in cells).
+//!
+//! The tensor is the real fluid volume tensor of a Freudenthal tetrahedral grid
+//! ([`crate::reduce::synthetic`]); bases are random (premultiplication cost does not depend on
+//! their values) except where a reduced model is evaluated, which needs an invertible reduced
+//! volume matrix: there the velocity basis is orthonormalised and the geometry basis spans the
+//! grid's own coordinates.
+
+use std::collections::BTreeMap;
+use std::time::{Duration, Instant};
+
+use faer::linalg::matmul::matmul;
+use faer::{Accum, Mat, Par};
+use rayon::prelude::*;
+
+use crate::reduce::synthetic::{volume_tensor, TetGrid};
+use crate::reduce::{premultiply_sparse_with, Bases, Basis, Expr, Model, PremultiplyOptions, ReduceError};
+use crate::tensor::{SparseTensor, Tensor};
+
+/// Deterministic pseudo-random values in [-0.5, 0.5).
+fn random(n: usize, seed: u64) -> Vec<f64> {
+    let mut s = seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1;
+    (0..n)
+        .map(|_| {
+            s ^= s << 13;
+            s ^= s >> 7;
+            s ^= s << 17;
+            (s >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        })
+        .collect()
+}
+
+fn random_matrix(n: usize, m: usize, seed: u64) -> Tensor {
+    Tensor::from_vec(&[n, m], random(n * m, seed)).expect("shape matches")
+}
+
+/// One premultiplication measurement.
+#[derive(Clone, Debug)]
+pub struct PremultiplyRun {
+    /// Tetrahedra.
+    pub cells: usize,
+    /// Stored nonzeros of V.
+    pub entries: usize,
+    /// Reduced dimension of the result and velocity axes.
+    pub m: usize,
+    /// Reduced dimension of the geometry axes.
+    pub m_g: usize,
+    /// Wall time.
+    pub time: Duration,
+    /// Multiply–adds the plan performed.
+    pub flops: f64,
+}
+
+impl PremultiplyRun {
+    /// GFLOP/s (2 flops per multiply–add).
+    pub fn gflops(&self) -> f64 {
+        2.0 * self.flops / self.time.as_secs_f64() / 1e9
+    }
+}
+
+/// Premultiplies the volume tensor of `cells` tetrahedra with random bases of `m` (result and
+/// velocity axes) and `m_g` (geometry) columns on the CPU; `progress` sees (done, total).
+pub fn premultiply_volume(
+    cells: usize,
+    m: usize,
+    m_g: usize,
+    progress: Option<&(dyn Fn(f64, f64) + Sync)>,
+) -> Result<(PremultiplyRun, Tensor), ReduceError> {
+    let grid = TetGrid::with_cells(cells);
+    let v = volume_tensor(&grid);
+    let bp = random_matrix(v.shape()[0], m, 1);
+    let bg = random_matrix(v.shape()[2], m_g, 2);
+    let t = Instant::now();
+    let options = PremultiplyOptions { progress, ..PremultiplyOptions::default() };
+    let (out, plan) = premultiply_sparse_with(&v, &[&bp, &bp, &bg, &bg, &bg], options)
+        .map_err(|source| ReduceError::Tensor { context: "premultiplying V".into(), source })?;
+    let run =
+        PremultiplyRun { cells, entries: v.nnz(), m, m_g, time: t.elapsed(), flops: plan.total_flops() };
+    Ok((run, out))
+}
+
+/// faer's plain f64 GEMM `C (m×n) = A (m×k) · B (k×n)` on every core: the peer of the
+/// premultiplication's final stage, at that stage's shape. Returns GFLOP/s (median of `reps`).
+pub fn faer_gemm_gflops(m: usize, k: usize, n: usize, reps: usize) -> f64 {
+    let a = Mat::from_fn(m, k, |i, j| ((i * 7 + j * 13) % 17) as f64 - 8.0);
+    let b = Mat::from_fn(k, n, |i, j| ((i * 11 + j * 5) % 19) as f64 - 9.0);
+    let mut c = Mat::<f64>::zeros(m, n);
+    let mut rates: Vec<f64> = (0..reps.max(1))
+        .map(|_| {
+            let t = Instant::now();
+            matmul(c.as_mut(), Accum::Replace, a.as_ref(), b.as_ref(), 1.0, Par::rayon(0));
+            2.0 * (m * k * n) as f64 / t.elapsed().as_secs_f64() / 1e9
+        })
+        .collect();
+    rates.sort_by(f64::total_cmp);
+    rates[rates.len() / 2]
+}
+
+/// The reduced fluid step of the benchmark: `û = (V̂ ⊗₂ ĝ ⊗₃ ĝ ⊗₄ ĝ)⁻¹ ⊗₁ p̂` — velocity
+/// from momentum on the reduced deforming mesh (the paper's `B_u = B_p`).
+pub fn velocity_from_momentum_model(v: SparseTensor) -> Model {
+    let g = Expr::input("g");
+    let volume = Expr::tensor("V").times(2, g.clone()).times(3, g.clone()).times(4, g);
+    Model::new(volume.inverse().times(1, Expr::input("p")))
+        .with_tensor("V", &["u", "u", "g", "g", "g"], v)
+        .with_input("g", "g")
+        .with_input("p", "u")
+}
+
+/// Reduced evaluation timings: (per call, per batch of `batch`) medians over `reps`, the
+/// CPU path (batches run on every core).
+pub fn reduced_evaluation(
+    cells: usize,
+    m: usize,
+    batch: usize,
+    reps: usize,
+) -> Result<(Duration, Duration), ReduceError> {
+    let grid = TetGrid::with_cells(cells);
+    let v = volume_tensor(&grid);
+    let model = velocity_from_momentum_model(v);
+    let n_u = 3 * grid.cells.len();
+    let coords = grid.coordinates();
+    // Geometry basis: the rest pose plus 4 random deformation modes; velocity basis random.
+    let modes = random(4 * coords.len(), 4);
+    let gcols: Vec<f64> = coords
+        .iter()
+        .enumerate()
+        .flat_map(|(i, &c)| std::iter::once(c).chain(modes[4 * i..4 * i + 4].iter().copied()))
+        .collect();
+    let bg = Basis::orthonormalize("g", &Tensor::from_vec(&[coords.len(), 5], gcols).expect("shape"))?;
+    let bu = Basis::orthonormalize("u", &random_matrix(n_u, m, 3))?;
+    let mut bases = Bases::new();
+    bases.insert("g".into(), bg);
+    bases.insert("u".into(), bu);
+    let reduced = model.reduce(&bases)?;
+    let ghat = reduced.project_input("g", &coords)?;
+    let inputs: Vec<Vec<f64>> = (0..batch).map(|k| random(m, 100 + k as u64)).collect();
+    let eval = |p: &[f64]| -> Result<Tensor, ReduceError> {
+        let args: BTreeMap<&str, &[f64]> = [("g", &ghat[..]), ("p", p)].into_iter().collect();
+        reduced.evaluate(&args)
+    };
+    let mut single = Vec::new();
+    let mut batched = Vec::new();
+    for _ in 0..reps.max(1) {
+        let t = Instant::now();
+        eval(&inputs[0])?;
+        single.push(t.elapsed());
+        let t = Instant::now();
+        inputs.par_iter().map(|p| eval(p).map(|_| ())).collect::<Result<Vec<()>, _>>()?;
+        batched.push(t.elapsed());
+    }
+    Ok((crate::bench::median(&mut single), crate::bench::median(&mut batched)))
+}
