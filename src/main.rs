@@ -116,7 +116,7 @@ fn run(cli: Cli) -> Result<()> {
             view(desc, &scene, frames, screenshot, resize_to)
         }
         Command::Bench { what: BenchWhat::Gpu { quick } } => bench_gpu(&desc, quick),
-        Command::Bench { what: BenchWhat::Reduce { quick } } => bench_reduce(quick),
+        Command::Bench { what: BenchWhat::Reduce { quick } } => bench_reduce(&desc, quick),
     }
 }
 
@@ -345,10 +345,10 @@ fn bench_gpu(desc: &GpuDesc, quick: bool) -> Result<()> {
     check_validation(gpu)
 }
 
-fn bench_reduce(quick: bool) -> Result<()> {
+fn bench_reduce(desc: &GpuDesc, quick: bool) -> Result<()> {
     use galerkin::bench::reduce::{faer_gemm_gflops, premultiply_volume, reduced_evaluation};
     let threads = galerkin::bench::cpu::threads();
-    println!("CPU backend (faer, {threads} threads). The GPU backend is not built yet.\n");
+    println!("Premultiplication: CPU backend (faer, {threads} threads); its GPU backend is not built yet.\n");
 
     let (cells, m, m_g) = (if quick { 10_000 } else { 88_671 }, 128, 5);
     let bar = indicatif::ProgressBar::new(1000);
@@ -375,18 +375,39 @@ fn bench_reduce(quick: bool) -> Result<()> {
     );
 
     let (batch, reps) = (1024, if quick { 3 } else { 5 });
-    let (single, batched) = reduced_evaluation(10_000, m, batch, reps)?;
+    let gpu = Gpu::new(desc).ok();
+    let t = reduced_evaluation(10_000, m, batch, reps, gpu.as_ref())?;
     println!(
         "## Reduced evaluation û = (V̂ ⊗₂ ĝ ⊗₃ ĝ ⊗₄ ĝ)⁻¹ ⊗₁ p̂ (m = {m}, m_g = {m_g}), medians of {reps}\n"
     );
-    println!("| per call | per batch of {batch} (all cores) | per input in the batch |");
-    println!("|---:|---:|---:|");
-    println!(
-        "| {:.3} ms | {:.1} ms | {:.3} ms |\n",
-        single.as_secs_f64() * 1e3,
-        batched.as_secs_f64() * 1e3,
-        batched.as_secs_f64() * 1e3 / batch as f64
-    );
+    println!("| path | per call | per batch of {batch} | per input in the batch |");
+    println!("|---|---:|---:|---:|");
+    let row = |name: &str, single: std::time::Duration, batched: std::time::Duration| {
+        println!(
+            "| {name} | {:.3} ms | {:.1} ms | {:.3} ms |",
+            single.as_secs_f64() * 1e3,
+            batched.as_secs_f64() * 1e3,
+            batched.as_secs_f64() * 1e3 / batch as f64
+        )
+    };
+    row(&format!("CPU (faer, {threads} threads)"), t.cpu_single, t.cpu_batch);
+    if let (Some((s, b)), Some(g)) = (t.gpu, gpu.as_ref()) {
+        row(
+            &format!("GPU ({}): contractions as one GEMM per batch, solves on the CPU", g.caps().device_name),
+            s,
+            b,
+        );
+        println!(
+            "\nGPU vs CPU results: largest difference {:.1e} of max |û| (f32 on the device).",
+            t.gpu_error.unwrap_or(f64::NAN)
+        );
+        let auto = if galerkin::reduce::Backend::Auto.uses_gpu(Some(g)) { "GPU" } else { "CPU" };
+        println!("`auto` picks the {auto} on this device.");
+    }
+    println!();
+    if let Some(g) = gpu {
+        check_validation(g)?;
+    }
 
     let cell_counts: &[usize] = if quick { &[1_000, 10_000] } else { &[1_000, 10_000, 100_000] };
     let ms: &[usize] = if quick { &[16, 64] } else { &[16, 32, 64, 128] };

@@ -9,6 +9,7 @@ use crate::gpu::{
     shaders, BindingKind, Buffer, ComputePipeline, ComputePipelineDesc, DescriptorSet, Gpu, GpuResult,
     Resource,
 };
+use crate::tensor::gpu::{Gemm, GemmBinding, GemmShape};
 
 fn storage(b: &Buffer<f32>) -> GpuResult<Resource> {
     Ok(Resource::Storage(b.binding()?))
@@ -178,24 +179,10 @@ impl TriadKernel {
     }
 }
 
-#[repr(C)]
-#[derive(Clone, Copy, Pod, Zeroable)]
-struct GemmPush {
-    m: u32,
-    n: u32,
-    k: u32,
-}
-
-/// Tile edge of `sgemm.comp`.
-pub const SGEMM_TILE: u32 = 64;
-
-/// Shared-memory tiled SGEMM `C ← A·B`, row-major (`sgemm.comp`).
+/// The tiled SGEMM `C ← A·B` of [`crate::tensor::gpu::Gemm`], bound for the benchmark.
 pub struct SgemmKernel {
-    pipeline: ComputePipeline,
-    set: DescriptorSet,
-    m: u32,
-    n: u32,
-    k: u32,
+    gemm: Gemm,
+    binding: GemmBinding,
 }
 
 impl SgemmKernel {
@@ -209,33 +196,18 @@ impl SgemmKernel {
         n: u32,
         k: u32,
     ) -> GpuResult<Self> {
-        assert_eq!(a.len(), u64::from(m) * u64::from(k), "A is m×k");
-        assert_eq!(b.len(), u64::from(k) * u64::from(n), "B is k×n");
-        assert_eq!(c.len(), u64::from(m) * u64::from(n), "C is m×n");
-        let pipeline = ComputePipeline::new(
-            gpu,
-            &ComputePipelineDesc {
-                name: "sgemm",
-                spirv: shaders::bench::SGEMM,
-                bindings: &[BindingKind::StorageBuffer; 3],
-                push_constant_bytes: std::mem::size_of::<GemmPush>() as u32,
-                specialization: &[],
-                shared_bytes: 16 * 1024,
-            },
-        )?;
-        let set = pipeline.bind(gpu, &[storage(a)?, storage(b)?, storage(c)?])?;
-        Ok(Self { pipeline, set, m, n, k })
+        let gemm = Gemm::new(gpu)?;
+        let binding = gemm.bind(gpu, a.binding()?, b.binding()?, c.binding()?, GemmShape { m, n, k })?;
+        Ok(Self { gemm, binding })
     }
 
     /// Records the product.
     pub fn record(&self, cmd: vk::CommandBuffer) {
-        let push = GemmPush { m: self.m, n: self.n, k: self.k };
-        let groups = [self.n.div_ceil(SGEMM_TILE), self.m.div_ceil(SGEMM_TILE), 1];
-        self.pipeline.record_dispatch(cmd, &self.set, bytemuck::bytes_of(&push), groups);
+        self.gemm.record(cmd, &self.binding, false);
     }
 
     /// Floating-point operations of one product.
     pub fn flops(&self) -> f64 {
-        2.0 * f64::from(self.m) * f64::from(self.n) * f64::from(self.k)
+        2.0 * self.binding.flops()
     }
 }

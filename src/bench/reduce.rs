@@ -13,7 +13,6 @@ use std::time::{Duration, Instant};
 
 use faer::linalg::matmul::matmul;
 use faer::{Accum, Mat, Par};
-use rayon::prelude::*;
 
 use crate::reduce::synthetic::{volume_tensor, TetGrid};
 use crate::reduce::{premultiply_sparse_with, Bases, Basis, Expr, Model, PremultiplyOptions, ReduceError};
@@ -109,14 +108,30 @@ pub fn velocity_from_momentum_model(v: SparseTensor) -> Model {
         .with_input("p", "u")
 }
 
-/// Reduced evaluation timings: (per call, per batch of `batch`) medians over `reps`, the
-/// CPU path (batches run on every core).
+/// Reduced evaluation timings, medians: per call and per batch, on the CPU path and (when a
+/// device is given) on the GPU path.
+#[derive(Clone, Debug)]
+pub struct EvalTimings {
+    /// CPU, one input set.
+    pub cpu_single: Duration,
+    /// CPU, the whole batch (every core).
+    pub cpu_batch: Duration,
+    /// GPU, one input set, and the whole batch.
+    pub gpu: Option<(Duration, Duration)>,
+    /// Largest difference between the GPU and CPU results over the batch, relative to the
+    /// largest |û|.
+    pub gpu_error: Option<f64>,
+}
+
+/// Times the reduced fluid step for `batch` input sets (velocity basis of `m`, geometry basis
+/// of 5 spanning the grid's rest pose) on the CPU and, with `gpu`, on the device.
 pub fn reduced_evaluation(
     cells: usize,
     m: usize,
     batch: usize,
     reps: usize,
-) -> Result<(Duration, Duration), ReduceError> {
+    gpu: Option<&crate::gpu::Gpu>,
+) -> Result<EvalTimings, ReduceError> {
     let grid = TetGrid::with_cells(cells);
     let v = volume_tensor(&grid);
     let model = velocity_from_momentum_model(v);
@@ -136,20 +151,35 @@ pub fn reduced_evaluation(
     bases.insert("u".into(), bu);
     let reduced = model.reduce(&bases)?;
     let ghat = reduced.project_input("g", &coords)?;
-    let inputs: Vec<Vec<f64>> = (0..batch).map(|k| random(m, 100 + k as u64)).collect();
-    let eval = |p: &[f64]| -> Result<Tensor, ReduceError> {
-        let args: BTreeMap<&str, &[f64]> = [("g", &ghat[..]), ("p", p)].into_iter().collect();
-        reduced.evaluate(&args)
+    let ps: Vec<Vec<f64>> = (0..batch).map(|k| random(m, 100 + k as u64)).collect();
+    let sets: Vec<BTreeMap<&str, &[f64]>> =
+        ps.iter().map(|p| [("g", &ghat[..]), ("p", &p[..])].into_iter().collect()).collect();
+    let time = |f: &dyn Fn() -> Result<Vec<Tensor>, ReduceError>| -> Result<Duration, ReduceError> {
+        let t = Instant::now();
+        f()?;
+        Ok(t.elapsed())
     };
-    let mut single = Vec::new();
-    let mut batched = Vec::new();
+    let (mut cs, mut cb, mut gs, mut gb) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    let device = gpu.map(|g| crate::reduce::GpuReducedModel::new(g, reduced.clone())).transpose()?;
+    let mut gpu_error = None;
     for _ in 0..reps.max(1) {
-        let t = Instant::now();
-        eval(&inputs[0])?;
-        single.push(t.elapsed());
-        let t = Instant::now();
-        inputs.par_iter().map(|p| eval(p).map(|_| ())).collect::<Result<Vec<()>, _>>()?;
-        batched.push(t.elapsed());
+        cs.push(time(&|| reduced.evaluate_batch(&sets[..1]))?);
+        cb.push(time(&|| reduced.evaluate_batch(&sets))?);
+        if let Some(d) = &device {
+            gs.push(time(&|| d.evaluate_batch(&sets[..1]))?);
+            gb.push(time(&|| d.evaluate_batch(&sets))?);
+        }
     }
-    Ok((crate::bench::median(&mut single), crate::bench::median(&mut batched)))
+    if let Some(d) = &device {
+        let (c, g) = (reduced.evaluate_batch(&sets)?, d.evaluate_batch(&sets)?);
+        let scale = c.iter().fold(0.0f64, |m, t| m.max(t.max_abs()));
+        gpu_error = Some(c.iter().zip(&g).fold(0.0f64, |m, (a, b)| m.max(a.max_abs_diff(b))) / scale);
+    }
+    let med = crate::bench::median;
+    Ok(EvalTimings {
+        cpu_single: med(&mut cs),
+        cpu_batch: med(&mut cb),
+        gpu: device.as_ref().map(|_| (med(&mut gs), med(&mut gb))),
+        gpu_error,
+    })
 }

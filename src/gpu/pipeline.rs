@@ -473,7 +473,7 @@ mod tests {
 
     #[test]
     fn workgroup_sizes_are_read_from_spirv() {
-        assert_eq!(spirv_local_size(shaders::bench::SGEMM), Some([8, 8, 1]));
+        assert_eq!(spirv_local_size(shaders::tensor::GEMM), Some([8, 8, 1]));
         assert_eq!(spirv_local_size(shaders::demo::AXPY), Some([256, 1, 1]));
         assert_eq!(spirv_local_size(shaders::demo::FIELD_FRAG), None);
         assert_eq!(spirv_local_size(&[]), None);

@@ -3,22 +3,38 @@
 //! which is the whole point of §4: "computing f̂(x̂) follows exactly the sequence of
 //! operations used to compute f(x)".
 
+use rayon::prelude::*;
+
 use super::error::ReduceError;
 use super::expr::Expr;
 use crate::tensor::{solve, spd_power, transpose, Tensor, TensorError};
 
-/// Where an evaluation takes its tensors and inputs from.
-pub(crate) trait Operands {
+/// Where an evaluation takes its tensors and inputs from, for a batch of input sets.
+pub(crate) trait Operands: Sync {
     /// Basis names of a named tensor's axes.
     fn tensor_axes(&self, name: &str) -> Option<&[String]>;
     /// Basis name of a named input.
     fn input_basis(&self, name: &str) -> Option<&str>;
     /// `name ⊗_a x_a …` computed from the stored form (sparse or dense).
     fn contract_tensor(&self, name: &str, args: &[(usize, &[f64])]) -> Result<Tensor, TensorError>;
+    /// One contraction per input set; the default loops over them in parallel, the GPU
+    /// overrides it with one GEMM for the whole batch.
+    fn contract_tensor_batch(
+        &self,
+        name: &str,
+        args: &[Vec<(usize, &[f64])>],
+    ) -> Result<Vec<Tensor>, TensorError> {
+        if args.len() == 1 {
+            return Ok(vec![self.contract_tensor(name, &args[0])?]);
+        }
+        args.par_iter().map(|a| self.contract_tensor(name, a)).collect()
+    }
+    /// Number of input sets.
+    fn batch(&self) -> usize;
     /// The named tensor, dense.
     fn dense_tensor(&self, name: &str) -> Tensor;
-    /// The named input's value.
-    fn input_value(&self, name: &str) -> Result<&[f64], ReduceError>;
+    /// The named input's value in input set `b`.
+    fn input_value(&self, name: &str, b: usize) -> Result<&[f64], ReduceError>;
 }
 
 fn tensor_err(e: &Expr) -> impl FnOnce(TensorError) -> ReduceError + '_ {
@@ -135,73 +151,103 @@ fn same_axes(e: &Expr, a: &[String], b: &[String]) -> Result<(), ReduceError> {
     }
 }
 
-/// Evaluates `e` (whose [`signature`] has been checked).
-pub(crate) fn evaluate(e: &Expr, ops: &impl Operands) -> Result<Tensor, ReduceError> {
+/// One result per batch element, computed in parallel when there are several.
+fn per_item(
+    batch: usize,
+    f: impl Fn(usize) -> Result<Tensor, ReduceError> + Sync + Send,
+) -> Result<Vec<Tensor>, ReduceError> {
+    if batch == 1 {
+        Ok(vec![f(0)?])
+    } else {
+        (0..batch).into_par_iter().map(f).collect()
+    }
+}
+
+/// Evaluates `e` (whose [`signature`] has been checked) for every input set of the batch.
+pub(crate) fn evaluate(e: &Expr, ops: &impl Operands) -> Result<Vec<Tensor>, ReduceError> {
+    let batch = ops.batch();
     match e {
-        Expr::Tensor(n) => Ok(ops.dense_tensor(n)),
-        Expr::Input(n) => Ok(Tensor::vector(ops.input_value(n)?.to_vec())),
+        Expr::Tensor(n) => Ok(vec![ops.dense_tensor(n); batch]),
+        Expr::Input(n) => per_item(batch, |b| Ok(Tensor::vector(ops.input_value(n, b)?.to_vec()))),
         Expr::Contract(base, args) => {
-            let values: Vec<(usize, Tensor)> = args
+            let values: Vec<(usize, Vec<Tensor>)> = args
                 .iter()
                 .map(|(axis, a)| Ok((*axis, evaluate(a, ops)?)))
                 .collect::<Result<_, ReduceError>>()?;
-            let all_vectors = values.iter().all(|(_, v)| v.order() == 1);
-            // A named tensor contracted with vectors: straight from its stored (sparse) form.
+            let all_vectors = values.iter().all(|(_, v)| v[0].order() == 1);
+            // A named tensor contracted with vectors: straight from its stored form (sparse in
+            // the full space; one GEMM for the whole batch on the GPU).
             if let (Expr::Tensor(name), true) = (base.as_ref(), all_vectors) {
-                let refs: Vec<(usize, &[f64])> = values.iter().map(|(a, v)| (*a, v.data())).collect();
-                return ops.contract_tensor(name, &refs).map_err(tensor_err(e));
+                let refs: Vec<Vec<(usize, &[f64])>> =
+                    (0..batch).map(|b| values.iter().map(|(a, v)| (*a, v[b].data())).collect()).collect();
+                return ops.contract_tensor_batch(name, &refs).map_err(tensor_err(e));
             }
             // M⁻¹ ⊗₁ v is a solve, M⁻¹ ⊗₀ v a solve with Mᵀ: never an explicit inverse.
             if let (Expr::Inverse(m), [(axis, v)]) = (base.as_ref(), values.as_slice()) {
-                if v.order() == 1 {
+                if v[0].order() == 1 {
                     let mv = evaluate(m, ops)?;
-                    let mv = if *axis == 0 { transpose(&mv) } else { mv };
-                    return solve(&m.to_string(), &mv, v.data()).map(Tensor::vector).map_err(tensor_err(e));
+                    return per_item(batch, |b| {
+                        let mb = if *axis == 0 { transpose(&mv[b]) } else { mv[b].clone() };
+                        solve(&m.to_string(), &mb, v[b].data()).map(Tensor::vector).map_err(tensor_err(e))
+                    });
                 }
             }
-            let mut t = evaluate(base, ops)?;
-            for (axis, v) in values.iter().filter(|(_, v)| v.order() == 2) {
-                t = t.mode_product(*axis, v).map_err(tensor_err(e))?;
-            }
-            let mut vectors: Vec<&(usize, Tensor)> = values.iter().filter(|(_, v)| v.order() == 1).collect();
-            vectors.sort_by_key(|v| std::cmp::Reverse(v.0));
-            for (axis, v) in vectors {
-                t = t.contract(*axis, v.data()).map_err(tensor_err(e))?;
-            }
-            Ok(t)
+            let t = evaluate(base, ops)?;
+            per_item(batch, |b| {
+                let mut t = t[b].clone();
+                for (axis, v) in values.iter().filter(|(_, v)| v[b].order() == 2) {
+                    t = t.mode_product(*axis, &v[b]).map_err(tensor_err(e))?;
+                }
+                let mut vectors: Vec<&(usize, Vec<Tensor>)> =
+                    values.iter().filter(|(_, v)| v[b].order() == 1).collect();
+                vectors.sort_by_key(|v| std::cmp::Reverse(v.0));
+                for (axis, v) in vectors {
+                    t = t.contract(*axis, v[b].data()).map_err(tensor_err(e))?;
+                }
+                Ok(t)
+            })
         }
         Expr::Inverse(m) => {
             // Only reached when the inverse is not applied to a single vector: the matrix itself
             // is wanted, so solve for every column of the identity.
             let mv = evaluate(m, ops)?;
-            let n = mv.shape()[0];
-            let mut inv = Tensor::zeros(&[n, n]);
-            for j in 0..n {
-                let mut unit = vec![0.0; n];
-                unit[j] = 1.0;
-                let col = solve(&m.to_string(), &mv, &unit).map_err(tensor_err(e))?;
-                for (i, c) in col.into_iter().enumerate() {
-                    inv.set(&[i, j], c);
+            per_item(batch, |b| {
+                let n = mv[b].shape()[0];
+                let mut inv = Tensor::zeros(&[n, n]);
+                for j in 0..n {
+                    let mut unit = vec![0.0; n];
+                    unit[j] = 1.0;
+                    let col = solve(&m.to_string(), &mv[b], &unit).map_err(tensor_err(e))?;
+                    for (i, c) in col.into_iter().enumerate() {
+                        inv.set(&[i, j], c);
+                    }
                 }
-            }
-            Ok(inv)
+                Ok(inv)
+            })
         }
-        Expr::Power(m, p) => spd_power(&m.to_string(), &evaluate(m, ops)?, *p).map_err(tensor_err(e)),
+        Expr::Power(m, p) => {
+            let mv = evaluate(m, ops)?;
+            per_item(batch, |b| spd_power(&m.to_string(), &mv[b], *p).map_err(tensor_err(e)))
+        }
         Expr::Sum(terms) => {
-            let mut it = terms.iter();
-            let first = it.next().ok_or_else(|| ReduceError::BadContraction {
+            let values: Vec<Vec<Tensor>> =
+                terms.iter().map(|t| evaluate(t, ops)).collect::<Result<_, _>>()?;
+            let first = values.first().ok_or_else(|| ReduceError::BadContraction {
                 what: "sum".into(),
                 detail: "a sum of nothing".into(),
             })?;
-            let mut acc = evaluate(first, ops)?;
-            for t in it {
-                acc = acc.add_scaled(&evaluate(t, ops)?, 1.0).map_err(tensor_err(e))?;
-            }
-            Ok(acc)
+            per_item(batch, |b| {
+                let mut acc = first[b].clone();
+                for v in &values[1..] {
+                    acc = acc.add_scaled(&v[b], 1.0).map_err(tensor_err(e))?;
+                }
+                Ok(acc)
+            })
         }
-        Expr::Difference(a, b) => {
-            evaluate(a, ops)?.add_scaled(&evaluate(b, ops)?, -1.0).map_err(tensor_err(e))
+        Expr::Difference(x, y) => {
+            let (x, y) = (evaluate(x, ops)?, evaluate(y, ops)?);
+            per_item(batch, |b| x[b].add_scaled(&y[b], -1.0).map_err(tensor_err(e)))
         }
-        Expr::Scale(c, x) => Ok(evaluate(x, ops)?.scale(*c)),
+        Expr::Scale(c, x) => Ok(evaluate(x, ops)?.into_iter().map(|t| t.scale(*c)).collect()),
     }
 }

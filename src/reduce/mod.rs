@@ -18,6 +18,7 @@ mod error;
 mod eval;
 mod expr;
 mod file;
+mod gpu_eval;
 mod model;
 mod pca;
 mod premultiply;
@@ -28,6 +29,7 @@ pub use basis::{Bases, Basis};
 pub use error::ReduceError;
 pub use expr::Expr;
 pub use file::{FORMAT, VERSION};
+pub use gpu_eval::{Backend, GpuReducedModel};
 pub use model::{FullTensor, Model, TensorDecl};
 pub use pca::{pca, Pca, SnapshotFile, SnapshotFn, SnapshotSource, Truncation};
 pub use premultiply::{

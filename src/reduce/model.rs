@@ -149,7 +149,7 @@ impl Model {
         }
         let ops = FullOperands { model: self, inputs };
         signature(&self.output, &ops)?;
-        evaluate(&self.output, &ops)
+        Ok(evaluate(&self.output, &ops)?.swap_remove(0))
     }
 
     /// Premultiplies every tensor by the bases of its axes (Eq. 2 and §4's table:
@@ -234,7 +234,11 @@ impl Operands for FullOperands<'_> {
         }
     }
 
-    fn input_value(&self, name: &str) -> Result<&[f64], ReduceError> {
+    fn batch(&self) -> usize {
+        1
+    }
+
+    fn input_value(&self, name: &str, _b: usize) -> Result<&[f64], ReduceError> {
         self.inputs.get(name).copied().ok_or_else(|| ReduceError::MissingInput(name.to_string()))
     }
 }

@@ -76,25 +76,41 @@ impl ReducedModel {
     /// Checks the composition against the reduced tensors (names, bases, §4's rules) and
     /// returns the output's axis bases.
     pub fn check(&self) -> Result<Vec<String>, ReduceError> {
-        super::eval::signature(&self.output, &ReducedOperands { model: self, inputs: &BTreeMap::new() })
+        super::eval::signature(&self.output, &ReducedOperands { model: self, inputs: &[] })
     }
 
     /// Evaluates `ŷ = f̂(x̂)` on reduced inputs.
     pub fn evaluate(&self, inputs: &BTreeMap<&str, &[f64]>) -> Result<Tensor, ReduceError> {
-        for (name, b) in &self.inputs {
-            if let Some(x) = inputs.get(name.as_str()) {
-                let m = self.bases[b].reduced_dim();
-                if x.len() != m {
-                    return Err(ReduceError::InputLength {
-                        input: name.clone(),
-                        basis: b.clone(),
-                        expected: m,
-                        found: x.len(),
-                    });
+        Ok(self.evaluate_batch(std::slice::from_ref(inputs))?.swap_remove(0))
+    }
+
+    /// Evaluates `f̂` for every input set of `batch` (in parallel on the CPU).
+    pub fn evaluate_batch(&self, batch: &[BTreeMap<&str, &[f64]>]) -> Result<Vec<Tensor>, ReduceError> {
+        self.check_inputs(batch)?;
+        if batch.is_empty() {
+            return Ok(Vec::new());
+        }
+        evaluate(&self.output, &ReducedOperands { model: self, inputs: batch })
+    }
+
+    /// Every given input has its basis's reduced length.
+    pub(crate) fn check_inputs(&self, batch: &[BTreeMap<&str, &[f64]>]) -> Result<(), ReduceError> {
+        for inputs in batch {
+            for (name, b) in &self.inputs {
+                if let Some(x) = inputs.get(name.as_str()) {
+                    let m = self.bases[b].reduced_dim();
+                    if x.len() != m {
+                        return Err(ReduceError::InputLength {
+                            input: name.clone(),
+                            basis: b.clone(),
+                            expected: m,
+                            found: x.len(),
+                        });
+                    }
                 }
             }
         }
-        evaluate(&self.output, &ReducedOperands { model: self, inputs })
+        Ok(())
     }
 
     /// `y = B_y ŷ` for a vector output.
@@ -111,7 +127,7 @@ impl ReducedModel {
 
 struct ReducedOperands<'a> {
     model: &'a ReducedModel,
-    inputs: &'a BTreeMap<&'a str, &'a [f64]>,
+    inputs: &'a [BTreeMap<&'a str, &'a [f64]>],
 }
 
 impl ReducedOperands<'_> {
@@ -137,7 +153,11 @@ impl Operands for ReducedOperands<'_> {
         self.dense(name).clone()
     }
 
-    fn input_value(&self, name: &str) -> Result<&[f64], ReduceError> {
-        self.inputs.get(name).copied().ok_or_else(|| ReduceError::MissingInput(name.to_string()))
+    fn batch(&self) -> usize {
+        self.inputs.len()
+    }
+
+    fn input_value(&self, name: &str, b: usize) -> Result<&[f64], ReduceError> {
+        self.inputs[b].get(name).copied().ok_or_else(|| ReduceError::MissingInput(name.to_string()))
     }
 }

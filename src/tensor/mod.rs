@@ -11,6 +11,7 @@
 
 mod dense;
 mod error;
+pub mod gpu;
 mod linalg;
 mod sparse;
 

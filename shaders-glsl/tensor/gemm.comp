@@ -1,5 +1,6 @@
 #version 450
-// Shared-memory tiled SGEMM: C = A * B, row-major A (m x k), B (k x n), C (m x n).
+// Shared-memory tiled SGEMM: C = A * B (or C += A * B), row-major A (m x k), B (k x n), C (m x n).
+// Each operand is one binding (callers chunk larger arrays by rows).
 // An 8 x 8 workgroup computes a 64 x 64 tile of C, walking k in steps of 32 through two shared
 // tiles (2 * 64 * 32 floats = 16 KiB of lavapipe's 32 KiB). Invocation (tx, ty) owns rows
 // ty*8 .. ty*8+7 and the interleaved columns tx, tx+8, …, tx+56: neighbouring invocations (SIMD
@@ -11,8 +12,8 @@
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(std430, set = 0, binding = 0) readonly buffer MA { float A[]; };
 layout(std430, set = 0, binding = 1) readonly buffer MB { float B[]; };
-layout(std430, set = 0, binding = 2) writeonly buffer MC { float C[]; };
-layout(push_constant) uniform Push { uint m; uint n; uint k; } pc;
+layout(std430, set = 0, binding = 2) buffer MC { float C[]; };
+layout(push_constant) uniform Push { uint m; uint n; uint k; uint accumulate; } pc;
 
 const uint TILE = 64u;
 const uint KT = 32u;
@@ -52,7 +53,7 @@ void main() {
         if (r >= pc.m) continue;
         for (uint j = 0u; j < 8u; ++j) {
             uint c = col0 + tx + 8u * j;
-            if (c < pc.n) C[r * pc.n + c] = acc[i][j];
+            if (c < pc.n) C[r * pc.n + c] = (pc.accumulate != 0u ? C[r * pc.n + c] : 0.0) + acc[i][j];
         }
     }
 }
