@@ -263,7 +263,35 @@ pub fn run(gpu: &Gpu, config: &BenchConfig, mut progress: impl FnMut(&str)) -> G
 
     progress("tiled SGEMM");
     let nn = config.gemm_size;
+    let (gpu_rate, got, ah, bh) = sgemm_ceiling(gpu, nn, reps)?;
     let size = (nn as usize) * (nn as usize);
+    let flops = 2.0 * f64::from(nn).powi(3);
+    let mut ch = vec![0f32; size];
+    let mut c = Vec::new();
+    for _ in 0..reps {
+        let (dt, ()) = time(|| cpu::gemm(&ah, &bh, &mut ch, nn as usize, nn as usize, nn as usize));
+        c.push(flops / dt.as_secs_f64() / 1e9);
+    }
+    let scale = ch.iter().fold(0f32, |m, v| m.max(v.abs()));
+    let err = got.iter().zip(&ch).fold(0f32, |m, (g, c)| m.max((g - c).abs())) / scale;
+    rows.push(BenchRow {
+        name: "tiled SGEMM".into(),
+        size: format!("{nn}³"),
+        gpu: gpu_rate,
+        cpu: median_f64(&mut c),
+        unit: "GFLOP/s",
+        peer: "faer matmul, all cores",
+        lower_is_better: false,
+        check: format!("max err {err:.1e} of max |C|"),
+    });
+    Ok(rows)
+}
+
+/// The tiled SGEMM's kernel rate on `n³` (GFLOP/s, median of `reps`, timestamp queries), with
+/// the product and its operands for checking.
+#[allow(clippy::type_complexity)]
+pub fn sgemm_ceiling(gpu: &Gpu, n: u32, reps: usize) -> GpuResult<(f64, Vec<f32>, Vec<f32>, Vec<f32>)> {
+    let size = (n as usize) * (n as usize);
     let ah: Vec<f32> = (0..size).map(|i| ((i * 7919) % 1000) as f32 / 1000.0 - 0.5).collect();
     let bh: Vec<f32> = (0..size).map(|i| ((i * 104_729) % 1000) as f32 / 1000.0 - 0.5).collect();
     let ad = Buffer::from_slice(gpu, "sgemm A", &ah, vk::BufferUsageFlags::STORAGE_BUFFER)?;
@@ -275,35 +303,17 @@ pub fn run(gpu: &Gpu, config: &BenchConfig, mut progress: impl FnMut(&str)) -> G
         vk::BufferUsageFlags::STORAGE_BUFFER,
         MemoryKind::GpuOnly,
     )?;
-    let gemm = SgemmKernel::new(gpu, &ad, &bd, &cd, nn, nn, nn)?;
+    let gemm = SgemmKernel::new(gpu, &ad, &bd, &cd, n, n, n)?;
+    let mut profiler = Profiler::new(gpu, 1)?;
     let mut g = Vec::new();
-    for _ in 0..reps {
+    for _ in 0..reps.max(1) {
         gpu.run(|cmd| {
             profiler.record_reset(cmd);
             profiler.scope(cmd, "sgemm", || gemm.record(cmd));
         })?;
         g.push(gemm.flops() / (profiler.results()?[0].1 * 1e-3) / 1e9);
     }
-    let got = cd.download(gpu)?;
-    let mut ch = vec![0f32; size];
-    let mut c = Vec::new();
-    for _ in 0..reps {
-        let (dt, ()) = time(|| cpu::gemm(&ah, &bh, &mut ch, nn as usize, nn as usize, nn as usize));
-        c.push(gemm.flops() / dt.as_secs_f64() / 1e9);
-    }
-    let scale = ch.iter().fold(0f32, |m, v| m.max(v.abs()));
-    let err = got.iter().zip(&ch).fold(0f32, |m, (g, c)| m.max((g - c).abs())) / scale;
-    rows.push(BenchRow {
-        name: "tiled SGEMM".into(),
-        size: format!("{nn}³"),
-        gpu: median_f64(&mut g),
-        cpu: median_f64(&mut c),
-        unit: "GFLOP/s",
-        peer: "faer matmul, all cores",
-        lower_is_better: false,
-        check: format!("max err {err:.1e} of max |C|"),
-    });
-    Ok(rows)
+    Ok((median_f64(&mut g), cd.download(gpu)?, ah, bh))
 }
 
 /// The table as Markdown.

@@ -80,6 +80,29 @@ pub fn premultiply_volume(
     Ok((run, out))
 }
 
+/// [`premultiply_volume`] on the GPU backend (f32), with the same random bases.
+pub fn premultiply_volume_gpu(
+    gpu: &crate::gpu::Gpu,
+    cells: usize,
+    m: usize,
+    m_g: usize,
+) -> Result<(PremultiplyRun, Tensor), ReduceError> {
+    let grid = TetGrid::with_cells(cells);
+    let v = volume_tensor(&grid);
+    let bp = random_matrix(v.shape()[0], m, 1);
+    let bg = random_matrix(v.shape()[2], m_g, 2);
+    let t = Instant::now();
+    let (out, plan) = crate::reduce::premultiply_sparse_gpu(
+        gpu,
+        &v,
+        &[&bp, &bp, &bg, &bg, &bg],
+        PremultiplyOptions::default(),
+    )?;
+    let run =
+        PremultiplyRun { cells, entries: v.nnz(), m, m_g, time: t.elapsed(), flops: plan.total_flops() };
+    Ok((run, out))
+}
+
 /// faer's plain f64 GEMM `C (m×n) = A (m×k) · B (k×n)` on every core: the peer of the
 /// premultiplication's final stage, at that stage's shape. Returns GFLOP/s (median of `reps`).
 pub fn faer_gemm_gflops(m: usize, k: usize, n: usize, reps: usize) -> f64 {

@@ -107,6 +107,14 @@ pub enum ReduceError {
         /// What is wrong.
         detail: String,
     },
+    /// The device failed (out of memory, device lost) or a request exceeds its limits.
+    #[error("{context}: {detail}")]
+    Device {
+        /// What was being done.
+        context: String,
+        /// What the device layer said.
+        detail: String,
+    },
     /// A tensor operation failed (singular matrix, non-SPD root, …).
     #[error("{context}: {source}")]
     Tensor {

@@ -49,11 +49,9 @@ impl Backend {
     }
 }
 
-fn gpu_err(context: &str) -> impl FnOnce(GpuError) -> ReduceError + '_ {
-    move |e| ReduceError::Tensor {
-        context: context.to_string(),
-        source: TensorError::NotFinite { what: "device".into(), detail: e.to_string() },
-    }
+/// Maps a device error to [`ReduceError::Device`] with what was being done.
+pub(crate) fn gpu_err(context: &str) -> impl FnOnce(GpuError) -> ReduceError + '_ {
+    move |e| ReduceError::Device { context: context.to_string(), detail: e.to_string() }
 }
 
 /// A reduced tensor on the device, permuted for one contraction pattern: `K × R` in column

@@ -30,9 +30,10 @@ pub use error::ReduceError;
 pub use expr::Expr;
 pub use file::{FORMAT, VERSION};
 pub use gpu_eval::{Backend, GpuReducedModel};
-pub use model::{FullTensor, Model, TensorDecl};
+pub use model::{FullTensor, Model, ReduceOptions, TensorDecl};
 pub use pca::{pca, Pca, SnapshotFile, SnapshotFn, SnapshotSource, Truncation};
 pub use premultiply::{
-    premultiply_dense, premultiply_sparse, premultiply_sparse_with, PremultiplyOptions, PremultiplyPlan, Unit,
+    premultiply_dense, premultiply_sparse, premultiply_sparse_gpu, premultiply_sparse_with,
+    PremultiplyOptions, PremultiplyPlan, Unit,
 };
 pub use reduced::ReducedModel;

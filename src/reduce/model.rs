@@ -7,9 +7,24 @@ use super::basis::Bases;
 use super::error::ReduceError;
 use super::eval::{evaluate, signature, Operands};
 use super::expr::Expr;
-use super::premultiply::{premultiply_dense, premultiply_sparse};
+use super::gpu_eval::Backend;
+use super::premultiply::{
+    premultiply_dense, premultiply_sparse_gpu, premultiply_sparse_with, PremultiplyOptions,
+};
 use super::reduced::{ReducedModel, ReducedTensor};
+use crate::gpu::Gpu;
 use crate::tensor::{SparseTensor, Tensor, TensorError};
+
+/// How [`Model::reduce_with`] premultiplies.
+#[derive(Clone, Copy, Default)]
+pub struct ReduceOptions<'a> {
+    /// CPU, GPU, or `Auto` (the GPU on a real GPU, the CPU on a CPU rasteriser).
+    pub backend: Backend,
+    /// The device for the GPU backend.
+    pub gpu: Option<&'a Gpu>,
+    /// Called with (multiply–adds done, planned) during each sparse tensor's premultiplication.
+    pub progress: Option<&'a (dyn Fn(f64, f64) + Sync)>,
+}
 
 /// A full-space tensor: dense (small) or sparse (what real models have).
 #[derive(Clone, Debug, PartialEq)]
@@ -156,6 +171,16 @@ impl Model {
     /// `Q̂ = Q ⊗₀ B₀ ⊗₁ B₁ …`) on the CPU, and returns the reduced model. Every axis name needs
     /// a basis whose full dimension matches the axis.
     pub fn reduce(&self, bases: &Bases) -> Result<ReducedModel, ReduceError> {
+        self.reduce_with(bases, &ReduceOptions::default())
+    }
+
+    /// [`Model::reduce`] with a choice of backend for the sparse tensors (dense ones are small
+    /// and always premultiplied on the CPU) and a progress callback.
+    pub fn reduce_with(
+        &self,
+        bases: &Bases,
+        options: &ReduceOptions<'_>,
+    ) -> Result<ReducedModel, ReduceError> {
         let output_axes = self.check()?;
         let mut reduced = BTreeMap::new();
         for (name, t) in &self.tensors {
@@ -183,11 +208,18 @@ impl Model {
                     Ok(basis.matrix())
                 })
                 .collect::<Result<Vec<&Tensor>, ReduceError>>()?;
-            let data = match &t.data {
-                FullTensor::Dense(d) => premultiply_dense(d, &mats),
-                FullTensor::Sparse(s) => premultiply_sparse(s, &mats),
-            }
-            .map_err(|source| ReduceError::Tensor { context: format!("premultiplying `{name}`"), source })?;
+            let context = || format!("premultiplying `{name}`");
+            let pm = PremultiplyOptions { progress: options.progress, ..PremultiplyOptions::default() };
+            let data = match (&t.data, options.backend.uses_gpu(options.gpu), options.gpu) {
+                (FullTensor::Dense(d), _, _) => premultiply_dense(d, &mats)
+                    .map_err(|source| ReduceError::Tensor { context: context(), source })?,
+                (FullTensor::Sparse(s), true, Some(gpu)) => premultiply_sparse_gpu(gpu, s, &mats, pm)?.0,
+                (FullTensor::Sparse(s), _, _) => {
+                    premultiply_sparse_with(s, &mats, pm)
+                        .map_err(|source| ReduceError::Tensor { context: context(), source })?
+                        .0
+                }
+            };
             reduced.insert(name.clone(), ReducedTensor { axes: t.axes.clone(), data });
         }
         for (input, b) in &self.inputs {
