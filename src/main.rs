@@ -346,107 +346,20 @@ fn bench_gpu(desc: &GpuDesc, quick: bool) -> Result<()> {
 }
 
 fn bench_reduce(desc: &GpuDesc, quick: bool) -> Result<()> {
-    use galerkin::bench::reduce::{faer_gemm_gflops, premultiply_volume, reduced_evaluation};
-    let threads = galerkin::bench::cpu::threads();
-    println!("CPU backend: faer, {threads} threads. GPU backend: compute shaders (f32), measured below on the device.\n");
-
-    let (cells, m, m_g) = (if quick { 10_000 } else { 88_671 }, 128, 5);
+    let gpu = Gpu::new(desc).ok();
     let bar = indicatif::ProgressBar::new(1000);
     bar.set_style(
         indicatif::ProgressStyle::with_template("premultiplying V {bar:30} {percent}% eta {eta}")
             .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
     );
-    let report = |done: f64, total: f64| bar.set_position((1000.0 * done / total.max(1.0)) as u64);
-    let (run, _) = premultiply_volume(cells, m, m_g, Some(&report))?;
-    bar.finish_and_clear();
-    let peer = faer_gemm_gflops(m, 3 * cells, m * (m_g * (m_g + 1) * (m_g + 2) / 6), 3);
-    println!("## Premultiplication of the volume tensor V (cells {cells}, m_p = m_u = {m}, m_g = {m_g})\n");
-    println!("| stored entries | time | GFLOP/s | faer GEMM of the final stage's shape | ratio |");
-    println!("|---:|---:|---:|---:|---:|");
-    println!(
-        "| {} | {:.2} s | {:.1} | {:.1} GFLOP/s ({m} × {} × {}) | {:.2} |\n",
-        run.entries,
-        run.time.as_secs_f64(),
-        run.gflops(),
-        peer,
-        3 * cells,
-        m * 35,
-        run.gflops() / peer
-    );
-
-    let gpu = Gpu::new(desc).ok();
-    if let Some(g) = gpu.as_ref() {
-        let cells_gpu = if quick { 2_000 } else { 10_000 };
-        let (cpu_run, cpu_out) = premultiply_volume(cells_gpu, m, m_g, None)?;
-        let (gpu_run, gpu_out) = galerkin::bench::reduce::premultiply_volume_gpu(g, cells_gpu, m, m_g)?;
-        let (ceiling, ..) = galerkin::bench::sgemm_ceiling(g, if quick { 512 } else { 1024 }, 3)?;
-        let err = cpu_out.max_abs_diff(&gpu_out) / cpu_out.max_abs();
-        println!(
-            "## Premultiplication on the GPU backend ({}), {cells_gpu} cells, m = {m}, m_g = {m_g}\n",
-            g.caps().device_name
-        );
-        println!("| backend | time | GFLOP/s | tiled-SGEMM ceiling, same run | ratio to ceiling |");
-        println!("|---|---:|---:|---:|---:|");
-        println!("| CPU (faer, f64) | {:.2} s | {:.1} | | |", cpu_run.time.as_secs_f64(), cpu_run.gflops());
-        println!(
-            "| GPU (f32) | {:.2} s | {:.2} | {ceiling:.2} GFLOP/s | {:.2} |\n",
-            gpu_run.time.as_secs_f64(),
-            gpu_run.gflops(),
-            gpu_run.gflops() / ceiling
-        );
-        let auto = if galerkin::reduce::Backend::Auto.uses_gpu(Some(g)) { "GPU" } else { "CPU" };
-        println!("GPU vs CPU result: largest difference {err:.1e} of max |V̂|; `auto` picks the {auto} backend here.\n");
-    }
-    let (batch, reps) = (1024, if quick { 3 } else { 5 });
-    let t = reduced_evaluation(10_000, m, batch, reps, gpu.as_ref())?;
-    println!(
-        "## Reduced evaluation û = (V̂ ⊗₂ ĝ ⊗₃ ĝ ⊗₄ ĝ)⁻¹ ⊗₁ p̂ (m = {m}, m_g = {m_g}), medians of {reps}\n"
-    );
-    println!("| path | per call | per batch of {batch} | per input in the batch |");
-    println!("|---|---:|---:|---:|");
-    let row = |name: &str, single: std::time::Duration, batched: std::time::Duration| {
-        println!(
-            "| {name} | {:.3} ms | {:.1} ms | {:.3} ms |",
-            single.as_secs_f64() * 1e3,
-            batched.as_secs_f64() * 1e3,
-            batched.as_secs_f64() * 1e3 / batch as f64
-        )
+    let progress = |done: f64, total: f64| bar.set_position((1000.0 * done / total.max(1.0)) as u64);
+    let mut emit = |section: &str| {
+        bar.suspend(|| print!("{section}"));
     };
-    row(&format!("CPU (faer, {threads} threads)"), t.cpu_single, t.cpu_batch);
-    if let (Some((s, b)), Some(g)) = (t.gpu, gpu.as_ref()) {
-        row(
-            &format!("GPU ({}): contractions as one GEMM per batch, solves on the CPU", g.caps().device_name),
-            s,
-            b,
-        );
-        println!(
-            "\nGPU vs CPU results: largest difference {:.1e} of max |û| (f32 on the device).",
-            t.gpu_error.unwrap_or(f64::NAN)
-        );
-        let auto = if galerkin::reduce::Backend::Auto.uses_gpu(Some(g)) { "GPU" } else { "CPU" };
-        println!("`auto` picks the {auto} on this device.");
+    galerkin::bench::reduce::report(quick, gpu.as_ref(), Some(&progress), &mut emit)?;
+    bar.finish_and_clear();
+    match gpu {
+        Some(g) => check_validation(g),
+        None => Ok(()),
     }
-    println!();
-    if let Some(g) = gpu {
-        check_validation(g)?;
-    }
-
-    let cell_counts: &[usize] = if quick { &[1_000, 10_000] } else { &[1_000, 10_000, 100_000] };
-    let ms: &[usize] = if quick { &[16, 64] } else { &[16, 32, 64, 128] };
-    println!("## Premultiplication time against cells and m (m_g = {m_g})\n");
-    print!("| cells |");
-    for m in ms {
-        print!(" m = {m} |");
-    }
-    println!();
-    println!("|---:|{}", "---:|".repeat(ms.len()));
-    for &c in cell_counts {
-        print!("| {c} |");
-        for &m in ms {
-            let (run, _) = premultiply_volume(c, m, m_g, None)?;
-            print!(" {:.3} s |", run.time.as_secs_f64());
-        }
-        println!();
-    }
-    Ok(())
 }

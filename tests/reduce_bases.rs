@@ -132,3 +132,21 @@ fn merged_bases_span_both_and_stay_orthonormal() {
     let skew = Tensor::from_vec(&[2, 2], vec![1.0, 0.5, 0.0, 1.0]).unwrap();
     assert!(Basis::new("skew", skew, 1e-12).unwrap_err().to_string().contains("not orthonormal"));
 }
+
+#[test]
+fn pca_with_the_gram_matrix_on_the_gpu_finds_the_same_subspace() {
+    use galerkin::reduce::{pca_with, Backend};
+    let gpu = common::gpu();
+    // Rows span two 4096-row blocks; a well-separated spectrum, so f32 Gram entries resolve it.
+    let (s, u) = snapshots(6000, &[5.0, 3.0, 2.0, 1.0], 31);
+    let truncation = Truncation { energy: 0.999, max_modes: 10 };
+    let cpu = pca("u", &mut &s, truncation).unwrap();
+    let on_gpu = pca_with("u", &mut &s, truncation, Backend::Gpu, Some(&gpu)).unwrap();
+    assert_eq!(on_gpu.basis.reduced_dim(), cpu.basis.reduced_dim());
+    // f32 Gram: relative error ~1e-7 of σ₁² per entry, so subspaces agree to ~1e-6 here.
+    assert!(distance_from_span(&u, &on_gpu.basis) < 1e-5);
+    for (a, b) in on_gpu.singular_values.iter().zip(&cpu.singular_values).take(4) {
+        assert!((a - b).abs() < 1e-5 * cpu.singular_values[0], "{a} vs {b}");
+    }
+    assert!(on_gpu.basis.orthonormality_error() < 1e-12, "the basis itself is formed in f64");
+}

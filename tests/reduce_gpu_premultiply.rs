@@ -102,6 +102,15 @@ fn gpu_premultiplication_split_across_small_bindings_matches() {
     }
     let (q, bases) = v_like();
     check(&gpu, &q, &bases.iter().collect::<Vec<_>>(), 6 * q.nnz());
+    // A tensor whose data exceed one binding: 3000 nonzeros = 12 KB of f32 against 4 KiB.
+    let shape = [8, 10, 12];
+    let mut q = SparseTensor::new(&shape);
+    for (e, p) in random_vec(3000, 31).iter().enumerate() {
+        q.push(&[e % 8, (e / 8) % 10, (e * 7) % 12], *p);
+    }
+    let bases: Vec<Tensor> =
+        shape.iter().enumerate().map(|(a, &n)| random_basis(n, 2 + a, 40 + a as u64)).collect();
+    check(&gpu, &q, &bases.iter().collect::<Vec<_>>(), q.nnz());
 }
 
 #[test]

@@ -206,3 +206,128 @@ pub fn reduced_evaluation(
         gpu_error,
     })
 }
+
+/// The whole `galerkin bench reduce` report as Markdown, section by section through `emit`:
+/// premultiplication at the paper's cavity size next to faer's GEMM of its final stage, the GPU
+/// backend against the tiled-SGEMM ceiling (with `gpu`), reduced evaluation on both paths, and
+/// premultiplication time against cells and `m`. `progress` follows the cavity-size run.
+pub fn report(
+    quick: bool,
+    gpu: Option<&crate::gpu::Gpu>,
+    progress: Option<&(dyn Fn(f64, f64) + Sync)>,
+    emit: &mut dyn FnMut(&str),
+) -> Result<(), ReduceError> {
+    use std::fmt::Write as _;
+    let mut out = String::new();
+    let threads = crate::bench::cpu::threads();
+    let _ = writeln!(out, "CPU backend: faer, {threads} threads. GPU backend: compute shaders (f32), measured below on the device.\n");
+
+    let (cells, m, m_g) = (if quick { 10_000 } else { 88_671 }, 128, 5);
+    let (run, _) = premultiply_volume(cells, m, m_g, progress)?;
+    let peer = faer_gemm_gflops(m, 3 * cells, m * (m_g * (m_g + 1) * (m_g + 2) / 6), 3);
+    let _ = writeln!(
+        out,
+        "## Premultiplication of the volume tensor V (cells {cells}, m_p = m_u = {m}, m_g = {m_g})\n"
+    );
+    let _ =
+        writeln!(out, "| stored entries | time | GFLOP/s | faer GEMM of the final stage's shape | ratio |");
+    let _ = writeln!(out, "|---:|---:|---:|---:|---:|");
+    let _ = writeln!(
+        out,
+        "| {} | {:.2} s | {:.1} | {:.1} GFLOP/s ({m} × {} × {}) | {:.2} |\n",
+        run.entries,
+        run.time.as_secs_f64(),
+        run.gflops(),
+        peer,
+        3 * cells,
+        m * 35,
+        run.gflops() / peer
+    );
+    emit(&std::mem::take(&mut out));
+
+    if let Some(g) = gpu {
+        let cells_gpu = if quick { 2_000 } else { 10_000 };
+        let (cpu_run, cpu_out) = premultiply_volume(cells_gpu, m, m_g, None)?;
+        let (gpu_run, gpu_out) = premultiply_volume_gpu(g, cells_gpu, m, m_g)?;
+        let (ceiling, ..) = crate::bench::sgemm_ceiling(g, if quick { 512 } else { 1024 }, 3)
+            .map_err(|e| ReduceError::Device { context: "SGEMM ceiling".into(), detail: e.to_string() })?;
+        let err = cpu_out.max_abs_diff(&gpu_out) / cpu_out.max_abs();
+        let _ = writeln!(
+            out,
+            "## Premultiplication on the GPU backend ({}), {cells_gpu} cells, m = {m}, m_g = {m_g}\n",
+            g.caps().device_name
+        );
+        let _ =
+            writeln!(out, "| backend | time | GFLOP/s | tiled-SGEMM ceiling, same run | ratio to ceiling |");
+        let _ = writeln!(out, "|---|---:|---:|---:|---:|");
+        let _ = writeln!(
+            out,
+            "| CPU (faer, f64) | {:.2} s | {:.1} | | |",
+            cpu_run.time.as_secs_f64(),
+            cpu_run.gflops()
+        );
+        let _ = writeln!(
+            out,
+            "| GPU (f32) | {:.2} s | {:.2} | {ceiling:.2} GFLOP/s | {:.2} |\n",
+            gpu_run.time.as_secs_f64(),
+            gpu_run.gflops(),
+            gpu_run.gflops() / ceiling
+        );
+        let auto = if crate::reduce::Backend::Auto.uses_gpu(Some(g)) { "GPU" } else { "CPU" };
+        let _ = writeln!(out, "GPU vs CPU result: largest difference {err:.1e} of max |V̂|; `auto` picks the {auto} backend here.\n");
+        emit(&std::mem::take(&mut out));
+    }
+    let (batch, reps) = (1024, if quick { 3 } else { 5 });
+    let t = reduced_evaluation(10_000, m, batch, reps, gpu)?;
+    let _ = writeln!(
+        out,
+        "## Reduced evaluation û = (V̂ ⊗₂ ĝ ⊗₃ ĝ ⊗₄ ĝ)⁻¹ ⊗₁ p̂ (m = {m}, m_g = {m_g}), medians of {reps}\n"
+    );
+    let _ = writeln!(out, "| path | per call | per batch of {batch} | per input in the batch |");
+    let _ = writeln!(out, "|---|---:|---:|---:|");
+    let row = |name: &str, single: Duration, batched: Duration| {
+        format!(
+            "| {name} | {:.3} ms | {:.1} ms | {:.3} ms |\n",
+            single.as_secs_f64() * 1e3,
+            batched.as_secs_f64() * 1e3,
+            batched.as_secs_f64() * 1e3 / batch as f64
+        )
+    };
+    out.push_str(&row(&format!("CPU (faer, {threads} threads)"), t.cpu_single, t.cpu_batch));
+    if let (Some((s, b)), Some(g)) = (t.gpu, gpu) {
+        out.push_str(&row(
+            &format!("GPU ({}): contractions as one GEMM per batch, solves on the CPU", g.caps().device_name),
+            s,
+            b,
+        ));
+        let _ = writeln!(
+            out,
+            "\nGPU vs CPU results: largest difference {:.1e} of max |û| (f32 on the device).",
+            t.gpu_error.unwrap_or(f64::NAN)
+        );
+        let auto = if crate::reduce::Backend::Auto.uses_gpu(Some(g)) { "GPU" } else { "CPU" };
+        let _ = writeln!(out, "`auto` picks the {auto} on this device.");
+    }
+    out.push('\n');
+    emit(&std::mem::take(&mut out));
+
+    let cell_counts: &[usize] = if quick { &[1_000, 10_000] } else { &[1_000, 10_000, 100_000] };
+    let ms: &[usize] = if quick { &[16, 64] } else { &[16, 32, 64, 128] };
+    let _ = writeln!(out, "## Premultiplication time against cells and m (m_g = {m_g})\n");
+    let _ = write!(out, "| cells |");
+    for m in ms {
+        let _ = write!(out, " m = {m} |");
+    }
+    out.push('\n');
+    let _ = writeln!(out, "|---:|{}", "---:|".repeat(ms.len()));
+    for &c in cell_counts {
+        let _ = write!(out, "| {c} |");
+        for &m in ms {
+            let (run, _) = premultiply_volume(c, m, m_g, None)?;
+            let _ = write!(out, " {:.3} s |", run.time.as_secs_f64());
+        }
+        out.push('\n');
+    }
+    emit(&out);
+    Ok(())
+}

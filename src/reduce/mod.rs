@@ -31,7 +31,7 @@ pub use expr::Expr;
 pub use file::{FORMAT, VERSION};
 pub use gpu_eval::{Backend, GpuReducedModel};
 pub use model::{FullTensor, Model, ReduceOptions, TensorDecl};
-pub use pca::{pca, Pca, SnapshotFile, SnapshotFn, SnapshotSource, Truncation};
+pub use pca::{pca, pca_with, Pca, SnapshotFile, SnapshotFn, SnapshotSource, Truncation};
 pub use premultiply::{
     premultiply_dense, premultiply_sparse, premultiply_sparse_gpu, premultiply_sparse_with,
     PremultiplyOptions, PremultiplyPlan, Unit,

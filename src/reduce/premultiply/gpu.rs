@@ -57,14 +57,21 @@ struct Kernels {
     gemm: Gemm,
 }
 
-/// A stage's input on the device: entries (coordinates on the host) with blocks of values.
+/// Where a stage's values are: the input's on the host (uploaded batch by batch, so the input
+/// may exceed one binding), every intermediate's on the device.
+enum Values {
+    Host(Vec<f32>),
+    Device(Buffer<f32>),
+}
+
+/// A stage's input: entries (coordinates on the host) with blocks of values.
 struct DevicePartial {
     sparse_axes: Vec<usize>,
     coords: Vec<u32>,
     dense: Vec<Unit>,
     block: usize,
     entries: usize,
-    values: Buffer<f32>,
+    values: Values,
 }
 
 struct Ctx<'a> {
@@ -111,8 +118,18 @@ impl Ctx<'_> {
         }
     }
 
-    /// Records `dst[i] = src[perm[i]]` for rows of `block` floats.
-    fn gather(&self, src: &Buffer<f32>, perm: &[u32], block: usize) -> Result<Buffer<f32>, ReduceError> {
+    /// Rows `perm` of `src` (rows of `block` floats), in that order, on the device.
+    fn gather(&self, src: &Values, perm: &[u32], block: usize) -> Result<Buffer<f32>, ReduceError> {
+        let src = match src {
+            Values::Host(v) => {
+                let rows: Vec<f32> = perm
+                    .iter()
+                    .flat_map(|&e| v[e as usize * block..(e as usize + 1) * block].iter().copied())
+                    .collect();
+                return self.upload("premultiply input rows", &rows);
+            }
+            Values::Device(b) => b,
+        };
         let dst = self.scratch("premultiply rows in order", perm.len() * block)?;
         let pb = self.upload("premultiply row order", perm)?;
         let set = self
@@ -285,7 +302,7 @@ impl Ctx<'_> {
             dense,
             block: size * block,
             entries: groups,
-            values: out,
+            values: Values::Device(out),
         })
     }
 
@@ -331,7 +348,17 @@ impl Ctx<'_> {
                 j += 1;
             }
             let perm: Vec<u32> = idx[i..j].iter().map(|&e| e as u32).collect();
-            let values = self.gather(&part.values, &perm, part.block)?;
+            let values = match &part.values {
+                // A host chunk stays on the host: its batches are uploaded as they run.
+                Values::Host(v) => Values::Host(
+                    perm.iter()
+                        .flat_map(|&e| {
+                            v[e as usize * part.block..(e as usize + 1) * part.block].iter().copied()
+                        })
+                        .collect(),
+                ),
+                Values::Device(_) => Values::Device(self.gather(&part.values, &perm, part.block)?),
+            };
             let mut w = DevicePartial {
                 sparse_axes: part.sparse_axes.clone(),
                 coords: idx[i..j]
@@ -363,7 +390,10 @@ impl Ctx<'_> {
                 .bind(
                     self.gpu,
                     whole(&a),
-                    whole(&w.values),
+                    whole(match &w.values {
+                        Values::Device(b) => b,
+                        Values::Host(_) => unreachable!("a contracted stage's values are on the device"),
+                    }),
                     whole(&out),
                     GemmShape { m: size as u32, n: w_block as u32, k: d as u32 },
                 )
@@ -383,7 +413,7 @@ impl Ctx<'_> {
             dense,
             block: size * w_block,
             entries: 1,
-            values: out,
+            values: Values::Device(out),
         })
     }
 }
@@ -405,15 +435,6 @@ pub fn premultiply_sparse_gpu(
         .map_err(|source| ReduceError::Tensor { context: "premultiply".into(), source })?;
     if q.nnz() == 0 {
         return Ok((Tensor::zeros(&setup.reduced_shape), setup.plan));
-    }
-    if q.nnz() > floats {
-        return Err(ReduceError::Device {
-            context: "premultiplying on the device".into(),
-            detail: format!(
-                "{} nonzeros exceed one storage binding of {floats} f32 values (use the CPU backend)",
-                q.nnz()
-            ),
-        });
     }
     let stage = |name: &str, spirv: &[u32], bindings: &[BindingKind], push: usize| {
         ComputePipeline::new(
@@ -452,7 +473,7 @@ pub fn premultiply_sparse_gpu(
         dense: Vec::new(),
         block: 1,
         entries: q.nnz(),
-        values: ctx.upload("premultiply input values", &values)?,
+        values: Values::Host(values),
     };
     let total = setup.plan.total_flops();
     let mut done = 0.0;
@@ -472,7 +493,12 @@ pub fn premultiply_sparse_gpu(
         );
         done += flops;
     }
-    let values: Vec<f64> =
-        part.values.download(gpu).map_err(dev("reading the result"))?.into_iter().map(f64::from).collect();
+    let values: Vec<f64> = match &part.values {
+        Values::Device(b) => b.download(gpu).map_err(dev("reading the result"))?,
+        Values::Host(v) => v.clone(),
+    }
+    .into_iter()
+    .map(f64::from)
+    .collect();
     Ok((setup.expand(&part.dense, bases, &values), setup.plan))
 }
