@@ -60,44 +60,27 @@ impl PremultiplyRun {
 }
 
 /// Premultiplies the volume tensor of `cells` tetrahedra with random bases of `m` (result and
-/// velocity axes) and `m_g` (geometry) columns on the CPU; `progress` sees (done, total).
+/// velocity axes) and `m_g` (geometry) columns, on the CPU backend, or on `gpu`'s GPU backend
+/// when given; `progress` sees (done, total).
 pub fn premultiply_volume(
     cells: usize,
     m: usize,
     m_g: usize,
+    gpu: Option<&crate::gpu::Gpu>,
     progress: Option<&(dyn Fn(f64, f64) + Sync)>,
 ) -> Result<(PremultiplyRun, Tensor), ReduceError> {
     let grid = TetGrid::with_cells(cells);
     let v = volume_tensor(&grid);
     let bp = random_matrix(v.shape()[0], m, 1);
     let bg = random_matrix(v.shape()[2], m_g, 2);
-    let t = Instant::now();
+    let bases = [&bp, &bp, &bg, &bg, &bg];
     let options = PremultiplyOptions { progress, ..PremultiplyOptions::default() };
-    let (out, plan) = premultiply_sparse_with(&v, &[&bp, &bp, &bg, &bg, &bg], options)
-        .map_err(|source| ReduceError::Tensor { context: "premultiplying V".into(), source })?;
-    let run =
-        PremultiplyRun { cells, entries: v.nnz(), m, m_g, time: t.elapsed(), flops: plan.total_flops() };
-    Ok((run, out))
-}
-
-/// [`premultiply_volume`] on the GPU backend (f32), with the same random bases.
-pub fn premultiply_volume_gpu(
-    gpu: &crate::gpu::Gpu,
-    cells: usize,
-    m: usize,
-    m_g: usize,
-) -> Result<(PremultiplyRun, Tensor), ReduceError> {
-    let grid = TetGrid::with_cells(cells);
-    let v = volume_tensor(&grid);
-    let bp = random_matrix(v.shape()[0], m, 1);
-    let bg = random_matrix(v.shape()[2], m_g, 2);
     let t = Instant::now();
-    let (out, plan) = crate::reduce::premultiply_sparse_gpu(
-        gpu,
-        &v,
-        &[&bp, &bp, &bg, &bg, &bg],
-        PremultiplyOptions::default(),
-    )?;
+    let (out, plan) = match gpu {
+        Some(g) => crate::reduce::premultiply_sparse_gpu(g, &v, &bases, options)?,
+        None => premultiply_sparse_with(&v, &bases, options)
+            .map_err(|source| ReduceError::Tensor { context: "premultiplying V".into(), source })?,
+    };
     let run =
         PremultiplyRun { cells, entries: v.nnz(), m, m_g, time: t.elapsed(), flops: plan.total_flops() };
     Ok((run, out))
@@ -223,7 +206,7 @@ pub fn report(
     let _ = writeln!(out, "CPU backend: faer, {threads} threads. GPU backend: compute shaders (f32), measured below on the device.\n");
 
     let (cells, m, m_g) = (if quick { 10_000 } else { 88_671 }, 128, 5);
-    let (run, _) = premultiply_volume(cells, m, m_g, progress)?;
+    let (run, _) = premultiply_volume(cells, m, m_g, None, progress)?;
     let peer = faer_gemm_gflops(m, 3 * cells, m * (m_g * (m_g + 1) * (m_g + 2) / 6), 3);
     let _ = writeln!(
         out,
@@ -247,8 +230,8 @@ pub fn report(
 
     if let Some(g) = gpu {
         let cells_gpu = if quick { 2_000 } else { 10_000 };
-        let (cpu_run, cpu_out) = premultiply_volume(cells_gpu, m, m_g, None)?;
-        let (gpu_run, gpu_out) = premultiply_volume_gpu(g, cells_gpu, m, m_g)?;
+        let (cpu_run, cpu_out) = premultiply_volume(cells_gpu, m, m_g, None, None)?;
+        let (gpu_run, gpu_out) = premultiply_volume(cells_gpu, m, m_g, Some(g), None)?;
         let (ceiling, ..) = crate::bench::sgemm_ceiling(g, if quick { 512 } else { 1024 }, 3)
             .map_err(|e| ReduceError::Device { context: "SGEMM ceiling".into(), detail: e.to_string() })?;
         let err = cpu_out.max_abs_diff(&gpu_out) / cpu_out.max_abs();
@@ -323,7 +306,7 @@ pub fn report(
     for &c in cell_counts {
         let _ = write!(out, "| {c} |");
         for &m in ms {
-            let (run, _) = premultiply_volume(c, m, m_g, None)?;
+            let (run, _) = premultiply_volume(c, m, m_g, None, None)?;
             let _ = write!(out, " {:.3} s |", run.time.as_secs_f64());
         }
         out.push('\n');

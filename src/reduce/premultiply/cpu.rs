@@ -7,7 +7,7 @@ use faer::linalg::matmul::matmul;
 use faer::{Accum, MatMut, MatRef, Par};
 use rayon::prelude::*;
 
-use super::plan::sorted_entries;
+use super::plan::{chunks_of_groups, sorted_entries};
 use super::{unit_row, unit_size, Packing, Unit};
 use crate::tensor::Tensor;
 
@@ -196,20 +196,12 @@ impl Partial {
         // Chunks of whole first-unit groups, each chunk's W within KR_CHUNK_VALUES · 4.
         let per_chunk = (4 * KR_CHUNK_VALUES / w_block.max(1)).max(1);
         let mut out = vec![0.0; size * w_block];
-        let mut i = 0;
         let total = idx.len().max(1);
         let mut row = Vec::new();
         let mut recycled: Vec<f64> = Vec::new();
         let mut rows_m: Vec<f64> = Vec::new();
-        while i < idx.len() {
-            let mut j = i;
-            let mut distinct = 0;
-            while j < idx.len() && (distinct < per_chunk || first_of(idx[j]) == first_of(idx[j - 1])) {
-                if j == i || first_of(idx[j]) != first_of(idx[j - 1]) {
-                    distinct += 1;
-                }
-                j += 1;
-            }
+        for range in chunks_of_groups(&idx, first_of, per_chunk) {
+            let (i, j) = (range.start, range.end);
             let chunk = Partial {
                 sparse_axes: self.sparse_axes.clone(),
                 coords: idx[i..j]
@@ -253,7 +245,6 @@ impl Partial {
                 "finish chunk"
             );
             recycled = w.values;
-            i = j;
         }
         let mut dense = units.to_vec();
         dense.extend(self.dense);

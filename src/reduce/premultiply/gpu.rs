@@ -13,7 +13,7 @@
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
 
-use super::plan::sorted_entries;
+use super::plan::{chunks_of_groups, sorted_entries};
 use super::{unit_row, unit_size, Packing, PremultiplyOptions, PremultiplyPlan, Setup, Unit};
 use crate::gpu::{
     shaders, BindingKind, Buffer, BufferBinding, ComputePipeline, ComputePipelineDesc, Gpu, GpuError,
@@ -336,17 +336,9 @@ impl Ctx<'_> {
         let per_chunk = (self.floats / w_block.max(1)).min(self.floats / size.max(1)).max(1);
         let out = self.scratch("premultiply final block", size * w_block)?;
         let mut first_chunk = true;
-        let mut i = 0;
         let mut row = Vec::new();
-        while i < idx.len() {
-            let mut j = i;
-            let mut distinct = 0;
-            while j < idx.len() && (distinct < per_chunk || first_of(idx[j]) == first_of(idx[j - 1])) {
-                if j == i || first_of(idx[j]) != first_of(idx[j - 1]) {
-                    distinct += 1;
-                }
-                j += 1;
-            }
+        for range in chunks_of_groups(&idx, first_of, per_chunk) {
+            let (i, j) = (range.start, range.end);
             let perm: Vec<u32> = idx[i..j].iter().map(|&e| e as u32).collect();
             let values = match &part.values {
                 // A host chunk stays on the host: its batches are uploaded as they run.
@@ -403,7 +395,6 @@ impl Ctx<'_> {
                 .map_err(dev("the final GEMM"))?;
             first_chunk = false;
             progress(j as f64 / idx.len() as f64);
-            i = j;
         }
         let mut dense = units.to_vec();
         dense.extend(part.dense);

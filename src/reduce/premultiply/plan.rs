@@ -171,3 +171,27 @@ pub(crate) fn sorted_entries(coords: &[u32], s: usize, key_pos: &[usize], unit_p
     });
     idx
 }
+
+/// Splits `idx` (sorted by the first unit's coordinates, `first_of`) into consecutive ranges of
+/// whole first-unit groups, at most `per_chunk` groups each (at least one).
+pub(crate) fn chunks_of_groups(
+    idx: &[usize],
+    first_of: impl Fn(usize) -> Vec<u32>,
+    per_chunk: usize,
+) -> Vec<std::ops::Range<usize>> {
+    let mut out = Vec::new();
+    let mut i = 0;
+    while i < idx.len() {
+        let mut j = i;
+        let mut distinct = 0;
+        while j < idx.len() && (distinct < per_chunk.max(1) || first_of(idx[j]) == first_of(idx[j - 1])) {
+            if j == i || first_of(idx[j]) != first_of(idx[j - 1]) {
+                distinct += 1;
+            }
+            j += 1;
+        }
+        out.push(i..j);
+        i = j;
+    }
+    out
+}
