@@ -331,15 +331,6 @@ fn composition_through_an_intermediate_basis_trades_accuracy_for_size() {
     assert_eq!(s.tensor("Q").unwrap().len(), 243);
 }
 
-/// Plain dense reference: one mode product per axis, in axis order.
-fn dense_reference(q: &Tensor, bases: &[&Tensor]) -> Tensor {
-    let mut t = q.clone();
-    for (axis, b) in bases.iter().enumerate() {
-        t = t.mode_product(axis, b).unwrap();
-    }
-    t
-}
-
 #[test]
 fn sparse_premultiplication_matches_the_dense_reference_for_orders_2_to_5() {
     for order in 2..=5usize {
@@ -361,7 +352,7 @@ fn sparse_premultiplication_matches_the_dense_reference_for_orders_2_to_5() {
             (0..order).map(|a| random_basis(shape[a], reduced[a], 100 + a as u64)).collect();
         let mats: Vec<&Tensor> = bases.iter().map(Basis::matrix).collect();
         let (got, plan) = premultiply_sparse_with(&q, &mats, PremultiplyOptions::default()).unwrap();
-        let want = dense_reference(&q.to_dense(), &mats);
+        let want = common::dense_reference(&q.to_dense(), &mats);
         assert_eq!(got.shape(), reduced.as_slice());
         // f64 sums of a few hundred terms of size ≤ 1: rounding ~1e-15 per term.
         assert!(got.max_abs_diff(&want) < 1e-12 * want.max_abs().max(1.0), "order {order}");
@@ -397,7 +388,7 @@ fn symmetric_axes_are_contracted_packed_and_match_the_dense_reference() {
     let bg = random_basis(ng, 4, 79);
     let mats = [bp.matrix(), bp.matrix(), bg.matrix(), bg.matrix(), bg.matrix()];
     let (got, plan) = premultiply_sparse_with(&q, &mats, PremultiplyOptions::default()).unwrap();
-    let want = dense_reference(&q.to_dense(), &mats);
+    let want = common::dense_reference(&q.to_dense(), &mats);
     assert!(got.max_abs_diff(&want) < 1e-12 * want.max_abs(), "diff {}", got.max_abs_diff(&want));
     assert!(plan.stages.iter().flatten().any(|u| *u == Unit::Group(vec![2, 3, 4])), "{plan:?}");
     // The result is symmetric in its last three axes.

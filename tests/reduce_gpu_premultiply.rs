@@ -17,15 +17,6 @@ fn random_basis(n: usize, m: usize, seed: u64) -> Tensor {
     Basis::orthonormalize("b", &g).unwrap().matrix().clone()
 }
 
-/// Plain dense reference: one mode product per axis, in axis order, f64.
-fn dense_reference(q: &Tensor, bases: &[&Tensor]) -> Tensor {
-    let mut t = q.clone();
-    for (axis, b) in bases.iter().enumerate() {
-        t = t.mode_product(axis, b).unwrap();
-    }
-    t
-}
-
 fn abs(t: &Tensor) -> Tensor {
     Tensor::from_vec(t.shape(), t.data().iter().map(|v| v.abs()).collect()).unwrap()
 }
@@ -36,9 +27,9 @@ fn abs(t: &Tensor) -> Tensor {
 fn check(gpu: &Gpu, q: &SparseTensor, bases: &[&Tensor], terms: usize) -> Vec<Vec<Unit>> {
     let (got, plan) = premultiply_sparse_gpu(gpu, q, bases, PremultiplyOptions::default()).unwrap();
     let dense = q.to_dense();
-    let want = dense_reference(&dense, bases);
+    let want = common::dense_reference(&dense, bases);
     let abs_bases: Vec<Tensor> = bases.iter().map(|b| abs(b)).collect();
-    let scale = dense_reference(&abs(&dense), &abs_bases.iter().collect::<Vec<_>>());
+    let scale = common::dense_reference(&abs(&dense), &abs_bases.iter().collect::<Vec<_>>());
     let eps = 2f64.powi(-24) * terms as f64;
     for i in 0..want.len() {
         let (g, w, s) = (got.data()[i], want.data()[i], scale.data()[i]);

@@ -61,3 +61,16 @@ pub fn random_f32(n: usize, seed: u64) -> Vec<f32> {
         })
         .collect()
 }
+
+/// Plain dense f64 reference of premultiplication: one mode product per axis, in axis order
+/// (written independently of the library's planned chain).
+pub fn dense_reference(
+    q: &galerkin::tensor::Tensor,
+    bases: &[&galerkin::tensor::Tensor],
+) -> galerkin::tensor::Tensor {
+    let mut t = q.clone();
+    for (axis, b) in bases.iter().enumerate() {
+        t = t.mode_product(axis, b).expect("bases fit the tensor");
+    }
+    t
+}
