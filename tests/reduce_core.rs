@@ -28,6 +28,17 @@ fn inputs<'a>(pairs: &[(&'a str, &'a [f64])]) -> BTreeMap<&'a str, &'a [f64]> {
     pairs.iter().copied().collect()
 }
 
+/// Eq. 4's composition `(Q1 ⊗₂ x ⊗₃ x)⁻¹ ⊗₁ (Q2 ⊗₁ x ⊗₂ x)` over the given tensors.
+fn eq4_form(q1: SparseTensor, q2: SparseTensor) -> Model {
+    let x = Expr::input("x");
+    let m = Expr::tensor("Q1").times(2, x.clone()).times(3, x.clone());
+    let v = Expr::tensor("Q2").times(1, x.clone()).times(2, x);
+    Model::new(m.inverse().times(1, v))
+        .with_tensor("Q1", &["y", "y", "x", "x"], q1)
+        .with_tensor("Q2", &["y", "x", "x"], q2)
+        .with_input("x", "x")
+}
+
 /// Eq. 4's tensors for Eq. 3: `Q1 ⊗₂ x ⊗₃ x = diag(x₁², x₂²)`, `Q2 ⊗₁ x ⊗₂ x = [x₁x₂ + x₂², x₁²]`.
 fn eq4_model() -> Model {
     let mut q1 = SparseTensor::new(&[2, 2, 2, 2]);
@@ -37,13 +48,7 @@ fn eq4_model() -> Model {
     q2.push(&[0, 0, 1], 1.0); // x₁x₂ in v[0]
     q2.push(&[0, 1, 1], 1.0); // x₂² in v[0]
     q2.push(&[1, 0, 0], 1.0); // x₁² in v[1]
-    let x = Expr::input("x");
-    let m = Expr::tensor("Q1").times(2, x.clone()).times(3, x.clone());
-    let v = Expr::tensor("Q2").times(1, x.clone()).times(2, x);
-    Model::new(m.inverse().times(1, v))
-        .with_tensor("Q1", &["y", "y", "x", "x"], q1)
-        .with_tensor("Q2", &["y", "x", "x"], q2)
-        .with_input("x", "x")
+    eq4_form(q1, q2)
 }
 
 #[test]
@@ -96,13 +101,7 @@ fn rational_model(n: usize) -> Model {
             }
         }
     }
-    let x = Expr::input("x");
-    let m = Expr::tensor("Q1").times(2, x.clone()).times(3, x.clone());
-    let v = Expr::tensor("Q2").times(1, x.clone()).times(2, x);
-    Model::new(m.inverse().times(1, v))
-        .with_tensor("Q1", &["y", "y", "x", "x"], q1)
-        .with_tensor("Q2", &["y", "x", "x"], q2)
-        .with_input("x", "x")
+    eq4_form(q1, q2)
 }
 
 #[test]
@@ -334,20 +333,9 @@ fn composition_through_an_intermediate_basis_trades_accuracy_for_size() {
 #[test]
 fn sparse_premultiplication_matches_the_dense_reference_for_orders_2_to_5() {
     for order in 2..=5usize {
-        let shape: Vec<usize> = (0..order).map(|a| 5 + 3 * a).collect();
+        let q = common::random_sparse(order, 400);
+        let shape = q.shape().to_vec();
         let reduced: Vec<usize> = (0..order).map(|a| 2 + a % 3).collect();
-        let mut q = SparseTensor::new(&shape);
-        let total: usize = shape.iter().product();
-        let picks = random_vec(400, order as u64);
-        for (e, p) in picks.iter().enumerate() {
-            let mut flat = ((p.abs() * 1e6) as usize + e * 7919) % total;
-            let mut index = vec![0; order];
-            for a in (0..order).rev() {
-                index[a] = flat % shape[a];
-                flat /= shape[a];
-            }
-            q.push(&index, *p);
-        }
         let bases: Vec<Basis> =
             (0..order).map(|a| random_basis(shape[a], reduced[a], 100 + a as u64)).collect();
         let mats: Vec<&Tensor> = bases.iter().map(Basis::matrix).collect();

@@ -41,19 +41,9 @@ fn check(gpu: &Gpu, q: &SparseTensor, bases: &[&Tensor], terms: usize) -> Vec<Ve
 fn random_tensors() -> Vec<(SparseTensor, Vec<Tensor>)> {
     (2..=5usize)
         .map(|order| {
-            let shape: Vec<usize> = (0..order).map(|a| 5 + 3 * a).collect();
+            let q = common::random_sparse(order, 300);
+            let shape = q.shape().to_vec();
             let reduced: Vec<usize> = (0..order).map(|a| 2 + a % 3).collect();
-            let mut q = SparseTensor::new(&shape);
-            let total: usize = shape.iter().product();
-            for (e, p) in random_vec(300, order as u64).iter().enumerate() {
-                let mut flat = ((p.abs() * 1e6) as usize + e * 7919) % total;
-                let mut index = vec![0; order];
-                for a in (0..order).rev() {
-                    index[a] = flat % shape[a];
-                    flat /= shape[a];
-                }
-                q.push(&index, *p);
-            }
             let bases = (0..order).map(|a| random_basis(shape[a], reduced[a], 100 + a as u64)).collect();
             (q, bases)
         })

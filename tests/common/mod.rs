@@ -74,3 +74,21 @@ pub fn dense_reference(
     }
     t
 }
+
+/// A random sparse tensor of `order` axes with shape `5 + 3a` per axis and `nnz` entries
+/// (duplicates allowed: they add up), values in [-1, 1).
+pub fn random_sparse(order: usize, nnz: usize) -> galerkin::tensor::SparseTensor {
+    let shape: Vec<usize> = (0..order).map(|a| 5 + 3 * a).collect();
+    let mut q = galerkin::tensor::SparseTensor::new(&shape);
+    let total: usize = shape.iter().product();
+    for (e, p) in random_f32(nnz, order as u64).into_iter().map(f64::from).enumerate() {
+        let mut flat = ((p.abs() * 1e6) as usize + e * 7919) % total;
+        let mut index = vec![0; order];
+        for a in (0..order).rev() {
+            index[a] = flat % shape[a];
+            flat /= shape[a];
+        }
+        q.push(&index, p);
+    }
+    q
+}

@@ -7,7 +7,7 @@ use faer::linalg::matmul::matmul;
 use faer::{Accum, MatMut, MatRef, Par};
 use rayon::prelude::*;
 
-use super::plan::{chunks_of_groups, sorted_entries};
+use super::plan::{chunks_of_groups, sorted_entries, unit_and_key_positions};
 use super::{unit_row, unit_size, Packing, Unit};
 use crate::tensor::Tensor;
 
@@ -94,12 +94,7 @@ impl Partial {
         recycled: Vec<f64>,
     ) -> Partial {
         let s = self.sparse_axes.len();
-        let unit_pos: Vec<usize> = unit
-            .axes()
-            .iter()
-            .map(|a| self.sparse_axes.iter().position(|x| x == a).expect("sparse"))
-            .collect();
-        let key_pos: Vec<usize> = (0..s).filter(|i| !unit_pos.contains(i)).collect();
+        let (unit_pos, key_pos) = unit_and_key_positions(&self.sparse_axes, unit);
         let size = unit_size(unit, bases, packings);
         let block = self.block;
         let coords = &self.coords;

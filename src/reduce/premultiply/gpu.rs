@@ -13,7 +13,7 @@
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
 
-use super::plan::{chunks_of_groups, sorted_entries};
+use super::plan::{chunks_of_groups, sorted_entries, unit_and_key_positions};
 use super::{unit_row, unit_size, Packing, PremultiplyOptions, PremultiplyPlan, Setup, Unit};
 use crate::gpu::{
     shaders, BindingKind, Buffer, BufferBinding, ComputePipeline, ComputePipelineDesc, Gpu, GpuError,
@@ -155,12 +155,7 @@ impl Ctx<'_> {
     /// Contracts one unit on the device (see the module docs).
     fn contract_unit(&self, part: DevicePartial, unit: &Unit) -> Result<DevicePartial, ReduceError> {
         let s = part.sparse_axes.len();
-        let unit_pos: Vec<usize> = unit
-            .axes()
-            .iter()
-            .map(|a| part.sparse_axes.iter().position(|x| x == a).expect("sparse"))
-            .collect();
-        let key_pos: Vec<usize> = (0..s).filter(|i| !unit_pos.contains(i)).collect();
+        let (unit_pos, key_pos) = unit_and_key_positions(&part.sparse_axes, unit);
         let size = unit_size(unit, self.bases, self.packings);
         let block = part.block;
         let c = &part.coords;
