@@ -131,3 +131,21 @@ fn a_model_reduces_on_either_backend_and_auto_picks_the_cpu_here() {
         assert_eq!(auto.tensor("V").unwrap(), a, "auto takes the CPU backend on a CPU rasteriser");
     }
 }
+
+#[test]
+fn a_final_stage_of_three_or_more_units_matches() {
+    // Few nonzeros with distinct coordinates: the planner contracts every unit in one final
+    // stage, so the inner units go through unit stages per chunk before the fused GEMM.
+    let shape = [7, 9, 11, 13];
+    let mut q = SparseTensor::new(&shape);
+    for (e, p) in random_vec(6, 5).iter().enumerate() {
+        q.push(&[e % 7, (2 * e + 1) % 9, (3 * e + 2) % 11, (5 * e + 3) % 13], *p);
+    }
+    let bases: Vec<Tensor> =
+        shape.iter().enumerate().map(|(a, &n)| random_basis(n, 2, 60 + a as u64)).collect();
+    let refs: Vec<&Tensor> = bases.iter().collect();
+    for gpu in [common::gpu(), common::gpu_with(|d| d.max_binding_bytes = Some(256))] {
+        let stages = check(&gpu, &q, &refs, q.nnz());
+        assert!(stages.last().is_some_and(|s| s.len() >= 3), "plan {stages:?}");
+    }
+}

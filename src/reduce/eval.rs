@@ -29,6 +29,21 @@ pub(crate) trait Operands: Sync {
         }
         args.par_iter().map(|a| self.contract_tensor(name, a)).collect()
     }
+    /// `x_b = M_b⁻¹ v_b` for every input set (§4's inverse applied to a vector: a solve, never
+    /// an explicit inverse); the default solves on the CPU in f64, in parallel, the GPU
+    /// overrides it with one batched solve on the device.
+    fn solve_batch(
+        &self,
+        what: &str,
+        matrices: &[Tensor],
+        rhs: &[&[f64]],
+    ) -> Result<Vec<Tensor>, ReduceError> {
+        per_item(matrices.len(), |b| {
+            solve(what, &matrices[b], rhs[b])
+                .map(Tensor::vector)
+                .map_err(|source| ReduceError::Tensor { context: format!("{what}, input set {b}"), source })
+        })
+    }
     /// Number of input sets.
     fn batch(&self) -> usize;
     /// The named tensor, dense.
@@ -185,11 +200,12 @@ pub(crate) fn evaluate(e: &Expr, ops: &impl Operands) -> Result<Vec<Tensor>, Red
             // M⁻¹ ⊗₁ v is a solve, M⁻¹ ⊗₀ v a solve with Mᵀ: never an explicit inverse.
             if let (Expr::Inverse(m), [(axis, v)]) = (base.as_ref(), values.as_slice()) {
                 if v[0].order() == 1 {
-                    let mv = evaluate(m, ops)?;
-                    return per_item(batch, |b| {
-                        let mb = if *axis == 0 { transpose(&mv[b]) } else { mv[b].clone() };
-                        solve(&m.to_string(), &mb, v[b].data()).map(Tensor::vector).map_err(tensor_err(e))
-                    });
+                    let mut mv = evaluate(m, ops)?;
+                    if *axis == 0 {
+                        mv = mv.iter().map(transpose).collect();
+                    }
+                    let rhs: Vec<&[f64]> = v.iter().map(Tensor::data).collect();
+                    return ops.solve_batch(&m.to_string(), &mv, &rhs);
                 }
             }
             let t = evaluate(base, ops)?;

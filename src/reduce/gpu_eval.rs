@@ -4,11 +4,10 @@
 //! that dominates — a reduced tensor contracted with vectors, `Q̂ ⊗_a x ⊗_b y …` — runs on the
 //! device, for the whole batch at once, as one GEMM: with the tensor permuted so that its
 //! contracted axes lead and reshaped to `K × R`, and the batch's Khatri–Rao rows
-//! `x ⊗ y ⊗ …` stacked as `B × K`, the results are `(B × K)·(K × R)`. Solves, roots and sums
-//! of the small results stay on the CPU (faer): a reduced matrix is 128×128 at most in the
-//! paper, and a batched LU on the device is the next step for real GPUs — on lavapipe a
-//! 128×128 f32 LU does not fit the 32 KiB of shared memory, and faer on the same cores is
-//! faster than lavapipe's emulation would be.
+//! `x ⊗ y ⊗ …` stacked as `B × K`, the results are `(B × K)·(K × R)`. Inverses applied to
+//! vectors run on the device too, as one batched LU solve ([`crate::tensor::gpu::BatchedSolve`],
+//! one workgroup per system). Roots (a symmetric eigendecomposition each) and sums of the
+//! small results stay on the CPU (faer).
 //!
 //! Arrays larger than one storage binding are split: tensors by column blocks, batches by
 //! rows, bases (for lifting) by rows.
@@ -22,7 +21,7 @@ use super::error::ReduceError;
 use super::eval::{evaluate, Operands};
 use super::reduced::ReducedModel;
 use crate::gpu::{Buffer, BufferBinding, Gpu, GpuError, MemoryKind};
-use crate::tensor::gpu::{Gemm, GemmShape};
+use crate::tensor::gpu::{BatchedSolve, Gemm, GemmShape};
 use crate::tensor::{Tensor, TensorError};
 
 /// Which processor evaluates or premultiplies.
@@ -73,6 +72,7 @@ pub struct GpuReducedModel {
     gpu: Gpu,
     model: ReducedModel,
     gemm: Gemm,
+    solver: BatchedSolve,
     contractions: Mutex<ContractionCache>,
 }
 
@@ -81,7 +81,8 @@ impl GpuReducedModel {
     /// their contraction needs).
     pub fn new(gpu: &Gpu, model: ReducedModel) -> Result<Self, ReduceError> {
         let gemm = Gemm::new(gpu).map_err(gpu_err("building the GEMM pipeline"))?;
-        Ok(Self { gpu: gpu.clone(), model, gemm, contractions: Mutex::new(HashMap::new()) })
+        let solver = BatchedSolve::new(gpu).map_err(gpu_err("building the solve pipeline"))?;
+        Ok(Self { gpu: gpu.clone(), model, gemm, solver, contractions: Mutex::new(HashMap::new()) })
     }
 
     /// The model.
@@ -90,7 +91,8 @@ impl GpuReducedModel {
     }
 
     /// Evaluates `f̂` for every input set of `batch`: tensor contractions on the device (one
-    /// GEMM per contraction for the whole batch), the rest on the CPU.
+    /// GEMM per contraction for the whole batch) and solves (one batched LU) on the device,
+    /// roots and sums on the CPU.
     pub fn evaluate_batch(&self, batch: &[BTreeMap<&str, &[f64]>]) -> Result<Vec<Tensor>, ReduceError> {
         self.model.check_inputs(batch)?;
         if batch.is_empty() {
@@ -320,6 +322,26 @@ impl Operands for GpuOperands<'_> {
         self.owner
             .contract_batch(name, args)
             .map_err(|e| TensorError::NotFinite { what: name.into(), detail: e.to_string() })
+    }
+
+    fn solve_batch(
+        &self,
+        what: &str,
+        matrices: &[Tensor],
+        rhs: &[&[f64]],
+    ) -> Result<Vec<Tensor>, ReduceError> {
+        let refs: Vec<&Tensor> = matrices.iter().collect();
+        let results = self.owner.solver.solve(&self.owner.gpu, what, &refs, rhs).map_err(gpu_err(what))?;
+        results
+            .into_iter()
+            .enumerate()
+            .map(|(b, r)| {
+                r.map(Tensor::vector).map_err(|source| ReduceError::Tensor {
+                    context: format!("{what}, input set {b}"),
+                    source,
+                })
+            })
+            .collect()
     }
 
     fn batch(&self) -> usize {

@@ -6,9 +6,14 @@
 //! the unit contracted). Per batch of consecutive groups that fits the storage-binding limit,
 //! `gather_rows.comp` puts the batch's values into row order, `unit_stage.comp` contracts the
 //! unit (basis rows, or packed symmetrised rows of a symmetric group), and the batch's results
-//! are copied into the stage's output. The final stage streams over the first unit's
-//! coordinates like the CPU backend and accumulates `B_firstᵀ · W` with the tiled GEMM
-//! (`tensor/gemm.comp`).
+//! are copied into the stage's output. The final stage accumulates
+//! `out += B_firstᵀ · (U_last ⊙ X)` in `premultiply_gemm.comp`: the tiled GEMM loop of
+//! `include/gemm_tile.glsl` with its operands formed while the tiles load (first-unit rows
+//! by reference; the row-wise Kronecker product of last-unit rows and the entries' values),
+//! so the Khatri–Rao intermediate `W` is never written. Units between the first and the last
+//! (final stages of three or more units) are contracted per chunk by unit stages first.
+//! Buffers of the final stage are reused across its batches (fresh memory costs a page fault
+//! per page on first touch, which dominated before).
 
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
@@ -20,7 +25,7 @@ use crate::gpu::{
     MemoryKind, Resource,
 };
 use crate::reduce::ReduceError;
-use crate::tensor::gpu::{Gemm, GemmShape};
+use crate::tensor::gpu::GEMM_TILE;
 use crate::tensor::{SparseTensor, Tensor};
 
 use std::collections::HashMap;
@@ -33,6 +38,16 @@ struct StagePush {
     block: u32,
     g: u32,
     m: u32,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct FusedPush {
+    m: u32,
+    k: u32,
+    size: u32,
+    block: u32,
+    accumulate: u32,
 }
 
 #[repr(C)]
@@ -54,7 +69,7 @@ fn whole<T: Pod>(b: &Buffer<T>) -> BufferBinding {
 struct Kernels {
     stage: ComputePipeline,
     gather: ComputePipeline,
-    gemm: Gemm,
+    fused: ComputePipeline,
 }
 
 /// Where a stage's values are: the input's on the host (uploaded batch by batch, so the input
@@ -118,7 +133,20 @@ impl Ctx<'_> {
         }
     }
 
-    /// Rows `perm` of `src` (rows of `block` floats), in that order, on the device.
+    /// Records `dst[r] = Σ_{i ∈ starts[r]..starts[r+1]} src[perm[i]]` (rows of `block` floats).
+    fn record_gather(
+        &self,
+        cmd: vk::CommandBuffer,
+        set: &crate::gpu::DescriptorSet,
+        rows: usize,
+        block: usize,
+    ) {
+        let push = GatherPush { rows: rows as u32, block: block as u32 };
+        let groups = self.gpu.caps().groups_1d((rows * block) as u64, 256);
+        self.k.gather.record_dispatch(cmd, set, bytemuck::bytes_of(&push), [groups, 1, 1]);
+    }
+
+    /// Rows `perm` of `src` (rows of `block` floats), in that order, in a new device buffer.
     fn gather(&self, src: &Values, perm: &[u32], block: usize) -> Result<Buffer<f32>, ReduceError> {
         let src = match src {
             Values::Host(v) => {
@@ -132,22 +160,15 @@ impl Ctx<'_> {
         };
         let dst = self.scratch("premultiply rows in order", perm.len() * block)?;
         let pb = self.upload("premultiply row order", perm)?;
+        let starts: Vec<u32> = (0..=perm.len() as u32).collect();
+        let sb = self.upload("premultiply row starts", &starts)?;
         let set = self
             .k
             .gather
-            .bind(
-                self.gpu,
-                &[
-                    Resource::Storage(whole(src)),
-                    Resource::Storage(whole(&pb)),
-                    Resource::Storage(whole(&dst)),
-                ],
-            )
+            .bind(self.gpu, &[whole(src), whole(&pb), whole(&sb), whole(&dst)].map(Resource::Storage))
             .map_err(dev("binding the gather"))?;
-        let push = GatherPush { rows: perm.len() as u32, block: block as u32 };
-        let groups = self.gpu.caps().groups_1d((perm.len() * block) as u64, 256);
         self.gpu
-            .run(|cmd| self.k.gather.record_dispatch(cmd, &set, bytemuck::bytes_of(&push), [groups, 1, 1]))
+            .run(|cmd| self.record_gather(cmd, &set, perm.len(), block))
             .map_err(dev("gathering rows"))?;
         Ok(dst)
     }
@@ -199,17 +220,19 @@ impl Ctx<'_> {
                 }
                 let (r0, r1) = (group_rows[g0], group_rows[g1 + 1]);
                 let entries = row_starts[r1] - row_starts[r0];
-                let mut seen = coords_seen.clone();
-                for r in group_rows[g1]..group_rows[g1 + 1] {
-                    seen.extend(ucoords(idx[row_starts[r]]));
-                }
+                let mut new: Vec<u32> = (group_rows[g1]..group_rows[g1 + 1])
+                    .flat_map(|r| ucoords(idx[row_starts[r]]))
+                    .filter(|c| !coords_seen.contains(c))
+                    .collect();
+                new.sort_unstable();
+                new.dedup();
                 let fits = entries * block <= self.floats
                     && (g1 + 1 - g0) * size * block <= self.floats
-                    && seen.len() * m <= self.floats;
+                    && (coords_seen.len() + new.len()) * m <= self.floats;
                 if !fits {
                     break;
                 }
-                coords_seen = seen;
+                coords_seen.extend(new);
                 g1 += 1;
             }
             if g1 == g0 {
@@ -313,83 +336,83 @@ impl Ctx<'_> {
             progress(1.0);
             return r;
         }
-        let (first, rest) = (&units[0], &units[1..]);
+        let (first, last, inner) = (&units[0], &units[1], &units[2..]);
         let s = part.sparse_axes.len();
-        let first_pos: Vec<usize> = first
-            .axes()
-            .iter()
-            .map(|a| part.sparse_axes.iter().position(|x| x == a).expect("sparse"))
-            .collect();
         let size = unit_size(first, self.bases, self.packings);
-        let rest_size: usize = rest.iter().map(|u| unit_size(u, self.bases, self.packings)).product();
+        let rest_size: usize = units[1..].iter().map(|u| unit_size(u, self.bases, self.packings)).product();
         let w_block = rest_size * part.block;
         if size * w_block > self.floats {
             return Err(self.over_limit("the final block", size * w_block));
         }
-        let idx = sorted_entries(&part.coords, s, &first_pos, &[]);
-        let first_of = |e: usize| first_pos.iter().map(|&i| part.coords[e * s + i]).collect::<Vec<u32>>();
-        let per_chunk = (self.floats / w_block.max(1)).min(self.floats / size.max(1)).max(1);
         let out = self.scratch("premultiply final block", size * w_block)?;
-        let mut first_chunk = true;
-        let mut row = Vec::new();
-        for range in chunks_of_groups(&idx, first_of, per_chunk) {
-            let (i, j) = (range.start, range.end);
-            let perm: Vec<u32> = idx[i..j].iter().map(|&e| e as u32).collect();
-            let values = match &part.values {
-                // A host chunk stays on the host: its batches are uploaded as they run.
-                Values::Host(v) => Values::Host(
-                    perm.iter()
-                        .flat_map(|&e| {
-                            v[e as usize * part.block..(e as usize + 1) * part.block].iter().copied()
-                        })
-                        .collect(),
-                ),
-                Values::Device(_) => Values::Device(self.gather(&part.values, &perm, part.block)?),
-            };
-            let mut w = DevicePartial {
-                sparse_axes: part.sparse_axes.clone(),
-                coords: idx[i..j]
-                    .iter()
-                    .flat_map(|&e| part.coords[e * s..(e + 1) * s].iter().copied())
-                    .collect(),
-                dense: Vec::new(),
+        let mut scratch = FusedScratch::default();
+        let positions = |sparse_axes: &[usize], unit: &Unit| -> Vec<usize> {
+            unit.axes().iter().map(|a| sparse_axes.iter().position(|x| x == a).expect("sparse")).collect()
+        };
+        let first_pos = positions(&part.sparse_axes, first);
+        if inner.is_empty() {
+            // One sort by (first, last) coordinates; the fused GEMM streams over its rows.
+            let last_pos = positions(&part.sparse_axes, last);
+            let idx = sorted_entries(&part.coords, s, &first_pos, &last_pos);
+            let piece = Piece {
+                values: &part.values,
                 block: part.block,
-                entries: j - i,
-                values,
+                sparse_axes: &part.sparse_axes,
+                coords: &part.coords,
             };
-            for u in rest.iter().rev() {
-                w = self.contract_unit(w, u)?;
-            }
-            // out (size × w_block) += Rowsᵀ (size × d) · W (d × w_block).
-            let d = w.entries;
-            let fp = first_pos.len();
-            let mut at = vec![0f32; size * d];
-            for e in 0..d {
-                unit_row(first, &w.coords[e * fp..(e + 1) * fp], self.bases, self.packings, &mut row);
-                for (t, &v) in row.iter().enumerate() {
-                    at[t * d + e] = v as f32;
+            self.fused_gemm(&piece, &idx, first, last, &out, &mut scratch, false, progress)?;
+        } else {
+            // Chunks of whole first-unit groups; the inner units are contracted per chunk by
+            // unit stages, then the chunk's result goes through the fused GEMM.
+            let idx = sorted_entries(&part.coords, s, &first_pos, &[]);
+            let first_of = |e: usize| first_pos.iter().map(|&i| part.coords[e * s + i]).collect::<Vec<u32>>();
+            let per_chunk = (self.floats / w_block.max(1)).min(self.floats / size.max(1)).max(1);
+            let mut accumulate = false;
+            for range in chunks_of_groups(&idx, first_of, per_chunk) {
+                let (i, j) = (range.start, range.end);
+                let perm: Vec<u32> = idx[i..j].iter().map(|&e| e as u32).collect();
+                let values = match &part.values {
+                    // A host chunk stays on the host: its batches are uploaded as they run.
+                    Values::Host(v) => Values::Host(
+                        perm.iter()
+                            .flat_map(|&e| {
+                                v[e as usize * part.block..(e as usize + 1) * part.block].iter().copied()
+                            })
+                            .collect(),
+                    ),
+                    Values::Device(_) => Values::Device(self.gather(&part.values, &perm, part.block)?),
+                };
+                let mut w = DevicePartial {
+                    sparse_axes: part.sparse_axes.clone(),
+                    coords: idx[i..j]
+                        .iter()
+                        .flat_map(|&e| part.coords[e * s..(e + 1) * s].iter().copied())
+                        .collect(),
+                    dense: Vec::new(),
+                    block: part.block,
+                    entries: j - i,
+                    values,
+                };
+                for u in inner.iter().rev() {
+                    w = self.contract_unit(w, u)?;
                 }
+                let ws = w.sparse_axes.len();
+                let widx = sorted_entries(
+                    &w.coords,
+                    ws,
+                    &positions(&w.sparse_axes, first),
+                    &positions(&w.sparse_axes, last),
+                );
+                let piece = Piece {
+                    values: &w.values,
+                    block: w.block,
+                    sparse_axes: &w.sparse_axes,
+                    coords: &w.coords,
+                };
+                self.fused_gemm(&piece, &widx, first, last, &out, &mut scratch, accumulate, &|_| ())?;
+                accumulate = true;
+                progress(j as f64 / idx.len() as f64);
             }
-            let a = self.upload("premultiply first-unit rows", &at)?;
-            let binding = self
-                .k
-                .gemm
-                .bind(
-                    self.gpu,
-                    whole(&a),
-                    whole(match &w.values {
-                        Values::Device(b) => b,
-                        Values::Host(_) => unreachable!("a contracted stage's values are on the device"),
-                    }),
-                    whole(&out),
-                    GemmShape { m: size as u32, n: w_block as u32, k: d as u32 },
-                )
-                .map_err(dev("binding the final GEMM"))?;
-            self.gpu
-                .run(|cmd| self.k.gemm.record(cmd, &binding, !first_chunk))
-                .map_err(dev("the final GEMM"))?;
-            first_chunk = false;
-            progress(j as f64 / idx.len() as f64);
         }
         let mut dense = units.to_vec();
         dense.extend(part.dense);
@@ -402,6 +425,222 @@ impl Ctx<'_> {
             values: Values::Device(out),
         })
     }
+
+    /// `out[t][s·block + b] (+)= Σ_e F_first(e)[t] · U_last(e)[s] · values[e][b]` over the
+    /// entries `idx` of `piece` (sorted by first-unit, then last-unit coordinates; every sparse
+    /// axis belongs to one of the two units), as `premultiply_gemm.comp` dispatches over
+    /// batches of rows (entries with equal coordinates, summed) that fit one binding each.
+    #[allow(clippy::too_many_arguments)]
+    fn fused_gemm(
+        &self,
+        piece: &Piece<'_>,
+        idx: &[usize],
+        first: &Unit,
+        last: &Unit,
+        out: &Buffer<f32>,
+        scratch: &mut FusedScratch,
+        mut accumulate: bool,
+        progress: &dyn Fn(f64),
+    ) -> Result<(), ReduceError> {
+        let s = piece.sparse_axes.len();
+        let positions = |unit: &Unit| -> Vec<usize> {
+            unit.axes()
+                .iter()
+                .map(|a| piece.sparse_axes.iter().position(|x| x == a).expect("sparse"))
+                .collect()
+        };
+        let (fpos, lpos) = (positions(first), positions(last));
+        debug_assert_eq!(fpos.len() + lpos.len(), s, "every sparse axis is in the first or last unit");
+        let c = piece.coords;
+        let fkey = |e: usize| fpos.iter().map(move |&i| c[e * s + i]);
+        let lkey = |e: usize| lpos.iter().map(move |&i| c[e * s + i]);
+        let mut row_start = vec![0usize];
+        for i in 1..idx.len() {
+            if !fkey(idx[i - 1]).eq(fkey(idx[i])) || !lkey(idx[i - 1]).eq(lkey(idx[i])) {
+                row_start.push(i);
+            }
+        }
+        row_start.push(idx.len());
+        let rows = row_start.len() - 1;
+        let size = unit_size(first, self.bases, self.packings);
+        let last_size = unit_size(last, self.bases, self.packings);
+        let block = piece.block;
+        let mut unit = Vec::new();
+        let mut r0 = 0;
+        while r0 < rows {
+            // The batch: as many rows as fit (their values, first-unit rows and last-unit rows).
+            let (mut r1, mut firsts) = (r0, 0usize);
+            while r1 < rows {
+                let new_first = r1 == r0 || !fkey(idx[row_start[r1]]).eq(fkey(idx[row_start[r1 - 1]]));
+                let f = firsts + usize::from(new_first);
+                if (r1 + 1 - r0) * block.max(last_size) > self.floats || f * size > self.floats {
+                    break;
+                }
+                (firsts, r1) = (f, r1 + 1);
+            }
+            if r1 == r0 {
+                return Err(self.over_limit("one row of the final stage", block.max(last_size).max(size)));
+            }
+            let mut first_rows = Vec::with_capacity(firsts * size);
+            let mut fref = Vec::with_capacity(r1 - r0);
+            let mut last_rows = Vec::new();
+            let mut uref = Vec::with_capacity(r1 - r0);
+            let mut last_index: HashMap<Vec<u32>, u32> = HashMap::new();
+            for r in r0..r1 {
+                let e = idx[row_start[r]];
+                if r == r0 || !fkey(e).eq(fkey(idx[row_start[r - 1]])) {
+                    let coords: Vec<u32> = fkey(e).collect();
+                    unit_row(first, &coords, self.bases, self.packings, &mut unit);
+                    first_rows.extend(unit.iter().map(|&v| v as f32));
+                }
+                fref.push((first_rows.len() / size - 1) as u32);
+                let coords: Vec<u32> = lkey(e).collect();
+                let next = last_index.len() as u32;
+                let k = *last_index.entry(coords).or_insert_with_key(|coords| {
+                    unit_row(last, coords, self.bases, self.packings, &mut unit);
+                    last_rows.extend(unit.iter().map(|&v| v as f32));
+                    next
+                });
+                uref.push(k);
+            }
+            let (e0, e1) = (row_start[r0], row_start[r1]);
+            let perm: Vec<u32> = idx[e0..e1].iter().map(|&e| e as u32).collect();
+            let starts: Vec<u32> = row_start[r0..=r1].iter().map(|&x| (x - e0) as u32).collect();
+            let n_rows = r1 - r0;
+            let fb = scratch.first_rows.fill(self, "premultiply first-unit rows", &first_rows)?;
+            let frb = scratch.first_ref.fill(self, "premultiply first-unit refs", &fref)?;
+            let lb = scratch.last_rows.fill(self, "premultiply last-unit rows", &last_rows)?;
+            let lrb = scratch.last_ref.fill(self, "premultiply last-unit refs", &uref)?;
+            let gathered = match piece.values {
+                Values::Host(v) => {
+                    let mut x = vec![0f32; n_rows * block];
+                    for (r, xr) in x.chunks_exact_mut(block.max(1)).enumerate() {
+                        for &e in &perm[starts[r] as usize..starts[r + 1] as usize] {
+                            for (o, &y) in xr.iter_mut().zip(&v[e as usize * block..(e as usize + 1) * block])
+                            {
+                                *o += y;
+                            }
+                        }
+                    }
+                    scratch.rows.fill(self, "premultiply final-stage rows", &x)?;
+                    None
+                }
+                Values::Device(src) => {
+                    scratch.rows.reserve(self, "premultiply final-stage rows", n_rows * block)?;
+                    let pb = scratch.perm.fill(self, "premultiply row order", &perm)?;
+                    let sb = scratch.starts.fill(self, "premultiply row starts", &starts)?;
+                    let set = self
+                        .k
+                        .gather
+                        .bind(
+                            self.gpu,
+                            &[whole(src), whole(pb), whole(sb), whole(scratch.rows.get())]
+                                .map(Resource::Storage),
+                        )
+                        .map_err(dev("binding the gather"))?;
+                    Some(set)
+                }
+            };
+            let set = self
+                .k
+                .fused
+                .bind(
+                    self.gpu,
+                    &[whole(fb), whole(frb), whole(lb), whole(lrb), whole(scratch.rows.get()), whole(out)]
+                        .map(Resource::Storage),
+                )
+                .map_err(dev("binding the final GEMM"))?;
+            let push = FusedPush {
+                m: size as u32,
+                k: n_rows as u32,
+                size: last_size as u32,
+                block: block as u32,
+                accumulate: u32::from(accumulate),
+            };
+            let groups =
+                [((last_size * block) as u32).div_ceil(GEMM_TILE), (size as u32).div_ceil(GEMM_TILE), 1];
+            self.gpu
+                .run(|cmd| {
+                    if let Some(gather) = &gathered {
+                        self.record_gather(cmd, gather, n_rows, block);
+                        self.gpu.memory_barrier(
+                            cmd,
+                            (vk::PipelineStageFlags::COMPUTE_SHADER, vk::AccessFlags::SHADER_WRITE),
+                            (vk::PipelineStageFlags::COMPUTE_SHADER, vk::AccessFlags::SHADER_READ),
+                        );
+                    }
+                    self.k.fused.record_dispatch(cmd, &set, bytemuck::bytes_of(&push), groups);
+                })
+                .map_err(dev("the final GEMM"))?;
+            accumulate = true;
+            r0 = r1;
+            progress(r0 as f64 / rows as f64);
+        }
+        Ok(())
+    }
+}
+
+/// Entries with coordinates on the host and blocks of values, as the fused GEMM reads them.
+struct Piece<'a> {
+    values: &'a Values,
+    block: usize,
+    sparse_axes: &'a [usize],
+    coords: &'a [u32],
+}
+
+/// A device buffer kept between batches and grown when too small, so that streaming does not
+/// allocate (and page-fault in) fresh memory for every batch.
+struct Reused<T: Pod>(Option<Buffer<T>>);
+
+impl<T: Pod> Default for Reused<T> {
+    fn default() -> Self {
+        Self(None)
+    }
+}
+
+impl<T: Pod> Reused<T> {
+    /// At least `len` elements (contents undefined).
+    fn reserve(&mut self, ctx: &Ctx<'_>, name: &str, len: usize) -> Result<&Buffer<T>, ReduceError> {
+        if self.0.as_ref().is_none_or(|b| (b.len() as usize) < len.max(1)) {
+            self.0 = None;
+            let grown = len.max(1) + len / 4;
+            self.0 = Some(
+                Buffer::new(
+                    ctx.gpu,
+                    name,
+                    grown as u64,
+                    vk::BufferUsageFlags::STORAGE_BUFFER,
+                    MemoryKind::GpuOnly,
+                )
+                .map_err(dev(name))?,
+            );
+        }
+        Ok(self.get())
+    }
+
+    /// `data` at the start of the buffer.
+    fn fill(&mut self, ctx: &Ctx<'_>, name: &str, data: &[T]) -> Result<&Buffer<T>, ReduceError> {
+        self.reserve(ctx, name, data.len())?;
+        let b = self.get();
+        b.upload(ctx.gpu, 0, data).map_err(dev(name))?;
+        Ok(b)
+    }
+
+    fn get(&self) -> &Buffer<T> {
+        self.0.as_ref().expect("reserved before use")
+    }
+}
+
+/// The buffers of the fused final stage, reused across its batches.
+#[derive(Default)]
+struct FusedScratch {
+    first_rows: Reused<f32>,
+    first_ref: Reused<u32>,
+    last_rows: Reused<f32>,
+    last_ref: Reused<u32>,
+    rows: Reused<f32>,
+    perm: Reused<u32>,
+    starts: Reused<u32>,
 }
 
 /// `Q̂` of a sparse tensor on the GPU (f32), with the plan the CPU backend would follow (its
@@ -422,7 +661,7 @@ pub fn premultiply_sparse_gpu(
     if q.nnz() == 0 {
         return Ok((Tensor::zeros(&setup.reduced_shape), setup.plan));
     }
-    let stage = |name: &str, spirv: &[u32], bindings: &[BindingKind], push: usize| {
+    let stage = |name: &str, spirv: &[u32], bindings: &[BindingKind], push: usize, shared: u32| {
         ComputePipeline::new(
             gpu,
             &ComputePipelineDesc {
@@ -431,7 +670,7 @@ pub fn premultiply_sparse_gpu(
                 bindings,
                 push_constant_bytes: push as u32,
                 specialization: &[],
-                shared_bytes: 0,
+                shared_bytes: shared,
             },
         )
         .map_err(dev("building a premultiply pipeline"))
@@ -442,14 +681,22 @@ pub fn premultiply_sparse_gpu(
             shaders::tensor::UNIT_STAGE,
             &[BindingKind::StorageBuffer; 7],
             std::mem::size_of::<StagePush>(),
+            0,
         )?,
         gather: stage(
             "premultiply gather",
             shaders::tensor::GATHER_ROWS,
-            &[BindingKind::StorageBuffer; 3],
+            &[BindingKind::StorageBuffer; 4],
             std::mem::size_of::<GatherPush>(),
+            0,
         )?,
-        gemm: Gemm::new(gpu).map_err(dev("building the GEMM pipeline"))?,
+        fused: stage(
+            "premultiply final GEMM",
+            shaders::tensor::PREMULTIPLY_GEMM,
+            &[BindingKind::StorageBuffer; 6],
+            std::mem::size_of::<FusedPush>(),
+            16 * 1024,
+        )?,
     };
     let ctx = Ctx { gpu, k: &kernels, bases, packings: &setup.packings, floats };
     let values: Vec<f32> = q.values().iter().map(|&v| v as f32).collect();

@@ -1,7 +1,5 @@
-//! Tensor operations on the device. One kernel serves them all for now: the shared-memory tiled
-//! SGEMM (`shaders-glsl/tensor/gemm.comp`), because every reduced-space contraction of a
-//! batch is a GEMM once the batch's Khatri–Rao rows are formed (see
-//! [`crate::reduce::GpuReducedModel`]).
+//! The shared-memory tiled SGEMM (`shaders-glsl/tensor/gemm.comp`, tiling in
+//! `shaders-glsl/include/gemm_tile.glsl`).
 
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
