@@ -14,11 +14,13 @@
 //!
 //! The layers: [`gpu`] (Vulkan, knows nothing of the maths), [`render`] (targets, images,
 //! colour maps, camera, viewer), [`demo`] (the first passes with their CPU references),
-//! [`bench`] (the device's ceilings).
+//! [`bench`] (the device's ceilings), [`tensor`] and [`reduce`] (seed 000 §3–4), [`spacetime`]
+//! (seed 003).
 
 pub mod bench;
 pub mod demo;
 pub mod gpu;
 pub mod reduce;
 pub mod render;
+pub mod spacetime;
 pub mod tensor;

@@ -1,0 +1,84 @@
+// The spacetime DG element field of seed 003 §4.2.1 and its derived fields.
+// Twin of src/spacetime/cubic.rs (same monomial order, same formulas); tests/spacetime_fields.rs
+// checks they agree.
+#ifndef GALERKIN_SPACETIME_CUBIC_GLSL
+#define GALERKIN_SPACETIME_CUBIC_GLSL
+
+// Exponents (x, y, t) of 1, x, y, t, x², xy, xt, y², yt, t², x³, x²y, x²t, xy², xyt, xt², y³,
+// y²t, yt², t³.
+const ivec3 SPACETIME_MONOMIALS[20] = ivec3[20](
+    ivec3(0, 0, 0), ivec3(1, 0, 0), ivec3(0, 1, 0), ivec3(0, 0, 1), ivec3(2, 0, 0),
+    ivec3(1, 1, 0), ivec3(1, 0, 1), ivec3(0, 2, 0), ivec3(0, 1, 1), ivec3(0, 0, 2),
+    ivec3(3, 0, 0), ivec3(2, 1, 0), ivec3(2, 0, 1), ivec3(1, 2, 0), ivec3(1, 1, 1),
+    ivec3(1, 0, 2), ivec3(0, 3, 0), ivec3(0, 2, 1), ivec3(0, 1, 2), ivec3(0, 0, 3));
+
+// One element as stored on the device (std430, 192 bytes): frame centre and λ, extents and μ,
+// the 20 displacement coefficients. Rust: spacetime::GpuElement.
+struct SpacetimeElement {
+    vec4 centre_lambda;
+    vec4 extent_mu;
+    vec2 c[20];
+};
+
+struct SpacetimeFields {
+    vec2 displacement;
+    vec2 velocity;
+    float speed;
+    vec2 speed_gradient;
+    vec3 strain;   // (ε_xx, ε_yy, ε_xy)
+    float strain_energy_density;
+};
+
+float spacetime_power(vec4 p, int e) { return e < 0 ? 0.0 : p[e]; }
+
+// Fields of element `el` at the global spacetime point p = (x, y, t).
+SpacetimeFields spacetime_evaluate(SpacetimeElement el, vec3 p) {
+    vec3 w = el.extent_mu.xyz;
+    vec3 q = (p - el.centre_lambda.xyz) / w;
+    vec4 px = vec4(1.0, q.x, q.x * q.x, q.x * q.x * q.x);
+    vec4 py = vec4(1.0, q.y, q.y * q.y, q.y * q.y * q.y);
+    vec4 pt = vec4(1.0, q.z, q.z * q.z, q.z * q.z * q.z);
+    vec2 u = vec2(0.0), ux = vec2(0.0), uy = vec2(0.0), ut = vec2(0.0), utx = vec2(0.0), uty = vec2(0.0);
+    for (int k = 0; k < 20; ++k) {
+        ivec3 e = SPACETIME_MONOMIALS[k];
+        float a = float(e.x), b = float(e.y), d = float(e.z);
+        float xa = spacetime_power(px, e.x), yb = spacetime_power(py, e.y), td = spacetime_power(pt, e.z);
+        float xa1 = spacetime_power(px, e.x - 1), yb1 = spacetime_power(py, e.y - 1);
+        float td1 = spacetime_power(pt, e.z - 1);
+        vec2 c = el.c[k];
+        u += c * (xa * yb * td);
+        ux += c * (a * xa1 * yb * td);
+        uy += c * (b * xa * yb1 * td);
+        ut += c * (d * xa * yb * td1);
+        utx += c * (a * d * xa1 * yb * td1);
+        uty += c * (b * d * xa * yb1 * td1);
+    }
+    SpacetimeFields f;
+    f.displacement = u;
+    f.velocity = ut / w.z;
+    // Columns: ∂u/∂x̂ and ∂u/∂ŷ in global units.
+    vec2 gx = ux / w.x, gy = uy / w.y;
+    f.strain = vec3(gx.x, gy.y, 0.5 * (gy.x + gx.y));
+    f.speed = length(f.velocity);
+    if (f.speed > 0.0) {
+        vec2 dvx = utx / (w.z * w.x), dvy = uty / (w.z * w.y);
+        f.speed_gradient = vec2(dot(f.velocity, dvx), dot(f.velocity, dvy)) / f.speed;
+    } else {
+        f.speed_gradient = vec2(0.0);
+    }
+    float lambda = el.centre_lambda.w, mu = el.extent_mu.w;
+    float tr = f.strain.x + f.strain.y;
+    f.strain_energy_density =
+        0.5 * (lambda * tr * tr + 2.0 * mu * (f.strain.x * f.strain.x + f.strain.y * f.strain.y
+                                                + 2.0 * f.strain.z * f.strain.z));
+    return f;
+}
+
+// Unit normal of the height field z = height_scale · |v| (seed 003 §4.2.3); (0, 0, 1) where
+// |v| = 0 (the gradient is then zero).
+vec3 spacetime_normal(SpacetimeFields f, float height_scale) {
+    vec2 g = height_scale * f.speed_gradient;
+    return normalize(vec3(-g, 1.0));
+}
+
+#endif

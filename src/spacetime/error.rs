@@ -1,0 +1,68 @@
+//! Errors of the spacetime module: bad data name the element (and the file, when read).
+
+use std::path::PathBuf;
+
+/// What can go wrong with a spacetime data set.
+#[derive(Debug, thiserror::Error)]
+pub enum SpacetimeError {
+    /// A tetrahedron references a vertex that does not exist.
+    #[error("element {element}: vertex index {index} is out of range ({vertices} vertices)")]
+    BadIndex {
+        /// The element.
+        element: usize,
+        /// The index.
+        index: u64,
+        /// Number of vertices.
+        vertices: usize,
+    },
+    /// A tetrahedron with (numerically) zero spacetime volume (seed 003 §4.1 assumes none).
+    #[error("element {element}: degenerate tetrahedron (spacetime volume {volume:e})")]
+    Degenerate {
+        /// The element.
+        element: usize,
+        /// Its signed volume.
+        volume: f64,
+    },
+    /// A NaN or infinity in a vertex, frame, material or coefficient.
+    #[error("element {element}: {what} is not finite")]
+    NotFinite {
+        /// The element (or vertex, for vertex data).
+        element: usize,
+        /// Which value.
+        what: String,
+    },
+    /// A frame with a non-positive extent, or a material with non-positive μ or density.
+    #[error("element {element}: {what}")]
+    Invalid {
+        /// The element.
+        element: usize,
+        /// What is wrong.
+        what: String,
+    },
+    /// Array lengths that disagree.
+    #[error("{what}: {found} entries, expected {expected}")]
+    Length {
+        /// The array.
+        what: String,
+        /// Entries found.
+        found: usize,
+        /// Entries expected.
+        expected: usize,
+    },
+    /// A problem reading or writing a file.
+    #[error("{path}: {detail}")]
+    File {
+        /// The file.
+        path: PathBuf,
+        /// What went wrong.
+        detail: String,
+    },
+    /// A device failure.
+    #[error("{context}: {source}")]
+    Device {
+        /// What was being done.
+        context: String,
+        /// The failure.
+        source: crate::gpu::GpuError,
+    },
+}

@@ -1,0 +1,243 @@
+//! Synthetic spacetime data sets. There is no spacetime DG solver here: the fields are
+//! *analytic* elastodynamic solutions (plane pressure and shear pulses, which solve the
+//! equations of linear elasticity exactly in a homogeneous medium) projected element by
+//! element onto the 20 cubic monomials (an L2 projection per element, so the data are
+//! discontinuous across faces exactly as a DG solution is). They are not solved.
+//!
+//! The mesh is a structured extrusion: a triangulated rectangle, extruded through time layers,
+//! each prism split into three tetrahedra by the global vertex order (so neighbours agree on
+//! the split and the mesh is conforming). The tent-pitching mesher of the issue is not built yet.
+
+use rayon::prelude::*;
+
+use super::cubic::{CubicCoefficients, LocalFrame, Material, MONOMIALS};
+use super::mesh::{ElementField, SpacetimeMesh};
+use crate::tensor::{solve, Tensor};
+
+/// Five-point Gauss–Legendre rule on [0, 1]: nodes and weights.
+const GAUSS5: [(f64, f64); 5] = [
+    (0.046_910_077_030_668_0, 0.118_463_442_528_094_5),
+    (0.230_765_344_947_158_5, 0.239_314_335_249_683_2),
+    (0.5, 0.284_444_444_444_444_4),
+    (0.769_234_655_052_841_5, 0.239_314_335_249_683_2),
+    (0.953_089_922_969_332_0, 0.118_463_442_528_094_5),
+];
+
+/// Quadrature points (barycentric weights of corners 1, 2, 3) and weights (summing to 1) on a
+/// tetrahedron: the collapsed-coordinate product of 5-point Gauss rules, exact for polynomials
+/// of degree 6 (a cubic times a cubic: the L2 projection's mass matrix) — the collapse adds
+/// degree 3 in the first coordinate, within the rule's degree 9.
+fn tet_quadrature() -> Vec<([f64; 3], f64)> {
+    let mut q = Vec::with_capacity(125);
+    for &(a, wa) in &GAUSS5 {
+        for &(b, wb) in &GAUSS5 {
+            for &(c, wc) in &GAUSS5 {
+                let l1 = a;
+                let l2 = b * (1.0 - a);
+                let l3 = c * (1.0 - a) * (1.0 - b);
+                // d(l1, l2, l3) = (1 − a)² (1 − b) da db dc; the reference volume is 1/6.
+                q.push(([l1, l2, l3], 6.0 * wa * wb * wc * (1.0 - a) * (1.0 - a) * (1.0 - b)));
+            }
+        }
+    }
+    q
+}
+
+/// Values of the 20 monomials at local point `q`.
+fn monomials(q: [f64; 3]) -> [f64; 20] {
+    let mut m = [0.0; 20];
+    for (k, e) in MONOMIALS.iter().enumerate() {
+        m[k] = q[0].powi(e[0] as i32) * q[1].powi(e[1] as i32) * q[2].powi(e[2] as i32);
+    }
+    m
+}
+
+/// The L2 projection of `field` onto the cubic monomials of an element with corners `p`, in
+/// the element's bounding-box frame.
+pub fn project_element(
+    p: [[f64; 3]; 4],
+    field: &(impl Fn([f64; 3]) -> [f64; 2] + Sync),
+) -> (LocalFrame, CubicCoefficients) {
+    let frame = LocalFrame::bounding(&p);
+    let mut mass = vec![0.0; 400];
+    let mut rhs = [[0.0; 20]; 2];
+    for (l, w) in tet_quadrature() {
+        let l0 = 1.0 - l[0] - l[1] - l[2];
+        let x: [f64; 3] =
+            std::array::from_fn(|k| l0 * p[0][k] + l[0] * p[1][k] + l[1] * p[2][k] + l[2] * p[3][k]);
+        let m = monomials(frame.local(x));
+        let f = field(x);
+        for i in 0..20 {
+            for j in 0..20 {
+                mass[i * 20 + j] += w * m[i] * m[j];
+            }
+            rhs[0][i] += w * m[i] * f[0];
+            rhs[1][i] += w * m[i] * f[1];
+        }
+    }
+    let mass = Tensor::from_vec(&[20, 20], mass).expect("20 × 20");
+    let mut c = [[0.0; 2]; 20];
+    for comp in 0..2 {
+        // The mass matrix of 20 monomials on a non-degenerate element is SPD.
+        let x = solve("element mass matrix", &mass, &rhs[comp]).expect("non-degenerate element");
+        for k in 0..20 {
+            c[k][comp] = x[k];
+        }
+    }
+    (frame, c)
+}
+
+/// A structured spacetime mesh over `[0, size[0]] × [0, size[1]] × [0, duration]`: `nx × ny`
+/// squares, each split into two triangles, extruded through `nt` equal time layers, each
+/// prism split into three tetrahedra (`6 nx ny nt` elements), sorted by lowest time. Fields
+/// are zero and the one material is `material`.
+pub fn structured_mesh(
+    nx: usize,
+    ny: usize,
+    nt: usize,
+    size: [f64; 2],
+    duration: f64,
+    material: Material,
+) -> SpacetimeMesh {
+    let layer = (nx + 1) * (ny + 1);
+    let mut vertices = Vec::with_capacity(layer * (nt + 1));
+    for k in 0..=nt {
+        for j in 0..=ny {
+            for i in 0..=nx {
+                vertices.push([
+                    size[0] * i as f64 / nx as f64,
+                    size[1] * j as f64 / ny as f64,
+                    duration * k as f64 / nt as f64,
+                ]);
+            }
+        }
+    }
+    let mut tets = Vec::with_capacity(6 * nx * ny * nt);
+    for k in 0..nt {
+        for j in 0..ny {
+            for i in 0..nx {
+                let v = |di: usize, dj: usize| (j + dj) * (nx + 1) + i + di;
+                for tri in [[v(0, 0), v(1, 0), v(1, 1)], [v(0, 0), v(1, 1), v(0, 1)]] {
+                    // Prism split by the global order of the base triangle's vertices: neighbours
+                    // sharing a quadrilateral face pick the same diagonal.
+                    let mut t = tri;
+                    t.sort_unstable();
+                    let [a, b, c] = t.map(|x| (x + k * layer) as u32);
+                    let up = layer as u32;
+                    tets.push([a, b, c, c + up]);
+                    tets.push([a, b, b + up, c + up]);
+                    tets.push([a, a + up, b + up, c + up]);
+                }
+            }
+        }
+    }
+    let zero = ElementField {
+        frame: LocalFrame { centre: [0.0; 3], extent: [1.0; 3] },
+        material: 0,
+        coefficients: [[0.0; 2]; 20],
+    };
+    let mut mesh =
+        SpacetimeMesh { vertices, tets, fields: vec![zero; 6 * nx * ny * nt], materials: vec![material] };
+    mesh.sort_by_lowest_time();
+    mesh
+}
+
+/// Fills every element with the L2 projection of `field` (in parallel).
+pub fn project_field(mesh: &mut SpacetimeMesh, field: &(impl Fn([f64; 3]) -> [f64; 2] + Sync)) {
+    let corners: Vec<[[f64; 3]; 4]> = (0..mesh.tets.len()).map(|e| mesh.corners(e)).collect();
+    let projected: Vec<(LocalFrame, CubicCoefficients)> =
+        corners.par_iter().map(|&p| project_element(p, field)).collect();
+    for (f, (frame, c)) in mesh.fields.iter_mut().zip(projected) {
+        f.frame = frame;
+        f.coefficients = c;
+    }
+}
+
+/// A Gaussian pulse `g(ξ) = exp(−ξ² / (2σ²))`.
+fn gaussian(xi: f64, sigma: f64) -> f64 {
+    (-xi * xi / (2.0 * sigma * sigma)).exp()
+}
+
+/// A plane pressure pulse travelling along the unit direction `d` plus a shear pulse along
+/// `e`, each an exact solution of linear elastodynamics in the homogeneous `material`:
+/// `u = A d g(d·x − c_p t − s_p) + B e⊥ g(e·x − c_s t − s_s)`.
+pub fn crossing_pulses(material: Material, size: [f64; 2]) -> impl Fn([f64; 3]) -> [f64; 2] + Sync {
+    let (cp, cs) = (material.p_wave_speed(), material.s_wave_speed());
+    let d = [0.8, 0.6];
+    let e = [-0.6, 0.8];
+    let sigma = 0.08 * size[0].max(size[1]);
+    let amp = 0.01 * size[0].max(size[1]);
+    move |p: [f64; 3]| {
+        let xi_p = d[0] * p[0] + d[1] * p[1] - cp * p[2] - 0.1 * size[0];
+        let xi_s = e[0] * (p[0] - size[0]) + e[1] * p[1] - cs * p[2] + 0.1 * size[0];
+        let gp = amp * gaussian(xi_p, sigma);
+        let gs = 0.7 * amp * gaussian(xi_s, sigma);
+        // Shear pulse polarised across its direction: e⊥ = (−e_y, e_x).
+        [d[0] * gp - e[1] * gs, d[1] * gp + e[0] * gs]
+    }
+}
+
+/// The data set of `galerkin spacetime-gen --scenario pulses`: the unit square over a time
+/// span that lets both pulses cross it, with about `elements` tetrahedra.
+pub fn pulses(elements: usize) -> SpacetimeMesh {
+    let k = ((elements as f64 / 6.0).cbrt().round() as usize).max(1);
+    let material = Material { lambda: 2.0, mu: 1.0, density: 1.0 };
+    let size = [1.0, 1.0];
+    let mut mesh = structured_mesh(k, k, k, size, 1.0 / material.p_wave_speed(), material);
+    project_field(&mut mesh, &crossing_pulses(material, size));
+    mesh
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::spacetime::cubic::evaluate;
+
+    #[test]
+    fn quadrature_integrates_degree_six_exactly() {
+        // ∫ over the unit tetrahedron of x^a y^b z^c = a! b! c! / (a + b + c + 3)!.
+        let fact = |n: u32| (1..=n).map(f64::from).product::<f64>();
+        let q = tet_quadrature();
+        for (a, b, c) in [(0, 0, 0), (2, 2, 2), (6, 0, 0), (3, 2, 1), (1, 4, 1)] {
+            let got: f64 = q.iter().map(|(l, w)| w / 6.0 * l[0].powi(a) * l[1].powi(b) * l[2].powi(c)).sum();
+            let want = fact(a as u32) * fact(b as u32) * fact(c as u32) / fact((a + b + c + 3) as u32);
+            assert!((got - want).abs() < 1e-15, "{a} {b} {c}: {got} vs {want}");
+        }
+    }
+
+    #[test]
+    fn a_cubic_field_is_projected_exactly() {
+        let material = Material { lambda: 1.0, mu: 1.0, density: 1.0 };
+        let mut mesh = structured_mesh(2, 2, 2, [1.0, 1.0], 1.0, material);
+        let f = |p: [f64; 3]| [p[0] * p[1] * p[2] - p[2] * p[2], 2.0 * p[0].powi(3) + p[1]];
+        project_field(&mut mesh, &f);
+        mesh.validate().unwrap();
+        for e in 0..mesh.tets.len() {
+            let c = mesh.corners(e);
+            let x = [
+                0.25 * (c[0][0] + c[1][0] + c[2][0] + c[3][0]),
+                0.25 * (c[0][1] + c[1][1] + c[2][1] + c[3][1]),
+                0.25 * (c[0][2] + c[1][2] + c[2][2] + c[3][2]),
+            ];
+            let got =
+                evaluate(&mesh.fields[e].frame, &material, &mesh.fields[e].coefficients, x).displacement;
+            let want = f(x);
+            assert!(
+                (got[0] - want[0]).abs() < 1e-11 && (got[1] - want[1]).abs() < 1e-11,
+                "{got:?} vs {want:?}"
+            );
+        }
+    }
+
+    #[test]
+    fn structured_meshes_are_valid_and_sorted() {
+        let m = structured_mesh(3, 2, 4, [2.0, 1.0], 1.0, Material { lambda: 1.0, mu: 1.0, density: 1.0 });
+        assert_eq!(m.tets.len(), 6 * 3 * 2 * 4);
+        m.validate().unwrap();
+        assert!((0..m.tets.len() - 1).all(|e| m.lowest_time(e) <= m.lowest_time(e + 1)));
+        // Total spacetime volume = 2 × 1 × 1.
+        let v: f64 =
+            (0..m.tets.len()).map(|e| crate::spacetime::mesh::six_volume(m.corners(e)).abs() / 6.0).sum();
+        assert!((v - 2.0).abs() < 1e-12);
+    }
+}
