@@ -443,6 +443,37 @@ impl GraphicsPipeline {
         vertices: Option<vk::Buffer>,
         vertex_count: u32,
     ) {
+        self.record_state(cmd, extent, set, push, vertices);
+        // SAFETY: `cmd` is recording inside a render pass compatible with this pipeline.
+        unsafe { self.core.device().cmd_draw(cmd, vertex_count, 1, 0, 0) };
+    }
+
+    /// Like [`GraphicsPipeline::record_draw`], with the draw's parameters read by the device from
+    /// the `VkDrawIndirectCommand` at byte `offset` of buffer `indirect` (written by an earlier pass, whose
+    /// writes a barrier has made visible to `DRAW_INDIRECT`).
+    pub fn record_draw_indirect(
+        &self,
+        cmd: vk::CommandBuffer,
+        extent: vk::Extent2D,
+        set: &DescriptorSet,
+        push: &[u8],
+        vertices: Option<vk::Buffer>,
+        (indirect, offset): (vk::Buffer, u64),
+    ) {
+        self.record_state(cmd, extent, set, push, vertices);
+        // SAFETY: `cmd` is recording inside a render pass compatible with this pipeline;
+        // `indirect` holds a draw command at `offset` (the caller's contract).
+        unsafe { self.core.device().cmd_draw_indirect(cmd, indirect, offset, 1, 16) };
+    }
+
+    fn record_state(
+        &self,
+        cmd: vk::CommandBuffer,
+        extent: vk::Extent2D,
+        set: &DescriptorSet,
+        push: &[u8],
+        vertices: Option<vk::Buffer>,
+    ) {
         self.core.record_bind(cmd, set, push);
         let d = self.core.device();
         let viewport = vk::Viewport {
@@ -461,7 +492,6 @@ impl GraphicsPipeline {
             if let Some(v) = vertices {
                 d.cmd_bind_vertex_buffers(cmd, 0, &[v], &[0]);
             }
-            d.cmd_draw(cmd, vertex_count, 1, 0, 0);
         }
     }
 }

@@ -92,3 +92,40 @@ pub fn write_exr_rgba(path: &Path, width: u32, height: u32, rgba: &[f32]) -> Res
     }
     result
 }
+
+/// Writes named 32-bit float channels (each row-major from the top, `width × height` values)
+/// as one EXR layer: raw values beside or instead of colour, for analysis (e.g. a spacetime
+/// slice's `U`, `speed` and normal). Written to a temporary name and renamed.
+pub fn write_exr_channels(
+    path: &Path,
+    width: u32,
+    height: u32,
+    channels: Vec<(&str, Vec<f32>)>,
+) -> Result<(), RenderError> {
+    use exr::prelude::*;
+    let n = width as usize * height as usize;
+    for (name, v) in &channels {
+        assert_eq!(v.len(), n, "EXR channel {name} size");
+    }
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).map_err(io(dir))?;
+    }
+    let tmp = temp_beside(path).with_extension("exr");
+    let list: SmallVec<[AnyChannel<FlatSamples>; 4]> =
+        channels.into_iter().map(|(name, v)| AnyChannel::new(name, FlatSamples::F32(v))).collect();
+    let layer = Layer::new(
+        (width as usize, height as usize),
+        LayerAttributes::default(),
+        Encoding::FAST_LOSSLESS,
+        AnyChannels::sort(list),
+    );
+    let result = Image::from_layer(layer)
+        .write()
+        .to_file(&tmp)
+        .map_err(|e| RenderError::Image { path: path.to_path_buf(), detail: e.to_string() })
+        .and_then(|()| std::fs::rename(&tmp, path).map_err(io(path)));
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    result
+}

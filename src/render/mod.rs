@@ -6,6 +6,7 @@ mod colormap;
 mod colormap_data;
 mod error;
 mod image_io;
+mod phong;
 mod target;
 #[cfg(feature = "viewer")]
 pub mod viewer;
@@ -13,5 +14,6 @@ pub mod viewer;
 pub use camera::Camera;
 pub use colormap::{ramp_coordinate, ramp_texcoord, Colormap, ColormapTexture, RAMP_TEXELS};
 pub use error::RenderError;
-pub use image_io::{read_png_rgba8, write_exr_rgba, write_png_rgba8};
+pub use image_io::{read_png_rgba8, write_exr_channels, write_exr_rgba, write_png_rgba8};
+pub use phong::{phong, PHONG_AMBIENT, PHONG_DIFFUSE, PHONG_SHININESS, PHONG_SPECULAR};
 pub use target::{ColorFormat, Pixels, RenderTarget};

@@ -107,7 +107,7 @@ impl SpacetimeMesh {
             let frame = LocalFrame::bounding(&p);
             let scale = frame.extent.iter().product::<f64>();
             let volume = six_volume(p) / 6.0;
-            if !(volume.abs() > 1e-12 * scale) {
+            if volume.abs() <= 1e-12 * scale {
                 return Err(SpacetimeError::Degenerate { element: e, volume });
             }
             let f = &self.fields[e];

@@ -12,8 +12,10 @@ pub mod cubic;
 mod error;
 pub mod generate;
 pub mod mesh;
+mod render;
 pub mod slice;
 
 pub use cubic::{evaluate, LocalFrame, Material, PointFields, MONOMIALS};
 pub use error::SpacetimeError;
 pub use mesh::{ElementField, SpacetimeMesh};
+pub use render::{GpuElement, SliceStats, SpacetimeRenderer, SpacetimeView};

@@ -1,0 +1,40 @@
+#version 450
+// Per-pixel strain energy density and exact height-field normal (seed 003 §4.2.3): the
+// element's cubic is evaluated at the fragment's (x, y) and the slice time; U maps to the
+// ramp by s = log(U + 1) / log(U_max + 1), the normal comes from the exact derivatives of |v|,
+// and the colour is lit by Phong. The data output writes the raw values for EXR files and tests.
+#include "spacetime_cubic.glsl"
+#include "colormap.glsl"
+#include "phong.glsl"
+#include "spacetime_push.glsl"
+
+layout(location = 0) in vec3 world;
+layout(location = 1) in float vertex_s;
+layout(location = 2) flat in vec4 el_data[12];
+layout(set = 0, binding = 1) uniform sampler1D colormap;
+layout(location = 0) out vec4 out_colour;
+
+void main() {
+    SpacetimeElement el;
+    el.centre_lambda = el_data[0];
+    el.extent_mu = el_data[1];
+    for (int k = 0; k < 10; ++k) {
+        el.c[2 * k] = el_data[2 + k].xy;
+        el.c[2 * k + 1] = el_data[2 + k].zw;
+    }
+    SpacetimeFields f = spacetime_evaluate(el, vec3(world.xy, pc.eye_t.w));
+    // The height field's normal (at the height scale) is reported whether or not the surface
+    // is displaced; lighting uses it only when it is (else the slice is flat).
+    vec3 n = spacetime_normal(f, pc.light_scale.w);
+    if (pc.flags.x == 1u) {
+        out_colour = vec4(f.strain_energy_density, f.speed, n.x, n.y);
+        return;
+    }
+    if (pc.flags.y == 0u) n = vec3(0.0, 0.0, 1.0);
+    float s = pc.flags.z != 0u
+        ? vertex_s
+        : ramp_coordinate(f.strain_energy_density + 1.0, 1.0, pc.ramp.x + 1.0, true);
+    vec3 colour = texture(colormap, ramp_texcoord(s, pc.ramp.y)).rgb;
+    vec3 v = normalize(pc.eye_t.xyz - world);
+    out_colour = vec4(phong(colour, n, pc.light_scale.xyz, v), 1.0);
+}

@@ -1,0 +1,385 @@
+//! Spacetime DG rendering (seed 003) on lavapipe with validation on: the GLSL field and
+//! shading includes against their Rust twins, the device slicer against the CPU reference,
+//! pixel exactness of U, |v| and the normal, edge overdraw, subdivision, and bad input.
+
+mod common;
+
+use galerkin::gpu::{
+    shaders, vk, BindingKind, Buffer, ComputePipeline, ComputePipelineDesc, MemoryKind, Resource,
+};
+use galerkin::render::{phong, ColorFormat, Colormap, Pixels, RenderTarget};
+use galerkin::spacetime::generate::{pulses, structured_mesh};
+use galerkin::spacetime::slice::{slice, SlicePolygon};
+use galerkin::spacetime::{
+    evaluate, GpuElement, Material, SpacetimeError, SpacetimeMesh, SpacetimeRenderer, SpacetimeView,
+};
+
+fn mesh() -> SpacetimeMesh {
+    pulses(6000)
+}
+
+fn tri_area(t: &[[f32; 2]; 3]) -> f64 {
+    let p = t.map(|v| [f64::from(v[0]), f64::from(v[1])]);
+    0.5 * ((p[1][0] - p[0][0]) * (p[2][1] - p[0][1]) - (p[2][0] - p[0][0]) * (p[1][1] - p[0][1])).abs()
+}
+
+#[test]
+fn glsl_field_and_shading_match_their_rust_twins() {
+    let gpu = common::gpu();
+    let m = mesh();
+    let elements: Vec<GpuElement> = (0..m.tets.len()).map(|e| GpuElement::of(&m, e)).collect();
+    let r = common::random_f32(4 * 300, 3);
+    let mut points = Vec::new();
+    let mut phong_in: Vec<[f32; 4]> = Vec::new();
+    for k in 0..300 {
+        let e = (k * 19) % m.tets.len();
+        // A point inside element e: a random convex combination of its corners.
+        let w: Vec<f64> = (0..4).map(|i| f64::from(r[4 * k + i].abs()) + 0.05).collect();
+        let s: f64 = w.iter().sum();
+        let c = m.corners(e);
+        let x: [f64; 3] = std::array::from_fn(|j| (0..4).map(|i| w[i] / s * c[i][j]).sum());
+        points.push(([x[0] as f32, x[1] as f32, x[2] as f32, e as f32], e));
+        phong_in.extend([
+            [0.2, 0.5, 0.9, 0.0],
+            [r[4 * k], r[4 * k + 1], 1.0, 0.0],
+            [-0.4, -0.4, 0.8, 0.0],
+            [0.1, -0.7, 0.7, 0.0],
+        ]);
+    }
+    let usage = vk::BufferUsageFlags::STORAGE_BUFFER;
+    let eb = Buffer::from_slice(&gpu, "elements", &elements, usage).unwrap();
+    let pb =
+        Buffer::from_slice(&gpu, "points", &points.iter().map(|p| p.0).collect::<Vec<_>>(), usage).unwrap();
+    let qb = Buffer::from_slice(&gpu, "phong in", &phong_in, usage).unwrap();
+    let ob = Buffer::<[f32; 4]>::new(&gpu, "out", 5 * 300, usage, MemoryKind::GpuOnly).unwrap();
+    let pipeline = ComputePipeline::new(
+        &gpu,
+        &ComputePipelineDesc {
+            name: "spacetime probe",
+            spirv: shaders::probe::SPACETIME,
+            bindings: &[BindingKind::StorageBuffer; 4],
+            push_constant_bytes: 8,
+            specialization: &[],
+            shared_bytes: 0,
+        },
+    )
+    .unwrap();
+    let set = pipeline
+        .bind(
+            &gpu,
+            &[eb.binding(), pb.binding(), qb.binding(), ob.binding()].map(|b| Resource::Storage(b.unwrap())),
+        )
+        .unwrap();
+    let height_scale = 3.0f32;
+    let mut push = [0u8; 8];
+    push[..4].copy_from_slice(&300u32.to_ne_bytes());
+    push[4..].copy_from_slice(&height_scale.to_ne_bytes());
+    gpu.run(|cmd| pipeline.record_dispatch(cmd, &set, &push, [5, 1, 1])).unwrap();
+    let out = ob.download(&gpu).unwrap();
+    let (mut max_u, mut max_v, mut max_e) = (0f64, 0f64, 0f64);
+    let fields: Vec<_> = points
+        .iter()
+        .map(|(p, e)| {
+            let f = &m.fields[*e];
+            // The f64 reference at the f32 point the shader saw, with the f32-rounded element.
+            let g = GpuElement::of(&m, *e);
+            let frame = galerkin::spacetime::LocalFrame {
+                centre: [0, 1, 2].map(|k| f64::from(g.centre_lambda[k])),
+                extent: [0, 1, 2].map(|k| f64::from(g.extent_mu[k])),
+            };
+            let mat = Material {
+                lambda: f64::from(g.centre_lambda[3]),
+                mu: f64::from(g.extent_mu[3]),
+                density: 1.0,
+            };
+            let c = g.coefficients.map(|v| v.map(f64::from));
+            let _ = f;
+            evaluate(&frame, &mat, &c, [0, 1, 2].map(|k| f64::from(p[k])))
+        })
+        .collect();
+    for f in &fields {
+        max_u = max_u.max(f.strain_energy_density);
+        max_v = max_v.max(f.speed);
+        max_e = max_e.max(f.strain.iter().fold(0.0f64, |a, b| a.max(b.abs())));
+    }
+    for (k, f) in fields.iter().enumerate() {
+        let o = &out[5 * k..5 * k + 5];
+        // f32 evaluation of 20-term cubics in local coordinates (|q| ≤ 0.5) with coefficients of
+        // the field's size: relative error ~ 20 terms × a few ε₃₂ ≈ 1e-6 of the field's scale;
+        // tolerances are 1e-4 of each field's largest value over the probes.
+        let near = |a: f32, b: f64, scale: f64, what: &str| {
+            assert!(
+                (f64::from(a) - b).abs() <= 1e-4 * scale,
+                "probe {k} {what}: glsl {a} vs rust {b} (scale {scale})"
+            );
+        };
+        near(o[0][0], f.strain_energy_density, max_u, "U");
+        near(o[0][1], f.speed, max_v, "|v|");
+        near(o[1][0], f.velocity[0], max_v, "v_x");
+        near(o[1][1], f.velocity[1], max_v, "v_y");
+        near(o[1][2], f.strain[0], max_e, "ε_xx");
+        near(o[1][3], f.strain[1], max_e, "ε_yy");
+        near(o[2][0], f.strain[2], max_e, "ε_xy");
+        // The normal is a unit vector; where |v| is tiny its direction is ill-conditioned, so
+        // it is compared where |v| is at least 1% of the largest speed.
+        if f.speed > 0.01 * max_v {
+            let n = f.normal(f64::from(height_scale));
+            for j in 0..3 {
+                near(o[2][1 + j], n[j], 1e-1, "normal");
+            }
+        }
+        let q = &phong_in[4 * k..4 * k + 4];
+        let unit = |v: [f32; 4]| {
+            let l = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+            [f64::from(v[0] / l), f64::from(v[1] / l), f64::from(v[2] / l)]
+        };
+        let want = phong([0.2, 0.5, 0.9], unit(q[1]), unit(q[2]), unit(q[3]));
+        for j in 0..3 {
+            near(o[4][j], want[j], 1.0, "phong");
+        }
+    }
+}
+
+#[test]
+fn the_device_slice_matches_the_reference_and_tiles_the_domain() {
+    let gpu = common::gpu();
+    // Vertices rounded to f32, as the device stores them, and f32 times: the reference then
+    // classifies every corner (t_i < t) exactly as the device does, also when t is exactly a
+    // vertex's time.
+    let mut m = mesh();
+    for v in &mut m.vertices {
+        *v = v.map(|x| f64::from(x as f32));
+    }
+    let mut r = SpacetimeRenderer::new(&gpu, &m, &Colormap::viridis()).unwrap();
+    let (t0, t1) = m.time_range();
+    let mut layers: Vec<f64> = m.vertices.iter().map(|v| v[2]).collect();
+    layers.sort_by(f64::total_cmp);
+    layers.dedup();
+    assert_eq!(layers.len(), 11, "the generator's 10 time layers");
+    // Generic times, and times exactly at a layer of vertices (cuts through vertices, edges
+    // and faces).
+    let generic = f64::from((t0 + 0.37 * (t1 - t0)) as f32);
+    for t in [generic, layers[3], f64::from(((layers[0] + layers[1]) / 2.0) as f32), layers[7]] {
+        let cpu = slice(&m, t);
+        let cpu_area: f64 = cpu.iter().map(SlicePolygon::area).sum();
+        assert!((cpu_area - 1.0).abs() < 1e-12, "t = {t}: reference slice area {cpu_area}");
+        let stats = r.slice(t, None).unwrap();
+        let tris = r.slice_triangles().unwrap();
+        assert_eq!(stats.triangles, tris.len());
+        let gpu_area: f64 = tris.iter().map(|(_, t)| tri_area(t)).sum();
+        // f32 corners of O(1) size: each triangle's area within ~4 ε₃₂; the total within 1e-5.
+        assert!((gpu_area - 1.0).abs() < 1e-5, "t = {t}: device slice area {gpu_area}");
+        // Per element: the same polygon area, and every device triangle inside its element's cut.
+        let mut per_element = vec![0.0f64; m.tets.len()];
+        for (e, t) in &tris {
+            per_element[*e as usize] += tri_area(t);
+        }
+        for p in &cpu {
+            let got = per_element[p.element as usize];
+            assert!(
+                (got - p.area()).abs() < 1e-6,
+                "t = {t}, element {}: area {got} vs {}",
+                p.element,
+                p.area()
+            );
+        }
+        let cut: std::collections::HashSet<u32> = cpu.iter().map(|p| p.element).collect();
+        assert!(
+            tris.iter().all(|(e, _)| cut.contains(e)),
+            "t = {t}: a device triangle from an uncut element"
+        );
+        // Edges: 3 or 4 per polygon.
+        let lines = r.slice_lines().unwrap();
+        assert_eq!(lines.len(), cpu.iter().map(|p| p.corners.len()).sum::<usize>());
+    }
+}
+
+#[test]
+fn subdivision_quadrisects_large_triangles() {
+    let gpu = common::gpu();
+    let m = mesh();
+    let mut r = SpacetimeRenderer::new(&gpu, &m, &Colormap::viridis()).unwrap();
+    let t = 0.41 * m.time_range().1;
+    let plain = r.slice(t, None).unwrap();
+    let tris = r.slice_triangles().unwrap();
+    let largest = tris.iter().map(|(_, t)| tri_area(t)).fold(0.0, f64::max);
+    let sub = r.slice(t, Some(largest / 5.0)).unwrap();
+    let fine = r.slice_triangles().unwrap();
+    assert!(sub.triangles > plain.triangles);
+    let area: f64 = fine.iter().map(|(_, t)| tri_area(t)).sum();
+    assert!((area - 1.0).abs() < 1e-5);
+    assert!(fine.iter().all(|(_, t)| tri_area(t) <= largest / 5.0 * (1.0 + 1e-4)));
+    assert_eq!(sub.lines, plain.lines, "only polygon edges are overdrawn");
+}
+
+#[test]
+fn pixels_show_the_element_polynomial_at_their_centres() {
+    let gpu = common::gpu();
+    let m = mesh();
+    let mut r = SpacetimeRenderer::new(&gpu, &m, &Colormap::viridis()).unwrap();
+    let t = 0.43 * m.time_range().1;
+    let view = SpacetimeView { edges: false, ..SpacetimeView::from_above(&m, t) };
+    let (w, h) = (160, 160);
+    let target = RenderTarget::new(&gpu, "data", w, h, ColorFormat::Rgba32F).unwrap();
+    let Pixels::Rgba32F(data) = r.render(&target, &view).unwrap() else { panic!("float target") };
+    let polys = slice(&m, t);
+    let hs = r.default_height_scale();
+    let (mut max_u, mut max_v) = (0f64, 0f64);
+    for p in &polys {
+        let f = &m.fields[p.element as usize];
+        let c = p.corners.iter().fold([0.0, 0.0], |a, q| [a[0] + q[0], a[1] + q[1]]);
+        let n = p.corners.len() as f64;
+        let v = evaluate(&f.frame, &m.materials[0], &f.coefficients, [c[0] / n, c[1] / n, t]);
+        max_u = max_u.max(v.strain_energy_density);
+        max_v = max_v.max(v.speed);
+    }
+    let inside = |p: &SlicePolygon, x: f64, y: f64, eps: f64| {
+        let c = &p.corners;
+        let s: Vec<f64> = (0..c.len())
+            .map(|i| {
+                let (a, b) = (c[i], c[(i + 1) % c.len()]);
+                let len = ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2)).sqrt().max(1e-300);
+                ((b[0] - a[0]) * (y - a[1]) - (b[1] - a[1]) * (x - a[0])) / len
+            })
+            .collect();
+        s.iter().all(|&d| d >= -eps) || s.iter().all(|&d| d <= eps)
+    };
+    let (mut checked, mut worst_u, mut worst_v) = (0, 0f64, 0f64);
+    for py in 0..h {
+        for px in 0..w {
+            let Some(q) = view.camera.pixel_on_plane_z(px, py, w, h, 0.0) else { continue };
+            let got = &data[4 * (py * w + px) as usize..][..4];
+            // Pixel centres within 1e-4 of the domain's boundary are skipped (rasterisation may
+            // go either way there); every other centre in the domain must be covered.
+            let margin = 1e-4;
+            if q.x < margin || q.x > 1.0 - margin || q.y < margin || q.y > 1.0 - margin {
+                continue;
+            }
+            assert!(got[0].is_finite(), "pixel ({px}, {py}) at ({}, {}) not covered", q.x, q.y);
+            // Every polygon containing the centre (two or more on a shared edge): one must match.
+            let candidates: Vec<_> = polys.iter().filter(|p| inside(p, q.x, q.y, 1e-5)).collect();
+            assert!(!candidates.is_empty());
+            let errors: Vec<(f64, f64, f64)> = candidates
+                .iter()
+                .map(|p| {
+                    let f = &m.fields[p.element as usize];
+                    let v = evaluate(&f.frame, &m.materials[0], &f.coefficients, [q.x, q.y, t]);
+                    let n = v.normal(hs);
+                    (
+                        (f64::from(got[0]) - v.strain_energy_density).abs() / max_u,
+                        (f64::from(got[1]) - v.speed).abs() / max_v,
+                        (f64::from(got[2]) - n[0]).abs().max((f64::from(got[3]) - n[1]).abs()),
+                    )
+                })
+                .collect();
+            let best = errors.iter().copied().fold((f64::INFINITY, f64::INFINITY, f64::INFINITY), |a, b| {
+                if b.0 + b.1 < a.0 + a.1 {
+                    b
+                } else {
+                    a
+                }
+            });
+            // f32: the fragment's (x, y) is interpolated from f32 corners (≈1e-7 of the domain)
+            // and the cubic evaluated in f32 (≈1e-6 of the field's scale). The fields vary on
+            // the pulse width σ = 0.08, so a position error δ moves them by ≈ δ/σ of their
+            // scale: 1e-4 of the largest value covers both with a 10× margin. The normal (a
+            // unit vector from the derivatives of |v|, ill-conditioned where |v| → 0) gets 1e-2.
+            assert!(best.0 <= 1e-4, "pixel ({px}, {py}): U error {} of max", best.0);
+            assert!(best.1 <= 1e-4, "pixel ({px}, {py}): |v| error {} of max", best.1);
+            worst_u = worst_u.max(best.0);
+            worst_v = worst_v.max(best.1);
+            if best.2 > 1e-2 {
+                // Allowed only where |v| is small (the normal's direction is undetermined).
+                assert!(f64::from(got[1]) < 1e-3 * max_v, "pixel ({px}, {py}): normal error {}", best.2);
+            }
+            checked += 1;
+        }
+    }
+    assert!(checked > (w * h) as usize / 2, "{checked} pixels checked");
+    eprintln!("{checked} pixels: worst U error {worst_u:.2e}, |v| {worst_v:.2e} of max");
+}
+
+/// Background (NaN) pixels whose ray meets z = 0 well inside the domain: cracks.
+fn cracks(gpu: &galerkin::gpu::Gpu, r: &mut SpacetimeRenderer, view: &SpacetimeView) -> usize {
+    let (w, h) = (320, 240);
+    let target = RenderTarget::new(gpu, "data", w, h, ColorFormat::Rgba32F).unwrap();
+    let Pixels::Rgba32F(data) = r.render(&target, view).unwrap() else { panic!("float target") };
+    let mut n = 0;
+    for py in 0..h {
+        for px in 0..w {
+            let Some(q) = view.camera.pixel_on_plane_z(px, py, w, h, 0.0) else { continue };
+            if q.x > 0.2 && q.x < 0.8 && q.y > 0.2 && q.y < 0.8 && data[4 * (py * w + px) as usize].is_nan() {
+                n += 1;
+            }
+        }
+    }
+    n
+}
+
+#[test]
+fn edge_overdraw_fills_the_cracks_of_a_discontinuous_height_field() {
+    let gpu = common::gpu();
+    // A field made deliberately discontinuous: each element's velocity gets its own offset,
+    // up to 3% of the largest speed. With heights up to ~12 px on screen, neighbouring slice
+    // polygons then disagree on their shared edge's height by up to ~0.7 px: the aliasing
+    // cracks of seed 003 Fig. 4, not walls (a jump of many pixels is a real gap in the data,
+    // which edge overdraw does not and should not hide).
+    let mut m = mesh();
+    let max_speed =
+        0.1 / SpacetimeRenderer::new(&gpu, &m, &Colormap::viridis()).unwrap().default_height_scale();
+    let r = common::random_f32(2 * m.tets.len(), 11);
+    for (e, f) in m.fields.iter_mut().enumerate() {
+        let wt = f.frame.extent[2];
+        f.coefficients[3][0] += 0.03 * max_speed * f64::from(r[2 * e]) * wt;
+        f.coefficients[3][1] += 0.03 * max_speed * f64::from(r[2 * e + 1]) * wt;
+    }
+    let mut rend = SpacetimeRenderer::new(&gpu, &m, &Colormap::viridis()).unwrap();
+    let t = 0.5 * m.time_range().1;
+    let base = SpacetimeView::looking_at(&m, t);
+    // Heights up to ~5% of the domain: the interior test region stays under the surface.
+    let view = SpacetimeView { height_scale: Some(0.5 * rend.default_height_scale()), ..base };
+    let without = cracks(&gpu, &mut rend, &SpacetimeView { edges: false, ..view });
+    let with = cracks(&gpu, &mut rend, &SpacetimeView { edges: true, ..view });
+    eprintln!("background pixels inside the domain: {without} without edge overdraw, {with} with");
+    assert!(without > 0, "the test needs cracks to fill");
+    assert_eq!(with, 0);
+}
+
+#[test]
+fn colour_output_and_per_vertex_mode() {
+    let gpu = common::gpu();
+    let m = mesh();
+    let mut r = SpacetimeRenderer::new(&gpu, &m, &Colormap::viridis()).unwrap();
+    let t = 0.5 * m.time_range().1;
+    let target = RenderTarget::new(&gpu, "colour", 200, 150, ColorFormat::Rgba8).unwrap();
+    let view = SpacetimeView::looking_at(&m, t);
+    let Pixels::Rgba8(pixel) = r.render(&target, &view).unwrap() else { panic!("rgba8") };
+    let Pixels::Rgba8(vertex) = r.render(&target, &SpacetimeView { per_vertex: true, ..view }).unwrap()
+    else {
+        panic!("rgba8")
+    };
+    let lit = pixel.chunks_exact(4).filter(|p| p[3] == 255).count();
+    assert!(lit > 200 * 150 / 4, "{lit} pixels drawn");
+    let differ = pixel.chunks_exact(4).zip(vertex.chunks_exact(4)).filter(|(a, b)| a != b).count();
+    eprintln!("per-vertex colour differs from per-pixel at {differ} of {lit} drawn pixels");
+    assert!(differ > 0);
+}
+
+#[test]
+fn bad_meshes_are_refused_naming_the_element() {
+    let mat = Material { lambda: 1.0, mu: 1.0, density: 1.0 };
+    let mut m = structured_mesh(2, 2, 2, [1.0, 1.0], 1.0, mat);
+    m.validate().unwrap();
+    let mut flat = m.clone();
+    flat.tets[5][3] = flat.tets[5][0];
+    assert!(matches!(flat.validate(), Err(SpacetimeError::Degenerate { element: 5, .. })));
+    let mut nan = m.clone();
+    nan.fields[7].coefficients[4][1] = f64::NAN;
+    let err = nan.validate().unwrap_err();
+    assert!(matches!(err, SpacetimeError::NotFinite { element: 7, .. }), "{err}");
+    let mut oob = m.clone();
+    oob.tets[2][1] = 9999;
+    assert!(oob.validate().unwrap_err().to_string().contains("element 2"));
+    m.fields.pop();
+    assert!(matches!(m.validate(), Err(SpacetimeError::Length { .. })));
+}
