@@ -167,6 +167,9 @@ pub struct SliceStats {
     pub lines: usize,
 }
 
+/// Background of colour images (linear RGBA).
+pub const BACKGROUND: [f32; 4] = [0.12, 0.12, 0.14, 1.0];
+
 /// Direction to the light (unit), from the upper left front.
 const LIGHT: [f64; 3] = [-0.408_248_290_463_863, -0.408_248_290_463_863, 0.816_496_580_927_726];
 
