@@ -182,6 +182,12 @@ fn run(cli: Cli) -> Result<()> {
             if !(t0..=t1).contains(&time) {
                 bail!("--time {time} is outside the data set's time span [{t0}, {t1}]");
             }
+            for (name, v) in [("--subdivide", subdivide), ("--umax", umax), ("--height-scale", height_scale)]
+            {
+                if let Some(v) = v.filter(|v| !(v.is_finite() && *v > 0.0)) {
+                    bail!("{name} must be a positive number, got {v}");
+                }
+            }
             let base = galerkin::spacetime::SpacetimeView::looking_at(&mesh, time);
             let view = galerkin::spacetime::SpacetimeView {
                 height: !flat,
