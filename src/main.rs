@@ -349,7 +349,7 @@ fn demo(desc: &GpuDesc, scene_path: &Path, out: &Path) -> Result<()> {
         scene.ramp(),
         FieldOutput::Colour,
     )?;
-    let background = [0.12, 0.12, 0.14, 1.0];
+    let background = galerkin::render::BACKGROUND;
     let Pixels::Rgba8(c) =
         colours.render(&gpu, background, |cmd| pass.record(cmd, colours.extent(), &scene.camera))?
     else {

@@ -80,7 +80,6 @@ fn glsl_field_and_shading_match_their_rust_twins() {
     let fields: Vec<_> = points
         .iter()
         .map(|(p, e)| {
-            let f = &m.fields[*e];
             // The f64 reference at the f32 point the shader saw, with the f32-rounded element.
             let g = GpuElement::of(&m, *e);
             let frame = galerkin::spacetime::LocalFrame {
@@ -93,7 +92,6 @@ fn glsl_field_and_shading_match_their_rust_twins() {
                 density: 1.0,
             };
             let c = g.coefficients.map(|v| v.map(f64::from));
-            let _ = f;
             evaluate(&frame, &mat, &c, [0, 1, 2].map(|k| f64::from(p[k])))
         })
         .collect();
@@ -358,7 +356,7 @@ fn colour_output_and_per_vertex_mode() {
     else {
         panic!("rgba8")
     };
-    let bg = galerkin::spacetime::BACKGROUND.map(|v| (v * 255.0).round() as u8);
+    let bg = galerkin::render::BACKGROUND.map(|v| (v * 255.0).round() as u8);
     let lit = pixel.chunks_exact(4).filter(|p| p[..3] != bg[..3]).count();
     assert!(lit > 200 * 150 / 4, "{lit} pixels drawn");
     let differ = pixel.chunks_exact(4).zip(vertex.chunks_exact(4)).filter(|(a, b)| a != b).count();

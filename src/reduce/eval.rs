@@ -30,19 +30,16 @@ pub(crate) trait Operands: Sync {
         args.par_iter().map(|a| self.contract_tensor(name, a)).collect()
     }
     /// `x_b = M_b⁻¹ v_b` for every input set (§4's inverse applied to a vector: a solve, never
-    /// an explicit inverse); the default solves on the CPU in f64, in parallel, the GPU
-    /// overrides it with one batched solve on the device.
+    /// an explicit inverse), each system's own result; the outer error is the device's. The
+    /// default solves on the CPU in f64, in parallel; the GPU overrides it with one batched
+    /// solve on the device.
     fn solve_batch(
         &self,
         what: &str,
         matrices: &[Tensor],
         rhs: &[&[f64]],
-    ) -> Result<Vec<Tensor>, ReduceError> {
-        per_item(matrices.len(), |b| {
-            solve(what, &matrices[b], rhs[b])
-                .map(Tensor::vector)
-                .map_err(|source| ReduceError::Tensor { context: format!("{what}, input set {b}"), source })
-        })
+    ) -> Result<Vec<Result<Vec<f64>, TensorError>>, ReduceError> {
+        Ok((0..matrices.len()).into_par_iter().map(|b| solve(what, &matrices[b], rhs[b])).collect())
     }
     /// Number of input sets.
     fn batch(&self) -> usize;
@@ -205,7 +202,18 @@ pub(crate) fn evaluate(e: &Expr, ops: &impl Operands) -> Result<Vec<Tensor>, Red
                         mv = mv.iter().map(transpose).collect();
                     }
                     let rhs: Vec<&[f64]> = v.iter().map(Tensor::data).collect();
-                    return ops.solve_batch(&m.to_string(), &mv, &rhs);
+                    let what = m.to_string();
+                    return ops
+                        .solve_batch(&what, &mv, &rhs)?
+                        .into_iter()
+                        .enumerate()
+                        .map(|(b, x)| {
+                            x.map(Tensor::vector).map_err(|source| ReduceError::Tensor {
+                                context: format!("{what}, input set {b}"),
+                                source,
+                            })
+                        })
+                        .collect();
                 }
             }
             let t = evaluate(base, ops)?;

@@ -329,19 +329,9 @@ impl Operands for GpuOperands<'_> {
         what: &str,
         matrices: &[Tensor],
         rhs: &[&[f64]],
-    ) -> Result<Vec<Tensor>, ReduceError> {
+    ) -> Result<Vec<Result<Vec<f64>, TensorError>>, ReduceError> {
         let refs: Vec<&Tensor> = matrices.iter().collect();
-        let results = self.owner.solver.solve(&self.owner.gpu, what, &refs, rhs).map_err(gpu_err(what))?;
-        results
-            .into_iter()
-            .enumerate()
-            .map(|(b, r)| {
-                r.map(Tensor::vector).map_err(|source| ReduceError::Tensor {
-                    context: format!("{what}, input set {b}"),
-                    source,
-                })
-            })
-            .collect()
+        self.owner.solver.solve(&self.owner.gpu, what, &refs, rhs).map_err(gpu_err(what))
     }
 
     fn batch(&self) -> usize {

@@ -11,6 +11,9 @@ mod target;
 #[cfg(feature = "viewer")]
 pub mod viewer;
 
+/// Background of the engine's colour images and windows (linear RGBA, opaque dark grey).
+pub const BACKGROUND: [f32; 4] = [0.12, 0.12, 0.14, 1.0];
+
 pub use camera::Camera;
 pub use colormap::{ramp_coordinate, ramp_texcoord, Colormap, ColormapTexture, RAMP_TEXELS};
 pub use error::RenderError;

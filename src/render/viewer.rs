@@ -188,7 +188,7 @@ impl State {
         let waits = [(swapchain.image_available, vk::PipelineStageFlags::TRANSFER)];
         let signals = [swapchain.render_finished[index as usize]];
         let (submission, ()) = gpu.submit_with_semaphores(&waits, &signals, |cmd| {
-            target.record_begin(cmd, [0.12, 0.12, 0.14, 1.0]);
+            target.record_begin(cmd, crate::render::BACKGROUND);
             pass.record(cmd, target.extent(), camera);
             target.record_end(cmd);
             let dev = gpu.device();

@@ -43,6 +43,9 @@ fn tet_quadrature() -> Vec<([f64; 3], f64)> {
     q
 }
 
+/// [`tet_quadrature`], built once (every element's projection uses it).
+static TET_QUADRATURE: std::sync::LazyLock<Vec<([f64; 3], f64)>> = std::sync::LazyLock::new(tet_quadrature);
+
 /// Values of the 20 monomials at local point `q`.
 fn monomials(q: [f64; 3]) -> [f64; 20] {
     let mut m = [0.0; 20];
@@ -61,7 +64,7 @@ pub fn project_element(
     let frame = LocalFrame::bounding(&p);
     let mut mass = vec![0.0; 400];
     let mut rhs = [[0.0; 20]; 2];
-    for (l, w) in tet_quadrature() {
+    for &(l, w) in TET_QUADRATURE.iter() {
         let l0 = 1.0 - l[0] - l[1] - l[2];
         let x: [f64; 3] =
             std::array::from_fn(|k| l0 * p[0][k] + l[0] * p[1][k] + l[1] * p[2][k] + l[2] * p[3][k]);

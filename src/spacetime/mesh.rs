@@ -141,10 +141,10 @@ impl SpacetimeMesh {
     }
 
     /// Reorders the elements by lowest time (§4.1), so that the elements a time plane can cut
-    /// form a contiguous range ([`SpacetimeMesh::active_range`]).
+    /// form a contiguous range ([`active_range`]).
     pub fn sort_by_lowest_time(&mut self) {
         let mut order: Vec<usize> = (0..self.tets.len()).collect();
-        let keys: Vec<f64> = (0..self.tets.len()).map(|e| self.lowest_time(e)).collect();
+        let keys = self.lowest_times();
         order.sort_by(|&a, &b| keys[a].total_cmp(&keys[b]).then(a.cmp(&b)));
         self.tets = order.iter().map(|&e| self.tets[e]).collect();
         self.fields = order.iter().map(|&e| self.fields[e].clone()).collect();
@@ -155,25 +155,17 @@ impl SpacetimeMesh {
         (0..self.tets.len()).map(|e| self.highest_time(e) - self.lowest_time(e)).fold(0.0, f64::max)
     }
 
-    /// For a mesh sorted by lowest time: the elements that may be cut by the plane `t`
-    /// (lowest time in `[t − longest_duration, t)`), as a range. Every element the plane cuts
-    /// is in it; the slicer tests each.
-    pub fn active_range(&self, t: f64, longest_duration: f64) -> std::ops::Range<usize> {
-        let lo = self.partition_point(|x| x < t - longest_duration);
-        let hi = self.partition_point(|x| x < t);
-        lo..hi
+    /// Every element's lowest time, in element order.
+    pub fn lowest_times(&self) -> Vec<f64> {
+        (0..self.tets.len()).map(|e| self.lowest_time(e)).collect()
     }
+}
 
-    fn partition_point(&self, pred: impl Fn(f64) -> bool) -> usize {
-        let (mut lo, mut hi) = (0, self.tets.len());
-        while lo < hi {
-            let mid = (lo + hi) / 2;
-            if pred(self.lowest_time(mid)) {
-                lo = mid + 1;
-            } else {
-                hi = mid;
-            }
-        }
-        lo
-    }
+/// For elements sorted by lowest time (`lowest_times`, ascending): the range that may be cut
+/// by the plane `t` — lowest time in `[t − longest_duration, t)`. Every element the plane cuts
+/// is in it; the slicer tests each.
+pub fn active_range(lowest_times: &[f64], t: f64, longest_duration: f64) -> std::ops::Range<usize> {
+    let lo = lowest_times.partition_point(|&x| x < t - longest_duration);
+    let hi = lowest_times.partition_point(|&x| x < t);
+    lo..hi
 }

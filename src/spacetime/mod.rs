@@ -18,6 +18,4 @@ pub mod slice;
 pub use cubic::{evaluate, LocalFrame, Material, PointFields, MONOMIALS};
 pub use error::SpacetimeError;
 pub use mesh::{ElementField, SpacetimeMesh};
-pub use render::{
-    GpuElement, SliceLine, SliceStats, SliceTriangle, SpacetimeRenderer, SpacetimeView, BACKGROUND,
-};
+pub use render::{GpuElement, SliceLine, SliceStats, SliceTriangle, SpacetimeRenderer, SpacetimeView};

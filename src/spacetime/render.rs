@@ -14,12 +14,12 @@ use ash::vk;
 use bytemuck::{Pod, Zeroable};
 
 use super::error::SpacetimeError;
-use super::mesh::SpacetimeMesh;
+use super::mesh::{active_range, SpacetimeMesh};
 use crate::gpu::{
     shaders, BindingKind, Buffer, ComputePipeline, ComputePipelineDesc, DescriptorSet, Gpu, GpuError,
     GraphicsPipeline, GraphicsPipelineDesc, MemoryKind, Resource,
 };
-use crate::render::{Camera, ColorFormat, Colormap, ColormapTexture, Pixels, RenderTarget};
+use crate::render::{Camera, ColorFormat, Colormap, ColormapTexture, Pixels, RenderTarget, BACKGROUND};
 
 /// One element as the shaders read it (`SpacetimeElement` in `include/spacetime_cubic.glsl`).
 #[repr(C)]
@@ -167,9 +167,6 @@ pub struct SliceStats {
     pub lines: usize,
 }
 
-/// Background of colour images (linear RGBA).
-pub const BACKGROUND: [f32; 4] = [0.12, 0.12, 0.14, 1.0];
-
 /// Direction to the light (unit), from the upper left front.
 const LIGHT: [f64; 3] = [-0.408_248_290_463_863, -0.408_248_290_463_863, 0.816_496_580_927_726];
 
@@ -189,6 +186,16 @@ pub struct SpacetimeRenderer {
     colormap: ColormapTexture,
     pipelines: HashMap<ColorFormat, (GraphicsPipeline, GraphicsPipeline, DescriptorSet, DescriptorSet)>,
     sliced: Option<(f64, Option<f64>, SliceStats)>,
+    /// The slicer's bindings, kept until the output buffers grow.
+    slice_set: Option<DescriptorSet>,
+    /// The float target of the automatic-U_max data pass, reused while the size stays.
+    umax_target: Option<RenderTarget>,
+}
+
+/// A slice output buffer: vertices written by the slicer, read by the draws.
+fn slice_buffer(gpu: &Gpu, name: &str, len: u64) -> Result<Buffer<SliceVertex>, SpacetimeError> {
+    let usage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::VERTEX_BUFFER;
+    Buffer::new(gpu, name, len, usage, MemoryKind::GpuOnly).map_err(dev("slice buffers"))
 }
 
 fn dev(context: &str) -> impl FnOnce(GpuError) -> SpacetimeError + '_ {
@@ -200,7 +207,7 @@ impl SpacetimeRenderer {
     /// [`SpacetimeMesh::sort_by_lowest_time`]) and makes it resident on `gpu`.
     pub fn new(gpu: &Gpu, mesh: &SpacetimeMesh, colormap: &Colormap) -> Result<Self, SpacetimeError> {
         mesh.validate()?;
-        let mesh_lowest: Vec<f64> = (0..mesh.tets.len()).map(|e| mesh.lowest_time(e)).collect();
+        let mesh_lowest = mesh.lowest_times();
         if let Some(e) = mesh_lowest.windows(2).position(|w| w[1] < w[0]) {
             return Err(SpacetimeError::Invalid {
                 element: e + 1,
@@ -217,11 +224,8 @@ impl SpacetimeRenderer {
             .map_err(dev("uploading tetrahedra"))?;
         let elements_buf = Buffer::from_slice(gpu, "spacetime elements", &elements, storage)
             .map_err(dev("uploading elements"))?;
-        let slice_usage = storage | vk::BufferUsageFlags::VERTEX_BUFFER;
-        let tris = Buffer::new(gpu, "slice triangles", 3 * 1024, slice_usage, MemoryKind::GpuOnly)
-            .map_err(dev("slice buffers"))?;
-        let lines = Buffer::new(gpu, "slice edges", 8 * 1024, slice_usage, MemoryKind::GpuOnly)
-            .map_err(dev("slice buffers"))?;
+        let tris = slice_buffer(gpu, "slice triangles", 3 * 1024)?;
+        let lines = slice_buffer(gpu, "slice edges", 8 * 1024)?;
         let draws = Buffer::new(
             gpu,
             "slice draws",
@@ -270,18 +274,14 @@ impl SpacetimeRenderer {
             colormap: colormap.upload(gpu).map_err(dev("uploading the colour map"))?,
             pipelines: HashMap::new(),
             sliced: None,
+            slice_set: None,
+            umax_target: None,
         })
     }
 
     /// The height scale used when a view does not set one.
     pub fn default_height_scale(&self) -> f64 {
         self.default_height_scale
-    }
-
-    fn active_range(&self, t: f64) -> std::ops::Range<usize> {
-        let lo = self.mesh_lowest.partition_point(|&x| x < t - self.longest);
-        let hi = self.mesh_lowest.partition_point(|&x| x < t);
-        lo..hi
     }
 
     /// Slices the mesh at `t` on the device (a no-op if the last slice had the same `t` and
@@ -292,27 +292,24 @@ impl SpacetimeRenderer {
                 return Ok(stats);
             }
         }
-        let range = self.active_range(t);
+        let range = active_range(&self.mesh_lowest, t, self.longest);
         loop {
-            let set = self
-                .slicer
-                .bind(
-                    &self.gpu,
-                    &[
-                        self.vertices.binding(),
-                        self.tets.binding(),
-                        self.tris.binding(),
-                        self.lines.binding(),
-                        self.draws.binding(),
-                    ]
-                    .into_iter()
-                    .collect::<Result<Vec<_>, _>>()
-                    .map_err(dev("binding the slicer"))?
-                    .into_iter()
-                    .map(Resource::Storage)
-                    .collect::<Vec<_>>(),
-                )
+            if self.slice_set.is_none() {
+                let bindings = [
+                    self.vertices.binding(),
+                    self.tets.binding(),
+                    self.tris.binding(),
+                    self.lines.binding(),
+                    self.draws.binding(),
+                ]
+                .into_iter()
+                .map(|b| b.map(Resource::Storage))
+                .collect::<Result<Vec<_>, _>>()
                 .map_err(dev("binding the slicer"))?;
+                self.slice_set =
+                    Some(self.slicer.bind(&self.gpu, &bindings).map_err(dev("binding the slicer"))?);
+            }
+            let set = self.slice_set.as_ref().expect("bound above");
             let push = SlicePushCompute {
                 first: range.start as u32,
                 count: range.len() as u32,
@@ -338,7 +335,7 @@ impl SpacetimeRenderer {
                             vk::AccessFlags::SHADER_READ | vk::AccessFlags::SHADER_WRITE,
                         ),
                     );
-                    self.slicer.record_dispatch(cmd, &set, bytemuck::bytes_of(&push), [groups, 1, 1]);
+                    self.slicer.record_dispatch(cmd, set, bytemuck::bytes_of(&push), [groups, 1, 1]);
                     // Later submissions draw from these buffers: the barrier's second scope covers
                     // them (submission order).
                     self.gpu.memory_barrier(
@@ -366,24 +363,10 @@ impl SpacetimeRenderer {
                 return Ok(stats);
             }
             // The counters hold what was asked for: grow to that (and a margin) and redo.
-            let usage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::VERTEX_BUFFER;
             let grow = |n: u32, cur: u64| u64::from(n).max(cur) + u64::from(n) / 4 + 64;
-            self.tris = Buffer::new(
-                &self.gpu,
-                "slice triangles",
-                grow(counts[0], self.tris.len()),
-                usage,
-                MemoryKind::GpuOnly,
-            )
-            .map_err(dev("growing the slice buffers"))?;
-            self.lines = Buffer::new(
-                &self.gpu,
-                "slice edges",
-                grow(counts[4], self.lines.len()),
-                usage,
-                MemoryKind::GpuOnly,
-            )
-            .map_err(dev("growing the slice buffers"))?;
+            self.slice_set = None;
+            self.tris = slice_buffer(&self.gpu, "slice triangles", grow(counts[0], self.tris.len()))?;
+            self.lines = slice_buffer(&self.gpu, "slice edges", grow(counts[4], self.lines.len()))?;
         }
     }
 
@@ -437,17 +420,23 @@ impl SpacetimeRenderer {
             Some(u) => u,
             None if target.format() == ColorFormat::Rgba32F => 1.0,
             None => {
-                // The largest U over the slice's pixels, from a data pass of the same view.
+                // The largest U over the slice's pixels, from a data pass of the same view into a
+                // float target kept for the next frame of the same size.
                 let extent = target.extent();
-                let data = RenderTarget::new(
-                    &self.gpu,
-                    "spacetime U_max pass",
-                    extent.width,
-                    extent.height,
-                    ColorFormat::Rgba32F,
-                )
-                .map_err(dev("the U_max pass"))?;
-                match self.render(&data, &SpacetimeView { u_max: Some(1.0), ..*view })? {
+                let data = match self.umax_target.take() {
+                    Some(d) if d.extent() == extent => d,
+                    _ => RenderTarget::new(
+                        &self.gpu,
+                        "spacetime U_max pass",
+                        extent.width,
+                        extent.height,
+                        ColorFormat::Rgba32F,
+                    )
+                    .map_err(dev("the U_max pass"))?,
+                };
+                let pixels = self.render(&data, &SpacetimeView { u_max: Some(1.0), ..*view });
+                self.umax_target = Some(data);
+                match pixels? {
                     Pixels::Rgba32F(v) => v
                         .chunks_exact(4)
                         .map(|p| f64::from(p[0]))
@@ -478,9 +467,9 @@ impl SpacetimeRenderer {
             ],
         };
         let (tris, lines, draws) = (self.tris.raw(), self.lines.raw(), self.draws.raw());
-        // Data targets clear to NaN: "no surface here", distinct from any value.
-        let clear =
-            if target.format() == ColorFormat::Rgba32F { [f32::NAN; 4] } else { [0.0, 0.0, 0.0, 0.0] };
+        // Data targets clear to NaN ("no surface here", distinct from any value), colour
+        // targets to the engine's opaque background.
+        let clear = if target.format() == ColorFormat::Rgba32F { [f32::NAN; 4] } else { BACKGROUND };
         let gpu = self.gpu.clone();
         let (fill, edges, fill_set, edges_set) = self.pipelines_for(target)?;
         target

@@ -15,6 +15,26 @@ fn square(what: &str, m: &Tensor) -> Result<usize, TensorError> {
     }
 }
 
+/// Checks that `q x = b` is a square system with finite values; returns `n`. Shared by the
+/// CPU solve and the device's batched solve ([`crate::tensor::gpu::BatchedSolve`]).
+pub(crate) fn check_system(what: &str, q: &Tensor, b: &[f64]) -> Result<usize, TensorError> {
+    let n = square(what, q)?;
+    q.expect_axis(what, 1, b.len())?;
+    if let Some(i) = q.data().iter().chain(b).position(|v| !v.is_finite()) {
+        return Err(TensorError::NotFinite {
+            what: what.into(),
+            detail: format!("element {i} is not finite"),
+        });
+    }
+    Ok(n)
+}
+
+/// The magnitude at or below which an LU pivot of `q` counts as zero at working precision
+/// `epsilon`: `n·ε·max|q|`.
+pub(crate) fn pivot_tolerance(q: &Tensor, epsilon: f64) -> f64 {
+    q.shape()[0] as f64 * epsilon * q.max_abs().max(f64::MIN_POSITIVE)
+}
+
 fn to_faer(m: &Tensor) -> Mat<f64> {
     let (r, c) = (m.shape()[0], m.shape()[1]);
     Mat::from_fn(r, c, |i, j| m.data()[i * c + j])
@@ -34,20 +54,13 @@ fn from_faer(m: faer::MatRef<'_, f64>) -> Tensor {
 /// `Q⁻¹ b`: solves `Q y = b` by LU with partial pivoting. A pivot below `n·ε·max|Q|` is
 /// reported as [`TensorError::Singular`].
 pub fn solve(what: &str, q: &Tensor, b: &[f64]) -> Result<Vec<f64>, TensorError> {
-    let n = square(what, q)?;
-    q.expect_axis(what, 1, b.len())?;
-    if let Some(i) = q.data().iter().chain(b).position(|v| !v.is_finite()) {
-        return Err(TensorError::NotFinite {
-            what: what.into(),
-            detail: format!("element {i} is not finite"),
-        });
-    }
+    let n = check_system(what, q, b)?;
     let a = to_faer(q);
     let lu = a.partial_piv_lu();
-    let scale = q.max_abs().max(f64::MIN_POSITIVE);
+    let tolerance = pivot_tolerance(q, f64::EPSILON);
     let u = lu.U();
     for i in 0..n {
-        if u[(i, i)].abs() <= n as f64 * f64::EPSILON * scale {
+        if u[(i, i)].abs() <= tolerance {
             return Err(TensorError::Singular { what: what.into(), row: i, pivot: u[(i, i)] });
         }
     }

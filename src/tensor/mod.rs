@@ -17,5 +17,6 @@ mod sparse;
 
 pub use dense::{Scalar, Tensor};
 pub use error::TensorError;
+pub(crate) use linalg::{check_system, pivot_tolerance};
 pub use linalg::{matmul, solve, spd_power, symmetric_eigen, transpose};
 pub use sparse::{distinct_permutations, SparseTensor};

@@ -7,7 +7,7 @@ use faer::linalg::matmul::matmul;
 use faer::{Accum, MatMut, MatRef, Par};
 use rayon::prelude::*;
 
-use super::plan::{chunks_of_groups, sorted_entries, unit_and_key_positions};
+use super::plan::{chunks_of_groups, sorted_entries, unit_and_key_positions, unit_positions};
 use super::{unit_row, unit_size, Packing, Unit};
 use crate::tensor::Tensor;
 
@@ -178,11 +178,7 @@ impl Partial {
         }
         let (first, rest) = (&units[0], &units[1..]);
         let s = self.sparse_axes.len();
-        let first_pos: Vec<usize> = first
-            .axes()
-            .iter()
-            .map(|a| self.sparse_axes.iter().position(|x| x == a).expect("sparse"))
-            .collect();
+        let first_pos = unit_positions(&self.sparse_axes, first);
         let size = unit_size(first, bases, packings);
         let rest_size: usize = rest.iter().map(|u| unit_size(u, bases, packings)).product();
         let w_block = rest_size * self.block;

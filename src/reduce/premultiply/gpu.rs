@@ -18,7 +18,7 @@
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
 
-use super::plan::{chunks_of_groups, sorted_entries, unit_and_key_positions};
+use super::plan::{chunks_of_groups, sorted_entries, unit_and_key_positions, unit_positions};
 use super::{unit_row, unit_size, Packing, PremultiplyOptions, PremultiplyPlan, Setup, Unit};
 use crate::gpu::{
     shaders, BindingKind, Buffer, BufferBinding, ComputePipeline, ComputePipelineDesc, Gpu, GpuError,
@@ -346,13 +346,10 @@ impl Ctx<'_> {
         }
         let out = self.scratch("premultiply final block", size * w_block)?;
         let mut scratch = FusedScratch::default();
-        let positions = |sparse_axes: &[usize], unit: &Unit| -> Vec<usize> {
-            unit.axes().iter().map(|a| sparse_axes.iter().position(|x| x == a).expect("sparse")).collect()
-        };
-        let first_pos = positions(&part.sparse_axes, first);
+        let first_pos = unit_positions(&part.sparse_axes, first);
         if inner.is_empty() {
             // One sort by (first, last) coordinates; the fused GEMM streams over its rows.
-            let last_pos = positions(&part.sparse_axes, last);
+            let last_pos = unit_positions(&part.sparse_axes, last);
             let idx = sorted_entries(&part.coords, s, &first_pos, &last_pos);
             let piece = Piece {
                 values: &part.values,
@@ -400,8 +397,8 @@ impl Ctx<'_> {
                 let widx = sorted_entries(
                     &w.coords,
                     ws,
-                    &positions(&w.sparse_axes, first),
-                    &positions(&w.sparse_axes, last),
+                    &unit_positions(&w.sparse_axes, first),
+                    &unit_positions(&w.sparse_axes, last),
                 );
                 let piece = Piece {
                     values: &w.values,
@@ -443,13 +440,8 @@ impl Ctx<'_> {
         progress: &dyn Fn(f64),
     ) -> Result<(), ReduceError> {
         let s = piece.sparse_axes.len();
-        let positions = |unit: &Unit| -> Vec<usize> {
-            unit.axes()
-                .iter()
-                .map(|a| piece.sparse_axes.iter().position(|x| x == a).expect("sparse"))
-                .collect()
-        };
-        let (fpos, lpos) = (positions(first), positions(last));
+        let (fpos, lpos) =
+            (unit_positions(piece.sparse_axes, first), unit_positions(piece.sparse_axes, last));
         debug_assert_eq!(fpos.len() + lpos.len(), s, "every sparse axis is in the first or last unit");
         let c = piece.coords;
         let fkey = |e: usize| fpos.iter().map(move |&i| c[e * s + i]);

@@ -196,13 +196,17 @@ pub(crate) fn chunks_of_groups(
     out
 }
 
-/// Positions, among `sparse_axes`, of `unit`'s axes and of every other axis (the grouping key).
-pub(crate) fn unit_and_key_positions(sparse_axes: &[usize], unit: &Unit) -> (Vec<usize>, Vec<usize>) {
-    let unit_pos: Vec<usize> = unit
-        .axes()
+/// Positions, among `sparse_axes`, of `unit`'s axes (in the unit's order).
+pub(crate) fn unit_positions(sparse_axes: &[usize], unit: &Unit) -> Vec<usize> {
+    unit.axes()
         .iter()
         .map(|a| sparse_axes.iter().position(|x| x == a).expect("the unit's axes are sparse"))
-        .collect();
+        .collect()
+}
+
+/// Positions, among `sparse_axes`, of `unit`'s axes and of every other axis (the grouping key).
+pub(crate) fn unit_and_key_positions(sparse_axes: &[usize], unit: &Unit) -> (Vec<usize>, Vec<usize>) {
+    let unit_pos = unit_positions(sparse_axes, unit);
     let key_pos = (0..sparse_axes.len()).filter(|i| !unit_pos.contains(i)).collect();
     (unit_pos, key_pos)
 }

@@ -10,7 +10,7 @@ use crate::gpu::{
     shaders, BindingKind, Buffer, ComputePipeline, ComputePipelineDesc, Gpu, GpuError, GpuResult, MemoryKind,
     Resource,
 };
-use crate::tensor::{Tensor, TensorError};
+use crate::tensor::{check_system, pivot_tolerance, Tensor, TensorError};
 
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
@@ -65,36 +65,16 @@ impl BatchedSolve {
         let Some(first) = matrices.first() else { return Ok(Vec::new()) };
         let n = first.shape().first().copied().unwrap_or(0);
         let mut results: Vec<Option<Result<Vec<f64>, TensorError>>> = vec![None; matrices.len()];
-        // Systems that cannot be sent: wrong shape or non-finite values.
+        // Systems that cannot be sent: not n × n (the batch's size) or non-finite values.
         let mut sent = Vec::new();
         for (s, (a, b)) in matrices.iter().zip(rhs).enumerate() {
-            let check = (|| {
-                if a.order() != 2 {
-                    return Err(TensorError::Shape {
-                        what: what.into(),
-                        axis: 0,
-                        expected: n,
-                        found: a.order(),
-                    });
+            let check = check_system(what, a, b).and_then(|m| {
+                if m == n {
+                    Ok(())
+                } else {
+                    Err(TensorError::Shape { what: what.into(), axis: 0, expected: n, found: m })
                 }
-                a.expect_axis(what, 0, n)?;
-                a.expect_axis(what, 1, n)?;
-                if b.len() != n {
-                    return Err(TensorError::Shape {
-                        what: what.into(),
-                        axis: 1,
-                        expected: n,
-                        found: b.len(),
-                    });
-                }
-                if let Some(i) = a.data().iter().chain(b.iter()).position(|v| !v.is_finite()) {
-                    return Err(TensorError::NotFinite {
-                        what: what.into(),
-                        detail: format!("element {i} is not finite"),
-                    });
-                }
-                Ok(())
-            })();
+            });
             match check {
                 Ok(()) => sent.push(s),
                 Err(e) => results[s] = Some(Err(e)),
@@ -138,7 +118,7 @@ impl BatchedSolve {
                     let b: Vec<f32> = chunk.iter().flat_map(|&s| rhs[s].iter().map(|&v| v as f32)).collect();
                     let t: Vec<f32> = chunk
                         .iter()
-                        .map(|&s| (n as f64 * f64::from(f32::EPSILON) * matrices[s].max_abs()) as f32)
+                        .map(|&s| pivot_tolerance(matrices[s], f64::from(f32::EPSILON)) as f32)
                         .collect();
                     mats.upload(gpu, 0, &a)?;
                     xs.upload(gpu, 0, &b)?;
