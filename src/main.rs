@@ -6,6 +6,10 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{bail, Context, Result};
+
+mod cli {
+    pub mod spacetime;
+}
 use clap::{Parser, Subcommand};
 use galerkin::demo::axpy::{axpy_error_ratio, Axpy};
 use galerkin::demo::field::{check_colours, check_values, FieldOutput, FieldPass};
@@ -62,49 +66,14 @@ enum Command {
         resize_to: Option<(u32, u32)>,
     },
     /// Render a time slice of a spacetime DG data set (seed 003): height |v|, colour by strain
-    /// energy density on the seed's log ramp, exact per-pixel normals, edge overdraw. PNG out
-    /// is the lit colour image; EXR out holds the raw per-pixel fields (channels U, speed,
-    /// normal.x, normal.y, normal.z; NaN where no surface). Data sets are generated (the fields
-    /// are analytic elastodynamic pulses projected per element, not solved); reading files is
-    /// not built yet.
-    Spacetime {
-        /// Generated data set: `pulses` (a pressure and a shear pulse crossing the unit square).
-        #[arg(long, default_value = "pulses")]
-        generate: String,
-        /// About this many tetrahedra (structured: 6·k³).
-        #[arg(long, default_value_t = 60_000)]
-        elements: usize,
-        /// Time of the slice (default: the middle of the data set's time span).
-        #[arg(long)]
-        time: Option<f64>,
-        /// Flat slice (no height field).
-        #[arg(long)]
-        flat: bool,
-        /// Height per unit of |v| (default: a tenth of the domain per the largest |v|).
-        #[arg(long)]
-        height_scale: Option<f64>,
-        /// Do not overdraw polygon edges (shows the cracks of seed 003 Fig. 4a).
-        #[arg(long)]
-        no_edges: bool,
-        /// Quadrisect slice triangles larger than this area (seed 003 §4.2.2).
-        #[arg(long, value_name = "AREA")]
-        subdivide: Option<f64>,
-        /// U_max of the colour ramp s = log(U+1)/log(U_max+1) (default: the slice's largest U).
-        #[arg(long)]
-        umax: Option<f64>,
-        /// Colour at the vertices, interpolated (the seed's per-vertex baseline, Fig. 5a).
-        #[arg(long)]
-        per_vertex: bool,
-        /// Colour map: viridis, cool-warm, grey, or a ramp PNG file.
-        #[arg(long, default_value = "viridis")]
-        colormap: String,
-        /// Image size.
-        #[arg(long, value_name = "WxH", value_parser = parse_size, default_value = "1280x720")]
-        size: (u32, u32),
-        /// Output image: .png (colour) or .exr (fields).
-        #[arg(long, default_value = "out/spacetime.png")]
-        out: PathBuf,
-    },
+    /// energy density on the seed's log ramp, exact per-pixel normals, edge overdraw. Reads
+    /// .gst (memory-mapped, streamed) and .vtu files, or generates a data set (the fields are
+    /// analytic elastodynamic pulses projected per element, not solved).
+    Spacetime(cli::spacetime::RenderArgs),
+    /// Generate a spacetime data set to a .gst or .vtu file (analytic fields, not solved).
+    SpacetimeGen(cli::spacetime::GenArgs),
+    /// Convert a spacetime data set between .gst and .vtu.
+    SpacetimeConvert(cli::spacetime::ConvertArgs),
     /// Benchmarks.
     Bench {
         #[command(subcommand)]
@@ -159,54 +128,16 @@ fn run(cli: Cli) -> Result<()> {
         Command::View { scene, frames, screenshot, resize_to } => {
             view(desc, &scene, frames, screenshot, resize_to)
         }
-        Command::Spacetime {
-            generate,
-            elements,
-            time,
-            flat,
-            height_scale,
-            no_edges,
-            subdivide,
-            umax,
-            per_vertex,
-            colormap,
-            size,
-            out,
-        } => {
-            let mesh = match generate.as_str() {
-                "pulses" => galerkin::spacetime::generate::pulses(elements),
-                other => bail!("unknown data set {other:?} (available: pulses)"),
-            };
-            let (t0, t1) = mesh.time_range();
-            let time = time.unwrap_or(0.5 * (t0 + t1));
-            if !(t0..=t1).contains(&time) {
-                bail!("--time {time} is outside the data set's time span [{t0}, {t1}]");
-            }
-            for (name, v) in [("--subdivide", subdivide), ("--umax", umax), ("--height-scale", height_scale)]
-            {
-                if let Some(v) = v.filter(|v| !(v.is_finite() && *v > 0.0)) {
-                    bail!("{name} must be a positive number, got {v}");
-                }
-            }
-            let base = galerkin::spacetime::SpacetimeView::looking_at(&mesh, time);
-            let view = galerkin::spacetime::SpacetimeView {
-                height: !flat,
-                height_scale,
-                edges: !no_edges,
-                subdivide,
-                u_max: umax,
-                per_vertex,
-                ..base
-            };
-            spacetime(&desc, &mesh, &view, &Colormap::by_name(&colormap)?, size, &out)
-        }
+        Command::Spacetime(args) => cli::spacetime::render(&desc, &args),
+        Command::SpacetimeGen(args) => cli::spacetime::generate_file(&args),
+        Command::SpacetimeConvert(args) => cli::spacetime::convert(&args),
         Command::Bench { what: BenchWhat::Gpu { quick } } => bench_gpu(&desc, quick),
         Command::Bench { what: BenchWhat::Reduce { quick } } => bench_reduce(&desc, quick),
     }
 }
 
 /// After the work: fail if validation was on and reported errors.
-fn check_validation(gpu: Gpu) -> Result<()> {
+pub(crate) fn check_validation(gpu: Gpu) -> Result<()> {
     let log = gpu.validation_log();
     drop(gpu);
     if let Some(log) = log {
@@ -376,9 +307,9 @@ fn demo(desc: &GpuDesc, scene_path: &Path, out: &Path) -> Result<()> {
 
     // Spacetime DG (seed 003): one lit frame (PNG) and its raw fields (EXR) of generated pulses.
     let mesh = galerkin::spacetime::generate::pulses(20_000);
-    let mut renderer = galerkin::spacetime::SpacetimeRenderer::new(&gpu, &mesh, &colormap)?;
+    let mut renderer = galerkin::spacetime::SpacetimeRenderer::from_mesh(&gpu, &mesh, &colormap)?;
     let t = 0.5 * mesh.time_range().1;
-    let view = galerkin::spacetime::SpacetimeView::looking_at(&mesh, t);
+    let view = galerkin::spacetime::SpacetimeView::looking_at(renderer.data().summary(), t);
     let stats = renderer.slice(t, None)?;
     let colours = RenderTarget::new(&gpu, "demo spacetime", w, h, ColorFormat::Rgba8)?;
     let Pixels::Rgba8(c) = renderer.render(&colours, &view)? else { bail!("RGBA8 target returned floats") };
@@ -416,67 +347,7 @@ fn view(_: GpuDesc, _: &Path, _: Option<u64>, _: PathBuf, _: Option<(u32, u32)>)
 }
 
 /// Parses `WIDTHxHEIGHT`.
-fn spacetime(
-    desc: &GpuDesc,
-    mesh: &galerkin::spacetime::SpacetimeMesh,
-    view: &galerkin::spacetime::SpacetimeView,
-    colormap: &Colormap,
-    (w, h): (u32, u32),
-    out: &Path,
-) -> Result<()> {
-    let gpu = Gpu::new(desc)?;
-    let mut renderer = galerkin::spacetime::SpacetimeRenderer::new(&gpu, mesh, colormap)?;
-    let t = Instant::now();
-    let stats = renderer.slice(view.time, view.subdivide)?;
-    let slice_ms = t.elapsed().as_secs_f64() * 1e3;
-    let exr = out.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr"));
-    let format = if exr { ColorFormat::Rgba32F } else { ColorFormat::Rgba8 };
-    let target = RenderTarget::new(&gpu, "spacetime", w, h, format)?;
-    let t = Instant::now();
-    let pixels = renderer.render(&target, view)?;
-    let draw_ms = t.elapsed().as_secs_f64() * 1e3;
-    match pixels {
-        Pixels::Rgba8(c) => write_png_rgba8(out, w, h, &c)?,
-        Pixels::Rgba32F(v) => {
-            let channel = |k: usize| v.chunks_exact(4).map(|p| p[k]).collect::<Vec<f32>>();
-            let nz: Vec<f32> =
-                v.chunks_exact(4)
-                    .map(|p| {
-                        if p[2].is_nan() {
-                            f32::NAN
-                        } else {
-                            (1.0 - p[2] * p[2] - p[3] * p[3]).max(0.0).sqrt()
-                        }
-                    })
-                    .collect();
-            galerkin::render::write_exr_channels(
-                out,
-                w,
-                h,
-                vec![
-                    ("U", channel(0)),
-                    ("speed", channel(1)),
-                    ("normal.x", channel(2)),
-                    ("normal.y", channel(3)),
-                    ("normal.z", nz),
-                ],
-            )?;
-        }
-    }
-    println!(
-        "spacetime: {} elements, t = {:.4}: {} active, {} triangles, {} edge lines; slice {slice_ms:.1} ms, render + readback {draw_ms:.1} ms → {}",
-        mesh.tets.len(),
-        view.time,
-        stats.active,
-        stats.triangles,
-        stats.lines,
-        out.display()
-    );
-    drop((target, renderer));
-    check_validation(gpu)
-}
-
-fn parse_size(s: &str) -> Result<(u32, u32), String> {
+pub(crate) fn parse_size(s: &str) -> Result<(u32, u32), String> {
     let (w, h) = s.split_once(['x', 'X']).ok_or_else(|| format!("{s:?} is not WIDTHxHEIGHT"))?;
     let n = |v: &str| v.trim().parse::<u32>().ok().filter(|&v| (1..=16384).contains(&v));
     match (n(w), n(h)) {

@@ -11,7 +11,8 @@ use galerkin::render::{phong, ColorFormat, Colormap, Pixels, RenderTarget};
 use galerkin::spacetime::generate::{pulses, structured_mesh};
 use galerkin::spacetime::slice::{slice, SlicePolygon};
 use galerkin::spacetime::{
-    evaluate, GpuElement, Material, SpacetimeError, SpacetimeMesh, SpacetimeRenderer, SpacetimeView,
+    evaluate, ElementRecord, Material, SpacetimeData, SpacetimeError, SpacetimeMesh, SpacetimeRenderer,
+    SpacetimeView,
 };
 
 fn mesh() -> SpacetimeMesh {
@@ -27,7 +28,8 @@ fn tri_area(t: &[[f32; 2]; 3]) -> f64 {
 fn glsl_field_and_shading_match_their_rust_twins() {
     let gpu = common::gpu();
     let m = mesh();
-    let elements: Vec<GpuElement> = (0..m.tets.len()).map(|e| GpuElement::of(&m, e)).collect();
+    let elements: Vec<ElementRecord> = (0..m.tets.len()).map(|e| ElementRecord::of(&m, e)).collect();
+    let materials: Vec<[f32; 4]> = m.materials.iter().map(galerkin::spacetime::record::gpu_material).collect();
     let r = common::random_f32(4 * 300, 3);
     let mut points = Vec::new();
     let mut phong_in: Vec<[f32; 4]> = Vec::new();
@@ -52,12 +54,13 @@ fn glsl_field_and_shading_match_their_rust_twins() {
         Buffer::from_slice(&gpu, "points", &points.iter().map(|p| p.0).collect::<Vec<_>>(), usage).unwrap();
     let qb = Buffer::from_slice(&gpu, "phong in", &phong_in, usage).unwrap();
     let ob = Buffer::<[f32; 4]>::new(&gpu, "out", 5 * 300, usage, MemoryKind::GpuOnly).unwrap();
+    let mb = Buffer::from_slice(&gpu, "materials", &materials, usage).unwrap();
     let pipeline = ComputePipeline::new(
         &gpu,
         &ComputePipelineDesc {
             name: "spacetime probe",
             spirv: shaders::probe::SPACETIME,
-            bindings: &[BindingKind::StorageBuffer; 4],
+            bindings: &[BindingKind::StorageBuffer; 5],
             push_constant_bytes: 8,
             specialization: &[],
             shared_bytes: 0,
@@ -67,7 +70,8 @@ fn glsl_field_and_shading_match_their_rust_twins() {
     let set = pipeline
         .bind(
             &gpu,
-            &[eb.binding(), pb.binding(), qb.binding(), ob.binding()].map(|b| Resource::Storage(b.unwrap())),
+            &[eb.binding(), pb.binding(), qb.binding(), ob.binding(), mb.binding()]
+                .map(|b| Resource::Storage(b.unwrap())),
         )
         .unwrap();
     let height_scale = 3.0f32;
@@ -81,18 +85,14 @@ fn glsl_field_and_shading_match_their_rust_twins() {
         .iter()
         .map(|(p, e)| {
             // The f64 reference at the f32 point the shader saw, with the f32-rounded element.
-            let g = GpuElement::of(&m, *e);
-            let frame = galerkin::spacetime::LocalFrame {
-                centre: [0, 1, 2].map(|k| f64::from(g.centre_lambda[k])),
-                extent: [0, 1, 2].map(|k| f64::from(g.extent_mu[k])),
-            };
+            let g = ElementRecord::of(&m, *e);
+            let mat = m.materials[g.material as usize];
             let mat = Material {
-                lambda: f64::from(g.centre_lambda[3]),
-                mu: f64::from(g.extent_mu[3]),
+                lambda: f64::from(mat.lambda as f32),
+                mu: f64::from(mat.mu as f32),
                 density: 1.0,
             };
-            let c = g.coefficients.map(|v| v.map(f64::from));
-            evaluate(&frame, &mat, &c, [0, 1, 2].map(|k| f64::from(p[k])))
+            evaluate(&g.frame(), &mat, &g.coefficients_f64(), [0, 1, 2].map(|k| f64::from(p[k])))
         })
         .collect();
     for f in &fields {
@@ -148,7 +148,7 @@ fn the_device_slice_matches_the_reference_and_tiles_the_domain() {
     for v in &mut m.vertices {
         *v = v.map(|x| f64::from(x as f32));
     }
-    let mut r = SpacetimeRenderer::new(&gpu, &m, &Colormap::viridis()).unwrap();
+    let mut r = SpacetimeRenderer::from_mesh(&gpu, &m, &Colormap::viridis()).unwrap();
     let (t0, t1) = m.time_range();
     let mut layers: Vec<f64> = m.vertices.iter().map(|v| v[2]).collect();
     layers.sort_by(f64::total_cmp);
@@ -196,7 +196,7 @@ fn the_device_slice_matches_the_reference_and_tiles_the_domain() {
 fn subdivision_quadrisects_large_triangles() {
     let gpu = common::gpu();
     let m = mesh();
-    let mut r = SpacetimeRenderer::new(&gpu, &m, &Colormap::viridis()).unwrap();
+    let mut r = SpacetimeRenderer::from_mesh(&gpu, &m, &Colormap::viridis()).unwrap();
     let t = 0.41 * m.time_range().1;
     let plain = r.slice(t, None).unwrap();
     let tris = r.slice_triangles().unwrap();
@@ -214,9 +214,9 @@ fn subdivision_quadrisects_large_triangles() {
 fn pixels_show_the_element_polynomial_at_their_centres() {
     let gpu = common::gpu();
     let m = mesh();
-    let mut r = SpacetimeRenderer::new(&gpu, &m, &Colormap::viridis()).unwrap();
+    let mut r = SpacetimeRenderer::from_mesh(&gpu, &m, &Colormap::viridis()).unwrap();
     let t = 0.43 * m.time_range().1;
-    let view = SpacetimeView { edges: false, ..SpacetimeView::from_above(&m, t) };
+    let view = SpacetimeView { edges: false, ..SpacetimeView::from_above(r.data().summary(), t) };
     let (w, h) = (160, 160);
     let target = RenderTarget::new(&gpu, "data", w, h, ColorFormat::Rgba32F).unwrap();
     let Pixels::Rgba32F(data) = r.render(&target, &view).unwrap() else { panic!("float target") };
@@ -324,16 +324,16 @@ fn edge_overdraw_fills_the_cracks_of_a_discontinuous_height_field() {
     // which edge overdraw does not and should not hide).
     let mut m = mesh();
     let max_speed =
-        0.1 / SpacetimeRenderer::new(&gpu, &m, &Colormap::viridis()).unwrap().default_height_scale();
+        0.1 / SpacetimeRenderer::from_mesh(&gpu, &m, &Colormap::viridis()).unwrap().default_height_scale();
     let r = common::random_f32(2 * m.tets.len(), 11);
     for (e, f) in m.fields.iter_mut().enumerate() {
         let wt = f.frame.extent[2];
         f.coefficients[3][0] += 0.03 * max_speed * f64::from(r[2 * e]) * wt;
         f.coefficients[3][1] += 0.03 * max_speed * f64::from(r[2 * e + 1]) * wt;
     }
-    let mut rend = SpacetimeRenderer::new(&gpu, &m, &Colormap::viridis()).unwrap();
+    let mut rend = SpacetimeRenderer::from_mesh(&gpu, &m, &Colormap::viridis()).unwrap();
     let t = 0.5 * m.time_range().1;
-    let base = SpacetimeView::looking_at(&m, t);
+    let base = SpacetimeView::looking_at(rend.data().summary(), t);
     // Heights up to ~5% of the domain: the interior test region stays under the surface.
     let view = SpacetimeView { height_scale: Some(0.5 * rend.default_height_scale()), ..base };
     let without = cracks(&gpu, &mut rend, &SpacetimeView { edges: false, ..view });
@@ -347,10 +347,10 @@ fn edge_overdraw_fills_the_cracks_of_a_discontinuous_height_field() {
 fn colour_output_and_per_vertex_mode() {
     let gpu = common::gpu();
     let m = mesh();
-    let mut r = SpacetimeRenderer::new(&gpu, &m, &Colormap::viridis()).unwrap();
+    let mut r = SpacetimeRenderer::from_mesh(&gpu, &m, &Colormap::viridis()).unwrap();
     let t = 0.5 * m.time_range().1;
     let target = RenderTarget::new(&gpu, "colour", 200, 150, ColorFormat::Rgba8).unwrap();
-    let view = SpacetimeView::looking_at(&m, t);
+    let view = SpacetimeView::looking_at(r.data().summary(), t);
     let Pixels::Rgba8(pixel) = r.render(&target, &view).unwrap() else { panic!("rgba8") };
     let Pixels::Rgba8(vertex) = r.render(&target, &SpacetimeView { per_vertex: true, ..view }).unwrap()
     else {

@@ -12,13 +12,40 @@ const ivec3 SPACETIME_MONOMIALS[20] = ivec3[20](
     ivec3(3, 0, 0), ivec3(2, 1, 0), ivec3(2, 0, 1), ivec3(1, 2, 0), ivec3(1, 1, 1),
     ivec3(1, 0, 2), ivec3(0, 3, 0), ivec3(0, 2, 1), ivec3(0, 1, 2), ivec3(0, 0, 3));
 
-// One element as stored on the device (std430, 192 bytes): frame centre and λ, extents and μ,
-// the 20 displacement coefficients. Rust: spacetime::GpuElement.
+// One element ready for evaluation: frame centre and λ, extents and μ, the 20 displacement
+// coefficients (what the slice pipelines pass from the vertex to the fragment stage).
 struct SpacetimeElement {
     vec4 centre_lambda;
     vec4 extent_mu;
     vec2 c[20];
 };
+
+// One element as stored on the device and in .gst files (std430, 240 bytes): its corners
+// (x0 y0 t0 x1)(y1 t1 x2 y2)(t2 x3 y3 t3), frame centre and material index (bits of w),
+// extents, the 20 coefficients. Rust: spacetime::ElementRecord.
+struct SpacetimeRecord {
+    vec4 corners[3];
+    vec4 centre_material;
+    vec4 extent;
+    vec2 c[20];
+};
+
+// Corner i (0..3) of a record.
+vec3 spacetime_corner(SpacetimeRecord r, uint i) {
+    float v[12] = float[12](r.corners[0].x, r.corners[0].y, r.corners[0].z, r.corners[0].w,
+                            r.corners[1].x, r.corners[1].y, r.corners[1].z, r.corners[1].w,
+                            r.corners[2].x, r.corners[2].y, r.corners[2].z, r.corners[2].w);
+    return vec3(v[3u * i], v[3u * i + 1u], v[3u * i + 2u]);
+}
+
+// The element of a record with its material (λ, μ, ρ, 0) resolved.
+SpacetimeElement spacetime_element(SpacetimeRecord r, vec4 material) {
+    SpacetimeElement el;
+    el.centre_lambda = vec4(r.centre_material.xyz, material.x);
+    el.extent_mu = vec4(r.extent.xyz, material.y);
+    el.c = r.c;
+    return el;
+}
 
 struct SpacetimeFields {
     vec2 displacement;

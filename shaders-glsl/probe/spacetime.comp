@@ -5,7 +5,8 @@
 #include "phong.glsl"
 
 layout(local_size_x = 64) in;
-layout(std430, set = 0, binding = 0) readonly buffer Elements { SpacetimeElement elements[]; };
+layout(std430, set = 0, binding = 0) readonly buffer Records { SpacetimeRecord records[]; };
+layout(std430, set = 0, binding = 4) readonly buffer Materials { vec4 materials[]; };
 // Per probe: (x, y, t, element) and a Phong input set: colour, normal, light, eye (vec4 each).
 layout(std430, set = 0, binding = 1) readonly buffer Points { vec4 points[]; };
 layout(std430, set = 0, binding = 2) readonly buffer PhongIn { vec4 phong_in[]; };
@@ -18,7 +19,8 @@ void main() {
     uint i = gl_GlobalInvocationID.x;
     if (i >= pc.n) return;
     vec4 p = points[i];
-    SpacetimeFields f = spacetime_evaluate(elements[uint(p.w)], p.xyz);
+    SpacetimeRecord r = records[uint(p.w)];
+    SpacetimeFields f = spacetime_evaluate(spacetime_element(r, materials[floatBitsToUint(r.centre_material.w)]), p.xyz);
     vec3 nrm = spacetime_normal(f, pc.height_scale);
     result[5u * i + 0u] = vec4(f.strain_energy_density, f.speed, f.speed_gradient);
     result[5u * i + 1u] = vec4(f.velocity, f.strain.xy);

@@ -8,14 +8,16 @@
 
 layout(location = 0) in vec2 xy;
 layout(location = 1) in uint element;
-layout(std430, set = 0, binding = 0) readonly buffer Elements { SpacetimeElement elements[]; };
+layout(std430, set = 0, binding = 0) readonly buffer Records { SpacetimeRecord records[]; };
+layout(std430, set = 0, binding = 2) readonly buffer Materials { vec4 materials[]; };   // λ, μ, ρ, 0
 
 layout(location = 0) out vec3 world;
 layout(location = 1) out float vertex_s;        // per-vertex colour coordinate (comparison mode)
 layout(location = 2) flat out vec4 el_data[12];
 
 void main() {
-    SpacetimeElement el = elements[element];
+    SpacetimeRecord r = records[element];
+    SpacetimeElement el = spacetime_element(r, materials[floatBitsToUint(r.centre_material.w)]);
     SpacetimeFields f = spacetime_evaluate(el, vec3(xy, pc.eye_t.w));
     float z = pc.flags.y != 0u ? pc.light_scale.w * f.speed : 0.0;
     world = vec3(xy, z);

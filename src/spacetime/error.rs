@@ -57,6 +57,17 @@ pub enum SpacetimeError {
         /// What went wrong.
         detail: String,
     },
+    /// More elements can be cut by one time plane than one storage binding holds.
+    #[error(
+        "{active} elements may be cut by this time plane; one device binding holds {limit} \
+         (elements longer in time than needed make the active range long)"
+    )]
+    TooManyActive {
+        /// Elements in the active range.
+        active: usize,
+        /// Records per binding.
+        limit: usize,
+    },
     /// A device failure.
     #[error("{context}: {source}")]
     Device {

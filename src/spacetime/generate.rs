@@ -11,7 +11,9 @@
 use rayon::prelude::*;
 
 use super::cubic::{CubicCoefficients, LocalFrame, Material, MONOMIALS};
+use super::error::SpacetimeError;
 use super::mesh::{ElementField, SpacetimeMesh};
+use super::record::ElementRecord;
 use crate::tensor::{solve, Tensor};
 
 /// Five-point Gauss–Legendre rule on [0, 1]: nodes and weights.
@@ -180,15 +182,53 @@ pub fn crossing_pulses(material: Material, size: [f64; 2]) -> impl Fn([f64; 3]) 
     }
 }
 
+/// The material of the `pulses` data set.
+pub const PULSES_MATERIAL: Material = Material { lambda: 2.0, mu: 1.0, density: 1.0 };
+
+/// Cells per axis of the `pulses` data set of about `elements` tetrahedra (`6 k³`).
+fn pulses_cells(elements: usize) -> usize {
+    ((elements as f64 / 6.0).cbrt().round() as usize).max(1)
+}
+
 /// The data set of `galerkin spacetime-gen --scenario pulses`: the unit square over a time
 /// span that lets both pulses cross it, with about `elements` tetrahedra.
 pub fn pulses(elements: usize) -> SpacetimeMesh {
-    let k = ((elements as f64 / 6.0).cbrt().round() as usize).max(1);
-    let material = Material { lambda: 2.0, mu: 1.0, density: 1.0 };
+    let k = pulses_cells(elements);
     let size = [1.0, 1.0];
-    let mut mesh = structured_mesh(k, k, k, size, 1.0 / material.p_wave_speed(), material);
-    project_field(&mut mesh, &crossing_pulses(material, size));
+    let mut mesh = structured_mesh(k, k, k, size, 1.0 / PULSES_MATERIAL.p_wave_speed(), PULSES_MATERIAL);
+    project_field(&mut mesh, &crossing_pulses(PULSES_MATERIAL, size));
     mesh
+}
+
+/// [`pulses`] streamed time layer by time layer in ascending lowest time — the same records,
+/// never more than one layer in memory — for data sets larger than memory. `progress` is told
+/// the elements done after each layer.
+pub fn stream_pulses(
+    elements: usize,
+    sink: &mut dyn FnMut(&ElementRecord) -> Result<(), SpacetimeError>,
+    progress: &mut dyn FnMut(u64),
+) -> Result<(), SpacetimeError> {
+    let k = pulses_cells(elements);
+    let size = [1.0, 1.0];
+    let duration = 1.0 / PULSES_MATERIAL.p_wave_speed();
+    let field = crossing_pulses(PULSES_MATERIAL, size);
+    let mut done = 0u64;
+    for layer in 0..k {
+        // One layer of the structured mesh, its times set by the same formula as
+        // `structured_mesh` uses for the whole (so the values are bit-identical).
+        let mut mesh = structured_mesh(k, k, 1, size, duration, PULSES_MATERIAL);
+        for v in &mut mesh.vertices {
+            let local = if v[2] > 0.0 { 1 } else { 0 };
+            v[2] = duration * (layer + local) as f64 / k as f64;
+        }
+        project_field(&mut mesh, &field);
+        for e in 0..mesh.tets.len() {
+            sink(&ElementRecord::of(&mesh, e))?;
+        }
+        done += mesh.tets.len() as u64;
+        progress(done);
+    }
+    Ok(())
 }
 
 #[cfg(test)]
@@ -229,6 +269,25 @@ mod tests {
                 (got[0] - want[0]).abs() < 1e-11 && (got[1] - want[1]).abs() < 1e-11,
                 "{got:?} vs {want:?}"
             );
+        }
+    }
+
+    #[test]
+    fn streamed_pulses_are_the_in_memory_records() {
+        let mesh = pulses(1500);
+        let mut streamed = Vec::new();
+        stream_pulses(
+            1500,
+            &mut |r| {
+                streamed.push(*r);
+                Ok(())
+            },
+            &mut |_| {},
+        )
+        .unwrap();
+        assert_eq!(streamed.len(), mesh.tets.len());
+        for (e, r) in streamed.iter().enumerate() {
+            assert_eq!(*r, ElementRecord::of(&mesh, e), "element {e}");
         }
     }
 

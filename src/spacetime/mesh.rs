@@ -141,7 +141,7 @@ impl SpacetimeMesh {
     }
 
     /// Reorders the elements by lowest time (§4.1), so that the elements a time plane can cut
-    /// form a contiguous range ([`active_range`]).
+    /// form a contiguous range ([`super::SpacetimeData::active_range`]).
     pub fn sort_by_lowest_time(&mut self) {
         let mut order: Vec<usize> = (0..self.tets.len()).collect();
         let keys = self.lowest_times();
@@ -159,13 +159,4 @@ impl SpacetimeMesh {
     pub fn lowest_times(&self) -> Vec<f64> {
         (0..self.tets.len()).map(|e| self.lowest_time(e)).collect()
     }
-}
-
-/// For elements sorted by lowest time (`lowest_times`, ascending): the range that may be cut
-/// by the plane `t` — lowest time in `[t − longest_duration, t)`. Every element the plane cuts
-/// is in it; the slicer tests each.
-pub fn active_range(lowest_times: &[f64], t: f64, longest_duration: f64) -> std::ops::Range<usize> {
-    let lo = lowest_times.partition_point(|&x| x < t - longest_duration);
-    let hi = lowest_times.partition_point(|&x| x < t);
-    lo..hi
 }

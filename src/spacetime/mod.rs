@@ -9,13 +9,19 @@
 //! fields are analytic, not solved.
 
 pub mod cubic;
+pub mod data;
 mod error;
 pub mod generate;
+pub mod gst;
 pub mod mesh;
+pub mod record;
 mod render;
 pub mod slice;
+pub mod vtu;
 
 pub use cubic::{evaluate, LocalFrame, Material, PointFields, MONOMIALS};
 pub use error::SpacetimeError;
 pub use mesh::{ElementField, SpacetimeMesh};
-pub use render::{GpuElement, SliceLine, SliceStats, SliceTriangle, SpacetimeRenderer, SpacetimeView};
+pub use data::{DataSummary, SpacetimeData};
+pub use record::ElementRecord;
+pub use render::{FrameTimes, SliceLine, SliceStats, SliceTriangle, SpacetimeRenderer, SpacetimeView};

@@ -1,52 +1,30 @@
-//! The spacetime renderer (seed 003 §4): the mesh resident on the device, a compute pass that
-//! slices it at time `t` (`shaders-glsl/spacetime/slice.comp`), and graphics pipelines that
-//! draw the slice with per-vertex height and per-pixel strain energy density, exact normals
-//! and Phong lighting (`slice.vert`, `slice.frag`), then overdraw every polygon edge as a line
-//! to fill cracks between discontinuous neighbours (§4.3).
+//! The spacetime renderer (seed 003 §4): the elements a slice can cut resident on the device
+//! (a window of the data sorted by lowest time, streamed from memory or a memory-mapped
+//! `.gst` file as `t` moves), two compute passes that slice the window at time `t`
+//! (`shaders-glsl/spacetime/slice.comp`: the cut; `subdivide.comp`: quadrisection), and
+//! graphics pipelines that draw the slice with per-vertex height and per-pixel strain energy
+//! density, exact normals and Phong lighting (`slice.vert`, `slice.frag`), then overdraw every
+//! polygon edge as a line to fill cracks between discontinuous neighbours (§4.3).
 //!
 //! The edge lines are drawn with a depth bias that puts them *behind* the polygons: where a
 //! polygon covers a pixel it wins and the pixel shows the polygon's value at the pixel centre;
 //! a line only shows where no polygon covered the pixel — a crack.
 
 use std::collections::HashMap;
+use std::ops::Range;
 
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
 
+use super::data::{DataSummary, SpacetimeData};
 use super::error::SpacetimeError;
-use super::mesh::{active_range, SpacetimeMesh};
+use super::mesh::SpacetimeMesh;
+use super::record::{gpu_material, ElementRecord};
 use crate::gpu::{
     shaders, BindingKind, Buffer, ComputePipeline, ComputePipelineDesc, DescriptorSet, Gpu, GpuError,
-    GraphicsPipeline, GraphicsPipelineDesc, MemoryKind, Resource,
+    GraphicsPipeline, GraphicsPipelineDesc, MemoryKind, Profiler, Resource,
 };
 use crate::render::{Camera, ColorFormat, Colormap, ColormapTexture, Pixels, RenderTarget, BACKGROUND};
-
-/// One element as the shaders read it (`SpacetimeElement` in `include/spacetime_cubic.glsl`).
-#[repr(C)]
-#[derive(Clone, Copy, Pod, Zeroable)]
-pub struct GpuElement {
-    /// Frame centre (x, y, t) and λ.
-    pub centre_lambda: [f32; 4],
-    /// Frame extents (w_x, w_y, w_t) and μ.
-    pub extent_mu: [f32; 4],
-    /// The 20 displacement coefficients.
-    pub coefficients: [[f32; 2]; 20],
-}
-
-impl GpuElement {
-    /// Element `e` of `mesh`.
-    pub fn of(mesh: &SpacetimeMesh, e: usize) -> Self {
-        let f = &mesh.fields[e];
-        let m = mesh.materials[f.material as usize];
-        let c = f.frame.centre.map(|x| x as f32);
-        let w = f.frame.extent.map(|x| x as f32);
-        Self {
-            centre_lambda: [c[0], c[1], c[2], m.lambda as f32],
-            extent_mu: [w[0], w[1], w[2], m.mu as f32],
-            coefficients: f.coefficients.map(|v| v.map(|x| x as f32)),
-        }
-    }
-}
 
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
@@ -66,7 +44,7 @@ struct SlicePushCompute {
     max_level: u32,
     tri_capacity: u32,
     line_capacity: u32,
-    pad: u32,
+    cut_capacity: u32,
 }
 
 #[repr(C)]
@@ -102,12 +80,10 @@ pub struct SpacetimeView {
 }
 
 impl SpacetimeView {
-    /// Height on, edges on, no subdivision, automatic scales, looking at `mesh` from above
-    /// and in front.
-    pub fn looking_at(mesh: &SpacetimeMesh, time: f64) -> Self {
-        let (lo, hi) = mesh.space_bounds();
-        let centre = [0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1])];
-        let size = (hi[0] - lo[0]).max(hi[1] - lo[1]);
+    /// Height on, edges on, no subdivision, automatic scales, looking at the data set from
+    /// above and in front.
+    pub fn looking_at(data: &DataSummary, time: f64) -> Self {
+        let (centre, size) = (data.centre(), data.size());
         Self {
             time,
             height: true,
@@ -127,12 +103,10 @@ impl SpacetimeView {
         }
     }
 
-    /// Looking straight down at `mesh` so that it fills the image (height off): every pixel
+    /// Looking straight down at the data set so that it fills the image (height off): every pixel
     /// centre sees the point (x, y) of the slice plane, as the pixel-exactness tests want.
-    pub fn from_above(mesh: &SpacetimeMesh, time: f64) -> Self {
-        let (lo, hi) = mesh.space_bounds();
-        let centre = [0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1])];
-        let size = (hi[0] - lo[0]).max(hi[1] - lo[1]);
+    pub fn from_above(data: &DataSummary, time: f64) -> Self {
+        let (centre, size) = (data.centre(), data.size());
         let fov: f64 = 30.0;
         let distance = 0.5 * size / (0.5 * fov.to_radians()).tan();
         Self {
@@ -145,7 +119,7 @@ impl SpacetimeView {
                 near: 0.1 * distance,
                 far: 4.0 * distance,
             },
-            ..Self::looking_at(mesh, time)
+            ..Self::looking_at(data, time)
         }
     }
 }
@@ -165,29 +139,55 @@ pub struct SliceStats {
     pub triangles: usize,
     /// Edge lines drawn.
     pub lines: usize,
+    /// Elements uploaded to the device for this slice (0 when the resident window already
+    /// held the active range).
+    pub streamed: usize,
+}
+
+/// Device times of one frame's stages from timestamp queries (milliseconds).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct FrameTimes {
+    /// The cut of the active elements (`slice.comp`).
+    pub slice_ms: f64,
+    /// The quadrisection of the cut triangles (`subdivide.comp`).
+    pub subdivide_ms: f64,
+    /// The render pass: polygons and edge lines.
+    pub draw_ms: f64,
 }
 
 /// Direction to the light (unit), from the upper left front.
 const LIGHT: [f64; 3] = [-0.408_248_290_463_863, -0.408_248_290_463_863, 0.816_496_580_927_726];
 
-/// The resident mesh, its slice and the pipelines.
+/// Elements of the data resident on the device: `range` of the sorted records in `buffer`.
+struct Window {
+    range: Range<usize>,
+    buffer: Buffer<ElementRecord>,
+}
+
+/// Counters written by the slicing passes: two `VkDrawIndirectCommand`s (triangles at word 0,
+/// lines at word 4), the overflow flag (word 8), the number of cut triangles (word 9).
+const COUNTERS: u64 = 10;
+
+/// Data sets up to this many elements are made resident whole.
+const RESIDENT_WHOLE: usize = 1 << 18;
+
+/// The data, the resident window, its slice and the pipelines.
 pub struct SpacetimeRenderer {
     gpu: Gpu,
-    mesh_lowest: Vec<f64>,
-    longest: f64,
-    default_height_scale: f64,
-    vertices: Buffer<[f32; 4]>,
-    tets: Buffer<[u32; 4]>,
-    elements: Buffer<GpuElement>,
+    data: SpacetimeData,
+    window: Option<Window>,
+    materials: Buffer<[f32; 4]>,
+    cuts: Buffer<[f32; 4]>,
     tris: Buffer<SliceVertex>,
     lines: Buffer<SliceVertex>,
     draws: Buffer<u32>,
     slicer: ComputePipeline,
+    subdivider: ComputePipeline,
     colormap: ColormapTexture,
     pipelines: HashMap<ColorFormat, (GraphicsPipeline, GraphicsPipeline, DescriptorSet, DescriptorSet)>,
     sliced: Option<(f64, Option<f64>, SliceStats)>,
-    /// The slicer's bindings, kept until the output buffers grow.
-    slice_set: Option<DescriptorSet>,
+    /// The slicing passes' bindings, kept until a buffer is replaced.
+    slice_sets: Option<(DescriptorSet, DescriptorSet)>,
     /// The float target of the automatic-U_max data pass, reused while the size stays.
     umax_target: Option<RenderTarget>,
 }
@@ -202,171 +202,274 @@ fn dev(context: &str) -> impl FnOnce(GpuError) -> SpacetimeError + '_ {
     move |source| SpacetimeError::Device { context: context.to_string(), source }
 }
 
+fn compute(gpu: &Gpu, name: &'static str, spirv: &'static [u32]) -> Result<ComputePipeline, SpacetimeError> {
+    ComputePipeline::new(
+        gpu,
+        &ComputePipelineDesc {
+            name,
+            spirv,
+            bindings: &[BindingKind::StorageBuffer; 4],
+            push_constant_bytes: std::mem::size_of::<SlicePushCompute>() as u32,
+            specialization: &[],
+            shared_bytes: 0,
+        },
+    )
+    .map_err(dev("building the slicer"))
+}
+
 impl SpacetimeRenderer {
-    /// Validates `mesh` (it must be sorted by lowest time, see
-    /// [`SpacetimeMesh::sort_by_lowest_time`]) and makes it resident on `gpu`.
-    pub fn new(gpu: &Gpu, mesh: &SpacetimeMesh, colormap: &Colormap) -> Result<Self, SpacetimeError> {
-        mesh.validate()?;
-        let mesh_lowest = mesh.lowest_times();
-        if let Some(e) = mesh_lowest.windows(2).position(|w| w[1] < w[0]) {
-            return Err(SpacetimeError::Invalid {
-                element: e + 1,
-                what: "elements are not sorted by lowest time (SpacetimeMesh::sort_by_lowest_time)".into(),
-            });
-        }
+    /// A renderer of `data` on `gpu`. Nothing is uploaded until the first slice.
+    pub fn new(gpu: &Gpu, data: SpacetimeData, colormap: &Colormap) -> Result<Self, SpacetimeError> {
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
-        let verts: Vec<[f32; 4]> =
-            mesh.vertices.iter().map(|p| [p[0] as f32, p[1] as f32, p[2] as f32, 0.0]).collect();
-        let elements: Vec<GpuElement> = (0..mesh.tets.len()).map(|e| GpuElement::of(mesh, e)).collect();
-        let vertices = Buffer::from_slice(gpu, "spacetime vertices", &verts, storage)
-            .map_err(dev("uploading vertices"))?;
-        let tets = Buffer::from_slice(gpu, "spacetime tetrahedra", &mesh.tets, storage)
-            .map_err(dev("uploading tetrahedra"))?;
-        let elements_buf = Buffer::from_slice(gpu, "spacetime elements", &elements, storage)
-            .map_err(dev("uploading elements"))?;
+        let materials: Vec<[f32; 4]> = data.materials().iter().map(gpu_material).collect();
+        let materials = Buffer::from_slice(gpu, "spacetime materials", &materials, storage)
+            .map_err(dev("uploading materials"))?;
+        let cuts = Buffer::new(gpu, "slice cuts", 2 * 1024, storage, MemoryKind::GpuOnly)
+            .map_err(dev("slice buffers"))?;
         let tris = slice_buffer(gpu, "slice triangles", 3 * 1024)?;
         let lines = slice_buffer(gpu, "slice edges", 8 * 1024)?;
         let draws = Buffer::new(
             gpu,
             "slice draws",
-            9,
+            COUNTERS,
             storage | vk::BufferUsageFlags::INDIRECT_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
             MemoryKind::GpuOnly,
         )
         .map_err(dev("slice buffers"))?;
-        let slicer = ComputePipeline::new(
-            gpu,
-            &ComputePipelineDesc {
-                name: "spacetime slice",
-                spirv: shaders::spacetime::SLICE,
-                bindings: &[BindingKind::StorageBuffer; 5],
-                push_constant_bytes: std::mem::size_of::<SlicePushCompute>() as u32,
-                specialization: &[],
-                shared_bytes: 0,
-            },
-        )
-        .map_err(dev("building the slicer"))?;
-        // Height scale: a tenth of the domain per the largest |v| at the element centroids.
-        let (lo, hi) = mesh.space_bounds();
-        let size = (hi[0] - lo[0]).max(hi[1] - lo[1]);
-        let max_speed = (0..mesh.tets.len())
-            .map(|e| {
-                let c = mesh.corners(e);
-                let x: [f64; 3] = std::array::from_fn(|k| 0.25 * (c[0][k] + c[1][k] + c[2][k] + c[3][k]));
-                let f = &mesh.fields[e];
-                super::cubic::evaluate(&f.frame, &mesh.materials[f.material as usize], &f.coefficients, x)
-                    .speed
-            })
-            .fold(0.0, f64::max);
-        let default_height_scale = if max_speed > 0.0 { 0.1 * size / max_speed } else { 1.0 };
         Ok(Self {
             gpu: gpu.clone(),
-            longest: mesh.longest_duration(),
-            mesh_lowest,
-            default_height_scale,
-            vertices,
-            tets,
-            elements: elements_buf,
+            data,
+            window: None,
+            materials,
+            cuts,
             tris,
             lines,
             draws,
-            slicer,
+            slicer: compute(gpu, "spacetime slice", shaders::spacetime::SLICE)?,
+            subdivider: compute(gpu, "spacetime subdivide", shaders::spacetime::SUBDIVIDE)?,
             colormap: colormap.upload(gpu).map_err(dev("uploading the colour map"))?,
             pipelines: HashMap::new(),
             sliced: None,
-            slice_set: None,
+            slice_sets: None,
             umax_target: None,
         })
     }
 
-    /// The height scale used when a view does not set one.
-    pub fn default_height_scale(&self) -> f64 {
-        self.default_height_scale
+    /// A renderer of a validated `mesh` sorted by lowest time (see [`SpacetimeData::from_mesh`]).
+    pub fn from_mesh(gpu: &Gpu, mesh: &SpacetimeMesh, colormap: &Colormap) -> Result<Self, SpacetimeError> {
+        Self::new(gpu, SpacetimeData::from_mesh(mesh)?, colormap)
     }
 
-    /// Slices the mesh at `t` on the device (a no-op if the last slice had the same `t` and
-    /// subdivision). Output buffers grow when a slice needs more room, and the slice is redone.
+    /// The data set.
+    pub fn data(&self) -> &SpacetimeData {
+        &self.data
+    }
+
+    /// The height scale used when a view does not set one: a tenth of the domain's size per
+    /// the largest |v| at an element centroid.
+    pub fn default_height_scale(&self) -> f64 {
+        let s = self.data.summary();
+        if s.max_speed > 0.0 {
+            0.1 * s.size() / s.max_speed
+        } else {
+            1.0
+        }
+    }
+
+    /// The resident window of records (elements `range` of the data), if any.
+    pub fn resident(&self) -> Option<Range<usize>> {
+        self.window.as_ref().map(|w| w.range.clone())
+    }
+
+    /// Makes `active` resident: a window starting at its first element (so that advancing `t`
+    /// finds the next elements already there), checked, then uploaded. Returns the number of
+    /// elements uploaded.
+    fn make_resident(&mut self, active: Range<usize>) -> Result<usize, SpacetimeError> {
+        if let Some(w) = &self.window {
+            if w.range.start <= active.start && active.end <= w.range.end {
+                return Ok(0);
+            }
+        }
+        let n = self.data.len();
+        let limit = (self.gpu.max_binding_bytes() / ElementRecord::BYTES as u64) as usize;
+        if active.len() > limit {
+            return Err(SpacetimeError::TooManyActive { active: active.len(), limit });
+        }
+        let current = self.window.as_ref().map_or(0, |w| w.buffer.len() as usize);
+        let capacity = if n <= RESIDENT_WHOLE.min(limit) {
+            n
+        } else if active.len() <= current {
+            current
+        } else {
+            (4 * active.len()).max(1 << 16).min(limit).min(n)
+        };
+        let range = active.start..(active.start + capacity).min(n);
+        // Keep the window full: near the end of the data it reaches back.
+        let range = range.end.saturating_sub(capacity)..range.end;
+        self.data.check(range.clone())?;
+        let buffer = match self.window.take() {
+            Some(w) if w.buffer.len() as usize == capacity => w.buffer,
+            _ => {
+                // New bindings for everything that reads the window.
+                self.slice_sets = None;
+                self.pipelines.clear();
+                Buffer::new(
+                    &self.gpu,
+                    "spacetime records",
+                    capacity.max(1) as u64,
+                    vk::BufferUsageFlags::STORAGE_BUFFER,
+                    MemoryKind::GpuOnly,
+                )
+                .map_err(dev("the resident window"))?
+            }
+        };
+        buffer.upload(&self.gpu, 0, &self.data.records()[range.clone()]).map_err(dev("streaming elements"))?;
+        let streamed = range.len();
+        self.window = Some(Window { range, buffer });
+        Ok(streamed)
+    }
+
+    fn slice_push(&self, t: f64, subdivide: Option<f64>, active: &Range<usize>) -> SlicePushCompute {
+        let first = self.window.as_ref().map_or(0, |w| active.start - w.range.start);
+        SlicePushCompute {
+            first: first as u32,
+            count: active.len() as u32,
+            t: t as f32,
+            max_area: subdivide.map_or(f32::INFINITY, |a| a as f32),
+            max_level: if subdivide.is_some() { 6 } else { 0 },
+            tri_capacity: self.tris.len() as u32,
+            line_capacity: self.lines.len() as u32,
+            cut_capacity: (self.cuts.len() / 2) as u32,
+        }
+    }
+
+    fn bind_slicer(&mut self) -> Result<(), SpacetimeError> {
+        if self.slice_sets.is_some() {
+            return Ok(());
+        }
+        let window = self.window.as_ref().expect("made resident before slicing");
+        let b = |r: crate::gpu::GpuResult<crate::gpu::BufferBinding>| {
+            r.map(Resource::Storage).map_err(dev("binding the slicer"))
+        };
+        let records = b(window.buffer.binding())?;
+        let cuts = b(self.cuts.binding())?;
+        let draws = b(self.draws.binding())?;
+        let slice = self
+            .slicer
+            .bind(&self.gpu, &[records.clone(), cuts.clone(), b(self.lines.binding())?, draws.clone()])
+            .map_err(dev("binding the slicer"))?;
+        let subdivide = self
+            .subdivider
+            .bind(&self.gpu, &[records, cuts, b(self.tris.binding())?, draws])
+            .map_err(dev("binding the slicer"))?;
+        self.slice_sets = Some((slice, subdivide));
+        Ok(())
+    }
+
+    /// Records the two slicing passes; `scope` wraps each in a profiler scope.
+    fn record_slice(
+        &self,
+        cmd: vk::CommandBuffer,
+        push: &SlicePushCompute,
+        mut profiler: Option<&mut Profiler>,
+    ) {
+        let (slice_set, subdivide_set) = self.slice_sets.as_ref().expect("bound before recording");
+        let reset: [u32; COUNTERS as usize] = [0, 1, 0, 0, 0, 1, 0, 0, 0, 0];
+        let d = self.gpu.device();
+        let rw = vk::AccessFlags::SHADER_READ | vk::AccessFlags::SHADER_WRITE;
+        let cs = vk::PipelineStageFlags::COMPUTE_SHADER;
+        let cut = || {
+            // SAFETY: the buffer is alive and was created with TRANSFER_DST; 40 bytes.
+            unsafe { d.cmd_update_buffer(cmd, self.draws.raw(), 0, bytemuck::cast_slice(&reset)) };
+            self.gpu.memory_barrier(cmd, (vk::PipelineStageFlags::TRANSFER, vk::AccessFlags::TRANSFER_WRITE), (cs, rw));
+            let groups = self.gpu.caps().groups_1d(u64::from(push.count.max(1)), 64);
+            self.slicer.record_dispatch(cmd, slice_set, bytemuck::bytes_of(push), [groups, 1, 1]);
+            self.gpu.memory_barrier(cmd, (cs, vk::AccessFlags::SHADER_WRITE), (cs, rw));
+        };
+        match profiler.as_deref_mut() {
+            Some(p) => p.scope(cmd, "slice", cut),
+            None => cut(),
+        }
+        let subdivide = || {
+            // A polygon is cut into at most two triangles.
+            let groups = self.gpu.caps().groups_1d(u64::from(push.count.max(1)) * 2, 64);
+            self.subdivider.record_dispatch(cmd, subdivide_set, bytemuck::bytes_of(push), [groups, 1, 1]);
+            // Later commands and submissions draw from these buffers and read the counters.
+            self.gpu.memory_barrier(
+                cmd,
+                (cs, vk::AccessFlags::SHADER_WRITE),
+                (
+                    vk::PipelineStageFlags::DRAW_INDIRECT
+                        | vk::PipelineStageFlags::VERTEX_INPUT
+                        | vk::PipelineStageFlags::TRANSFER,
+                    vk::AccessFlags::INDIRECT_COMMAND_READ
+                        | vk::AccessFlags::VERTEX_ATTRIBUTE_READ
+                        | vk::AccessFlags::TRANSFER_READ,
+                ),
+            );
+        };
+        match profiler {
+            Some(p) => p.scope(cmd, "subdivide", subdivide),
+            None => subdivide(),
+        }
+    }
+
+    /// Reads the counters of the last slice: `Ok(stats)`, or `Err(())` after growing the
+    /// output buffers that overflowed (the slice must be redone).
+    fn finish_slice(&mut self, active: usize, streamed: usize) -> Result<Option<SliceStats>, SpacetimeError> {
+        let counts = self.draws.download(&self.gpu).map_err(dev("reading the slice size"))?;
+        if counts[8] == 0 {
+            return Ok(Some(SliceStats {
+                active,
+                triangles: counts[0] as usize / 3,
+                lines: counts[4] as usize / 2,
+                streamed,
+            }));
+        }
+        // The counters hold what was asked for: grow to that (and a margin) and redo.
+        let grow = |n: u32, cur: u64| u64::from(n).max(cur) + u64::from(n) / 4 + 64;
+        self.slice_sets = None;
+        if u64::from(counts[9]) > self.cuts.len() / 2 {
+            self.cuts = Buffer::new(
+                &self.gpu,
+                "slice cuts",
+                2 * grow(counts[9], self.cuts.len() / 2),
+                vk::BufferUsageFlags::STORAGE_BUFFER,
+                MemoryKind::GpuOnly,
+            )
+            .map_err(dev("slice buffers"))?;
+            // The subdivision saw at most the capacity: its count is not final yet.
+            return Ok(None);
+        }
+        if u64::from(counts[0]) > self.tris.len() {
+            self.tris = slice_buffer(&self.gpu, "slice triangles", grow(counts[0], self.tris.len()))?;
+        }
+        if u64::from(counts[4]) > self.lines.len() {
+            self.lines = slice_buffer(&self.gpu, "slice edges", grow(counts[4], self.lines.len()))?;
+        }
+        Ok(None)
+    }
+
+    /// Slices the data at `t` on the device (a no-op if the last slice had the same `t` and
+    /// subdivision), streaming the active elements first if they are not resident. Output
+    /// buffers grow when a slice needs more room, and the slice is redone.
     pub fn slice(&mut self, t: f64, subdivide: Option<f64>) -> Result<SliceStats, SpacetimeError> {
         if let Some((st, sd, stats)) = self.sliced {
             if st == t && sd == subdivide {
                 return Ok(stats);
             }
         }
-        let range = active_range(&self.mesh_lowest, t, self.longest);
+        self.sliced = None;
+        let active = self.data.active_range(t);
+        let streamed = self.make_resident(active.clone())?;
         loop {
-            if self.slice_set.is_none() {
-                let bindings = [
-                    self.vertices.binding(),
-                    self.tets.binding(),
-                    self.tris.binding(),
-                    self.lines.binding(),
-                    self.draws.binding(),
-                ]
-                .into_iter()
-                .map(|b| b.map(Resource::Storage))
-                .collect::<Result<Vec<_>, _>>()
-                .map_err(dev("binding the slicer"))?;
-                self.slice_set =
-                    Some(self.slicer.bind(&self.gpu, &bindings).map_err(dev("binding the slicer"))?);
-            }
-            let set = self.slice_set.as_ref().expect("bound above");
-            let push = SlicePushCompute {
-                first: range.start as u32,
-                count: range.len() as u32,
-                t: t as f32,
-                max_area: subdivide.map_or(f32::INFINITY, |a| a as f32),
-                max_level: if subdivide.is_some() { 6 } else { 0 },
-                tri_capacity: self.tris.len() as u32,
-                line_capacity: self.lines.len() as u32,
-                pad: 0,
-            };
-            let reset: [u32; 9] = [0, 1, 0, 0, 0, 1, 0, 0, 0];
-            let groups = self.gpu.caps().groups_1d(range.len().max(1) as u64, 64);
-            self.gpu
-                .run(|cmd| {
-                    let d = self.gpu.device();
-                    // SAFETY: the buffer is alive and was created with TRANSFER_DST; 36 bytes.
-                    unsafe { d.cmd_update_buffer(cmd, self.draws.raw(), 0, bytemuck::cast_slice(&reset)) };
-                    self.gpu.memory_barrier(
-                        cmd,
-                        (vk::PipelineStageFlags::TRANSFER, vk::AccessFlags::TRANSFER_WRITE),
-                        (
-                            vk::PipelineStageFlags::COMPUTE_SHADER,
-                            vk::AccessFlags::SHADER_READ | vk::AccessFlags::SHADER_WRITE,
-                        ),
-                    );
-                    self.slicer.record_dispatch(cmd, set, bytemuck::bytes_of(&push), [groups, 1, 1]);
-                    // Later submissions draw from these buffers: the barrier's second scope covers
-                    // them (submission order).
-                    self.gpu.memory_barrier(
-                        cmd,
-                        (vk::PipelineStageFlags::COMPUTE_SHADER, vk::AccessFlags::SHADER_WRITE),
-                        (
-                            vk::PipelineStageFlags::DRAW_INDIRECT
-                                | vk::PipelineStageFlags::VERTEX_INPUT
-                                | vk::PipelineStageFlags::TRANSFER,
-                            vk::AccessFlags::INDIRECT_COMMAND_READ
-                                | vk::AccessFlags::VERTEX_ATTRIBUTE_READ
-                                | vk::AccessFlags::TRANSFER_READ,
-                        ),
-                    );
-                })
-                .map_err(dev("slicing"))?;
-            let counts = self.draws.download(&self.gpu).map_err(dev("reading the slice size"))?;
-            if counts[8] == 0 {
-                let stats = SliceStats {
-                    active: range.len(),
-                    triangles: counts[0] as usize / 3,
-                    lines: counts[4] as usize / 2,
-                };
+            self.bind_slicer()?;
+            let push = self.slice_push(t, subdivide, &active);
+            self.gpu.run(|cmd| self.record_slice(cmd, &push, None)).map_err(dev("slicing"))?;
+            if let Some(stats) = self.finish_slice(active.len(), streamed)? {
                 self.sliced = Some((t, subdivide, stats));
                 return Ok(stats);
             }
-            // The counters hold what was asked for: grow to that (and a margin) and redo.
-            let grow = |n: u32, cur: u64| u64::from(n).max(cur) + u64::from(n) / 4 + 64;
-            self.slice_set = None;
-            self.tris = slice_buffer(&self.gpu, "slice triangles", grow(counts[0], self.tris.len()))?;
-            self.lines = slice_buffer(&self.gpu, "slice edges", grow(counts[4], self.lines.len()))?;
         }
     }
 
@@ -376,6 +479,9 @@ impl SpacetimeRenderer {
     ) -> Result<&(GraphicsPipeline, GraphicsPipeline, DescriptorSet, DescriptorSet), SpacetimeError> {
         let format = target.format();
         if !self.pipelines.contains_key(&format) {
+            let window = self.window.as_ref().expect("made resident before drawing");
+            let records = window.buffer.binding().map_err(dev("binding elements"))?;
+            let materials = self.materials.binding().map_err(dev("binding materials"))?;
             let make = |lines: bool| -> Result<(GraphicsPipeline, DescriptorSet), SpacetimeError> {
                 let mut desc = GraphicsPipelineDesc::new(
                     if lines { "spacetime slice edges" } else { "spacetime slice" },
@@ -383,7 +489,7 @@ impl SpacetimeRenderer {
                     shaders::spacetime::SLICE_FRAG,
                     target.render_pass().raw(),
                 );
-                desc.bindings = &[BindingKind::StorageBuffer, BindingKind::Texture];
+                desc.bindings = &[BindingKind::StorageBuffer, BindingKind::Texture, BindingKind::StorageBuffer];
                 desc.push_constant_bytes = std::mem::size_of::<DrawPush>() as u32;
                 desc.vertex_stride = std::mem::size_of::<SliceVertex>() as u32;
                 desc.vertex_attributes = &[(0, vk::Format::R32G32_SFLOAT, 0), (1, vk::Format::R32_UINT, 8)];
@@ -398,8 +504,9 @@ impl SpacetimeRenderer {
                     .bind(
                         &self.gpu,
                         &[
-                            Resource::Storage(self.elements.binding().map_err(dev("binding elements"))?),
+                            Resource::Storage(records.clone()),
                             self.colormap.resource(),
+                            Resource::Storage(materials.clone()),
                         ],
                     )
                     .map_err(dev("binding the slice pipelines"))?;
@@ -412,16 +519,14 @@ impl SpacetimeRenderer {
         Ok(&self.pipelines[&format])
     }
 
-    /// Renders `view` into `target` (slicing first if needed) and returns the pixels: lit
-    /// colours in an RGBA8 target, `(U, |v|, n_x, n_y)` in an RGBA32F target.
-    pub fn render(&mut self, target: &RenderTarget, view: &SpacetimeView) -> Result<Pixels, SpacetimeError> {
-        self.slice(view.time, view.subdivide)?;
-        let u_max = match view.u_max {
-            Some(u) => u,
-            None if target.format() == ColorFormat::Rgba32F => 1.0,
+    /// The colour ramp's `U_max` for `view`: its own, or the largest U over the slice's
+    /// pixels from a data pass of the same view into a float target kept for the next frame
+    /// of the same size.
+    fn resolve_u_max(&mut self, target: &RenderTarget, view: &SpacetimeView) -> Result<f64, SpacetimeError> {
+        match view.u_max {
+            Some(u) => Ok(u),
+            None if target.format() == ColorFormat::Rgba32F => Ok(1.0),
             None => {
-                // The largest U over the slice's pixels, from a data pass of the same view into a
-                // float target kept for the next frame of the same size.
                 let extent = target.extent();
                 let data = match self.umax_target.take() {
                     Some(d) if d.extent() == extent => d,
@@ -437,70 +542,156 @@ impl SpacetimeRenderer {
                 let pixels = self.render(&data, &SpacetimeView { u_max: Some(1.0), ..*view });
                 self.umax_target = Some(data);
                 match pixels? {
-                    Pixels::Rgba32F(v) => v
+                    Pixels::Rgba32F(v) => Ok(v
                         .chunks_exact(4)
                         .map(|p| f64::from(p[0]))
                         .filter(|u| u.is_finite())
-                        .fold(0.0, f64::max),
+                        .fold(0.0, f64::max)),
                     Pixels::Rgba8(_) => unreachable!("a float target"),
                 }
             }
-        };
-        let extent = target.extent();
-        let aspect = target.aspect();
-        let height_scale = view.height_scale.unwrap_or(self.default_height_scale);
-        let push = DrawPush {
-            view_proj: view.camera.view_proj_f32(aspect).to_cols_array(),
-            eye_t: [
-                view.camera.eye[0] as f32,
-                view.camera.eye[1] as f32,
-                view.camera.eye[2] as f32,
-                view.time as f32,
-            ],
+        }
+    }
+
+    fn draw_push(&self, target: &RenderTarget, view: &SpacetimeView, u_max: f64) -> DrawPush {
+        let height_scale = view.height_scale.unwrap_or_else(|| self.default_height_scale());
+        let eye = view.camera.eye.map(|x| x as f32);
+        DrawPush {
+            view_proj: view.camera.view_proj_f32(target.aspect()).to_cols_array(),
+            eye_t: [eye[0], eye[1], eye[2], view.time as f32],
             light_scale: [LIGHT[0] as f32, LIGHT[1] as f32, LIGHT[2] as f32, height_scale as f32],
-            ramp: [u_max as f32, self.colormap_texels() as f32, 0.0, 0.0],
+            ramp: [u_max as f32, self.colormap.texels() as f32, 0.0, 0.0],
             flags: [
                 u32::from(target.format() == ColorFormat::Rgba32F),
                 u32::from(view.height),
                 u32::from(view.per_vertex),
                 0,
             ],
-        };
-        let (tris, lines, draws) = (self.tris.raw(), self.lines.raw(), self.draws.raw());
-        // Data targets clear to NaN ("no surface here", distinct from any value), colour
-        // targets to the engine's opaque background.
-        let clear = if target.format() == ColorFormat::Rgba32F { [f32::NAN; 4] } else { BACKGROUND };
-        let gpu = self.gpu.clone();
-        let (fill, edges, fill_set, edges_set) = self.pipelines_for(target)?;
-        target
-            .render(&gpu, clear, |cmd| {
-                let bytes = bytemuck::bytes_of(&push);
-                fill.record_draw_indirect(cmd, extent, fill_set, bytes, Some(tris), (draws, 0));
-                if view.edges {
-                    edges.record_draw_indirect(cmd, extent, edges_set, bytes, Some(lines), (draws, 16));
-                }
-            })
-            .map_err(dev("drawing the slice"))
+        }
     }
 
-    /// The triangles of the current slice, read back: (element, corners). For tests and
-    /// inspection.
+    /// Records the render pass of the current slice into `target`.
+    fn record_draw(
+        &mut self,
+        target: &RenderTarget,
+        view: &SpacetimeView,
+        push: &DrawPush,
+    ) -> Result<impl FnOnce(vk::CommandBuffer) + '_, SpacetimeError> {
+        let (tris, lines, draws) = (self.tris.raw(), self.lines.raw(), self.draws.raw());
+        let extent = target.extent();
+        let edges_on = view.edges;
+        let push = *push;
+        let (fill, edges, fill_set, edges_set) = self.pipelines_for(target)?;
+        Ok(move |cmd| {
+            let bytes = bytemuck::bytes_of(&push);
+            fill.record_draw_indirect(cmd, extent, fill_set, bytes, Some(tris), (draws, 0));
+            if edges_on {
+                edges.record_draw_indirect(cmd, extent, edges_set, bytes, Some(lines), (draws, 16));
+            }
+        })
+    }
+
+    /// Renders `view` into `target` (slicing first if needed) and returns the pixels: lit
+    /// colours in an RGBA8 target, `(U, |v|, n_x, n_y)` in an RGBA32F target.
+    pub fn render(&mut self, target: &RenderTarget, view: &SpacetimeView) -> Result<Pixels, SpacetimeError> {
+        self.slice(view.time, view.subdivide)?;
+        let u_max = self.resolve_u_max(target, view)?;
+        let push = self.draw_push(target, view, u_max);
+        let gpu = self.gpu.clone();
+        let draw = self.record_draw(target, view, &push)?;
+        target.render(&gpu, clear_colour(target), draw).map_err(dev("drawing the slice"))
+    }
+
+    /// One frame as an interactive loop runs it: the slice (always redone, as when `t`
+    /// advances) and the draw in one submission, without reading the image back; with a
+    /// `profiler` (4 scopes), each stage's device time. `view.u_max` should be set (else a data
+    /// pass runs first, as in [`Self::render`]).
+    pub fn frame(
+        &mut self,
+        target: &RenderTarget,
+        view: &SpacetimeView,
+        mut profiler: Option<&mut Profiler>,
+    ) -> Result<(SliceStats, Option<FrameTimes>), SpacetimeError> {
+        let u_max = self.resolve_u_max(target, view)?;
+        self.sliced = None;
+        let active = self.data.active_range(view.time);
+        let streamed = self.make_resident(active.clone())?;
+        let push = self.draw_push(target, view, u_max);
+        let gpu = self.gpu.clone();
+        loop {
+            self.bind_slicer()?;
+            self.pipelines_for(target)?;
+            let slice_push = self.slice_push(view.time, view.subdivide, &active);
+            let clear = clear_colour(target);
+            {
+                let mut profiler = profiler.as_deref_mut();
+                let slicer = &*self;
+                let (tris, lines, draws) = (slicer.tris.raw(), slicer.lines.raw(), slicer.draws.raw());
+                let (fill, edges, fill_set, edges_set) = &slicer.pipelines[&target.format()];
+                let extent = target.extent();
+                gpu.run(|cmd| {
+                    if let Some(p) = profiler.as_deref_mut() {
+                        p.record_reset(cmd);
+                    }
+                    slicer.record_slice(cmd, &slice_push, profiler.as_deref_mut());
+                    let draw = || {
+                        target.record_begin(cmd, clear);
+                        let bytes = bytemuck::bytes_of(&push);
+                        fill.record_draw_indirect(cmd, extent, fill_set, bytes, Some(tris), (draws, 0));
+                        if view.edges {
+                            edges.record_draw_indirect(cmd, extent, edges_set, bytes, Some(lines), (draws, 16));
+                        }
+                        target.record_end(cmd);
+                    };
+                    match profiler.as_deref_mut() {
+                        Some(p) => p.scope(cmd, "draw", draw),
+                        None => draw(),
+                    }
+                })
+                .map_err(dev("drawing a frame"))?;
+            }
+            if let Some(stats) = self.finish_slice(active.len(), streamed)? {
+                self.sliced = Some((view.time, view.subdivide, stats));
+                let times = match profiler {
+                    Some(p) => {
+                        let r = p.results().map_err(dev("reading timestamps"))?;
+                        let get = |name: &str| r.iter().find(|(n, _)| n == name).map_or(0.0, |(_, ms)| *ms);
+                        Some(FrameTimes { slice_ms: get("slice"), subdivide_ms: get("subdivide"), draw_ms: get("draw") })
+                    }
+                    None => None,
+                };
+                return Ok((stats, times));
+            }
+        }
+    }
+
+    /// The triangles of the current slice, read back: (element of the data, corners). For
+    /// tests and inspection.
     pub fn slice_triangles(&self) -> Result<Vec<SliceTriangle>, SpacetimeError> {
         let Some((_, _, stats)) = self.sliced else { return Ok(Vec::new()) };
+        let base = self.window.as_ref().map_or(0, |w| w.range.start) as u32;
         let mut v = vec![SliceVertex::zeroed(); 3 * stats.triangles];
         self.tris.download_into(&self.gpu, 0, &mut v).map_err(dev("reading the slice"))?;
-        Ok(v.chunks_exact(3).map(|t| (t[0].element, [t[0].xy, t[1].xy, t[2].xy])).collect())
+        Ok(v.chunks_exact(3).map(|t| (base + t[0].element, [t[0].xy, t[1].xy, t[2].xy])).collect())
     }
 
-    /// The edge lines of the current slice, read back: (element, endpoints).
+    /// The edge lines of the current slice, read back: (element of the data, endpoints).
     pub fn slice_lines(&self) -> Result<Vec<SliceLine>, SpacetimeError> {
         let Some((_, _, stats)) = self.sliced else { return Ok(Vec::new()) };
+        let base = self.window.as_ref().map_or(0, |w| w.range.start) as u32;
         let mut v = vec![SliceVertex::zeroed(); 2 * stats.lines];
         self.lines.download_into(&self.gpu, 0, &mut v).map_err(dev("reading the slice"))?;
-        Ok(v.chunks_exact(2).map(|l| (l[0].element, [l[0].xy, l[1].xy])).collect())
+        Ok(v.chunks_exact(2).map(|l| (base + l[0].element, [l[0].xy, l[1].xy])).collect())
     }
 
-    fn colormap_texels(&self) -> u32 {
-        self.colormap.texels()
+}
+
+/// Data targets clear to NaN ("no surface here", distinct from any value), colour targets to
+/// the engine's opaque background.
+fn clear_colour(target: &RenderTarget) -> [f32; 4] {
+    if target.format() == ColorFormat::Rgba32F {
+        [f32::NAN; 4]
+    } else {
+        BACKGROUND
     }
 }

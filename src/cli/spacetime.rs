@@ -1,0 +1,248 @@
+//! `galerkin spacetime`, `galerkin spacetime-gen` and `galerkin spacetime-convert`: render a
+//! time slice of a spacetime DG data set (seed 003), generate data sets, convert between the
+//! `.gst` binary and VTK `.vtu`.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::{bail, Context, Result};
+use clap::Args;
+use galerkin::gpu::{Gpu, GpuDesc};
+use galerkin::render::{write_png_rgba8, ColorFormat, Colormap, Pixels, RenderTarget};
+use galerkin::spacetime::{generate, gst, vtu, SpacetimeData, SpacetimeError, SpacetimeView};
+
+/// Arguments of `galerkin spacetime`.
+#[derive(Args)]
+pub struct RenderArgs {
+    /// Data set: a `.gst` file (memory-mapped: only the elements near --time are read) or a
+    /// VTK `.vtu` file (read whole). Without it, a data set is generated (--generate).
+    pub file: Option<PathBuf>,
+    /// Without FILE: the generated data set, `pulses` (a pressure and a shear pulse crossing
+    /// the unit square; structured mesh).
+    #[arg(long, default_value = "pulses")]
+    pub generate: String,
+    /// Without FILE: about this many tetrahedra.
+    #[arg(long, default_value_t = 60_000)]
+    pub elements: usize,
+    /// Time of the slice (default: the middle of the data set's time span).
+    #[arg(long)]
+    pub time: Option<f64>,
+    /// Flat slice (height field off).
+    #[arg(long)]
+    pub flat: bool,
+    /// Height per unit of |v| (default: a tenth of the domain per the largest |v|).
+    #[arg(long)]
+    pub height_scale: Option<f64>,
+    /// Do not overdraw polygon edges (shows the cracks of seed 003 Fig. 4a).
+    #[arg(long)]
+    pub no_edges: bool,
+    /// Quadrisect slice triangles larger than this area, at most 6 times (seed 003 §4.2.2).
+    #[arg(long, value_name = "AREA")]
+    pub subdivide: Option<f64>,
+    /// U_max of the colour ramp s = log(U+1)/log(U_max+1) (default: the slice's largest U).
+    #[arg(long)]
+    pub umax: Option<f64>,
+    /// Colour at the vertices, interpolated (the seed's per-vertex baseline, Fig. 5a).
+    #[arg(long)]
+    pub per_vertex: bool,
+    /// Colour map: viridis, cool-warm, grey, or a ramp PNG file.
+    #[arg(long, default_value = "viridis")]
+    pub colormap: String,
+    /// Image size.
+    #[arg(long, value_name = "WxH", value_parser = crate::parse_size, default_value = "1280x720")]
+    pub size: (u32, u32),
+    /// Output image: .png (lit colour) or .exr (channels U, speed, normal.x/y/z; NaN where
+    /// no surface).
+    #[arg(long, default_value = "out/spacetime.png")]
+    pub out: PathBuf,
+}
+
+/// Arguments of `galerkin spacetime-gen`.
+#[derive(Args)]
+pub struct GenArgs {
+    /// The data set: `pulses` (unit square, structured mesh, crossing pressure and shear
+    /// pulses).
+    #[arg(long, default_value = "pulses")]
+    pub scenario: String,
+    /// About this many tetrahedra.
+    #[arg(long, default_value_t = 100_000)]
+    pub elements: usize,
+    /// Output: `.gst` (streamed to disk: any size) or `.vtu` (built in memory).
+    #[arg(long)]
+    pub out: PathBuf,
+}
+
+/// Arguments of `galerkin spacetime-convert`.
+#[derive(Args)]
+pub struct ConvertArgs {
+    /// Input `.gst` or `.vtu`.
+    pub input: PathBuf,
+    /// Output `.gst` or `.vtu`.
+    pub output: PathBuf,
+}
+
+fn extension(path: &Path) -> String {
+    path.extension().and_then(|e| e.to_str()).unwrap_or_default().to_ascii_lowercase()
+}
+
+/// Loads `.gst` (mapped) or `.vtu` (read, sorted by lowest time).
+pub fn load(path: &Path) -> Result<SpacetimeData, SpacetimeError> {
+    match extension(path).as_str() {
+        "gst" => gst::open(path),
+        "vtu" => {
+            let mut mesh = vtu::read(path)?;
+            mesh.sort_by_lowest_time();
+            SpacetimeData::from_mesh(&mesh).map_err(|e| SpacetimeError::File {
+                path: path.to_path_buf(),
+                detail: format!("{e} (element numbers after sorting by lowest time)"),
+            })
+        }
+        _ => Err(SpacetimeError::File {
+            path: path.to_path_buf(),
+            detail: "unknown extension: expected .gst or .vtu".into(),
+        }),
+    }
+}
+
+fn progress_bar(len: u64, what: &str) -> indicatif::ProgressBar {
+    let bar = indicatif::ProgressBar::new(len);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template(&format!("{what} {{bar:30}} {{percent}}% eta {{eta}}"))
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    bar
+}
+
+/// `galerkin spacetime-gen`.
+pub fn generate_file(args: &GenArgs) -> Result<()> {
+    if args.elements == 0 {
+        bail!("--elements must be positive");
+    }
+    let start = Instant::now();
+    match (args.scenario.as_str(), extension(&args.out).as_str()) {
+        ("pulses", "gst") => {
+            let mut writer = gst::GstWriter::create(&args.out, &[generate::PULSES_MATERIAL])?;
+            let bar = progress_bar(args.elements as u64, "generating");
+            generate::stream_pulses(args.elements, &mut |r| writer.push(r), &mut |done| bar.set_position(done))?;
+            bar.finish_and_clear();
+            let n = writer.len();
+            writer.finish()?;
+            report(&args.out, n, start);
+        }
+        ("pulses", "vtu") => {
+            let mesh = generate::pulses(args.elements);
+            vtu::write(&args.out, &mesh)?;
+            report(&args.out, mesh.tets.len(), start);
+        }
+        ("pulses", other) => bail!("{}: unknown extension {other:?}: expected .gst or .vtu", args.out.display()),
+        (other, _) => bail!("unknown scenario {other:?} (available: pulses)"),
+    }
+    Ok(())
+}
+
+fn report(path: &Path, elements: usize, start: Instant) {
+    let bytes = std::fs::metadata(path).map(|m| m.len()).unwrap_or(0);
+    println!(
+        "{}: {elements} elements, {:.1} MB, {:.1} s (fields are analytic, L2-projected per element — not solved)",
+        path.display(),
+        bytes as f64 / 1e6,
+        start.elapsed().as_secs_f64()
+    );
+}
+
+/// `galerkin spacetime-convert`.
+pub fn convert(args: &ConvertArgs) -> Result<()> {
+    let data = load(&args.input)?;
+    match extension(&args.output).as_str() {
+        "gst" => {
+            gst::write(&args.output, &data)?;
+        }
+        "vtu" => {
+            let mesh = data.to_mesh();
+            vtu::write(&args.output, &mesh)?;
+        }
+        other => bail!("{}: unknown extension {other:?}: expected .gst or .vtu", args.output.display()),
+    }
+    println!("{} → {}: {} elements", args.input.display(), args.output.display(), data.len());
+    Ok(())
+}
+
+/// `galerkin spacetime`.
+pub fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
+    for (name, v) in [("--subdivide", args.subdivide), ("--umax", args.umax), ("--height-scale", args.height_scale)] {
+        if let Some(v) = v.filter(|v| !(v.is_finite() && *v > 0.0)) {
+            bail!("{name} must be a positive number, got {v}");
+        }
+    }
+    let data = match &args.file {
+        Some(path) => load(path)?,
+        None => match args.generate.as_str() {
+            "pulses" => SpacetimeData::from_mesh(&generate::pulses(args.elements))?,
+            other => bail!("unknown data set {other:?} (available: pulses)"),
+        },
+    };
+    let [t0, t1] = data.summary().time;
+    let time = args.time.unwrap_or(0.5 * (t0 + t1));
+    if !(t0..=t1).contains(&time) {
+        bail!("--time {time} is outside the data set's time span [{t0}, {t1}]");
+    }
+    let base = SpacetimeView::looking_at(data.summary(), time);
+    let view = SpacetimeView {
+        height: !args.flat,
+        height_scale: args.height_scale,
+        edges: !args.no_edges,
+        subdivide: args.subdivide,
+        u_max: args.umax,
+        per_vertex: args.per_vertex,
+        ..base
+    };
+    let elements = data.len();
+    let gpu = Gpu::new(desc)?;
+    let colormap = Colormap::by_name(&args.colormap)?;
+    let mut renderer = galerkin::spacetime::SpacetimeRenderer::new(&gpu, data, &colormap)?;
+    let start = Instant::now();
+    let stats = renderer.slice(view.time, view.subdivide)?;
+    let slice_ms = start.elapsed().as_secs_f64() * 1e3;
+    let (w, h) = args.size;
+    let exr = extension(&args.out) == "exr";
+    let format = if exr { ColorFormat::Rgba32F } else { ColorFormat::Rgba8 };
+    let target = RenderTarget::new(&gpu, "spacetime", w, h, format)?;
+    let start = Instant::now();
+    let pixels = renderer.render(&target, &view)?;
+    let draw_ms = start.elapsed().as_secs_f64() * 1e3;
+    if let Some(dir) = args.out.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    }
+    match pixels {
+        Pixels::Rgba8(c) => write_png_rgba8(&args.out, w, h, &c)?,
+        Pixels::Rgba32F(v) => {
+            let channel = |k: usize| v.chunks_exact(4).map(|p| p[k]).collect::<Vec<f32>>();
+            let nz: Vec<f32> = v
+                .chunks_exact(4)
+                .map(|p| if p[2].is_nan() { f32::NAN } else { (1.0 - p[2] * p[2] - p[3] * p[3]).max(0.0).sqrt() })
+                .collect();
+            galerkin::render::write_exr_channels(
+                &args.out,
+                w,
+                h,
+                vec![
+                    ("U", channel(0)),
+                    ("speed", channel(1)),
+                    ("normal.x", channel(2)),
+                    ("normal.y", channel(3)),
+                    ("normal.z", nz),
+                ],
+            )?;
+        }
+    }
+    println!(
+        "spacetime: {elements} elements, t = {time:.4}: {} active ({} streamed to the device), {} triangles, {} edge lines; slice {slice_ms:.1} ms, render + readback {draw_ms:.1} ms → {}",
+        stats.active,
+        stats.streamed,
+        stats.triangles,
+        stats.lines,
+        args.out.display()
+    );
+    drop((target, renderer));
+    crate::check_validation(gpu)
+}
