@@ -11,8 +11,7 @@ use galerkin::render::{phong, ColorFormat, Colormap, Pixels, RenderTarget};
 use galerkin::spacetime::generate::{pulses, structured_mesh};
 use galerkin::spacetime::slice::{slice, SlicePolygon};
 use galerkin::spacetime::{
-    evaluate, ElementRecord, Material, SpacetimeData, SpacetimeError, SpacetimeMesh, SpacetimeRenderer,
-    SpacetimeView,
+    evaluate, ElementRecord, Material, SpacetimeError, SpacetimeMesh, SpacetimeRenderer, SpacetimeView,
 };
 
 fn mesh() -> SpacetimeMesh {
@@ -29,7 +28,8 @@ fn glsl_field_and_shading_match_their_rust_twins() {
     let gpu = common::gpu();
     let m = mesh();
     let elements: Vec<ElementRecord> = (0..m.tets.len()).map(|e| ElementRecord::of(&m, e)).collect();
-    let materials: Vec<[f32; 4]> = m.materials.iter().map(galerkin::spacetime::record::gpu_material).collect();
+    let materials: Vec<[f32; 4]> =
+        m.materials.iter().map(galerkin::spacetime::record::gpu_material).collect();
     let r = common::random_f32(4 * 300, 3);
     let mut points = Vec::new();
     let mut phong_in: Vec<[f32; 4]> = Vec::new();
@@ -87,11 +87,8 @@ fn glsl_field_and_shading_match_their_rust_twins() {
             // The f64 reference at the f32 point the shader saw, with the f32-rounded element.
             let g = ElementRecord::of(&m, *e);
             let mat = m.materials[g.material as usize];
-            let mat = Material {
-                lambda: f64::from(mat.lambda as f32),
-                mu: f64::from(mat.mu as f32),
-                density: 1.0,
-            };
+            let mat =
+                Material { lambda: f64::from(mat.lambda as f32), mu: f64::from(mat.mu as f32), density: 1.0 };
             evaluate(&g.frame(), &mat, &g.coefficients_f64(), [0, 1, 2].map(|k| f64::from(p[k])))
         })
         .collect();
@@ -216,11 +213,24 @@ fn pixels_show_the_element_polynomial_at_their_centres() {
     let m = mesh();
     let mut r = SpacetimeRenderer::from_mesh(&gpu, &m, &Colormap::viridis()).unwrap();
     let t = 0.43 * m.time_range().1;
-    let view = SpacetimeView { edges: false, ..SpacetimeView::from_above(r.data().summary(), t) };
+    // With and without the edge overdraw: the lines must stay behind the polygons.
+    for edges in [false, true] {
+        let view = SpacetimeView { edges, ..SpacetimeView::from_above(r.data().summary(), t) };
+        check_pixels(&gpu, &mut r, &m, &view);
+    }
+}
+
+fn check_pixels(
+    gpu: &galerkin::gpu::Gpu,
+    r: &mut SpacetimeRenderer,
+    m: &SpacetimeMesh,
+    view: &SpacetimeView,
+) {
+    let t = view.time;
     let (w, h) = (160, 160);
-    let target = RenderTarget::new(&gpu, "data", w, h, ColorFormat::Rgba32F).unwrap();
-    let Pixels::Rgba32F(data) = r.render(&target, &view).unwrap() else { panic!("float target") };
-    let polys = slice(&m, t);
+    let target = RenderTarget::new(gpu, "data", w, h, ColorFormat::Rgba32F).unwrap();
+    let Pixels::Rgba32F(data) = r.render(&target, view).unwrap() else { panic!("float target") };
+    let polys = slice(m, t);
     let hs = r.default_height_scale();
     let (mut max_u, mut max_v) = (0f64, 0f64);
     for p in &polys {
@@ -294,7 +304,10 @@ fn pixels_show_the_element_polynomial_at_their_centres() {
         }
     }
     assert!(checked > (w * h) as usize / 2, "{checked} pixels checked");
-    eprintln!("{checked} pixels: worst U error {worst_u:.2e}, |v| {worst_v:.2e} of max");
+    eprintln!(
+        "edges {}: {checked} pixels: worst U error {worst_u:.2e}, |v| {worst_v:.2e} of max",
+        view.edges
+    );
 }
 
 /// Background (NaN) pixels whose ray meets z = 0 well inside the domain: cracks.

@@ -26,4 +26,7 @@ void main() {
     el_data[1] = el.extent_mu;
     for (int k = 0; k < 10; ++k) el_data[2 + k] = vec4(el.c[2 * k], el.c[2 * k + 1]);
     gl_Position = pc.view_proj * vec4(world, 1.0);
+    // The edge pass sits behind the polygons (depth bias does not apply to lines): ramp.z is
+    // EDGE_DEPTH_OFFSET of src/spacetime/render.rs there (normalised depth), 0 for polygons.
+    gl_Position.z += pc.ramp.z * gl_Position.w;
 }

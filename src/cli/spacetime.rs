@@ -123,7 +123,9 @@ pub fn generate_file(args: &GenArgs) -> Result<()> {
         ("pulses", "gst") => {
             let mut writer = gst::GstWriter::create(&args.out, &[generate::PULSES_MATERIAL])?;
             let bar = progress_bar(args.elements as u64, "generating");
-            generate::stream_pulses(args.elements, &mut |r| writer.push(r), &mut |done| bar.set_position(done))?;
+            generate::stream_pulses(args.elements, &mut |r| writer.push(r), &mut |done| {
+                bar.set_position(done)
+            })?;
             bar.finish_and_clear();
             let n = writer.len();
             writer.finish()?;
@@ -134,7 +136,9 @@ pub fn generate_file(args: &GenArgs) -> Result<()> {
             vtu::write(&args.out, &mesh)?;
             report(&args.out, mesh.tets.len(), start);
         }
-        ("pulses", other) => bail!("{}: unknown extension {other:?}: expected .gst or .vtu", args.out.display()),
+        ("pulses", other) => {
+            bail!("{}: unknown extension {other:?}: expected .gst or .vtu", args.out.display())
+        }
         (other, _) => bail!("unknown scenario {other:?} (available: pulses)"),
     }
     Ok(())
@@ -169,7 +173,9 @@ pub fn convert(args: &ConvertArgs) -> Result<()> {
 
 /// `galerkin spacetime`.
 pub fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
-    for (name, v) in [("--subdivide", args.subdivide), ("--umax", args.umax), ("--height-scale", args.height_scale)] {
+    for (name, v) in
+        [("--subdivide", args.subdivide), ("--umax", args.umax), ("--height-scale", args.height_scale)]
+    {
         if let Some(v) = v.filter(|v| !(v.is_finite() && *v > 0.0)) {
             bail!("{name} must be a positive number, got {v}");
         }
@@ -217,10 +223,16 @@ pub fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
         Pixels::Rgba8(c) => write_png_rgba8(&args.out, w, h, &c)?,
         Pixels::Rgba32F(v) => {
             let channel = |k: usize| v.chunks_exact(4).map(|p| p[k]).collect::<Vec<f32>>();
-            let nz: Vec<f32> = v
-                .chunks_exact(4)
-                .map(|p| if p[2].is_nan() { f32::NAN } else { (1.0 - p[2] * p[2] - p[3] * p[3]).max(0.0).sqrt() })
-                .collect();
+            let nz: Vec<f32> =
+                v.chunks_exact(4)
+                    .map(|p| {
+                        if p[2].is_nan() {
+                            f32::NAN
+                        } else {
+                            (1.0 - p[2] * p[2] - p[3] * p[3]).max(0.0).sqrt()
+                        }
+                    })
+                    .collect();
             galerkin::render::write_exr_channels(
                 &args.out,
                 w,

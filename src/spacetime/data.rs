@@ -101,7 +101,9 @@ impl SpacetimeData {
             });
         }
         // f32 rounding can make a valid f64 element degenerate: check the records too.
-        if let Some((e, what)) = records.iter().enumerate().find_map(|(e, r)| Some((e, r.problem(usize::MAX)?))) {
+        if let Some((e, what)) =
+            records.iter().enumerate().find_map(|(e, r)| Some((e, r.problem(usize::MAX)?)))
+        {
             return Err(SpacetimeError::Invalid { element: e, what: format!("{what} (in f32)") });
         }
         let mut summary = DataSummary::empty();
@@ -204,16 +206,25 @@ impl SpacetimeData {
             let duration = f64::from(r.highest_time()) - f64::from(r.lowest_time());
             let problem = r.problem(materials).or_else(|| {
                 if r.lowest_time() != lowest[e] {
-                    Some(format!("the index says lowest time {} but the corners say {}", lowest[e], r.lowest_time()))
+                    Some(format!(
+                        "the index says lowest time {} but the corners say {}",
+                        lowest[e],
+                        r.lowest_time()
+                    ))
                 } else if duration > self.summary.longest {
-                    Some(format!("spans {duration} in time, longer than the header's longest {}", self.summary.longest))
+                    Some(format!(
+                        "spans {duration} in time, longer than the header's longest {}",
+                        self.summary.longest
+                    ))
                 } else {
                     None
                 }
             });
             if let Some(what) = problem {
                 return Err(match &self.path {
-                    Some(path) => SpacetimeError::File { path: path.clone(), detail: format!("element {e}: {what}") },
+                    Some(path) => {
+                        SpacetimeError::File { path: path.clone(), detail: format!("element {e}: {what}") }
+                    }
                     None => SpacetimeError::Invalid { element: e, what },
                 });
             }

@@ -54,7 +54,16 @@ fn header(materials: &[Material], s: &DataSummary) -> Vec<u8> {
     h[12..16].copy_from_slice(&(ElementRecord::BYTES as u32).to_le_bytes());
     h[16..24].copy_from_slice(&s.elements.to_le_bytes());
     h[24..28].copy_from_slice(&(materials.len() as u32).to_le_bytes());
-    let f = [s.space_lo[0], s.space_lo[1], s.space_hi[0], s.space_hi[1], s.time[0], s.time[1], s.longest, s.max_speed];
+    let f = [
+        s.space_lo[0],
+        s.space_lo[1],
+        s.space_hi[0],
+        s.space_hi[1],
+        s.time[0],
+        s.time[1],
+        s.longest,
+        s.max_speed,
+    ];
     for (k, v) in f.iter().enumerate() {
         h[32 + 8 * k..40 + 8 * k].copy_from_slice(&v.to_le_bytes());
     }
@@ -87,11 +96,17 @@ impl GstWriter {
     /// Starts `path` (written as `path.partial` until finished) for data with `materials`.
     pub fn create(path: &Path, materials: &[Material]) -> Result<Self, SpacetimeError> {
         if materials.is_empty() || materials.len() > MAX_MATERIALS {
-            return Err(file_error(path, format!("needs 1 to {MAX_MATERIALS} materials, got {}", materials.len())));
+            return Err(file_error(
+                path,
+                format!("needs 1 to {MAX_MATERIALS} materials, got {}", materials.len()),
+            ));
         }
         for (i, m) in materials.iter().enumerate() {
             if !(m.mu > 0.0 && m.lambda + m.mu > 0.0 && m.density > 0.0) {
-                return Err(file_error(path, format!("material {i} needs μ > 0, λ + μ > 0 and ρ > 0 ({m:?})")));
+                return Err(file_error(
+                    path,
+                    format!("material {i} needs μ > 0, λ + μ > 0 and ρ > 0 ({m:?})"),
+                ));
             }
         }
         let mut partial = path.as_os_str().to_owned();
@@ -203,7 +218,10 @@ pub fn open(path: &Path) -> Result<SpacetimeData, SpacetimeError> {
     }
     let record = read_u32(&h, 12) as usize;
     if record != ElementRecord::BYTES {
-        return Err(file_error(path, format!("records of {record} bytes; version {VERSION} has {}", ElementRecord::BYTES)));
+        return Err(file_error(
+            path,
+            format!("records of {record} bytes; version {VERSION} has {}", ElementRecord::BYTES),
+        ));
     }
     let n = read_u64(&h, 16);
     let m = read_u32(&h, 24) as usize;
@@ -216,17 +234,25 @@ pub fn open(path: &Path) -> Result<SpacetimeData, SpacetimeError> {
         .checked_mul(ElementRecord::BYTES as u64 + 4)
         .and_then(|b| b.checked_add(HEADER_BYTES as u64))
         .ok_or_else(|| file_error(path, format!("element count {n} is impossible")))?;
-    if records_at != HEADER_BYTES as u64 || index_at != HEADER_BYTES as u64 + n * ElementRecord::BYTES as u64 {
-        return Err(file_error(path, format!("section offsets {records_at}, {index_at} disagree with {n} elements")));
+    if records_at != HEADER_BYTES as u64 || index_at != HEADER_BYTES as u64 + n * ElementRecord::BYTES as u64
+    {
+        return Err(file_error(
+            path,
+            format!("section offsets {records_at}, {index_at} disagree with {n} elements"),
+        ));
     }
     if size != expected {
         let what = if size < expected { "truncated" } else { "has trailing bytes" };
-        return Err(file_error(path, format!("{what}: {size} bytes, the header's {n} elements need {expected}")));
+        return Err(file_error(
+            path,
+            format!("{what}: {size} bytes, the header's {n} elements need {expected}"),
+        ));
     }
     let mut materials = Vec::with_capacity(m);
     for i in 0..m {
         let at = MATERIALS_AT + 24 * i;
-        let mat = Material { lambda: read_f64(&h, at), mu: read_f64(&h, at + 8), density: read_f64(&h, at + 16) };
+        let mat =
+            Material { lambda: read_f64(&h, at), mu: read_f64(&h, at + 8), density: read_f64(&h, at + 16) };
         if !(mat.mu > 0.0 && mat.lambda + mat.mu > 0.0 && mat.density > 0.0) {
             return Err(file_error(path, format!("material {i} needs μ > 0, λ + μ > 0 and ρ > 0 ({mat:?})")));
         }
@@ -247,7 +273,8 @@ pub fn open(path: &Path) -> Result<SpacetimeData, SpacetimeError> {
     // SAFETY: the map is read-only; the file could be changed by another process while mapped,
     // which would change what we read (not memory safety for plain-old-data records and f32),
     // and every record is checked before use.
-    let map = unsafe { memmap2::Mmap::map(&file) }.map_err(|e| file_error(path, format!("cannot map: {e}")))?;
+    let map =
+        unsafe { memmap2::Mmap::map(&file) }.map_err(|e| file_error(path, format!("cannot map: {e}")))?;
     let records = records_at as usize..index_at as usize;
     let index = index_at as usize..size as usize;
     let lowest: &[f32] = bytemuck::cast_slice(&map[index.clone()]);

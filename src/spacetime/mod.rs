@@ -20,8 +20,8 @@ pub mod slice;
 pub mod vtu;
 
 pub use cubic::{evaluate, LocalFrame, Material, PointFields, MONOMIALS};
+pub use data::{DataSummary, SpacetimeData};
 pub use error::SpacetimeError;
 pub use mesh::{ElementField, SpacetimeMesh};
-pub use data::{DataSummary, SpacetimeData};
 pub use record::ElementRecord;
 pub use render::{FrameTimes, SliceLine, SliceStats, SliceTriangle, SpacetimeRenderer, SpacetimeView};

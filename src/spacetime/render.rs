@@ -6,9 +6,12 @@
 //! density, exact normals and Phong lighting (`slice.vert`, `slice.frag`), then overdraw every
 //! polygon edge as a line to fill cracks between discontinuous neighbours (§4.3).
 //!
-//! The edge lines are drawn with a depth bias that puts them *behind* the polygons: where a
-//! polygon covers a pixel it wins and the pixel shows the polygon's value at the pixel centre;
-//! a line only shows where no polygon covered the pixel — a crack.
+//! The edge lines are drawn *behind* the polygons: where a polygon covers a pixel it wins and
+//! the pixel shows the polygon's value at the pixel centre; a line only shows where no polygon
+//! covered the pixel — a crack. Vulkan's depth bias applies to polygons only, not to lines, so
+//! the vertex stage moves edge vertices back by [`EDGE_DEPTH_OFFSET`] in normalised depth (a
+//! line at the same depth as the polygons would win some pixels by interpolation rounding,
+//! showing the neighbour's value there).
 
 use std::collections::HashMap;
 use std::ops::Range;
@@ -56,6 +59,21 @@ struct DrawPush {
     ramp: [f32; 4],
     flags: [u32; 4],
 }
+
+impl DrawPush {
+    /// The same push for the edge pass: vertices moved back by [`EDGE_DEPTH_OFFSET`].
+    fn for_edges(&self) -> Self {
+        let mut p = *self;
+        p.ramp[2] = EDGE_DEPTH_OFFSET;
+        p
+    }
+}
+
+/// How far the edge pass moves its vertices back, in normalised depth (`slice.vert`): about
+/// 300 f32 ulps of depth near 1, far above the rounding of depth interpolation (a few ulps),
+/// and for the default cameras (near plane at 1 % of the domain size) a distance of ≈ 0.2 % of
+/// the domain — a line is hidden only by polygons that close in front of it.
+pub const EDGE_DEPTH_OFFSET: f32 = 2e-5;
 
 /// How to show a slice.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -190,6 +208,8 @@ pub struct SpacetimeRenderer {
     slice_sets: Option<(DescriptorSet, DescriptorSet)>,
     /// The float target of the automatic-U_max data pass, reused while the size stays.
     umax_target: Option<RenderTarget>,
+    /// The most elements resident at once (besides the binding limit).
+    max_window: usize,
 }
 
 /// A slice output buffer: vertices written by the slicer, read by the draws.
@@ -252,6 +272,7 @@ impl SpacetimeRenderer {
             sliced: None,
             slice_sets: None,
             umax_target: None,
+            max_window: usize::MAX,
         })
     }
 
@@ -276,6 +297,14 @@ impl SpacetimeRenderer {
         }
     }
 
+    /// Caps the resident window at `elements` records (default: as many as one storage binding
+    /// holds, 559,240 at lavapipe's 128 MiB), for applications that budget device memory; a
+    /// time plane that can cut more elements than the cap is an error.
+    pub fn with_window_limit(mut self, elements: usize) -> Self {
+        self.max_window = elements.max(1);
+        self
+    }
+
     /// The resident window of records (elements `range` of the data), if any.
     pub fn resident(&self) -> Option<Range<usize>> {
         self.window.as_ref().map(|w| w.range.clone())
@@ -291,7 +320,8 @@ impl SpacetimeRenderer {
             }
         }
         let n = self.data.len();
-        let limit = (self.gpu.max_binding_bytes() / ElementRecord::BYTES as u64) as usize;
+        let limit =
+            ((self.gpu.max_binding_bytes() / ElementRecord::BYTES as u64) as usize).min(self.max_window);
         if active.len() > limit {
             return Err(SpacetimeError::TooManyActive { active: active.len(), limit });
         }
@@ -301,7 +331,7 @@ impl SpacetimeRenderer {
         } else if active.len() <= current {
             current
         } else {
-            (4 * active.len()).max(1 << 16).min(limit).min(n)
+            (4 * active.len()).max(1 << 16).min(limit).min(n).max(active.len())
         };
         let range = active.start..(active.start + capacity).min(n);
         // Keep the window full: near the end of the data it reaches back.
@@ -323,7 +353,9 @@ impl SpacetimeRenderer {
                 .map_err(dev("the resident window"))?
             }
         };
-        buffer.upload(&self.gpu, 0, &self.data.records()[range.clone()]).map_err(dev("streaming elements"))?;
+        buffer
+            .upload(&self.gpu, 0, &self.data.records()[range.clone()])
+            .map_err(dev("streaming elements"))?;
         let streamed = range.len();
         self.window = Some(Window { range, buffer });
         Ok(streamed)
@@ -381,7 +413,11 @@ impl SpacetimeRenderer {
         let cut = || {
             // SAFETY: the buffer is alive and was created with TRANSFER_DST; 40 bytes.
             unsafe { d.cmd_update_buffer(cmd, self.draws.raw(), 0, bytemuck::cast_slice(&reset)) };
-            self.gpu.memory_barrier(cmd, (vk::PipelineStageFlags::TRANSFER, vk::AccessFlags::TRANSFER_WRITE), (cs, rw));
+            self.gpu.memory_barrier(
+                cmd,
+                (vk::PipelineStageFlags::TRANSFER, vk::AccessFlags::TRANSFER_WRITE),
+                (cs, rw),
+            );
             let groups = self.gpu.caps().groups_1d(u64::from(push.count.max(1)), 64);
             self.slicer.record_dispatch(cmd, slice_set, bytemuck::bytes_of(push), [groups, 1, 1]);
             self.gpu.memory_barrier(cmd, (cs, vk::AccessFlags::SHADER_WRITE), (cs, rw));
@@ -489,14 +525,13 @@ impl SpacetimeRenderer {
                     shaders::spacetime::SLICE_FRAG,
                     target.render_pass().raw(),
                 );
-                desc.bindings = &[BindingKind::StorageBuffer, BindingKind::Texture, BindingKind::StorageBuffer];
+                desc.bindings =
+                    &[BindingKind::StorageBuffer, BindingKind::Texture, BindingKind::StorageBuffer];
                 desc.push_constant_bytes = std::mem::size_of::<DrawPush>() as u32;
                 desc.vertex_stride = std::mem::size_of::<SliceVertex>() as u32;
                 desc.vertex_attributes = &[(0, vk::Format::R32G32_SFLOAT, 0), (1, vk::Format::R32_UINT, 8)];
                 if lines {
                     desc.topology = vk::PrimitiveTopology::LINE_LIST;
-                    // Behind the polygons: a line shows only where no polygon covered the pixel.
-                    desc.depth_bias = Some((1000.0, 2.0));
                 }
                 let p =
                     GraphicsPipeline::new(&self.gpu, &desc).map_err(dev("building the slice pipelines"))?;
@@ -580,12 +615,19 @@ impl SpacetimeRenderer {
         let (tris, lines, draws) = (self.tris.raw(), self.lines.raw(), self.draws.raw());
         let extent = target.extent();
         let edges_on = view.edges;
-        let push = *push;
+        let (push, edge_push) = (*push, push.for_edges());
         let (fill, edges, fill_set, edges_set) = self.pipelines_for(target)?;
         Ok(move |cmd| {
-            let bytes = bytemuck::bytes_of(&push);
-            fill.record_draw_indirect(cmd, extent, fill_set, bytes, Some(tris), (draws, 0));
+            fill.record_draw_indirect(
+                cmd,
+                extent,
+                fill_set,
+                bytemuck::bytes_of(&push),
+                Some(tris),
+                (draws, 0),
+            );
             if edges_on {
+                let bytes = bytemuck::bytes_of(&edge_push);
                 edges.record_draw_indirect(cmd, extent, edges_set, bytes, Some(lines), (draws, 16));
             }
         })
@@ -617,6 +659,7 @@ impl SpacetimeRenderer {
         let active = self.data.active_range(view.time);
         let streamed = self.make_resident(active.clone())?;
         let push = self.draw_push(target, view, u_max);
+        let edge_push = push.for_edges();
         let gpu = self.gpu.clone();
         loop {
             self.bind_slicer()?;
@@ -639,7 +682,15 @@ impl SpacetimeRenderer {
                         let bytes = bytemuck::bytes_of(&push);
                         fill.record_draw_indirect(cmd, extent, fill_set, bytes, Some(tris), (draws, 0));
                         if view.edges {
-                            edges.record_draw_indirect(cmd, extent, edges_set, bytes, Some(lines), (draws, 16));
+                            let bytes = bytemuck::bytes_of(&edge_push);
+                            edges.record_draw_indirect(
+                                cmd,
+                                extent,
+                                edges_set,
+                                bytes,
+                                Some(lines),
+                                (draws, 16),
+                            );
                         }
                         target.record_end(cmd);
                     };
@@ -656,7 +707,11 @@ impl SpacetimeRenderer {
                     Some(p) => {
                         let r = p.results().map_err(dev("reading timestamps"))?;
                         let get = |name: &str| r.iter().find(|(n, _)| n == name).map_or(0.0, |(_, ms)| *ms);
-                        Some(FrameTimes { slice_ms: get("slice"), subdivide_ms: get("subdivide"), draw_ms: get("draw") })
+                        Some(FrameTimes {
+                            slice_ms: get("slice"),
+                            subdivide_ms: get("subdivide"),
+                            draw_ms: get("draw"),
+                        })
                     }
                     None => None,
                 };
@@ -683,7 +738,6 @@ impl SpacetimeRenderer {
         self.lines.download_into(&self.gpu, 0, &mut v).map_err(dev("reading the slice"))?;
         Ok(v.chunks_exact(2).map(|l| (base + l[0].element, [l[0].xy, l[1].xy])).collect())
     }
-
 }
 
 /// Data targets clear to NaN ("no surface here", distinct from any value), colour targets to

@@ -38,14 +38,24 @@ pub fn write(path: &Path, mesh: &SpacetimeMesh) -> Result<(), SpacetimeError> {
     arrays.push(("offsets", "Int64", 1, (1..=n_cells as i64).flat_map(|k| (4 * k).to_le_bytes()).collect()));
     arrays.push(("types", "UInt8", 1, vec![VTK_TETRA; n_cells]));
     let fields = &mesh.fields;
-    arrays.push(("coefficients", "Float64", 40, f64s(&mut fields.iter().flat_map(|f| f.coefficients).flatten())));
+    arrays.push((
+        "coefficients",
+        "Float64",
+        40,
+        f64s(&mut fields.iter().flat_map(|f| f.coefficients).flatten()),
+    ));
     arrays.push((
         "frame",
         "Float64",
         6,
         f64s(&mut fields.iter().flat_map(|f| f.frame.centre.into_iter().chain(f.frame.extent))),
     ));
-    arrays.push(("material", "Int32", 1, fields.iter().flat_map(|f| (f.material as i32).to_le_bytes()).collect()));
+    arrays.push((
+        "material",
+        "Int32",
+        1,
+        fields.iter().flat_map(|f| (f.material as i32).to_le_bytes()).collect(),
+    ));
     let mat = |f: &ElementField| mesh.materials.get(f.material as usize).copied();
     for (name, get) in [
         ("lambda", (|m: Material| m.lambda) as fn(Material) -> f64),
@@ -78,7 +88,9 @@ pub fn write(path: &Path, mesh: &SpacetimeMesh) -> Result<(), SpacetimeError> {
     for a in &arrays[4..] {
         xml.push_str(&tag(a.0, a.1, a.2, a.3.len()));
     }
-    xml.push_str("      </CellData>\n    </Piece>\n  </UnstructuredGrid>\n  <AppendedData encoding=\"raw\">\n   _");
+    xml.push_str(
+        "      </CellData>\n    </Piece>\n  </UnstructuredGrid>\n  <AppendedData encoding=\"raw\">\n   _",
+    );
     let mut partial = path.as_os_str().to_owned();
     partial.push(".partial");
     let partial = std::path::PathBuf::from(partial);
@@ -152,7 +164,8 @@ impl Framing {
         let h = self.header_bytes();
         if !self.zlib {
             let n = self.word(b, 0).ok_or("truncated block header")?;
-            let data = b.get(h..h + n).ok_or_else(|| format!("truncated: a block of {n} bytes is cut short"))?;
+            let data =
+                b.get(h..h + n).ok_or_else(|| format!("truncated: a block of {n} bytes is cut short"))?;
             return Ok((data.to_vec(), h + n));
         }
         // [blocks, block size, last block size, compressed sizes…], then the zlib streams.
@@ -165,7 +178,8 @@ impl Framing {
         for k in 0..blocks {
             let size = self.word(b, 3 + k).ok_or("truncated compression header")?;
             let z = b.get(at..at + size).ok_or("truncated compressed block")?;
-            let d = miniz_oxide::inflate::decompress_to_vec_zlib(z).map_err(|e| format!("bad zlib data: {e:?}"))?;
+            let d = miniz_oxide::inflate::decompress_to_vec_zlib(z)
+                .map_err(|e| format!("bad zlib data: {e:?}"))?;
             out.extend_from_slice(&d);
             at += size;
         }
@@ -231,7 +245,9 @@ pub fn read(path: &Path) -> Result<SpacetimeMesh, SpacetimeError> {
     // The appended section: after the '_' that follows the opening tag.
     let appended = match appended_at {
         Some(at) => {
-            let tag_end = find(&bytes[at..], b">").map(|k| at + k).ok_or_else(|| err(path, "unterminated <AppendedData>"))?;
+            let tag_end = find(&bytes[at..], b">")
+                .map(|k| at + k)
+                .ok_or_else(|| err(path, "unterminated <AppendedData>"))?;
             let tag = String::from_utf8_lossy(&bytes[at..tag_end]).to_string();
             let underscore = find(&bytes[tag_end..], b"_")
                 .map(|k| tag_end + k + 1)
@@ -253,11 +269,10 @@ pub fn read(path: &Path) -> Result<SpacetimeMesh, SpacetimeError> {
     };
     let (n_points, n_cells) = (count("NumberOfPoints")?, count("NumberOfCells")?);
     let array = |section: &str, name: &str| -> Result<Option<(Vec<f64>, usize)>, SpacetimeError> {
-        let Some(node) = piece
-            .children()
-            .filter(|n| n.has_tag_name(section))
-            .flat_map(|s| s.children())
-            .find(|n| n.has_tag_name("DataArray") && (n.attribute("Name") == Some(name) || section == "Points"))
+        let Some(node) =
+            piece.children().filter(|n| n.has_tag_name(section)).flat_map(|s| s.children()).find(|n| {
+                n.has_tag_name("DataArray") && (n.attribute("Name") == Some(name) || section == "Points")
+            })
         else {
             return Ok(None);
         };
@@ -272,12 +287,14 @@ pub fn read(path: &Path) -> Result<SpacetimeMesh, SpacetimeError> {
                 .map(|w| w.parse::<f64>().map_err(|_| what(format!("{w:?} is not a number"))))
                 .collect::<Result<Vec<f64>, _>>()?,
             "binary" => {
-                let raw = base64_decode(node.text().unwrap_or("")).ok_or_else(|| what("bad base64".into()))?;
+                let raw =
+                    base64_decode(node.text().unwrap_or("")).ok_or_else(|| what("bad base64".into()))?;
                 let (data, _) = framing.block(&raw).map_err(what)?;
                 numbers(ty, &data).map_err(what)?
             }
             "appended" => {
-                let (base64, start) = appended.ok_or_else(|| what("appended, but the file has no <AppendedData>".into()))?;
+                let (base64, start) =
+                    appended.ok_or_else(|| what("appended, but the file has no <AppendedData>".into()))?;
                 let offset: usize = node
                     .attribute("offset")
                     .and_then(|o| o.trim().parse().ok())
@@ -285,11 +302,15 @@ pub fn read(path: &Path) -> Result<SpacetimeMesh, SpacetimeError> {
                 let data = if base64 {
                     // Each array is its own base64 run, up to the next array's offset.
                     let rest = &bytes[start + offset..];
-                    let end = rest.iter().position(|&c| c == b'<' || c.is_ascii_whitespace()).unwrap_or(rest.len());
-                    let raw = base64_decode(&String::from_utf8_lossy(&rest[..end])).ok_or_else(|| what("bad base64".into()))?;
+                    let end =
+                        rest.iter().position(|&c| c == b'<' || c.is_ascii_whitespace()).unwrap_or(rest.len());
+                    let raw = base64_decode(&String::from_utf8_lossy(&rest[..end]))
+                        .ok_or_else(|| what("bad base64".into()))?;
                     framing.block(&raw).map_err(what)?.0
                 } else {
-                    let rest = bytes.get(start + offset..).ok_or_else(|| what("offset past the end of the file".into()))?;
+                    let rest = bytes
+                        .get(start + offset..)
+                        .ok_or_else(|| what("offset past the end of the file".into()))?;
                     framing.block(rest).map_err(what)?.0
                 };
                 numbers(ty, &data).map_err(what)?
@@ -299,7 +320,8 @@ pub fn read(path: &Path) -> Result<SpacetimeMesh, SpacetimeError> {
         Ok(Some((values, comps)))
     };
     let need = |section: &str, name: &str, comps: usize, n: usize| -> Result<Vec<f64>, SpacetimeError> {
-        let (v, c) = array(section, name)?.ok_or_else(|| err(path, format!("no {section} array {name:?}")))?;
+        let (v, c) =
+            array(section, name)?.ok_or_else(|| err(path, format!("no {section} array {name:?}")))?;
         if c != comps || v.len() != comps * n {
             return Err(err(
                 path,
@@ -388,7 +410,13 @@ pub fn read(path: &Path) -> Result<SpacetimeMesh, SpacetimeError> {
     let n_materials = materials.keys().max().map_or(0, |&m| m as usize + 1);
     mesh.materials = (0..n_materials)
         // An index no element uses gets a copy of one that is used (it is never read).
-        .map(|i| materials.get(&(i as u32)).or_else(|| materials.values().next()).copied().expect("n_materials > 0"))
+        .map(|i| {
+            materials
+                .get(&(i as u32))
+                .or_else(|| materials.values().next())
+                .copied()
+                .expect("n_materials > 0")
+        })
         .collect();
     mesh.validate().map_err(|e| err(path, e.to_string()))?;
     Ok(mesh)
@@ -404,7 +432,9 @@ mod tests {
 
     #[test]
     fn base64_decodes_the_rfc_4648_vectors() {
-        for (text, plain) in [("", ""), ("Zg==", "f"), ("Zm8=", "fo"), ("Zm9v", "foo"), ("Zm9vYmFy", "foobar")] {
+        for (text, plain) in
+            [("", ""), ("Zg==", "f"), ("Zm8=", "fo"), ("Zm9v", "foo"), ("Zm9vYmFy", "foobar")]
+        {
             assert_eq!(base64_decode(text).unwrap(), plain.as_bytes());
         }
         assert!(base64_decode("Zm9v!").is_none());

@@ -1,0 +1,305 @@
+//! Spacetime data files and streaming (seed 003, the issue's large-data part): the `.gst`
+//! binary round trip and its errors, VTK `.vtu` reading and writing and their errors, a
+//! renderer streaming a memory-mapped file through a small resident window against one holding
+//! the whole mesh, and per-stage frame times. GPU tests run with validation on.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+
+use galerkin::render::{ColorFormat, Colormap, Pixels, RenderTarget};
+use galerkin::spacetime::generate::{pulses, structured_mesh, PULSES_MATERIAL};
+use galerkin::spacetime::{
+    gst, vtu, Material, SpacetimeData, SpacetimeError, SpacetimeRenderer, SpacetimeView,
+};
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("galerkin-spacetime-files-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir.join(name)
+}
+
+fn file_error(e: SpacetimeError, path: &Path, wants: &str) {
+    let text = e.to_string();
+    assert!(text.contains(&path.display().to_string()), "error does not name the file: {text}");
+    assert!(text.contains(wants), "error {text:?} lacks {wants:?}");
+}
+
+#[test]
+fn gst_files_round_trip_bit_for_bit() {
+    let data = SpacetimeData::from_mesh(&pulses(3000)).unwrap();
+    let path = scratch("round.gst");
+    let summary = gst::write(&path, &data).unwrap();
+    assert_eq!(&summary, data.summary());
+    let back = gst::open(&path).unwrap();
+    assert_eq!(back.records(), data.records());
+    assert_eq!(back.lowest_times(), data.lowest_times());
+    assert_eq!(back.materials(), data.materials());
+    assert_eq!(back.summary(), data.summary());
+    assert_eq!(back.path(), Some(path.as_path()));
+    assert_eq!(std::fs::metadata(&path).unwrap().len(), 4096 + 244 * data.len() as u64);
+}
+
+#[test]
+fn malformed_gst_files_are_refused_naming_file_and_element() {
+    let data = SpacetimeData::from_mesh(&pulses(1500)).unwrap();
+    let good = scratch("good.gst");
+    gst::write(&good, &data).unwrap();
+    let bytes = std::fs::read(&good).unwrap();
+    let n = data.len();
+    let write = |name: &str, b: &[u8]| {
+        let p = scratch(name);
+        std::fs::write(&p, b).unwrap();
+        p
+    };
+
+    let p = write("truncated.gst", &bytes[..bytes.len() - 100]);
+    file_error(gst::open(&p).err().unwrap(), &p, "truncated");
+    let p = write("short.gst", &bytes[..100]);
+    file_error(gst::open(&p).err().unwrap(), &p, "too short");
+    let mut b = bytes.clone();
+    b[0] = b'X';
+    let p = write("magic.gst", &b);
+    file_error(gst::open(&p).err().unwrap(), &p, "magic");
+    let mut b = bytes.clone();
+    b[8] = 7;
+    let p = write("version.gst", &b);
+    file_error(gst::open(&p).err().unwrap(), &p, "version 7");
+
+    // The index: element 10's lowest time made later than element 11's.
+    let index = 4096 + 240 * n;
+    let mut b = bytes.clone();
+    let late = (data.lowest_times()[n - 1] + 1.0).to_le_bytes();
+    b[index + 4 * 10..index + 4 * 11].copy_from_slice(&late);
+    let p = write("unsorted.gst", &b);
+    file_error(gst::open(&p).err().unwrap(), &p, "element 11: the index is not sorted");
+
+    // A NaN coefficient in element 700: the file opens (records are not read at open), and the
+    // first slice that reads the element fails naming it.
+    let e = 700;
+    let mut b = bytes.clone();
+    let at = 4096 + 240 * e + 80 + 4 * 7;
+    b[at..at + 4].copy_from_slice(&f32::NAN.to_le_bytes());
+    let p = write("nan.gst", &b);
+    let bad = gst::open(&p).unwrap();
+    let t = f64::from(data.records()[e].lowest_time()) + 1e-4;
+    let gpu = common::gpu();
+    let mut r = SpacetimeRenderer::new(&gpu, bad, &Colormap::viridis()).unwrap();
+    file_error(
+        r.slice(t, None).err().unwrap(),
+        &p,
+        &format!("element {e}: a displacement coefficient is not finite"),
+    );
+    drop(r);
+
+    // The writer: out-of-order elements are refused, and an unfinished file leaves nothing.
+    let out = scratch("unfinished.gst");
+    let mut w = gst::GstWriter::create(&out, data.materials()).unwrap();
+    w.push(&data.records()[n - 1]).unwrap();
+    file_error(w.push(&data.records()[0]).err().unwrap(), &out, "element 1: lowest time");
+    drop(w);
+    assert!(!out.exists());
+    assert!(!scratch("unfinished.gst.partial").exists());
+}
+
+#[test]
+fn vtu_files_round_trip_and_read_ascii_and_compressed_forms() {
+    let mesh = pulses(1500);
+    let path = scratch("round.vtu");
+    vtu::write(&path, &mesh).unwrap();
+    let back = vtu::read(&path).unwrap();
+    assert_eq!(back, mesh, "appended raw binary round trip is exact (f64)");
+
+    // A hand-written ASCII file as another program might write it: one tetrahedron, no frame
+    // (the bounding box is the default) and no material index, u = (x t, y²) in local
+    // coordinates of the bounding box frame centred at (0.5, 0.5, 0.5) with extents 1.
+    let mut coefficients = [0.0; 40];
+    coefficients[2 * 6] = 1.0; // x t → u_x
+    coefficients[2 * 7 + 1] = 1.0; // y² → u_y
+    let coeff_text: Vec<String> = coefficients.iter().map(|c| c.to_string()).collect();
+    let ascii = format!(
+        r#"<?xml version="1.0"?>
+<VTKFile type="UnstructuredGrid" version="0.1" byte_order="LittleEndian">
+  <UnstructuredGrid>
+    <Piece NumberOfPoints="4" NumberOfCells="1">
+      <Points><DataArray type="Float32" NumberOfComponents="3" format="ascii">0 0 0  1 0 0  0 1 0  0 0 1</DataArray></Points>
+      <Cells>
+        <DataArray type="Int32" Name="connectivity" format="ascii">0 1 2 3</DataArray>
+        <DataArray type="Int32" Name="offsets" format="ascii">4</DataArray>
+        <DataArray type="UInt8" Name="types" format="ascii">10</DataArray>
+      </Cells>
+      <CellData>
+        <DataArray type="Float64" Name="coefficients" NumberOfComponents="40" format="ascii">{}</DataArray>
+        <DataArray type="Float64" Name="lambda" format="ascii">2</DataArray>
+        <DataArray type="Float64" Name="mu" format="ascii">1</DataArray>
+      </CellData>
+    </Piece>
+  </UnstructuredGrid>
+</VTKFile>"#,
+        coeff_text.join(" ")
+    );
+    let p = scratch("ascii.vtu");
+    std::fs::write(&p, &ascii).unwrap();
+    let m = vtu::read(&p).unwrap();
+    assert_eq!(m.materials, vec![Material { lambda: 2.0, mu: 1.0, density: 1.0 }]);
+    let f = &m.fields[0];
+    assert_eq!(f.frame.centre, [0.5; 3]);
+    let x = [0.2, 0.3, 0.1];
+    let u = galerkin::spacetime::evaluate(&f.frame, &m.materials[0], &f.coefficients, x).displacement;
+    let q = f.frame.local(x);
+    assert!((u[0] - q[0] * q[2]).abs() < 1e-15 && (u[1] - q[1] * q[1]).abs() < 1e-15, "{u:?}");
+
+    // The same data written by VTK with zlib compression in inline base64 blocks: rebuild the
+    // file with each array as one compressed block (header UInt32: 1 block, sizes, stream).
+    let block = |values: &[u8]| {
+        let z = miniz_oxide::deflate::compress_to_vec_zlib(values, 6);
+        let mut b = Vec::new();
+        for w in [1u32, values.len() as u32, values.len() as u32, z.len() as u32] {
+            b.extend_from_slice(&w.to_le_bytes());
+        }
+        b.extend_from_slice(&z);
+        base64(&b)
+    };
+    let f64s = |v: &[f64]| v.iter().flat_map(|x| x.to_le_bytes()).collect::<Vec<u8>>();
+    let zipped = ascii
+        .replace(
+            r#"byte_order="LittleEndian">"#,
+            r#"byte_order="LittleEndian" compressor="vtkZLibDataCompressor">"#,
+        )
+        .replace(
+            r#"<DataArray type="Float64" Name="coefficients" NumberOfComponents="40" format="ascii">"#,
+            r#"<DataArray type="Float64" Name="coefficients" NumberOfComponents="40" format="binary">"#,
+        )
+        .replace(&coeff_text.join(" "), &block(&f64s(&coefficients)));
+    let p = scratch("zlib.vtu");
+    std::fs::write(&p, &zipped).unwrap();
+    assert_eq!(vtu::read(&p).unwrap(), m);
+
+    // Errors name the file and the element or array.
+    let cases = [
+        ("celltype.vtu", ascii.replace(">10<", ">5<"), "element 0: cell type 5"),
+        ("index.vtu", ascii.replace(">0 1 2 3<", ">0 1 2 9<"), "element 0: vertex index 9 is out of range"),
+        ("lambda.vtu", ascii.replace(r#"Name="lambda""#, r#"Name="lam""#), "no CellData array \"lambda\""),
+        (
+            "comps.vtu",
+            ascii.replace(r#"NumberOfComponents="40""#, r#"NumberOfComponents="20""#),
+            "array coefficients: 40 values in 20 components",
+        ),
+        ("number.vtu", ascii.replace(">2<", ">two<"), "array lambda: \"two\" is not a number"),
+        ("flat.vtu", ascii.replace("0 0 1</DataArray>", "0 0 0</DataArray>"), "degenerate"),
+        (
+            "mu.vtu",
+            ascii.replace(r#"Name="mu" format="ascii">1<"#, r#"Name="mu" format="ascii">-1<"#),
+            "needs μ > 0",
+        ),
+    ];
+    for (name, text, wants) in cases {
+        let p = scratch(name);
+        std::fs::write(&p, text).unwrap();
+        file_error(vtu::read(&p).err().unwrap(), &p, wants);
+    }
+    let p = scratch("truncated.vtu");
+    let full = std::fs::read(&path).unwrap();
+    std::fs::write(&p, &full[..full.len() - 5000]).unwrap();
+    file_error(vtu::read(&p).err().unwrap(), &p, "truncated");
+}
+
+fn base64(b: &[u8]) -> String {
+    const A: &[u8] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    let mut s = String::new();
+    for c in b.chunks(3) {
+        let n = (u32::from(c[0]) << 16)
+            | (u32::from(*c.get(1).unwrap_or(&0)) << 8)
+            | u32::from(*c.get(2).unwrap_or(&0));
+        for k in 0..4 {
+            if k <= c.len() {
+                s.push(A[(n >> (18 - 6 * k) & 63) as usize] as char);
+            } else {
+                s.push('=');
+            }
+        }
+    }
+    s
+}
+
+#[test]
+fn a_streamed_file_renders_as_the_resident_mesh() {
+    let gpu = common::gpu();
+    // 12 time layers: the active range at any t is a twelfth to a sixth of the elements.
+    let mut mesh = structured_mesh(12, 12, 12, [1.0, 1.0], 1.0, PULSES_MATERIAL);
+    galerkin::spacetime::generate::project_field(
+        &mut mesh,
+        &galerkin::spacetime::generate::crossing_pulses(PULSES_MATERIAL, [1.0, 1.0]),
+    );
+    let n = mesh.tets.len();
+    let path = scratch("streamed.gst");
+    gst::write(&path, &SpacetimeData::from_mesh(&mesh).unwrap()).unwrap();
+    let colormap = Colormap::viridis();
+    let mut whole = SpacetimeRenderer::from_mesh(&gpu, &mesh, &colormap).unwrap();
+    // A window of at most a quarter of the data: slices must stream.
+    let mut streamed =
+        SpacetimeRenderer::new(&gpu, gst::open(&path).unwrap(), &colormap).unwrap().with_window_limit(n / 4);
+    let target = RenderTarget::new(&gpu, "fields", 96, 96, ColorFormat::Rgba32F).unwrap();
+    let mut uploads = 0;
+    // Forward in time (as playback), then a jump back.
+    for t in [0.05, 0.3, 0.55, 0.81, 0.97, 0.2] {
+        let a = whole.slice(t, Some(0.002)).unwrap();
+        let b = streamed.slice(t, Some(0.002)).unwrap();
+        assert_eq!((a.active, a.triangles, a.lines), (b.active, b.triangles, b.lines), "t = {t}");
+        let window = streamed.resident().unwrap();
+        assert!(window.len() <= n / 4, "window {window:?}");
+        uploads += usize::from(b.streamed > 0);
+        let mut ta = whole.slice_triangles().unwrap();
+        let mut tb = streamed.slice_triangles().unwrap();
+        let key = |x: &(u32, [[f32; 2]; 3])| (x.0, x.1.map(|p| p.map(f32::to_bits)));
+        ta.sort_by_key(key);
+        tb.sort_by_key(key);
+        assert!(ta == tb, "t = {t}: the streamed slice differs");
+        let view = SpacetimeView { u_max: Some(1.0), ..SpacetimeView::from_above(whole.data().summary(), t) };
+        assert_eq!(view.subdivide, None);
+        let (Pixels::Rgba32F(pa), Pixels::Rgba32F(pb)) =
+            (whole.render(&target, &view).unwrap(), streamed.render(&target, &view).unwrap())
+        else {
+            panic!("float targets")
+        };
+        // Without subdivision the slice is watertight (neighbours cut shared edges with the same
+        // f32 arithmetic), so every pixel centre is covered once, whatever the draw order the
+        // slicer's atomics produce: the same pixels, bit for bit (NaN background too). (Subdivided
+        // neighbours meet at f32 T-junctions where either may win a pixel.)
+        assert!(pa.iter().zip(&pb).all(|(x, y)| x.to_bits() == y.to_bits()), "t = {t}: pixels differ");
+    }
+    assert!(uploads >= 3, "only {uploads} slices streamed");
+    // A window too small for the active range is an error that says so.
+    let mut tiny =
+        SpacetimeRenderer::new(&gpu, gst::open(&path).unwrap(), &colormap).unwrap().with_window_limit(10);
+    let e = tiny.slice(0.5, None).err().unwrap();
+    assert!(matches!(e, SpacetimeError::TooManyActive { limit: 10, .. }), "{e}");
+}
+
+#[test]
+fn frames_report_per_stage_device_times() {
+    let gpu = common::gpu();
+    let mesh = pulses(6000);
+    let mut r = SpacetimeRenderer::from_mesh(&gpu, &mesh, &Colormap::viridis()).unwrap();
+    let target = RenderTarget::new(&gpu, "frame", 160, 90, ColorFormat::Rgba8).unwrap();
+    let t = 0.5 * mesh.time_range().1;
+    let view = SpacetimeView {
+        u_max: Some(0.05),
+        subdivide: Some(0.001),
+        ..SpacetimeView::looking_at(r.data().summary(), t)
+    };
+    let Some(mut profiler) = galerkin::gpu::Profiler::new(&gpu, 4).ok() else {
+        eprintln!("skipped: no timestamp queries on this device");
+        return;
+    };
+    let (stats, times) = r.frame(&target, &view, Some(&mut profiler)).unwrap();
+    let times = times.unwrap();
+    assert!(times.slice_ms > 0.0 && times.subdivide_ms > 0.0 && times.draw_ms > 0.0, "{times:?}");
+    assert_eq!(stats, r.slice(t, view.subdivide).unwrap(), "frame() slices as slice() does");
+    // The subdivision asked for more triangles than the first buffers hold: the frame grew them
+    // and redid the slice. A frame without a profiler or subdivision works too.
+    assert!(stats.triangles > 3 * 1024, "{stats:?}");
+    let (coarse, none) = r.frame(&target, &SpacetimeView { subdivide: None, ..view }, None).unwrap();
+    assert!(none.is_none());
+    assert!(coarse.triangles < stats.triangles, "{coarse:?} vs {stats:?}");
+}
