@@ -45,9 +45,9 @@ impl DataSummary {
     pub fn add(&mut self, r: &ElementRecord, materials: &[Material]) {
         let p = r.corner_points();
         for c in &p {
-            for k in 0..2 {
-                self.space_lo[k] = self.space_lo[k].min(c[k]);
-                self.space_hi[k] = self.space_hi[k].max(c[k]);
+            for (k, &x) in c[..2].iter().enumerate() {
+                self.space_lo[k] = self.space_lo[k].min(x);
+                self.space_hi[k] = self.space_hi[k].max(x);
             }
             self.time[0] = self.time[0].min(c[2]);
             self.time[1] = self.time[1].max(c[2]);

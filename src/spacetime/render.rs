@@ -388,7 +388,7 @@ impl SpacetimeRenderer {
         let draws = b(self.draws.binding())?;
         let slice = self
             .slicer
-            .bind(&self.gpu, &[records.clone(), cuts.clone(), b(self.lines.binding())?, draws.clone()])
+            .bind(&self.gpu, &[records, cuts, b(self.lines.binding())?, draws])
             .map_err(dev("binding the slicer"))?;
         let subdivide = self
             .subdivider
@@ -539,9 +539,9 @@ impl SpacetimeRenderer {
                     .bind(
                         &self.gpu,
                         &[
-                            Resource::Storage(records.clone()),
+                            Resource::Storage(records),
                             self.colormap.resource(),
-                            Resource::Storage(materials.clone()),
+                            Resource::Storage(materials),
                         ],
                     )
                     .map_err(dev("binding the slice pipelines"))?;
@@ -694,7 +694,7 @@ impl SpacetimeRenderer {
                         }
                         target.record_end(cmd);
                     };
-                    match profiler.as_deref_mut() {
+                    match profiler {
                         Some(p) => p.scope(cmd, "draw", draw),
                         None => draw(),
                     }

@@ -192,7 +192,7 @@ fn numbers(ty: &str, b: &[u8]) -> Result<Vec<f64>, String> {
     macro_rules! conv {
         ($t:ty) => {{
             const N: usize = std::mem::size_of::<$t>();
-            if b.len() % N != 0 {
+            if !b.len().is_multiple_of(N) {
                 return Err(format!("{} bytes is not a whole number of {ty} values", b.len()));
             }
             b.chunks_exact(N).map(|c| <$t>::from_le_bytes(c.try_into().expect("N bytes")) as f64).collect()
