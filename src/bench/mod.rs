@@ -7,6 +7,7 @@
 pub mod cpu;
 pub mod kernels;
 pub mod reduce;
+pub mod spacetime;
 
 use std::time::{Duration, Instant};
 
@@ -103,7 +104,8 @@ pub fn median(times: &mut [Duration]) -> Duration {
     times[times.len() / 2]
 }
 
-fn median_f64(values: &mut [f64]) -> f64 {
+/// Median of values (the upper middle for even counts; NaN for none).
+pub fn median_f64(values: &mut [f64]) -> f64 {
     if values.is_empty() {
         return f64::NAN;
     }
