@@ -13,7 +13,9 @@ mod error;
 pub mod generate;
 pub mod mesh;
 mod render;
+pub mod scenario;
 pub mod slice;
+pub mod tent;
 
 pub use cubic::{evaluate, LocalFrame, Material, PointFields, MONOMIALS};
 pub use error::SpacetimeError;
