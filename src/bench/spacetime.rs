@@ -64,7 +64,8 @@ pub fn measure_frames(
     for k in 0..frames {
         let t = times[0] + (times[1] - times[0]) * k as f64 / (frames.max(2) - 1) as f64;
         let start = Instant::now();
-        let (stats, stages) = renderer.frame(&target, &SpacetimeView { time: t, ..*view }, Some(&mut profiler))?;
+        let (stats, stages) =
+            renderer.frame(&target, &SpacetimeView { time: t, ..*view }, Some(&mut profiler))?;
         let wall = start.elapsed().as_secs_f64() * 1e3;
         let stages = stages.unwrap_or_default();
         streaming_frames += usize::from(stats.streamed > 0);

@@ -6,7 +6,9 @@
 //!
 //! The mesh is a structured extrusion: a triangulated rectangle, extruded through time layers,
 //! each prism split into three tetrahedra by the global vertex order (so neighbours agree on
-//! the split and the mesh is conforming). The tent-pitching mesher of the issue is not built yet.
+//! the split and the mesh is conforming). The tent-pitching mesher, with local refinement near
+//! wave fronts and non-conforming slabs, is [`super::tent`]; the seed's scenarios on it are
+//! [`super::scenario`] (both use [`project_element`]).
 
 use rayon::prelude::*;
 

@@ -16,7 +16,9 @@ pub mod gst;
 pub mod mesh;
 pub mod record;
 mod render;
+pub mod scenario;
 pub mod slice;
+pub mod tent;
 pub mod vtu;
 
 pub use cubic::{evaluate, LocalFrame, Material, PointFields, MONOMIALS};

@@ -538,11 +538,7 @@ impl SpacetimeRenderer {
                 let set = p
                     .bind(
                         &self.gpu,
-                        &[
-                            Resource::Storage(records),
-                            self.colormap.resource(),
-                            Resource::Storage(materials),
-                        ],
+                        &[Resource::Storage(records), self.colormap.resource(), Resource::Storage(materials)],
                     )
                     .map_err(dev("binding the slice pipelines"))?;
                 Ok((p, set))
