@@ -83,6 +83,11 @@ enum Command {
 
 #[derive(Subcommand)]
 enum BenchWhat {
+    /// Seed 003's spacetime renderer: frame time (wall and per stage: slice, subdivide, draw)
+    /// at 1280×720 on generated data sets of 10^5 to 5·10^6 elements, growth with pixels, and
+    /// the out-of-core first frame of a 2·10^7-element file (generated on first use into
+    /// --data-dir).
+    Spacetime(cli::spacetime::BenchArgs),
     /// The reduction core: premultiplication of the fluid volume tensor at the paper's cavity
     /// size (88,671 cells, m = 128, m_g = 5) next to faer's GEMM of its final stage, reduced
     /// evaluation per call and per batch, and premultiplication time against cells and m.
@@ -133,6 +138,7 @@ fn run(cli: Cli) -> Result<()> {
         Command::SpacetimeConvert(args) => cli::spacetime::convert(&args),
         Command::Bench { what: BenchWhat::Gpu { quick } } => bench_gpu(&desc, quick),
         Command::Bench { what: BenchWhat::Reduce { quick } } => bench_reduce(&desc, quick),
+        Command::Bench { what: BenchWhat::Spacetime(args) } => cli::spacetime::bench(&desc, &args),
     }
 }
 

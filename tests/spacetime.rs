@@ -395,3 +395,109 @@ fn bad_meshes_are_refused_naming_the_element() {
     m.fields.pop();
     assert!(matches!(m.validate(), Err(SpacetimeError::Length { .. })));
 }
+
+#[test]
+fn with_height_pixels_show_the_polynomial_where_their_ray_meets_the_surface() {
+    // The per-vertex heights (|v| evaluated by the slicing passes) and per-pixel U with the
+    // height field on, against a CPU reference: each pixel's ray is intersected with the slice
+    // triangles lifted to z = height_scale·|v| (|v| in f64 at the f32 corners), the nearest hit
+    // taken, and U evaluated there in f64.
+    let gpu = common::gpu();
+    let m = mesh();
+    let mut r = SpacetimeRenderer::from_mesh(&gpu, &m, &Colormap::viridis()).unwrap();
+    let t = 0.43 * m.time_range().1;
+    let view = SpacetimeView { edges: false, ..SpacetimeView::looking_at(r.data().summary(), t) };
+    assert!(view.height);
+    let (w, h) = (128, 96);
+    let target = RenderTarget::new(&gpu, "data", w, h, ColorFormat::Rgba32F).unwrap();
+    let Pixels::Rgba32F(data) = r.render(&target, &view).unwrap() else { panic!("float target") };
+    let hs = r.default_height_scale();
+    let field = |e: u32, x: f64, y: f64| {
+        let f = &m.fields[e as usize];
+        evaluate(&f.frame, &m.materials[f.material as usize], &f.coefficients, [x, y, t])
+    };
+    let lifted: Vec<(u32, [[f64; 3]; 3])> = r
+        .slice_triangles()
+        .unwrap()
+        .iter()
+        .map(|(e, c)| {
+            (
+                *e,
+                c.map(|p| {
+                    let (x, y) = (f64::from(p[0]), f64::from(p[1]));
+                    [x, y, hs * field(*e, x, y).speed]
+                }),
+            )
+        })
+        .collect();
+    let max_u = lifted
+        .iter()
+        .flat_map(|(e, c)| c.iter().map(move |p| field(*e, p[0], p[1]).strain_energy_density))
+        .fold(0.0f64, f64::max);
+    let (mut checked, mut ambiguous, mut worst) = (0, 0, 0f64);
+    for py in 0..h {
+        for px in 0..w {
+            let (Some(a), Some(b)) = (
+                view.camera.pixel_on_plane_z(px, py, w, h, 0.0),
+                view.camera.pixel_on_plane_z(px, py, w, h, 1.0),
+            ) else {
+                continue;
+            };
+            let eye = view.camera.eye;
+            let d = [a.x - b.x, a.y - b.y, a.z - b.z];
+            // Möller–Trumbore against every lifted triangle: (distance, element, hit, min barycentric).
+            let mut hits: Vec<(f64, u32, [f64; 2], f64)> = Vec::new();
+            for (e, c) in &lifted {
+                let e1 = [0, 1, 2].map(|k| c[1][k] - c[0][k]);
+                let e2 = [0, 1, 2].map(|k| c[2][k] - c[0][k]);
+                let cross = |u: [f64; 3], v: [f64; 3]| {
+                    [u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]]
+                };
+                let dot = |u: [f64; 3], v: [f64; 3]| u[0] * v[0] + u[1] * v[1] + u[2] * v[2];
+                let pv = cross(d, e2);
+                let det = dot(e1, pv);
+                if det.abs() < 1e-300 {
+                    continue;
+                }
+                let tv = [0, 1, 2].map(|k| eye[k] - c[0][k]);
+                let u = dot(tv, pv) / det;
+                let qv = cross(tv, e1);
+                let v = dot(d, qv) / det;
+                let s = dot(e2, qv) / det;
+                let bary = u.min(v).min(1.0 - u - v);
+                if bary >= -1e-3 && s > 0.0 {
+                    hits.push((s, *e, [eye[0] + s * d[0], eye[1] + s * d[1]], bary));
+                }
+            }
+            hits.sort_by(|x, y| x.0.total_cmp(&y.0));
+            let got = &data[4 * (py * w + px) as usize..][..4];
+            let Some(&(s, e, q, bary)) = hits.first() else {
+                assert!(got[0].is_nan(), "pixel ({px}, {py}) drawn where no triangle is hit");
+                continue;
+            };
+            // Ambiguous pixels are skipped: rays within 1e-4 (barycentric) of a triangle's edge,
+            // where f32 rasterisation may pick the neighbour or miss (the search accepts hits up
+            // to 1e-3 outside a triangle so that near misses count as such), and rays meeting a
+            // second surface within 1e-5 of the distance (the f32 heights may swap them).
+            if bary < 1e-4 || hits.get(1).is_some_and(|h2| h2.0 - s < 1e-5 * s) {
+                ambiguous += 1;
+                continue;
+            }
+            assert!(got[0].is_finite(), "pixel ({px}, {py}) not drawn, element {e} hit");
+            let want = field(e, q[0], q[1]).strain_energy_density;
+            let err = (f64::from(got[0]) - want).abs() / max_u;
+            // f32 heights and positions move the hit by ~1e-6 of the domain; U varies on the
+            // pulse width (0.08), so ~1e-5 of its scale; 1e-4 leaves a 10× margin.
+            assert!(
+                err <= 1e-4,
+                "pixel ({px}, {py}), element {e}: U {} vs {want} ({err:.1e} of max)",
+                got[0]
+            );
+            worst = worst.max(err);
+            checked += 1;
+        }
+    }
+    assert!(checked > (w * h) as usize / 4, "{checked} pixels checked, {ambiguous} ambiguous");
+    assert!(ambiguous * 10 < checked, "{ambiguous} ambiguous of {checked}");
+    eprintln!("height on: {checked} pixels, {ambiguous} ambiguous skipped, worst U error {worst:.1e} of max");
+}

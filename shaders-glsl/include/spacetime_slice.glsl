@@ -2,11 +2,25 @@
 // spacetime/subdivide.comp); Rust: SlicePushCompute in src/spacetime/render.rs.
 #ifndef GALERKIN_SPACETIME_SLICE_GLSL
 #define GALERKIN_SPACETIME_SLICE_GLSL
-struct SliceVertex { vec2 xy; uint element; float pad; };
+#include "spacetime_cubic.glsl"
+// A slice vertex: position, element (in the window), |v| there (the height before scaling).
+struct SliceVertex { vec2 xy; uint element; float speed; };
+// The resident window of the records (element k of the window = record first + k) and the
+// materials (λ, μ, ρ, 0).
+layout(std430, set = 0, binding = 0) readonly buffer Records { SpacetimeRecord records[]; };
+layout(std430, set = 0, binding = 4) readonly buffer Materials { vec4 materials[]; };
 // Two VkDrawIndirectCommand (triangles, lines), the overflow flag, the number of cut triangles.
 layout(std430, set = 0, binding = 3) buffer Draws { uint draws[10]; };
 layout(push_constant) uniform Push {
     uint first; uint count; float t; float max_area;
     uint max_level; uint tri_capacity; uint line_capacity; uint cut_capacity;
 } pc;
+
+// |v| of window element `element` at (xy, pc.t): the per-vertex height of §4.2.2, evaluated
+// once per slice vertex here rather than per drawn vertex.
+float slice_speed(uint element, vec2 xy) {
+    SpacetimeRecord r = records[element];
+    SpacetimeElement el = spacetime_element(r, materials[floatBitsToUint(r.centre_material.w)]);
+    return spacetime_evaluate(el, vec3(xy, pc.t)).speed;
+}
 #endif

@@ -1,15 +1,15 @@
 #version 450
 // Slices the active range of a spacetime mesh (sorted by lowest time; element indices are
-// positions in the resident window of records) with the plane t (seed 003 §4.1); the device twin of src/spacetime/slice.rs (same below/above rule, same cut
-// formula, same corner order). Each cut polygon is fanned into triangles for subdivide.comp
-// (the second pass) and its edges are emitted as lines for the edge overdraw (§4.3). Output is
-// appended with atomics; the line count is the vertexCount of an indirect draw.
+// positions in the resident window of records) with the plane t (seed 003 §4.1); the device
+// twin of src/spacetime/slice.rs (same below/above rule, same cut formula, same corner order).
+// |v| is evaluated at each polygon corner; the polygon is fanned into triangles for
+// subdivide.comp (the second pass) and its edges are emitted as lines for the edge overdraw
+// (§4.3). Output is appended with atomics; the line count is the vertexCount of an indirect
+// draw.
 layout(local_size_x = 64) in;
 #include "spacetime_slice.glsl"
 
-// The resident window of the records (element k of the window = record first + k).
-layout(std430, set = 0, binding = 0) readonly buffer Records { vec4 records[]; };   // 15 vec4 each
-// Cut triangles for subdivide.comp: (a, b), (c, element bits, 0).
+// Cut triangles for subdivide.comp: (a, b), (c, element bits, |v|(a)), (|v|(b), |v|(c), 0, 0).
 layout(std430, set = 0, binding = 1) writeonly buffer Cuts { vec4 cuts[]; };
 layout(std430, set = 0, binding = 2) writeonly buffer Lines { SliceVertex lines[]; };
 
@@ -22,9 +22,7 @@ void main() {
     uint k = gl_GlobalInvocationID.x;
     if (k >= pc.count) return;
     uint element = pc.first + k;   // in the window
-    // Corners (x0 y0 t0 x1)(y1 t1 x2 y2)(t2 x3 y3 t3): the first three vec4 of the record
-    // (SpacetimeRecord in include/spacetime_cubic.glsl; read as vec4 to skip the coefficients).
-    vec4 a = records[15u * element], b = records[15u * element + 1u], d = records[15u * element + 2u];
+    vec4 a = records[element].corners[0], b = records[element].corners[1], d = records[element].corners[2];
     vec3 p[4] = vec3[4](a.xyz, vec3(a.w, b.xy), vec3(b.zw, d.x), d.yzw);
     uint below[4], above[4];
     uint nb = 0u, na = 0u;
@@ -47,18 +45,22 @@ void main() {
         c[3] = cut(p[below[1]], p[above[0]]);
         corners = 4u;
     }
+    float speed[4];
+    for (uint i = 0u; i < corners; ++i) speed[i] = slice_speed(element, c[i]);
     uint ncut = corners - 2u;
     uint cut_at = atomicAdd(draws[9], ncut);
     if (cut_at + ncut > pc.cut_capacity) { draws[8] = 1u; return; }
     for (uint i = 1u; i + 1u < corners; ++i) {
-        cuts[2u * cut_at] = vec4(c[0], c[i]);
-        cuts[2u * cut_at + 1u] = vec4(c[i + 1u], uintBitsToFloat(element), 0.0);
+        cuts[3u * cut_at] = vec4(c[0], c[i]);
+        cuts[3u * cut_at + 1u] = vec4(c[i + 1u], uintBitsToFloat(element), speed[0]);
+        cuts[3u * cut_at + 2u] = vec4(speed[i], speed[i + 1u], 0.0, 0.0);
         cut_at++;
     }
     uint at = atomicAdd(draws[4], 2u * corners);
     if (at + 2u * corners > pc.line_capacity) { draws[8] = 1u; return; }
     for (uint i = 0u; i < corners; ++i) {
-        lines[at++] = SliceVertex(c[i], element, 0.0);
-        lines[at++] = SliceVertex(c[(i + 1u) % corners], element, 0.0);
+        uint j = (i + 1u) % corners;
+        lines[at++] = SliceVertex(c[i], element, speed[i]);
+        lines[at++] = SliceVertex(c[j], element, speed[j]);
     }
 }

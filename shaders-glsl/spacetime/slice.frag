@@ -10,18 +10,15 @@
 
 layout(location = 0) in vec3 world;
 layout(location = 1) in float vertex_s;
-layout(location = 2) flat in vec4 el_data[12];
+layout(location = 2) flat in uint el_index;
+layout(std430, set = 0, binding = 0) readonly buffer Records { SpacetimeRecord records[]; };
+layout(std430, set = 0, binding = 2) readonly buffer Materials { vec4 materials[]; };
 layout(set = 0, binding = 1) uniform sampler1D colormap;
 layout(location = 0) out vec4 out_colour;
 
 void main() {
-    SpacetimeElement el;
-    el.centre_lambda = el_data[0];
-    el.extent_mu = el_data[1];
-    for (int k = 0; k < 10; ++k) {
-        el.c[2 * k] = el_data[2 + k].xy;
-        el.c[2 * k + 1] = el_data[2 + k].zw;
-    }
+    SpacetimeRecord r = records[el_index];
+    SpacetimeElement el = spacetime_element(r, materials[floatBitsToUint(r.centre_material.w)]);
     SpacetimeFields f = spacetime_evaluate(el, vec3(world.xy, pc.eye_t.w));
     // The height field's normal (at the height scale) is reported whether or not the surface
     // is displaced; lighting uses it only when it is (else the slice is flat).

@@ -219,6 +219,7 @@ pub fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
             bail!("{name} must be a positive number, got {v}");
         }
     }
+    let opened = Instant::now();
     let data = match &args.file {
         Some(path) => load(path)?,
         None => match args.generate.as_str() {
@@ -245,6 +246,7 @@ pub fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
         ..base
     };
     let elements = data.len();
+    let open_ms = opened.elapsed().as_secs_f64() * 1e3;
     let gpu = Gpu::new(desc)?;
     let colormap = Colormap::by_name(&args.colormap)?;
     let mut renderer = galerkin::spacetime::SpacetimeRenderer::new(&gpu, data, &colormap)?;
@@ -290,13 +292,137 @@ pub fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
         }
     }
     println!(
-        "spacetime: {elements} elements, t = {time:.4}: {} active ({} streamed to the device), {} triangles, {} edge lines; slice {slice_ms:.1} ms, render + readback {draw_ms:.1} ms → {}",
+        "spacetime: {elements} elements, t = {time:.4}: {} active ({} streamed to the device), {} triangles, {} edge lines; load {open_ms:.1} ms, slice {slice_ms:.1} ms, render + readback {draw_ms:.1} ms, peak RSS {} → {}",
         stats.active,
         stats.streamed,
         stats.triangles,
         stats.lines,
+        peak_rss_mb().map_or("unknown".into(), |mb| format!("{mb:.0} MB")),
         args.out.display()
     );
     drop((target, renderer));
     crate::check_validation(gpu)
+}
+
+/// The process's peak resident set (VmHWM of /proc/self/status), in MB; `None` off Linux.
+pub fn peak_rss_mb() -> Option<f64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kb: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb / 1024.0)
+}
+
+/// Arguments of `galerkin bench spacetime`.
+#[derive(Args)]
+pub struct BenchArgs {
+    /// 10^5 and 10^6 elements only, no out-of-core run (a minute instead of ten).
+    #[arg(long)]
+    pub quick: bool,
+    /// Where the generated data sets are kept between runs (pulses-N.gst; ~1.2 GB for 5·10^6
+    /// elements, ~4.9 GB for the 2·10^7-element out-of-core file).
+    #[arg(long, default_value = "out/bench-data")]
+    pub data_dir: PathBuf,
+    /// Frames per configuration (the median is reported).
+    #[arg(long, default_value_t = 30)]
+    pub frames: usize,
+}
+
+/// The `pulses` data set of about `elements` elements in `dir`, generated if missing.
+fn bench_data(dir: &Path, elements: usize) -> Result<PathBuf> {
+    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    let path = dir.join(format!("pulses-{elements}.gst"));
+    if gst::open(&path).is_err() {
+        generate_file(&GenArgs { scenario: "pulses".into(), elements, out: path.clone() })?;
+    }
+    Ok(path)
+}
+
+/// `galerkin bench spacetime`: frame times of seed 003's renderer on generated data (the
+/// issue's goal: ≥ 30 FPS at 1280×720 on 5·10^6 elements), their growth with active elements
+/// and with pixels, and the out-of-core first frame of a 2·10^7-element file.
+pub fn bench(desc: &GpuDesc, args: &BenchArgs) -> Result<()> {
+    use galerkin::bench::spacetime::{measure_frames, FrameReport};
+    if args.frames == 0 {
+        bail!("--frames must be positive");
+    }
+    let sizes: &[usize] = if args.quick { &[100_000, 1_000_000] } else { &[100_000, 1_000_000, 5_000_000] };
+    let gpu = Gpu::new(desc)?;
+    println!("device: {} ({})", gpu.caps().device_name, gpu.caps().driver);
+    let colormap = Colormap::viridis();
+    let header = "| elements | active | triangles | size | subdivide | frame (wall) | FPS | slice | subdivide | draw | frames streaming |\n|---:|---:|---:|---|---|---:|---:|---:|---:|---:|---:|";
+    let row = |n: usize, size: (u32, u32), sub: Option<f64>, r: &FrameReport| {
+        println!(
+            "| {n} | {:.0} | {:.0} | {}×{} | {} | {:.1} ms | {:.1} | {:.2} ms | {:.2} ms | {:.1} ms | {}/{} |",
+            r.active,
+            r.triangles,
+            size.0,
+            size.1,
+            sub.map_or("off".into(), |a| format!("{a:.1e}")),
+            r.wall_ms,
+            r.fps(),
+            r.slice_ms,
+            r.subdivide_ms,
+            r.draw_ms,
+            r.streaming_frames,
+            r.frames
+        )
+    };
+    println!("\nFrames at an advancing t (0.3 → 0.7 of the span), height and edges on, U_max 0.05; medians of {} frames:\n\n{header}", args.frames);
+    let mut largest = None;
+    for &n in sizes {
+        let path = bench_data(&args.data_dir, n)?;
+        let data = gst::open(&path)?;
+        let [t0, t1] = data.summary().time;
+        let view = SpacetimeView { u_max: Some(0.05), ..SpacetimeView::looking_at(data.summary(), t0) };
+        let times = [t0 + 0.3 * (t1 - t0), t0 + 0.7 * (t1 - t0)];
+        let mut r = galerkin::spacetime::SpacetimeRenderer::new(&gpu, data, &colormap)?;
+        let report = measure_frames(&gpu, &mut r, &view, (1280, 720), times, args.frames, 3)?;
+        row(n, (1280, 720), None, &report);
+        largest = Some((n, r, view, times, report));
+    }
+    let (n, mut r, view, times, base) = largest.expect("at least one size");
+    // Subdivision: triangles quadrisected to about a quarter of a structured cell's triangle.
+    let k = (n as f64 / 6.0).cbrt();
+    let area = 0.5 / (k * k) / 4.0;
+    let sub = SpacetimeView { subdivide: Some(area), ..view };
+    row(n, (1280, 720), Some(area), &measure_frames(&gpu, &mut r, &sub, (1280, 720), times, args.frames, 2)?);
+    let no_edges = SpacetimeView { edges: false, ..view };
+    let rep = measure_frames(&gpu, &mut r, &no_edges, (1280, 720), times, args.frames, 2)?;
+    println!("(the same without edge overdraw: {:.1} ms per frame, draw {:.1} ms)", rep.wall_ms, rep.draw_ms);
+    println!("\nGrowth with pixels ({n} elements):\n\n{header}");
+    for size in [(320, 180), (640, 360), (1280, 720), (1920, 1080)] {
+        let rep = if size == (1280, 720) {
+            base
+        } else {
+            measure_frames(&gpu, &mut r, &view, size, times, args.frames, 2)?
+        };
+        row(n, size, None, &rep);
+    }
+    drop(r);
+    crate::check_validation(gpu)?;
+    if !args.quick {
+        let path = bench_data(&args.data_dir, 20_000_000)?;
+        println!("\nOut of core: the first frame of {} in a fresh process:", path.display());
+        let exe = std::env::current_exe().context("finding this executable")?;
+        let start = Instant::now();
+        let out = args.data_dir.join("out-of-core.png");
+        let status = std::process::Command::new(exe)
+            .args([
+                "spacetime",
+                &path.to_string_lossy(),
+                "--time",
+                "0.2",
+                "--umax",
+                "0.05",
+                "--out",
+                &out.to_string_lossy(),
+            ])
+            .status()
+            .context("running the out-of-core frame")?;
+        if !status.success() {
+            bail!("the out-of-core frame failed ({status})");
+        }
+        println!("process wall time (Vulkan start-up included): {:.2} s", start.elapsed().as_secs_f64());
+    }
+    Ok(())
 }

@@ -34,7 +34,7 @@ use crate::render::{Camera, ColorFormat, Colormap, ColormapTexture, Pixels, Rend
 struct SliceVertex {
     xy: [f32; 2],
     element: u32,
-    pad: f32,
+    speed: f32,
 }
 
 #[repr(C)]
@@ -186,6 +186,10 @@ struct Window {
 /// lines at word 4), the overflow flag (word 8), the number of cut triangles (word 9).
 const COUNTERS: u64 = 10;
 
+/// vec4s per cut triangle in the buffer between the slicing passes: corners, element, |v| at
+/// the corners.
+const CUT_VEC4S: u64 = 3;
+
 /// Data sets up to this many elements are made resident whole.
 const RESIDENT_WHOLE: usize = 1 << 18;
 
@@ -228,7 +232,7 @@ fn compute(gpu: &Gpu, name: &'static str, spirv: &'static [u32]) -> Result<Compu
         &ComputePipelineDesc {
             name,
             spirv,
-            bindings: &[BindingKind::StorageBuffer; 4],
+            bindings: &[BindingKind::StorageBuffer; 5],
             push_constant_bytes: std::mem::size_of::<SlicePushCompute>() as u32,
             specialization: &[],
             shared_bytes: 0,
@@ -244,7 +248,7 @@ impl SpacetimeRenderer {
         let materials: Vec<[f32; 4]> = data.materials().iter().map(gpu_material).collect();
         let materials = Buffer::from_slice(gpu, "spacetime materials", &materials, storage)
             .map_err(dev("uploading materials"))?;
-        let cuts = Buffer::new(gpu, "slice cuts", 2 * 1024, storage, MemoryKind::GpuOnly)
+        let cuts = Buffer::new(gpu, "slice cuts", CUT_VEC4S * 1024, storage, MemoryKind::GpuOnly)
             .map_err(dev("slice buffers"))?;
         let tris = slice_buffer(gpu, "slice triangles", 3 * 1024)?;
         let lines = slice_buffer(gpu, "slice edges", 8 * 1024)?;
@@ -371,7 +375,7 @@ impl SpacetimeRenderer {
             max_level: if subdivide.is_some() { 6 } else { 0 },
             tri_capacity: self.tris.len() as u32,
             line_capacity: self.lines.len() as u32,
-            cut_capacity: (self.cuts.len() / 2) as u32,
+            cut_capacity: (self.cuts.len() / CUT_VEC4S) as u32,
         }
     }
 
@@ -386,13 +390,14 @@ impl SpacetimeRenderer {
         let records = b(window.buffer.binding())?;
         let cuts = b(self.cuts.binding())?;
         let draws = b(self.draws.binding())?;
+        let materials = b(self.materials.binding())?;
         let slice = self
             .slicer
-            .bind(&self.gpu, &[records, cuts, b(self.lines.binding())?, draws])
+            .bind(&self.gpu, &[records, cuts, b(self.lines.binding())?, draws, materials])
             .map_err(dev("binding the slicer"))?;
         let subdivide = self
             .subdivider
-            .bind(&self.gpu, &[records, cuts, b(self.tris.binding())?, draws])
+            .bind(&self.gpu, &[records, cuts, b(self.tris.binding())?, draws, materials])
             .map_err(dev("binding the slicer"))?;
         self.slice_sets = Some((slice, subdivide));
         Ok(())
@@ -465,11 +470,11 @@ impl SpacetimeRenderer {
         // The counters hold what was asked for: grow to that (and a margin) and redo.
         let grow = |n: u32, cur: u64| u64::from(n).max(cur) + u64::from(n) / 4 + 64;
         self.slice_sets = None;
-        if u64::from(counts[9]) > self.cuts.len() / 2 {
+        if u64::from(counts[9]) > self.cuts.len() / CUT_VEC4S {
             self.cuts = Buffer::new(
                 &self.gpu,
                 "slice cuts",
-                2 * grow(counts[9], self.cuts.len() / 2),
+                CUT_VEC4S * grow(counts[9], self.cuts.len() / CUT_VEC4S),
                 vk::BufferUsageFlags::STORAGE_BUFFER,
                 MemoryKind::GpuOnly,
             )
@@ -529,7 +534,11 @@ impl SpacetimeRenderer {
                     &[BindingKind::StorageBuffer, BindingKind::Texture, BindingKind::StorageBuffer];
                 desc.push_constant_bytes = std::mem::size_of::<DrawPush>() as u32;
                 desc.vertex_stride = std::mem::size_of::<SliceVertex>() as u32;
-                desc.vertex_attributes = &[(0, vk::Format::R32G32_SFLOAT, 0), (1, vk::Format::R32_UINT, 8)];
+                desc.vertex_attributes = &[
+                    (0, vk::Format::R32G32_SFLOAT, 0),
+                    (1, vk::Format::R32_UINT, 8),
+                    (2, vk::Format::R32_SFLOAT, 12),
+                ];
                 if lines {
                     desc.topology = vk::PrimitiveTopology::LINE_LIST;
                 }
