@@ -501,3 +501,65 @@ fn with_height_pixels_show_the_polynomial_where_their_ray_meets_the_surface() {
     assert!(ambiguous * 10 < checked, "{ambiguous} ambiguous of {checked}");
     eprintln!("height on: {checked} pixels, {ambiguous} ambiguous skipped, worst U error {worst:.1e} of max");
 }
+
+#[test]
+fn the_bar_of_fig3_is_pixel_exact_and_per_vertex_colour_is_not() {
+    use galerkin::spacetime::bar::{bar1d, BarRenderer};
+    use galerkin::spacetime::cubic::seed_log_coordinate;
+    let gpu = common::gpu();
+    let mesh = bar1d(800);
+    let mut r = BarRenderer::new(&gpu, &mesh, &Colormap::viridis()).unwrap();
+    let (w, h) = (240, 120);
+    let target = RenderTarget::new(&gpu, "bar", w, h, ColorFormat::Rgba32F).unwrap();
+    // U_max: the largest U at the element vertices (the colour ramp's top).
+    let u_max = (0..mesh.triangles.len())
+        .flat_map(|e| mesh.corners(e).map(|p| mesh.evaluate(e, p[0], p[1]).strain_energy_density))
+        .fold(0.0f64, f64::max);
+    let Pixels::Rgba32F(pixel) = r.render(&target, u_max, false).unwrap() else { panic!("float target") };
+    let Pixels::Rgba32F(vertex) = r.render(&target, u_max, true).unwrap() else { panic!("float target") };
+    let inside = |e: usize, q: [f64; 2]| {
+        let c = mesh.corners(e);
+        let d = |a: [f64; 2], b: [f64; 2]| (b[0] - a[0]) * (q[1] - a[1]) - (b[1] - a[1]) * (q[0] - a[0]);
+        let s = [d(c[0], c[1]), d(c[1], c[2]), d(c[2], c[0])];
+        // Within 1e-9 (in area units) of the triangle: both neighbours are candidates on an edge.
+        s.iter().all(|&v| v >= -1e-9) || s.iter().all(|&v| v <= 1e-9)
+    };
+    let (mut worst_u, mut worst_s_pixel) = (0f64, 0f64);
+    let (mut sum_s_vertex, mut worst_s_vertex, mut far_off, mut n) = (0f64, 0f64, 0usize, 0usize);
+    for py in 0..h {
+        for px in 0..w {
+            let q = r.pixel_point(px, py, w, h);
+            let got = &pixel[4 * (py * w + px) as usize..][..4];
+            let got_vertex = &vertex[4 * (py * w + px) as usize..][..4];
+            assert!(got[0].is_finite(), "pixel ({px}, {py}) not covered");
+            // Every triangle containing the centre (two or more on a shared edge): one must match.
+            let (err, s_true) = (0..mesh.triangles.len())
+                .filter(|&e| inside(e, q))
+                .map(|e| {
+                    let u = mesh.evaluate(e, q[0], q[1]).strain_energy_density;
+                    ((f64::from(got[0]) - u).abs() / u_max, seed_log_coordinate(u, u_max))
+                })
+                .min_by(|a, b| a.0.total_cmp(&b.0))
+                .expect("a pixel centre in the mesh's window lies in a triangle");
+            // f32 evaluation (~1e-6 of the field's scale) at an f32 position (~1e-7 of the bar);
+            // U varies on the pulse width 0.05: 1e-4 of the largest U is a 10× margin.
+            assert!(err <= 1e-4, "pixel ({px}, {py}) at {q:?}: U error {err:.1e} of max");
+            worst_u = worst_u.max(err);
+            worst_s_pixel = worst_s_pixel.max((f64::from(got[3]) - s_true).abs());
+            let dv = (f64::from(got_vertex[3]) - s_true).abs();
+            sum_s_vertex += dv;
+            worst_s_vertex = worst_s_vertex.max(dv);
+            far_off += usize::from(dv > 0.05);
+            n += 1;
+        }
+    }
+    // The colour coordinate shown per pixel is the true one (f32 log); per vertex it is not.
+    assert!(worst_s_pixel < 1e-4, "per-pixel colour coordinate off by {worst_s_pixel}");
+    assert!(worst_s_vertex > 0.1, "per-vertex colour is unexpectedly exact ({worst_s_vertex})");
+    eprintln!(
+        "bar: {n} pixels, worst U error {worst_u:.1e} of max; colour coordinate s: per pixel worst {worst_s_pixel:.1e}, \
+         per vertex mean {:.3} worst {worst_s_vertex:.3}, {:.1} % of pixels off by > 0.05",
+        sum_s_vertex / n as f64,
+        100.0 * far_off as f64 / n as f64
+    );
+}

@@ -20,7 +20,10 @@ pub struct RenderArgs {
     pub file: Option<PathBuf>,
     /// Without FILE: the generated data set: `pulses` (a pressure and a shear pulse crossing
     /// the unit square; structured mesh) or a scenario of seed 003 on a tent-pitched,
-    /// non-conforming mesh: `crack`, `inclusions`, `booster` (see `spacetime-gen --help`).
+    /// non-conforming mesh: `crack`, `inclusions`, `booster` (see `spacetime-gen --help`); or
+    /// `bar1d`, the seed's Fig. 3: a 1D bar fixed at its left end over (x, t) triangles, the
+    /// whole spacetime shown as one image (x to the right, t upwards; EXR channels U, speed, u
+    /// and s, the colour coordinate shown).
     #[arg(long, default_value = "pulses")]
     pub generate: String,
     /// Without FILE: about this many tetrahedra.
@@ -126,6 +129,9 @@ pub fn generate_file(args: &GenArgs) -> Result<()> {
         bail!("--elements must be positive");
     }
     let start = Instant::now();
+    if args.scenario == "bar1d" {
+        bail!("bar1d is a 1D bar over (x, t) triangles, not a tetrahedral data set: render it with `galerkin spacetime --generate bar1d`");
+    }
     if let Ok(scenario) = args.scenario.parse::<Scenario>() {
         match extension(&args.out).as_str() {
             "gst" => {
@@ -218,6 +224,9 @@ pub fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
         if let Some(v) = v.filter(|v| !(v.is_finite() && *v > 0.0)) {
             bail!("{name} must be a positive number, got {v}");
         }
+    }
+    if args.file.is_none() && args.generate == "bar1d" {
+        return render_bar(desc, args);
     }
     let opened = Instant::now();
     let data = match &args.file {
@@ -425,4 +434,54 @@ pub fn bench(desc: &GpuDesc, args: &BenchArgs) -> Result<()> {
         println!("process wall time (Vulkan start-up included): {:.2} s", start.elapsed().as_secs_f64());
     }
     Ok(())
+}
+
+/// `galerkin spacetime --generate bar1d`: seed 003's Fig. 3, the whole (x, t) spacetime of a
+/// bar, per pixel (or per vertex with --per-vertex).
+fn render_bar(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
+    use galerkin::spacetime::bar::{bar1d, BarRenderer};
+    let mesh = bar1d(args.elements);
+    let gpu = Gpu::new(desc)?;
+    let mut renderer = BarRenderer::new(&gpu, &mesh, &Colormap::by_name(&args.colormap)?)?;
+    let (w, h) = args.size;
+    let exr = extension(&args.out) == "exr";
+    let u_max = match args.umax {
+        Some(u) => u,
+        None => {
+            // The largest U over the image's pixels, from a data pass.
+            let data = RenderTarget::new(&gpu, "bar U_max", w, h, ColorFormat::Rgba32F)?;
+            let Pixels::Rgba32F(v) = renderer.render(&data, 1.0, false)? else {
+                bail!("float target returned bytes")
+            };
+            v.chunks_exact(4).map(|p| f64::from(p[0])).filter(|u| u.is_finite()).fold(0.0, f64::max)
+        }
+    };
+    let target =
+        RenderTarget::new(&gpu, "bar", w, h, if exr { ColorFormat::Rgba32F } else { ColorFormat::Rgba8 })?;
+    let pixels = renderer.render(&target, u_max, args.per_vertex)?;
+    if let Some(dir) = args.out.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    }
+    match pixels {
+        Pixels::Rgba8(c) => write_png_rgba8(&args.out, w, h, &c)?,
+        Pixels::Rgba32F(v) => {
+            let channel = |k: usize| v.chunks_exact(4).map(|p| p[k]).collect::<Vec<f32>>();
+            galerkin::render::write_exr_channels(
+                &args.out,
+                w,
+                h,
+                vec![("U", channel(0)), ("speed", channel(1)), ("u", channel(2)), ("s", channel(3))],
+            )?;
+        }
+    }
+    println!(
+        "bar1d (seed 003 Fig. 3): {} triangles over x ∈ [0, 1], t ∈ [{:.3}, {:.3}], U_max {u_max:.3e}, {} → {}",
+        mesh.triangles.len(),
+        renderer.window()[2],
+        renderer.window()[3],
+        if args.per_vertex { "per-vertex colour" } else { "per-pixel colour" },
+        args.out.display()
+    );
+    drop((target, renderer));
+    crate::check_validation(gpu)
 }

@@ -5,9 +5,15 @@
 //! `t = const` ([`slice`]; a compute pass on the device), and every slice polygon is drawn with
 //! the height `|v|` computed per vertex and the strain energy density and the exact normal of
 //! the height field computed per pixel ([`SpacetimeRenderer`]), its edges drawn again to fill
-//! cracks between discontinuous neighbours (§4.3). Data sets are generated ([`generate`]): the
-//! fields are analytic, not solved.
+//! cracks between discontinuous neighbours (§4.3).
+//!
+//! Data: [`SpacetimeMesh`] (f64, shared vertices) for generation and references;
+//! [`ElementRecord`]s sorted by lowest time in a [`SpacetimeData`] for rendering, in memory or
+//! memory-mapped from a `.gst` file ([`gst`]); VTK `.vtu` files ([`vtu`]). Data sets are
+//! generated ([`generate`]: structured meshes; [`tent`]: tent pitching; [`scenario`]: the
+//! seed's crack, inclusion and booster scenarios): the fields are analytic, not solved.
 
+pub mod bar;
 pub mod cubic;
 pub mod data;
 mod error;
