@@ -98,3 +98,36 @@ fn the_viewer_follows_a_resize() {
     assert_eq!((w, h), (320, 200), "the swapchain and target follow the new window size");
     check_screenshot(w, h, &rgba);
 }
+
+#[test]
+fn the_spacetime_viewer_animates_t() {
+    let x = Xvfb::start();
+    let dir = std::env::temp_dir().join(format!("galerkin-viewer-spacetime-{}", std::process::id()));
+    let shot = dir.join("shot.png");
+    let out = Command::new(env!("CARGO_BIN_EXE_galerkin"))
+        .args(["spacetime", "--validation", "--generate", "pulses", "--elements", "6000", "--time", "0.2"])
+        .args(["--view", "--play", "--frames", "6", "--size", "320x200", "--screenshot"])
+        .arg(&shot)
+        .env("DISPLAY", &x.display)
+        .env_remove("WAYLAND_DISPLAY")
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "galerkin spacetime --view failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    // "viewer: 6 frames, t from 0.2000 to T": playing moved t forward.
+    let line = stdout.lines().find(|l| l.starts_with("viewer:")).expect("the viewer's summary line");
+    let times: Vec<f64> = line.split_whitespace().filter_map(|w| w.parse().ok()).collect();
+    assert_eq!(times.len(), 3, "{line}");
+    assert_eq!(times[0], 6.0, "{line}");
+    assert!(times[2] > times[1], "t did not advance: {line}");
+    let (w, h, rgba) = read_png_rgba8(&shot).unwrap();
+    assert_eq!((w, h), (320, 200));
+    let background = galerkin::render::BACKGROUND.map(|v| (v * 255.0).round() as u8);
+    let drawn = rgba.chunks_exact(4).filter(|p| p[..3] != background[..3]).count();
+    assert!(drawn > (w * h / 10) as usize, "only {drawn} pixels drawn");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -60,6 +60,20 @@ pub struct RenderArgs {
     /// no surface).
     #[arg(long, default_value = "out/spacetime.png")]
     pub out: PathBuf,
+    /// Open the interactive viewer instead of writing an image: space plays/pauses t, `.`/`,`
+    /// step, `]`/`[` speed ×2/÷2, h height, e edges, v per-vertex colour, d subdivision, arrows
+    /// orbit, +/- zoom, S screenshot, Esc quits.
+    #[arg(long)]
+    pub view: bool,
+    /// With --view: start playing.
+    #[arg(long)]
+    pub play: bool,
+    /// With --view: quit after this many frames (scripted runs), saving --screenshot.
+    #[arg(long)]
+    pub frames: Option<u64>,
+    /// With --view: where S (and a scripted run's last frame) saves the screenshot.
+    #[arg(long, default_value = "out/screenshot.png")]
+    pub screenshot: PathBuf,
 }
 
 /// Arguments of `galerkin spacetime-gen`.
@@ -254,6 +268,9 @@ pub fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
         per_vertex: args.per_vertex,
         ..base
     };
+    if args.view {
+        return open_viewer(desc, data, view, args);
+    }
     let elements = data.len();
     let open_ms = opened.elapsed().as_secs_f64() * 1e3;
     let gpu = Gpu::new(desc)?;
@@ -484,4 +501,23 @@ fn render_bar(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
     );
     drop((target, renderer));
     crate::check_validation(gpu)
+}
+
+#[cfg(feature = "viewer")]
+fn open_viewer(desc: &GpuDesc, data: SpacetimeData, view: SpacetimeView, args: &RenderArgs) -> Result<()> {
+    use galerkin::render::viewer::{run, ViewOptions};
+    let content = galerkin::spacetime::viewer::SpacetimeContent::new(
+        data,
+        view,
+        Colormap::by_name(&args.colormap)?,
+        args.size,
+        args.play,
+    );
+    let options = ViewOptions { frames: args.frames, screenshot: args.screenshot.clone(), resize_to: None };
+    run(desc.clone(), Box::new(content), options)
+}
+
+#[cfg(not(feature = "viewer"))]
+fn open_viewer(_: &GpuDesc, _: SpacetimeData, _: SpacetimeView, _: &RenderArgs) -> Result<()> {
+    bail!("this build has no viewer: rebuild with the default `viewer` feature")
 }

@@ -1,12 +1,14 @@
 //! The interactive window (feature `viewer`): winit + an ash-window surface + a swapchain.
-//! Each frame renders the demo scene offscreen with the same render pass and pipeline as
-//! `galerkin demo`, then blits it into the acquired swapchain image, so the window shows exactly
-//! what the PNG would hold. Esc quits, S saves a screenshot (copied back from the presented
-//! swapchain image), arrow keys orbit the camera, +/- zoom. Resizing recreates the swapchain
+//! Each frame renders the content ([`ViewerContent`]: the demo scene, a spacetime slice)
+//! offscreen with the same render pass and pipelines as the offscreen commands, then blits it
+//! into the acquired swapchain image, so the window shows exactly what the PNG would hold. Esc
+//! quits, S saves a screenshot (copied back from the presented swapchain image), arrow keys
+//! orbit the camera, +/- zoom; other keys go to the content. Resizing recreates the swapchain
 //! and the offscreen target. winit allows one event loop per process, so tests run the
-//! `galerkin view` binary as a child under Xvfb.
+//! `galerkin` binary as a child under Xvfb.
 
 use std::path::PathBuf;
+use std::time::Instant;
 
 use anyhow::{anyhow, Context, Result};
 use ash::vk;
@@ -26,6 +28,87 @@ use crate::gpu::{
     Swapchain,
 };
 
+/// What the viewer shows. The viewer owns the window, the swapchain, the offscreen target and
+/// the camera; the content draws into the target's render pass.
+pub trait ViewerContent {
+    /// The window's title (asked again after every frame: it may show state, e.g. the time).
+    fn title(&self) -> String;
+    /// The window's initial size.
+    fn size(&self) -> (u32, u32);
+    /// The initial camera.
+    fn camera(&self) -> Camera;
+    /// Creates the device objects, once the device and the first target exist.
+    fn start(&mut self, gpu: &Gpu, target: &RenderTarget) -> Result<()>;
+    /// Work before a frame is recorded (it may submit its own work, e.g. a compute pass), with
+    /// the seconds since the last frame. Returns true while animating (another frame is wanted).
+    fn update(&mut self, target: &RenderTarget, seconds: f64) -> Result<bool>;
+    /// Records the frame's draws inside the target's render pass.
+    fn record(&mut self, cmd: vk::CommandBuffer, target: &RenderTarget, camera: &Camera) -> Result<()>;
+    /// A key the viewer does not use (a character, or " " for the space bar); true if it
+    /// changed what is shown.
+    fn key(&mut self, key: &str) -> bool;
+    /// A line for the terminal when the viewer closes (e.g. where an animation stopped).
+    fn summary(&self) -> Option<String> {
+        None
+    }
+}
+
+/// The demo scene of `galerkin demo` (one polynomial, per-pixel colour).
+pub struct DemoContent {
+    scene: DemoScene,
+    pass: Option<FieldPass>,
+}
+
+impl DemoContent {
+    /// The content of `scene`.
+    pub fn new(scene: DemoScene) -> Self {
+        Self { scene, pass: None }
+    }
+}
+
+impl ViewerContent for DemoContent {
+    fn title(&self) -> String {
+        "galerkin".into()
+    }
+
+    fn size(&self) -> (u32, u32) {
+        (self.scene.image.width, self.scene.image.height)
+    }
+
+    fn camera(&self) -> Camera {
+        self.scene.camera
+    }
+
+    fn start(&mut self, gpu: &Gpu, target: &RenderTarget) -> Result<()> {
+        let colormap = Colormap::by_name(&self.scene.colormap_name())?;
+        self.pass = Some(FieldPass::new(
+            gpu,
+            target.render_pass(),
+            &self.scene.field.coefficients,
+            self.scene.field.tessellation,
+            &colormap,
+            self.scene.ramp(),
+            FieldOutput::Colour,
+        )?);
+        Ok(())
+    }
+
+    fn update(&mut self, _: &RenderTarget, _: f64) -> Result<bool> {
+        Ok(false)
+    }
+
+    fn record(&mut self, cmd: vk::CommandBuffer, target: &RenderTarget, camera: &Camera) -> Result<()> {
+        if let Some(pass) = &self.pass {
+            pass.record(cmd, target.extent(), camera);
+        }
+        Ok(())
+    }
+
+    fn key(&mut self, _: &str) -> bool {
+        false
+    }
+}
+
 /// How a viewer run goes: interactive by default, scripted for tests and recordings.
 #[derive(Clone, Debug, Default)]
 pub struct ViewOptions {
@@ -37,14 +120,14 @@ pub struct ViewOptions {
     pub resize_to: Option<(u32, u32)>,
 }
 
-/// Opens the window on `scene` and runs until Esc, the window closes, or `options.frames`
+/// Opens the window on `content` and runs until Esc, the window closes, or `options.frames`
 /// frames have been presented.
-pub fn run(desc: GpuDesc, scene: DemoScene, options: ViewOptions) -> Result<()> {
+pub fn run(desc: GpuDesc, content: Box<dyn ViewerContent>, options: ViewOptions) -> Result<()> {
     let ViewOptions { frames, screenshot, resize_to } = options;
     let event_loop = EventLoop::new().context("cannot open a window (is DISPLAY or WAYLAND_DISPLAY set?)")?;
     let mut app = App {
         desc,
-        scene,
+        content: Some(content),
         frames,
         screenshot,
         resize_to,
@@ -58,6 +141,9 @@ pub fn run(desc: GpuDesc, scene: DemoScene, options: ViewOptions) -> Result<()> 
         Some(e) => Err(e),
         None => {
             if let Some(state) = app.state.take() {
+                if let Some(line) = state.content.summary() {
+                    println!("{line}");
+                }
                 state.finish()?;
             }
             Ok(())
@@ -67,7 +153,7 @@ pub fn run(desc: GpuDesc, scene: DemoScene, options: ViewOptions) -> Result<()> 
 
 struct App {
     desc: GpuDesc,
-    scene: DemoScene,
+    content: Option<Box<dyn ViewerContent>>,
     frames: Option<u64>,
     screenshot: PathBuf,
     resize_to: Option<(u32, u32)>,
@@ -81,7 +167,9 @@ struct App {
 /// is waited on first, then the swapchain goes before its surface, the window last.
 struct State {
     last_frame: Option<Submission>,
-    pass: FieldPass,
+    content: Box<dyn ViewerContent>,
+    last_update: Instant,
+    animating: bool,
     target: RenderTarget,
     readback: Option<Buffer<u8>>,
     swapchain: Option<Swapchain>,
@@ -92,10 +180,15 @@ struct State {
 }
 
 impl State {
-    fn new(event_loop: &ActiveEventLoop, desc: &GpuDesc, scene: &DemoScene) -> Result<Self> {
+    fn new(
+        event_loop: &ActiveEventLoop,
+        desc: &GpuDesc,
+        mut content: Box<dyn ViewerContent>,
+    ) -> Result<Self> {
+        let (width, height) = content.size();
         let attrs = Window::default_attributes()
-            .with_title("galerkin")
-            .with_inner_size(winit::dpi::PhysicalSize::new(scene.image.width, scene.image.height));
+            .with_title(content.title())
+            .with_inner_size(winit::dpi::PhysicalSize::new(width, height));
         let window = event_loop.create_window(attrs).context("create window")?;
         let display = window.display_handle().map_err(|e| anyhow!("display handle: {e}"))?.as_raw();
         let handle = window.window_handle().map_err(|e| anyhow!("window handle: {e}"))?.as_raw();
@@ -110,25 +203,18 @@ impl State {
         let extent = swapchain.extent();
         let target =
             RenderTarget::new(&gpu, "viewer frame", extent.width, extent.height, ColorFormat::Rgba8)?;
-        let colormap = Colormap::by_name(&scene.colormap_name())?;
-        let pass = FieldPass::new(
-            &gpu,
-            target.render_pass(),
-            &scene.field.coefficients,
-            scene.field.tessellation,
-            &colormap,
-            scene.ramp(),
-            FieldOutput::Colour,
-        )?;
+        content.start(&gpu, &target)?;
         Ok(Self {
             last_frame: None,
-            pass,
+            camera: content.camera(),
+            content,
+            last_update: Instant::now(),
+            animating: false,
             target,
             readback: None,
             swapchain: Some(swapchain),
             surface,
             gpu,
-            camera: scene.camera,
             window,
         })
     }
@@ -163,6 +249,10 @@ impl State {
     /// Returns false if the swapchain had to be recreated instead.
     fn frame(&mut self, save: bool) -> Result<bool> {
         self.wait_last_frame()?;
+        let now = Instant::now();
+        let seconds = now.duration_since(self.last_update).as_secs_f64();
+        self.last_update = now;
+        self.animating = self.content.update(&self.target, seconds)?;
         let Some(swapchain) = self.swapchain.as_ref() else {
             return Ok(false);
         };
@@ -183,13 +273,13 @@ impl State {
                 MemoryKind::GpuToCpu,
             )?);
         }
-        let (gpu, target, pass, camera, readback) =
-            (&self.gpu, &self.target, &self.pass, &self.camera, &self.readback);
+        let (gpu, target, content, camera, readback) =
+            (&self.gpu, &self.target, &mut self.content, &self.camera, &self.readback);
         let waits = [(swapchain.image_available, vk::PipelineStageFlags::TRANSFER)];
         let signals = [swapchain.render_finished[index as usize]];
-        let (submission, ()) = gpu.submit_with_semaphores(&waits, &signals, |cmd| {
+        let (submission, recorded) = gpu.submit_with_semaphores(&waits, &signals, |cmd| {
             target.record_begin(cmd, crate::render::BACKGROUND);
-            pass.record(cmd, target.extent(), camera);
+            let recorded = content.record(cmd, target, camera);
             target.record_end(cmd);
             let dev = gpu.device();
             let color = vk::ImageAspectFlags::COLOR;
@@ -277,8 +367,10 @@ impl State {
                     vk::AccessFlags::empty(),
                 ),
             );
+            recorded
         })?;
         self.last_frame = Some(submission);
+        recorded?;
         let fresh = swapchain.present(index)?;
         if readable {
             self.wait_last_frame()?;
@@ -357,7 +449,10 @@ impl ApplicationHandler for App {
         if self.state.is_some() {
             return;
         }
-        match State::new(event_loop, &self.desc, &self.scene) {
+        let Some(content) = self.content.take() else {
+            return;
+        };
+        match State::new(event_loop, &self.desc, content) {
             Ok(s) => {
                 s.window.request_redraw();
                 self.state = Some(s);
@@ -390,6 +485,12 @@ impl ApplicationHandler for App {
                     Key::Character("+") | Key::Character("=") => state.orbit(0.0, 0.0, 0.9),
                     Key::Character("-") => state.orbit(0.0, 0.0, 1.0 / 0.9),
                     Key::Character(c) if c.eq_ignore_ascii_case("s") => self.save_next = true,
+                    Key::Named(NamedKey::Space) => {
+                        state.content.key(" ");
+                    }
+                    Key::Character(c) => {
+                        state.content.key(c);
+                    }
                     _ => {}
                 }
                 state.window.request_redraw();
@@ -410,9 +511,10 @@ impl ApplicationHandler for App {
                                 let _ = state.window.request_inner_size(winit::dpi::PhysicalSize::new(w, h));
                             }
                         }
+                        state.window.set_title(&state.content.title());
                         if self.frames.is_some_and(|n| self.presented >= n) {
                             event_loop.exit();
-                        } else if self.frames.is_some() {
+                        } else if self.frames.is_some() || state.animating {
                             state.window.request_redraw();
                         }
                         r

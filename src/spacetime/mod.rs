@@ -25,6 +25,8 @@ mod render;
 pub mod scenario;
 pub mod slice;
 pub mod tent;
+#[cfg(feature = "viewer")]
+pub mod viewer;
 pub mod vtu;
 
 pub use cubic::{evaluate, LocalFrame, Material, PointFields, MONOMIALS};

@@ -638,6 +638,30 @@ impl SpacetimeRenderer {
         })
     }
 
+    /// The colour ramp's `U_max` for `view` in a colour `target`: the view's own, or the
+    /// largest U over the slice's pixels (a data pass at the target's size). For callers that
+    /// fix the ramp once, e.g. while animating t.
+    pub fn u_max_for(&mut self, target: &RenderTarget, view: &SpacetimeView) -> Result<f64, SpacetimeError> {
+        self.slice(view.time, view.subdivide)?;
+        self.resolve_u_max(target, view)
+    }
+
+    /// Records the draw of the current slice (see [`Self::slice`]; slice at `view.time` first)
+    /// into `target`'s render pass, begun and ended by the caller — for applications and the
+    /// viewer that own the frame's command buffer.
+    pub fn record_draw_into(
+        &mut self,
+        cmd: vk::CommandBuffer,
+        target: &RenderTarget,
+        view: &SpacetimeView,
+        u_max: f64,
+    ) -> Result<(), SpacetimeError> {
+        let push = self.draw_push(target, view, u_max);
+        let draw = self.record_draw(target, view, &push)?;
+        draw(cmd);
+        Ok(())
+    }
+
     /// Renders `view` into `target` (slicing first if needed) and returns the pixels: lit
     /// colours in an RGBA8 target, `(U, |v|, n_x, n_y)` in an RGBA32F target.
     pub fn render(&mut self, target: &RenderTarget, view: &SpacetimeView) -> Result<Pixels, SpacetimeError> {
