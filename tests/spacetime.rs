@@ -563,3 +563,23 @@ fn the_bar_of_fig3_is_pixel_exact_and_per_vertex_colour_is_not() {
         100.0 * far_off as f64 / n as f64
     );
 }
+
+#[test]
+fn u_max_reduced_on_the_device_is_the_largest_pixel_value() {
+    let gpu = common::gpu();
+    let m = mesh();
+    let mut r = SpacetimeRenderer::from_mesh(&gpu, &m, &Colormap::viridis()).unwrap();
+    let t = 0.6 * m.time_range().1;
+    let view = SpacetimeView { u_max: None, ..SpacetimeView::looking_at(r.data().summary(), t) };
+    let (w, h) = (200, 120);
+    let colour = RenderTarget::new(&gpu, "colour", w, h, ColorFormat::Rgba8).unwrap();
+    let device = r.u_max_for(&colour, &view).unwrap();
+    // The same data pass read back and reduced here.
+    let data = RenderTarget::new(&gpu, "data", w, h, ColorFormat::Rgba32F).unwrap();
+    let Pixels::Rgba32F(v) = r.render(&data, &SpacetimeView { u_max: Some(1.0), ..view }).unwrap() else {
+        panic!("float target")
+    };
+    let host = v.chunks_exact(4).map(|p| p[0]).filter(|u| u.is_finite()).fold(0.0f32, f32::max);
+    assert!(host > 0.0);
+    assert_eq!(device, f64::from(host), "the device maximum is exact (a maximum does not round)");
+}

@@ -214,6 +214,11 @@ pub struct SpacetimeRenderer {
     umax_target: Option<RenderTarget>,
     /// The most elements resident at once (besides the binding limit).
     max_window: usize,
+    /// The U_max reduction (`max_u.comp`), its pixel buffer, result word and bindings.
+    umax_reducer: ComputePipeline,
+    umax_pixels: Option<Buffer<[f32; 4]>>,
+    umax_result: Buffer<u32>,
+    umax_set: Option<DescriptorSet>,
 }
 
 /// A slice output buffer: vertices written by the slicer, read by the draws.
@@ -277,6 +282,28 @@ impl SpacetimeRenderer {
             slice_sets: None,
             umax_target: None,
             max_window: usize::MAX,
+            umax_reducer: ComputePipeline::new(
+                gpu,
+                &ComputePipelineDesc {
+                    name: "spacetime U_max",
+                    spirv: shaders::spacetime::MAX_U,
+                    bindings: &[BindingKind::StorageBuffer; 2],
+                    push_constant_bytes: 4,
+                    specialization: &[],
+                    shared_bytes: 0,
+                },
+            )
+            .map_err(dev("building the U_max reduction"))?,
+            umax_pixels: None,
+            umax_result: Buffer::new(
+                gpu,
+                "U_max",
+                1,
+                storage | vk::BufferUsageFlags::TRANSFER_DST,
+                MemoryKind::GpuOnly,
+            )
+            .map_err(dev("the U_max pass"))?,
+            umax_set: None,
         })
     }
 
@@ -560,8 +587,9 @@ impl SpacetimeRenderer {
     }
 
     /// The colour ramp's `U_max` for `view`: its own, or the largest U over the slice's
-    /// pixels from a data pass of the same view into a float target kept for the next frame
-    /// of the same size.
+    /// pixels, from a data pass of the same view into a float target kept for the next frame
+    /// of the same size, reduced on the device (on the host when the image exceeds one storage
+    /// binding).
     fn resolve_u_max(&mut self, target: &RenderTarget, view: &SpacetimeView) -> Result<f64, SpacetimeError> {
         match view.u_max {
             Some(u) => Ok(u),
@@ -579,18 +607,85 @@ impl SpacetimeRenderer {
                     )
                     .map_err(dev("the U_max pass"))?,
                 };
-                let pixels = self.render(&data, &SpacetimeView { u_max: Some(1.0), ..*view });
+                let data_view = SpacetimeView { u_max: Some(1.0), ..*view };
+                self.slice(view.time, view.subdivide)?;
+                let u_max = if data.readback_bytes() <= self.gpu.max_binding_bytes() {
+                    self.data_pass_max_u(&data, &data_view)
+                } else {
+                    // Larger than one binding: read the pixels back and take the maximum here.
+                    match self.render(&data, &data_view) {
+                        Ok(Pixels::Rgba32F(v)) => Ok(v
+                            .chunks_exact(4)
+                            .map(|p| f64::from(p[0]))
+                            .filter(|u| u.is_finite())
+                            .fold(0.0, f64::max)),
+                        Ok(Pixels::Rgba8(_)) => unreachable!("a float target"),
+                        Err(e) => Err(e),
+                    }
+                };
                 self.umax_target = Some(data);
-                match pixels? {
-                    Pixels::Rgba32F(v) => Ok(v
-                        .chunks_exact(4)
-                        .map(|p| f64::from(p[0]))
-                        .filter(|u| u.is_finite())
-                        .fold(0.0, f64::max)),
-                    Pixels::Rgba8(_) => unreachable!("a float target"),
-                }
+                u_max
             }
         }
+    }
+
+    /// Draws the data pass of `view` into the float target `data` and reduces its U channel to
+    /// the maximum on the device (`max_u.comp`); reads back 4 bytes.
+    fn data_pass_max_u(&mut self, data: &RenderTarget, view: &SpacetimeView) -> Result<f64, SpacetimeError> {
+        let pixels = (data.extent().width as u64) * (data.extent().height as u64);
+        if self.umax_pixels.as_ref().is_none_or(|b| b.len() != pixels) {
+            self.umax_pixels = Some(
+                Buffer::new(
+                    &self.gpu,
+                    "U_max pixels",
+                    pixels,
+                    vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+                    MemoryKind::GpuOnly,
+                )
+                .map_err(dev("the U_max pass"))?,
+            );
+            self.umax_set = None;
+        }
+        if self.umax_set.is_none() {
+            let pix =
+                self.umax_pixels.as_ref().expect("made above").binding().map_err(dev("the U_max pass"))?;
+            let res = self.umax_result.binding().map_err(dev("the U_max pass"))?;
+            self.umax_set = Some(
+                self.umax_reducer
+                    .bind(&self.gpu, &[Resource::Storage(pix), Resource::Storage(res)])
+                    .map_err(dev("the U_max pass"))?,
+            );
+        }
+        let push = self.draw_push(data, view, 1.0);
+        let gpu = self.gpu.clone();
+        self.pipelines_for(data)?;
+        let draw = self.draw_commands(data, view, &push);
+        let pix = self.umax_pixels.as_ref().expect("made above");
+        let (reducer, set, result) =
+            (&self.umax_reducer, self.umax_set.as_ref().expect("bound above"), &self.umax_result);
+        gpu.run(|cmd| {
+            data.record_begin(cmd, [f32::NAN; 4]);
+            draw(cmd);
+            data.record_end(cmd);
+            data.record_readback(&gpu, cmd, pix.raw());
+            result.record_fill(cmd, 0);
+            let cs = vk::PipelineStageFlags::COMPUTE_SHADER;
+            gpu.memory_barrier(
+                cmd,
+                (vk::PipelineStageFlags::TRANSFER, vk::AccessFlags::TRANSFER_WRITE),
+                (cs, vk::AccessFlags::SHADER_READ | vk::AccessFlags::SHADER_WRITE),
+            );
+            let n = pixels as u32;
+            reducer.record_dispatch(cmd, set, &n.to_ne_bytes(), [64, 1, 1]);
+            gpu.memory_barrier(
+                cmd,
+                (cs, vk::AccessFlags::SHADER_WRITE),
+                (vk::PipelineStageFlags::TRANSFER, vk::AccessFlags::TRANSFER_READ),
+            );
+        })
+        .map_err(dev("the U_max pass"))?;
+        let bits = self.umax_result.download(&self.gpu).map_err(dev("reading U_max"))?;
+        Ok(f64::from(f32::from_bits(bits[0])))
     }
 
     fn draw_push(&self, target: &RenderTarget, view: &SpacetimeView, u_max: f64) -> DrawPush {
@@ -617,12 +712,24 @@ impl SpacetimeRenderer {
         view: &SpacetimeView,
         push: &DrawPush,
     ) -> Result<impl FnOnce(vk::CommandBuffer) + '_, SpacetimeError> {
+        self.pipelines_for(target)?;
+        Ok(self.draw_commands(target, view, push))
+    }
+
+    /// The draws of the current slice (polygons, then edges if on) for a target whose pipelines
+    /// exist ([`Self::pipelines_for`]).
+    fn draw_commands(
+        &self,
+        target: &RenderTarget,
+        view: &SpacetimeView,
+        push: &DrawPush,
+    ) -> impl FnOnce(vk::CommandBuffer) + '_ {
         let (tris, lines, draws) = (self.tris.raw(), self.lines.raw(), self.draws.raw());
         let extent = target.extent();
         let edges_on = view.edges;
         let (push, edge_push) = (*push, push.for_edges());
-        let (fill, edges, fill_set, edges_set) = self.pipelines_for(target)?;
-        Ok(move |cmd| {
+        let (fill, edges, fill_set, edges_set) = &self.pipelines[&target.format()];
+        move |cmd| {
             fill.record_draw_indirect(
                 cmd,
                 extent,
@@ -635,7 +742,7 @@ impl SpacetimeRenderer {
                 let bytes = bytemuck::bytes_of(&edge_push);
                 edges.record_draw_indirect(cmd, extent, edges_set, bytes, Some(lines), (draws, 16));
             }
-        })
+        }
     }
 
     /// The colour ramp's `U_max` for `view` in a colour `target`: the view's own, or the
@@ -688,7 +795,6 @@ impl SpacetimeRenderer {
         let active = self.data.active_range(view.time);
         let streamed = self.make_resident(active.clone())?;
         let push = self.draw_push(target, view, u_max);
-        let edge_push = push.for_edges();
         let gpu = self.gpu.clone();
         loop {
             self.bind_slicer()?;
@@ -698,9 +804,7 @@ impl SpacetimeRenderer {
             {
                 let mut profiler = profiler.as_deref_mut();
                 let slicer = &*self;
-                let (tris, lines, draws) = (slicer.tris.raw(), slicer.lines.raw(), slicer.draws.raw());
-                let (fill, edges, fill_set, edges_set) = &slicer.pipelines[&target.format()];
-                let extent = target.extent();
+                let commands = slicer.draw_commands(target, view, &push);
                 gpu.run(|cmd| {
                     if let Some(p) = profiler.as_deref_mut() {
                         p.record_reset(cmd);
@@ -708,19 +812,7 @@ impl SpacetimeRenderer {
                     slicer.record_slice(cmd, &slice_push, profiler.as_deref_mut());
                     let draw = || {
                         target.record_begin(cmd, clear);
-                        let bytes = bytemuck::bytes_of(&push);
-                        fill.record_draw_indirect(cmd, extent, fill_set, bytes, Some(tris), (draws, 0));
-                        if view.edges {
-                            let bytes = bytemuck::bytes_of(&edge_push);
-                            edges.record_draw_indirect(
-                                cmd,
-                                extent,
-                                edges_set,
-                                bytes,
-                                Some(lines),
-                                (draws, 16),
-                            );
-                        }
+                        commands(cmd);
                         target.record_end(cmd);
                     };
                     match profiler {
