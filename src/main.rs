@@ -323,12 +323,28 @@ fn demo(desc: &GpuDesc, scene_path: &Path, out: &Path) -> Result<()> {
     let values = RenderTarget::new(&gpu, "demo spacetime fields", w, h, ColorFormat::Rgba32F)?;
     let Pixels::Rgba32F(v) = renderer.render(&values, &view)? else { bail!("float target returned bytes") };
     write_exr_rgba(&out.join("spacetime.exr"), w, h, &v)?;
+    // Its own check: a flat view from above against the CPU f64 fields at every 4th pixel.
+    let flat = galerkin::spacetime::SpacetimeView::from_above(renderer.data().summary(), t);
+    let Pixels::Rgba32F(d) = renderer.render(&values, &flat)? else { bail!("float target returned bytes") };
+    let hs = renderer.default_height_scale();
+    let check = galerkin::spacetime::reference::check_flat_pixels(&mesh, &flat, hs, (w, h), &d, 4, 1e-4);
+    if !check.passed() {
+        bail!(
+            "spacetime: {} of {} pixels differ from the CPU reference; first: {}",
+            check.failures,
+            check.checked,
+            check.first_failure.unwrap_or_default()
+        );
+    }
     println!(
-        "spacetime: {} elements (analytic pulses, L2-projected per element), t = {t:.3}: {} triangles → {}, {} (U, |v|, n_x, n_y)",
+        "spacetime: {} elements (analytic pulses, L2-projected per element), t = {t:.3}: {} triangles → {}, {} (U, |v|, n_x, n_y); flat view checked at {} pixels against f64: worst U {:.1e}, |v| {:.1e} of max",
         mesh.tets.len(),
         stats.triangles,
         out.join("spacetime.png").display(),
-        out.join("spacetime.exr").display()
+        out.join("spacetime.exr").display(),
+        check.checked,
+        check.worst_u,
+        check.worst_speed
     );
     drop((renderer, colours, values));
     check_validation(gpu)

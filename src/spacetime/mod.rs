@@ -21,6 +21,7 @@ pub mod generate;
 pub mod gst;
 pub mod mesh;
 pub mod record;
+pub mod reference;
 mod render;
 pub mod scenario;
 pub mod slice;
