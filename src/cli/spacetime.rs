@@ -286,37 +286,21 @@ pub fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
     let start = Instant::now();
     let pixels = renderer.render(&target, &view)?;
     let draw_ms = start.elapsed().as_secs_f64() * 1e3;
-    if let Some(dir) = args.out.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-    }
-    match pixels {
-        Pixels::Rgba8(c) => write_png_rgba8(&args.out, w, h, &c)?,
-        Pixels::Rgba32F(v) => {
-            let channel = |k: usize| v.chunks_exact(4).map(|p| p[k]).collect::<Vec<f32>>();
-            let nz: Vec<f32> =
-                v.chunks_exact(4)
-                    .map(|p| {
-                        if p[2].is_nan() {
-                            f32::NAN
-                        } else {
-                            (1.0 - p[2] * p[2] - p[3] * p[3]).max(0.0).sqrt()
-                        }
-                    })
-                    .collect();
-            galerkin::render::write_exr_channels(
-                &args.out,
-                w,
-                h,
-                vec![
-                    ("U", channel(0)),
-                    ("speed", channel(1)),
-                    ("normal.x", channel(2)),
-                    ("normal.y", channel(3)),
-                    ("normal.z", nz),
-                ],
-            )?;
-        }
-    }
+    // EXR channels: U, |v| and the normal (n_z from the unit length; NaN where no surface).
+    let nz =
+        |p: &[f32]| if p[2].is_nan() { f32::NAN } else { (1.0 - p[2] * p[2] - p[3] * p[3]).max(0.0).sqrt() };
+    write_image(
+        &args.out,
+        (w, h),
+        pixels,
+        &[
+            ("U", |p| p[0]),
+            ("speed", |p| p[1]),
+            ("normal.x", |p| p[2]),
+            ("normal.y", |p| p[3]),
+            ("normal.z", nz),
+        ],
+    )?;
     println!(
         "spacetime: {elements} elements, t = {time:.4}: {} active ({} streamed to the device), {} triangles, {} edge lines; load {open_ms:.1} ms, slice {slice_ms:.1} ms, render + readback {draw_ms:.1} ms, peak RSS {} → {}",
         stats.active,
@@ -476,21 +460,12 @@ fn render_bar(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
     let target =
         RenderTarget::new(&gpu, "bar", w, h, if exr { ColorFormat::Rgba32F } else { ColorFormat::Rgba8 })?;
     let pixels = renderer.render(&target, u_max, args.per_vertex)?;
-    if let Some(dir) = args.out.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-    }
-    match pixels {
-        Pixels::Rgba8(c) => write_png_rgba8(&args.out, w, h, &c)?,
-        Pixels::Rgba32F(v) => {
-            let channel = |k: usize| v.chunks_exact(4).map(|p| p[k]).collect::<Vec<f32>>();
-            galerkin::render::write_exr_channels(
-                &args.out,
-                w,
-                h,
-                vec![("U", channel(0)), ("speed", channel(1)), ("u", channel(2)), ("s", channel(3))],
-            )?;
-        }
-    }
+    write_image(
+        &args.out,
+        (w, h),
+        pixels,
+        &[("U", |p| p[0]), ("speed", |p| p[1]), ("u", |p| p[2]), ("s", |p| p[3])],
+    )?;
     println!(
         "bar1d (seed 003 Fig. 3): {} triangles over x ∈ [0, 1], t ∈ [{:.3}, {:.3}], U_max {u_max:.3e}, {} → {}",
         mesh.triangles.len(),
@@ -520,4 +495,25 @@ fn open_viewer(desc: &GpuDesc, data: SpacetimeData, view: SpacetimeView, args: &
 #[cfg(not(feature = "viewer"))]
 fn open_viewer(_: &GpuDesc, _: SpacetimeData, _: SpacetimeView, _: &RenderArgs) -> Result<()> {
     bail!("this build has no viewer: rebuild with the default `viewer` feature")
+}
+
+/// A pixel channel of an EXR file: its name and its value from a pixel's four floats.
+type Channel = (&'static str, fn(&[f32]) -> f32);
+
+/// Writes colour pixels as PNG, float pixels as EXR with `channels`, creating the folder.
+fn write_image(out: &Path, (w, h): (u32, u32), pixels: Pixels, channels: &[Channel]) -> Result<()> {
+    if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    }
+    match pixels {
+        Pixels::Rgba8(c) => write_png_rgba8(out, w, h, &c)?,
+        Pixels::Rgba32F(v) => {
+            let named = channels
+                .iter()
+                .map(|(name, f)| (*name, v.chunks_exact(4).map(f).collect::<Vec<f32>>()))
+                .collect();
+            galerkin::render::write_exr_channels(out, w, h, named)?;
+        }
+    }
+    Ok(())
 }

@@ -138,15 +138,6 @@ impl BarMesh {
     }
 }
 
-/// Five-point Gauss–Legendre nodes and weights on [0, 1].
-const GAUSS5: [(f64, f64); 5] = [
-    (0.046_910_077_030_668_0, 0.118_463_442_528_094_5),
-    (0.230_765_344_947_158_5, 0.239_314_335_249_683_2),
-    (0.5, 0.284_444_444_444_444_4),
-    (0.769_234_655_052_841_5, 0.239_314_335_249_683_2),
-    (0.953_089_922_969_332, 0.118_463_442_528_094_5),
-];
-
 /// The L2 projection of `field` onto the 10 y-free cubic monomials of the triangle `p`, in its
 /// bounding-box frame: collapsed Gauss 5×5 quadrature (exact to degree 8 ≥ 6, the mass
 /// matrix's degree), one solve.
@@ -157,8 +148,8 @@ pub fn project_bar_element(p: [[f64; 2]; 3], field: &(impl Fn(f64, f64) -> f64 +
     let extent = [hi[0] - lo[0], hi[1] - lo[1]];
     let mut mass = vec![0.0; 100];
     let mut rhs = [0.0; 10];
-    for &(a, wa) in &GAUSS5 {
-        for &(b, wb) in &GAUSS5 {
+    for &(a, wa) in &super::generate::GAUSS5 {
+        for &(b, wb) in &super::generate::GAUSS5 {
             // (l1, l2) = (a, b (1 − a)), Jacobian (1 − a).
             let (l1, l2) = (a, b * (1.0 - a));
             let w = wa * wb * (1.0 - a);

@@ -19,7 +19,7 @@ use super::record::ElementRecord;
 use crate::tensor::{solve, Tensor};
 
 /// Five-point Gauss–Legendre rule on [0, 1]: nodes and weights.
-const GAUSS5: [(f64, f64); 5] = [
+pub(crate) const GAUSS5: [(f64, f64); 5] = [
     (0.046_910_077_030_668_0, 0.118_463_442_528_094_5),
     (0.230_765_344_947_158_5, 0.239_314_335_249_683_2),
     (0.5, 0.284_444_444_444_444_4),
