@@ -16,7 +16,7 @@ use super::cubic::{CubicCoefficients, LocalFrame, Material, MONOMIALS};
 use super::error::SpacetimeError;
 use super::mesh::{ElementField, SpacetimeMesh};
 use super::record::ElementRecord;
-use crate::tensor::{solve, Tensor};
+use crate::tensor::{solve_many, Tensor};
 
 /// Five-point Gauss–Legendre rule on [0, 1]: nodes and weights.
 pub(crate) const GAUSS5: [(f64, f64); 5] = [
@@ -74,24 +74,26 @@ pub fn project_element(
             std::array::from_fn(|k| l0 * p[0][k] + l[0] * p[1][k] + l[1] * p[2][k] + l[2] * p[3][k]);
         let m = monomials(frame.local(x));
         let f = field(x);
+        // The upper triangle of the symmetric mass matrix; mirrored below.
         for i in 0..20 {
-            for j in 0..20 {
-                mass[i * 20 + j] += w * m[i] * m[j];
+            let wm = w * m[i];
+            for j in i..20 {
+                mass[i * 20 + j] += wm * m[j];
             }
-            rhs[0][i] += w * m[i] * f[0];
-            rhs[1][i] += w * m[i] * f[1];
+            rhs[0][i] += wm * f[0];
+            rhs[1][i] += wm * f[1];
+        }
+    }
+    for i in 0..20 {
+        for j in 0..i {
+            mass[i * 20 + j] = mass[j * 20 + i];
         }
     }
     let mass = Tensor::from_vec(&[20, 20], mass).expect("20 × 20");
-    let mut c = [[0.0; 2]; 20];
-    for comp in 0..2 {
-        // The mass matrix of 20 monomials on a non-degenerate element is SPD.
-        let x = solve("element mass matrix", &mass, &rhs[comp]).expect("non-degenerate element");
-        for k in 0..20 {
-            c[k][comp] = x[k];
-        }
-    }
-    (frame, c)
+    // The mass matrix of 20 monomials on a non-degenerate element is SPD; one factorisation
+    // serves both components.
+    let x = solve_many("element mass matrix", &mass, &[&rhs[0], &rhs[1]]).expect("non-degenerate element");
+    (frame, std::array::from_fn(|k| [x[0][k], x[1][k]]))
 }
 
 /// A structured spacetime mesh over `[0, size[0]] × [0, size[1]] × [0, duration]`: `nx × ny`

@@ -54,7 +54,16 @@ fn from_faer(m: faer::MatRef<'_, f64>) -> Tensor {
 /// `Q⁻¹ b`: solves `Q y = b` by LU with partial pivoting. A pivot below `n·ε·max|Q|` is
 /// reported as [`TensorError::Singular`].
 pub fn solve(what: &str, q: &Tensor, b: &[f64]) -> Result<Vec<f64>, TensorError> {
-    let n = check_system(what, q, b)?;
+    let mut x = solve_many(what, q, &[b])?;
+    Ok(x.pop().expect("one right-hand side"))
+}
+
+/// [`solve`] for several right-hand sides with one factorisation.
+pub fn solve_many(what: &str, q: &Tensor, rhs: &[&[f64]]) -> Result<Vec<Vec<f64>>, TensorError> {
+    let mut n = square(what, q)?;
+    for b in rhs {
+        n = check_system(what, q, b)?;
+    }
     let a = to_faer(q);
     let lu = a.partial_piv_lu();
     let tolerance = pivot_tolerance(q, f64::EPSILON);
@@ -64,9 +73,9 @@ pub fn solve(what: &str, q: &Tensor, b: &[f64]) -> Result<Vec<f64>, TensorError>
             return Err(TensorError::Singular { what: what.into(), row: i, pivot: u[(i, i)] });
         }
     }
-    let rhs = Mat::from_fn(n, 1, |i, _| b[i]);
-    let y = lu.solve(&rhs);
-    Ok((0..n).map(|i| y[(i, 0)]).collect())
+    let b = Mat::from_fn(n, rhs.len(), |i, j| rhs[j][i]);
+    let y = lu.solve(&b);
+    Ok((0..rhs.len()).map(|j| (0..n).map(|i| y[(i, j)]).collect()).collect())
 }
 
 /// Eigenvalues (ascending) and eigenvectors (columns) of the symmetric part of `q`.
