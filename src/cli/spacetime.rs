@@ -335,14 +335,18 @@ pub struct BenchArgs {
     /// Frames per configuration (the median is reported).
     #[arg(long, default_value_t = 30)]
     pub frames: usize,
+    /// The data sets: `pulses` (structured) or a tent-pitched scenario (`crack`, `inclusions`,
+    /// `booster`); the out-of-core file is always `pulses`.
+    #[arg(long, default_value = "pulses")]
+    pub scenario: String,
 }
 
-/// The `pulses` data set of about `elements` elements in `dir`, generated if missing.
-fn bench_data(dir: &Path, elements: usize) -> Result<PathBuf> {
+/// The data set `scenario` of about `elements` elements in `dir`, generated if missing.
+fn bench_data(dir: &Path, scenario: &str, elements: usize) -> Result<PathBuf> {
     std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-    let path = dir.join(format!("pulses-{elements}.gst"));
+    let path = dir.join(format!("{scenario}-{elements}.gst"));
     if gst::open(&path).is_err() {
-        generate_file(&GenArgs { scenario: "pulses".into(), elements, out: path.clone() })?;
+        generate_file(&GenArgs { scenario: scenario.into(), elements, out: path.clone() })?;
     }
     Ok(path)
 }
@@ -380,7 +384,7 @@ pub fn bench(desc: &GpuDesc, args: &BenchArgs) -> Result<()> {
     println!("\nFrames at an advancing t (0.3 → 0.7 of the span), height and edges on, U_max 0.05; medians of {} frames:\n\n{header}", args.frames);
     let mut largest = None;
     for &n in sizes {
-        let path = bench_data(&args.data_dir, n)?;
+        let path = bench_data(&args.data_dir, &args.scenario, n)?;
         let data = gst::open(&path)?;
         let [t0, t1] = data.summary().time;
         let view = SpacetimeView { u_max: Some(0.05), ..SpacetimeView::looking_at(data.summary(), t0) };
@@ -391,9 +395,9 @@ pub fn bench(desc: &GpuDesc, args: &BenchArgs) -> Result<()> {
         largest = Some((n, r, view, times, report));
     }
     let (n, mut r, view, times, base) = largest.expect("at least one size");
-    // Subdivision: triangles quadrisected to about a quarter of a structured cell's triangle.
-    let k = (n as f64 / 6.0).cbrt();
-    let area = 0.5 / (k * k) / 4.0;
+    // Subdivision: triangles larger than the mean slice triangle (over the bounding box) are
+    // quadrisected.
+    let area = r.data().summary().size().powi(2) / base.triangles.max(1.0);
     let sub = SpacetimeView { subdivide: Some(area), ..view };
     row(n, (1280, 720), Some(area), &measure_frames(&gpu, &mut r, &sub, (1280, 720), times, args.frames, 2)?);
     let no_edges = SpacetimeView { edges: false, ..view };
@@ -410,8 +414,8 @@ pub fn bench(desc: &GpuDesc, args: &BenchArgs) -> Result<()> {
     }
     drop(r);
     crate::check_validation(gpu)?;
-    if !args.quick {
-        let path = bench_data(&args.data_dir, 20_000_000)?;
+    if !args.quick && args.scenario == "pulses" {
+        let path = bench_data(&args.data_dir, "pulses", 20_000_000)?;
         println!("\nOut of core: the first frame of {} in a fresh process:", path.display());
         let exe = std::env::current_exe().context("finding this executable")?;
         let start = Instant::now();

@@ -1,0 +1,317 @@
+//! The drawing half of [`SpacetimeRenderer`] (seed 003 §4.2.2–4.3): the fill and edge
+//! pipelines, the colour ramp's U_max (a data pass reduced on the device), and the draws —
+//! into a caller's render pass, an offscreen image, or a timed frame.
+
+use ash::vk;
+
+use super::*;
+
+impl SpacetimeRenderer {
+    pub(super) fn pipelines_for(
+        &mut self,
+        target: &RenderTarget,
+    ) -> Result<&(GraphicsPipeline, GraphicsPipeline, DescriptorSet, DescriptorSet), SpacetimeError> {
+        let format = target.format();
+        if !self.pipelines.contains_key(&format) {
+            let window = self.window.as_ref().expect("made resident before drawing");
+            let records = window.buffer.binding().map_err(dev("binding elements"))?;
+            let materials = self.materials.binding().map_err(dev("binding materials"))?;
+            let make = |lines: bool| -> Result<(GraphicsPipeline, DescriptorSet), SpacetimeError> {
+                let mut desc = GraphicsPipelineDesc::new(
+                    if lines { "spacetime slice edges" } else { "spacetime slice" },
+                    shaders::spacetime::SLICE_VERT,
+                    shaders::spacetime::SLICE_FRAG,
+                    target.render_pass().raw(),
+                );
+                desc.bindings =
+                    &[BindingKind::StorageBuffer, BindingKind::Texture, BindingKind::StorageBuffer];
+                desc.push_constant_bytes = std::mem::size_of::<DrawPush>() as u32;
+                desc.vertex_stride = std::mem::size_of::<SliceVertex>() as u32;
+                desc.vertex_attributes = &[
+                    (0, vk::Format::R32G32_SFLOAT, 0),
+                    (1, vk::Format::R32_UINT, 8),
+                    (2, vk::Format::R32_SFLOAT, 12),
+                ];
+                if lines {
+                    desc.topology = vk::PrimitiveTopology::LINE_LIST;
+                }
+                let p =
+                    GraphicsPipeline::new(&self.gpu, &desc).map_err(dev("building the slice pipelines"))?;
+                let set = p
+                    .bind(
+                        &self.gpu,
+                        &[Resource::Storage(records), self.colormap.resource(), Resource::Storage(materials)],
+                    )
+                    .map_err(dev("binding the slice pipelines"))?;
+                Ok((p, set))
+            };
+            let (fill, fill_set) = make(false)?;
+            let (edges, edges_set) = make(true)?;
+            self.pipelines.insert(format, (fill, edges, fill_set, edges_set));
+        }
+        Ok(&self.pipelines[&format])
+    }
+
+    /// The colour ramp's `U_max` for `view`: its own, or the largest U over the slice's
+    /// pixels, from a data pass of the same view into a float target kept for the next frame
+    /// of the same size, reduced on the device (on the host when the image exceeds one storage
+    /// binding).
+    pub(super) fn resolve_u_max(
+        &mut self,
+        target: &RenderTarget,
+        view: &SpacetimeView,
+    ) -> Result<f64, SpacetimeError> {
+        match view.u_max {
+            Some(u) => Ok(u),
+            None if target.format() == ColorFormat::Rgba32F => Ok(1.0),
+            None => {
+                let extent = target.extent();
+                let data = match self.umax_target.take() {
+                    Some(d) if d.extent() == extent => d,
+                    _ => RenderTarget::new(
+                        &self.gpu,
+                        "spacetime U_max pass",
+                        extent.width,
+                        extent.height,
+                        ColorFormat::Rgba32F,
+                    )
+                    .map_err(dev("the U_max pass"))?,
+                };
+                let data_view = SpacetimeView { u_max: Some(1.0), ..*view };
+                self.slice(view.time, view.subdivide)?;
+                let u_max = if data.readback_bytes() <= self.gpu.max_binding_bytes() {
+                    self.data_pass_max_u(&data, &data_view)
+                } else {
+                    // Larger than one binding: read the pixels back and take the maximum here.
+                    match self.render(&data, &data_view) {
+                        Ok(Pixels::Rgba32F(v)) => Ok(v
+                            .chunks_exact(4)
+                            .map(|p| f64::from(p[0]))
+                            .filter(|u| u.is_finite())
+                            .fold(0.0, f64::max)),
+                        Ok(Pixels::Rgba8(_)) => unreachable!("a float target"),
+                        Err(e) => Err(e),
+                    }
+                };
+                self.umax_target = Some(data);
+                u_max
+            }
+        }
+    }
+
+    /// Draws the data pass of `view` into the float target `data` and reduces its U channel to
+    /// the maximum on the device (`max_u.comp`); reads back 4 bytes.
+    pub(super) fn data_pass_max_u(
+        &mut self,
+        data: &RenderTarget,
+        view: &SpacetimeView,
+    ) -> Result<f64, SpacetimeError> {
+        let pixels = (data.extent().width as u64) * (data.extent().height as u64);
+        if self.umax_pixels.as_ref().is_none_or(|b| b.len() != pixels) {
+            self.umax_pixels = Some(
+                Buffer::new(
+                    &self.gpu,
+                    "U_max pixels",
+                    pixels,
+                    vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+                    MemoryKind::GpuOnly,
+                )
+                .map_err(dev("the U_max pass"))?,
+            );
+            self.umax_set = None;
+        }
+        if self.umax_set.is_none() {
+            let pix =
+                self.umax_pixels.as_ref().expect("made above").binding().map_err(dev("the U_max pass"))?;
+            let res = self.umax_result.binding().map_err(dev("the U_max pass"))?;
+            self.umax_set = Some(
+                self.umax_reducer
+                    .bind(&self.gpu, &[Resource::Storage(pix), Resource::Storage(res)])
+                    .map_err(dev("the U_max pass"))?,
+            );
+        }
+        let push = self.draw_push(data, view, 1.0);
+        let gpu = self.gpu.clone();
+        self.pipelines_for(data)?;
+        let draw = self.draw_commands(data, view, &push);
+        let pix = self.umax_pixels.as_ref().expect("made above");
+        let (reducer, set, result) =
+            (&self.umax_reducer, self.umax_set.as_ref().expect("bound above"), &self.umax_result);
+        gpu.run(|cmd| {
+            data.record_begin(cmd, [f32::NAN; 4]);
+            draw(cmd);
+            data.record_end(cmd);
+            data.record_readback(&gpu, cmd, pix.raw());
+            result.record_fill(cmd, 0);
+            let cs = vk::PipelineStageFlags::COMPUTE_SHADER;
+            gpu.memory_barrier(
+                cmd,
+                (vk::PipelineStageFlags::TRANSFER, vk::AccessFlags::TRANSFER_WRITE),
+                (cs, vk::AccessFlags::SHADER_READ | vk::AccessFlags::SHADER_WRITE),
+            );
+            let n = pixels as u32;
+            reducer.record_dispatch(cmd, set, &n.to_ne_bytes(), [64, 1, 1]);
+            gpu.memory_barrier(
+                cmd,
+                (cs, vk::AccessFlags::SHADER_WRITE),
+                (vk::PipelineStageFlags::TRANSFER, vk::AccessFlags::TRANSFER_READ),
+            );
+        })
+        .map_err(dev("the U_max pass"))?;
+        let bits = self.umax_result.download(&self.gpu).map_err(dev("reading U_max"))?;
+        Ok(f64::from(f32::from_bits(bits[0])))
+    }
+
+    pub(super) fn draw_push(&self, target: &RenderTarget, view: &SpacetimeView, u_max: f64) -> DrawPush {
+        let height_scale = view.height_scale.unwrap_or_else(|| self.default_height_scale());
+        let eye = view.camera.eye.map(|x| x as f32);
+        DrawPush {
+            view_proj: view.camera.view_proj_f32(target.aspect()).to_cols_array(),
+            eye_t: [eye[0], eye[1], eye[2], view.time as f32],
+            light_scale: [LIGHT[0] as f32, LIGHT[1] as f32, LIGHT[2] as f32, height_scale as f32],
+            ramp: [u_max as f32, self.colormap.texels() as f32, 0.0, 0.0],
+            flags: [
+                u32::from(target.format() == ColorFormat::Rgba32F),
+                u32::from(view.height),
+                u32::from(view.per_vertex),
+                0,
+            ],
+        }
+    }
+
+    /// Records the render pass of the current slice into `target`.
+    pub(super) fn record_draw(
+        &mut self,
+        target: &RenderTarget,
+        view: &SpacetimeView,
+        push: &DrawPush,
+    ) -> Result<impl FnOnce(vk::CommandBuffer) + '_, SpacetimeError> {
+        self.pipelines_for(target)?;
+        Ok(self.draw_commands(target, view, push))
+    }
+
+    /// The draws of the current slice (polygons, then edges if on) for a target whose pipelines
+    /// exist ([`Self::pipelines_for`]).
+    pub(super) fn draw_commands(
+        &self,
+        target: &RenderTarget,
+        view: &SpacetimeView,
+        push: &DrawPush,
+    ) -> impl FnOnce(vk::CommandBuffer) + '_ {
+        let (tris, lines, draws) = (self.tris.raw(), self.lines.raw(), self.draws.raw());
+        let extent = target.extent();
+        let edges_on = view.edges;
+        let (push, edge_push) = (*push, push.for_edges());
+        let (fill, edges, fill_set, edges_set) = &self.pipelines[&target.format()];
+        move |cmd| {
+            fill.record_draw_indirect(
+                cmd,
+                extent,
+                fill_set,
+                bytemuck::bytes_of(&push),
+                Some(tris),
+                (draws, 0),
+            );
+            if edges_on {
+                let bytes = bytemuck::bytes_of(&edge_push);
+                edges.record_draw_indirect(cmd, extent, edges_set, bytes, Some(lines), (draws, 16));
+            }
+        }
+    }
+
+    /// The colour ramp's `U_max` for `view` in a colour `target`: the view's own, or the
+    /// largest U over the slice's pixels (a data pass at the target's size). For callers that
+    /// fix the ramp once, e.g. while animating t.
+    pub fn u_max_for(&mut self, target: &RenderTarget, view: &SpacetimeView) -> Result<f64, SpacetimeError> {
+        self.slice(view.time, view.subdivide)?;
+        self.resolve_u_max(target, view)
+    }
+
+    /// Records the draw of the current slice (see [`Self::slice`]; slice at `view.time` first)
+    /// into `target`'s render pass, begun and ended by the caller — for applications and the
+    /// viewer that own the frame's command buffer.
+    pub fn record_draw_into(
+        &mut self,
+        cmd: vk::CommandBuffer,
+        target: &RenderTarget,
+        view: &SpacetimeView,
+        u_max: f64,
+    ) -> Result<(), SpacetimeError> {
+        let push = self.draw_push(target, view, u_max);
+        let draw = self.record_draw(target, view, &push)?;
+        draw(cmd);
+        Ok(())
+    }
+
+    /// Renders `view` into `target` (slicing first if needed) and returns the pixels: lit
+    /// colours in an RGBA8 target, `(U, |v|, n_x, n_y)` in an RGBA32F target.
+    pub fn render(&mut self, target: &RenderTarget, view: &SpacetimeView) -> Result<Pixels, SpacetimeError> {
+        self.slice(view.time, view.subdivide)?;
+        let u_max = self.resolve_u_max(target, view)?;
+        let push = self.draw_push(target, view, u_max);
+        let gpu = self.gpu.clone();
+        let draw = self.record_draw(target, view, &push)?;
+        target.render(&gpu, clear_colour(target), draw).map_err(dev("drawing the slice"))
+    }
+
+    /// One frame as an interactive loop runs it: the slice (always redone, as when `t`
+    /// advances) and the draw in one submission, without reading the image back; with a
+    /// `profiler` (4 scopes), each stage's device time. `view.u_max` should be set (else a data
+    /// pass runs first, as in [`Self::render`]).
+    pub fn frame(
+        &mut self,
+        target: &RenderTarget,
+        view: &SpacetimeView,
+        mut profiler: Option<&mut Profiler>,
+    ) -> Result<(SliceStats, Option<FrameTimes>), SpacetimeError> {
+        let u_max = self.resolve_u_max(target, view)?;
+        self.sliced = None;
+        let active = self.data.active_range(view.time);
+        let streamed = self.make_resident(active.clone())?;
+        let push = self.draw_push(target, view, u_max);
+        let gpu = self.gpu.clone();
+        loop {
+            self.bind_slicer()?;
+            self.pipelines_for(target)?;
+            let slice_push = self.slice_push(view.time, view.subdivide, &active);
+            let clear = clear_colour(target);
+            {
+                let mut profiler = profiler.as_deref_mut();
+                let slicer = &*self;
+                let commands = slicer.draw_commands(target, view, &push);
+                gpu.run(|cmd| {
+                    if let Some(p) = profiler.as_deref_mut() {
+                        p.record_reset(cmd);
+                    }
+                    slicer.record_slice(cmd, &slice_push, profiler.as_deref_mut());
+                    let draw = || {
+                        target.record_begin(cmd, clear);
+                        commands(cmd);
+                        target.record_end(cmd);
+                    };
+                    match profiler {
+                        Some(p) => p.scope(cmd, "draw", draw),
+                        None => draw(),
+                    }
+                })
+                .map_err(dev("drawing a frame"))?;
+            }
+            if let Some(stats) = self.finish_slice(active.len(), streamed)? {
+                self.sliced = Some((view.time, view.subdivide, stats));
+                let times = match profiler {
+                    Some(p) => {
+                        let r = p.results().map_err(dev("reading timestamps"))?;
+                        let get = |name: &str| r.iter().find(|(n, _)| n == name).map_or(0.0, |(_, ms)| *ms);
+                        Some(FrameTimes {
+                            slice_ms: get("slice"),
+                            subdivide_ms: get("subdivide"),
+                            draw_ms: get("draw"),
+                        })
+                    }
+                    None => None,
+                };
+                return Ok((stats, times));
+            }
+        }
+    }
+}

@@ -1,0 +1,240 @@
+//! The slicing half of [`SpacetimeRenderer`] (seed 003 §4.1, §4.2.2): the resident window of
+//! records streamed as `t` moves, and the two compute passes — the cut (`slice.comp`) and the
+//! quadrisection (`subdivide.comp`) — with their output buffers grown on overflow.
+
+use std::ops::Range;
+
+use ash::vk;
+use bytemuck::Zeroable;
+
+use super::*;
+
+impl SpacetimeRenderer {
+    /// Makes `active` resident: a window starting at its first element (so that advancing `t`
+    /// finds the next elements already there), checked, then uploaded. Returns the number of
+    /// elements uploaded.
+    pub(super) fn make_resident(&mut self, active: Range<usize>) -> Result<usize, SpacetimeError> {
+        if let Some(w) = &self.window {
+            if w.range.start <= active.start && active.end <= w.range.end {
+                return Ok(0);
+            }
+        }
+        let n = self.data.len();
+        let limit =
+            ((self.gpu.max_binding_bytes() / ElementRecord::BYTES as u64) as usize).min(self.max_window);
+        if active.len() > limit {
+            return Err(SpacetimeError::TooManyActive { active: active.len(), limit });
+        }
+        let current = self.window.as_ref().map_or(0, |w| w.buffer.len() as usize);
+        let capacity = if n <= RESIDENT_WHOLE.min(limit) {
+            n
+        } else if active.len() <= current {
+            current
+        } else {
+            (4 * active.len()).max(1 << 16).min(limit).min(n).max(active.len())
+        };
+        let range = active.start..(active.start + capacity).min(n);
+        // Keep the window full: near the end of the data it reaches back.
+        let range = range.end.saturating_sub(capacity)..range.end;
+        self.data.check(range.clone())?;
+        let buffer = match self.window.take() {
+            Some(w) if w.buffer.len() as usize == capacity => w.buffer,
+            _ => {
+                // New bindings for everything that reads the window.
+                self.slice_sets = None;
+                self.pipelines.clear();
+                Buffer::new(
+                    &self.gpu,
+                    "spacetime records",
+                    capacity.max(1) as u64,
+                    vk::BufferUsageFlags::STORAGE_BUFFER,
+                    MemoryKind::GpuOnly,
+                )
+                .map_err(dev("the resident window"))?
+            }
+        };
+        buffer
+            .upload(&self.gpu, 0, &self.data.records()[range.clone()])
+            .map_err(dev("streaming elements"))?;
+        let streamed = range.len();
+        self.window = Some(Window { range, buffer });
+        Ok(streamed)
+    }
+
+    pub(super) fn slice_push(
+        &self,
+        t: f64,
+        subdivide: Option<f64>,
+        active: &Range<usize>,
+    ) -> SlicePushCompute {
+        let first = self.window.as_ref().map_or(0, |w| active.start - w.range.start);
+        SlicePushCompute {
+            first: first as u32,
+            count: active.len() as u32,
+            t: t as f32,
+            max_area: subdivide.map_or(f32::INFINITY, |a| a as f32),
+            max_level: if subdivide.is_some() { 6 } else { 0 },
+            tri_capacity: self.tris.len() as u32,
+            line_capacity: self.lines.len() as u32,
+            cut_capacity: (self.cuts.len() / CUT_VEC4S) as u32,
+        }
+    }
+
+    pub(super) fn bind_slicer(&mut self) -> Result<(), SpacetimeError> {
+        if self.slice_sets.is_some() {
+            return Ok(());
+        }
+        let window = self.window.as_ref().expect("made resident before slicing");
+        let b = |r: crate::gpu::GpuResult<crate::gpu::BufferBinding>| {
+            r.map(Resource::Storage).map_err(dev("binding the slicer"))
+        };
+        let records = b(window.buffer.binding())?;
+        let cuts = b(self.cuts.binding())?;
+        let draws = b(self.draws.binding())?;
+        let materials = b(self.materials.binding())?;
+        let slice = self
+            .slicer
+            .bind(&self.gpu, &[records, cuts, b(self.lines.binding())?, draws, materials])
+            .map_err(dev("binding the slicer"))?;
+        let subdivide = self
+            .subdivider
+            .bind(&self.gpu, &[records, cuts, b(self.tris.binding())?, draws, materials])
+            .map_err(dev("binding the slicer"))?;
+        self.slice_sets = Some((slice, subdivide));
+        Ok(())
+    }
+
+    /// Records the two slicing passes; `scope` wraps each in a profiler scope.
+    pub(super) fn record_slice(
+        &self,
+        cmd: vk::CommandBuffer,
+        push: &SlicePushCompute,
+        mut profiler: Option<&mut Profiler>,
+    ) {
+        let (slice_set, subdivide_set) = self.slice_sets.as_ref().expect("bound before recording");
+        let reset: [u32; COUNTERS as usize] = [0, 1, 0, 0, 0, 1, 0, 0, 0, 0];
+        let d = self.gpu.device();
+        let rw = vk::AccessFlags::SHADER_READ | vk::AccessFlags::SHADER_WRITE;
+        let cs = vk::PipelineStageFlags::COMPUTE_SHADER;
+        let cut = || {
+            // SAFETY: the buffer is alive and was created with TRANSFER_DST; 40 bytes.
+            unsafe { d.cmd_update_buffer(cmd, self.draws.raw(), 0, bytemuck::cast_slice(&reset)) };
+            self.gpu.memory_barrier(
+                cmd,
+                (vk::PipelineStageFlags::TRANSFER, vk::AccessFlags::TRANSFER_WRITE),
+                (cs, rw),
+            );
+            let groups = self.gpu.caps().groups_1d(u64::from(push.count.max(1)), 64);
+            self.slicer.record_dispatch(cmd, slice_set, bytemuck::bytes_of(push), [groups, 1, 1]);
+            self.gpu.memory_barrier(cmd, (cs, vk::AccessFlags::SHADER_WRITE), (cs, rw));
+        };
+        match profiler.as_deref_mut() {
+            Some(p) => p.scope(cmd, "slice", cut),
+            None => cut(),
+        }
+        let subdivide = || {
+            // A polygon is cut into at most two triangles.
+            let groups = self.gpu.caps().groups_1d(u64::from(push.count.max(1)) * 2, 64);
+            self.subdivider.record_dispatch(cmd, subdivide_set, bytemuck::bytes_of(push), [groups, 1, 1]);
+            // Later commands and submissions draw from these buffers and read the counters.
+            self.gpu.memory_barrier(
+                cmd,
+                (cs, vk::AccessFlags::SHADER_WRITE),
+                (
+                    vk::PipelineStageFlags::DRAW_INDIRECT
+                        | vk::PipelineStageFlags::VERTEX_INPUT
+                        | vk::PipelineStageFlags::TRANSFER,
+                    vk::AccessFlags::INDIRECT_COMMAND_READ
+                        | vk::AccessFlags::VERTEX_ATTRIBUTE_READ
+                        | vk::AccessFlags::TRANSFER_READ,
+                ),
+            );
+        };
+        match profiler {
+            Some(p) => p.scope(cmd, "subdivide", subdivide),
+            None => subdivide(),
+        }
+    }
+
+    /// Reads the counters of the last slice: `Ok(stats)`, or `Err(())` after growing the
+    /// output buffers that overflowed (the slice must be redone).
+    pub(super) fn finish_slice(
+        &mut self,
+        active: usize,
+        streamed: usize,
+    ) -> Result<Option<SliceStats>, SpacetimeError> {
+        let counts = self.draws.download(&self.gpu).map_err(dev("reading the slice size"))?;
+        if counts[8] == 0 {
+            return Ok(Some(SliceStats {
+                active,
+                triangles: counts[0] as usize / 3,
+                lines: counts[4] as usize / 2,
+                streamed,
+            }));
+        }
+        // The counters hold what was asked for: grow to that (and a margin) and redo.
+        let grow = |n: u32, cur: u64| u64::from(n).max(cur) + u64::from(n) / 4 + 64;
+        self.slice_sets = None;
+        if u64::from(counts[9]) > self.cuts.len() / CUT_VEC4S {
+            self.cuts = Buffer::new(
+                &self.gpu,
+                "slice cuts",
+                CUT_VEC4S * grow(counts[9], self.cuts.len() / CUT_VEC4S),
+                vk::BufferUsageFlags::STORAGE_BUFFER,
+                MemoryKind::GpuOnly,
+            )
+            .map_err(dev("slice buffers"))?;
+            // The subdivision saw at most the capacity: its count is not final yet.
+            return Ok(None);
+        }
+        if u64::from(counts[0]) > self.tris.len() {
+            self.tris = slice_buffer(&self.gpu, "slice triangles", grow(counts[0], self.tris.len()))?;
+        }
+        if u64::from(counts[4]) > self.lines.len() {
+            self.lines = slice_buffer(&self.gpu, "slice edges", grow(counts[4], self.lines.len()))?;
+        }
+        Ok(None)
+    }
+
+    /// Slices the data at `t` on the device (a no-op if the last slice had the same `t` and
+    /// subdivision), streaming the active elements first if they are not resident. Output
+    /// buffers grow when a slice needs more room, and the slice is redone.
+    pub fn slice(&mut self, t: f64, subdivide: Option<f64>) -> Result<SliceStats, SpacetimeError> {
+        if let Some((st, sd, stats)) = self.sliced {
+            if st == t && sd == subdivide {
+                return Ok(stats);
+            }
+        }
+        self.sliced = None;
+        let active = self.data.active_range(t);
+        let streamed = self.make_resident(active.clone())?;
+        loop {
+            self.bind_slicer()?;
+            let push = self.slice_push(t, subdivide, &active);
+            self.gpu.run(|cmd| self.record_slice(cmd, &push, None)).map_err(dev("slicing"))?;
+            if let Some(stats) = self.finish_slice(active.len(), streamed)? {
+                self.sliced = Some((t, subdivide, stats));
+                return Ok(stats);
+            }
+        }
+    }
+
+    /// The triangles of the current slice, read back: (element of the data, corners). For
+    /// tests and inspection.
+    pub fn slice_triangles(&self) -> Result<Vec<SliceTriangle>, SpacetimeError> {
+        let Some((_, _, stats)) = self.sliced else { return Ok(Vec::new()) };
+        let base = self.window.as_ref().map_or(0, |w| w.range.start) as u32;
+        let mut v = vec![SliceVertex::zeroed(); 3 * stats.triangles];
+        self.tris.download_into(&self.gpu, 0, &mut v).map_err(dev("reading the slice"))?;
+        Ok(v.chunks_exact(3).map(|t| (base + t[0].element, [t[0].xy, t[1].xy, t[2].xy])).collect())
+    }
+
+    /// The edge lines of the current slice, read back: (element of the data, endpoints).
+    pub fn slice_lines(&self) -> Result<Vec<SliceLine>, SpacetimeError> {
+        let Some((_, _, stats)) = self.sliced else { return Ok(Vec::new()) };
+        let base = self.window.as_ref().map_or(0, |w| w.range.start) as u32;
+        let mut v = vec![SliceVertex::zeroed(); 2 * stats.lines];
+        self.lines.download_into(&self.gpu, 0, &mut v).map_err(dev("reading the slice"))?;
+        Ok(v.chunks_exact(2).map(|l| (base + l[0].element, [l[0].xy, l[1].xy])).collect())
+    }
+}
