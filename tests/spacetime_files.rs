@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 use galerkin::render::{ColorFormat, Colormap, Pixels, RenderTarget};
 use galerkin::spacetime::generate::{pulses, structured_mesh, PULSES_MATERIAL};
 use galerkin::spacetime::{
-    gst, vtu, Material, SpacetimeData, SpacetimeError, SpacetimeRenderer, SpacetimeView,
+    gst, vtu, Material, SpacetimeData, SpacetimeError, SpacetimeMesh, SpacetimeRenderer, SpacetimeView,
 };
 
 fn scratch(name: &str) -> PathBuf {
@@ -222,39 +222,39 @@ fn base64(b: &[u8]) -> String {
     s
 }
 
-#[test]
-fn a_streamed_file_renders_as_the_resident_mesh() {
-    let gpu = common::gpu();
-    // 12 time layers: the active range at any t is a twelfth to a sixth of the elements.
-    let mut mesh = structured_mesh(12, 12, 12, [1.0, 1.0], 1.0, PULSES_MATERIAL);
-    galerkin::spacetime::generate::project_field(
-        &mut mesh,
-        &galerkin::spacetime::generate::crossing_pulses(PULSES_MATERIAL, [1.0, 1.0]),
-    );
+/// Renders `mesh` at `times` from memory (whole) and from a `.gst` file through a window of at
+/// most a quarter of the elements, asserting the same slices and pixels; returns how many
+/// slices uploaded records and how many of those reused part of the window.
+fn compare_streamed(
+    gpu: &galerkin::gpu::Gpu,
+    name: &str,
+    mesh: &SpacetimeMesh,
+    times: &[f64],
+) -> (usize, usize) {
     let n = mesh.tets.len();
-    let path = scratch("streamed.gst");
-    gst::write(&path, &SpacetimeData::from_mesh(&mesh).unwrap()).unwrap();
+    let path = scratch(name);
+    gst::write(&path, &SpacetimeData::from_mesh(mesh).unwrap()).unwrap();
     let colormap = Colormap::viridis();
-    let mut whole = SpacetimeRenderer::from_mesh(&gpu, &mesh, &colormap).unwrap();
-    // A window of at most a quarter of the data: slices must stream.
+    let mut whole = SpacetimeRenderer::from_mesh(gpu, mesh, &colormap).unwrap();
     let mut streamed =
-        SpacetimeRenderer::new(&gpu, gst::open(&path).unwrap(), &colormap).unwrap().with_window_limit(n / 4);
-    let target = RenderTarget::new(&gpu, "fields", 96, 96, ColorFormat::Rgba32F).unwrap();
-    let mut uploads = 0;
-    // Forward in time (as playback), then a jump back.
-    for t in [0.05, 0.3, 0.55, 0.81, 0.97, 0.2] {
+        SpacetimeRenderer::new(gpu, gst::open(&path).unwrap(), &colormap).unwrap().with_window_limit(n / 4);
+    let target = RenderTarget::new(gpu, "fields", 96, 96, ColorFormat::Rgba32F).unwrap();
+    let (mut uploads, mut partial) = (0, 0);
+    for &t in times {
         let a = whole.slice(t, Some(0.002)).unwrap();
         let b = streamed.slice(t, Some(0.002)).unwrap();
-        assert_eq!((a.active, a.triangles, a.lines), (b.active, b.triangles, b.lines), "t = {t}");
+        assert_eq!((a.active, a.triangles, a.lines), (b.active, b.triangles, b.lines), "{name}, t = {t}");
         let window = streamed.resident().unwrap();
         assert!(window.len() <= n / 4, "window {window:?}");
         uploads += usize::from(b.streamed > 0);
+        // Moving on uploads only what is not resident yet (the window is a ring).
+        partial += usize::from(b.streamed > 0 && b.streamed < window.len());
         let mut ta = whole.slice_triangles().unwrap();
         let mut tb = streamed.slice_triangles().unwrap();
         let key = |x: &(u32, [[f32; 2]; 3])| (x.0, x.1.map(|p| p.map(f32::to_bits)));
         ta.sort_by_key(key);
         tb.sort_by_key(key);
-        assert!(ta == tb, "t = {t}: the streamed slice differs");
+        assert!(ta == tb, "{name}, t = {t}: the streamed slice differs");
         let view = SpacetimeView { u_max: Some(1.0), ..SpacetimeView::from_above(whole.data().summary(), t) };
         assert_eq!(view.subdivide, None);
         let (Pixels::Rgba32F(pa), Pixels::Rgba32F(pb)) =
@@ -263,15 +263,44 @@ fn a_streamed_file_renders_as_the_resident_mesh() {
             panic!("float targets")
         };
         // Without subdivision the slice is watertight (neighbours cut shared edges with the same
-        // f32 arithmetic), so every pixel centre is covered once, whatever the draw order the
-        // slicer's atomics produce: the same pixels, bit for bit (NaN background too). (Subdivided
-        // neighbours meet at f32 T-junctions where either may win a pixel.)
-        assert!(pa.iter().zip(&pb).all(|(x, y)| x.to_bits() == y.to_bits()), "t = {t}: pixels differ");
+        // f32 arithmetic; a tent mesh is conforming within a slab), so every pixel centre is
+        // covered once, whatever the draw order the slicer's atomics produce: the same pixels,
+        // bit for bit (NaN background too). (Subdivided neighbours meet at f32 T-junctions where
+        // either may win a pixel.)
+        assert!(
+            pa.iter().zip(&pb).all(|(x, y)| x.to_bits() == y.to_bits()),
+            "{name}, t = {t}: pixels differ"
+        );
     }
+    (uploads, partial)
+}
+
+#[test]
+fn a_streamed_file_renders_as_the_resident_mesh() {
+    let gpu = common::gpu();
+    // 12 time layers: the active range at any t is one layer, a twelfth of the elements, and
+    // the window (three layers) moves in whole jumps. Forward in time (as playback), then back.
+    let mut mesh = structured_mesh(12, 12, 12, [1.0, 1.0], 1.0, PULSES_MATERIAL);
+    galerkin::spacetime::generate::project_field(
+        &mut mesh,
+        &galerkin::spacetime::generate::crossing_pulses(PULSES_MATERIAL, [1.0, 1.0]),
+    );
+    let (uploads, _) = compare_streamed(&gpu, "layers.gst", &mesh, &[0.05, 0.3, 0.37, 0.55, 0.81, 0.97, 0.2]);
     assert!(uploads >= 3, "only {uploads} slices streamed");
+    // A tent-pitched mesh: lowest times spread continuously, so a moving window keeps part of
+    // what it holds and uploads the rest.
+    let crack =
+        galerkin::spacetime::scenario::generate(galerkin::spacetime::scenario::Scenario::Crack, 12_000);
+    let [t0, t1] = SpacetimeData::from_mesh(&crack).unwrap().summary().time;
+    let times: Vec<f64> = (0..12).map(|k| t0 + (t1 - t0) * (0.1 + 0.07 * f64::from(k))).collect();
+    let (uploads, partial) = compare_streamed(&gpu, "tents.gst", &crack, &times);
+    assert!(uploads >= 3, "only {uploads} slices streamed");
+    assert!(partial >= 1, "no slice reused the resident part of the window");
     // A window too small for the active range is an error that says so.
-    let mut tiny =
-        SpacetimeRenderer::new(&gpu, gst::open(&path).unwrap(), &colormap).unwrap().with_window_limit(10);
+    let path = scratch("layers.gst");
+    let mut tiny = SpacetimeRenderer::new(&gpu, gst::open(&path).unwrap(), &Colormap::viridis())
+        .unwrap()
+        .with_window_limit(10);
     let e = tiny.slice(0.5, None).err().unwrap();
     assert!(matches!(e, SpacetimeError::TooManyActive { limit: 10, .. }), "{e}");
 }

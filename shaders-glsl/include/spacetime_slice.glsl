@@ -5,8 +5,8 @@
 #include "spacetime_cubic.glsl"
 // A slice vertex: position, element (in the window), |v| there (the height before scaling).
 struct SliceVertex { vec2 xy; uint element; float speed; };
-// The resident window of the records (element k of the window = record first + k) and the
-// materials (λ, μ, ρ, 0).
+// The resident window of the records (a ring: the k-th active element is in slot
+// (first + k) mod capacity) and the materials (λ, μ, ρ, 0).
 layout(std430, set = 0, binding = 0) readonly buffer Records { SpacetimeRecord records[]; };
 layout(std430, set = 0, binding = 4) readonly buffer Materials { vec4 materials[]; };
 // Two VkDrawIndirectCommand (triangles, lines), the overflow flag, the number of cut triangles.
@@ -14,6 +14,7 @@ layout(std430, set = 0, binding = 3) buffer Draws { uint draws[10]; };
 layout(push_constant) uniform Push {
     uint first; uint count; float t; float max_area;
     uint max_level; uint tri_capacity; uint line_capacity; uint cut_capacity;
+    uint capacity;   // records in the window's ring (record e in slot e mod capacity)
 } pc;
 
 // |v| of window element `element` at (xy, pc.t): the per-vertex height of §4.2.2, evaluated

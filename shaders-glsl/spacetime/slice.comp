@@ -21,7 +21,7 @@ vec2 cut(vec3 below, vec3 above) {
 void main() {
     uint k = gl_GlobalInvocationID.x;
     if (k >= pc.count) return;
-    uint element = pc.first + k;   // in the window
+    uint element = (pc.first + k) % pc.capacity;   // the slot in the window's ring
     vec4 a = records[element].corners[0], b = records[element].corners[1], d = records[element].corners[2];
     vec3 p[4] = vec3[4](a.xyz, vec3(a.w, b.xy), vec3(b.zw, d.x), d.yzw);
     uint below[4], above[4];

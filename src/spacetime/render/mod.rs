@@ -43,6 +43,7 @@ struct SliceVertex {
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
 struct SlicePushCompute {
+    /// Ring slot of the first active element.
     first: u32,
     count: u32,
     t: f32,
@@ -51,6 +52,8 @@ struct SlicePushCompute {
     tri_capacity: u32,
     line_capacity: u32,
     cut_capacity: u32,
+    /// Records in the window's ring.
+    capacity: u32,
 }
 
 #[repr(C)]
@@ -179,7 +182,8 @@ pub struct FrameTimes {
 /// Direction to the light (unit), from the upper left front.
 const LIGHT: [f64; 3] = [-0.408_248_290_463_863, -0.408_248_290_463_863, 0.816_496_580_927_726];
 
-/// Elements of the data resident on the device: `range` of the sorted records in `buffer`.
+/// Elements of the data resident on the device: `range` of the sorted records, record `e` in
+/// slot `e mod capacity` of the ring `buffer`.
 struct Window {
     range: Range<usize>,
     buffer: Buffer<ElementRecord>,

@@ -10,9 +10,10 @@ use bytemuck::Zeroable;
 use super::*;
 
 impl SpacetimeRenderer {
-    /// Makes `active` resident: a window starting at its first element (so that advancing `t`
-    /// finds the next elements already there), checked, then uploaded. Returns the number of
-    /// elements uploaded.
+    /// Makes `active` resident. The window is a ring of `capacity` records (record `e` in slot
+    /// `e mod capacity`) covering `[start, start + capacity)` from the active range's first
+    /// element, so that advancing `t` finds the next elements already there; moving on uploads
+    /// only the records not yet resident (checked first). Returns the number uploaded.
     pub(super) fn make_resident(&mut self, active: Range<usize>) -> Result<usize, SpacetimeError> {
         if let Some(w) = &self.window {
             if w.range.start <= active.start && active.end <= w.range.end {
@@ -36,29 +37,57 @@ impl SpacetimeRenderer {
         let range = active.start..(active.start + capacity).min(n);
         // Keep the window full: near the end of the data it reaches back.
         let range = range.end.saturating_sub(capacity)..range.end;
-        self.data.check(range.clone())?;
-        let buffer = match self.window.take() {
-            Some(w) if w.buffer.len() as usize == capacity => w.buffer,
+        let (buffer, resident) = match self.window.take() {
+            Some(w) if w.buffer.len() as usize == capacity.max(1) => (w.buffer, w.range),
             _ => {
                 // New bindings for everything that reads the window.
                 self.slice_sets = None;
                 self.pipelines.clear();
-                Buffer::new(
+                let buffer = Buffer::new(
                     &self.gpu,
                     "spacetime records",
                     capacity.max(1) as u64,
                     vk::BufferUsageFlags::STORAGE_BUFFER,
                     MemoryKind::GpuOnly,
                 )
-                .map_err(dev("the resident window"))?
+                .map_err(dev("the resident window"))?;
+                (buffer, 0..0)
             }
         };
-        buffer
-            .upload(&self.gpu, 0, &self.data.records()[range.clone()])
-            .map_err(dev("streaming elements"))?;
-        let streamed = range.len();
+        // What the new window needs beyond what is resident: at most two intervals.
+        let missing = [
+            range.start..range.end.min(resident.start.max(range.start)),
+            resident.end.max(range.start)..range.end,
+        ];
+        let mut streamed = 0;
+        for part in missing.into_iter().filter(|p| !p.is_empty()) {
+            self.data.check(part.clone())?;
+            // Each interval occupies at most two runs of slots (it may wrap around the ring).
+            let mut e = part.start;
+            while e < part.end {
+                let slot = e % capacity;
+                let run = (part.end - e).min(capacity - slot);
+                buffer
+                    .upload(&self.gpu, slot as u64, &self.data.records()[e..e + run])
+                    .map_err(dev("streaming elements"))?;
+                e += run;
+            }
+            streamed += part.len();
+        }
         self.window = Some(Window { range, buffer });
         Ok(streamed)
+    }
+
+    /// The element of the data in ring slot `slot` of the window.
+    fn element_of_slot(&self, slot: u32) -> u32 {
+        match &self.window {
+            Some(w) => {
+                let cap = w.buffer.len() as usize;
+                let start = w.range.start;
+                (start + (slot as usize + cap - start % cap) % cap) as u32
+            }
+            None => slot,
+        }
     }
 
     pub(super) fn slice_push(
@@ -67,9 +96,10 @@ impl SpacetimeRenderer {
         subdivide: Option<f64>,
         active: &Range<usize>,
     ) -> SlicePushCompute {
-        let first = self.window.as_ref().map_or(0, |w| active.start - w.range.start);
+        let capacity = self.window.as_ref().map_or(1, |w| w.buffer.len() as usize);
         SlicePushCompute {
-            first: first as u32,
+            first: (active.start % capacity) as u32,
+            capacity: capacity as u32,
             count: active.len() as u32,
             t: t as f32,
             max_area: subdivide.map_or(f32::INFINITY, |a| a as f32),
@@ -223,18 +253,18 @@ impl SpacetimeRenderer {
     /// tests and inspection.
     pub fn slice_triangles(&self) -> Result<Vec<SliceTriangle>, SpacetimeError> {
         let Some((_, _, stats)) = self.sliced else { return Ok(Vec::new()) };
-        let base = self.window.as_ref().map_or(0, |w| w.range.start) as u32;
         let mut v = vec![SliceVertex::zeroed(); 3 * stats.triangles];
         self.tris.download_into(&self.gpu, 0, &mut v).map_err(dev("reading the slice"))?;
-        Ok(v.chunks_exact(3).map(|t| (base + t[0].element, [t[0].xy, t[1].xy, t[2].xy])).collect())
+        Ok(v.chunks_exact(3)
+            .map(|t| (self.element_of_slot(t[0].element), [t[0].xy, t[1].xy, t[2].xy]))
+            .collect())
     }
 
     /// The edge lines of the current slice, read back: (element of the data, endpoints).
     pub fn slice_lines(&self) -> Result<Vec<SliceLine>, SpacetimeError> {
         let Some((_, _, stats)) = self.sliced else { return Ok(Vec::new()) };
-        let base = self.window.as_ref().map_or(0, |w| w.range.start) as u32;
         let mut v = vec![SliceVertex::zeroed(); 2 * stats.lines];
         self.lines.download_into(&self.gpu, 0, &mut v).map_err(dev("reading the slice"))?;
-        Ok(v.chunks_exact(2).map(|l| (base + l[0].element, [l[0].xy, l[1].xy])).collect())
+        Ok(v.chunks_exact(2).map(|l| (self.element_of_slot(l[0].element), [l[0].xy, l[1].xy])).collect())
     }
 }
