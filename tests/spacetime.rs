@@ -54,7 +54,7 @@ fn glsl_field_and_shading_match_their_rust_twins() {
     let pb =
         Buffer::from_slice(&gpu, "points", &points.iter().map(|p| p.0).collect::<Vec<_>>(), usage).unwrap();
     let qb = Buffer::from_slice(&gpu, "phong in", &phong_in, usage).unwrap();
-    let ob = Buffer::<[f32; 4]>::new(&gpu, "out", 5 * 300, usage, MemoryKind::GpuOnly).unwrap();
+    let ob = Buffer::<[f32; 4]>::new(&gpu, "out", 6 * 300, usage, MemoryKind::GpuOnly).unwrap();
     let mb = Buffer::from_slice(&gpu, "materials", &materials, usage).unwrap();
     let pipeline = ComputePipeline::new(
         &gpu,
@@ -99,7 +99,7 @@ fn glsl_field_and_shading_match_their_rust_twins() {
         max_e = max_e.max(f.strain.iter().fold(0.0f64, |a, b| a.max(b.abs())));
     }
     for (k, f) in fields.iter().enumerate() {
-        let o = &out[5 * k..5 * k + 5];
+        let o = &out[6 * k..6 * k + 6];
         // f32 evaluation of 20-term cubics in local coordinates (|q| ≤ 0.5) with coefficients of
         // the field's size: relative error ~ 20 terms × a few ε₃₂ ≈ 1e-6 of the field's scale;
         // tolerances are 1e-4 of each field's largest value over the probes.
@@ -111,6 +111,9 @@ fn glsl_field_and_shading_match_their_rust_twins() {
         };
         near(o[0][0], f.strain_energy_density, max_u, "U");
         near(o[0][1], f.speed, max_v, "|v|");
+        // The slice restriction (the fragment stage's path) gives the same fields.
+        near(o[5][0], f.strain_energy_density, max_u, "U (restricted)");
+        near(o[5][1], f.speed, max_v, "|v| (restricted)");
         near(o[1][0], f.velocity[0], max_v, "v_x");
         near(o[1][1], f.velocity[1], max_v, "v_y");
         near(o[1][2], f.strain[0], max_e, "ε_xx");

@@ -101,6 +101,61 @@ SpacetimeFields spacetime_evaluate(SpacetimeElement el, vec3 p) {
     return f;
 }
 
+// An element's cubic restricted to the time plane of a slice: the displacement as a cubic and
+// the velocity as a quadratic in local (x, y), so that per-pixel evaluation is 2D. Rust twin:
+// spacetime::cubic::SliceCubic (std430, 160 bytes).
+struct SpacetimeSliceCubic {
+    vec4 frame;      // centre x, y; 1/w_x, 1/w_y
+    vec4 material;   // λ, μ, 0, 0
+    vec2 a[10];      // u: 1, x, y, x², xy, y², x³, x²y, xy², y³
+    vec2 b[6];       // v = ∂u/∂t: 1, x, y, x², xy, y²
+};
+
+SpacetimeSliceCubic spacetime_restrict(SpacetimeElement el, float t) {
+    SpacetimeSliceCubic s;
+    vec3 w = el.extent_mu.xyz;
+    s.frame = vec4(el.centre_lambda.xy, 1.0 / w.x, 1.0 / w.y);
+    s.material = vec4(el.centre_lambda.w, el.extent_mu.w, 0.0, 0.0);
+    float qt = (t - el.centre_lambda.z) / w.z;
+    vec4 pt = vec4(1.0, qt, qt * qt, qt * qt * qt);
+    for (int k = 0; k < 10; ++k) s.a[k] = vec2(0.0);
+    for (int k = 0; k < 6; ++k) s.b[k] = vec2(0.0);
+    for (int k = 0; k < 20; ++k) {
+        ivec3 e = SPACETIME_MONOMIALS[k];
+        int i = (e.x + e.y) * (e.x + e.y + 1) / 2 + e.y;
+        s.a[i] += el.c[k] * spacetime_power(pt, e.z);
+        if (e.z >= 1) s.b[i] += el.c[k] * (float(e.z) * spacetime_power(pt, e.z - 1) / w.z);
+    }
+    return s;
+}
+
+// The fields of a restricted element at (x, y) on its plane (as spacetime_evaluate there).
+SpacetimeFields spacetime_evaluate_slice(SpacetimeSliceCubic s, vec2 p) {
+    vec2 q = (p - s.frame.xy) * s.frame.zw;
+    float x = q.x, y = q.y, xx = x * x, xy = x * y, yy = y * y;
+    SpacetimeFields f;
+    f.displacement = s.a[0] + s.a[1] * x + s.a[2] * y + s.a[3] * xx + s.a[4] * xy + s.a[5] * yy
+                   + s.a[6] * (xx * x) + s.a[7] * (xx * y) + s.a[8] * (x * yy) + s.a[9] * (yy * y);
+    vec2 gx = (s.a[1] + 2.0 * s.a[3] * x + s.a[4] * y + 3.0 * s.a[6] * xx + 2.0 * s.a[7] * xy
+               + s.a[8] * yy) * s.frame.z;
+    vec2 gy = (s.a[2] + s.a[4] * x + 2.0 * s.a[5] * y + s.a[7] * xx + 2.0 * s.a[8] * xy
+               + 3.0 * s.a[9] * yy) * s.frame.w;
+    f.velocity = s.b[0] + s.b[1] * x + s.b[2] * y + s.b[3] * xx + s.b[4] * xy + s.b[5] * yy;
+    vec2 dvx = (s.b[1] + 2.0 * s.b[3] * x + s.b[4] * y) * s.frame.z;
+    vec2 dvy = (s.b[2] + s.b[4] * x + 2.0 * s.b[5] * y) * s.frame.w;
+    f.strain = vec3(gx.x, gy.y, 0.5 * (gy.x + gx.y));
+    f.speed = length(f.velocity);
+    f.speed_gradient = f.speed > 0.0
+        ? vec2(dot(f.velocity, dvx), dot(f.velocity, dvy)) / f.speed
+        : vec2(0.0);
+    float lambda = s.material.x, mu = s.material.y;
+    float tr = f.strain.x + f.strain.y;
+    f.strain_energy_density =
+        0.5 * (lambda * tr * tr + 2.0 * mu * (f.strain.x * f.strain.x + f.strain.y * f.strain.y
+                                                + 2.0 * f.strain.z * f.strain.z));
+    return f;
+}
+
 // Unit normal of the height field z = height_scale · |v| (seed 003 §4.2.3); (0, 0, 1) where
 // |v| = 0 (the gradient is then zero).
 vec3 spacetime_normal(SpacetimeFields f, float height_scale) {

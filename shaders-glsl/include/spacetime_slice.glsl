@@ -17,11 +17,13 @@ layout(push_constant) uniform Push {
     uint capacity;   // records in the window's ring (record e in slot e mod capacity)
 } pc;
 
-// |v| of window element `element` at (xy, pc.t): the per-vertex height of §4.2.2, evaluated
-// once per slice vertex here rather than per drawn vertex.
+// The slice restriction of every cut element (slot of the window's ring), written by the cut
+// pass, read by the subdivision pass and the fragment stage.
+layout(std430, set = 0, binding = 5) buffer Cubics { SpacetimeSliceCubic cubics[]; };
+
+// |v| of window element `element` at (xy, pc.t) from its slice restriction: the per-vertex
+// height of §4.2.2, evaluated once per slice vertex here rather than per drawn vertex.
 float slice_speed(uint element, vec2 xy) {
-    SpacetimeRecord r = records[element];
-    SpacetimeElement el = spacetime_element(r, materials[floatBitsToUint(r.centre_material.w)]);
-    return spacetime_evaluate(el, vec3(xy, pc.t)).speed;
+    return spacetime_evaluate_slice(cubics[element], xy).speed;
 }
 #endif

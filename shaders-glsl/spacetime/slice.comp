@@ -2,7 +2,8 @@
 // Slices the active range of a spacetime mesh (sorted by lowest time; element indices are
 // positions in the resident window of records) with the plane t (seed 003 §4.1); the device
 // twin of src/spacetime/slice.rs (same below/above rule, same cut formula, same corner order).
-// |v| is evaluated at each polygon corner; the polygon is fanned into triangles for
+// Each cut element's cubic is restricted to the plane (for the subdivision pass and the
+// fragment stage) and |v| evaluated at each polygon corner; the polygon is fanned into triangles for
 // subdivide.comp (the second pass) and its edges are emitted as lines for the edge overdraw
 // (§4.3). Output is appended with atomics; the line count is the vertexCount of an indirect
 // draw.
@@ -45,8 +46,12 @@ void main() {
         c[3] = cut(p[below[1]], p[above[0]]);
         corners = 4u;
     }
+    SpacetimeRecord r = records[element];
+    SpacetimeSliceCubic restricted =
+        spacetime_restrict(spacetime_element(r, materials[floatBitsToUint(r.centre_material.w)]), pc.t);
+    cubics[element] = restricted;
     float speed[4];
-    for (uint i = 0u; i < corners; ++i) speed[i] = slice_speed(element, c[i]);
+    for (uint i = 0u; i < corners; ++i) speed[i] = spacetime_evaluate_slice(restricted, c[i]).speed;
     uint ncut = corners - 2u;
     uint cut_at = atomicAdd(draws[9], ncut);
     if (cut_at + ncut > pc.cut_capacity) { draws[8] = 1u; return; }

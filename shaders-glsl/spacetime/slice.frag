@@ -1,6 +1,7 @@
 #version 450
 // Per-pixel strain energy density and exact height-field normal (seed 003 §4.2.3): the
-// element's cubic is evaluated at the fragment's (x, y) and the slice time; U maps to the
+// element's cubic, restricted to the slice time by the cut pass, is evaluated at the
+// fragment's (x, y); U maps to the
 // ramp by s = log(U + 1) / log(U_max + 1), the normal comes from the exact derivatives of |v|,
 // and the colour is lit by Phong. The data output writes the raw values for EXR files and tests.
 #include "spacetime_cubic.glsl"
@@ -11,15 +12,13 @@
 layout(location = 0) in vec3 world;
 layout(location = 1) in float vertex_s;
 layout(location = 2) flat in uint el_index;
-layout(std430, set = 0, binding = 0) readonly buffer Records { SpacetimeRecord records[]; };
-layout(std430, set = 0, binding = 2) readonly buffer Materials { vec4 materials[]; };
+// The cut elements' cubics restricted to the slice's plane (written by slice.comp).
+layout(std430, set = 0, binding = 3) readonly buffer Cubics { SpacetimeSliceCubic cubics[]; };
 layout(set = 0, binding = 1) uniform sampler1D colormap;
 layout(location = 0) out vec4 out_colour;
 
 void main() {
-    SpacetimeRecord r = records[el_index];
-    SpacetimeElement el = spacetime_element(r, materials[floatBitsToUint(r.centre_material.w)]);
-    SpacetimeFields f = spacetime_evaluate(el, vec3(world.xy, pc.eye_t.w));
+    SpacetimeFields f = spacetime_evaluate_slice(cubics[el_index], world.xy);
     // The height field's normal (at the height scale) is reported whether or not the surface
     // is displaced; lighting uses it only when it is (else the slice is flat).
     vec3 n = spacetime_normal(f, pc.light_scale.w);

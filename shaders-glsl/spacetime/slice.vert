@@ -1,8 +1,8 @@
 #version 450
 // Time-slice polygons (seed 003 §4.2.2): the height |v| at each vertex (evaluated by the
 // slicing passes) displaces it to (x, y, height_scale·|v|); the fragment stage reads its
-// element by the flat index (measured on lavapipe, Mesa 25: a per-fragment storage fetch
-// draws twice as fast as passing the element's 48 values as flat varyings).
+// element's restricted cubic by the flat index (measured on lavapipe, Mesa 25: a per-fragment
+// storage fetch draws twice as fast as passing an element's 48 values as flat varyings).
 #include "spacetime_cubic.glsl"
 #include "colormap.glsl"
 #include "spacetime_push.glsl"

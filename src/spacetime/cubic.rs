@@ -187,6 +187,105 @@ pub fn evaluate(frame: &LocalFrame, material: &Material, c: &CubicCoefficients, 
     }
 }
 
+/// Position of the 2D monomial `x^a y^b` (`a + b ≤ 3`) in the order 1, x, y, x², xy, y², x³,
+/// x²y, xy², y³ (the seed's order with t dropped).
+pub fn slice_monomial_index(a: usize, b: usize) -> usize {
+    let n = a + b;
+    n * (n + 1) / 2 + b
+}
+
+/// An element's cubic restricted to one time plane (seed 003 §4.2.3 evaluates every pixel of a
+/// slice at the same t): the displacement as a cubic and the velocity as a quadratic in the
+/// local (x, y). Computed once per element and slice, it makes the per-pixel evaluation a 2D
+/// one. `SpacetimeSliceCubic` in `include/spacetime_cubic.glsl` is its twin.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SliceCubic {
+    /// Frame centre (x, y).
+    pub centre: [f64; 2],
+    /// Frame extents (x, y).
+    pub extent: [f64; 2],
+    /// `u = Σ a_k x^i y^j` over 1, x, y, x², xy, y², x³, x²y, xy², y³ (local coordinates).
+    pub a: [[f64; 2]; 10],
+    /// `v = ∂u/∂t = Σ b_k x^i y^j` over 1, x, y, x², xy, y² (global time units).
+    pub b: [[f64; 2]; 6],
+}
+
+impl SliceCubic {
+    /// The restriction of the element (`frame`, `c`) to the plane at time `t`.
+    pub fn restrict(frame: &LocalFrame, c: &CubicCoefficients, t: f64) -> Self {
+        let qt = (t - frame.centre[2]) / frame.extent[2];
+        let pt = [1.0, qt, qt * qt, qt * qt * qt];
+        let (mut a, mut b) = ([[0.0; 2]; 10], [[0.0; 2]; 6]);
+        for (k, e) in MONOMIALS.iter().enumerate() {
+            let i = slice_monomial_index(e[0] as usize, e[1] as usize);
+            let d = e[2] as usize;
+            for comp in 0..2 {
+                a[i][comp] += c[k][comp] * pt[d];
+                if d >= 1 {
+                    b[i][comp] += c[k][comp] * d as f64 * pt[d - 1] / frame.extent[2];
+                }
+            }
+        }
+        Self { centre: [frame.centre[0], frame.centre[1]], extent: [frame.extent[0], frame.extent[1]], a, b }
+    }
+
+    /// The fields at `(x, y)` on the plane (the same as [`evaluate`] there).
+    pub fn evaluate(&self, material: &Material, x: f64, y: f64) -> PointFields {
+        let (qx, qy) = ((x - self.centre[0]) / self.extent[0], (y - self.centre[1]) / self.extent[1]);
+        let (a, b) = (&self.a, &self.b);
+        let (xx, xy, yy) = (qx * qx, qx * qy, qy * qy);
+        let comb = |f: &dyn Fn(usize) -> f64| -> [f64; 2] { [f(0), f(1)] };
+        let u = comb(&|i| {
+            a[0][i]
+                + a[1][i] * qx
+                + a[2][i] * qy
+                + a[3][i] * xx
+                + a[4][i] * xy
+                + a[5][i] * yy
+                + a[6][i] * xx * qx
+                + a[7][i] * xx * qy
+                + a[8][i] * qx * yy
+                + a[9][i] * yy * qy
+        });
+        let ux = comb(&|i| {
+            (a[1][i]
+                + 2.0 * a[3][i] * qx
+                + a[4][i] * qy
+                + 3.0 * a[6][i] * xx
+                + 2.0 * a[7][i] * xy
+                + a[8][i] * yy)
+                / self.extent[0]
+        });
+        let uy = comb(&|i| {
+            (a[2][i]
+                + a[4][i] * qx
+                + 2.0 * a[5][i] * qy
+                + a[7][i] * xx
+                + 2.0 * a[8][i] * xy
+                + 3.0 * a[9][i] * yy)
+                / self.extent[1]
+        });
+        let v = comb(&|i| b[0][i] + b[1][i] * qx + b[2][i] * qy + b[3][i] * xx + b[4][i] * xy + b[5][i] * yy);
+        let vx = comb(&|i| (b[1][i] + 2.0 * b[3][i] * qx + b[4][i] * qy) / self.extent[0]);
+        let vy = comb(&|i| (b[2][i] + b[4][i] * qx + 2.0 * b[5][i] * qy) / self.extent[1]);
+        let strain = [ux[0], uy[1], 0.5 * (uy[0] + ux[1])];
+        let speed = v[0].hypot(v[1]);
+        let speed_gradient = if speed > 0.0 {
+            [(v[0] * vx[0] + v[1] * vx[1]) / speed, (v[0] * vy[0] + v[1] * vy[1]) / speed]
+        } else {
+            [0.0, 0.0]
+        };
+        PointFields {
+            displacement: u,
+            velocity: v,
+            speed,
+            speed_gradient,
+            strain,
+            strain_energy_density: material.strain_energy_density(strain),
+        }
+    }
+}
+
 /// The seed's colour coordinate `s = log(U + 1) / log(U_max + 1)`, clamped to [0, 1]
 /// (seed 003 §4.2.3). It is the render module's log ramp over `[1, U_max + 1]` applied to
 /// `U + 1`, which is how the shader computes it (`include/colormap.glsl`).
@@ -197,6 +296,36 @@ pub fn seed_log_coordinate(u: f64, u_max: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_slice_restriction_evaluates_as_the_full_cubic() {
+        let frame = LocalFrame { centre: [0.3, -0.2, 0.7], extent: [0.11, 0.07, 0.05] };
+        let material = Material { lambda: 2.5, mu: 1.3, density: 1.0 };
+        let mut c = [[0.0; 2]; 20];
+        for (k, v) in c.iter_mut().enumerate() {
+            *v = [((k * 7919) % 13) as f64 / 13.0 - 0.4, ((k * 104_729) % 17) as f64 / 17.0 - 0.6];
+        }
+        for t in [0.68, 0.7, 0.7249] {
+            let s = SliceCubic::restrict(&frame, &c, t);
+            for (x, y) in [(0.3, -0.2), (0.26, -0.17), (0.35, -0.23)] {
+                let full = evaluate(&frame, &material, &c, [x, y, t]);
+                let slice = s.evaluate(&material, x, y);
+                let near = |a: f64, b: f64, what: &str| {
+                    assert!((a - b).abs() <= 1e-12 * (1.0 + b.abs()), "{what} at t = {t}: {a} vs {b}")
+                };
+                near(slice.strain_energy_density, full.strain_energy_density, "U");
+                near(slice.speed, full.speed, "|v|");
+                for k in 0..2 {
+                    near(slice.displacement[k], full.displacement[k], "u");
+                    near(slice.velocity[k], full.velocity[k], "v");
+                    near(slice.speed_gradient[k], full.speed_gradient[k], "∇|v|");
+                }
+                for k in 0..3 {
+                    near(slice.strain[k], full.strain[k], "ε");
+                }
+            }
+        }
+    }
 
     const STEEL: Material = Material { lambda: 2.0, mu: 1.0, density: 1.0 };
 

@@ -16,6 +16,7 @@ impl SpacetimeRenderer {
             let window = self.window.as_ref().expect("made resident before drawing");
             let records = window.buffer.binding().map_err(dev("binding elements"))?;
             let materials = self.materials.binding().map_err(dev("binding materials"))?;
+            let cubics = window.cubics.binding().map_err(dev("binding the slice cubics"))?;
             let make = |lines: bool| -> Result<(GraphicsPipeline, DescriptorSet), SpacetimeError> {
                 let mut desc = GraphicsPipelineDesc::new(
                     if lines { "spacetime slice edges" } else { "spacetime slice" },
@@ -23,8 +24,12 @@ impl SpacetimeRenderer {
                     shaders::spacetime::SLICE_FRAG,
                     target.render_pass().raw(),
                 );
-                desc.bindings =
-                    &[BindingKind::StorageBuffer, BindingKind::Texture, BindingKind::StorageBuffer];
+                desc.bindings = &[
+                    BindingKind::StorageBuffer,
+                    BindingKind::Texture,
+                    BindingKind::StorageBuffer,
+                    BindingKind::StorageBuffer,
+                ];
                 desc.push_constant_bytes = std::mem::size_of::<DrawPush>() as u32;
                 desc.vertex_stride = std::mem::size_of::<SliceVertex>() as u32;
                 desc.vertex_attributes = &[
@@ -40,7 +45,12 @@ impl SpacetimeRenderer {
                 let set = p
                     .bind(
                         &self.gpu,
-                        &[Resource::Storage(records), self.colormap.resource(), Resource::Storage(materials)],
+                        &[
+                            Resource::Storage(records),
+                            self.colormap.resource(),
+                            Resource::Storage(materials),
+                            Resource::Storage(cubics),
+                        ],
                     )
                     .map_err(dev("binding the slice pipelines"))?;
                 Ok((p, set))

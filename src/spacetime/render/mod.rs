@@ -187,6 +187,9 @@ const LIGHT: [f64; 3] = [-0.408_248_290_463_863, -0.408_248_290_463_863, 0.816_4
 struct Window {
     range: Range<usize>,
     buffer: Buffer<ElementRecord>,
+    /// Per slot, the element's cubic restricted to the current slice's time (written by the
+    /// cut pass for the cut elements; `SpacetimeSliceCubic`, 160 bytes).
+    cubics: Buffer<[[f32; 4]; 10]>,
 }
 
 /// Counters written by the slicing passes: two `VkDrawIndirectCommand`s (triangles at word 0,
@@ -244,7 +247,7 @@ fn compute(gpu: &Gpu, name: &'static str, spirv: &'static [u32]) -> Result<Compu
         &ComputePipelineDesc {
             name,
             spirv,
-            bindings: &[BindingKind::StorageBuffer; 5],
+            bindings: &[BindingKind::StorageBuffer; 6],
             push_constant_bytes: std::mem::size_of::<SlicePushCompute>() as u32,
             specialization: &[],
             shared_bytes: 0,

@@ -37,8 +37,8 @@ impl SpacetimeRenderer {
         let range = active.start..(active.start + capacity).min(n);
         // Keep the window full: near the end of the data it reaches back.
         let range = range.end.saturating_sub(capacity)..range.end;
-        let (buffer, resident) = match self.window.take() {
-            Some(w) if w.buffer.len() as usize == capacity.max(1) => (w.buffer, w.range),
+        let (buffer, cubics, resident) = match self.window.take() {
+            Some(w) if w.buffer.len() as usize == capacity.max(1) => (w.buffer, w.cubics, w.range),
             _ => {
                 // New bindings for everything that reads the window.
                 self.slice_sets = None;
@@ -51,7 +51,15 @@ impl SpacetimeRenderer {
                     MemoryKind::GpuOnly,
                 )
                 .map_err(dev("the resident window"))?;
-                (buffer, 0..0)
+                let cubics = Buffer::new(
+                    &self.gpu,
+                    "spacetime slice cubics",
+                    capacity.max(1) as u64,
+                    vk::BufferUsageFlags::STORAGE_BUFFER,
+                    MemoryKind::GpuOnly,
+                )
+                .map_err(dev("the resident window"))?;
+                (buffer, cubics, 0..0)
             }
         };
         // What the new window needs beyond what is resident: at most two intervals.
@@ -74,7 +82,7 @@ impl SpacetimeRenderer {
             }
             streamed += part.len();
         }
-        self.window = Some(Window { range, buffer });
+        self.window = Some(Window { range, buffer, cubics });
         Ok(streamed)
     }
 
@@ -122,13 +130,14 @@ impl SpacetimeRenderer {
         let cuts = b(self.cuts.binding())?;
         let draws = b(self.draws.binding())?;
         let materials = b(self.materials.binding())?;
+        let cubics = b(window.cubics.binding())?;
         let slice = self
             .slicer
-            .bind(&self.gpu, &[records, cuts, b(self.lines.binding())?, draws, materials])
+            .bind(&self.gpu, &[records, cuts, b(self.lines.binding())?, draws, materials, cubics])
             .map_err(dev("binding the slicer"))?;
         let subdivide = self
             .subdivider
-            .bind(&self.gpu, &[records, cuts, b(self.tris.binding())?, draws, materials])
+            .bind(&self.gpu, &[records, cuts, b(self.tris.binding())?, draws, materials, cubics])
             .map_err(dev("binding the slicer"))?;
         self.slice_sets = Some((slice, subdivide));
         Ok(())
@@ -166,16 +175,19 @@ impl SpacetimeRenderer {
             // A polygon is cut into at most two triangles.
             let groups = self.gpu.caps().groups_1d(u64::from(push.count.max(1)) * 2, 64);
             self.subdivider.record_dispatch(cmd, subdivide_set, bytemuck::bytes_of(push), [groups, 1, 1]);
-            // Later commands and submissions draw from these buffers and read the counters.
+            // Later commands and submissions draw from these buffers (vertex input; the restricted
+            // cubics in the fragment stage) and read the counters.
             self.gpu.memory_barrier(
                 cmd,
                 (cs, vk::AccessFlags::SHADER_WRITE),
                 (
                     vk::PipelineStageFlags::DRAW_INDIRECT
                         | vk::PipelineStageFlags::VERTEX_INPUT
+                        | vk::PipelineStageFlags::FRAGMENT_SHADER
                         | vk::PipelineStageFlags::TRANSFER,
                     vk::AccessFlags::INDIRECT_COMMAND_READ
                         | vk::AccessFlags::VERTEX_ATTRIBUTE_READ
+                        | vk::AccessFlags::SHADER_READ
                         | vk::AccessFlags::TRANSFER_READ,
                 ),
             );
