@@ -332,3 +332,52 @@ fn frames_report_per_stage_device_times() {
     assert!(none.is_none());
     assert!(coarse.triangles < stats.triangles, "{coarse:?} vs {stats:?}");
 }
+
+#[test]
+fn the_cli_generates_converts_and_refuses_bad_input_naming_it() {
+    let run = |args: &[&str]| {
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_galerkin")).args(args).output().unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr).to_string();
+        assert!(!stderr.contains("panicked"), "{args:?}: {stderr}");
+        (out.status.code(), stderr)
+    };
+    let gst_path = scratch("cli.gst");
+    let vtu_path = scratch("cli.vtu");
+    let back = scratch("cli-back.gst");
+    let s = |p: &Path| p.to_string_lossy().to_string();
+    // spacetime-gen streams a scenario to .gst; convert to .vtu and back: the same records.
+    let (code, err) =
+        run(&["spacetime-gen", "--scenario", "booster", "--elements", "3000", "--out", &s(&gst_path)]);
+    assert_eq!(code, Some(0), "{err}");
+    assert_eq!(run(&["spacetime-convert", &s(&gst_path), &s(&vtu_path)]).0, Some(0));
+    assert_eq!(run(&["spacetime-convert", &s(&vtu_path), &s(&back)]).0, Some(0));
+    let (a, b) = (gst::open(&gst_path).unwrap(), gst::open(&back).unwrap());
+    assert_eq!(a.len(), b.len());
+    // .vtu holds f64; records are f32 of the same values, so the round trip is exact. The
+    // elements are re-sorted by lowest time (ties keep file order), so compare as sets.
+    let key = |r: &galerkin::spacetime::ElementRecord| bytemuck::bytes_of(r).to_vec();
+    let mut ra: Vec<_> = a.records().iter().map(key).collect();
+    let mut rb: Vec<_> = b.records().iter().map(key).collect();
+    ra.sort();
+    rb.sort();
+    assert!(ra == rb, "records changed in the .gst → .vtu → .gst round trip");
+    // Bad input: each error names the file (or lists what exists) and exits 1.
+    let missing = scratch("missing.gst");
+    let (code, err) = run(&["spacetime", &s(&missing)]);
+    assert_eq!(code, Some(1));
+    assert!(err.contains(&s(&missing)), "{err}");
+    let (code, err) = run(&["spacetime-gen", "--scenario", "volcano", "--out", &s(&gst_path)]);
+    assert_eq!(code, Some(1));
+    assert!(err.contains("volcano") && err.contains("crack"), "{err}");
+    let (code, err) = run(&["spacetime-gen", "--scenario", "bar1d", "--out", &s(&gst_path)]);
+    assert_eq!(code, Some(1));
+    assert!(err.contains("--generate bar1d"), "{err}");
+    let (code, err) = run(&["spacetime", &s(&gst_path), "--time", "99"]);
+    assert_eq!(code, Some(1));
+    assert!(err.contains("outside the data set's time span"), "{err}");
+    let text = scratch("notes.txt");
+    std::fs::write(&text, "not spacetime data").unwrap();
+    let (code, err) = run(&["spacetime-convert", &s(&text), &s(&vtu_path)]);
+    assert_eq!(code, Some(1));
+    assert!(err.contains(&s(&text)) && err.contains(".gst or .vtu"), "{err}");
+}
