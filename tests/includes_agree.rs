@@ -5,9 +5,7 @@
 mod common;
 
 use galerkin::demo::polynomial::BivariateCubic;
-use galerkin::gpu::{
-    shaders, vk, BindingKind, Buffer, ComputePipeline, ComputePipelineDesc, MemoryKind, Resource,
-};
+use galerkin::gpu::{shaders, vk, Buffer, MemoryKind};
 use galerkin::render::{ramp_coordinate, ramp_texcoord};
 
 #[test]
@@ -34,33 +32,16 @@ fn glsl_includes_match_their_rust_twins() {
     let xb = Buffer::from_slice(&gpu, "xy", &xy, usage).unwrap();
     let cb = Buffer::from_slice(&gpu, "coefficients", &coeffs, usage).unwrap();
     let ob = Buffer::<[f32; 4]>::new(&gpu, "out", n as u64, usage, MemoryKind::GpuOnly).unwrap();
-    let pipeline = ComputePipeline::new(
+    let bindings = [rb.binding(), xb.binding(), cb.binding(), ob.binding()].map(|b| b.unwrap());
+    let push = (n as u32).to_ne_bytes();
+    common::run_probe(
         &gpu,
-        &ComputePipelineDesc {
-            name: "include probe",
-            spirv: shaders::probe::INCLUDES,
-            bindings: &[BindingKind::StorageBuffer; 4],
-            push_constant_bytes: 4,
-            specialization: &[],
-            shared_bytes: 0,
-        },
-    )
-    .unwrap();
-    let set = pipeline
-        .bind(
-            &gpu,
-            &[
-                Resource::Storage(rb.binding().unwrap()),
-                Resource::Storage(xb.binding().unwrap()),
-                Resource::Storage(cb.binding().unwrap()),
-                Resource::Storage(ob.binding().unwrap()),
-            ],
-        )
-        .unwrap();
-    gpu.run(|cmd| {
-        pipeline.record_dispatch(cmd, &set, bytemuck::bytes_of(&(n as u32)), [(n as u32).div_ceil(64), 1, 1])
-    })
-    .unwrap();
+        "include probe",
+        shaders::probe::INCLUDES,
+        &bindings,
+        &push,
+        (n as u32).div_ceil(64),
+    );
     let out = ob.download(&gpu).unwrap();
 
     for i in 0..n {

@@ -4,9 +4,7 @@
 
 mod common;
 
-use galerkin::gpu::{
-    shaders, vk, BindingKind, Buffer, ComputePipeline, ComputePipelineDesc, MemoryKind, Resource,
-};
+use galerkin::gpu::{shaders, vk, Buffer, MemoryKind};
 use galerkin::render::{phong, ColorFormat, Colormap, Pixels, RenderTarget};
 use galerkin::spacetime::generate::{pulses, structured_mesh};
 use galerkin::spacetime::reference::check_flat_pixels;
@@ -56,30 +54,12 @@ fn glsl_field_and_shading_match_their_rust_twins() {
     let qb = Buffer::from_slice(&gpu, "phong in", &phong_in, usage).unwrap();
     let ob = Buffer::<[f32; 4]>::new(&gpu, "out", 6 * 300, usage, MemoryKind::GpuOnly).unwrap();
     let mb = Buffer::from_slice(&gpu, "materials", &materials, usage).unwrap();
-    let pipeline = ComputePipeline::new(
-        &gpu,
-        &ComputePipelineDesc {
-            name: "spacetime probe",
-            spirv: shaders::probe::SPACETIME,
-            bindings: &[BindingKind::StorageBuffer; 5],
-            push_constant_bytes: 8,
-            specialization: &[],
-            shared_bytes: 0,
-        },
-    )
-    .unwrap();
-    let set = pipeline
-        .bind(
-            &gpu,
-            &[eb.binding(), pb.binding(), qb.binding(), ob.binding(), mb.binding()]
-                .map(|b| Resource::Storage(b.unwrap())),
-        )
-        .unwrap();
     let height_scale = 3.0f32;
     let mut push = [0u8; 8];
     push[..4].copy_from_slice(&300u32.to_ne_bytes());
     push[4..].copy_from_slice(&height_scale.to_ne_bytes());
-    gpu.run(|cmd| pipeline.record_dispatch(cmd, &set, &push, [5, 1, 1])).unwrap();
+    let bindings = [eb.binding(), pb.binding(), qb.binding(), ob.binding(), mb.binding()].map(|b| b.unwrap());
+    common::run_probe(&gpu, "spacetime probe", shaders::probe::SPACETIME, &bindings, &push, 5);
     let out = ob.download(&gpu).unwrap();
     let (mut max_u, mut max_v, mut max_e) = (0f64, 0f64, 0f64);
     let fields: Vec<_> = points

@@ -58,6 +58,24 @@ struct SpacetimeFields {
 
 float spacetime_power(vec4 p, int e) { return e < 0 ? 0.0 : p[e]; }
 
+// The derived fields of §4.2.3 from the displacement u, its spatial derivatives gx = ∂u/∂x and
+// gy = ∂u/∂y, the velocity v and its derivatives dvx, dvy (global units), for Lamé λ, μ: strain,
+// |v| and its gradient (zero where |v| = 0), U = ½ ε : C ε (plane strain). Shared by the full
+// and the slice evaluation; Rust twin: cubic::fields_from_derivatives.
+SpacetimeFields spacetime_fields(vec2 u, vec2 gx, vec2 gy, vec2 v, vec2 dvx, vec2 dvy, float lambda, float mu) {
+    SpacetimeFields f;
+    f.displacement = u;
+    f.velocity = v;
+    f.strain = vec3(gx.x, gy.y, 0.5 * (gy.x + gx.y));
+    f.speed = length(v);
+    f.speed_gradient = f.speed > 0.0 ? vec2(dot(v, dvx), dot(v, dvy)) / f.speed : vec2(0.0);
+    float tr = f.strain.x + f.strain.y;
+    f.strain_energy_density =
+        0.5 * (lambda * tr * tr + 2.0 * mu * (f.strain.x * f.strain.x + f.strain.y * f.strain.y
+                                                + 2.0 * f.strain.z * f.strain.z));
+    return f;
+}
+
 // Fields of element `el` at the global spacetime point p = (x, y, t).
 SpacetimeFields spacetime_evaluate(SpacetimeElement el, vec3 p) {
     vec3 w = el.extent_mu.xyz;
@@ -80,25 +98,9 @@ SpacetimeFields spacetime_evaluate(SpacetimeElement el, vec3 p) {
         utx += c * (a * d * xa1 * yb * td1);
         uty += c * (b * d * xa * yb1 * td1);
     }
-    SpacetimeFields f;
-    f.displacement = u;
-    f.velocity = ut / w.z;
-    // Columns: ∂u/∂x̂ and ∂u/∂ŷ in global units.
-    vec2 gx = ux / w.x, gy = uy / w.y;
-    f.strain = vec3(gx.x, gy.y, 0.5 * (gy.x + gx.y));
-    f.speed = length(f.velocity);
-    if (f.speed > 0.0) {
-        vec2 dvx = utx / (w.z * w.x), dvy = uty / (w.z * w.y);
-        f.speed_gradient = vec2(dot(f.velocity, dvx), dot(f.velocity, dvy)) / f.speed;
-    } else {
-        f.speed_gradient = vec2(0.0);
-    }
-    float lambda = el.centre_lambda.w, mu = el.extent_mu.w;
-    float tr = f.strain.x + f.strain.y;
-    f.strain_energy_density =
-        0.5 * (lambda * tr * tr + 2.0 * mu * (f.strain.x * f.strain.x + f.strain.y * f.strain.y
-                                                + 2.0 * f.strain.z * f.strain.z));
-    return f;
+    // Derivatives in global units: ∂/∂x = (1/w_x) ∂/∂x̂, v = (1/w_t) ∂u/∂t̂.
+    return spacetime_fields(u, ux / w.x, uy / w.y, ut / w.z, utx / (w.z * w.x), uty / (w.z * w.y),
+                            el.centre_lambda.w, el.extent_mu.w);
 }
 
 // An element's cubic restricted to the time plane of a slice: the displacement as a cubic and
@@ -133,27 +135,16 @@ SpacetimeSliceCubic spacetime_restrict(SpacetimeElement el, float t) {
 SpacetimeFields spacetime_evaluate_slice(SpacetimeSliceCubic s, vec2 p) {
     vec2 q = (p - s.frame.xy) * s.frame.zw;
     float x = q.x, y = q.y, xx = x * x, xy = x * y, yy = y * y;
-    SpacetimeFields f;
-    f.displacement = s.a[0] + s.a[1] * x + s.a[2] * y + s.a[3] * xx + s.a[4] * xy + s.a[5] * yy
-                   + s.a[6] * (xx * x) + s.a[7] * (xx * y) + s.a[8] * (x * yy) + s.a[9] * (yy * y);
+    vec2 u = s.a[0] + s.a[1] * x + s.a[2] * y + s.a[3] * xx + s.a[4] * xy + s.a[5] * yy
+           + s.a[6] * (xx * x) + s.a[7] * (xx * y) + s.a[8] * (x * yy) + s.a[9] * (yy * y);
     vec2 gx = (s.a[1] + 2.0 * s.a[3] * x + s.a[4] * y + 3.0 * s.a[6] * xx + 2.0 * s.a[7] * xy
                + s.a[8] * yy) * s.frame.z;
     vec2 gy = (s.a[2] + s.a[4] * x + 2.0 * s.a[5] * y + s.a[7] * xx + 2.0 * s.a[8] * xy
                + 3.0 * s.a[9] * yy) * s.frame.w;
-    f.velocity = s.b[0] + s.b[1] * x + s.b[2] * y + s.b[3] * xx + s.b[4] * xy + s.b[5] * yy;
+    vec2 v = s.b[0] + s.b[1] * x + s.b[2] * y + s.b[3] * xx + s.b[4] * xy + s.b[5] * yy;
     vec2 dvx = (s.b[1] + 2.0 * s.b[3] * x + s.b[4] * y) * s.frame.z;
     vec2 dvy = (s.b[2] + s.b[4] * x + 2.0 * s.b[5] * y) * s.frame.w;
-    f.strain = vec3(gx.x, gy.y, 0.5 * (gy.x + gx.y));
-    f.speed = length(f.velocity);
-    f.speed_gradient = f.speed > 0.0
-        ? vec2(dot(f.velocity, dvx), dot(f.velocity, dvy)) / f.speed
-        : vec2(0.0);
-    float lambda = s.material.x, mu = s.material.y;
-    float tr = f.strain.x + f.strain.y;
-    f.strain_energy_density =
-        0.5 * (lambda * tr * tr + 2.0 * mu * (f.strain.x * f.strain.x + f.strain.y * f.strain.y
-                                                + 2.0 * f.strain.z * f.strain.z));
-    return f;
+    return spacetime_fields(u, gx, gy, v, dvx, dvy, s.material.x, s.material.y);
 }
 
 // Unit normal of the height field z = height_scale · |v| (seed 003 §4.2.3); (0, 0, 1) where

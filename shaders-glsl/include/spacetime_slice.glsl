@@ -21,9 +21,4 @@ layout(push_constant) uniform Push {
 // pass, read by the subdivision pass and the fragment stage.
 layout(std430, set = 0, binding = 5) buffer Cubics { SpacetimeSliceCubic cubics[]; };
 
-// |v| of window element `element` at (xy, pc.t) from its slice restriction: the per-vertex
-// height of §4.2.2, evaluated once per slice vertex here rather than per drawn vertex.
-float slice_speed(uint element, vec2 xy) {
-    return spacetime_evaluate_slice(cubics[element], xy).speed;
-}
 #endif

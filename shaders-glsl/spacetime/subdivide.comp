@@ -28,21 +28,24 @@ void main() {
         tris[at + 2u] = SliceVertex(c, element, sp.y);
         return;
     }
+    // The element's restriction to the plane, read once for all the new vertices.
+    SpacetimeSliceCubic restricted = cubics[element];
     float inv = 1.0 / float(n);
     for (uint i = 0u; i < n; ++i) {
         for (uint j = 0u; j < n - i; ++j) {
             vec2 p00 = a + (float(i) * inv) * (b - a) + (float(j) * inv) * (c - a);
             vec2 p10 = p00 + inv * (b - a);
             vec2 p01 = p00 + inv * (c - a);
-            float s00 = slice_speed(element, p00), s10 = slice_speed(element, p10);
-            float s01 = slice_speed(element, p01);
+            float s00 = spacetime_evaluate_slice(restricted, p00).speed;
+            float s10 = spacetime_evaluate_slice(restricted, p10).speed;
+            float s01 = spacetime_evaluate_slice(restricted, p01).speed;
             tris[at++] = SliceVertex(p00, element, s00);
             tris[at++] = SliceVertex(p10, element, s10);
             tris[at++] = SliceVertex(p01, element, s01);
             if (j + 1u < n - i) {
                 vec2 p11 = p10 + inv * (c - a);
                 tris[at++] = SliceVertex(p10, element, s10);
-                tris[at++] = SliceVertex(p11, element, slice_speed(element, p11));
+                tris[at++] = SliceVertex(p11, element, spacetime_evaluate_slice(restricted, p11).speed);
                 tris[at++] = SliceVertex(p01, element, s01);
             }
         }

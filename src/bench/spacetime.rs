@@ -49,10 +49,7 @@ pub fn measure_frames(
     frames: usize,
     warmup: usize,
 ) -> Result<FrameReport, SpacetimeError> {
-    let dev = |context: &str| {
-        let context = context.to_string();
-        move |source| SpacetimeError::Device { context, source }
-    };
+    let dev = SpacetimeError::device;
     let target = RenderTarget::new(gpu, "spacetime bench", width, height, ColorFormat::Rgba8)
         .map_err(dev("the bench target"))?;
     let mut profiler = Profiler::new(gpu, 4).map_err(dev("timestamp queries"))?;

@@ -99,12 +99,8 @@ impl BarMesh {
                 expected: self.triangles.len(),
             });
         }
-        let m = self.material;
-        if !(m.mu > 0.0 && m.lambda + m.mu > 0.0 && m.density > 0.0) {
-            return Err(SpacetimeError::Invalid {
-                element: 0,
-                what: format!("the material needs μ > 0, λ + μ > 0, ρ > 0 ({m:?})"),
-            });
+        if let Some(what) = self.material.problem() {
+            return Err(SpacetimeError::Invalid { element: 0, what: format!("the material {what}") });
         }
         for (e, tri) in self.triangles.iter().enumerate() {
             if let Some(&i) = tri.iter().find(|&&i| i as usize >= self.vertices.len()) {
@@ -252,8 +248,9 @@ struct BarPush {
     flags: [u32; 4],
 }
 
+/// A device failure met while doing `context` ([`SpacetimeError::device`]).
 fn dev(context: &str) -> impl FnOnce(GpuError) -> SpacetimeError + '_ {
-    move |source| SpacetimeError::Device { context: context.to_string(), source }
+    SpacetimeError::device(context)
 }
 
 /// Draws a [`BarMesh`] whole: x across the image, t upwards, the window of the mesh filling

@@ -82,6 +82,13 @@ pub struct Material {
 }
 
 impl Material {
+    /// What makes this material unusable, if anything: the strain energy of plane strain is
+    /// positive definite and the wave speeds real only for μ > 0, λ + μ > 0 and ρ > 0.
+    pub fn problem(&self) -> Option<String> {
+        (!(self.mu > 0.0 && self.lambda + self.mu > 0.0 && self.density > 0.0))
+            .then(|| format!("needs μ > 0, λ + μ > 0 and ρ > 0 (got {self:?})"))
+    }
+
     /// Pressure-wave speed `√((λ + 2μ)/ρ)`.
     pub fn p_wave_speed(&self) -> f64 {
         ((self.lambda + 2.0 * self.mu) / self.density).sqrt()
@@ -162,24 +169,41 @@ pub fn evaluate(frame: &LocalFrame, material: &Material, c: &CubicCoefficients, 
             dtd[1][i] += ci * mty;
         }
     }
-    let velocity = [du[2][0] / wt, du[2][1] / wt];
-    // ∂u_i/∂x̂_j in global units.
-    let grad = [[du[0][0] / wx, du[1][0] / wy], [du[0][1] / wx, du[1][1] / wy]];
-    let strain = [grad[0][0], grad[1][1], 0.5 * (grad[0][1] + grad[1][0])];
-    let speed = velocity[0].hypot(velocity[1]);
+    // Derivatives in global units: ∂/∂x = (1/w_x) ∂/∂x̂, v = (1/w_t) ∂u/∂t̂.
+    fields_from_derivatives(
+        material,
+        u,
+        [du[0][0] / wx, du[0][1] / wx],
+        [du[1][0] / wy, du[1][1] / wy],
+        [du[2][0] / wt, du[2][1] / wt],
+        [dtd[0][0] / (wt * wx), dtd[0][1] / (wt * wx)],
+        [dtd[1][0] / (wt * wy), dtd[1][1] / (wt * wy)],
+    )
+}
+
+/// The derived fields of seed 003 §4.2.3 from the displacement `u`, its spatial derivatives
+/// `gx = ∂u/∂x`, `gy = ∂u/∂y`, the velocity `v` and its derivatives `dvx`, `dvy` (global
+/// units): strain, |v| and its gradient (zero where |v| = 0), U. Shared by [`evaluate`] and
+/// [`SliceCubic::evaluate`]; `spacetime_fields` in GLSL is its twin.
+pub fn fields_from_derivatives(
+    material: &Material,
+    u: [f64; 2],
+    gx: [f64; 2],
+    gy: [f64; 2],
+    v: [f64; 2],
+    dvx: [f64; 2],
+    dvy: [f64; 2],
+) -> PointFields {
+    let strain = [gx[0], gy[1], 0.5 * (gy[0] + gx[1])];
+    let speed = v[0].hypot(v[1]);
     let speed_gradient = if speed > 0.0 {
-        let dvx = [dtd[0][0] / (wt * wx), dtd[0][1] / (wt * wx)];
-        let dvy = [dtd[1][0] / (wt * wy), dtd[1][1] / (wt * wy)];
-        [
-            (velocity[0] * dvx[0] + velocity[1] * dvx[1]) / speed,
-            (velocity[0] * dvy[0] + velocity[1] * dvy[1]) / speed,
-        ]
+        [(v[0] * dvx[0] + v[1] * dvx[1]) / speed, (v[0] * dvy[0] + v[1] * dvy[1]) / speed]
     } else {
         [0.0, 0.0]
     };
     PointFields {
         displacement: u,
-        velocity,
+        velocity: v,
         speed,
         speed_gradient,
         strain,
@@ -268,21 +292,7 @@ impl SliceCubic {
         let v = comb(&|i| b[0][i] + b[1][i] * qx + b[2][i] * qy + b[3][i] * xx + b[4][i] * xy + b[5][i] * yy);
         let vx = comb(&|i| (b[1][i] + 2.0 * b[3][i] * qx + b[4][i] * qy) / self.extent[0]);
         let vy = comb(&|i| (b[2][i] + b[4][i] * qx + 2.0 * b[5][i] * qy) / self.extent[1]);
-        let strain = [ux[0], uy[1], 0.5 * (uy[0] + ux[1])];
-        let speed = v[0].hypot(v[1]);
-        let speed_gradient = if speed > 0.0 {
-            [(v[0] * vx[0] + v[1] * vx[1]) / speed, (v[0] * vy[0] + v[1] * vy[1]) / speed]
-        } else {
-            [0.0, 0.0]
-        };
-        PointFields {
-            displacement: u,
-            velocity: v,
-            speed,
-            speed_gradient,
-            strain,
-            strain_energy_density: material.strain_energy_density(strain),
-        }
+        fields_from_derivatives(material, u, ux, uy, v, vx, vy)
     }
 }
 

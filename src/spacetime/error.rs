@@ -77,3 +77,10 @@ pub enum SpacetimeError {
         source: crate::gpu::GpuError,
     },
 }
+
+impl SpacetimeError {
+    /// Wraps a device failure met while doing `context` (for `map_err`).
+    pub fn device(context: &str) -> impl FnOnce(crate::gpu::GpuError) -> Self + '_ {
+        move |source| Self::Device { context: context.to_string(), source }
+    }
+}

@@ -102,11 +102,8 @@ impl GstWriter {
             ));
         }
         for (i, m) in materials.iter().enumerate() {
-            if !(m.mu > 0.0 && m.lambda + m.mu > 0.0 && m.density > 0.0) {
-                return Err(file_error(
-                    path,
-                    format!("material {i} needs μ > 0, λ + μ > 0 and ρ > 0 ({m:?})"),
-                ));
+            if let Some(what) = m.problem() {
+                return Err(file_error(path, format!("material {i} {what}")));
             }
         }
         let mut partial = path.as_os_str().to_owned();
@@ -253,8 +250,8 @@ pub fn open(path: &Path) -> Result<SpacetimeData, SpacetimeError> {
         let at = MATERIALS_AT + 24 * i;
         let mat =
             Material { lambda: read_f64(&h, at), mu: read_f64(&h, at + 8), density: read_f64(&h, at + 16) };
-        if !(mat.mu > 0.0 && mat.lambda + mat.mu > 0.0 && mat.density > 0.0) {
-            return Err(file_error(path, format!("material {i} needs μ > 0, λ + μ > 0 and ρ > 0 ({mat:?})")));
+        if let Some(what) = mat.problem() {
+            return Err(file_error(path, format!("material {i} {what}")));
         }
         materials.push(mat);
     }

@@ -86,11 +86,8 @@ impl SpacetimeMesh {
             }
         }
         for (m, mat) in self.materials.iter().enumerate() {
-            if !(mat.mu > 0.0 && mat.lambda + mat.mu > 0.0 && mat.density > 0.0) {
-                return Err(SpacetimeError::Invalid {
-                    element: m,
-                    what: format!("material {m} needs μ > 0, λ + μ > 0 and ρ > 0 (got {mat:?})"),
-                });
+            if let Some(what) = mat.problem() {
+                return Err(SpacetimeError::Invalid { element: m, what: format!("material {m} {what}") });
             }
         }
         for (e, tet) in self.tets.iter().enumerate() {

@@ -92,3 +92,32 @@ pub fn random_sparse(order: usize, nnz: usize) -> galerkin::tensor::SparseTensor
     }
     q
 }
+
+/// Runs a test probe: the compute shader `spirv` with one storage buffer per entry of
+/// `buffers` (bindings 0, 1, …), push constants `push` and `groups` workgroups, and waits.
+pub fn run_probe(
+    gpu: &galerkin::gpu::Gpu,
+    name: &str,
+    spirv: &'static [u32],
+    buffers: &[galerkin::gpu::BufferBinding],
+    push: &[u8],
+    groups: u32,
+) {
+    use galerkin::gpu::{BindingKind, ComputePipeline, ComputePipelineDesc, Resource};
+    let bindings = vec![BindingKind::StorageBuffer; buffers.len()];
+    let pipeline = ComputePipeline::new(
+        gpu,
+        &ComputePipelineDesc {
+            name,
+            spirv,
+            bindings: &bindings,
+            push_constant_bytes: push.len() as u32,
+            specialization: &[],
+            shared_bytes: 0,
+        },
+    )
+    .expect("the probe pipeline builds");
+    let resources: Vec<Resource> = buffers.iter().map(|&b| Resource::Storage(b)).collect();
+    let set = pipeline.bind(gpu, &resources).expect("the probe binds");
+    gpu.run(|cmd| pipeline.record_dispatch(cmd, &set, push, [groups, 1, 1])).expect("the probe runs");
+}

@@ -7,17 +7,13 @@ use ash::vk;
 use super::*;
 
 impl SpacetimeRenderer {
-    pub(super) fn pipelines_for(
-        &mut self,
-        target: &RenderTarget,
-    ) -> Result<&(GraphicsPipeline, GraphicsPipeline, DescriptorSet, DescriptorSet), SpacetimeError> {
+    /// Makes the fill and edge pipelines for `target`'s format on first use, and their
+    /// bindings (the window, the colour map, the materials, the slice cubics) whenever they were
+    /// dropped because the window was reallocated — rebinding, not recompiling.
+    pub(super) fn pipelines_for(&mut self, target: &RenderTarget) -> Result<(), SpacetimeError> {
         let format = target.format();
         if !self.pipelines.contains_key(&format) {
-            let window = self.window.as_ref().expect("made resident before drawing");
-            let records = window.buffer.binding().map_err(dev("binding elements"))?;
-            let materials = self.materials.binding().map_err(dev("binding materials"))?;
-            let cubics = window.cubics.binding().map_err(dev("binding the slice cubics"))?;
-            let make = |lines: bool| -> Result<(GraphicsPipeline, DescriptorSet), SpacetimeError> {
+            let make = |lines: bool| -> Result<GraphicsPipeline, SpacetimeError> {
                 let mut desc = GraphicsPipelineDesc::new(
                     if lines { "spacetime slice edges" } else { "spacetime slice" },
                     shaders::spacetime::SLICE_VERT,
@@ -40,26 +36,27 @@ impl SpacetimeRenderer {
                 if lines {
                     desc.topology = vk::PrimitiveTopology::LINE_LIST;
                 }
-                let p =
-                    GraphicsPipeline::new(&self.gpu, &desc).map_err(dev("building the slice pipelines"))?;
-                let set = p
-                    .bind(
-                        &self.gpu,
-                        &[
-                            Resource::Storage(records),
-                            self.colormap.resource(),
-                            Resource::Storage(materials),
-                            Resource::Storage(cubics),
-                        ],
-                    )
-                    .map_err(dev("binding the slice pipelines"))?;
-                Ok((p, set))
+                GraphicsPipeline::new(&self.gpu, &desc).map_err(dev("building the slice pipelines"))
             };
-            let (fill, fill_set) = make(false)?;
-            let (edges, edges_set) = make(true)?;
-            self.pipelines.insert(format, (fill, edges, fill_set, edges_set));
+            let pair = (make(false)?, make(true)?);
+            self.pipelines.insert(format, pair);
         }
-        Ok(&self.pipelines[&format])
+        if !self.draw_sets.contains_key(&format) {
+            let window = self.window.as_ref().expect("made resident before drawing");
+            let bindings = [
+                Resource::Storage(window.buffer.binding().map_err(dev("binding elements"))?),
+                self.colormap.resource(),
+                Resource::Storage(self.materials.binding().map_err(dev("binding materials"))?),
+                Resource::Storage(window.cubics.binding().map_err(dev("binding the slice cubics"))?),
+            ];
+            let (fill, edges) = &self.pipelines[&format];
+            let bind = |p: &GraphicsPipeline| {
+                p.bind(&self.gpu, &bindings).map_err(dev("binding the slice pipelines"))
+            };
+            let sets = (bind(fill)?, bind(edges)?);
+            self.draw_sets.insert(format, sets);
+        }
+        Ok(())
     }
 
     /// The colour ramp's `U_max` for `view`: its own, or the largest U over the slice's
@@ -212,7 +209,8 @@ impl SpacetimeRenderer {
         let extent = target.extent();
         let edges_on = view.edges;
         let (push, edge_push) = (*push, push.for_edges());
-        let (fill, edges, fill_set, edges_set) = &self.pipelines[&target.format()];
+        let (fill, edges) = &self.pipelines[&target.format()];
+        let (fill_set, edges_set) = &self.draw_sets[&target.format()];
         move |cmd| {
             fill.record_draw_indirect(
                 cmd,

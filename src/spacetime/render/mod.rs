@@ -216,7 +216,10 @@ pub struct SpacetimeRenderer {
     slicer: ComputePipeline,
     subdivider: ComputePipeline,
     colormap: ColormapTexture,
-    pipelines: HashMap<ColorFormat, (GraphicsPipeline, GraphicsPipeline, DescriptorSet, DescriptorSet)>,
+    /// Fill and edge pipelines per target format.
+    pipelines: HashMap<ColorFormat, (GraphicsPipeline, GraphicsPipeline)>,
+    /// Their bindings, dropped when the window is reallocated.
+    draw_sets: HashMap<ColorFormat, (DescriptorSet, DescriptorSet)>,
     sliced: Option<(f64, Option<f64>, SliceStats)>,
     /// The slicing passes' bindings, kept until a buffer is replaced.
     slice_sets: Option<(DescriptorSet, DescriptorSet)>,
@@ -237,8 +240,9 @@ fn slice_buffer(gpu: &Gpu, name: &str, len: u64) -> Result<Buffer<SliceVertex>, 
     Buffer::new(gpu, name, len, usage, MemoryKind::GpuOnly).map_err(dev("slice buffers"))
 }
 
+/// A device failure met while doing `context` ([`SpacetimeError::device`]).
 fn dev(context: &str) -> impl FnOnce(GpuError) -> SpacetimeError + '_ {
-    move |source| SpacetimeError::Device { context: context.to_string(), source }
+    SpacetimeError::device(context)
 }
 
 fn compute(gpu: &Gpu, name: &'static str, spirv: &'static [u32]) -> Result<ComputePipeline, SpacetimeError> {
@@ -288,6 +292,7 @@ impl SpacetimeRenderer {
             subdivider: compute(gpu, "spacetime subdivide", shaders::spacetime::SUBDIVIDE)?,
             colormap: colormap.upload(gpu).map_err(dev("uploading the colour map"))?,
             pipelines: HashMap::new(),
+            draw_sets: HashMap::new(),
             sliced: None,
             slice_sets: None,
             umax_target: None,

@@ -42,7 +42,7 @@ impl SpacetimeRenderer {
             _ => {
                 // New bindings for everything that reads the window.
                 self.slice_sets = None;
-                self.pipelines.clear();
+                self.draw_sets.clear();
                 let buffer = Buffer::new(
                     &self.gpu,
                     "spacetime records",
