@@ -15,7 +15,7 @@
 //! The layers: [`gpu`] (Vulkan, knows nothing of the maths), [`render`] (targets, images,
 //! colour maps, camera, viewer), [`demo`] (the first passes with their CPU references),
 //! [`bench`] (the device's ceilings), [`tensor`] and [`reduce`] (seed 000 §3–4), [`spacetime`]
-//! (seed 003).
+//! (seed 003), [`spectral`] (seed 002).
 
 pub mod bench;
 pub mod demo;
@@ -23,4 +23,5 @@ pub mod gpu;
 pub mod reduce;
 pub mod render;
 pub mod spacetime;
+pub mod spectral;
 pub mod tensor;

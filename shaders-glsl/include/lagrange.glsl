@@ -1,0 +1,70 @@
+// One-dimensional bases of the tensor-product spectral element on [0, 1] (seed 002): Lagrange
+// polynomials in the first barycentric form, l_j(x) = w_j prod_{k != j} (x - x_k), formed by
+// prefix and suffix products (no division, exact at the nodes; backward stable, Higham 2004),
+// and the Bernstein polynomials by the de Casteljau triangle.
+// Twin of src/spectral/basis.rs (Basis1d::eval); tests/spectral.rs checks they agree.
+#ifndef GALERKIN_LAGRANGE_GLSL
+#define GALERKIN_LAGRANGE_GLSL
+
+// MAX_ORDER + 1 of basis.rs.
+#define SPECTRAL_MAX_NODES 13
+#define SPECTRAL_LAGRANGE 0u
+#define SPECTRAL_BERNSTEIN 1u
+
+// A basis as uploaded by the renderer: kind, order n, nodes and barycentric weights.
+struct SpectralBasis {
+    uint kind;
+    uint order;
+    uint pad0;
+    uint pad1;
+    float nodes[SPECTRAL_MAX_NODES];
+    float weights[SPECTRAL_MAX_NODES];
+};
+
+// The n + 1 basis values at x (and their derivatives when want_derivatives).
+void spectral_basis_eval(SpectralBasis b, float x, bool want_derivatives,
+                         out float values[SPECTRAL_MAX_NODES], out float derivatives[SPECTRAL_MAX_NODES]) {
+    uint m = b.order + 1u;
+    for (uint i = 0u; i < SPECTRAL_MAX_NODES; ++i) { values[i] = 0.0; derivatives[i] = 0.0; }
+    if (b.kind == SPECTRAL_BERNSTEIN) {
+        uint n = b.order;
+        values[0] = 1.0;
+        for (uint r = 1u; r <= n; ++r) {
+            if (r == n && want_derivatives) {
+                for (uint i = 0u; i <= n; ++i) {
+                    float left = i > 0u ? values[i - 1u] : 0.0;
+                    float right = i < n ? values[i] : 0.0;
+                    derivatives[i] = float(n) * (left - right);
+                }
+            }
+            values[r] = x * values[r - 1u];
+            for (uint i = r - 1u; i >= 1u; --i) values[i] = (1.0 - x) * values[i] + x * values[i - 1u];
+            values[0] *= 1.0 - x;
+        }
+        return;
+    }
+    float prefix[SPECTRAL_MAX_NODES + 1];
+    float dprefix[SPECTRAL_MAX_NODES + 1];
+    float suffix[SPECTRAL_MAX_NODES + 1];
+    float dsuffix[SPECTRAL_MAX_NODES + 1];
+    prefix[0] = 1.0;
+    dprefix[0] = 0.0;
+    for (uint k = 0u; k < m; ++k) {
+        float d = x - b.nodes[k];
+        dprefix[k + 1u] = dprefix[k] * d + prefix[k];
+        prefix[k + 1u] = prefix[k] * d;
+    }
+    suffix[m] = 1.0;
+    dsuffix[m] = 0.0;
+    for (uint k = m; k-- > 0u;) {
+        float d = x - b.nodes[k];
+        dsuffix[k] = dsuffix[k + 1u] * d + suffix[k + 1u];
+        suffix[k] = suffix[k + 1u] * d;
+    }
+    for (uint j = 0u; j < m; ++j) {
+        values[j] = b.weights[j] * prefix[j] * suffix[j + 1u];
+        if (want_derivatives) derivatives[j] = b.weights[j] * (dprefix[j] * suffix[j + 1u] + prefix[j] * dsuffix[j + 1u]);
+    }
+}
+
+#endif

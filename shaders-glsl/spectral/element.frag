@@ -1,0 +1,47 @@
+#version 450
+// Pixel-exact spectral elements (seed 002, done per fragment): the fragment's world point is
+// taken from its pixel centre, Newton's method on the element's geometry map finds the
+// reference point (xi, eta) that maps there (starting from the interpolated proxy coordinates),
+// fragments whose point leaves the reference square are discarded — so curved edges are exact
+// — and the element's tensor-product polynomial is evaluated there and colour-mapped. Iso-lines
+// of constant on-screen width come from the per-pixel value and its screen derivatives.
+#include "spectral_element.glsl"
+#include "spectral_push.glsl"
+#include "colormap.glsl"
+
+layout(location = 0) in vec2 in_reference;
+layout(location = 1) flat in uint element;
+layout(location = 2) in float vertex_value;
+layout(set = 0, binding = 2) uniform sampler1D colormap;
+layout(location = 0) out vec4 out_colour;
+
+void main() {
+    uint mode = pc.flags.z;
+    vec2 r = in_reference;
+    bool inside = true;
+    if (mode == SPECTRAL_MODE_PER_PIXEL) {
+        vec2 p = pc.pixel_to_world.xy + gl_FragCoord.xy * pc.pixel_to_world.zw;
+        float tol = pc.misc.y;
+        inside = spectral_inverse_map(element, p, r)
+              && all(greaterThanEqual(r, vec2(-tol))) && all(lessThanEqual(r, vec2(1.0 + tol)));
+    }
+    r = clamp(r, 0.0, 1.0);
+    float v = mode == SPECTRAL_MODE_PER_VERTEX ? vertex_value : spectral_value(element, r);
+    float t = ramp_coordinate(v, pc.range.x, pc.range.y, pc.flags.y != 0u);
+    // Iso-lines: distance to the nearest level in pixels from the screen derivative of the
+    // level coordinate (taken before any discard, while the whole quad is live).
+    float levels = t * pc.range.w;
+    float width = fwidth(levels);
+    if (!inside) discard;
+    if (pc.flags.x != 0u) {
+        out_colour = vec4(v, r, float(element));
+        return;
+    }
+    vec3 colour = texture(colormap, ramp_texcoord(t, pc.range.z)).rgb;
+    if (mode == SPECTRAL_MODE_EDGE_LINES) colour = vec3(0.05);
+    if (pc.range.w > 0.0 && width > 0.0) {
+        float d = abs(fract(levels + 0.5) - 0.5) / width;
+        colour = mix(colour, vec3(0.0), 0.8 * (1.0 - clamp(d - 0.5, 0.0, 1.0)));
+    }
+    out_colour = vec4(colour, 1.0);
+}

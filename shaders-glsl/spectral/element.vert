@@ -1,0 +1,22 @@
+#version 450
+// Spectral element proxies, per-vertex node grids and edge lines (seed 002): positions through
+// the view, the reference coordinates passed on for the fragment stage; in per-vertex mode the
+// field is evaluated here, at the node, and interpolated (the seed's baseline).
+#include "spectral_element.glsl"
+#include "spectral_push.glsl"
+
+layout(location = 0) in vec3 position;
+layout(location = 1) in vec2 reference;
+layout(location = 2) in uint element;
+layout(location = 0) out vec2 out_reference;
+layout(location = 1) flat out uint out_element;
+layout(location = 2) out float out_value;
+
+void main() {
+    vec4 clip = pc.view_proj * vec4(position, 1.0);
+    clip.z = pc.misc.x * clip.w;
+    gl_Position = clip;
+    out_reference = reference;
+    out_element = element;
+    out_value = pc.flags.z == SPECTRAL_MODE_PER_VERTEX ? spectral_value(element, reference) : 0.0;
+}

@@ -1,0 +1,70 @@
+//! Errors of the spectral module: bad data name the element, field or file.
+
+use std::path::PathBuf;
+
+/// What can go wrong with a spectral-element data set or its rendering.
+#[derive(Debug, thiserror::Error)]
+pub enum SpectralError {
+    /// A polynomial order outside what the basis evaluation supports.
+    #[error("{what}: order {order} is outside 1..={max}")]
+    Order {
+        /// Which basis (field or geometry).
+        what: String,
+        /// The order asked for.
+        order: usize,
+        /// The largest order supported.
+        max: usize,
+    },
+    /// A NaN or infinity in a node position or a field value.
+    #[error("element {element}: {what} is not finite")]
+    NotFinite {
+        /// The element.
+        element: usize,
+        /// Which value.
+        what: String,
+    },
+    /// An element whose geometry map folds or collapses (non-positive Jacobian somewhere).
+    #[error("element {element}: {what}")]
+    Invalid {
+        /// The element.
+        element: usize,
+        /// What is wrong.
+        what: String,
+    },
+    /// Array lengths that disagree.
+    #[error("{what}: {found} entries, expected {expected}")]
+    Length {
+        /// The array.
+        what: String,
+        /// Entries found.
+        found: usize,
+        /// Entries expected.
+        expected: usize,
+    },
+    /// A field or time step that does not exist.
+    #[error("{0}")]
+    Missing(String),
+    /// A problem reading or writing a file.
+    #[error("{path}: {detail}")]
+    File {
+        /// The file.
+        path: PathBuf,
+        /// What went wrong.
+        detail: String,
+    },
+    /// A Vulkan failure while rendering.
+    #[error("{context}: {source}")]
+    Device {
+        /// What the renderer was doing.
+        context: String,
+        /// The device error.
+        source: crate::gpu::GpuError,
+    },
+}
+
+impl SpectralError {
+    /// Wraps a device error with what the renderer was doing.
+    pub fn device(context: &str) -> impl Fn(crate::gpu::GpuError) -> Self + '_ {
+        move |source| Self::Device { context: context.to_owned(), source }
+    }
+}

@@ -1,0 +1,161 @@
+//! Synthetic spectral-element data sets for tests, demos and benchmarks. The fields are
+//! analytic functions sampled at the element's nodes (interpolation; for Bernstein bases the
+//! interpolant's Bernstein coefficients), not solutions of a solver.
+//!
+//! - [`quad_grid`]: a rectangle of straight-sided quadrilaterals whose interior vertices are
+//!   displaced, so the elements are general bilinear (not parallelograms).
+//! - [`annulus`]: a sector of an annulus in polar elements, the circles represented by the
+//!   geometry polynomial of the asked order — curved elements.
+//!
+//! Both carry two fields: `waves` (smooth, several time steps) and `cells` (the same plus a
+//! different constant per element: discontinuous across every edge, for the crack tests).
+
+use super::basis::{Basis1d, NodeSet};
+use super::error::SpectralError;
+use super::mesh::{Field, SpectralMesh};
+
+/// The smooth analytic field `waves` at time t.
+pub fn waves(x: f64, y: f64, t: f64) -> f64 {
+    (3.0 * x + 1.3 * t).sin() * (2.5 * y - 0.7 * t).cos() + 0.4 * x * y
+}
+
+/// The per-element offset of the discontinuous field `cells`.
+pub fn cell_offset(e: usize) -> f64 {
+    0.25 * (((e * 7919) % 13) as f64 / 12.0 - 0.5)
+}
+
+/// Time steps of the generated fields.
+pub const STEPS: usize = 4;
+
+/// Deterministic displacement in [−1, 1] of vertex `k` (SplitMix64; no RNG dependency).
+fn jitter(k: u64) -> f64 {
+    let mut z = k.wrapping_mul(0x9E37_79B9_7F4A_7C15).wrapping_add(0x6A09_E667_F3BC_C909);
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^= z >> 31;
+    (z >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+}
+
+/// An `nx` × `ny` grid of straight-sided quadrilaterals over [0, 2] × [0, 1], interior vertices
+/// displaced by up to `skew` × the cell size, with fields of `order` on `set`.
+pub fn quad_grid(
+    nx: usize,
+    ny: usize,
+    skew: f64,
+    order: usize,
+    set: NodeSet,
+) -> Result<SpectralMesh, SpectralError> {
+    let (hx, hy) = (2.0 / nx as f64, 1.0 / ny as f64);
+    let vertex = |i: usize, j: usize| -> [f64; 2] {
+        let mut p = [i as f64 * hx, j as f64 * hy];
+        if i > 0 && i < nx && j > 0 && j < ny {
+            let k = (j * (nx + 1) + i) as u64;
+            p[0] += skew * hx * jitter(2 * k);
+            p[1] += skew * hy * jitter(2 * k + 1);
+        }
+        p
+    };
+    let geometry = Basis1d::new(NodeSet::Equispaced, 1)?;
+    let mut points = Vec::with_capacity(nx * ny * 4);
+    for j in 0..ny {
+        for i in 0..nx {
+            for (a, b) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+                let p = vertex(i + a, j + b);
+                points.push([p[0], p[1], 0.0]);
+            }
+        }
+    }
+    with_fields(geometry, points, order, set)
+}
+
+/// A sector of the annulus 0.5 ≤ r ≤ 1, 0 ≤ θ ≤ 3π/2 in `nr` × `nt` polar elements whose
+/// geometry is of `geometry_order` on GLL points, with fields of `order` on `set`.
+pub fn annulus(
+    nr: usize,
+    nt: usize,
+    geometry_order: usize,
+    order: usize,
+    set: NodeSet,
+) -> Result<SpectralMesh, SpectralError> {
+    let geometry = Basis1d::new(NodeSet::GaussLobatto, geometry_order)?;
+    let sweep = 1.5 * std::f64::consts::PI;
+    let mut points = Vec::with_capacity(nr * nt * geometry.len() * geometry.len());
+    for it in 0..nt {
+        for ir in 0..nr {
+            for &b in &geometry.nodes {
+                for &a in &geometry.nodes {
+                    let r = 0.5 + 0.5 * (ir as f64 + a) / nr as f64;
+                    let th = sweep * (it as f64 + b) / nt as f64;
+                    points.push([r * th.cos(), r * th.sin(), 0.0]);
+                }
+            }
+        }
+    }
+    with_fields(geometry, points, order, set)
+}
+
+/// Samples `waves` (at [`STEPS`] times) and `cells` onto the mesh of `points`.
+fn with_fields(
+    geometry: Basis1d,
+    points: Vec<[f64; 3]>,
+    order: usize,
+    set: NodeSet,
+) -> Result<SpectralMesh, SpectralError> {
+    let basis = Basis1d::new(set, order)?;
+    let shell = SpectralMesh::new(geometry, basis.clone(), points, Vec::new())?;
+    let times: Vec<f64> = (0..STEPS).map(|k| 0.5 * k as f64).collect();
+    let steps = times.iter().map(|&t| sample(&shell, |_, x, y| waves(x, y, t))).collect();
+    let cells = sample(&shell, |e, x, y| waves(x, y, 0.0) + cell_offset(e));
+    let fields = vec![
+        Field { name: "waves".into(), times: times.clone(), steps },
+        Field { name: "cells".into(), times: vec![0.0], steps: vec![cells] },
+    ];
+    SpectralMesh::new(shell.geometry, shell.basis, shell.points, fields)
+}
+
+/// The coefficients of `f(e, x, y)` on every element of `mesh` in its field basis: values at
+/// the nodes, or for Bernstein the coefficients of the interpolant at the GLL points.
+pub fn sample(mesh: &SpectralMesh, f: impl Fn(usize, f64, f64) -> f64) -> Vec<f64> {
+    let b = &mesh.basis;
+    let m = b.len();
+    let at = if b.set == NodeSet::Bernstein {
+        super::basis::gauss_lobatto_nodes(b.order)
+    } else {
+        b.nodes.clone()
+    };
+    let mut out = Vec::with_capacity(mesh.elements() * m * m);
+    for e in 0..mesh.elements() {
+        let mut v: Vec<f64> = Vec::with_capacity(m * m);
+        for &eta in &at {
+            for &xi in &at {
+                let (x, _) = mesh.map(e, xi, eta);
+                v.push(f(e, x[0], x[1]));
+            }
+        }
+        if b.set == NodeSet::Bernstein {
+            v = tensor_interpolate(b, &at, &v);
+        }
+        out.extend(v);
+    }
+    out
+}
+
+/// Tensor-product interpolation: coefficients in `basis` ⊗ `basis` of the values `v` given at
+/// `points` × `points` (ξ fastest): the 1D interpolation along ξ for each row, then along η.
+fn tensor_interpolate(basis: &Basis1d, points: &[f64], v: &[f64]) -> Vec<f64> {
+    let m = basis.len();
+    let mut rows = vec![0.0; m * m];
+    for j in 0..m {
+        let c = basis.interpolate(points, &v[j * m..(j + 1) * m]);
+        rows[j * m..(j + 1) * m].copy_from_slice(&c);
+    }
+    let mut out = vec![0.0; m * m];
+    for i in 0..m {
+        let col: Vec<f64> = (0..m).map(|j| rows[j * m + i]).collect();
+        let c = basis.interpolate(points, &col);
+        for j in 0..m {
+            out[j * m + i] = c[j];
+        }
+    }
+    out
+}

@@ -1,0 +1,254 @@
+//! A spectral-element data set of quadrilaterals (seed 002): per element a tensor-product
+//! geometry map x(ξ, η) = Σ_ij X_ij g_i(ξ) g_j(η) of its own order and node set, and any
+//! number of scalar fields, each with any number of time steps, as tensor-product polynomials
+//! f(ξ, η) = Σ_ij F_ij ℓ_i(ξ) ℓ_j(η) on the reference square [0, 1]². This module is also the
+//! CPU f64 reference the renderer is tested against: the map, its Jacobian, its inverse
+//! (Newton's method in f64) and the field values.
+//!
+//! Node (i, j) of element e is entry `e (m² ) + j m + i` (m = order + 1, i along ξ fastest),
+//! for geometry points and field values alike. Loaders reorder other conventions into this one.
+
+use super::basis::Basis1d;
+use super::error::SpectralError;
+
+/// One scalar field over the mesh, at one or more time steps.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Field {
+    /// Its name (`--field NAME`).
+    pub name: String,
+    /// The time of each step.
+    pub times: Vec<f64>,
+    /// Per step, the coefficients of every element: elements × (n + 1)² values.
+    pub steps: Vec<Vec<f64>>,
+}
+
+/// Quadrilateral spectral elements in the plane (z = 0) or embedded in 3D, with their fields.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SpectralMesh {
+    /// The geometry's basis (its order may be lower than the field's).
+    pub geometry: Basis1d,
+    /// The fields' basis.
+    pub basis: Basis1d,
+    /// Geometry control points: elements × (g + 1)², node (i, j) at `e (g+1)² + j (g+1) + i`.
+    pub points: Vec<[f64; 3]>,
+    /// The scalar fields.
+    pub fields: Vec<Field>,
+}
+
+/// Newton iterations of the inverse map: quadratic convergence from a guess inside the
+/// element takes 3–6 steps for the curved meshes here; the cap only stops divergence.
+pub const NEWTON_ITERATIONS: usize = 12;
+
+impl SpectralMesh {
+    /// Checks and assembles a data set: array lengths, finite values, and a geometry map that
+    /// neither folds nor collapses (the Jacobian determinant keeps one sign on a (2g + 2)²
+    /// sample grid; planar meshes only). Errors name the element or field.
+    pub fn new(
+        geometry: Basis1d,
+        basis: Basis1d,
+        points: Vec<[f64; 3]>,
+        fields: Vec<Field>,
+    ) -> Result<Self, SpectralError> {
+        let gm = geometry.len() * geometry.len();
+        if points.is_empty() || !points.len().is_multiple_of(gm) {
+            return Err(SpectralError::Length {
+                what: format!("geometry points (order {} has {gm} per element)", geometry.order),
+                found: points.len(),
+                expected: (points.len() / gm).max(1) * gm,
+            });
+        }
+        let elements = points.len() / gm;
+        for (k, p) in points.iter().enumerate() {
+            if p.iter().any(|c| !c.is_finite()) {
+                return Err(SpectralError::NotFinite {
+                    element: k / gm,
+                    what: format!("geometry node {}", k % gm),
+                });
+            }
+        }
+        let fm = basis.len() * basis.len();
+        for f in &fields {
+            if f.steps.is_empty() || f.steps.len() != f.times.len() {
+                return Err(SpectralError::Length {
+                    what: format!("field {:?}: time steps", f.name),
+                    found: f.steps.len(),
+                    expected: f.times.len().max(1),
+                });
+            }
+            for (s, v) in f.steps.iter().enumerate() {
+                if v.len() != elements * fm {
+                    return Err(SpectralError::Length {
+                        what: format!("field {:?} step {s}", f.name),
+                        found: v.len(),
+                        expected: elements * fm,
+                    });
+                }
+                if let Some(k) = v.iter().position(|x| !x.is_finite()) {
+                    return Err(SpectralError::NotFinite {
+                        element: k / fm,
+                        what: format!("field {:?} step {s} value {}", f.name, k % fm),
+                    });
+                }
+            }
+        }
+        let mesh = Self { geometry, basis, points, fields };
+        if mesh.is_planar() {
+            for e in 0..elements {
+                mesh.check_orientation(e)?;
+            }
+        }
+        Ok(mesh)
+    }
+
+    /// Number of elements.
+    pub fn elements(&self) -> usize {
+        self.points.len() / (self.geometry.len() * self.geometry.len())
+    }
+
+    /// Whether every geometry point has z = 0 (a planar mesh, drawn in 2D).
+    pub fn is_planar(&self) -> bool {
+        self.points.iter().all(|p| p[2] == 0.0)
+    }
+
+    /// The geometry points of element `e`.
+    pub fn element_points(&self, e: usize) -> &[[f64; 3]] {
+        let gm = self.geometry.len() * self.geometry.len();
+        &self.points[e * gm..(e + 1) * gm]
+    }
+
+    /// The field index of `name`, or the first field when `None`.
+    pub fn field_index(&self, name: Option<&str>) -> Result<usize, SpectralError> {
+        match name {
+            None if !self.fields.is_empty() => Ok(0),
+            None => Err(SpectralError::Missing("the data set has no fields".into())),
+            Some(n) => self.fields.iter().position(|f| f.name == n).ok_or_else(|| {
+                let names: Vec<&str> = self.fields.iter().map(|f| f.name.as_str()).collect();
+                SpectralError::Missing(format!("no field {n:?}; the fields are {names:?}"))
+            }),
+        }
+    }
+
+    /// The coefficients of element `e` for `field` at `step`.
+    pub fn element_values(&self, field: usize, step: usize, e: usize) -> &[f64] {
+        let fm = self.basis.len() * self.basis.len();
+        &self.fields[field].steps[step][e * fm..(e + 1) * fm]
+    }
+
+    /// The geometry map of element `e` at (ξ, η): the point and its derivatives ∂x/∂ξ, ∂x/∂η.
+    pub fn map(&self, e: usize, xi: f64, eta: f64) -> ([f64; 3], [[f64; 3]; 2]) {
+        let m = self.geometry.len();
+        let (mut a, mut da, mut b, mut db) = ([0.0; 16], [0.0; 16], [0.0; 16], [0.0; 16]);
+        self.geometry.eval(xi, &mut a, Some(&mut da));
+        self.geometry.eval(eta, &mut b, Some(&mut db));
+        let pts = self.element_points(e);
+        let (mut x, mut dx, mut dy) = ([0.0; 3], [0.0; 3], [0.0; 3]);
+        for j in 0..m {
+            for i in 0..m {
+                let p = pts[j * m + i];
+                for c in 0..3 {
+                    x[c] += a[i] * b[j] * p[c];
+                    dx[c] += da[i] * b[j] * p[c];
+                    dy[c] += a[i] * db[j] * p[c];
+                }
+            }
+        }
+        (x, [dx, dy])
+    }
+
+    /// The value of `field` at `step` in element `e` at reference point (ξ, η).
+    pub fn value(&self, field: usize, step: usize, e: usize, xi: f64, eta: f64) -> f64 {
+        let m = self.basis.len();
+        let (mut a, mut b) = ([0.0; 16], [0.0; 16]);
+        self.basis.eval(xi, &mut a, None);
+        self.basis.eval(eta, &mut b, None);
+        let v = self.element_values(field, step, e);
+        (0..m).map(|j| b[j] * (0..m).map(|i| a[i] * v[j * m + i]).sum::<f64>()).sum()
+    }
+
+    /// The reference point of element `e` that maps to the planar point `p`, by Newton's
+    /// method in f64 from `guess`: `None` when it does not converge (p far outside).
+    pub fn inverse_map(&self, e: usize, p: [f64; 2], guess: [f64; 2]) -> Option<[f64; 2]> {
+        let mut r = guess;
+        for _ in 0..4 * NEWTON_ITERATIONS {
+            let (x, [dx, dy]) = self.map(e, r[0], r[1]);
+            let (fx, fy) = (x[0] - p[0], x[1] - p[1]);
+            let det = dx[0] * dy[1] - dy[0] * dx[1];
+            if det == 0.0 || !det.is_finite() {
+                return None;
+            }
+            let s = [(dy[1] * fx - dy[0] * fy) / det, (-dx[1] * fx + dx[0] * fy) / det];
+            r = [r[0] - s[0], r[1] - s[1]];
+            if r.iter().any(|c| !c.is_finite() || c.abs() > 10.0) {
+                return None;
+            }
+            if s[0].abs().max(s[1].abs()) < 1e-14 {
+                return Some(r);
+            }
+        }
+        let (x, _) = self.map(e, r[0], r[1]);
+        ((x[0] - p[0]).hypot(x[1] - p[1]) < 1e-12 * (1.0 + p[0].abs() + p[1].abs())).then_some(r)
+    }
+
+    /// The element of a planar mesh containing `p` and its reference point (the first one, in
+    /// element order, whose inverse map lands in [−tol, 1 + tol]²), searching only elements
+    /// whose bounding box (grown by `tol` of its size) contains `p`.
+    pub fn locate(&self, p: [f64; 2], tol: f64) -> Option<(usize, [f64; 2])> {
+        (0..self.elements()).find_map(|e| {
+            let pts = self.element_points(e);
+            let (mut lo, mut hi) = ([f64::MAX; 2], [f64::MIN; 2]);
+            // The control points' box, grown by half its size: Lagrange geometry can bulge
+            // past its nodes a little.
+            for q in pts {
+                for c in 0..2 {
+                    lo[c] = lo[c].min(q[c]);
+                    hi[c] = hi[c].max(q[c]);
+                }
+            }
+            let grow = [0.5 * (hi[0] - lo[0]), 0.5 * (hi[1] - lo[1])];
+            if (0..2).any(|c| p[c] < lo[c] - grow[c] || p[c] > hi[c] + grow[c]) {
+                return None;
+            }
+            let r = self.inverse_map(e, p, [0.5, 0.5])?;
+            (r.iter().all(|&c| (-tol..=1.0 + tol).contains(&c))).then_some((e, r))
+        })
+    }
+
+    /// The least and greatest value of `field` at `step`, sampled on a (2n + 1)² grid per
+    /// element (the colour range's "auto").
+    pub fn value_range(&self, field: usize, step: usize) -> (f64, f64) {
+        let s = 2 * self.basis.order;
+        let mut range = (f64::MAX, f64::MIN);
+        for e in 0..self.elements() {
+            for j in 0..=s {
+                for i in 0..=s {
+                    let v = self.value(field, step, e, i as f64 / s as f64, j as f64 / s as f64);
+                    range = (range.0.min(v), range.1.max(v));
+                }
+            }
+        }
+        range
+    }
+
+    fn check_orientation(&self, e: usize) -> Result<(), SpectralError> {
+        let s = 2 * self.geometry.order + 1;
+        let mut sign = 0.0;
+        for j in 0..=s {
+            for i in 0..=s {
+                let (_, [dx, dy]) = self.map(e, i as f64 / s as f64, j as f64 / s as f64);
+                let det = dx[0] * dy[1] - dy[0] * dx[1];
+                if det == 0.0 || (sign != 0.0 && det.signum() != sign) {
+                    return Err(SpectralError::Invalid {
+                        element: e,
+                        what: format!(
+                            "the geometry map folds or collapses (Jacobian determinant {det:e} at ξ = {:.3}, η = {:.3})",
+                            i as f64 / s as f64,
+                            j as f64 / s as f64
+                        ),
+                    });
+                }
+                sign = det.signum();
+            }
+        }
+        Ok(())
+    }
+}

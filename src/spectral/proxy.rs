@@ -1,0 +1,181 @@
+//! What the spectral renderer draws, built once on the CPU in f64 from the element geometry:
+//!
+//! - **Proxies** (per-pixel mode): a fan of triangles per element, from its centre to samples
+//!   of its boundary, moved outward far enough that the proxy contains the whole curved element.
+//!   The bound: a boundary edge c(s) of degree g, written in Bernstein form with control points
+//!   B_k, has |c″| ≤ g (g − 1) max_k |B_{k+2} − 2 B_{k+1} + B_k| (the hodograph's convex hull),
+//!   so a chord over a parameter interval of length h is within h² |c″|max / 8 of the curve.
+//!   Fragments of the proxy whose inverse map leaves the reference square are discarded, so the
+//!   element's true edge is drawn, not the proxy's. Straight-sided (bilinear) elements are not
+//!   moved: their proxies tile the plane exactly.
+//! - **Node grids** (per-vertex mode, the seed's baseline): the element's nodes joined into an
+//!   n × n grid of quads (two triangles each), the field evaluated at the vertices and
+//!   interpolated across.
+//! - **Edges**: each element's four edges sampled at 8g segments on the true curve, drawn as
+//!   lines (edge overdraw behind the faces; or in front, dark, to show the mesh).
+
+use bytemuck::{Pod, Zeroable};
+
+use super::basis::{Basis1d, NodeSet};
+use super::mesh::SpectralMesh;
+
+/// One vertex of the spectral draws: world position, reference coordinates, element.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct DrawVertex {
+    /// World position.
+    pub position: [f32; 3],
+    /// Reference coordinates (ξ, η) in the element.
+    pub reference: [f32; 2],
+    /// The element.
+    pub element: u32,
+}
+
+/// The three vertex streams of a mesh.
+pub struct DrawGeometry {
+    /// Triangle list: the per-pixel proxies.
+    pub proxies: Vec<DrawVertex>,
+    /// Triangle list: the per-vertex node grids.
+    pub node_grids: Vec<DrawVertex>,
+    /// Line list: the element edges.
+    pub edges: Vec<DrawVertex>,
+}
+
+/// Builds the proxies, node grids and edges of every element of `mesh`.
+pub fn build(mesh: &SpectralMesh) -> DrawGeometry {
+    let mut out = DrawGeometry { proxies: Vec::new(), node_grids: Vec::new(), edges: Vec::new() };
+    let g = mesh.geometry.order;
+    let bernstein = Basis1d::new(NodeSet::Bernstein, g).expect("same order as the geometry");
+    for e in 0..mesh.elements() {
+        proxy(mesh, &bernstein, e, &mut out.proxies);
+        node_grid(mesh, e, &mut out.node_grids);
+        edges(mesh, e, &mut out.edges);
+    }
+    out
+}
+
+fn vertex(mesh: &SpectralMesh, e: usize, r: [f64; 2]) -> DrawVertex {
+    let (x, _) = mesh.map(e, r[0], r[1]);
+    DrawVertex { position: x.map(|c| c as f32), reference: r.map(|c| c as f32), element: e as u32 }
+}
+
+/// The reference point at parameter s ∈ [0, 1] along edge `k` of the boundary, walked
+/// counter-clockwise in the reference square: η = 0, ξ = 1, η = 1 (reversed), ξ = 0 (reversed).
+fn boundary(k: usize, s: f64) -> [f64; 2] {
+    match k {
+        0 => [s, 0.0],
+        1 => [1.0, s],
+        2 => [1.0 - s, 1.0],
+        _ => [0.0, 1.0 - s],
+    }
+}
+
+/// Upper bound of |c″(s)| on edge `k` of element `e` (Bernstein second differences).
+fn edge_curvature_bound(mesh: &SpectralMesh, bernstein: &Basis1d, e: usize, k: usize) -> f64 {
+    let g = mesh.geometry.order;
+    if g < 2 {
+        return 0.0;
+    }
+    let nodes = &mesh.geometry.nodes;
+    let along: Vec<[f64; 3]> =
+        nodes.iter().map(|&s| mesh.map(e, boundary(k, s)[0], boundary(k, s)[1]).0).collect();
+    let control: Vec<[f64; 3]> = {
+        let per: Vec<Vec<f64>> = (0..3)
+            .map(|c| bernstein.interpolate(nodes, &along.iter().map(|p| p[c]).collect::<Vec<_>>()))
+            .collect();
+        (0..=g).map(|i| [per[0][i], per[1][i], per[2][i]]).collect()
+    };
+    let second = (0..g - 1)
+        .map(|i| {
+            let d: [f64; 3] =
+                std::array::from_fn(|c| control[i + 2][c] - 2.0 * control[i + 1][c] + control[i][c]);
+            (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt()
+        })
+        .fold(0.0, f64::max);
+    (g * (g - 1)) as f64 * second
+}
+
+fn proxy(mesh: &SpectralMesh, bernstein: &Basis1d, e: usize, out: &mut Vec<DrawVertex>) {
+    let g = mesh.geometry.order;
+    let per_edge = g.max(1);
+    let h = 1.0 / per_edge as f64;
+    let mut dilation =
+        (0..4).map(|k| h * h / 8.0 * edge_curvature_bound(mesh, bernstein, e, k)).fold(0.0, f64::max);
+    let ring: Vec<[f64; 2]> =
+        (0..4).flat_map(|k| (0..per_edge).map(move |i| boundary(k, i as f64 * h))).collect();
+    let mut points: Vec<[f64; 2]> = ring
+        .iter()
+        .map(|r| {
+            let (x, _) = mesh.map(e, r[0], r[1]);
+            [x[0], x[1]]
+        })
+        .collect();
+    let n = points.len();
+    if dilation > 0.0 {
+        // Plus f32 rounding of the vertices (relative 2⁻²³ of the coordinates).
+        let size = points.iter().flatten().fold(0.0f64, |a, c| a.max(c.abs()));
+        dilation += 4.0 * f64::from(f32::EPSILON) * size;
+        let area: f64 = (0..n)
+            .map(|i| {
+                let (a, b) = (points[i], points[(i + 1) % n]);
+                a[0] * b[1] - b[0] * a[1]
+            })
+            .sum();
+        let orient = area.signum();
+        let normal = |a: [f64; 2], b: [f64; 2]| {
+            let d = [b[0] - a[0], b[1] - a[1]];
+            let l = d[0].hypot(d[1]).max(f64::MIN_POSITIVE);
+            [orient * d[1] / l, -orient * d[0] / l]
+        };
+        let moved: Vec<[f64; 2]> = (0..n)
+            .map(|i| {
+                let (prev, p, next) = (points[(i + n - 1) % n], points[i], points[(i + 1) % n]);
+                let (n1, n2) = (normal(prev, p), normal(p, next));
+                let m = [n1[0] + n2[0], n1[1] + n2[1]];
+                let dot = m[0] * n1[0] + m[1] * n1[1];
+                // The miter: o · n1 = o · n2 = δ; at most 4δ long at sharp corners.
+                let a =
+                    if dot > 0.25 { dilation / dot } else { 4.0 * dilation / m[0].hypot(m[1]).max(1e-12) };
+                [p[0] + a * m[0], p[1] + a * m[1]]
+            })
+            .collect();
+        points = moved;
+    }
+    let centre = vertex(mesh, e, [0.5, 0.5]);
+    for i in 0..n {
+        let j = (i + 1) % n;
+        out.push(centre);
+        for (p, r) in [(points[i], ring[i]), (points[j], ring[j])] {
+            out.push(DrawVertex {
+                position: [p[0] as f32, p[1] as f32, 0.0],
+                reference: r.map(|c| c as f32),
+                element: e as u32,
+            });
+        }
+    }
+}
+
+fn node_grid(mesh: &SpectralMesh, e: usize, out: &mut Vec<DrawVertex>) {
+    let nodes = &mesh.basis.nodes;
+    let m = nodes.len();
+    for j in 0..m - 1 {
+        for i in 0..m - 1 {
+            let v = |a: usize, b: usize| vertex(mesh, e, [nodes[a], nodes[b]]);
+            let (v00, v10, v01, v11) = (v(i, j), v(i + 1, j), v(i, j + 1), v(i + 1, j + 1));
+            out.extend([v00, v10, v11, v00, v11, v01]);
+        }
+    }
+}
+
+fn edges(mesh: &SpectralMesh, e: usize, out: &mut Vec<DrawVertex>) {
+    let g = mesh.geometry.order;
+    let segments = if g == 1 { 1 } else { 8 * g };
+    for k in 0..4 {
+        for s in 0..segments {
+            let a = boundary(k, s as f64 / segments as f64);
+            let b = boundary(k, (s + 1) as f64 / segments as f64);
+            out.push(vertex(mesh, e, a));
+            out.push(vertex(mesh, e, b));
+        }
+    }
+}

@@ -1,0 +1,121 @@
+//! The per-pixel check of a rendered field against the CPU f64 reference (seed 002's claim,
+//! made testable): every pixel the renderer covered must show its element's polynomial at the
+//! reference point that maps to the pixel centre (the inverse map solved in f64), and every
+//! pixel centre that lies inside an element must be covered. Shared by the tests and the demo.
+
+use super::mesh::SpectralMesh;
+use super::render::View2d;
+
+/// How a rendered `(value, ξ, η, element)` image compares with the f64 reference.
+#[derive(Clone, Debug, Default)]
+pub struct PixelReport {
+    /// Pixels an element covered.
+    pub covered: usize,
+    /// Largest |GPU − reference| over the covered pixels.
+    pub max_error: f64,
+    /// Largest ratio of that error to the pixel's own f32 rounding bound (≤ 1 passes).
+    pub max_error_ratio: f64,
+    /// Where the ratio was largest: pixel, GPU value, reference value, bound.
+    pub worst: Option<(u32, u32, f64, f64, f64)>,
+    /// Covered pixels whose centre is not inside the element that drew them (beyond the
+    /// renderer's inside tolerance, with a margin).
+    pub wrong_element: usize,
+    /// Uncovered pixels whose centre lies inside an element (by more than 10⁻³ of its
+    /// reference square from its edges).
+    pub missing: usize,
+}
+
+impl PixelReport {
+    /// Whether every pixel passed.
+    pub fn passed(&self) -> bool {
+        self.max_error_ratio <= 1.0 && self.wrong_element == 0 && self.missing == 0
+    }
+}
+
+/// The f32 rounding bound of the value shown at reference point `r` of element `e`, times 4:
+/// the tensor-product sum's rounding, 8m ε Σ|ℓ_i ℓ_j F_ij| (m = n + 1 terms per axis, each
+/// basis value a product of m factors), plus the field's change over the reference-point error
+/// that f32 geometry causes, |∇_ξ f| ‖J⁻¹‖ (2|p| + 8(g + 1) Σ|g_i g_j X_ij|) ε (pixel centre
+/// and geometry map rounded to f32, pulled back through the Jacobian).
+pub fn rounding_bound(mesh: &SpectralMesh, field: usize, step: usize, e: usize, r: [f64; 2]) -> f64 {
+    let eps = f64::from(f32::EPSILON);
+    let (fb, gb) = (&mesh.basis, &mesh.geometry);
+    let (m, gm) = (fb.len(), gb.len());
+    let (mut a, mut da, mut b, mut db) = ([0.0; 16], [0.0; 16], [0.0; 16], [0.0; 16]);
+    fb.eval(r[0], &mut a, Some(&mut da));
+    fb.eval(r[1], &mut b, Some(&mut db));
+    let v = mesh.element_values(field, step, e);
+    let (mut s, mut fx, mut fy) = (0.0, 0.0, 0.0);
+    for j in 0..m {
+        for i in 0..m {
+            s += (a[i] * b[j] * v[j * m + i]).abs();
+            fx += da[i] * b[j] * v[j * m + i];
+            fy += a[i] * db[j] * v[j * m + i];
+        }
+    }
+    let (mut ga, mut gbv) = ([0.0; 16], [0.0; 16]);
+    gb.eval(r[0], &mut ga, None);
+    gb.eval(r[1], &mut gbv, None);
+    let pts = mesh.element_points(e);
+    let mut gs: f64 = 0.0;
+    for j in 0..gm {
+        for i in 0..gm {
+            gs += (ga[i] * gbv[j]).abs() * pts[j * gm + i][0].abs().max(pts[j * gm + i][1].abs());
+        }
+    }
+    let (x, [dx, dy]) = mesh.map(e, r[0], r[1]);
+    let det = (dx[0] * dy[1] - dy[0] * dx[1]).abs();
+    // ‖J⁻¹‖ ≤ ‖J‖_F / |det J| for 2 × 2.
+    let jinv = (dx[0] * dx[0] + dx[1] * dx[1] + dy[0] * dy[0] + dy[1] * dy[1]).sqrt() / det;
+    let position = 2.0 * x[0].abs().max(x[1].abs()) + 8.0 * gm as f64 * gs;
+    4.0 * (8.0 * m as f64 * eps * s + fx.hypot(fy) * jinv * position * eps)
+}
+
+/// Compares `pixels` (RGBA32F `(value, ξ, η, element)`, NaN where uncovered) of `field` at
+/// `step`, drawn with `view` into `width` × `height`, with the f64 reference, pixel by pixel.
+pub fn check_pixels(
+    mesh: &SpectralMesh,
+    field: usize,
+    step: usize,
+    view: &View2d,
+    (width, height): (u32, u32),
+    pixels: &[f32],
+) -> PixelReport {
+    let mut report = PixelReport::default();
+    let slack = 1e-4;
+    for py in 0..height {
+        for px in 0..width {
+            let k = 4 * (py * width + px) as usize;
+            let p = view.pixel_centre(px, py, width, height);
+            let texel = &pixels[k..k + 4];
+            if texel[3].is_nan() {
+                if let Some((_, r)) = mesh.locate(p, -1e-3) {
+                    debug_assert!(r.iter().all(|c| (1e-3..=1.0 - 1e-3).contains(c)));
+                    report.missing += 1;
+                }
+                continue;
+            }
+            report.covered += 1;
+            let e = texel[3] as usize;
+            let guess = [f64::from(texel[1]), f64::from(texel[2])];
+            let Some(r) = mesh
+                .inverse_map(e, p, guess)
+                .filter(|r| r.iter().all(|&c| (-slack..=1.0 + slack).contains(&c)))
+            else {
+                report.wrong_element += 1;
+                continue;
+            };
+            let r = r.map(|c| c.clamp(0.0, 1.0));
+            let reference = mesh.value(field, step, e, r[0], r[1]);
+            let err = (f64::from(texel[0]) - reference).abs();
+            let bound = rounding_bound(mesh, field, step, e, r);
+            report.max_error = report.max_error.max(err);
+            let ratio = err / bound;
+            if ratio > report.max_error_ratio {
+                report.max_error_ratio = ratio;
+                report.worst = Some((px, py, f64::from(texel[0]), reference, bound));
+            }
+        }
+    }
+    report
+}

@@ -1,0 +1,416 @@
+//! The spectral-element renderer (seed 002, done per fragment in a Vulkan graphics pipeline):
+//! the element geometry, the shown field's coefficients and the two 1D bases resident on the
+//! device; proxies drawn with `element.vert`/`element.frag`, whose fragment stage inverts the
+//! geometry map at the pixel centre by Newton's method and evaluates the tensor-product
+//! polynomial there (pixel-exact); the per-vertex baseline; element edges drawn as lines —
+//! behind the faces as edge overdraw (a crack between discontinuous neighbours shows the edge's
+//! own value, never the background), or in front, dark, to show the mesh.
+//!
+//! Memory does not grow with the order beyond the coefficient buffer: the bases are 2 × 128
+//! bytes and the draw streams depend on the geometry's order only.
+
+use std::collections::HashMap;
+use std::sync::Arc;
+
+use ash::vk;
+use bytemuck::{Pod, Zeroable};
+use glam::Mat4;
+
+use super::basis::{Basis1d, NodeSet, MAX_ORDER};
+use super::error::SpectralError;
+use super::mesh::SpectralMesh;
+use super::proxy::{self, DrawVertex};
+use crate::gpu::{
+    shaders, BindingKind, Buffer, DescriptorSet, Gpu, GraphicsPipeline, GraphicsPipelineDesc, Resource,
+};
+use crate::render::{ColorFormat, Colormap, ColormapTexture, Pixels, RenderTarget, BACKGROUND};
+
+type Result<T> = std::result::Result<T, SpectralError>;
+fn dev(context: &str) -> impl Fn(crate::gpu::GpuError) -> SpectralError + '_ {
+    SpectralError::device(context)
+}
+
+/// How far the reference point may lie outside [0, 1]² and still count as inside (then it is
+/// clamped): f32 Newton converges to a few ulps of [0, 1] (≈ 1e-7), so 1e-5 accepts every pixel
+/// of the element and at most a sliver of 1e-5 of an element's width beyond its true edge.
+pub const INSIDE_TOLERANCE: f64 = 1e-5;
+
+/// A 2D view of a planar mesh: the world point at the image centre and the world size of a
+/// pixel (square pixels, y up).
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub struct View2d {
+    /// World (x, y) at the centre of the image.
+    pub centre: [f64; 2],
+    /// World units per pixel.
+    pub pixel_size: f64,
+}
+
+impl View2d {
+    /// The view that fits `mesh`'s geometry points (with a 4 % margin) into `width` × `height`.
+    pub fn fit(mesh: &SpectralMesh, width: u32, height: u32) -> Self {
+        let (mut lo, mut hi) = ([f64::MAX; 2], [f64::MIN; 2]);
+        for p in &mesh.points {
+            for c in 0..2 {
+                lo[c] = lo[c].min(p[c]);
+                hi[c] = hi[c].max(p[c]);
+            }
+        }
+        let size = ((hi[0] - lo[0]) / f64::from(width)).max((hi[1] - lo[1]) / f64::from(height));
+        Self { centre: [0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1])], pixel_size: 1.04 * size.max(1e-30) }
+    }
+
+    /// The world point at the centre of pixel (`px`, `py`) (row 0 at the top) of a
+    /// `width` × `height` image — the point each pixel shows.
+    pub fn pixel_centre(&self, px: u32, py: u32, width: u32, height: u32) -> [f64; 2] {
+        [
+            self.centre[0] + (f64::from(px) + 0.5 - 0.5 * f64::from(width)) * self.pixel_size,
+            self.centre[1] - (f64::from(py) + 0.5 - 0.5 * f64::from(height)) * self.pixel_size,
+        ]
+    }
+
+    /// The orthographic projection of this view (Vulkan clip space, y down).
+    fn view_proj(&self, width: u32, height: u32) -> Mat4 {
+        let (sx, sy) =
+            (2.0 / (self.pixel_size * f64::from(width)), 2.0 / (self.pixel_size * f64::from(height)));
+        Mat4::from_cols_array(&[
+            sx as f32,
+            0.0,
+            0.0,
+            0.0,
+            0.0,
+            -sy as f32,
+            0.0,
+            0.0,
+            0.0,
+            0.0,
+            0.0,
+            0.0,
+            (-sx * self.centre[0]) as f32,
+            (sy * self.centre[1]) as f32,
+            0.0,
+            1.0,
+        ])
+    }
+
+    /// World (x, y) of framebuffer coordinate (0, 0) and the world step per framebuffer unit.
+    fn pixel_to_world(&self, width: u32, height: u32) -> [f32; 4] {
+        [
+            (self.centre[0] - 0.5 * f64::from(width) * self.pixel_size) as f32,
+            (self.centre[1] + 0.5 * f64::from(height) * self.pixel_size) as f32,
+            self.pixel_size as f32,
+            -self.pixel_size as f32,
+        ]
+    }
+}
+
+/// What to show and how (`galerkin spectral` options).
+#[derive(Clone, Debug, PartialEq)]
+pub struct SpectralView {
+    /// The field (index into the mesh's fields).
+    pub field: usize,
+    /// Its time step.
+    pub step: usize,
+    /// Colour range; `None`: the field's sampled range at this step.
+    pub range: Option<(f64, f64)>,
+    /// Logarithmic colour scale (positive ranges).
+    pub log: bool,
+    /// Iso-lines per colour range (0: none).
+    pub isolines: u32,
+    /// Draw the element edges in front, dark (the mesh).
+    pub edges: bool,
+    /// Edge overdraw behind the faces (fills cracks between discontinuous elements).
+    pub overdraw: bool,
+    /// The seed's baseline: colour at the nodes, interpolated.
+    pub per_vertex: bool,
+    /// The 2D view; `None`: fit the mesh.
+    pub view: Option<View2d>,
+}
+
+impl Default for SpectralView {
+    fn default() -> Self {
+        Self {
+            field: 0,
+            step: 0,
+            range: None,
+            log: false,
+            isolines: 0,
+            edges: false,
+            overdraw: true,
+            per_vertex: false,
+            view: None,
+        }
+    }
+}
+
+/// `SpectralBasis` of `lagrange.glsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct GpuBasis {
+    kind: u32,
+    order: u32,
+    pad: [u32; 2],
+    nodes: [f32; MAX_ORDER + 1],
+    weights: [f32; MAX_ORDER + 1],
+}
+
+impl GpuBasis {
+    fn of(b: &Basis1d) -> Self {
+        let mut g = GpuBasis {
+            kind: u32::from(b.set == NodeSet::Bernstein),
+            order: b.order as u32,
+            pad: [0; 2],
+            nodes: [0.0; MAX_ORDER + 1],
+            weights: [0.0; MAX_ORDER + 1],
+        };
+        for k in 0..b.len() {
+            g.nodes[k] = b.nodes[k] as f32;
+            g.weights[k] = b.weights[k] as f32;
+        }
+        g
+    }
+}
+
+/// `spectral_push.glsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct SpectralPush {
+    view_proj: [f32; 16],
+    pixel_to_world: [f32; 4],
+    range: [f32; 4],
+    misc: [f32; 4],
+    flags: [u32; 4],
+}
+
+const MODE_PER_PIXEL: u32 = 0;
+const MODE_PER_VERTEX: u32 = 1;
+const MODE_EDGE_OVERDRAW: u32 = 2;
+const MODE_EDGE_LINES: u32 = 3;
+/// Normalised depths of the passes: edge overdraw behind the faces, mesh lines in front.
+const DEPTH_FACES: f32 = 0.5;
+const DEPTH_OVERDRAW: f32 = 0.75;
+const DEPTH_LINES: f32 = 0.25;
+
+/// A planar spectral-element mesh resident on the device, drawn per pixel (seed 002).
+pub struct SpectralRenderer {
+    gpu: Gpu,
+    mesh: Arc<SpectralMesh>,
+    _points: Buffer<[f32; 4]>,
+    values: Buffer<f32>,
+    _bases: Buffer<GpuBasis>,
+    proxies: Buffer<DrawVertex>,
+    node_grids: Buffer<DrawVertex>,
+    edges: Buffer<DrawVertex>,
+    counts: [u32; 3],
+    colormap: ColormapTexture,
+    resources: Vec<Resource>,
+    shown: (usize, usize),
+    pipelines: HashMap<ColorFormat, (GraphicsPipeline, GraphicsPipeline, DescriptorSet, DescriptorSet)>,
+    ranges: HashMap<(usize, usize), (f64, f64)>,
+}
+
+impl SpectralRenderer {
+    /// Uploads `mesh` (geometry, the first field's first step, bases, draw streams) and
+    /// `colormap`. Planar meshes only: surfaces in 3D need the adaptive tessellation of seed
+    /// 002's surface case, which this renderer does not have yet.
+    pub fn new(gpu: &Gpu, mesh: Arc<SpectralMesh>, colormap: &Colormap) -> Result<Self> {
+        if !mesh.is_planar() {
+            return Err(SpectralError::Missing(
+                "the mesh is not planar (z ≠ 0): surfaces in 3D are not rendered yet".into(),
+            ));
+        }
+        if mesh.fields.is_empty() {
+            return Err(SpectralError::Missing("the data set has no fields to show".into()));
+        }
+        let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
+        let points: Vec<[f32; 4]> =
+            mesh.points.iter().map(|p| [p[0] as f32, p[1] as f32, p[2] as f32, 0.0]).collect();
+        let points =
+            Buffer::from_slice(gpu, "spectral geometry", &points, storage).map_err(dev("uploading"))?;
+        let values: Vec<f32> = mesh.fields[0].steps[0].iter().map(|&v| v as f32).collect();
+        let values =
+            Buffer::from_slice(gpu, "spectral values", &values, storage).map_err(dev("uploading"))?;
+        let bases = [GpuBasis::of(&mesh.basis), GpuBasis::of(&mesh.geometry)];
+        let bases = Buffer::from_slice(gpu, "spectral bases", &bases, storage).map_err(dev("uploading"))?;
+        let draw = proxy::build(&mesh);
+        let vertex = vk::BufferUsageFlags::VERTEX_BUFFER;
+        let upload = |name: &str, v: &[DrawVertex]| {
+            Buffer::from_slice(gpu, name, v, vertex).map_err(dev("uploading the draw streams"))
+        };
+        let counts = [draw.proxies.len() as u32, draw.node_grids.len() as u32, draw.edges.len() as u32];
+        let proxies = upload("spectral proxies", &draw.proxies)?;
+        let node_grids = upload("spectral node grids", &draw.node_grids)?;
+        let edges = upload("spectral edges", &draw.edges)?;
+        let colormap = colormap.upload(gpu).map_err(dev("uploading the colour map"))?;
+        let resources = vec![
+            Resource::Storage(points.binding().map_err(dev("binding"))?),
+            Resource::Storage(values.binding().map_err(dev("binding"))?),
+            colormap.resource(),
+            Resource::Storage(bases.binding().map_err(dev("binding"))?),
+        ];
+        Ok(Self {
+            gpu: gpu.clone(),
+            mesh,
+            _points: points,
+            values,
+            _bases: bases,
+            proxies,
+            node_grids,
+            edges,
+            counts,
+            colormap,
+            resources,
+            shown: (0, 0),
+            pipelines: HashMap::new(),
+            ranges: HashMap::new(),
+        })
+    }
+
+    /// The mesh being shown.
+    pub fn mesh(&self) -> &SpectralMesh {
+        &self.mesh
+    }
+
+    /// Triangles drawn per frame in per-pixel and per-vertex mode, and edge lines.
+    pub fn primitive_counts(&self) -> [u32; 3] {
+        [self.counts[0] / 3, self.counts[1] / 3, self.counts[2] / 2]
+    }
+
+    /// The colour range `view` uses: its own, or the field's sampled range at its step.
+    pub fn range(&mut self, view: &SpectralView) -> (f64, f64) {
+        if let Some(r) = view.range {
+            return r;
+        }
+        let key = (view.field, view.step);
+        let mesh = &self.mesh;
+        *self.ranges.entry(key).or_insert_with(|| mesh.value_range(key.0, key.1))
+    }
+
+    /// Uploads the coefficients of `field` at `step` unless they are the ones shown.
+    fn show(&mut self, field: usize, step: usize) -> Result<()> {
+        let f = self.mesh.fields.get(field).ok_or_else(|| {
+            SpectralError::Missing(format!("no field {field} ({} fields)", self.mesh.fields.len()))
+        })?;
+        if step >= f.steps.len() {
+            return Err(SpectralError::Missing(format!(
+                "field {:?} has {} time steps; step {step} does not exist",
+                f.name,
+                f.steps.len()
+            )));
+        }
+        if self.shown != (field, step) {
+            let v: Vec<f32> = f.steps[step].iter().map(|&v| v as f32).collect();
+            self.values.upload(&self.gpu, 0, &v).map_err(dev("uploading a time step"))?;
+            self.shown = (field, step);
+        }
+        Ok(())
+    }
+
+    fn pipelines_for(&mut self, format: ColorFormat, target: &RenderTarget) -> Result<()> {
+        if self.pipelines.contains_key(&format) {
+            return Ok(());
+        }
+        let make = |lines: bool| {
+            let mut desc = GraphicsPipelineDesc::new(
+                if lines { "spectral edges" } else { "spectral elements" },
+                shaders::spectral::ELEMENT_VERT,
+                shaders::spectral::ELEMENT_FRAG,
+                target.render_pass().raw(),
+            );
+            desc.bindings = &[
+                BindingKind::StorageBuffer,
+                BindingKind::StorageBuffer,
+                BindingKind::Texture,
+                BindingKind::StorageBuffer,
+            ];
+            desc.push_constant_bytes = std::mem::size_of::<SpectralPush>() as u32;
+            desc.vertex_stride = std::mem::size_of::<DrawVertex>() as u32;
+            desc.vertex_attributes = &[
+                (0, vk::Format::R32G32B32_SFLOAT, 0),
+                (1, vk::Format::R32G32_SFLOAT, 12),
+                (2, vk::Format::R32_UINT, 20),
+            ];
+            if lines {
+                desc.topology = vk::PrimitiveTopology::LINE_LIST;
+            }
+            GraphicsPipeline::new(&self.gpu, &desc).map_err(dev("building the spectral pipelines"))
+        };
+        let (fill, lines) = (make(false)?, make(true)?);
+        let fill_set = fill.bind(&self.gpu, &self.resources).map_err(dev("binding"))?;
+        let lines_set = lines.bind(&self.gpu, &self.resources).map_err(dev("binding"))?;
+        self.pipelines.insert(format, (fill, lines, fill_set, lines_set));
+        Ok(())
+    }
+
+    fn push(&mut self, target: &RenderTarget, view: &SpectralView) -> SpectralPush {
+        let e = target.extent();
+        let v2 = view.view.unwrap_or_else(|| View2d::fit(&self.mesh, e.width, e.height));
+        let (lo, hi) = self.range(view);
+        SpectralPush {
+            view_proj: v2.view_proj(e.width, e.height).to_cols_array(),
+            pixel_to_world: v2.pixel_to_world(e.width, e.height),
+            range: [lo as f32, hi as f32, self.colormap.texels() as f32, view.isolines as f32],
+            misc: [DEPTH_FACES, INSIDE_TOLERANCE as f32, 0.0, 0.0],
+            flags: [
+                u32::from(target.format() == ColorFormat::Rgba32F),
+                u32::from(view.log),
+                if view.per_vertex { MODE_PER_VERTEX } else { MODE_PER_PIXEL },
+                0,
+            ],
+        }
+    }
+
+    /// Records the draws of `view` into `target`'s render pass, begun and ended by the caller
+    /// (for applications and the viewer that own the frame's command buffer).
+    pub fn record_draw_into(
+        &mut self,
+        cmd: vk::CommandBuffer,
+        target: &RenderTarget,
+        view: &SpectralView,
+    ) -> Result<()> {
+        let draw = self.prepare(target, view)?;
+        draw(cmd);
+        Ok(())
+    }
+
+    fn prepare(
+        &mut self,
+        target: &RenderTarget,
+        view: &SpectralView,
+    ) -> Result<impl FnOnce(vk::CommandBuffer) + '_> {
+        self.show(view.field, view.step)?;
+        self.pipelines_for(target.format(), target)?;
+        let push = self.push(target, view);
+        let (fill, lines, fill_set, lines_set) = &self.pipelines[&target.format()];
+        let extent = target.extent();
+        let (faces, face_count) = if view.per_vertex {
+            (self.node_grids.raw(), self.counts[1])
+        } else {
+            (self.proxies.raw(), self.counts[0])
+        };
+        let (edges, edge_count) = (self.edges.raw(), self.counts[2]);
+        let (overdraw, mesh_lines) = (view.overdraw, view.edges);
+        Ok(move |cmd: vk::CommandBuffer| {
+            fill.record_draw(cmd, extent, fill_set, bytemuck::bytes_of(&push), Some(faces), face_count);
+            let mut p = push;
+            p.flags[2] = MODE_EDGE_OVERDRAW;
+            if overdraw {
+                p.misc[0] = DEPTH_OVERDRAW;
+                lines.record_draw(cmd, extent, lines_set, bytemuck::bytes_of(&p), Some(edges), edge_count);
+            }
+            if mesh_lines {
+                p.flags[2] = MODE_EDGE_LINES;
+                p.misc[0] = DEPTH_LINES;
+                lines.record_draw(cmd, extent, lines_set, bytemuck::bytes_of(&p), Some(edges), edge_count);
+            }
+        })
+    }
+
+    /// Renders `view` into `target` and returns the pixels: colour-mapped RGBA8, or in an
+    /// RGBA32F target the raw `(value, ξ, η, element)` of every pixel (NaN where no element).
+    pub fn render(&mut self, target: &RenderTarget, view: &SpectralView) -> Result<Pixels> {
+        let gpu = self.gpu.clone();
+        let clear = if target.format() == ColorFormat::Rgba32F { [f32::NAN; 4] } else { BACKGROUND };
+        let draw = self.prepare(target, view)?;
+        target.render(&gpu, clear, draw).map_err(dev("drawing the spectral elements"))
+    }
+}

@@ -1,0 +1,296 @@
+//! Spectral elements (seed 002) on lavapipe with validation on: the GLSL bases and element
+//! maths against their Rust twins, per-pixel exactness against the CPU f64 reference for
+//! straight and curved planar meshes of orders 1–10 on GLL and equispaced nodes (and Gauss and
+//! Bernstein), edge overdraw on discontinuous data, and bad input.
+
+mod common;
+
+use std::sync::Arc;
+
+use galerkin::gpu::{shaders, vk, Buffer, MemoryKind};
+use galerkin::render::{ColorFormat, Colormap, Pixels, RenderTarget};
+use galerkin::spectral::generate::{annulus, quad_grid};
+use galerkin::spectral::reference::check_pixels;
+use galerkin::spectral::{
+    Basis1d, Field, NodeSet, SpectralError, SpectralMesh, SpectralRenderer, SpectralView, View2d,
+};
+
+fn storage<T: bytemuck::Pod>(gpu: &galerkin::gpu::Gpu, name: &str, data: &[T]) -> Buffer<T> {
+    Buffer::from_slice(gpu, name, data, vk::BufferUsageFlags::STORAGE_BUFFER).unwrap()
+}
+
+/// The GLSL bases, map, inverse map and value at random points against the Rust twins.
+#[test]
+fn glsl_element_maths_match_their_rust_twins() {
+    let gpu = common::gpu();
+    let cases = [
+        annulus(2, 3, 4, 10, NodeSet::GaussLobatto).unwrap(),
+        annulus(2, 3, 3, 7, NodeSet::Equispaced).unwrap(),
+        annulus(2, 2, 2, 5, NodeSet::Gauss).unwrap(),
+        quad_grid(3, 2, 0.2, 8, NodeSet::Bernstein).unwrap(),
+        quad_grid(3, 2, 0.2, 1, NodeSet::GaussLobatto).unwrap(),
+    ];
+    for mesh in &cases {
+        let renderer_bases = |b: &Basis1d| {
+            let mut w = vec![u32::from(b.set == NodeSet::Bernstein), b.order as u32, 0, 0];
+            w.extend((0..13).map(|k| (b.nodes.get(k).copied().unwrap_or(0.0) as f32).to_bits()));
+            w.extend((0..13).map(|k| (b.weights.get(k).copied().unwrap_or(0.0) as f32).to_bits()));
+            w
+        };
+        let mut bases = renderer_bases(&mesh.basis);
+        bases.extend(renderer_bases(&mesh.geometry));
+        let points: Vec<[f32; 4]> =
+            mesh.points.iter().map(|p| [p[0] as f32, p[1] as f32, 0.0, 0.0]).collect();
+        let values: Vec<f32> = mesh.fields[0].steps[0].iter().map(|&v| v as f32).collect();
+        let r = common::random_f32(200, 11);
+        let n = 100;
+        let mut probes: Vec<[f32; 4]> = Vec::new();
+        let mut expected = Vec::new();
+        for k in 0..n {
+            let e = (k * 7) % mesh.elements();
+            let (xi, eta) = (0.5 + 0.5 * f64::from(r[2 * k]), 0.5 + 0.5 * f64::from(r[2 * k + 1]));
+            let (xi, eta) = (f64::from(xi as f32), f64::from(eta as f32));
+            let (x, _) = mesh.map(e, xi, eta);
+            probes.push([e as f32, xi as f32, eta as f32, 0.0]);
+            // Inverse-map the point from the element centre.
+            probes.push([x[0] as f32, x[1] as f32, 0.5, 0.5]);
+            expected.push((e, xi, eta, x));
+        }
+        let pb = storage(&gpu, "points", &points);
+        let vb = storage(&gpu, "values", &values);
+        let qb = storage(&gpu, "probes", &probes);
+        let bb = storage(&gpu, "bases", &bases);
+        let ob = Buffer::<[f32; 4]>::new(
+            &gpu,
+            "out",
+            16 * n as u64,
+            vk::BufferUsageFlags::STORAGE_BUFFER,
+            MemoryKind::GpuToCpu,
+        )
+        .unwrap();
+        let bindings = [
+            pb.binding().unwrap(),
+            vb.binding().unwrap(),
+            qb.binding().unwrap(),
+            bb.binding().unwrap(),
+            ob.binding().unwrap(),
+        ];
+        common::run_probe(
+            &gpu,
+            "spectral probe",
+            shaders::probe::SPECTRAL,
+            &bindings,
+            &(n as u32).to_ne_bytes(),
+            2,
+        );
+        let out = ob.download(&gpu).unwrap();
+        let vmax = mesh.fields[0].steps[0].iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        for (k, &(e, xi, eta, x)) in expected.iter().enumerate() {
+            let o = &out[16 * k..16 * k + 16];
+            let what = format!("{:?} order {} probe {k}", mesh.basis.set, mesh.basis.order);
+            // Basis values: f32 products of ≤ 13 factors with weights up to ~1e6 (equispaced
+            // order 10), each within ~30 ε₃₂ relative of the f64 value; derivatives likewise
+            // against a scale of n².
+            let (mut a, mut da, mut g, mut dg) = ([0.0; 16], [0.0; 16], [0.0; 16], [0.0; 16]);
+            mesh.basis.eval(xi, &mut a, Some(&mut da));
+            mesh.geometry.eval(xi, &mut g, Some(&mut dg));
+            for j in 0..mesh.basis.len() {
+                let n2 = (mesh.basis.order * mesh.basis.order) as f64;
+                assert!(
+                    (f64::from(o[3 + j][0]) - a[j]).abs() < 1e-5,
+                    "{what}: l_{j} {} vs {}",
+                    o[3 + j][0],
+                    a[j]
+                );
+                assert!((f64::from(o[3 + j][1]) - da[j]).abs() < 1e-5 * n2, "{what}: l'_{j}");
+            }
+            for j in 0..mesh.geometry.len() {
+                assert!((f64::from(o[3 + j][2]) - g[j]).abs() < 1e-5, "{what}: g_{j}");
+                assert!((f64::from(o[3 + j][3]) - dg[j]).abs() < 1e-4, "{what}: g'_{j}");
+            }
+            // Map and value: sums of ≤ 121 f32 terms of size ≤ max|F| Λ.
+            let (xr, [dx, dy]) = mesh.map(e, xi, eta);
+            assert!(
+                (f64::from(o[0][1]) - xr[0]).abs() < 1e-5 && (f64::from(o[0][2]) - xr[1]).abs() < 1e-5,
+                "{what}: map"
+            );
+            for (gpu_d, d) in [(o[1][0], dx[0]), (o[1][1], dx[1]), (o[1][2], dy[0]), (o[1][3], dy[1])] {
+                assert!(
+                    (f64::from(gpu_d) - d).abs() < 1e-4 * (1.0 + d.abs()),
+                    "{what}: jacobian {gpu_d} vs {d}"
+                );
+            }
+            let value = mesh.value(0, 0, e, xi, eta);
+            assert!((f64::from(o[0][0]) - value).abs() < 1e-4 * vmax, "{what}: value {} vs {value}", o[0][0]);
+            // Newton from the centre recovers (ξ, η) of the f32-rounded point to ~1e-5.
+            assert_eq!(o[2][2], 1.0, "{what}: Newton converged");
+            let _ = x;
+            assert!(
+                (f64::from(o[2][0]) - xi).abs() < 2e-5 && (f64::from(o[2][1]) - eta).abs() < 2e-5,
+                "{what}: inverse map {:?} vs ({xi}, {eta})",
+                o[2]
+            );
+        }
+    }
+}
+
+fn render_data(
+    gpu: &galerkin::gpu::Gpu,
+    mesh: &Arc<SpectralMesh>,
+    view: &SpectralView,
+    size: (u32, u32),
+) -> Vec<f32> {
+    let mut r = SpectralRenderer::new(gpu, mesh.clone(), &Colormap::viridis()).unwrap();
+    let target = RenderTarget::new(gpu, "spectral data", size.0, size.1, ColorFormat::Rgba32F).unwrap();
+    match r.render(&target, view).unwrap() {
+        Pixels::Rgba32F(v) => v,
+        Pixels::Rgba8(_) => unreachable!(),
+    }
+}
+
+/// Every covered pixel shows its element's polynomial at the pixel centre's reference point
+/// (f64 inverse map), within the pixel's own f32 rounding bound; every pixel inside an element
+/// is covered. Straight (bilinear) and curved (isoparametric annulus) meshes, orders 1–10.
+#[test]
+fn pixels_show_the_polynomial_at_their_centre() {
+    let gpu = common::gpu();
+    let size = (160, 120);
+    for set in [NodeSet::GaussLobatto, NodeSet::Equispaced] {
+        for order in 1..=10 {
+            let meshes = [
+                quad_grid(4, 3, 0.25, order, set).unwrap(),
+                annulus(2, 4, order.clamp(2, 6), order, set).unwrap(),
+            ];
+            for mesh in meshes {
+                let curved = mesh.geometry.order > 1;
+                let mesh = Arc::new(mesh);
+                let view = SpectralView { overdraw: false, ..SpectralView::default() };
+                let pixels = render_data(&gpu, &mesh, &view, size);
+                let v2 = View2d::fit(&mesh, size.0, size.1);
+                let report = check_pixels(&mesh, 0, 0, &v2, size, &pixels);
+                eprintln!(
+                    "{set:?} order {order} curved {curved}: {} px, max error {:.2e}, {:.3} of the bound",
+                    report.covered, report.max_error, report.max_error_ratio
+                );
+                assert!(report.covered > 2000, "{set:?} order {order}: {} pixels covered", report.covered);
+                assert!(report.passed(), "{set:?} order {order} curved {curved}: {report:?}");
+            }
+        }
+    }
+    // Gauss–Legendre and Bernstein coefficients, a later time step.
+    for set in [NodeSet::Gauss, NodeSet::Bernstein] {
+        let mesh = Arc::new(annulus(2, 4, 4, 6, set).unwrap());
+        let view = SpectralView { step: 2, overdraw: false, ..SpectralView::default() };
+        let pixels = render_data(&gpu, &mesh, &view, size);
+        let v2 = View2d::fit(&mesh, size.0, size.1);
+        let report = check_pixels(&mesh, 0, 2, &v2, size, &pixels);
+        assert!(report.passed(), "{set:?}: {report:?}");
+    }
+}
+
+/// With edge overdraw, no background pixel shows inside a mesh of discontinuous elements: a
+/// pixel centre is "inside" when it lies inside some element's reference square.
+#[test]
+fn edge_overdraw_leaves_no_crack_in_discontinuous_data() {
+    let gpu = common::gpu();
+    let size = (200, 150);
+    for mesh in [
+        annulus(3, 6, 4, 5, NodeSet::GaussLobatto).unwrap(),
+        quad_grid(5, 4, 0.3, 4, NodeSet::GaussLobatto).unwrap(),
+    ] {
+        let mesh = Arc::new(mesh);
+        let cells = mesh.field_index(Some("cells")).unwrap();
+        let view = SpectralView { field: cells, ..SpectralView::default() };
+        let pixels = render_data(&gpu, &mesh, &view, size);
+        let v2 = View2d::fit(&mesh, size.0, size.1);
+        let mut holes = 0;
+        for py in 0..size.1 {
+            for px in 0..size.0 {
+                let k = 4 * (py * size.0 + px) as usize;
+                if pixels[k + 3].is_nan()
+                    && mesh.locate(v2.pixel_centre(px, py, size.0, size.1), 0.0).is_some()
+                {
+                    holes += 1;
+                }
+            }
+        }
+        assert_eq!(holes, 0, "background pixels inside the mesh");
+    }
+}
+
+/// The colour output maps the value through the colour ramp (and shows the background
+/// outside), and the mesh lines darken the edge pixels.
+#[test]
+fn colour_output_and_mesh_lines() {
+    let gpu = common::gpu();
+    let mesh = Arc::new(quad_grid(4, 2, 0.0, 3, NodeSet::GaussLobatto).unwrap());
+    let mut r = SpectralRenderer::new(&gpu, mesh.clone(), &Colormap::viridis()).unwrap();
+    let size = (128, 64);
+    let target = RenderTarget::new(&gpu, "spectral colour", size.0, size.1, ColorFormat::Rgba8).unwrap();
+    let view = SpectralView { range: Some((-1.5, 1.5)), ..SpectralView::default() };
+    let Pixels::Rgba8(plain) = r.render(&target, &view).unwrap() else { unreachable!() };
+    let Pixels::Rgba8(lined) = r.render(&target, &SpectralView { edges: true, ..view.clone() }).unwrap()
+    else {
+        unreachable!()
+    };
+    let v2 = View2d::fit(&mesh, size.0, size.1);
+    let cmap = Colormap::viridis();
+    let (mut checked, mut darker) = (0, 0);
+    for py in 0..size.1 {
+        for px in 0..size.0 {
+            let p = v2.pixel_centre(px, py, size.0, size.1);
+            let k = 4 * (py * size.0 + px) as usize;
+            if let Some((e, ref_point)) = mesh.locate(p, -0.05) {
+                let v = mesh.value(0, 0, e, ref_point[0], ref_point[1]);
+                let c = cmap.sample(galerkin::render::ramp_coordinate(v, -1.5, 1.5, false));
+                // 8-bit output of a linearly filtered 256-texel ramp: within 2/255 per channel.
+                for ch in 0..3 {
+                    assert!(
+                        (f64::from(plain[k + ch]) / 255.0 - c[ch]).abs() <= 2.0 / 255.0,
+                        "pixel ({px}, {py})"
+                    );
+                }
+                checked += 1;
+            }
+            let sum = |img: &[u8]| u32::from(img[k]) + u32::from(img[k + 1]) + u32::from(img[k + 2]);
+            if sum(&lined) + 30 < sum(&plain) {
+                darker += 1;
+            }
+        }
+    }
+    assert!(checked > 3000, "{checked}");
+    // Lines along 4 + 1 verticals and 2 + 1 horizontals of the 128 × 64 image, about 1 px wide.
+    assert!(darker > 300, "{darker} pixels darkened by the mesh lines");
+}
+
+#[test]
+fn bad_input_names_the_element_or_field() {
+    let g = Basis1d::new(NodeSet::Equispaced, 1).unwrap();
+    let b = Basis1d::new(NodeSet::GaussLobatto, 2).unwrap();
+    let square = vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [1.0, 1.0, 0.0]];
+    let field = |v: Vec<f64>| vec![Field { name: "f".into(), times: vec![0.0], steps: vec![v] }];
+    // A NaN value names element and node.
+    let mut v = vec![0.0; 9];
+    v[4] = f64::NAN;
+    let e = SpectralMesh::new(g.clone(), b.clone(), square.clone(), field(v)).unwrap_err();
+    assert!(matches!(e, SpectralError::NotFinite { element: 0, .. }), "{e}");
+    assert!(e.to_string().contains("value 4"), "{e}");
+    // Wrong count.
+    let e = SpectralMesh::new(g.clone(), b.clone(), square.clone(), field(vec![0.0; 8])).unwrap_err();
+    assert!(e.to_string().contains("8 entries, expected 9"), "{e}");
+    // A folded element (corners crossed): the second element.
+    let mut two = square.clone();
+    two.extend([[1.0, 0.0, 0.0], [2.0, 0.0, 0.0], [2.0, 1.0, 0.0], [1.0, 1.0, 0.0]]);
+    let e = SpectralMesh::new(g.clone(), b.clone(), two, field(vec![0.0; 18])).unwrap_err();
+    assert!(matches!(e, SpectralError::Invalid { element: 1, .. }), "{e}");
+    // Orders outside 1..=12.
+    assert!(Basis1d::new(NodeSet::GaussLobatto, 13).is_err());
+    // Unknown field and step.
+    let mesh = SpectralMesh::new(g, b, square, field(vec![0.0; 9])).unwrap();
+    assert!(mesh.field_index(Some("pressure")).unwrap_err().to_string().contains("\"f\""));
+    let gpu = common::gpu();
+    let mut r = SpectralRenderer::new(&gpu, Arc::new(mesh), &Colormap::viridis()).unwrap();
+    let target = RenderTarget::new(&gpu, "t", 8, 8, ColorFormat::Rgba8).unwrap();
+    let e = r.render(&target, &SpectralView { step: 3, ..SpectralView::default() }).err().unwrap();
+    assert!(e.to_string().contains("step 3"), "{e}");
+}
