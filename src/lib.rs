@@ -25,3 +25,4 @@ pub mod render;
 pub mod spacetime;
 pub mod spectral;
 pub mod tensor;
+pub mod vtk;

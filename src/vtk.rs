@@ -1,0 +1,442 @@
+//! VTK XML unstructured grids (`.vtu`): the container, shared by the spacetime and spectral
+//! data sets (each module maps its own cells and arrays onto it).
+//!
+//! Writing uses appended raw binary (`header_type="UInt64"`), to `NAME.partial` renamed when
+//! complete. Reading accepts what VTK and ParaView write: `ascii`, inline `binary` (base64) and
+//! `appended` data (raw or base64), with UInt32 or UInt64 block headers, uncompressed or
+//! zlib-compressed (`vtkZLibDataCompressor`); one `<Piece>`. Every error names the file and,
+//! for data errors, the array.
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+/// A problem with a `.vtu` file: the file and what is wrong.
+#[derive(Debug, thiserror::Error)]
+#[error("{path}: {detail}")]
+pub struct VtkError {
+    /// The file.
+    pub path: PathBuf,
+    /// What is wrong.
+    pub detail: String,
+}
+
+fn err(path: &Path, detail: impl Into<String>) -> VtkError {
+    VtkError { path: path.to_path_buf(), detail: detail.into() }
+}
+
+/// One `<DataArray>` as numbers.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DataArray {
+    /// Its section: `Points`, `Cells`, `PointData` or `CellData`.
+    pub section: String,
+    /// Its `Name` (`Points` for the points).
+    pub name: String,
+    /// `NumberOfComponents`.
+    pub components: usize,
+    /// The values, tuple by tuple.
+    pub values: Vec<f64>,
+}
+
+/// The single piece of an unstructured grid, every array read.
+#[derive(Clone, Debug, PartialEq)]
+pub struct UnstructuredGrid {
+    /// The file it came from (for errors).
+    pub path: PathBuf,
+    /// `NumberOfPoints`.
+    pub points: usize,
+    /// `NumberOfCells`.
+    pub cells: usize,
+    /// Every data array of the piece.
+    pub arrays: Vec<DataArray>,
+}
+
+impl UnstructuredGrid {
+    /// The array `name` of `section`, if present.
+    pub fn array(&self, section: &str, name: &str) -> Option<&DataArray> {
+        self.arrays.iter().find(|a| a.section == section && (a.name == name || section == "Points"))
+    }
+
+    /// The array `name` of `section` with `components` per tuple and `tuples` tuples, or an
+    /// error naming the file and array.
+    pub fn require(
+        &self,
+        section: &str,
+        name: &str,
+        components: usize,
+        tuples: usize,
+    ) -> Result<&[f64], VtkError> {
+        let a = self
+            .array(section, name)
+            .ok_or_else(|| err(&self.path, format!("no {section} array {name:?}")))?;
+        if a.components != components || a.values.len() != components * tuples {
+            return Err(err(
+                &self.path,
+                format!(
+                    "array {name}: {} values in {} components, expected {tuples} × {components}",
+                    a.values.len(),
+                    a.components
+                ),
+            ));
+        }
+        Ok(&a.values)
+    }
+
+    /// Like [`Self::require`], `None` when the array is absent.
+    pub fn optional(
+        &self,
+        section: &str,
+        name: &str,
+        components: usize,
+        tuples: usize,
+    ) -> Result<Option<&[f64]>, VtkError> {
+        match self.array(section, name) {
+            None => Ok(None),
+            Some(_) => self.require(section, name, components, tuples).map(Some),
+        }
+    }
+
+    /// An error about this file.
+    pub fn error(&self, detail: impl Into<String>) -> VtkError {
+        err(&self.path, detail)
+    }
+}
+
+/// Values of an array to write.
+pub enum Values {
+    /// `Float64`.
+    F64(Vec<f64>),
+    /// `Int64`.
+    I64(Vec<i64>),
+    /// `Int32`.
+    I32(Vec<i32>),
+    /// `UInt8`.
+    U8(Vec<u8>),
+}
+
+impl Values {
+    fn vtk_type(&self) -> &'static str {
+        match self {
+            Self::F64(_) => "Float64",
+            Self::I64(_) => "Int64",
+            Self::I32(_) => "Int32",
+            Self::U8(_) => "UInt8",
+        }
+    }
+
+    fn bytes(&self) -> Vec<u8> {
+        match self {
+            Self::F64(v) => v.iter().flat_map(|x| x.to_le_bytes()).collect(),
+            Self::I64(v) => v.iter().flat_map(|x| x.to_le_bytes()).collect(),
+            Self::I32(v) => v.iter().flat_map(|x| x.to_le_bytes()).collect(),
+            Self::U8(v) => v.clone(),
+        }
+    }
+}
+
+/// An array to write: section (`Points`, `Cells`, `PointData`, `CellData`), name, components.
+pub struct OutArray {
+    /// Its section.
+    pub section: &'static str,
+    /// Its name.
+    pub name: String,
+    /// Components per tuple.
+    pub components: usize,
+    /// The values.
+    pub values: Values,
+}
+
+/// Writes an unstructured grid of `points` points and `cells` cells with `arrays` (the
+/// `Points` array, the `Cells` arrays `connectivity`, `offsets`, `types`, and any point and
+/// cell data) to `path` as appended raw binary, via `path.partial` renamed when complete;
+/// `comment` goes into an XML comment at the top.
+pub fn write(
+    path: &Path,
+    comment: &str,
+    points: usize,
+    cells: usize,
+    arrays: &[OutArray],
+) -> Result<(), VtkError> {
+    let blobs: Vec<Vec<u8>> = arrays.iter().map(|a| a.values.bytes()).collect();
+    let mut xml = format!(
+        "<?xml version=\"1.0\"?>\n<!-- {comment} -->\n<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n  <UnstructuredGrid>\n    <Piece NumberOfPoints=\"{points}\" NumberOfCells=\"{cells}\">\n"
+    );
+    let mut offset = 0u64;
+    for section in ["Points", "Cells", "PointData", "CellData"] {
+        let members: Vec<usize> = (0..arrays.len()).filter(|&k| arrays[k].section == section).collect();
+        if members.is_empty() {
+            continue;
+        }
+        xml.push_str(&format!("      <{section}>\n"));
+        for k in members {
+            let a = &arrays[k];
+            xml.push_str(&format!(
+                "        <DataArray type=\"{}\" Name=\"{}\" NumberOfComponents=\"{}\" format=\"appended\" offset=\"{offset}\"/>\n",
+                a.values.vtk_type(),
+                a.name,
+                a.components
+            ));
+            offset += 8 + blobs[k].len() as u64;
+        }
+        xml.push_str(&format!("      </{section}>\n"));
+    }
+    xml.push_str("    </Piece>\n  </UnstructuredGrid>\n  <AppendedData encoding=\"raw\">\n   _");
+    let mut partial = path.as_os_str().to_owned();
+    partial.push(".partial");
+    let partial = PathBuf::from(partial);
+    // Blocks in section order, as the offsets were assigned.
+    let order: Vec<usize> = ["Points", "Cells", "PointData", "CellData"]
+        .iter()
+        .flat_map(|s| (0..arrays.len()).filter(move |&k| arrays[k].section == *s))
+        .collect();
+    let result = (|| -> std::io::Result<()> {
+        let mut out = std::io::BufWriter::new(std::fs::File::create(&partial)?);
+        out.write_all(xml.as_bytes())?;
+        for k in order {
+            out.write_all(&(blobs[k].len() as u64).to_le_bytes())?;
+            out.write_all(&blobs[k])?;
+        }
+        out.write_all(b"\n  </AppendedData>\n</VTKFile>\n")?;
+        out.flush()
+    })();
+    if let Err(e) = result {
+        let _ = std::fs::remove_file(&partial);
+        return Err(err(&partial, e.to_string()));
+    }
+    std::fs::rename(&partial, path).map_err(|e| err(path, e.to_string()))
+}
+
+/// How the binary blocks of a file are framed.
+struct Framing {
+    header_u64: bool,
+    zlib: bool,
+}
+
+fn base64_decode(text: &str) -> Option<Vec<u8>> {
+    let mut out = Vec::with_capacity(text.len() * 3 / 4);
+    let (mut acc, mut bits) = (0u32, 0u32);
+    for c in text.bytes().filter(|c| !c.is_ascii_whitespace()) {
+        let v = match c {
+            b'A'..=b'Z' => c - b'A',
+            b'a'..=b'z' => c - b'a' + 26,
+            b'0'..=b'9' => c - b'0' + 52,
+            b'+' => 62,
+            b'/' => 63,
+            b'=' => continue,
+            _ => return None,
+        };
+        acc = (acc << 6) | u32::from(v);
+        bits += 6;
+        if bits >= 8 {
+            bits -= 8;
+            out.push((acc >> bits) as u8);
+        }
+    }
+    Some(out)
+}
+
+impl Framing {
+    fn header_bytes(&self) -> usize {
+        if self.header_u64 {
+            8
+        } else {
+            4
+        }
+    }
+
+    fn word(&self, b: &[u8], k: usize) -> Option<usize> {
+        let h = self.header_bytes();
+        let w = b.get(k * h..(k + 1) * h)?;
+        Some(if self.header_u64 {
+            u64::from_le_bytes(w.try_into().ok()?) as usize
+        } else {
+            u32::from_le_bytes(w.try_into().ok()?) as usize
+        })
+    }
+
+    /// Decodes one block (its header and data) from `b`; returns the data and the bytes used.
+    fn block(&self, b: &[u8]) -> Result<(Vec<u8>, usize), String> {
+        let h = self.header_bytes();
+        if !self.zlib {
+            let n = self.word(b, 0).ok_or("truncated block header")?;
+            let data =
+                b.get(h..h + n).ok_or_else(|| format!("truncated: a block of {n} bytes is cut short"))?;
+            return Ok((data.to_vec(), h + n));
+        }
+        // [blocks, block size, last block size, compressed sizes…], then the zlib streams.
+        let blocks = self.word(b, 0).ok_or("truncated compression header")?;
+        let mut at = h * (3 + blocks);
+        if b.len() < at {
+            return Err("truncated compression header".into());
+        }
+        let mut out = Vec::new();
+        for k in 0..blocks {
+            let size = self.word(b, 3 + k).ok_or("truncated compression header")?;
+            let z = b.get(at..at + size).ok_or("truncated compressed block")?;
+            let d = miniz_oxide::inflate::decompress_to_vec_zlib(z)
+                .map_err(|e| format!("bad zlib data: {e:?}"))?;
+            out.extend_from_slice(&d);
+            at += size;
+        }
+        Ok((out, at))
+    }
+}
+
+/// Numbers of a DataArray of VTK type `ty` from little-endian bytes.
+fn numbers(ty: &str, b: &[u8]) -> Result<Vec<f64>, String> {
+    macro_rules! conv {
+        ($t:ty) => {{
+            const N: usize = std::mem::size_of::<$t>();
+            if !b.len().is_multiple_of(N) {
+                return Err(format!("{} bytes is not a whole number of {ty} values", b.len()));
+            }
+            b.chunks_exact(N).map(|c| <$t>::from_le_bytes(c.try_into().expect("N bytes")) as f64).collect()
+        }};
+    }
+    Ok(match ty {
+        "Float64" => conv!(f64),
+        "Float32" => conv!(f32),
+        "Int64" => conv!(i64),
+        "UInt64" => conv!(u64),
+        "Int32" => conv!(i32),
+        "UInt32" => conv!(u32),
+        "Int16" => conv!(i16),
+        "UInt16" => conv!(u16),
+        "Int8" => conv!(i8),
+        "UInt8" => conv!(u8),
+        other => return Err(format!("unsupported type {other}")),
+    })
+}
+
+/// Reads the one piece of the unstructured grid in `path`, with every data array.
+pub fn read(path: &Path) -> Result<UnstructuredGrid, VtkError> {
+    let bytes = std::fs::read(path).map_err(|e| err(path, e.to_string()))?;
+    // Appended raw data are not XML: parse the text before them, closed.
+    let appended_at = find(&bytes, b"<AppendedData");
+    let text_end = appended_at.unwrap_or(bytes.len());
+    let mut text = std::str::from_utf8(&bytes[..text_end])
+        .map_err(|e| err(path, format!("not UTF-8 XML text at byte {}", e.valid_up_to())))?
+        .to_string();
+    if appended_at.is_some() {
+        text.push_str("</VTKFile>");
+    }
+    let doc = roxmltree::Document::parse(&text).map_err(|e| err(path, format!("XML: {e}")))?;
+    let root = doc.root_element();
+    if root.tag_name().name() != "VTKFile" || root.attribute("type") != Some("UnstructuredGrid") {
+        return Err(err(path, "not a VTK XML UnstructuredGrid file"));
+    }
+    if root.attribute("byte_order").is_some_and(|o| o != "LittleEndian") {
+        return Err(err(path, "big-endian VTK files are not supported"));
+    }
+    let framing = Framing {
+        header_u64: root.attribute("header_type") == Some("UInt64"),
+        zlib: match root.attribute("compressor") {
+            None | Some("") => false,
+            Some("vtkZLibDataCompressor") => true,
+            Some(other) => return Err(err(path, format!("compressor {other} is not supported (only zlib)"))),
+        },
+    };
+    // The appended section: after the '_' that follows the opening tag.
+    let appended = match appended_at {
+        Some(at) => {
+            let tag_end = find(&bytes[at..], b">")
+                .map(|k| at + k)
+                .ok_or_else(|| err(path, "unterminated <AppendedData>"))?;
+            let tag = String::from_utf8_lossy(&bytes[at..tag_end]).to_string();
+            let underscore = find(&bytes[tag_end..], b"_")
+                .map(|k| tag_end + k + 1)
+                .ok_or_else(|| err(path, "<AppendedData> without its '_' marker"))?;
+            Some((tag.contains("encoding=\"base64\""), underscore))
+        }
+        None => None,
+    };
+    let pieces: Vec<_> = doc.descendants().filter(|n| n.has_tag_name("Piece")).collect();
+    if pieces.len() != 1 {
+        return Err(err(path, format!("{} pieces; one is supported", pieces.len())));
+    }
+    let piece = pieces[0];
+    let count = |name: &str| -> Result<usize, VtkError> {
+        piece
+            .attribute(name)
+            .and_then(|v| v.trim().parse().ok())
+            .ok_or_else(|| err(path, format!("<Piece> lacks a valid {name}")))
+    };
+    let (n_points, n_cells) = (count("NumberOfPoints")?, count("NumberOfCells")?);
+    let mut arrays = Vec::new();
+    for section in piece.children().filter(|n| n.is_element()) {
+        for node in section.children().filter(|n| n.has_tag_name("DataArray")) {
+            let section_name = section.tag_name().name();
+            let name = node.attribute("Name").unwrap_or(if section_name == "Points" { "Points" } else { "" });
+            let ty = node.attribute("type").unwrap_or("Float32");
+            let comps: usize = node.attribute("NumberOfComponents").and_then(|c| c.parse().ok()).unwrap_or(1);
+            let what = |d: String| err(path, format!("array {name}: {d}"));
+            let values = match node.attribute("format").unwrap_or("ascii") {
+                "ascii" => node
+                    .text()
+                    .unwrap_or("")
+                    .split_ascii_whitespace()
+                    .map(|w| w.parse::<f64>().map_err(|_| what(format!("{w:?} is not a number"))))
+                    .collect::<Result<Vec<f64>, _>>()?,
+                "binary" => {
+                    let raw =
+                        base64_decode(node.text().unwrap_or("")).ok_or_else(|| what("bad base64".into()))?;
+                    let (data, _) = framing.block(&raw).map_err(what)?;
+                    numbers(ty, &data).map_err(what)?
+                }
+                "appended" => {
+                    let (base64, start) = appended
+                        .ok_or_else(|| what("appended, but the file has no <AppendedData>".into()))?;
+                    let offset: usize = node
+                        .attribute("offset")
+                        .and_then(|o| o.trim().parse().ok())
+                        .ok_or_else(|| what("appended without an offset".into()))?;
+                    let data = if base64 {
+                        // Each array is its own base64 run, up to the next array's offset.
+                        let rest = bytes
+                            .get(start + offset..)
+                            .ok_or_else(|| what("offset past the end of the file".into()))?;
+                        let end = rest
+                            .iter()
+                            .position(|&c| c == b'<' || c.is_ascii_whitespace())
+                            .unwrap_or(rest.len());
+                        let raw = base64_decode(&String::from_utf8_lossy(&rest[..end]))
+                            .ok_or_else(|| what("bad base64".into()))?;
+                        framing.block(&raw).map_err(what)?.0
+                    } else {
+                        let rest = bytes
+                            .get(start + offset..)
+                            .ok_or_else(|| what("offset past the end of the file".into()))?;
+                        framing.block(rest).map_err(what)?.0
+                    };
+                    numbers(ty, &data).map_err(what)?
+                }
+                other => return Err(what(format!("format {other:?} is not supported"))),
+            };
+            arrays.push(DataArray {
+                section: section_name.to_string(),
+                name: name.to_string(),
+                components: comps,
+                values,
+            });
+        }
+    }
+    Ok(UnstructuredGrid { path: path.to_path_buf(), points: n_points, cells: n_cells, arrays })
+}
+
+fn find(haystack: &[u8], needle: &[u8]) -> Option<usize> {
+    haystack.windows(needle.len()).position(|w| w == needle)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn base64_decodes_the_rfc_4648_vectors() {
+        for (text, plain) in
+            [("", ""), ("Zg==", "f"), ("Zm8=", "fo"), ("Zm9v", "foo"), ("Zm9vYmFy", "foobar")]
+        {
+            assert_eq!(base64_decode(text).unwrap(), plain.as_bytes());
+        }
+        assert!(base64_decode("Zm9v!").is_none());
+    }
+}
