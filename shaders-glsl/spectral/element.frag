@@ -34,7 +34,8 @@ void main() {
     float width = fwidth(levels);
     if (!inside) discard;
     if (pc.flags.x != 0u) {
-        out_colour = vec4(v, r, float(element));
+        // Edge overdraw marks its pixels with −(element + 1) so analyses can tell them apart.
+        out_colour = vec4(v, r, mode >= SPECTRAL_MODE_EDGE_OVERDRAW ? -float(element) - 1.0 : float(element));
         return;
     }
     vec3 colour = texture(colormap, ramp_texcoord(t, pc.range.z)).rgb;

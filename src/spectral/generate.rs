@@ -12,7 +12,7 @@
 
 use super::basis::{Basis1d, NodeSet};
 use super::error::SpectralError;
-use super::mesh::{Field, SpectralMesh};
+use super::mesh::{Field, Shape, SpectralMesh};
 
 /// The smooth analytic field `waves` at time t.
 pub fn waves(x: f64, y: f64, t: f64) -> f64 {
@@ -102,59 +102,65 @@ fn with_fields(
     set: NodeSet,
 ) -> Result<SpectralMesh, SpectralError> {
     let basis = Basis1d::new(set, order)?;
-    let shell = SpectralMesh::new(geometry, basis.clone(), points, Vec::new())?;
+    let shell = SpectralMesh::new(Shape::Quadrilateral, geometry, basis.clone(), points, Vec::new())?;
     let times: Vec<f64> = (0..STEPS).map(|k| 0.5 * k as f64).collect();
-    let steps = times.iter().map(|&t| sample(&shell, |_, x, y| waves(x, y, t))).collect();
-    let cells = sample(&shell, |e, x, y| waves(x, y, 0.0) + cell_offset(e));
+    let steps = times.iter().map(|&t| sample(&shell, |_, x| waves(x[0], x[1], t))).collect();
+    let cells = sample(&shell, |e, x| waves(x[0], x[1], 0.0) + cell_offset(e));
     let fields = vec![
         Field { name: "waves".into(), times: times.clone(), steps },
         Field { name: "cells".into(), times: vec![0.0], steps: vec![cells] },
     ];
-    SpectralMesh::new(shell.geometry, shell.basis, shell.points, fields)
+    SpectralMesh::new(shell.shape, shell.geometry, shell.basis, shell.points, fields)
 }
 
-/// The coefficients of `f(e, x, y)` on every element of `mesh` in its field basis: values at
-/// the nodes, or for Bernstein the coefficients of the interpolant at the GLL points.
-pub fn sample(mesh: &SpectralMesh, f: impl Fn(usize, f64, f64) -> f64) -> Vec<f64> {
+/// The coefficients of `f(e, x)` on every element of `mesh` in its field basis: values at the
+/// nodes, or for Bernstein the coefficients of the interpolant at the GLL points.
+pub fn sample(mesh: &SpectralMesh, f: impl Fn(usize, [f64; 3]) -> f64) -> Vec<f64> {
     let b = &mesh.basis;
     let m = b.len();
+    let dim = mesh.shape.dim() as usize;
     let at = if b.set == NodeSet::Bernstein {
         super::basis::gauss_lobatto_nodes(b.order)
     } else {
         b.nodes.clone()
     };
-    let mut out = Vec::with_capacity(mesh.elements() * m * m);
+    let per = mesh.values_per_element();
+    let mut out = Vec::with_capacity(mesh.elements() * per);
     for e in 0..mesh.elements() {
-        let mut v: Vec<f64> = Vec::with_capacity(m * m);
-        for &eta in &at {
-            for &xi in &at {
-                let (x, _) = mesh.map(e, xi, eta);
-                v.push(f(e, x[0], x[1]));
-            }
+        let mut v: Vec<f64> = Vec::with_capacity(per);
+        for flat in 0..per {
+            let (i, j, k) = (flat % m, (flat / m) % m, flat / (m * m));
+            let x = match mesh.shape {
+                Shape::Quadrilateral => mesh.map(e, at[i], at[j]).0,
+                Shape::Hexahedron => mesh.map_hex(e, [at[i], at[j], at[k]]).0,
+            };
+            v.push(f(e, x));
         }
         if b.set == NodeSet::Bernstein {
-            v = tensor_interpolate(b, &at, &v);
+            v = tensor_interpolate(b, &at, &v, dim);
         }
         out.extend(v);
     }
     out
 }
 
-/// Tensor-product interpolation: coefficients in `basis` ⊗ `basis` of the values `v` given at
-/// `points` × `points` (ξ fastest): the 1D interpolation along ξ for each row, then along η.
-fn tensor_interpolate(basis: &Basis1d, points: &[f64], v: &[f64]) -> Vec<f64> {
+/// Tensor-product interpolation: coefficients in `basis`^⊗dim of the values `v` given at
+/// `points`^dim (ξ fastest), by the 1D interpolation along each axis in turn.
+fn tensor_interpolate(basis: &Basis1d, points: &[f64], v: &[f64], dim: usize) -> Vec<f64> {
     let m = basis.len();
-    let mut rows = vec![0.0; m * m];
-    for j in 0..m {
-        let c = basis.interpolate(points, &v[j * m..(j + 1) * m]);
-        rows[j * m..(j + 1) * m].copy_from_slice(&c);
-    }
-    let mut out = vec![0.0; m * m];
-    for i in 0..m {
-        let col: Vec<f64> = (0..m).map(|j| rows[j * m + i]).collect();
-        let c = basis.interpolate(points, &col);
-        for j in 0..m {
-            out[j * m + i] = c[j];
+    let mut out = v.to_vec();
+    for axis in 0..dim {
+        let stride = m.pow(axis as u32);
+        for flat in 0..out.len() {
+            // Each line along `axis` once, from its first entry.
+            if (flat / stride) % m != 0 {
+                continue;
+            }
+            let line: Vec<f64> = (0..m).map(|t| out[flat + t * stride]).collect();
+            let c = basis.interpolate(points, &line);
+            for t in 0..m {
+                out[flat + t * stride] = c[t];
+            }
         }
     }
     out

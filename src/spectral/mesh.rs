@@ -1,12 +1,14 @@
-//! A spectral-element data set of quadrilaterals (seed 002): per element a tensor-product
-//! geometry map x(ξ, η) = Σ_ij X_ij g_i(ξ) g_j(η) of its own order and node set, and any
-//! number of scalar fields, each with any number of time steps, as tensor-product polynomials
-//! f(ξ, η) = Σ_ij F_ij ℓ_i(ξ) ℓ_j(η) on the reference square [0, 1]². This module is also the
-//! CPU f64 reference the renderer is tested against: the map, its Jacobian, its inverse
-//! (Newton's method in f64) and the field values.
+//! A spectral-element data set (seed 002) of quadrilaterals or hexahedra: per element a
+//! tensor-product geometry map x(ξ, η) = Σ_ij X_ij g_i(ξ) g_j(η) (hexahedra: x(ξ, η, ζ) =
+//! Σ_ijk X_ijk g_i(ξ) g_j(η) g_k(ζ)) of its own order and node set, and any number of scalar
+//! fields, each with any number of time steps, as tensor-product polynomials
+//! f = Σ F_ij ℓ_i(ξ) ℓ_j(η) (Σ F_ijk ℓ_i ℓ_j ℓ_k) on the reference square [0, 1]² (cube
+//! [0, 1]³). This module is also the CPU f64 reference the renderer is tested against: the
+//! map, its Jacobian, its inverse (Newton's method in f64) and the field values.
 //!
-//! Node (i, j) of element e is entry `e (m² ) + j m + i` (m = order + 1, i along ξ fastest),
-//! for geometry points and field values alike. Loaders reorder other conventions into this one.
+//! Node (i, j) of element e is entry `e m² + j m + i` (m = order + 1, i along ξ fastest), node
+//! (i, j, k) of a hexahedron `e m³ + k m² + j m + i`, for geometry points and field values
+//! alike. Loaders reorder other conventions into this one.
 
 use super::basis::Basis1d;
 use super::error::SpectralError;
@@ -22,9 +24,30 @@ pub struct Field {
     pub steps: Vec<Vec<f64>>,
 }
 
-/// Quadrilateral spectral elements in the plane (z = 0) or embedded in 3D, with their fields.
+/// The reference shape of every element of a mesh.
+#[derive(Copy, Clone, Debug, PartialEq, Eq, Hash)]
+pub enum Shape {
+    /// Quadrilaterals, (ξ, η) ∈ [0, 1]², in the plane or embedded in 3D.
+    Quadrilateral,
+    /// Hexahedra, (ξ, η, ζ) ∈ [0, 1]³.
+    Hexahedron,
+}
+
+impl Shape {
+    /// Reference dimension: 2 or 3.
+    pub fn dim(self) -> u32 {
+        match self {
+            Self::Quadrilateral => 2,
+            Self::Hexahedron => 3,
+        }
+    }
+}
+
+/// Spectral elements (quadrilaterals in the plane or in 3D, or hexahedra) with their fields.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SpectralMesh {
+    /// The elements' reference shape.
+    pub shape: Shape,
     /// The geometry's basis (its order may be lower than the field's).
     pub geometry: Basis1d,
     /// The fields' basis.
@@ -44,12 +67,13 @@ impl SpectralMesh {
     /// neither folds nor collapses (the Jacobian determinant keeps one sign on a (2g + 2)²
     /// sample grid; planar meshes only). Errors name the element or field.
     pub fn new(
+        shape: Shape,
         geometry: Basis1d,
         basis: Basis1d,
         points: Vec<[f64; 3]>,
         fields: Vec<Field>,
     ) -> Result<Self, SpectralError> {
-        let gm = geometry.len() * geometry.len();
+        let gm = geometry.len().pow(shape.dim());
         if points.is_empty() || !points.len().is_multiple_of(gm) {
             return Err(SpectralError::Length {
                 what: format!("geometry points (order {} has {gm} per element)", geometry.order),
@@ -66,7 +90,7 @@ impl SpectralMesh {
                 });
             }
         }
-        let fm = basis.len() * basis.len();
+        let fm = basis.len().pow(shape.dim());
         for f in &fields {
             if f.steps.is_empty() || f.steps.len() != f.times.len() {
                 return Err(SpectralError::Length {
@@ -91,10 +115,12 @@ impl SpectralMesh {
                 }
             }
         }
-        let mesh = Self { geometry, basis, points, fields };
-        if mesh.is_planar() {
-            for e in 0..elements {
-                mesh.check_orientation(e)?;
+        let mesh = Self { shape, geometry, basis, points, fields };
+        for e in 0..elements {
+            match shape {
+                Shape::Quadrilateral if mesh.is_planar() => mesh.check_orientation(e)?,
+                Shape::Hexahedron => mesh.check_orientation_hex(e)?,
+                Shape::Quadrilateral => {}
             }
         }
         Ok(mesh)
@@ -102,17 +128,27 @@ impl SpectralMesh {
 
     /// Number of elements.
     pub fn elements(&self) -> usize {
-        self.points.len() / (self.geometry.len() * self.geometry.len())
+        self.points.len() / self.geometry.len().pow(self.shape.dim())
     }
 
-    /// Whether every geometry point has z = 0 (a planar mesh, drawn in 2D).
+    /// Whether this is a quadrilateral mesh with z = 0 at every geometry point (drawn in 2D).
     pub fn is_planar(&self) -> bool {
-        self.points.iter().all(|p| p[2] == 0.0)
+        self.shape == Shape::Quadrilateral && self.points.iter().all(|p| p[2] == 0.0)
+    }
+
+    /// Geometry points per element.
+    pub fn points_per_element(&self) -> usize {
+        self.geometry.len().pow(self.shape.dim())
+    }
+
+    /// Field coefficients per element.
+    pub fn values_per_element(&self) -> usize {
+        self.basis.len().pow(self.shape.dim())
     }
 
     /// The geometry points of element `e`.
     pub fn element_points(&self, e: usize) -> &[[f64; 3]] {
-        let gm = self.geometry.len() * self.geometry.len();
+        let gm = self.points_per_element();
         &self.points[e * gm..(e + 1) * gm]
     }
 
@@ -130,11 +166,12 @@ impl SpectralMesh {
 
     /// The coefficients of element `e` for `field` at `step`.
     pub fn element_values(&self, field: usize, step: usize, e: usize) -> &[f64] {
-        let fm = self.basis.len() * self.basis.len();
+        let fm = self.values_per_element();
         &self.fields[field].steps[step][e * fm..(e + 1) * fm]
     }
 
-    /// The geometry map of element `e` at (ξ, η): the point and its derivatives ∂x/∂ξ, ∂x/∂η.
+    /// The geometry map of quadrilateral `e` at (ξ, η): the point and its derivatives ∂x/∂ξ,
+    /// ∂x/∂η.
     pub fn map(&self, e: usize, xi: f64, eta: f64) -> ([f64; 3], [[f64; 3]; 2]) {
         let m = self.geometry.len();
         let (mut a, mut da, mut b, mut db) = ([0.0; 16], [0.0; 16], [0.0; 16], [0.0; 16]);
@@ -155,7 +192,7 @@ impl SpectralMesh {
         (x, [dx, dy])
     }
 
-    /// The value of `field` at `step` in element `e` at reference point (ξ, η).
+    /// The value of `field` at `step` in quadrilateral `e` at reference point (ξ, η).
     pub fn value(&self, field: usize, step: usize, e: usize, xi: f64, eta: f64) -> f64 {
         let m = self.basis.len();
         let (mut a, mut b) = ([0.0; 16], [0.0; 16]);
@@ -218,15 +255,132 @@ impl SpectralMesh {
     pub fn value_range(&self, field: usize, step: usize) -> (f64, f64) {
         let s = 2 * self.basis.order;
         let mut range = (f64::MAX, f64::MIN);
+        let layers = if self.shape == Shape::Hexahedron { s } else { 0 };
         for e in 0..self.elements() {
-            for j in 0..=s {
-                for i in 0..=s {
-                    let v = self.value(field, step, e, i as f64 / s as f64, j as f64 / s as f64);
-                    range = (range.0.min(v), range.1.max(v));
+            for k in 0..=layers {
+                for j in 0..=s {
+                    for i in 0..=s {
+                        let r = [i, j, k].map(|c| c as f64 / s as f64);
+                        let v = match self.shape {
+                            Shape::Quadrilateral => self.value(field, step, e, r[0], r[1]),
+                            Shape::Hexahedron => self.value_hex(field, step, e, r),
+                        };
+                        range = (range.0.min(v), range.1.max(v));
+                    }
                 }
             }
         }
         range
+    }
+
+    /// The geometry map of hexahedron `e` at r = (ξ, η, ζ): the point and its derivatives
+    /// along ξ, η and ζ.
+    pub fn map_hex(&self, e: usize, r: [f64; 3]) -> ([f64; 3], [[f64; 3]; 3]) {
+        debug_assert_eq!(self.shape, Shape::Hexahedron);
+        let m = self.geometry.len();
+        let mut v = [[0.0; 16]; 3];
+        let mut d = [[0.0; 16]; 3];
+        for a in 0..3 {
+            self.geometry.eval(r[a], &mut v[a], Some(&mut d[a]));
+        }
+        let pts = self.element_points(e);
+        let (mut x, mut j) = ([0.0; 3], [[0.0; 3]; 3]);
+        for k in 0..m {
+            for jj in 0..m {
+                for i in 0..m {
+                    let p = pts[(k * m + jj) * m + i];
+                    let w = [
+                        v[0][i] * v[1][jj] * v[2][k],
+                        d[0][i] * v[1][jj] * v[2][k],
+                        v[0][i] * d[1][jj] * v[2][k],
+                        v[0][i] * v[1][jj] * d[2][k],
+                    ];
+                    for c in 0..3 {
+                        x[c] += w[0] * p[c];
+                        j[0][c] += w[1] * p[c];
+                        j[1][c] += w[2] * p[c];
+                        j[2][c] += w[3] * p[c];
+                    }
+                }
+            }
+        }
+        (x, j)
+    }
+
+    /// The value of `field` at `step` in hexahedron `e` at r = (ξ, η, ζ).
+    pub fn value_hex(&self, field: usize, step: usize, e: usize, r: [f64; 3]) -> f64 {
+        let m = self.basis.len();
+        let mut v = [[0.0; 16]; 3];
+        for a in 0..3 {
+            self.basis.eval(r[a], &mut v[a], None);
+        }
+        let f = self.element_values(field, step, e);
+        let mut sum = 0.0;
+        for k in 0..m {
+            for j in 0..m {
+                for i in 0..m {
+                    sum += v[0][i] * v[1][j] * v[2][k] * f[(k * m + j) * m + i];
+                }
+            }
+        }
+        sum
+    }
+
+    /// The reference point of hexahedron `e` that maps to `p`, by Newton's method in f64 from
+    /// `guess`: `None` when it does not converge.
+    pub fn inverse_map_hex(&self, e: usize, p: [f64; 3], guess: [f64; 3]) -> Option<[f64; 3]> {
+        let mut r = guess;
+        for _ in 0..4 * NEWTON_ITERATIONS {
+            let (x, j) = self.map_hex(e, r);
+            let f = [x[0] - p[0], x[1] - p[1], x[2] - p[2]];
+            // Solve J s = f with J's columns j[0], j[1], j[2] (Cramer's rule).
+            let det3 = |a: [f64; 3], b: [f64; 3], c: [f64; 3]| {
+                a[0] * (b[1] * c[2] - b[2] * c[1]) - b[0] * (a[1] * c[2] - a[2] * c[1])
+                    + c[0] * (a[1] * b[2] - a[2] * b[1])
+            };
+            let det = det3(j[0], j[1], j[2]);
+            if det == 0.0 || !det.is_finite() {
+                return None;
+            }
+            let s = [det3(f, j[1], j[2]) / det, det3(j[0], f, j[2]) / det, det3(j[0], j[1], f) / det];
+            r = [r[0] - s[0], r[1] - s[1], r[2] - s[2]];
+            if r.iter().any(|c| !c.is_finite() || c.abs() > 10.0) {
+                return None;
+            }
+            if s.iter().fold(0.0f64, |a, c| a.max(c.abs())) < 1e-14 {
+                return Some(r);
+            }
+        }
+        let (x, _) = self.map_hex(e, r);
+        let scale = 1.0 + p.iter().fold(0.0f64, |a, c| a.max(c.abs()));
+        ((0..3).map(|c| (x[c] - p[c]).powi(2)).sum::<f64>().sqrt() < 1e-12 * scale).then_some(r)
+    }
+
+    fn check_orientation_hex(&self, e: usize) -> Result<(), SpectralError> {
+        let s = 2 * self.geometry.order + 1;
+        let mut sign = 0.0;
+        for k in 0..=s {
+            for j in 0..=s {
+                for i in 0..=s {
+                    let r = [i, j, k].map(|c| c as f64 / s as f64);
+                    let (_, d) = self.map_hex(e, r);
+                    let det = d[0][0] * (d[1][1] * d[2][2] - d[1][2] * d[2][1])
+                        - d[1][0] * (d[0][1] * d[2][2] - d[0][2] * d[2][1])
+                        + d[2][0] * (d[0][1] * d[1][2] - d[0][2] * d[1][1]);
+                    if det == 0.0 || (sign != 0.0 && det.signum() != sign) {
+                        return Err(SpectralError::Invalid {
+                            element: e,
+                            what: format!(
+                                "the geometry map folds or collapses (Jacobian determinant {det:e} at ξ = {:.3}, η = {:.3}, ζ = {:.3})",
+                                r[0], r[1], r[2]
+                            ),
+                        });
+                    }
+                    sign = det.signum();
+                }
+            }
+        }
+        Ok(())
     }
 
     fn check_orientation(&self, e: usize) -> Result<(), SpectralError> {

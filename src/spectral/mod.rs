@@ -18,8 +18,9 @@ pub mod mesh;
 pub mod proxy;
 pub mod reference;
 pub mod render;
+pub mod vtu;
 
 pub use basis::{Basis1d, NodeSet, MAX_ORDER};
 pub use error::SpectralError;
-pub use mesh::{Field, SpectralMesh};
+pub use mesh::{Field, Shape, SpectralMesh};
 pub use render::{SpectralRenderer, SpectralView, View2d, INSIDE_TOLERANCE};

@@ -11,6 +11,9 @@ use super::render::View2d;
 pub struct PixelReport {
     /// Pixels an element covered.
     pub covered: usize,
+    /// Pixels only edge overdraw covered (marked by a negative element channel): cracks and a
+    /// rim of at most one pixel outside the mesh's boundary, showing the edge's value.
+    pub overdraw: usize,
     /// Largest |GPU − reference| over the covered pixels.
     pub max_error: f64,
     /// Largest ratio of that error to the pixel's own f32 rounding bound (≤ 1 passes).
@@ -71,7 +74,8 @@ pub fn rounding_bound(mesh: &SpectralMesh, field: usize, step: usize, e: usize, 
     4.0 * (8.0 * m as f64 * eps * s + fx.hypot(fy) * jinv * position * eps)
 }
 
-/// Compares `pixels` (RGBA32F `(value, ξ, η, element)`, NaN where uncovered) of `field` at
+/// Compares `pixels` (RGBA32F `(value, ξ, η, element)`, NaN where uncovered, element
+/// −(e + 1) where only edge overdraw drew) of `field` at
 /// `step`, drawn with `view` into `width` × `height`, with the f64 reference, pixel by pixel.
 pub fn check_pixels(
     mesh: &SpectralMesh,
@@ -93,6 +97,10 @@ pub fn check_pixels(
                     debug_assert!(r.iter().all(|c| (1e-3..=1.0 - 1e-3).contains(c)));
                     report.missing += 1;
                 }
+                continue;
+            }
+            if texel[3] < 0.0 {
+                report.overdraw += 1;
                 continue;
             }
             report.covered += 1;

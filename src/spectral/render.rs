@@ -406,7 +406,8 @@ impl SpectralRenderer {
     }
 
     /// Renders `view` into `target` and returns the pixels: colour-mapped RGBA8, or in an
-    /// RGBA32F target the raw `(value, ξ, η, element)` of every pixel (NaN where no element).
+    /// RGBA32F target the raw `(value, ξ, η, element)` of every pixel (NaN where no element;
+    /// −(element + 1) where only an edge-overdraw line drew the pixel).
     pub fn render(&mut self, target: &RenderTarget, view: &SpectralView) -> Result<Pixels> {
         let gpu = self.gpu.clone();
         let clear = if target.format() == ColorFormat::Rgba32F { [f32::NAN; 4] } else { BACKGROUND };

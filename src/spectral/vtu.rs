@@ -1,0 +1,317 @@
+//! Spectral elements in VTK XML unstructured grids (`.vtu`): Lagrange cells
+//! (`VTK_LAGRANGE_QUADRILATERAL` = 70, `VTK_LAGRANGE_HEXAHEDRON` = 72; also the linear
+//! `VTK_QUAD` = 9 and `VTK_HEXAHEDRON` = 12) with point data, as ParaView and solvers write
+//! them. VTK's Lagrange cells are isoparametric on equispaced nodes of [0, 1]; their points are
+//! ordered corners, then edge interiors, then face interiors, then the body
+//! (`vtkHigherOrderQuadrilateral::PointIndexFromIJK` and `vtkHigherOrderHexahedron::…`, VTK 9),
+//! reproduced by [`vtk_point_index`].
+//!
+//! Every one-component point-data array is a field. Arrays named `NAME_t0`, `NAME_t1`, … are
+//! the time steps of field `NAME` (this is how [`write`] stores several steps; ParaView shows
+//! them as separate arrays). All cells must be of one shape and one order. The container
+//! (encodings, compression) is [`crate::vtk`]'s. Errors name the file and the element or array.
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use super::basis::{Basis1d, NodeSet};
+use super::error::SpectralError;
+use super::mesh::{Field, Shape, SpectralMesh};
+use crate::vtk::{self, OutArray, Values, VtkError};
+
+/// `VTK_QUAD`.
+pub const VTK_QUAD: u8 = 9;
+/// `VTK_HEXAHEDRON`.
+pub const VTK_HEXAHEDRON: u8 = 12;
+/// `VTK_LAGRANGE_QUADRILATERAL`.
+pub const VTK_LAGRANGE_QUADRILATERAL: u8 = 70;
+/// `VTK_LAGRANGE_HEXAHEDRON`.
+pub const VTK_LAGRANGE_HEXAHEDRON: u8 = 72;
+
+impl From<VtkError> for SpectralError {
+    fn from(e: VtkError) -> Self {
+        SpectralError::File { path: e.path, detail: e.detail }
+    }
+}
+
+/// The position in a VTK Lagrange cell's point list of node (i, j, k) of a cell of order `n`
+/// (k = 0 for quadrilaterals): corners, edges, faces, body, as VTK 9 orders them.
+pub fn vtk_point_index(shape: Shape, n: usize, i: usize, j: usize, k: usize) -> usize {
+    let bdy = |c: usize| c == 0 || c == n;
+    let (ib, jb) = (bdy(i), bdy(j));
+    let corner = |i: usize, j: usize| match (i > 0, j > 0) {
+        (false, false) => 0,
+        (true, false) => 1,
+        (true, true) => 2,
+        (false, true) => 3,
+    };
+    let e = n - 1;
+    if shape == Shape::Quadrilateral {
+        return match (ib, jb) {
+            (true, true) => corner(i, j),
+            (false, true) => 4 + (i - 1) + if j > 0 { 2 * e } else { 0 },
+            (true, false) => 4 + (j - 1) + if i > 0 { e } else { 3 * e },
+            (false, false) => 4 + 4 * e + (i - 1) + e * (j - 1),
+        };
+    }
+    let kb = bdy(k);
+    let nbdy = usize::from(ib) + usize::from(jb) + usize::from(kb);
+    if nbdy == 3 {
+        return corner(i, j) + if k > 0 { 4 } else { 0 };
+    }
+    let mut offset = 8;
+    if nbdy == 2 {
+        if !ib {
+            return (i - 1) + if j > 0 { 2 * e } else { 0 } + if k > 0 { 4 * e } else { 0 } + offset;
+        }
+        if !jb {
+            return (j - 1) + if i > 0 { e } else { 3 * e } + if k > 0 { 4 * e } else { 0 } + offset;
+        }
+        offset += 8 * e;
+        let vertical = match (i > 0, j > 0) {
+            (false, false) => 0,
+            (true, false) => 1,
+            (false, true) => 2,
+            (true, true) => 3,
+        };
+        return (k - 1) + e * vertical + offset;
+    }
+    offset += 12 * e;
+    if nbdy == 1 {
+        if ib {
+            return (j - 1) + e * (k - 1) + if i > 0 { e * e } else { 0 } + offset;
+        }
+        offset += 2 * e * e;
+        if jb {
+            return (i - 1) + e * (k - 1) + if j > 0 { e * e } else { 0 } + offset;
+        }
+        offset += 2 * e * e;
+        return (i - 1) + e * (j - 1) + if k > 0 { e * e } else { 0 } + offset;
+    }
+    offset += 6 * e * e;
+    offset + (i - 1) + e * ((j - 1) + e * (k - 1))
+}
+
+/// Reads spectral elements from a `.vtu` file (see the module docs).
+pub fn read(path: &Path) -> Result<SpectralMesh, SpectralError> {
+    let grid = vtk::read(path)?;
+    let file = |detail: String| SpectralError::File { path: path.to_path_buf(), detail };
+    let cells = grid.cells;
+    if cells == 0 {
+        return Err(file("no cells".into()));
+    }
+    let points = grid.require("Points", "Points", 3, grid.points)?;
+    let types = grid.require("Cells", "types", 1, cells)?;
+    let offsets = grid.require("Cells", "offsets", 1, cells)?;
+    let conn =
+        grid.array("Cells", "connectivity").ok_or_else(|| file("no Cells array \"connectivity\"".into()))?;
+    let first = types[0];
+    let shape = match first as u8 {
+        VTK_QUAD | VTK_LAGRANGE_QUADRILATERAL => Shape::Quadrilateral,
+        VTK_HEXAHEDRON | VTK_LAGRANGE_HEXAHEDRON => Shape::Hexahedron,
+        _ => {
+            return Err(file(format!(
+                "element 0: cell type {first} (spectral elements are VTK_LAGRANGE_QUADRILATERAL = 70, VTK_LAGRANGE_HEXAHEDRON = 72, VTK_QUAD = 9 or VTK_HEXAHEDRON = 12)"
+            )))
+        }
+    };
+    let dim = shape.dim();
+    let per_cell = offsets[0] as usize;
+    let n = (1..=crate::spectral::MAX_ORDER).find(|n| (n + 1).pow(dim) == per_cell).ok_or_else(|| {
+        file(format!(
+            "element 0: {per_cell} points is no {shape:?} of order 1..={}",
+            crate::spectral::MAX_ORDER
+        ))
+    })?;
+    let m = n + 1;
+    for e in 0..cells {
+        let same_shape = match shape {
+            Shape::Quadrilateral => [VTK_QUAD, VTK_LAGRANGE_QUADRILATERAL],
+            Shape::Hexahedron => [VTK_HEXAHEDRON, VTK_LAGRANGE_HEXAHEDRON],
+        };
+        if !same_shape.contains(&(types[e] as u8)) || types[e].fract() != 0.0 {
+            return Err(file(format!(
+                "element {e}: cell type {} differs from element 0's ({first}); one shape per file",
+                types[e]
+            )));
+        }
+        if offsets[e] != ((e + 1) * per_cell) as f64 {
+            return Err(file(format!(
+                "element {e}: offset {} (every cell has {per_cell} points, as element 0)",
+                offsets[e]
+            )));
+        }
+    }
+    if conn.values.len() != cells * per_cell {
+        return Err(file(format!(
+            "connectivity has {} entries, expected {}",
+            conn.values.len(),
+            cells * per_cell
+        )));
+    }
+    // Our lexicographic node (i, j, k) of cell e ← VTK's point at vtk_point_index.
+    let mut order = Vec::with_capacity(cells * per_cell);
+    for e in 0..cells {
+        for flat in 0..per_cell {
+            let (i, j, k) = (flat % m, (flat / m) % m, flat / (m * m));
+            let c = conn.values[e * per_cell + vtk_point_index(shape, n, i, j, k)];
+            if !(c >= 0.0 && c < grid.points as f64 && c.fract() == 0.0) {
+                return Err(file(format!(
+                    "element {e}: point index {c} is out of range ({} points)",
+                    grid.points
+                )));
+            }
+            order.push(c as usize);
+        }
+    }
+    let geometry: Vec<[f64; 3]> =
+        order.iter().map(|&p| [points[3 * p], points[3 * p + 1], points[3 * p + 2]]).collect();
+    // Fields: one-component point data, NAME_t<k> grouped into steps.
+    let mut grouped: BTreeMap<String, Vec<(usize, &[f64])>> = BTreeMap::new();
+    for a in grid.arrays.iter().filter(|a| a.section == "PointData") {
+        if a.components != 1 {
+            continue;
+        }
+        if a.values.len() != grid.points {
+            return Err(file(format!(
+                "array {}: {} values for {} points",
+                a.name,
+                a.values.len(),
+                grid.points
+            )));
+        }
+        let (name, step) = match a.name.rsplit_once("_t") {
+            Some((base, k)) if !base.is_empty() && k.parse::<usize>().is_ok() => {
+                (base.to_string(), k.parse().unwrap_or(0))
+            }
+            _ => (a.name.clone(), 0),
+        };
+        grouped.entry(name).or_default().push((step, &a.values));
+    }
+    let mut fields = Vec::new();
+    for (name, mut steps) in grouped {
+        steps.sort_by_key(|s| s.0);
+        if steps.iter().enumerate().any(|(k, s)| s.0 != k) {
+            return Err(file(format!(
+                "field {name:?}: time steps {:?} are not 0, 1, 2, …",
+                steps.iter().map(|s| s.0).collect::<Vec<_>>()
+            )));
+        }
+        fields.push(Field {
+            name,
+            times: (0..steps.len()).map(|k| k as f64).collect(),
+            steps: steps.iter().map(|(_, v)| order.iter().map(|&p| v[p]).collect()).collect(),
+        });
+    }
+    let basis = Basis1d::new(NodeSet::Equispaced, n)?;
+    SpectralMesh::new(shape, basis.clone(), basis, geometry, fields).map_err(|e| file(e.to_string()))
+}
+
+/// Writes `mesh` as Lagrange cells of order max(field order, geometry order) on equispaced
+/// nodes — an exact representation of both polynomials — with every field's steps as point
+/// data (`NAME`, or `NAME_t0`, `NAME_t1`, … for several steps). Each element has its own points
+/// (the data may be discontinuous). Written to `path.partial`, renamed when complete.
+pub fn write(path: &Path, mesh: &SpectralMesh) -> Result<(), SpectralError> {
+    let n = mesh.basis.order.max(mesh.geometry.order);
+    let nodes = Basis1d::new(NodeSet::Equispaced, n)?.nodes;
+    let m = n + 1;
+    let dim = mesh.shape.dim();
+    let per_cell = m.pow(dim);
+    let cells = mesh.elements();
+    // Reference points in VTK's order.
+    let mut refs = vec![[0.0; 3]; per_cell];
+    for flat in 0..per_cell {
+        let (i, j, k) = (flat % m, (flat / m) % m, flat / (m * m));
+        refs[vtk_point_index(mesh.shape, n, i, j, k)] =
+            [nodes[i], nodes[j], if dim == 3 { nodes[k] } else { 0.0 }];
+    }
+    let mut points = Vec::with_capacity(3 * cells * per_cell);
+    for e in 0..cells {
+        for r in &refs {
+            let x = match mesh.shape {
+                Shape::Quadrilateral => mesh.map(e, r[0], r[1]).0,
+                Shape::Hexahedron => mesh.map_hex(e, *r).0,
+            };
+            points.extend(x);
+        }
+    }
+    let cell_type = match mesh.shape {
+        Shape::Quadrilateral => VTK_LAGRANGE_QUADRILATERAL,
+        Shape::Hexahedron => VTK_LAGRANGE_HEXAHEDRON,
+    };
+    let mut arrays = vec![
+        OutArray { section: "Points", name: "Points".into(), components: 3, values: Values::F64(points) },
+        OutArray {
+            section: "Cells",
+            name: "connectivity".into(),
+            components: 1,
+            values: Values::I64((0..(cells * per_cell) as i64).collect()),
+        },
+        OutArray {
+            section: "Cells",
+            name: "offsets".into(),
+            components: 1,
+            values: Values::I64((1..=cells as i64).map(|c| c * per_cell as i64).collect()),
+        },
+        OutArray {
+            section: "Cells",
+            name: "types".into(),
+            components: 1,
+            values: Values::U8(vec![cell_type; cells]),
+        },
+    ];
+    for (fi, f) in mesh.fields.iter().enumerate() {
+        for step in 0..f.steps.len() {
+            let mut v = Vec::with_capacity(cells * per_cell);
+            for e in 0..cells {
+                for r in &refs {
+                    v.push(match mesh.shape {
+                        Shape::Quadrilateral => mesh.value(fi, step, e, r[0], r[1]),
+                        Shape::Hexahedron => mesh.value_hex(fi, step, e, *r),
+                    });
+                }
+            }
+            let name = if f.steps.len() == 1 { f.name.clone() } else { format!("{}_t{step}", f.name) };
+            arrays.push(OutArray { section: "PointData", name, components: 1, values: Values::F64(v) });
+        }
+    }
+    vtk::write(
+        path,
+        "galerkin spectral elements (seed 002): VTK Lagrange cells on equispaced nodes, one field per point-data array",
+        cells * per_cell,
+        cells,
+        &arrays,
+    )?;
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn vtk_point_order_is_a_permutation_with_corners_first() {
+        for shape in [Shape::Quadrilateral, Shape::Hexahedron] {
+            for n in 1..=6usize {
+                let m = n + 1;
+                let count = m.pow(shape.dim());
+                let mut seen = vec![false; count];
+                for flat in 0..count {
+                    let (i, j, k) = (flat % m, (flat / m) % m, flat / (m * m));
+                    let p = vtk_point_index(shape, n, i, j, k);
+                    assert!(!seen[p], "{shape:?} order {n}: {p} twice");
+                    seen[p] = true;
+                }
+                assert_eq!(vtk_point_index(shape, n, n, n, 0), 2);
+                assert_eq!(vtk_point_index(shape, n, 0, n, 0), 3);
+            }
+        }
+        // VTK's order-2 quadrilateral: corners, edge midpoints (bottom, right, top, left), centre.
+        let q = |i, j| vtk_point_index(Shape::Quadrilateral, 2, i, j, 0);
+        assert_eq!([q(1, 0), q(2, 1), q(1, 2), q(0, 1), q(1, 1)], [4, 5, 6, 7, 8]);
+        // The order-2 hexahedron's vertical edges 16–19 join corners 0–4, 1–5, 3–7, 2–6.
+        let h = |i, j, k| vtk_point_index(Shape::Hexahedron, 2, i, j, k);
+        assert_eq!([h(0, 0, 1), h(2, 0, 1), h(0, 2, 1), h(2, 2, 1)], [16, 17, 18, 19]);
+        assert_eq!(h(1, 1, 1), 26);
+    }
+}
