@@ -153,7 +153,7 @@ fn tensor_interpolate(basis: &Basis1d, points: &[f64], v: &[f64], dim: usize) ->
         let stride = m.pow(axis as u32);
         for flat in 0..out.len() {
             // Each line along `axis` once, from its first entry.
-            if (flat / stride) % m != 0 {
+            if !(flat / stride).is_multiple_of(m) {
                 continue;
             }
             let line: Vec<f64> = (0..m).map(|t| out[flat + t * stride]).collect();
