@@ -16,7 +16,7 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-const STAGES: [&str; 4] = ["comp", "vert", "frag", "geom"];
+const STAGES: [&str; 6] = ["comp", "vert", "frag", "geom", "tesc", "tese"];
 
 fn main() {
     let root = PathBuf::from(std::env::var("CARGO_MANIFEST_DIR").expect("cargo sets CARGO_MANIFEST_DIR"));

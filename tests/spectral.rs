@@ -305,3 +305,51 @@ fn bad_input_names_the_element_or_field() {
     let e = r.render(&target, &SpectralView { step: 3, ..SpectralView::default() }).err().unwrap();
     assert!(e.to_string().contains("step 3"), "{e}");
 }
+
+/// Surfaces in 3D: every covered pixel shows the polynomial at a reference point whose surface
+/// point projects within the ½-pixel error budget of the pixel centre (the tessellation's
+/// bound), with the value evaluated exactly there; a coarse budget visibly breaks the bound.
+#[test]
+fn surfaces_show_the_field_within_half_a_pixel() {
+    use galerkin::spectral::generate::artery;
+    use galerkin::spectral::render::fit_camera;
+    let gpu = common::gpu();
+    let mesh = Arc::new(artery(22, 8, 3, 4, NodeSet::GaussLobatto).unwrap());
+    let size = (256u32, 192u32);
+    let camera = fit_camera(&mesh);
+    let farthest = |budget: f64| {
+        let view = SpectralView { overdraw: false, max_error_px: budget, ..SpectralView::default() };
+        let pixels = render_data(&gpu, &mesh, &view, size);
+        let (mut covered, mut worst, mut worst_value) = (0, 0.0f64, 0.0f64);
+        for py in 0..size.1 {
+            for px in 0..size.0 {
+                let t = &pixels[4 * (py * size.0 + px) as usize..][..4];
+                if t[3].is_nan() {
+                    continue;
+                }
+                covered += 1;
+                let (e, r) = (t[3] as usize, [f64::from(t[1]), f64::from(t[2])]);
+                let (x, _) = mesh.map(e, r[0], r[1]);
+                let (sx, sy) = camera.project(glam::DVec3::from(x), size.0, size.1);
+                let d = (sx - (f64::from(px) + 0.5)).hypot(sy - (f64::from(py) + 0.5));
+                worst = worst.max(d);
+                let bound = galerkin::spectral::reference::rounding_bound(&mesh, 0, 0, e, r);
+                worst_value =
+                    worst_value.max((f64::from(t[0]) - mesh.value(0, 0, e, r[0], r[1])).abs() / bound);
+            }
+        }
+        (covered, worst, worst_value)
+    };
+    let (covered, worst, worst_value) = farthest(0.5);
+    eprintln!(
+        "budget 0.5 px: {covered} pixels, farthest {worst:.3} px, value error {worst_value:.3} of its bound"
+    );
+    assert!(covered > 3000, "{covered}");
+    // The bound, plus f32 slack: interpolated reference coordinates and the f32 view matrix
+    // move the point by ~1e-6 of the scene (≈ 1e-3 px here).
+    assert!(worst <= 0.5 + 0.01, "a pixel shows a surface point {worst} px away");
+    assert!(worst_value <= 1.0);
+    let (_, coarse, _) = farthest(16.0);
+    eprintln!("budget 16 px: farthest {coarse:.3} px");
+    assert!(coarse > 0.5, "a coarse tessellation should break the half-pixel bound ({coarse})");
+}

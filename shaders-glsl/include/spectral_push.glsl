@@ -5,15 +5,29 @@
 #define SPECTRAL_MODE_PER_VERTEX 1u
 #define SPECTRAL_MODE_EDGE_OVERDRAW 2u
 #define SPECTRAL_MODE_EDGE_LINES 3u
+#define SPECTRAL_PLANAR 0u
+#define SPECTRAL_SURFACE 1u
 layout(push_constant) uniform SpectralPush {
     mat4 view_proj;
-    // World (x, y) of framebuffer coordinate 0 and the world step per pixel along x and y.
+    // Planar: world (x, y) of framebuffer coordinate 0 and the world step per pixel along x
+    // and y. Surface: the eye (x, y, z) and pixels per world unit at view depth 1 (times the
+    // off-axis factor), for the tessellation's screen-space error bound.
     vec4 pixel_to_world;
     // Colour range lo, hi; ramp texels; iso-lines per range (0: none).
     vec4 range;
-    // Normalised depth of this pass; reference-square tolerance of the inside test.
+    // Depth offset of this pass (planar: from 0.5; surface: added to clip z / w); the
+    // reference-square tolerance of the inside test; the screen-space error budget in pixels;
+    // the largest tessellation level.
     vec4 misc;
-    // Data output (raw values), log scale, mode (SPECTRAL_MODE_*), unused.
+    // Data output (raw values), log scale, mode (SPECTRAL_MODE_*), SPECTRAL_PLANAR or _SURFACE.
     uvec4 flags;
 } pc;
+
+// Clip position of world point x for this pass (with its depth offset).
+vec4 spectral_clip(vec3 x) {
+    vec4 clip = pc.view_proj * vec4(x, 1.0);
+    if (pc.flags.w == SPECTRAL_PLANAR) clip.z = (0.5 + pc.misc.x) * clip.w;
+    else clip.z += pc.misc.x * clip.w;
+    return clip;
+}
 #endif

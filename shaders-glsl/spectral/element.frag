@@ -1,25 +1,32 @@
 #version 450
-// Pixel-exact spectral elements (seed 002, done per fragment): the fragment's world point is
-// taken from its pixel centre, Newton's method on the element's geometry map finds the
-// reference point (xi, eta) that maps there (starting from the interpolated proxy coordinates),
-// fragments whose point leaves the reference square are discarded — so curved edges are exact
-// — and the element's tensor-product polynomial is evaluated there and colour-mapped. Iso-lines
-// of constant on-screen width come from the per-pixel value and its screen derivatives.
+// Pixel-exact spectral elements (seed 002, done per fragment).
+// Planar: the fragment's world point is taken from its pixel centre, Newton's method on the
+// element's geometry map finds the reference point (xi, eta) that maps there (starting from the
+// interpolated proxy coordinates), fragments whose point leaves the reference square are
+// discarded — so curved edges are exact — and the element's tensor-product polynomial is
+// evaluated there and colour-mapped.
+// Surface: the reference point is the one interpolated across the adaptively tessellated
+// element (within the error budget of the true surface on screen); the value is evaluated
+// there, and lit with the exact normal of the geometry map at that point.
+// Iso-lines of constant on-screen width come from the per-pixel value and its screen derivatives.
 #include "spectral_element.glsl"
 #include "spectral_push.glsl"
 #include "colormap.glsl"
+#include "phong.glsl"
 
 layout(location = 0) in vec2 in_reference;
 layout(location = 1) flat in uint element;
 layout(location = 2) in float vertex_value;
+layout(location = 3) in vec3 world;
 layout(set = 0, binding = 2) uniform sampler1D colormap;
 layout(location = 0) out vec4 out_colour;
 
 void main() {
     uint mode = pc.flags.z;
+    bool surface = pc.flags.w == SPECTRAL_SURFACE;
     vec2 r = in_reference;
     bool inside = true;
-    if (mode == SPECTRAL_MODE_PER_PIXEL) {
+    if (mode == SPECTRAL_MODE_PER_PIXEL && !surface) {
         vec2 p = pc.pixel_to_world.xy + gl_FragCoord.xy * pc.pixel_to_world.zw;
         float tol = pc.misc.y;
         inside = spectral_inverse_map(element, p, r)
@@ -43,6 +50,14 @@ void main() {
     if (pc.range.w > 0.0 && width > 0.0) {
         float d = abs(fract(levels + 0.5) - 0.5) / width;
         colour = mix(colour, vec3(0.0), 0.8 * (1.0 - clamp(d - 0.5, 0.0, 1.0)));
+    }
+    if (surface && mode != SPECTRAL_MODE_EDGE_LINES) {
+        vec3 dxi, deta;
+        spectral_map(element, r, dxi, deta);
+        vec3 n = normalize(cross(dxi, deta));
+        vec3 view = normalize(pc.pixel_to_world.xyz - world);
+        vec3 light = normalize(view + vec3(0.2, 0.3, 0.5));
+        colour = phong(colour, n, light, view);
     }
     out_colour = vec4(colour, 1.0);
 }

@@ -11,12 +11,12 @@ layout(location = 2) in uint element;
 layout(location = 0) out vec2 out_reference;
 layout(location = 1) flat out uint out_element;
 layout(location = 2) out float out_value;
+layout(location = 3) out vec3 out_world;
 
 void main() {
-    vec4 clip = pc.view_proj * vec4(position, 1.0);
-    clip.z = pc.misc.x * clip.w;
-    gl_Position = clip;
+    gl_Position = spectral_clip(position);
     out_reference = reference;
     out_element = element;
     out_value = pc.flags.z == SPECTRAL_MODE_PER_VERTEX ? spectral_value(element, reference) : 0.0;
+    out_world = position;
 }

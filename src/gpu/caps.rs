@@ -55,6 +55,8 @@ pub struct Capabilities {
     pub shader_float64: bool,
     /// `geometryShader` was enabled.
     pub geometry_shader: bool,
+    /// `tessellationShader` was enabled.
+    pub tessellation_shader: bool,
     /// `fillModeNonSolid` was enabled (wireframe overdraw).
     pub fill_mode_non_solid: bool,
     /// Memory types: (property flags, heap index).
@@ -139,6 +141,7 @@ impl Capabilities {
                 .then_some(f64::from(limits.timestamp_period)),
             shader_float64: enabled.shader_float64 == vk::TRUE,
             geometry_shader: enabled.geometry_shader == vk::TRUE,
+            tessellation_shader: enabled.tessellation_shader == vk::TRUE,
             fill_mode_non_solid: enabled.fill_mode_non_solid == vk::TRUE,
             memory_types: memory
                 .memory_types_as_slice()

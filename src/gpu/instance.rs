@@ -214,8 +214,8 @@ pub(crate) fn has_device_extension(
 }
 
 /// Creates the logical device with one queue of `choice.queue_family`, enabling the optional
-/// core features galerkin uses when the device has them (f64 in shaders, geometry shaders,
-/// wireframe fill). Returns the device and the features actually enabled.
+/// core features galerkin uses when the device has them (f64 in shaders, geometry and
+/// tessellation shaders, wireframe fill). Returns the device and the features actually enabled.
 pub(crate) fn create_device(
     instance: &ash::Instance,
     choice: &Choice,
@@ -226,6 +226,7 @@ pub(crate) fn create_device(
     let enabled = vk::PhysicalDeviceFeatures {
         shader_float64: supported.shader_float64,
         geometry_shader: supported.geometry_shader,
+        tessellation_shader: supported.tessellation_shader,
         fill_mode_non_solid: supported.fill_mode_non_solid,
         wide_lines: supported.wide_lines,
         ..Default::default()

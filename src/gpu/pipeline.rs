@@ -255,6 +255,9 @@ pub struct GraphicsPipelineDesc<'a> {
     pub fragment: &'a [u32],
     /// SPIR-V of an optional geometry shader.
     pub geometry: Option<&'a [u32]>,
+    /// SPIR-V of optional tessellation control and evaluation shaders, and the control points
+    /// per patch (the topology must then be `PATCH_LIST`).
+    pub tessellation: Option<(&'a [u32], &'a [u32], u32)>,
     /// Bindings of set 0 (visible to every stage).
     pub bindings: &'a [BindingKind],
     /// Bytes of push constants (visible to every stage).
@@ -292,6 +295,7 @@ impl<'a> GraphicsPipelineDesc<'a> {
             vertex,
             fragment,
             geometry: None,
+            tessellation: None,
             bindings: &[],
             push_constant_bytes: 0,
             vertex_stride: 0,
@@ -324,6 +328,16 @@ impl GraphicsPipeline {
             }
             stages |= vk::ShaderStageFlags::GEOMETRY;
         }
+        if desc.tessellation.is_some() {
+            if !gpu.caps().tessellation_shader {
+                return Err(GpuError::Unsupported(format!(
+                    "tessellation shaders (pipeline `{}`)",
+                    desc.name
+                )));
+            }
+            stages |=
+                vk::ShaderStageFlags::TESSELLATION_CONTROL | vk::ShaderStageFlags::TESSELLATION_EVALUATION;
+        }
         if desc.polygon_mode != vk::PolygonMode::FILL && !gpu.caps().fill_mode_non_solid {
             return Err(GpuError::Unsupported(format!("fillModeNonSolid (pipeline `{}`)", desc.name)));
         }
@@ -332,6 +346,10 @@ impl GraphicsPipeline {
         let vs = ShaderModule::new(device, desc.vertex)?;
         let fs = ShaderModule::new(device, desc.fragment)?;
         let gs = desc.geometry.map(|g| ShaderModule::new(device, g)).transpose()?;
+        let tess = match desc.tessellation {
+            Some((tc, te, _)) => Some((ShaderModule::new(device, tc)?, ShaderModule::new(device, te)?)),
+            None => None,
+        };
         let mut entries = Vec::new();
         let spec = specialization(desc.specialization, &mut entries);
         let mut shader_stages = vec![
@@ -355,6 +373,22 @@ impl GraphicsPipeline {
                     .specialization_info(&spec),
             );
         }
+        if let Some((tc, te)) = &tess {
+            for (stage, module) in [
+                (vk::ShaderStageFlags::TESSELLATION_CONTROL, tc.raw),
+                (vk::ShaderStageFlags::TESSELLATION_EVALUATION, te.raw),
+            ] {
+                shader_stages.push(
+                    vk::PipelineShaderStageCreateInfo::default()
+                        .stage(stage)
+                        .module(module)
+                        .name(c"main")
+                        .specialization_info(&spec),
+                );
+            }
+        }
+        let tessellation_state = vk::PipelineTessellationStateCreateInfo::default()
+            .patch_control_points(desc.tessellation.map_or(1, |t| t.2));
         let bindings = [vk::VertexInputBindingDescription {
             binding: 0,
             stride: desc.vertex_stride,
@@ -421,6 +455,7 @@ impl GraphicsPipeline {
             .layout(layout.raw)
             .render_pass(desc.render_pass)
             .subpass(0);
+        let info = if tess.is_some() { info.tessellation_state(&tessellation_state) } else { info };
         // SAFETY: every pointer in `info` refers to locals alive during the call.
         let raw = unsafe { device.create_graphics_pipelines(vk::PipelineCache::null(), &[info], None) }
             .map_err(|(_, e)| vk_error("vkCreateGraphicsPipelines", e))?[0];

@@ -159,6 +159,30 @@ impl Basis1d {
     }
 }
 
+impl Basis1d {
+    /// Tensor-product interpolation: coefficients in this basis^⊗`dim` of the values `v` given
+    /// at `points`^`dim` (first axis fastest), by the 1D interpolation along each axis in turn.
+    pub fn tensor_interpolate(&self, points: &[f64], v: &[f64], dim: usize) -> Vec<f64> {
+        let m = self.len();
+        let mut out = v.to_vec();
+        for axis in 0..dim {
+            let stride = m.pow(axis as u32);
+            for flat in 0..out.len() {
+                // Each line along `axis` once, from its first entry.
+                if !(flat / stride).is_multiple_of(m) {
+                    continue;
+                }
+                let line: Vec<f64> = (0..m).map(|t| out[flat + t * stride]).collect();
+                let c = self.interpolate(points, &line);
+                for t in 0..m {
+                    out[flat + t * stride] = c[t];
+                }
+            }
+        }
+        out
+    }
+}
+
 /// de Casteljau's triangle for the Bernstein basis of degree `n` at `x`.
 fn bernstein(n: usize, x: f64, values: &mut [f64], derivatives: Option<&mut [f64]>) {
     values.fill(0.0);

@@ -7,7 +7,10 @@
 //! - [`annulus`]: a sector of an annulus in polar elements, the circles represented by the
 //!   geometry polynomial of the asked order — curved elements.
 //!
-//! Both carry two fields: `waves` (smooth, several time steps) and `cells` (the same plus a
+//! - [`artery`] and [`coil`]: the seed's surface data sets (704 and 3332 curved elements),
+//!   tubes in 3D with a field `pressure` over several time steps.
+//!
+//! The planar meshes carry two fields: `waves` (smooth, several time steps) and `cells` (the same plus a
 //! different constant per element: discontinuous across every edge, for the crack tests).
 
 use super::basis::{Basis1d, NodeSet};
@@ -94,6 +97,90 @@ pub fn annulus(
     with_fields(geometry, points, order, set)
 }
 
+/// The seed's artery-like data set: a bent tube of varying radius (a stenosis) in
+/// `along` × `around` curved elements (16 × 44 = 704 as in the seed) with geometry of
+/// `geometry_order` on GLL points and fields of `order` on `set`.
+pub fn artery(
+    along: usize,
+    around: usize,
+    geometry_order: usize,
+    order: usize,
+    set: NodeSet,
+) -> Result<SpectralMesh, SpectralError> {
+    let centre = |s: f64| {
+        let th = 0.8 * std::f64::consts::PI * s;
+        [1.5 * th.sin(), 1.5 * (1.0 - th.cos()), 0.15 * (2.0 * std::f64::consts::PI * s).sin()]
+    };
+    let radius = |s: f64| 0.25 * (1.0 - 0.35 * (-((s - 0.55) / 0.08).powi(2)).exp());
+    tube(along, around, geometry_order, order, set, centre, radius)
+}
+
+/// The seed's coil-like data set: a helical tube of 7 turns in `along` × `around` curved
+/// elements (238 × 14 = 3332 as in the seed).
+pub fn coil(
+    along: usize,
+    around: usize,
+    geometry_order: usize,
+    order: usize,
+    set: NodeSet,
+) -> Result<SpectralMesh, SpectralError> {
+    let turns = 7.0;
+    let centre = |s: f64| {
+        let a = 2.0 * std::f64::consts::PI * turns * s;
+        [a.cos(), a.sin(), 2.0 * s]
+    };
+    tube(along, around, geometry_order, order, set, centre, |_| 0.12)
+}
+
+/// A tube around the curve `centre(s)`, s ∈ [0, 1], of radius `radius(s)`, as quadrilateral
+/// surface elements; the frame is (T, N = ẑ × T, B = T × N), with T the curve's tangent.
+fn tube(
+    along: usize,
+    around: usize,
+    geometry_order: usize,
+    order: usize,
+    set: NodeSet,
+    centre: impl Fn(f64) -> [f64; 3],
+    radius: impl Fn(f64) -> f64,
+) -> Result<SpectralMesh, SpectralError> {
+    let geometry = Basis1d::new(NodeSet::GaussLobatto, geometry_order)?;
+    let mut points = Vec::with_capacity(along * around * geometry.len() * geometry.len());
+    let norm = |v: [f64; 3]| {
+        let l = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+        v.map(|c| c / l)
+    };
+    let cross = |a: [f64; 3], b: [f64; 3]| {
+        [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+    };
+    for ia in 0..along {
+        for ir in 0..around {
+            for &b in &geometry.nodes {
+                for &a in &geometry.nodes {
+                    let s = (ia as f64 + a) / along as f64;
+                    let phi = 2.0 * std::f64::consts::PI * (ir as f64 + b) / around as f64;
+                    let (p, q) = (centre(s - 1e-6), centre(s + 1e-6));
+                    let t = norm([q[0] - p[0], q[1] - p[1], q[2] - p[2]]);
+                    let n = norm(cross([0.0, 0.0, 1.0], t));
+                    let bn = cross(t, n);
+                    let (c, r) = (centre(s), radius(s));
+                    points.push(std::array::from_fn(|k| c[k] + r * (phi.cos() * n[k] + phi.sin() * bn[k])));
+                }
+            }
+        }
+    }
+    let basis = Basis1d::new(set, order)?;
+    let shell = SpectralMesh::new(Shape::Quadrilateral, geometry, basis, points, Vec::new())?;
+    let times: Vec<f64> = (0..STEPS).map(|k| 0.5 * k as f64).collect();
+    let steps = times.iter().map(|&t| sample(&shell, |_, x| pressure(x, t))).collect();
+    let fields = vec![Field { name: "pressure".into(), times, steps }];
+    SpectralMesh::new(shell.shape, shell.geometry, shell.basis, shell.points, fields)
+}
+
+/// The analytic field `pressure` of the tubes at time t: travelling waves along the tube.
+pub fn pressure(x: [f64; 3], t: f64) -> f64 {
+    (4.0 * x[0] - 1.5 * t).sin() * (3.0 * x[1] + 0.5 * t).cos() + 0.5 * (5.0 * x[2]).sin()
+}
+
 /// Samples `waves` (at [`STEPS`] times) and `cells` onto the mesh of `points`.
 fn with_fields(
     geometry: Basis1d,
@@ -137,31 +224,9 @@ pub fn sample(mesh: &SpectralMesh, f: impl Fn(usize, [f64; 3]) -> f64) -> Vec<f6
             v.push(f(e, x));
         }
         if b.set == NodeSet::Bernstein {
-            v = tensor_interpolate(b, &at, &v, dim);
+            v = b.tensor_interpolate(&at, &v, dim);
         }
         out.extend(v);
-    }
-    out
-}
-
-/// Tensor-product interpolation: coefficients in `basis`^⊗dim of the values `v` given at
-/// `points`^dim (ξ fastest), by the 1D interpolation along each axis in turn.
-fn tensor_interpolate(basis: &Basis1d, points: &[f64], v: &[f64], dim: usize) -> Vec<f64> {
-    let m = basis.len();
-    let mut out = v.to_vec();
-    for axis in 0..dim {
-        let stride = m.pow(axis as u32);
-        for flat in 0..out.len() {
-            // Each line along `axis` once, from its first entry.
-            if !(flat / stride).is_multiple_of(m) {
-                continue;
-            }
-            let line: Vec<f64> = (0..m).map(|t| out[flat + t * stride]).collect();
-            let c = basis.interpolate(points, &line);
-            for t in 0..m {
-                out[flat + t * stride] = c[t];
-            }
-        }
     }
     out
 }

@@ -31,7 +31,7 @@ pub struct DrawVertex {
     pub element: u32,
 }
 
-/// The three vertex streams of a mesh.
+/// The three vertex streams of a mesh (no proxies for surfaces: they are tessellated).
 pub struct DrawGeometry {
     /// Triangle list: the per-pixel proxies.
     pub proxies: Vec<DrawVertex>,
@@ -47,7 +47,9 @@ pub fn build(mesh: &SpectralMesh) -> DrawGeometry {
     let g = mesh.geometry.order;
     let bernstein = Basis1d::new(NodeSet::Bernstein, g).expect("same order as the geometry");
     for e in 0..mesh.elements() {
-        proxy(mesh, &bernstein, e, &mut out.proxies);
+        if mesh.is_planar() {
+            proxy(mesh, &bernstein, e, &mut out.proxies);
+        }
         node_grid(mesh, e, &mut out.node_grids);
         edges(mesh, e, &mut out.edges);
     }
@@ -178,4 +180,67 @@ fn edges(mesh: &SpectralMesh, e: usize, out: &mut Vec<DrawVertex>) {
             out.push(vertex(mesh, e, b));
         }
     }
+}
+
+/// Per element, for the surface tessellation (`surface.tesc`): a sphere containing the element
+/// (centre and radius of its Bernstein control net, whose convex hull contains it) and
+/// K = max(|x_ξξ|, |x_ηη|) + |x_ξη| bounded on the whole element by the control net's
+/// differences: |x_ξξ| ≤ g(g − 1) max|B_{i+2,j} − 2B_{i+1,j} + B_{ij}|, likewise η, and
+/// |x_ξη| ≤ g² max|B_{i+1,j+1} − B_{i+1,j} − B_{i,j+1} + B_{ij}|.
+pub fn surface_patches(mesh: &SpectralMesh) -> Vec<[f32; 8]> {
+    let g = mesh.geometry.order;
+    let m = g + 1;
+    let bernstein = Basis1d::new(NodeSet::Bernstein, g).expect("same order as the geometry");
+    (0..mesh.elements())
+        .map(|e| {
+            let pts = mesh.element_points(e);
+            let per: Vec<Vec<f64>> = (0..3)
+                .map(|c| {
+                    let v: Vec<f64> = pts.iter().map(|p| p[c]).collect();
+                    bernstein.tensor_interpolate(&mesh.geometry.nodes, &v, 2)
+                })
+                .collect();
+            let b = |i: usize, j: usize| [per[0][j * m + i], per[1][j * m + i], per[2][j * m + i]];
+            let norm = |v: [f64; 3]| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+            let comb = |terms: &[(f64, [f64; 3])]| {
+                norm(std::array::from_fn(|c| terms.iter().map(|(w, p)| w * p[c]).sum::<f64>()))
+            };
+            let (mut xx, mut yy, mut xy) = (0.0f64, 0.0f64, 0.0f64);
+            for j in 0..m {
+                for i in 0..m {
+                    if i + 2 < m {
+                        xx = xx.max(comb(&[(1.0, b(i + 2, j)), (-2.0, b(i + 1, j)), (1.0, b(i, j))]));
+                    }
+                    if j + 2 < m {
+                        yy = yy.max(comb(&[(1.0, b(i, j + 2)), (-2.0, b(i, j + 1)), (1.0, b(i, j))]));
+                    }
+                    if i + 1 < m && j + 1 < m {
+                        xy = xy.max(comb(&[
+                            (1.0, b(i + 1, j + 1)),
+                            (-1.0, b(i + 1, j)),
+                            (-1.0, b(i, j + 1)),
+                            (1.0, b(i, j)),
+                        ]));
+                    }
+                }
+            }
+            let gg = g as f64;
+            let k = (gg * (gg - 1.0) * xx.max(yy)) + gg * gg * xy;
+            let count = (m * m) as f64;
+            let centre: [f64; 3] = std::array::from_fn(|c| per[c].iter().sum::<f64>() / count);
+            let radius =
+                (0..m * m).map(|t| norm(std::array::from_fn(|c| per[c][t] - centre[c]))).fold(0.0, f64::max);
+            [
+                centre[0] as f32,
+                centre[1] as f32,
+                centre[2] as f32,
+                // Rounded up so the f32 sphere still contains the element.
+                (radius * (1.0 + 1e-6)) as f32,
+                (k * (1.0 + 1e-6)) as f32,
+                0.0,
+                0.0,
+                0.0,
+            ]
+        })
+        .collect()
 }

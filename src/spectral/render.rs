@@ -1,10 +1,21 @@
 //! The spectral-element renderer (seed 002, done per fragment in a Vulkan graphics pipeline):
 //! the element geometry, the shown field's coefficients and the two 1D bases resident on the
-//! device; proxies drawn with `element.vert`/`element.frag`, whose fragment stage inverts the
-//! geometry map at the pixel centre by Newton's method and evaluates the tensor-product
-//! polynomial there (pixel-exact); the per-vertex baseline; element edges drawn as lines —
-//! behind the faces as edge overdraw (a crack between discontinuous neighbours shows the edge's
-//! own value, never the background), or in front, dark, to show the mesh.
+//! device, and
+//!
+//! - **planar meshes**: proxies drawn with `element.vert`/`element.frag`, whose fragment stage
+//!   inverts the geometry map at the pixel centre by Newton's method and evaluates the
+//!   tensor-product polynomial there (pixel-exact), in a 2D view ([`View2d`]);
+//! - **surfaces in 3D** (the seed's artery and coil): one patch per element, tessellated on the
+//!   device (`surface.tesc`/`.tese`) to an L × L grid chosen per element and frame so that every
+//!   tessellated point lies within [`SpectralView::max_error_px`] pixels (default ½) of the true
+//!   surface on screen; each fragment evaluates the field at its interpolated reference point and
+//!   lights it with the geometry map's exact normal there. The shown value is therefore the
+//!   polynomial at a surface point whose image is within that budget of the pixel centre (the
+//!   level is capped at [`MAX_TESSELLATION`]: elements that would need more, e.g. cut by the near
+//!   plane, get the cap and a larger error);
+//! - the per-vertex baseline; element edges drawn as lines — behind the faces as edge overdraw
+//!   (a crack between discontinuous neighbours shows the edge's own value, never the
+//!   background), or in front, dark, to show the mesh.
 //!
 //! Memory does not grow with the order beyond the coefficient buffer: the bases are 2 × 128
 //! bytes and the draw streams depend on the geometry's order only.
@@ -23,7 +34,7 @@ use super::proxy::{self, DrawVertex};
 use crate::gpu::{
     shaders, BindingKind, Buffer, DescriptorSet, Gpu, GraphicsPipeline, GraphicsPipelineDesc, Resource,
 };
-use crate::render::{ColorFormat, Colormap, ColormapTexture, Pixels, RenderTarget, BACKGROUND};
+use crate::render::{Camera, ColorFormat, Colormap, ColormapTexture, Pixels, RenderTarget, BACKGROUND};
 
 type Result<T> = std::result::Result<T, SpectralError>;
 fn dev(context: &str) -> impl Fn(crate::gpu::GpuError) -> SpectralError + '_ {
@@ -34,6 +45,35 @@ fn dev(context: &str) -> impl Fn(crate::gpu::GpuError) -> SpectralError + '_ {
 /// clamped): f32 Newton converges to a few ulps of [0, 1] (≈ 1e-7), so 1e-5 accepts every pixel
 /// of the element and at most a sliver of 1e-5 of an element's width beyond its true edge.
 pub const INSIDE_TOLERANCE: f64 = 1e-5;
+
+/// The largest tessellation level asked of the device (Vulkan guarantees at least 64).
+pub const MAX_TESSELLATION: u32 = 64;
+
+/// A camera that shows all of `mesh` (its bounding sphere) from above the x–y diagonal.
+pub fn fit_camera(mesh: &SpectralMesh) -> Camera {
+    let (mut lo, mut hi) = ([f64::MAX; 3], [f64::MIN; 3]);
+    for p in &mesh.points {
+        for c in 0..3 {
+            lo[c] = lo[c].min(p[c]);
+            hi[c] = hi[c].max(p[c]);
+        }
+    }
+    let centre: [f64; 3] = std::array::from_fn(|c| 0.5 * (lo[c] + hi[c]));
+    let radius = (0..3).map(|c| (hi[c] - lo[c]).powi(2)).sum::<f64>().sqrt().max(1e-12) * 0.5;
+    let fov: f64 = 40.0;
+    let distance = 1.05 * radius / (0.5 * fov.to_radians()).sin();
+    let dir = [0.45, -0.75, 0.55];
+    let n = (dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]) as f64;
+    let n = n.sqrt();
+    Camera {
+        eye: std::array::from_fn(|c| centre[c] + distance * dir[c] / n),
+        target: centre,
+        up: [0.0, 0.0, 1.0],
+        fov_y_degrees: fov,
+        near: (distance - 1.5 * radius).max(1e-3 * distance),
+        far: distance + 1.5 * radius,
+    }
+}
 
 /// A 2D view of a planar mesh: the world point at the image centre and the world size of a
 /// pixel (square pixels, y up).
@@ -122,8 +162,12 @@ pub struct SpectralView {
     pub overdraw: bool,
     /// The seed's baseline: colour at the nodes, interpolated.
     pub per_vertex: bool,
-    /// The 2D view; `None`: fit the mesh.
+    /// The 2D view of a planar mesh; `None`: fit the mesh.
     pub view: Option<View2d>,
+    /// The camera of a surface mesh; `None`: [`fit_camera`].
+    pub camera: Option<Camera>,
+    /// The surface tessellation's screen-space error budget in pixels.
+    pub max_error_px: f64,
 }
 
 impl Default for SpectralView {
@@ -138,6 +182,8 @@ impl Default for SpectralView {
             overdraw: true,
             per_vertex: false,
             view: None,
+            camera: None,
+            max_error_px: 0.5,
         }
     }
 }
@@ -185,12 +231,24 @@ const MODE_PER_PIXEL: u32 = 0;
 const MODE_PER_VERTEX: u32 = 1;
 const MODE_EDGE_OVERDRAW: u32 = 2;
 const MODE_EDGE_LINES: u32 = 3;
-/// Normalised depths of the passes: edge overdraw behind the faces, mesh lines in front.
-const DEPTH_FACES: f32 = 0.5;
-const DEPTH_OVERDRAW: f32 = 0.75;
-const DEPTH_LINES: f32 = 0.25;
+/// Depth offsets of the line passes (edge overdraw behind the faces, mesh lines in front), in
+/// normalised depth: planar passes sit at 0.5 + offset; surface passes move by the offset
+/// (≈ 300 f32 ulps of depth near 1 — far above depth-interpolation rounding, far below the
+/// depth differences of distinct surfaces; Vulkan's depth bias does not apply to lines).
+const PLANAR_OFFSETS: [f32; 2] = [0.25, -0.25];
+const SURFACE_OFFSETS: [f32; 2] = [2e-5, -2e-5];
 
-/// A planar spectral-element mesh resident on the device, drawn per pixel (seed 002).
+struct Pipelines {
+    fill: GraphicsPipeline,
+    lines: GraphicsPipeline,
+    surface: Option<GraphicsPipeline>,
+    fill_set: DescriptorSet,
+    lines_set: DescriptorSet,
+    surface_set: Option<DescriptorSet>,
+}
+
+/// A quadrilateral spectral-element mesh (planar or a surface in 3D) resident on the device,
+/// drawn per pixel (seed 002).
 pub struct SpectralRenderer {
     gpu: Gpu,
     mesh: Arc<SpectralMesh>,
@@ -200,22 +258,30 @@ pub struct SpectralRenderer {
     proxies: Buffer<DrawVertex>,
     node_grids: Buffer<DrawVertex>,
     edges: Buffer<DrawVertex>,
+    _patches: Buffer<[f32; 8]>,
     counts: [u32; 3],
+    planar: bool,
     colormap: ColormapTexture,
     resources: Vec<Resource>,
     shown: (usize, usize),
-    pipelines: HashMap<ColorFormat, (GraphicsPipeline, GraphicsPipeline, DescriptorSet, DescriptorSet)>,
+    pipelines: HashMap<ColorFormat, Pipelines>,
     ranges: HashMap<(usize, usize), (f64, f64)>,
 }
 
 impl SpectralRenderer {
     /// Uploads `mesh` (geometry, the first field's first step, bases, draw streams) and
-    /// `colormap`. Planar meshes only: surfaces in 3D need the adaptive tessellation of seed
-    /// 002's surface case, which this renderer does not have yet.
+    /// `colormap`. Quadrilateral meshes: planar, or surfaces in 3D (these need tessellation
+    /// shaders). Hexahedral meshes are drawn by cut planes, not by this renderer.
     pub fn new(gpu: &Gpu, mesh: Arc<SpectralMesh>, colormap: &Colormap) -> Result<Self> {
-        if !mesh.is_planar() {
+        if mesh.shape != super::mesh::Shape::Quadrilateral {
             return Err(SpectralError::Missing(
-                "the mesh is not planar (z ≠ 0): surfaces in 3D are not rendered yet".into(),
+                "hexahedral meshes are shown by cut planes (--cut), not as surfaces".into(),
+            ));
+        }
+        let planar = mesh.is_planar();
+        if !planar && !gpu.caps().tessellation_shader {
+            return Err(SpectralError::Missing(
+                "surfaces in 3D need tessellation shaders, which this device lacks".into(),
             ));
         }
         if mesh.fields.is_empty() {
@@ -234,18 +300,25 @@ impl SpectralRenderer {
         let draw = proxy::build(&mesh);
         let vertex = vk::BufferUsageFlags::VERTEX_BUFFER;
         let upload = |name: &str, v: &[DrawVertex]| {
+            // A buffer cannot be empty: an unused stream (surfaces have no proxies) gets one
+            // vertex that is never drawn.
+            let v = if v.is_empty() { &[DrawVertex::zeroed()][..] } else { v };
             Buffer::from_slice(gpu, name, v, vertex).map_err(dev("uploading the draw streams"))
         };
         let counts = [draw.proxies.len() as u32, draw.node_grids.len() as u32, draw.edges.len() as u32];
         let proxies = upload("spectral proxies", &draw.proxies)?;
         let node_grids = upload("spectral node grids", &draw.node_grids)?;
         let edges = upload("spectral edges", &draw.edges)?;
+        let patches = proxy::surface_patches(&mesh);
+        let patches =
+            Buffer::from_slice(gpu, "spectral patches", &patches, storage).map_err(dev("uploading"))?;
         let colormap = colormap.upload(gpu).map_err(dev("uploading the colour map"))?;
         let resources = vec![
             Resource::Storage(points.binding().map_err(dev("binding"))?),
             Resource::Storage(values.binding().map_err(dev("binding"))?),
             colormap.resource(),
             Resource::Storage(bases.binding().map_err(dev("binding"))?),
+            Resource::Storage(patches.binding().map_err(dev("binding"))?),
         ];
         Ok(Self {
             gpu: gpu.clone(),
@@ -256,7 +329,9 @@ impl SpectralRenderer {
             proxies,
             node_grids,
             edges,
+            _patches: patches,
             counts,
+            planar,
             colormap,
             resources,
             shown: (0, 0),
@@ -309,52 +384,82 @@ impl SpectralRenderer {
         if self.pipelines.contains_key(&format) {
             return Ok(());
         }
-        let make = |lines: bool| {
+        let bindings = [
+            BindingKind::StorageBuffer,
+            BindingKind::StorageBuffer,
+            BindingKind::Texture,
+            BindingKind::StorageBuffer,
+            BindingKind::StorageBuffer,
+        ];
+        let make = |lines: bool, surface: bool| {
+            let name = match (lines, surface) {
+                (true, _) => "spectral edges",
+                (false, false) => "spectral elements",
+                (false, true) => "spectral surface",
+            };
+            let vertex =
+                if surface { shaders::spectral::SURFACE_VERT } else { shaders::spectral::ELEMENT_VERT };
             let mut desc = GraphicsPipelineDesc::new(
-                if lines { "spectral edges" } else { "spectral elements" },
-                shaders::spectral::ELEMENT_VERT,
+                name,
+                vertex,
                 shaders::spectral::ELEMENT_FRAG,
                 target.render_pass().raw(),
             );
-            desc.bindings = &[
-                BindingKind::StorageBuffer,
-                BindingKind::StorageBuffer,
-                BindingKind::Texture,
-                BindingKind::StorageBuffer,
-            ];
+            desc.bindings = &bindings;
             desc.push_constant_bytes = std::mem::size_of::<SpectralPush>() as u32;
-            desc.vertex_stride = std::mem::size_of::<DrawVertex>() as u32;
-            desc.vertex_attributes = &[
-                (0, vk::Format::R32G32B32_SFLOAT, 0),
-                (1, vk::Format::R32G32_SFLOAT, 12),
-                (2, vk::Format::R32_UINT, 20),
-            ];
+            if surface {
+                desc.tessellation =
+                    Some((shaders::spectral::SURFACE_TESC, shaders::spectral::SURFACE_TESE, 1));
+                desc.topology = vk::PrimitiveTopology::PATCH_LIST;
+            } else {
+                desc.vertex_stride = std::mem::size_of::<DrawVertex>() as u32;
+                desc.vertex_attributes = &[
+                    (0, vk::Format::R32G32B32_SFLOAT, 0),
+                    (1, vk::Format::R32G32_SFLOAT, 12),
+                    (2, vk::Format::R32_UINT, 20),
+                ];
+            }
             if lines {
                 desc.topology = vk::PrimitiveTopology::LINE_LIST;
             }
             GraphicsPipeline::new(&self.gpu, &desc).map_err(dev("building the spectral pipelines"))
         };
-        let (fill, lines) = (make(false)?, make(true)?);
-        let fill_set = fill.bind(&self.gpu, &self.resources).map_err(dev("binding"))?;
-        let lines_set = lines.bind(&self.gpu, &self.resources).map_err(dev("binding"))?;
-        self.pipelines.insert(format, (fill, lines, fill_set, lines_set));
+        let (fill, lines) = (make(false, false)?, make(true, false)?);
+        let surface = if self.planar { None } else { Some(make(false, true)?) };
+        let bind = |p: &GraphicsPipeline| p.bind(&self.gpu, &self.resources).map_err(dev("binding"));
+        let (fill_set, lines_set) = (bind(&fill)?, bind(&lines)?);
+        let surface_set = surface.as_ref().map(bind).transpose()?;
+        self.pipelines.insert(format, Pipelines { fill, lines, surface, fill_set, lines_set, surface_set });
         Ok(())
     }
 
     fn push(&mut self, target: &RenderTarget, view: &SpectralView) -> SpectralPush {
         let e = target.extent();
-        let v2 = view.view.unwrap_or_else(|| View2d::fit(&self.mesh, e.width, e.height));
         let (lo, hi) = self.range(view);
+        let (view_proj, pixel_to_world) = if self.planar {
+            let v2 = view.view.unwrap_or_else(|| View2d::fit(&self.mesh, e.width, e.height));
+            (v2.view_proj(e.width, e.height), v2.pixel_to_world(e.width, e.height))
+        } else {
+            let camera = view.camera.unwrap_or_else(|| fit_camera(&self.mesh));
+            let aspect = target.aspect();
+            let tan_half = (0.5 * camera.fov_y_degrees.to_radians()).tan();
+            // Pixels per world unit at view depth 1, times 1 + the tangent of the half-diagonal
+            // field of view (a depth error moves an off-axis point's image too).
+            let pixels =
+                0.5 * f64::from(e.height) / tan_half * (1.0 + tan_half * (1.0 + aspect * aspect).sqrt());
+            let eye = camera.eye.map(|c| c as f32);
+            (camera.view_proj_f32(aspect), [eye[0], eye[1], eye[2], pixels as f32])
+        };
         SpectralPush {
-            view_proj: v2.view_proj(e.width, e.height).to_cols_array(),
-            pixel_to_world: v2.pixel_to_world(e.width, e.height),
+            view_proj: view_proj.to_cols_array(),
+            pixel_to_world,
             range: [lo as f32, hi as f32, self.colormap.texels() as f32, view.isolines as f32],
-            misc: [DEPTH_FACES, INSIDE_TOLERANCE as f32, 0.0, 0.0],
+            misc: [0.0, INSIDE_TOLERANCE as f32, view.max_error_px.max(1e-3) as f32, MAX_TESSELLATION as f32],
             flags: [
                 u32::from(target.format() == ColorFormat::Rgba32F),
                 u32::from(view.log),
                 if view.per_vertex { MODE_PER_VERTEX } else { MODE_PER_PIXEL },
-                0,
+                u32::from(!self.planar),
             ],
         }
     }
@@ -380,8 +485,11 @@ impl SpectralRenderer {
         self.show(view.field, view.step)?;
         self.pipelines_for(target.format(), target)?;
         let push = self.push(target, view);
-        let (fill, lines, fill_set, lines_set) = &self.pipelines[&target.format()];
+        let p = &self.pipelines[&target.format()];
         let extent = target.extent();
+        let elements = self.mesh.elements() as u32;
+        let surface =
+            (!self.planar && !view.per_vertex).then(|| (p.surface.as_ref(), p.surface_set.as_ref()));
         let (faces, face_count) = if view.per_vertex {
             (self.node_grids.raw(), self.counts[1])
         } else {
@@ -389,18 +497,39 @@ impl SpectralRenderer {
         };
         let (edges, edge_count) = (self.edges.raw(), self.counts[2]);
         let (overdraw, mesh_lines) = (view.overdraw, view.edges);
+        let offsets = if self.planar { PLANAR_OFFSETS } else { SURFACE_OFFSETS };
         Ok(move |cmd: vk::CommandBuffer| {
-            fill.record_draw(cmd, extent, fill_set, bytemuck::bytes_of(&push), Some(faces), face_count);
-            let mut p = push;
-            p.flags[2] = MODE_EDGE_OVERDRAW;
+            let bytes = bytemuck::bytes_of(&push);
+            match surface {
+                Some((Some(pipeline), Some(set))) => {
+                    pipeline.record_draw(cmd, extent, set, bytes, None, elements)
+                }
+                _ => p.fill.record_draw(cmd, extent, &p.fill_set, bytes, Some(faces), face_count),
+            }
+            let mut lines = push;
             if overdraw {
-                p.misc[0] = DEPTH_OVERDRAW;
-                lines.record_draw(cmd, extent, lines_set, bytemuck::bytes_of(&p), Some(edges), edge_count);
+                lines.flags[2] = MODE_EDGE_OVERDRAW;
+                lines.misc[0] = offsets[0];
+                p.lines.record_draw(
+                    cmd,
+                    extent,
+                    &p.lines_set,
+                    bytemuck::bytes_of(&lines),
+                    Some(edges),
+                    edge_count,
+                );
             }
             if mesh_lines {
-                p.flags[2] = MODE_EDGE_LINES;
-                p.misc[0] = DEPTH_LINES;
-                lines.record_draw(cmd, extent, lines_set, bytemuck::bytes_of(&p), Some(edges), edge_count);
+                lines.flags[2] = MODE_EDGE_LINES;
+                lines.misc[0] = offsets[1];
+                p.lines.record_draw(
+                    cmd,
+                    extent,
+                    &p.lines_set,
+                    bytemuck::bytes_of(&lines),
+                    Some(edges),
+                    edge_count,
+                );
             }
         })
     }
