@@ -62,9 +62,8 @@ pub fn fit_camera(mesh: &SpectralMesh) -> Camera {
     let radius = (0..3).map(|c| (hi[c] - lo[c]).powi(2)).sum::<f64>().sqrt().max(1e-12) * 0.5;
     let fov: f64 = 40.0;
     let distance = 1.05 * radius / (0.5 * fov.to_radians()).sin();
-    let dir = [0.45, -0.75, 0.55];
-    let n = (dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]) as f64;
-    let n = n.sqrt();
+    let dir: [f64; 3] = [0.45, -0.75, 0.55];
+    let n = (dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]).sqrt();
     Camera {
         eye: std::array::from_fn(|c| centre[c] + distance * dir[c] / n),
         target: centre,
@@ -489,7 +488,7 @@ impl SpectralRenderer {
         let extent = target.extent();
         let elements = self.mesh.elements() as u32;
         let surface =
-            (!self.planar && !view.per_vertex).then(|| (p.surface.as_ref(), p.surface_set.as_ref()));
+            (!self.planar && !view.per_vertex).then_some((p.surface.as_ref(), p.surface_set.as_ref()));
         let (faces, face_count) = if view.per_vertex {
             (self.node_grids.raw(), self.counts[1])
         } else {
