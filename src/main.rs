@@ -9,6 +9,7 @@ use anyhow::{bail, Context, Result};
 
 mod cli {
     pub mod spacetime;
+    pub mod spectral;
 }
 use clap::{Parser, Subcommand};
 use galerkin::demo::axpy::{axpy_error_ratio, Axpy};
@@ -74,6 +75,11 @@ enum Command {
     SpacetimeGen(cli::spacetime::GenArgs),
     /// Convert a spacetime data set between .gst and .vtu.
     SpacetimeConvert(cli::spacetime::ConvertArgs),
+    /// Render spectral elements per pixel (seed 002): a .vtu file of VTK Lagrange cells or a
+    /// generated data set, planar or a surface in 3D, to PNG or EXR.
+    Spectral(cli::spectral::RenderArgs),
+    /// Generate a spectral-element data set to a .vtu file (analytic fields, not solved).
+    SpectralGen(cli::spectral::GenArgs),
     /// Benchmarks.
     Bench {
         #[command(subcommand)]
@@ -88,6 +94,9 @@ enum BenchWhat {
     /// the out-of-core first frame of a 2·10^7-element file (generated on first use into
     /// --data-dir).
     Spacetime(cli::spacetime::BenchArgs),
+    /// Seed 002's table: FPS of orders 1–8 on the artery (704) and coil (3332) at 1024×768,
+    /// per pixel against per vertex in the same run; frame time against pixels and elements.
+    Spectral(cli::spectral::BenchArgs),
     /// The reduction core: premultiplication of the fluid volume tensor at the paper's cavity
     /// size (88,671 cells, m = 128, m_g = 5) next to faer's GEMM of its final stage, reduced
     /// evaluation per call and per batch, and premultiplication time against cells and m.
@@ -136,9 +145,12 @@ fn run(cli: Cli) -> Result<()> {
         Command::Spacetime(args) => cli::spacetime::render(&desc, &args),
         Command::SpacetimeGen(args) => cli::spacetime::generate_file(&args),
         Command::SpacetimeConvert(args) => cli::spacetime::convert(&args),
+        Command::Spectral(args) => cli::spectral::render(&desc, &args),
+        Command::SpectralGen(args) => cli::spectral::generate_file(&args),
         Command::Bench { what: BenchWhat::Gpu { quick } } => bench_gpu(&desc, quick),
         Command::Bench { what: BenchWhat::Reduce { quick } } => bench_reduce(&desc, quick),
         Command::Bench { what: BenchWhat::Spacetime(args) } => cli::spacetime::bench(&desc, &args),
+        Command::Bench { what: BenchWhat::Spectral(args) } => cli::spectral::bench(&desc, &args),
     }
 }
 

@@ -349,6 +349,17 @@ fn surfaces_show_the_field_within_half_a_pixel() {
     // move the point by ~1e-6 of the scene (≈ 1e-3 px here).
     assert!(worst <= 0.5 + 0.01, "a pixel shows a surface point {worst} px away");
     assert!(worst_value <= 1.0);
+    // The device's levels agree with their CPU twin, and nothing was skipped.
+    let mut r = SpectralRenderer::new(&gpu, mesh.clone(), &Colormap::viridis()).unwrap();
+    let target = RenderTarget::new(&gpu, "tess", size.0, size.1, ColorFormat::Rgba8).unwrap();
+    let view = SpectralView::default();
+    r.render(&target, &view).unwrap();
+    let (written, skipped) = r.last_tessellation().unwrap().unwrap();
+    let expected = r.expected_tessellation(&target, &view);
+    eprintln!("tessellation: {written} vertices on the device, {expected} by the CPU twin");
+    assert_eq!(skipped, 0);
+    // Both in f32; a level may differ by one where ceil meets a rounding difference.
+    assert!((f64::from(written) - expected as f64).abs() <= 0.02 * expected as f64);
     let (_, coarse, _) = farthest(16.0);
     eprintln!("budget 16 px: farthest {coarse:.3} px");
     assert!(coarse > 0.5, "a coarse tessellation should break the half-pixel bound ({coarse})");

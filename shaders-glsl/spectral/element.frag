@@ -47,8 +47,10 @@ void main() {
     }
     vec3 colour = texture(colormap, ramp_texcoord(t, pc.range.z)).rgb;
     if (mode == SPECTRAL_MODE_EDGE_LINES) colour = vec3(0.05);
-    if (pc.range.w > 0.0 && width > 0.0) {
-        float d = abs(fract(levels + 0.5) - 0.5) / width;
+    // Interior levels only: the range's ends would ring the extrema.
+    float nearest = floor(levels + 0.5);
+    if (pc.range.w > 0.0 && width > 0.0 && nearest > 0.0 && nearest < pc.range.w) {
+        float d = abs(levels - nearest) / width;
         colour = mix(colour, vec3(0.0), 0.8 * (1.0 - clamp(d - 0.5, 0.0, 1.0)));
     }
     if (surface && mode != SPECTRAL_MODE_EDGE_LINES) {

@@ -230,3 +230,24 @@ pub fn sample(mesh: &SpectralMesh, f: impl Fn(usize, [f64; 3]) -> f64) -> Vec<f6
     }
     out
 }
+
+/// The generated data sets by name (`galerkin spectral --generate`): `grid` (8 × 4 straight,
+/// skewed quadrilaterals), `annulus` (4 × 12 curved), `artery` (704 curved surface elements)
+/// and `coil` (3332), with geometry of `geometry_order` (curved sets) and fields of `order` on
+/// `set`.
+pub fn by_name(
+    name: &str,
+    geometry_order: usize,
+    order: usize,
+    set: NodeSet,
+) -> Result<SpectralMesh, SpectralError> {
+    match name {
+        "grid" => quad_grid(8, 4, 0.25, order, set),
+        "annulus" => annulus(4, 12, geometry_order, order, set),
+        "artery" => artery(44, 16, geometry_order, order, set),
+        "coil" => coil(238, 14, geometry_order, order, set),
+        other => Err(SpectralError::Missing(format!(
+            "unknown data set {other:?} (available: grid, annulus, artery, coil)"
+        ))),
+    }
+}

@@ -11,10 +11,11 @@
 //! - **Node grids** (per-vertex mode, the seed's baseline): the element's nodes joined into an
 //!   n × n grid of quads (two triangles each), the field evaluated at the vertices and
 //!   interpolated across.
-//! - **Edges**: each element's four edges sampled at 8g segments on the true curve, drawn as
+//! - **Edges**: each element's four edges sampled at 2g segments on the true curve, drawn as
 //!   lines (edge overdraw behind the faces; or in front, dark, to show the mesh).
 
 use bytemuck::{Pod, Zeroable};
+use glam::{Mat4, Vec4};
 
 use super::basis::{Basis1d, NodeSet};
 use super::mesh::SpectralMesh;
@@ -171,7 +172,7 @@ fn node_grid(mesh: &SpectralMesh, e: usize, out: &mut Vec<DrawVertex>) {
 
 fn edges(mesh: &SpectralMesh, e: usize, out: &mut Vec<DrawVertex>) {
     let g = mesh.geometry.order;
-    let segments = if g == 1 { 1 } else { 8 * g };
+    let segments = if g == 1 { 1 } else { 2 * g };
     for k in 0..4 {
         for s in 0..segments {
             let a = boundary(k, s as f64 / segments as f64);
@@ -243,4 +244,18 @@ pub fn surface_patches(mesh: &SpectralMesh) -> Vec<[f32; 8]> {
             ]
         })
         .collect()
+}
+
+/// The tessellation level `tessellate.comp` gives a surface element (its twin, in the same f32
+/// arithmetic): L = ceil(sqrt(P K / (4 z budget))) clamped to [1, `cap`], 0 for an element
+/// wholly behind the eye; `patch` from [`surface_patches`], P pixels per world unit at view
+/// depth 1 (times the off-axis factor), z the element's nearest view depth.
+pub fn tessellation_level(patch: &[f32; 8], view_proj: &Mat4, pixels: f32, budget: f32, cap: f32) -> u32 {
+    let depth = (*view_proj * Vec4::new(patch[0], patch[1], patch[2], 1.0)).w - patch[3];
+    if depth + 2.0 * patch[3] <= 0.0 {
+        return 0;
+    }
+    let z = depth.max(1e-3 * patch[3]);
+    let l = (pixels / z * patch[4] / (4.0 * budget)).sqrt().ceil();
+    l.clamp(1.0, cap) as u32
 }

@@ -5,10 +5,11 @@
 //! - **planar meshes**: proxies drawn with `element.vert`/`element.frag`, whose fragment stage
 //!   inverts the geometry map at the pixel centre by Newton's method and evaluates the
 //!   tensor-product polynomial there (pixel-exact), in a 2D view ([`View2d`]);
-//! - **surfaces in 3D** (the seed's artery and coil): one patch per element, tessellated on the
-//!   device (`surface.tesc`/`.tese`) to an L × L grid chosen per element and frame so that every
+//! - **surfaces in 3D** (the seed's artery and coil): each element tessellated by a compute pass
+//!   (`tessellate.comp`) to an L × L grid chosen per element and frame so that every
 //!   tessellated point lies within [`SpectralView::max_error_px`] pixels (default ½) of the true
-//!   surface on screen; each fragment evaluates the field at its interpolated reference point and
+//!   surface on screen (tessellation shaders did the same but ran 20× slower at level 12 on
+//!   lavapipe); each fragment evaluates the field at its interpolated reference point and
 //!   lights it with the geometry map's exact normal there. The shown value is therefore the
 //!   polynomial at a surface point whose image is within that budget of the pixel centre (the
 //!   level is capped at [`MAX_TESSELLATION`]: elements that would need more, e.g. cut by the near
@@ -32,7 +33,8 @@ use super::error::SpectralError;
 use super::mesh::SpectralMesh;
 use super::proxy::{self, DrawVertex};
 use crate::gpu::{
-    shaders, BindingKind, Buffer, DescriptorSet, Gpu, GraphicsPipeline, GraphicsPipelineDesc, Resource,
+    shaders, BindingKind, Buffer, ComputePipeline, ComputePipelineDesc, DescriptorSet, Gpu, GraphicsPipeline,
+    GraphicsPipelineDesc, MemoryKind, Profiler, Resource,
 };
 use crate::render::{Camera, ColorFormat, Colormap, ColormapTexture, Pixels, RenderTarget, BACKGROUND};
 
@@ -240,10 +242,17 @@ const SURFACE_OFFSETS: [f32; 2] = [2e-5, -2e-5];
 struct Pipelines {
     fill: GraphicsPipeline,
     lines: GraphicsPipeline,
-    surface: Option<GraphicsPipeline>,
     fill_set: DescriptorSet,
     lines_set: DescriptorSet,
-    surface_set: Option<DescriptorSet>,
+}
+
+/// The surface tessellation pass and its output: the vertex stream and its indirect draw
+/// (`vertex_count, 1, 0, 0`, then the capacity in vertices and the elements skipped).
+struct Tessellator {
+    pipeline: ComputePipeline,
+    draw: Buffer<u32>,
+    vertices: Option<Buffer<DrawVertex>>,
+    set: Option<DescriptorSet>,
 }
 
 /// A quadrilateral spectral-element mesh (planar or a surface in 3D) resident on the device,
@@ -258,6 +267,7 @@ pub struct SpectralRenderer {
     node_grids: Buffer<DrawVertex>,
     edges: Buffer<DrawVertex>,
     _patches: Buffer<[f32; 8]>,
+    patch_bounds: Vec<[f32; 8]>,
     counts: [u32; 3],
     planar: bool,
     colormap: ColormapTexture,
@@ -265,12 +275,15 @@ pub struct SpectralRenderer {
     shown: (usize, usize),
     pipelines: HashMap<ColorFormat, Pipelines>,
     ranges: HashMap<(usize, usize), (f64, f64)>,
+    tessellator: Option<Tessellator>,
+    /// Vertices the last surface frame reserved room for (the CPU bound of its tessellation).
+    tessellated: u64,
 }
 
 impl SpectralRenderer {
     /// Uploads `mesh` (geometry, the first field's first step, bases, draw streams) and
-    /// `colormap`. Quadrilateral meshes: planar, or surfaces in 3D (these need tessellation
-    /// shaders). Hexahedral meshes are drawn by cut planes, not by this renderer.
+    /// `colormap`. Quadrilateral meshes: planar, or surfaces in 3D. Hexahedral meshes are drawn
+    /// by cut planes, not by this renderer.
     pub fn new(gpu: &Gpu, mesh: Arc<SpectralMesh>, colormap: &Colormap) -> Result<Self> {
         if mesh.shape != super::mesh::Shape::Quadrilateral {
             return Err(SpectralError::Missing(
@@ -278,11 +291,6 @@ impl SpectralRenderer {
             ));
         }
         let planar = mesh.is_planar();
-        if !planar && !gpu.caps().tessellation_shader {
-            return Err(SpectralError::Missing(
-                "surfaces in 3D need tessellation shaders, which this device lacks".into(),
-            ));
-        }
         if mesh.fields.is_empty() {
             return Err(SpectralError::Missing("the data set has no fields to show".into()));
         }
@@ -308,9 +316,9 @@ impl SpectralRenderer {
         let proxies = upload("spectral proxies", &draw.proxies)?;
         let node_grids = upload("spectral node grids", &draw.node_grids)?;
         let edges = upload("spectral edges", &draw.edges)?;
-        let patches = proxy::surface_patches(&mesh);
+        let patch_bounds = proxy::surface_patches(&mesh);
         let patches =
-            Buffer::from_slice(gpu, "spectral patches", &patches, storage).map_err(dev("uploading"))?;
+            Buffer::from_slice(gpu, "spectral patches", &patch_bounds, storage).map_err(dev("uploading"))?;
         let colormap = colormap.upload(gpu).map_err(dev("uploading the colour map"))?;
         let resources = vec![
             Resource::Storage(points.binding().map_err(dev("binding"))?),
@@ -329,6 +337,7 @@ impl SpectralRenderer {
             node_grids,
             edges,
             _patches: patches,
+            patch_bounds,
             counts,
             planar,
             colormap,
@@ -336,6 +345,8 @@ impl SpectralRenderer {
             shown: (0, 0),
             pipelines: HashMap::new(),
             ranges: HashMap::new(),
+            tessellator: None,
+            tessellated: 0,
         })
     }
 
@@ -344,9 +355,11 @@ impl SpectralRenderer {
         &self.mesh
     }
 
-    /// Triangles drawn per frame in per-pixel and per-vertex mode, and edge lines.
-    pub fn primitive_counts(&self) -> [u32; 3] {
-        [self.counts[0] / 3, self.counts[1] / 3, self.counts[2] / 2]
+    /// Triangles drawn per frame in per-pixel mode (planar: the proxies; surfaces: at most
+    /// this many in the last frame's tessellation) and per-vertex mode, and edge lines.
+    pub fn primitive_counts(&self) -> [u64; 3] {
+        let per_pixel = if self.planar { u64::from(self.counts[0]) / 3 } else { self.tessellated / 3 };
+        [per_pixel, u64::from(self.counts[1]) / 3, u64::from(self.counts[2]) / 2]
     }
 
     /// The colour range `view` uses: its own, or the field's sampled range at its step.
@@ -390,45 +403,31 @@ impl SpectralRenderer {
             BindingKind::StorageBuffer,
             BindingKind::StorageBuffer,
         ];
-        let make = |lines: bool, surface: bool| {
-            let name = match (lines, surface) {
-                (true, _) => "spectral edges",
-                (false, false) => "spectral elements",
-                (false, true) => "spectral surface",
-            };
-            let vertex =
-                if surface { shaders::spectral::SURFACE_VERT } else { shaders::spectral::ELEMENT_VERT };
+        let make = |lines: bool| {
+            let name = if lines { "spectral edges" } else { "spectral elements" };
             let mut desc = GraphicsPipelineDesc::new(
                 name,
-                vertex,
+                shaders::spectral::ELEMENT_VERT,
                 shaders::spectral::ELEMENT_FRAG,
                 target.render_pass().raw(),
             );
             desc.bindings = &bindings;
             desc.push_constant_bytes = std::mem::size_of::<SpectralPush>() as u32;
-            if surface {
-                desc.tessellation =
-                    Some((shaders::spectral::SURFACE_TESC, shaders::spectral::SURFACE_TESE, 1));
-                desc.topology = vk::PrimitiveTopology::PATCH_LIST;
-            } else {
-                desc.vertex_stride = std::mem::size_of::<DrawVertex>() as u32;
-                desc.vertex_attributes = &[
-                    (0, vk::Format::R32G32B32_SFLOAT, 0),
-                    (1, vk::Format::R32G32_SFLOAT, 12),
-                    (2, vk::Format::R32_UINT, 20),
-                ];
-            }
+            desc.vertex_stride = std::mem::size_of::<DrawVertex>() as u32;
+            desc.vertex_attributes = &[
+                (0, vk::Format::R32G32B32_SFLOAT, 0),
+                (1, vk::Format::R32G32_SFLOAT, 12),
+                (2, vk::Format::R32_UINT, 20),
+            ];
             if lines {
                 desc.topology = vk::PrimitiveTopology::LINE_LIST;
             }
             GraphicsPipeline::new(&self.gpu, &desc).map_err(dev("building the spectral pipelines"))
         };
-        let (fill, lines) = (make(false, false)?, make(true, false)?);
-        let surface = if self.planar { None } else { Some(make(false, true)?) };
+        let (fill, lines) = (make(false)?, make(true)?);
         let bind = |p: &GraphicsPipeline| p.bind(&self.gpu, &self.resources).map_err(dev("binding"));
         let (fill_set, lines_set) = (bind(&fill)?, bind(&lines)?);
-        let surface_set = surface.as_ref().map(bind).transpose()?;
-        self.pipelines.insert(format, Pipelines { fill, lines, surface, fill_set, lines_set, surface_set });
+        self.pipelines.insert(format, Pipelines { fill, lines, fill_set, lines_set });
         Ok(())
     }
 
@@ -471,39 +470,180 @@ impl SpectralRenderer {
         target: &RenderTarget,
         view: &SpectralView,
     ) -> Result<()> {
-        let draw = self.prepare(target, view)?;
+        let draw = self.prepare(target, view)?.1;
         draw(cmd);
         Ok(())
     }
 
+    /// Makes room for this frame's surface tessellation (the CPU bound of the device's levels,
+    /// one level of slack per element against f32 rounding) and binds the pass.
+    fn tessellator_for(&mut self, push: &SpectralPush) -> Result<()> {
+        if self.tessellator.is_none() {
+            let bindings = [BindingKind::StorageBuffer; 7];
+            let pipeline = ComputePipeline::new(
+                &self.gpu,
+                &ComputePipelineDesc {
+                    name: "spectral tessellation",
+                    spirv: shaders::spectral::TESSELLATE,
+                    bindings: &bindings,
+                    push_constant_bytes: std::mem::size_of::<SpectralPush>() as u32,
+                    specialization: &[],
+                    shared_bytes: 8,
+                },
+            )
+            .map_err(dev("building the tessellation pass"))?;
+            let draw = Buffer::new(
+                &self.gpu,
+                "spectral tessellation draw",
+                6,
+                vk::BufferUsageFlags::STORAGE_BUFFER
+                    | vk::BufferUsageFlags::INDIRECT_BUFFER
+                    | vk::BufferUsageFlags::TRANSFER_DST
+                    | vk::BufferUsageFlags::TRANSFER_SRC,
+                MemoryKind::GpuOnly,
+            )
+            .map_err(dev("the tessellation pass"))?;
+            self.tessellator = Some(Tessellator { pipeline, draw, vertices: None, set: None });
+        }
+        let view_proj = Mat4::from_cols_array(&push.view_proj);
+        let need: u64 = self
+            .patch_bounds
+            .iter()
+            .map(|p| {
+                let l = u64::from(proxy::tessellation_level(
+                    p,
+                    &view_proj,
+                    push.pixel_to_world[3],
+                    push.misc[2],
+                    push.misc[3],
+                ));
+                if l == 0 {
+                    0
+                } else {
+                    6 * (l + 1) * (l + 1)
+                }
+            })
+            .sum::<u64>()
+            .max(6);
+        let max = self.gpu.max_binding_bytes() / std::mem::size_of::<DrawVertex>() as u64;
+        let need = need.min(max);
+        self.tessellated = need;
+        let t = self.tessellator.as_mut().expect("made above");
+        if t.vertices.as_ref().is_none_or(|v| v.len() < need) {
+            // Grow by half again, so a slowly moving camera does not reallocate every frame.
+            let len = (need + need / 2).min(max);
+            t.set = None;
+            t.vertices = None;
+            t.vertices = Some(
+                Buffer::new(
+                    &self.gpu,
+                    "spectral tessellated vertices",
+                    len,
+                    vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::VERTEX_BUFFER,
+                    MemoryKind::GpuOnly,
+                )
+                .map_err(dev("the tessellation pass"))?,
+            );
+        }
+        if t.set.is_none() {
+            let vertices = t.vertices.as_ref().expect("made above");
+            let mut resources = self.resources.clone();
+            // Binding 2 (the colour map in the draws) is unused by the pass: bind the values.
+            resources[2] = Resource::Storage(self.values.binding().map_err(dev("binding"))?);
+            resources.push(Resource::Storage(t.draw.binding().map_err(dev("binding"))?));
+            resources.push(Resource::Storage(vertices.binding().map_err(dev("binding"))?));
+            t.set =
+                Some(t.pipeline.bind(&self.gpu, &resources).map_err(dev("binding the tessellation pass"))?);
+        }
+        Ok(())
+    }
+
+    /// Records the passes a frame needs before its render pass (the surface tessellation; for
+    /// planar meshes and per-vertex mode nothing) — for applications that record the frame
+    /// themselves, before [`Self::record_draw_into`].
+    pub fn record_prepass(
+        &mut self,
+        cmd: vk::CommandBuffer,
+        target: &RenderTarget,
+        view: &SpectralView,
+    ) -> Result<()> {
+        let pre = self.prepare(target, view)?.0;
+        pre(cmd);
+        Ok(())
+    }
+
+    #[allow(clippy::type_complexity)]
     fn prepare(
         &mut self,
         target: &RenderTarget,
         view: &SpectralView,
-    ) -> Result<impl FnOnce(vk::CommandBuffer) + '_> {
+    ) -> Result<(Box<dyn FnOnce(vk::CommandBuffer) + '_>, Box<dyn FnOnce(vk::CommandBuffer) + '_>)> {
         self.show(view.field, view.step)?;
         self.pipelines_for(target.format(), target)?;
         let push = self.push(target, view);
+        let surface = !self.planar && !view.per_vertex;
+        if surface {
+            self.tessellator_for(&push)?;
+        }
         let p = &self.pipelines[&target.format()];
         let extent = target.extent();
-        let elements = self.mesh.elements() as u32;
-        let surface =
-            (!self.planar && !view.per_vertex).then_some((p.surface.as_ref(), p.surface_set.as_ref()));
+        let (edges, edge_count) = (self.edges.raw(), self.counts[2]);
+        let (overdraw, mesh_lines) = (view.overdraw, view.edges);
+        let offsets = if self.planar { PLANAR_OFFSETS } else { SURFACE_OFFSETS };
+        let gpu = &self.gpu;
+        let tess = self.tessellator.as_ref().filter(|_| surface);
+        let capacity = self.tessellated as u32;
+        let elements = self.mesh.elements() as u64;
+        let pre = move |cmd: vk::CommandBuffer| {
+            let Some(t) = tess else { return };
+            let cs = vk::PipelineStageFlags::COMPUTE_SHADER;
+            // The last frame's draw has read the buffers this pass rewrites.
+            gpu.memory_barrier(
+                cmd,
+                (
+                    vk::PipelineStageFlags::VERTEX_INPUT | vk::PipelineStageFlags::DRAW_INDIRECT,
+                    vk::AccessFlags::empty(),
+                ),
+                (vk::PipelineStageFlags::TRANSFER | cs, vk::AccessFlags::empty()),
+            );
+            let header: [u32; 6] = [0, 1, 0, 0, capacity, 0];
+            // SAFETY: the buffer is alive, 24 bytes, created with TRANSFER_DST.
+            unsafe { gpu.device().cmd_update_buffer(cmd, t.draw.raw(), 0, bytemuck::cast_slice(&header)) };
+            gpu.memory_barrier(
+                cmd,
+                (vk::PipelineStageFlags::TRANSFER, vk::AccessFlags::TRANSFER_WRITE),
+                (cs, vk::AccessFlags::SHADER_READ | vk::AccessFlags::SHADER_WRITE),
+            );
+            let x = elements.clamp(1, 65_535);
+            let y = elements.div_ceil(x);
+            let set = t.set.as_ref().expect("bound in tessellator_for");
+            t.pipeline.record_dispatch(cmd, set, bytemuck::bytes_of(&push), [x as u32, y as u32, 1]);
+            gpu.memory_barrier(
+                cmd,
+                (cs, vk::AccessFlags::SHADER_WRITE),
+                (
+                    vk::PipelineStageFlags::DRAW_INDIRECT | vk::PipelineStageFlags::VERTEX_INPUT,
+                    vk::AccessFlags::INDIRECT_COMMAND_READ | vk::AccessFlags::VERTEX_ATTRIBUTE_READ,
+                ),
+            );
+        };
         let (faces, face_count) = if view.per_vertex {
             (self.node_grids.raw(), self.counts[1])
         } else {
             (self.proxies.raw(), self.counts[0])
         };
-        let (edges, edge_count) = (self.edges.raw(), self.counts[2]);
-        let (overdraw, mesh_lines) = (view.overdraw, view.edges);
-        let offsets = if self.planar { PLANAR_OFFSETS } else { SURFACE_OFFSETS };
-        Ok(move |cmd: vk::CommandBuffer| {
+        let draw = move |cmd: vk::CommandBuffer| {
             let bytes = bytemuck::bytes_of(&push);
-            match surface {
-                Some((Some(pipeline), Some(set))) => {
-                    pipeline.record_draw(cmd, extent, set, bytes, None, elements)
-                }
-                _ => p.fill.record_draw(cmd, extent, &p.fill_set, bytes, Some(faces), face_count),
+            match tess {
+                Some(t) => p.fill.record_draw_indirect(
+                    cmd,
+                    extent,
+                    &p.fill_set,
+                    bytes,
+                    Some(t.vertices.as_ref().expect("made in tessellator_for").raw()),
+                    (t.draw.raw(), 0),
+                ),
+                None => p.fill.record_draw(cmd, extent, &p.fill_set, bytes, Some(faces), face_count),
             }
             let mut lines = push;
             if overdraw {
@@ -530,7 +670,76 @@ impl SpectralRenderer {
                     edge_count,
                 );
             }
+        };
+        Ok((Box::new(pre), Box::new(draw)))
+    }
+
+    /// One frame as an interactive loop draws it — the render pass in one submission, waited
+    /// for, no readback — and its device time in milliseconds from timestamps around the pass
+    /// (`profiler` needs one scope).
+    pub fn frame(
+        &mut self,
+        target: &RenderTarget,
+        view: &SpectralView,
+        profiler: &mut Profiler,
+    ) -> Result<f64> {
+        let gpu = self.gpu.clone();
+        let clear = if target.format() == ColorFormat::Rgba32F { [f32::NAN; 4] } else { BACKGROUND };
+        let (pre, draw) = self.prepare(target, view)?;
+        gpu.run(|cmd| {
+            profiler.record_reset(cmd);
+            profiler.scope(cmd, "draw", || {
+                pre(cmd);
+                target.record_begin(cmd, clear);
+                draw(cmd);
+                target.record_end(cmd);
+            });
         })
+        .map_err(dev("drawing a frame"))?;
+        let times = profiler.results().map_err(dev("reading timestamps"))?;
+        Ok(times.first().map_or(0.0, |t| t.1))
+    }
+
+    /// The last surface tessellation as the device did it: vertices written and elements
+    /// skipped for want of room (0 unless the frame needed more than one storage binding);
+    /// `None` before the first surface frame.
+    pub fn last_tessellation(&self) -> Result<Option<(u32, u32)>> {
+        let Some(t) = &self.tessellator else { return Ok(None) };
+        let d = t.draw.download(&self.gpu).map_err(dev("reading the tessellation's counts"))?;
+        Ok(Some((d[0], d[5])))
+    }
+
+    /// The vertices the CPU twin of the tessellation levels ([`proxy::tessellation_level`])
+    /// gives `view` in `target`: 6 L² per element.
+    pub fn expected_tessellation(&mut self, target: &RenderTarget, view: &SpectralView) -> u64 {
+        let push = self.push(target, view);
+        let view_proj = Mat4::from_cols_array(&push.view_proj);
+        self.patch_bounds
+            .iter()
+            .map(|p| {
+                let l = u64::from(proxy::tessellation_level(
+                    p,
+                    &view_proj,
+                    push.pixel_to_world[3],
+                    push.misc[2],
+                    push.misc[3],
+                ));
+                6 * l * l
+            })
+            .sum()
+    }
+
+    /// Bytes resident on the device for drawing per pixel (geometry, the shown field's
+    /// coefficients, bases, patches, proxies, edges) and, separately, the per-vertex node
+    /// grids.
+    pub fn device_bytes(&self) -> (u64, u64) {
+        let per_pixel = self._points.size_bytes()
+            + self.values.size_bytes()
+            + self._bases.size_bytes()
+            + self._patches.size_bytes()
+            + self.proxies.size_bytes()
+            + self.edges.size_bytes();
+        (per_pixel, self.node_grids.size_bytes())
     }
 
     /// Renders `view` into `target` and returns the pixels: colour-mapped RGBA8, or in an
@@ -539,7 +748,8 @@ impl SpectralRenderer {
     pub fn render(&mut self, target: &RenderTarget, view: &SpectralView) -> Result<Pixels> {
         let gpu = self.gpu.clone();
         let clear = if target.format() == ColorFormat::Rgba32F { [f32::NAN; 4] } else { BACKGROUND };
-        let draw = self.prepare(target, view)?;
+        let (pre, draw) = self.prepare(target, view)?;
+        gpu.run(pre).map_err(dev("tessellating the surface"))?;
         target.render(&gpu, clear, draw).map_err(dev("drawing the spectral elements"))
     }
 }

@@ -1,0 +1,338 @@
+//! `galerkin spectral` and `galerkin spectral-gen`: render spectral elements per pixel (seed
+//! 002) from a file or a generated data set; write generated data sets to `.vtu`.
+
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::time::Instant;
+
+use anyhow::{bail, Context, Result};
+use clap::Args;
+use galerkin::gpu::{Gpu, GpuDesc};
+use galerkin::render::{write_exr_channels, write_png_rgba8, ColorFormat, Colormap, Pixels, RenderTarget};
+use galerkin::spectral::{generate, NodeSet, SpectralMesh, SpectralRenderer, SpectralView};
+
+/// Where a data set comes from, shared by `spectral` and `spectral-gen`.
+#[derive(Args)]
+pub struct Source {
+    /// Without FILE: the generated data set: `grid` (8 × 4 straight, skewed quadrilaterals;
+    /// fields `waves` and the discontinuous `cells`), `annulus` (4 × 12 curved quadrilaterals,
+    /// same fields), `artery` (the seed's 704-element tube with a stenosis) or `coil` (the
+    /// seed's 3332-element helix), both surfaces in 3D with field `pressure`. Analytic fields
+    /// with several time steps, sampled at the nodes — not solved.
+    #[arg(long, default_value = "annulus")]
+    pub generate: String,
+    /// Without FILE: the fields' polynomial order (1 to 12).
+    #[arg(long, default_value_t = 4)]
+    pub order: usize,
+    /// Without FILE: the geometry's order for the curved data sets (1 to 12).
+    #[arg(long, default_value_t = 3)]
+    pub geometry_order: usize,
+    /// Without FILE: the fields' node set: gll, equispaced, gauss, or bernstein (coefficients).
+    #[arg(long, default_value = "gll")]
+    pub nodes: String,
+}
+
+impl Source {
+    fn mesh(&self, file: Option<&Path>) -> Result<SpectralMesh> {
+        if let Some(path) = file {
+            return Ok(galerkin::spectral::load(path)?);
+        }
+        let set = NodeSet::by_name(&self.nodes).with_context(|| {
+            format!("unknown node set {:?} (gll, equispaced, gauss, bernstein)", self.nodes)
+        })?;
+        Ok(generate::by_name(&self.generate, self.geometry_order, self.order, set)?)
+    }
+}
+
+/// Arguments of `galerkin spectral`.
+#[derive(Args)]
+pub struct RenderArgs {
+    /// Data set: a VTK `.vtu` file of Lagrange quadrilaterals (planar or a surface in 3D).
+    /// Without it, a data set is generated (--generate).
+    pub file: Option<PathBuf>,
+    #[command(flatten)]
+    pub source: Source,
+    /// The field to show (default: the first).
+    #[arg(long)]
+    pub field: Option<String>,
+    /// Its time step (0 = first).
+    #[arg(long, default_value_t = 0)]
+    pub step: usize,
+    /// Colour range (default: the field's range at this step) — narrow it to look at one
+    /// region in detail, as the seed does.
+    #[arg(long, num_args = 2, value_names = ["LO", "HI"], allow_negative_numbers = true)]
+    pub range: Option<Vec<f64>>,
+    /// Logarithmic colour scale (needs a positive range).
+    #[arg(long)]
+    pub log: bool,
+    /// Colour map: viridis, cool-warm, grey, or a ramp PNG file.
+    #[arg(long, default_value = "viridis")]
+    pub palette: String,
+    /// Iso-lines: this many levels across the colour range, one pixel wide.
+    #[arg(long, default_value_t = 0)]
+    pub isolines: u32,
+    /// Draw the element edges (on the true curved edges).
+    #[arg(long)]
+    pub edges: bool,
+    /// Do not overdraw edges behind the faces (they fill cracks between discontinuous elements).
+    #[arg(long)]
+    pub no_overdraw: bool,
+    /// Colour at the nodes, interpolated (the seed's baseline) instead of per pixel.
+    #[arg(long)]
+    pub per_vertex: bool,
+    /// Surfaces: the tessellation's screen-space error budget in pixels.
+    #[arg(long, default_value_t = 0.5)]
+    pub max_error: f64,
+    /// Image size.
+    #[arg(long, value_name = "WxH", value_parser = crate::parse_size, default_value = "1024x768")]
+    pub size: (u32, u32),
+    /// Output image: .png (colour) or .exr (R, G, B of the picture and the raw value, xi, eta
+    /// and element of every pixel as float channels; NaN where no element).
+    #[arg(long, default_value = "out/spectral.png")]
+    pub out: PathBuf,
+}
+
+/// Arguments of `galerkin spectral-gen`.
+#[derive(Args)]
+pub struct GenArgs {
+    #[command(flatten)]
+    pub source: Source,
+    /// Output `.vtu` (VTK Lagrange cells, equispaced, every time step as `NAME_t<k>`).
+    #[arg(long)]
+    pub out: PathBuf,
+}
+
+/// `galerkin spectral-gen`.
+pub fn generate_file(args: &GenArgs) -> Result<()> {
+    let mesh = args.source.mesh(None)?;
+    galerkin::spectral::vtu::write(&args.out, &mesh)?;
+    println!(
+        "{}: {} elements of order {} (analytic fields sampled at the nodes — not solved)",
+        args.out.display(),
+        mesh.elements(),
+        mesh.basis.order
+    );
+    Ok(())
+}
+
+/// `galerkin spectral`.
+pub fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
+    let loaded = Instant::now();
+    let mesh = Arc::new(args.source.mesh(args.file.as_deref())?);
+    let load_ms = loaded.elapsed().as_secs_f64() * 1e3;
+    let field = mesh.field_index(args.field.as_deref())?;
+    let steps = mesh.fields[field].steps.len();
+    if args.step >= steps {
+        bail!(
+            "--step {}: field {:?} has {steps} time steps (0 to {})",
+            args.step,
+            mesh.fields[field].name,
+            steps - 1
+        );
+    }
+    let range = match args.range.as_deref() {
+        Some(&[lo, hi]) if lo.is_finite() && hi.is_finite() && lo < hi => Some((lo, hi)),
+        Some(r) => bail!("--range {r:?}: needs two finite numbers LO < HI"),
+        None => None,
+    };
+    if args.log && range.is_some_and(|(lo, _)| lo <= 0.0) {
+        bail!("--log needs a positive range (LO > 0)");
+    }
+    if !(args.max_error.is_finite() && args.max_error > 0.0) {
+        bail!("--max-error must be a positive number of pixels");
+    }
+    let view = SpectralView {
+        field,
+        step: args.step,
+        range,
+        log: args.log,
+        isolines: args.isolines,
+        edges: args.edges,
+        overdraw: !args.no_overdraw,
+        per_vertex: args.per_vertex,
+        max_error_px: args.max_error,
+        ..SpectralView::default()
+    };
+    let gpu = Gpu::new(desc)?;
+    let colormap = Colormap::by_name(&args.palette)?;
+    let mut renderer = SpectralRenderer::new(&gpu, mesh.clone(), &colormap)?;
+    let (w, h) = args.size;
+    let start = Instant::now();
+    let colour = RenderTarget::new(&gpu, "spectral", w, h, ColorFormat::Rgba8)?;
+    let Pixels::Rgba8(rgba) = renderer.render(&colour, &view)? else {
+        bail!("an RGBA8 target returned floats")
+    };
+    let draw_ms = start.elapsed().as_secs_f64() * 1e3;
+    if let Some(dir) = args.out.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    }
+    let ext = args.out.extension().and_then(|e| e.to_str()).unwrap_or_default().to_ascii_lowercase();
+    match ext.as_str() {
+        "png" => write_png_rgba8(&args.out, w, h, &rgba)?,
+        "exr" => {
+            let data = RenderTarget::new(&gpu, "spectral values", w, h, ColorFormat::Rgba32F)?;
+            let Pixels::Rgba32F(v) = renderer.render(&data, &view)? else {
+                bail!("a float target returned bytes")
+            };
+            let byte = |c: usize| rgba.chunks_exact(4).map(|p| f32::from(p[c]) / 255.0).collect::<Vec<f32>>();
+            let float = |c: usize| v.chunks_exact(4).map(|p| p[c]).collect::<Vec<f32>>();
+            write_exr_channels(
+                &args.out,
+                w,
+                h,
+                vec![
+                    ("R", byte(0)),
+                    ("G", byte(1)),
+                    ("B", byte(2)),
+                    ("value", float(0)),
+                    ("xi", float(1)),
+                    ("eta", float(2)),
+                    ("element", float(3)),
+                ],
+            )?;
+        }
+        other => bail!("{}: unknown image format {other:?}: expected .png or .exr", args.out.display()),
+    }
+    let (lo, hi) = renderer.range(&view);
+    let [proxies, grids, lines] = renderer.primitive_counts();
+    println!(
+        "spectral: {} {} elements of order {} ({} geometry of order {}), field {:?} step {}, range [{lo:.4}, {hi:.4}]; {} triangles ({}), {lines} edge lines; load {load_ms:.1} ms, render {draw_ms:.1} ms → {}",
+        mesh.elements(),
+        if mesh.is_planar() { "planar" } else { "surface" },
+        mesh.basis.order,
+        mesh.basis.set.name(),
+        mesh.geometry.order,
+        mesh.fields[field].name,
+        args.step,
+        if args.per_vertex { grids } else { proxies },
+        if args.per_vertex {
+            "node grids"
+        } else if mesh.is_planar() {
+            "proxies"
+        } else {
+            "tessellated on the device"
+        },
+        args.out.display()
+    );
+    drop((colour, renderer));
+    crate::check_validation(gpu)
+}
+
+/// Arguments of `galerkin bench spectral`.
+#[derive(Args)]
+pub struct BenchArgs {
+    /// Orders 1, 3 and 8 only, fewer frames.
+    #[arg(long)]
+    pub quick: bool,
+    /// Frames per measurement (the median is reported).
+    #[arg(long, default_value_t = 15)]
+    pub frames: usize,
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+/// Covered pixels of `view` (a data pass): the fragments the per-pixel path shades.
+fn covered(
+    renderer: &mut SpectralRenderer,
+    gpu: &Gpu,
+    (w, h): (u32, u32),
+    view: &SpectralView,
+) -> Result<usize> {
+    let data = RenderTarget::new(gpu, "bench coverage", w, h, ColorFormat::Rgba32F)?;
+    let Pixels::Rgba32F(v) = renderer.render(&data, view)? else { bail!("a float target returned bytes") };
+    Ok(v.chunks_exact(4).filter(|p| p[3] >= 0.0).count())
+}
+
+/// Median device times (ms) of per-pixel and per-vertex frames of `mesh`, interleaved A/B.
+fn per_pixel_and_vertex(
+    gpu: &Gpu,
+    profiler: &mut galerkin::gpu::Profiler,
+    renderer: &mut SpectralRenderer,
+    target: &RenderTarget,
+    frames: usize,
+) -> Result<(f64, f64)> {
+    let pixel = SpectralView { overdraw: false, ..SpectralView::default() };
+    let vertex = SpectralView { per_vertex: true, ..pixel.clone() };
+    for _ in 0..2 {
+        renderer.frame(target, &pixel, profiler)?;
+        renderer.frame(target, &vertex, profiler)?;
+    }
+    let (mut a, mut b) = (Vec::new(), Vec::new());
+    for _ in 0..frames {
+        a.push(renderer.frame(target, &pixel, profiler)?);
+        b.push(renderer.frame(target, &vertex, profiler)?);
+    }
+    let _ = gpu;
+    Ok((median(a), median(b)))
+}
+
+/// `galerkin bench spectral`: seed 002's table on this device.
+pub fn bench(desc: &GpuDesc, args: &BenchArgs) -> Result<()> {
+    let gpu = Gpu::new(desc)?;
+    let mut profiler = galerkin::gpu::Profiler::new(&gpu, 1)?;
+    let frames = if args.quick { args.frames.min(7) } else { args.frames }.max(1);
+    let orders: Vec<usize> = if args.quick { vec![1, 3, 8] } else { (1..=8).collect() };
+    let size = (1024, 768);
+    let c = gpu.caps();
+    println!("Device: {} ({}); 1024×768, geometry of order 3 (GLL), GLL fields, median device time of {frames} frames per mode, per-pixel and per-vertex frames interleaved; edge overdraw off in both (the seed had none).\n", c.device_name, c.driver);
+    println!("| data | order | per-pixel ms (FPS) | per-vertex ms (FPS) | per-pixel ÷ per-vertex rate | fragments | ns per fragment | per-pixel device memory | node grids |");
+    println!("|---|---:|---:|---:|---:|---:|---:|---:|---:|");
+    let colormap = Colormap::viridis();
+    let target = RenderTarget::new(&gpu, "bench spectral", size.0, size.1, ColorFormat::Rgba8)?;
+    for name in ["artery", "coil"] {
+        for &order in &orders {
+            let mesh = Arc::new(generate::by_name(name, 3, order, NodeSet::GaussLobatto)?);
+            let mut renderer = SpectralRenderer::new(&gpu, mesh.clone(), &colormap)?;
+            let (pp, pv) = per_pixel_and_vertex(&gpu, &mut profiler, &mut renderer, &target, frames)?;
+            let fragments = covered(
+                &mut renderer,
+                &gpu,
+                size,
+                &SpectralView { overdraw: false, ..SpectralView::default() },
+            )?;
+            let (bytes, grids) = renderer.device_bytes();
+            println!(
+                "| {name} ({}) | {order} | {pp:.1} ({:.1}) | {pv:.1} ({:.1}) | {:.2}× | {fragments} | {:.0} | {:.2} MB | {:.2} MB |",
+                mesh.elements(),
+                1e3 / pp,
+                1e3 / pv,
+                pv / pp,
+                pp * 1e6 / fragments.max(1) as f64,
+                bytes as f64 / 1e6,
+                grids as f64 / 1e6
+            );
+        }
+    }
+    println!("\nFrame time against pixels (coil, order 3, per pixel):\n\n| size | ms | fragments | ns per fragment |\n|---|---:|---:|---:|");
+    let coil = Arc::new(generate::by_name("coil", 3, 3, NodeSet::GaussLobatto)?);
+    let mut renderer = SpectralRenderer::new(&gpu, coil, &colormap)?;
+    let pixel = SpectralView { overdraw: false, ..SpectralView::default() };
+    for (w, h) in [(512, 384), (1024, 768), (2048, 1536)] {
+        let t = RenderTarget::new(&gpu, "bench size", w, h, ColorFormat::Rgba8)?;
+        renderer.frame(&t, &pixel, &mut profiler)?;
+        let ms = median(
+            (0..frames).map(|_| renderer.frame(&t, &pixel, &mut profiler)).collect::<Result<Vec<_>, _>>()?,
+        );
+        let f = covered(&mut renderer, &gpu, (w, h), &pixel)?;
+        println!("| {w}×{h} | {ms:.1} | {f} | {:.0} |", ms * 1e6 / f.max(1) as f64);
+    }
+    drop(renderer);
+    println!("\nFrame time against elements (helices of 7 turns, 14 elements around, order 3, 1024×768, per pixel):\n\n| elements | ms | fragments |\n|---:|---:|---:|");
+    for along in [60, 119, 238, 476] {
+        let mesh = Arc::new(generate::coil(along, 14, 3, 3, NodeSet::GaussLobatto)?);
+        let mut renderer = SpectralRenderer::new(&gpu, mesh.clone(), &colormap)?;
+        renderer.frame(&target, &pixel, &mut profiler)?;
+        let ms = median(
+            (0..frames)
+                .map(|_| renderer.frame(&target, &pixel, &mut profiler))
+                .collect::<Result<Vec<_>, _>>()?,
+        );
+        let f = covered(&mut renderer, &gpu, size, &pixel)?;
+        println!("| {} | {ms:.1} | {f} |", mesh.elements());
+    }
+    drop((target, profiler));
+    crate::check_validation(gpu)
+}
