@@ -11,6 +11,7 @@ use galerkin::gpu::{shaders, vk, Buffer, MemoryKind};
 use galerkin::render::{ColorFormat, Colormap, Pixels, RenderTarget};
 use galerkin::spectral::generate::{annulus, quad_grid};
 use galerkin::spectral::reference::check_pixels;
+use galerkin::spectral::render::basis_specialization;
 use galerkin::spectral::{
     Basis1d, Field, NodeSet, Shape, SpectralError, SpectralMesh, SpectralRenderer, SpectralView, View2d,
 };
@@ -31,17 +32,9 @@ fn glsl_element_maths_match_their_rust_twins() {
         quad_grid(3, 2, 0.2, 1, NodeSet::GaussLobatto).unwrap(),
     ];
     for mesh in &cases {
-        let renderer_bases = |b: &Basis1d| {
-            let mut w = vec![u32::from(b.set == NodeSet::Bernstein), b.order as u32, 0, 0];
-            w.extend((0..13).map(|k| (b.nodes.get(k).copied().unwrap_or(0.0) as f32).to_bits()));
-            w.extend((0..13).map(|k| (b.weights.get(k).copied().unwrap_or(0.0) as f32).to_bits()));
-            w
-        };
-        let mut bases = renderer_bases(&mesh.basis);
-        bases.extend(renderer_bases(&mesh.geometry));
         let points: Vec<[f32; 4]> =
             mesh.points.iter().map(|p| [p[0] as f32, p[1] as f32, 0.0, 0.0]).collect();
-        let values: Vec<f32> = mesh.fields[0].steps[0].iter().map(|&v| v as f32).collect();
+        let values = galerkin::spectral::render::padded_values(mesh, 0, 0);
         let r = common::random_f32(200, 11);
         let n = 100;
         let mut probes: Vec<[f32; 4]> = Vec::new();
@@ -59,7 +52,6 @@ fn glsl_element_maths_match_their_rust_twins() {
         let pb = storage(&gpu, "points", &points);
         let vb = storage(&gpu, "values", &values);
         let qb = storage(&gpu, "probes", &probes);
-        let bb = storage(&gpu, "bases", &bases);
         let ob = Buffer::<[f32; 4]>::new(
             &gpu,
             "out",
@@ -68,20 +60,16 @@ fn glsl_element_maths_match_their_rust_twins() {
             MemoryKind::GpuToCpu,
         )
         .unwrap();
-        let bindings = [
-            pb.binding().unwrap(),
-            vb.binding().unwrap(),
-            qb.binding().unwrap(),
-            bb.binding().unwrap(),
-            ob.binding().unwrap(),
-        ];
-        common::run_probe(
+        let bindings =
+            [pb.binding().unwrap(), vb.binding().unwrap(), qb.binding().unwrap(), ob.binding().unwrap()];
+        common::run_probe_specialized(
             &gpu,
             "spectral probe",
             shaders::probe::SPECTRAL,
             &bindings,
             &(n as u32).to_ne_bytes(),
             2,
+            &basis_specialization(mesh),
         );
         let out = ob.download(&gpu).unwrap();
         let vmax = mesh.fields[0].steps[0].iter().fold(0.0f64, |a, v| a.max(v.abs()));

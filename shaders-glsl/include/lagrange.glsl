@@ -11,23 +11,16 @@
 #define SPECTRAL_LAGRANGE 0u
 #define SPECTRAL_BERNSTEIN 1u
 
-// A basis as uploaded by the renderer: kind, order n, nodes and barycentric weights.
-struct SpectralBasis {
-    uint kind;
-    uint order;
-    uint pad0;
-    uint pad1;
-    float nodes[SPECTRAL_MAX_NODES];
-    float weights[SPECTRAL_MAX_NODES];
-};
-
-// The n + 1 basis values at x (and their derivatives when want_derivatives).
-void spectral_basis_eval(SpectralBasis b, float x, bool want_derivatives,
+// The n + 1 basis values at x (and their derivatives when want_derivatives) of the basis of
+// `kind` (SPECTRAL_LAGRANGE with `nodes` and barycentric `weights`, or SPECTRAL_BERNSTEIN) and
+// order n. The renderer passes specialization constants, so the loops unroll and the nodes fold.
+void spectral_basis_eval(uint kind, uint order, float nodes[SPECTRAL_MAX_NODES], float weights[SPECTRAL_MAX_NODES],
+                         float x, bool want_derivatives,
                          out float values[SPECTRAL_MAX_NODES], out float derivatives[SPECTRAL_MAX_NODES]) {
-    uint m = b.order + 1u;
+    uint m = order + 1u;
     for (uint i = 0u; i < SPECTRAL_MAX_NODES; ++i) { values[i] = 0.0; derivatives[i] = 0.0; }
-    if (b.kind == SPECTRAL_BERNSTEIN) {
-        uint n = b.order;
+    if (kind == SPECTRAL_BERNSTEIN) {
+        uint n = order;
         values[0] = 1.0;
         for (uint r = 1u; r <= n; ++r) {
             if (r == n && want_derivatives) {
@@ -50,20 +43,20 @@ void spectral_basis_eval(SpectralBasis b, float x, bool want_derivatives,
     prefix[0] = 1.0;
     dprefix[0] = 0.0;
     for (uint k = 0u; k < m; ++k) {
-        float d = x - b.nodes[k];
+        float d = x - nodes[k];
         dprefix[k + 1u] = dprefix[k] * d + prefix[k];
         prefix[k + 1u] = prefix[k] * d;
     }
     suffix[m] = 1.0;
     dsuffix[m] = 0.0;
     for (uint k = m; k-- > 0u;) {
-        float d = x - b.nodes[k];
+        float d = x - nodes[k];
         dsuffix[k] = dsuffix[k + 1u] * d + suffix[k + 1u];
         suffix[k] = suffix[k + 1u] * d;
     }
     for (uint j = 0u; j < m; ++j) {
-        values[j] = b.weights[j] * prefix[j] * suffix[j + 1u];
-        if (want_derivatives) derivatives[j] = b.weights[j] * (dprefix[j] * suffix[j + 1u] + prefix[j] * dsuffix[j + 1u]);
+        values[j] = weights[j] * prefix[j] * suffix[j + 1u];
+        if (want_derivatives) derivatives[j] = weights[j] * (dprefix[j] * suffix[j + 1u] + prefix[j] * dsuffix[j + 1u]);
     }
 }
 

@@ -1,6 +1,7 @@
 // A quadrilateral spectral element on the device (seed 002): its geometry map and Jacobian,
 // the inverse map by Newton's method, and the field value, all as tensor products of the 1D
-// bases of lagrange.glsl. Declares the renderer's element buffers (bindings 0, 1 and 3).
+// bases of lagrange.glsl. Declares the renderer's element buffers (bindings 0 and 1) and the
+// bases' specialization constants.
 // Twin of src/spectral/mesh.rs (SpectralMesh::map, value, inverse_map).
 #ifndef GALERKIN_SPECTRAL_ELEMENT_GLSL
 #define GALERKIN_SPECTRAL_ELEMENT_GLSL
@@ -8,12 +9,81 @@
 
 // Geometry control points, (g + 1)^2 per element, node (i, j) at e (g+1)^2 + j (g+1) + i.
 layout(std430, set = 0, binding = 0) readonly buffer SpectralGeometry { vec4 spectral_points[]; };
-// Field coefficients of the shown field and step, (n + 1)^2 per element, same order.
-layout(std430, set = 0, binding = 1) readonly buffer SpectralValues { float spectral_values[]; };
-layout(std430, set = 0, binding = 3) readonly buffer SpectralBases {
-    SpectralBasis spectral_field_basis;
-    SpectralBasis spectral_geometry_basis;
-};
+// Field coefficients of the shown field and step, (n + 1)^2 per element in the same order,
+// each element's run padded with zeros to whole vec4s (SPECTRAL_VALUE_VEC4S per element): one
+// vector load fetches four coefficients.
+layout(std430, set = 0, binding = 1) readonly buffer SpectralValues { vec4 spectral_values[]; };
+// The two bases as specialization constants (SpectralRenderer::specialization): field kind
+// and order (ids 0, 1), field nodes (2–14) and weights (15–27), geometry kind and order (28,
+// 29), geometry nodes (30–42) and weights (43–55).
+layout(constant_id = 0) const uint SPECTRAL_FIELD_KIND = 0u;
+layout(constant_id = 1) const uint SPECTRAL_FIELD_ORDER = 1u;
+layout(constant_id = 2) const float SPECTRAL_FN0 = 0.0;
+layout(constant_id = 3) const float SPECTRAL_FN1 = 1.0;
+layout(constant_id = 4) const float SPECTRAL_FN2 = 0.0;
+layout(constant_id = 5) const float SPECTRAL_FN3 = 0.0;
+layout(constant_id = 6) const float SPECTRAL_FN4 = 0.0;
+layout(constant_id = 7) const float SPECTRAL_FN5 = 0.0;
+layout(constant_id = 8) const float SPECTRAL_FN6 = 0.0;
+layout(constant_id = 9) const float SPECTRAL_FN7 = 0.0;
+layout(constant_id = 10) const float SPECTRAL_FN8 = 0.0;
+layout(constant_id = 11) const float SPECTRAL_FN9 = 0.0;
+layout(constant_id = 12) const float SPECTRAL_FN10 = 0.0;
+layout(constant_id = 13) const float SPECTRAL_FN11 = 0.0;
+layout(constant_id = 14) const float SPECTRAL_FN12 = 0.0;
+layout(constant_id = 15) const float SPECTRAL_FW0 = 0.0;
+layout(constant_id = 16) const float SPECTRAL_FW1 = 0.0;
+layout(constant_id = 17) const float SPECTRAL_FW2 = 0.0;
+layout(constant_id = 18) const float SPECTRAL_FW3 = 0.0;
+layout(constant_id = 19) const float SPECTRAL_FW4 = 0.0;
+layout(constant_id = 20) const float SPECTRAL_FW5 = 0.0;
+layout(constant_id = 21) const float SPECTRAL_FW6 = 0.0;
+layout(constant_id = 22) const float SPECTRAL_FW7 = 0.0;
+layout(constant_id = 23) const float SPECTRAL_FW8 = 0.0;
+layout(constant_id = 24) const float SPECTRAL_FW9 = 0.0;
+layout(constant_id = 25) const float SPECTRAL_FW10 = 0.0;
+layout(constant_id = 26) const float SPECTRAL_FW11 = 0.0;
+layout(constant_id = 27) const float SPECTRAL_FW12 = 0.0;
+layout(constant_id = 28) const uint SPECTRAL_GEOMETRY_KIND = 0u;
+layout(constant_id = 29) const uint SPECTRAL_GEOMETRY_ORDER = 1u;
+layout(constant_id = 30) const float SPECTRAL_GN0 = 0.0;
+layout(constant_id = 31) const float SPECTRAL_GN1 = 1.0;
+layout(constant_id = 32) const float SPECTRAL_GN2 = 0.0;
+layout(constant_id = 33) const float SPECTRAL_GN3 = 0.0;
+layout(constant_id = 34) const float SPECTRAL_GN4 = 0.0;
+layout(constant_id = 35) const float SPECTRAL_GN5 = 0.0;
+layout(constant_id = 36) const float SPECTRAL_GN6 = 0.0;
+layout(constant_id = 37) const float SPECTRAL_GN7 = 0.0;
+layout(constant_id = 38) const float SPECTRAL_GN8 = 0.0;
+layout(constant_id = 39) const float SPECTRAL_GN9 = 0.0;
+layout(constant_id = 40) const float SPECTRAL_GN10 = 0.0;
+layout(constant_id = 41) const float SPECTRAL_GN11 = 0.0;
+layout(constant_id = 42) const float SPECTRAL_GN12 = 0.0;
+layout(constant_id = 43) const float SPECTRAL_GW0 = 0.0;
+layout(constant_id = 44) const float SPECTRAL_GW1 = 0.0;
+layout(constant_id = 45) const float SPECTRAL_GW2 = 0.0;
+layout(constant_id = 46) const float SPECTRAL_GW3 = 0.0;
+layout(constant_id = 47) const float SPECTRAL_GW4 = 0.0;
+layout(constant_id = 48) const float SPECTRAL_GW5 = 0.0;
+layout(constant_id = 49) const float SPECTRAL_GW6 = 0.0;
+layout(constant_id = 50) const float SPECTRAL_GW7 = 0.0;
+layout(constant_id = 51) const float SPECTRAL_GW8 = 0.0;
+layout(constant_id = 52) const float SPECTRAL_GW9 = 0.0;
+layout(constant_id = 53) const float SPECTRAL_GW10 = 0.0;
+layout(constant_id = 54) const float SPECTRAL_GW11 = 0.0;
+layout(constant_id = 55) const float SPECTRAL_GW12 = 0.0;
+#define SPECTRAL_FIELD_NODES float[SPECTRAL_MAX_NODES](SPECTRAL_FN0, SPECTRAL_FN1, SPECTRAL_FN2, SPECTRAL_FN3, SPECTRAL_FN4, SPECTRAL_FN5, SPECTRAL_FN6, SPECTRAL_FN7, SPECTRAL_FN8, SPECTRAL_FN9, SPECTRAL_FN10, SPECTRAL_FN11, SPECTRAL_FN12)
+#define SPECTRAL_FIELD_WEIGHTS float[SPECTRAL_MAX_NODES](SPECTRAL_FW0, SPECTRAL_FW1, SPECTRAL_FW2, SPECTRAL_FW3, SPECTRAL_FW4, SPECTRAL_FW5, SPECTRAL_FW6, SPECTRAL_FW7, SPECTRAL_FW8, SPECTRAL_FW9, SPECTRAL_FW10, SPECTRAL_FW11, SPECTRAL_FW12)
+#define SPECTRAL_GEOMETRY_NODES float[SPECTRAL_MAX_NODES](SPECTRAL_GN0, SPECTRAL_GN1, SPECTRAL_GN2, SPECTRAL_GN3, SPECTRAL_GN4, SPECTRAL_GN5, SPECTRAL_GN6, SPECTRAL_GN7, SPECTRAL_GN8, SPECTRAL_GN9, SPECTRAL_GN10, SPECTRAL_GN11, SPECTRAL_GN12)
+#define SPECTRAL_GEOMETRY_WEIGHTS float[SPECTRAL_MAX_NODES](SPECTRAL_GW0, SPECTRAL_GW1, SPECTRAL_GW2, SPECTRAL_GW3, SPECTRAL_GW4, SPECTRAL_GW5, SPECTRAL_GW6, SPECTRAL_GW7, SPECTRAL_GW8, SPECTRAL_GW9, SPECTRAL_GW10, SPECTRAL_GW11, SPECTRAL_GW12)
+
+// The field's and the geometry's 1D bases at x.
+void spectral_field_eval(float x, bool want_derivatives, out float v[SPECTRAL_MAX_NODES], out float d[SPECTRAL_MAX_NODES]) {
+    spectral_basis_eval(SPECTRAL_FIELD_KIND, SPECTRAL_FIELD_ORDER, SPECTRAL_FIELD_NODES, SPECTRAL_FIELD_WEIGHTS, x, want_derivatives, v, d);
+}
+void spectral_geometry_eval(float x, bool want_derivatives, out float v[SPECTRAL_MAX_NODES], out float d[SPECTRAL_MAX_NODES]) {
+    spectral_basis_eval(SPECTRAL_GEOMETRY_KIND, SPECTRAL_GEOMETRY_ORDER, SPECTRAL_GEOMETRY_NODES, SPECTRAL_GEOMETRY_WEIGHTS, x, want_derivatives, v, d);
+}
 
 // Newton steps of the per-fragment inverse map (NEWTON_ITERATIONS of mesh.rs).
 #define SPECTRAL_NEWTON_ITERATIONS 12
@@ -21,9 +91,9 @@ layout(std430, set = 0, binding = 3) readonly buffer SpectralBases {
 // The geometry map x(xi, eta) of element e and its derivatives along xi and eta.
 vec3 spectral_map(uint e, vec2 r, out vec3 dxi, out vec3 deta) {
     float a[SPECTRAL_MAX_NODES], da[SPECTRAL_MAX_NODES], b[SPECTRAL_MAX_NODES], db[SPECTRAL_MAX_NODES];
-    spectral_basis_eval(spectral_geometry_basis, r.x, true, a, da);
-    spectral_basis_eval(spectral_geometry_basis, r.y, true, b, db);
-    uint m = spectral_geometry_basis.order + 1u;
+    spectral_geometry_eval(r.x, true, a, da);
+    spectral_geometry_eval(r.y, true, b, db);
+    const uint m = SPECTRAL_GEOMETRY_ORDER + 1u;
     uint base = e * m * m;
     vec3 x = vec3(0.0);
     dxi = vec3(0.0);
@@ -42,18 +112,25 @@ vec3 spectral_map(uint e, vec2 r, out vec3 dxi, out vec3 deta) {
     return x;
 }
 
-// The field value of element e at reference point r: sum_j l_j(eta) sum_i l_i(xi) F_ij.
+// Whole vec4s of one element's coefficients.
+#define SPECTRAL_VALUE_VEC4S (((SPECTRAL_FIELD_ORDER + 1u) * (SPECTRAL_FIELD_ORDER + 1u) + 3u) / 4u)
+
+// The field value of element e at reference point r: sum_ij l_i(xi) l_j(eta) F_ij, as the dot
+// product of the tensor weights with the coefficients, four at a time.
 float spectral_value(uint e, vec2 r) {
     float a[SPECTRAL_MAX_NODES], b[SPECTRAL_MAX_NODES], unused[SPECTRAL_MAX_NODES];
-    spectral_basis_eval(spectral_field_basis, r.x, false, a, unused);
-    spectral_basis_eval(spectral_field_basis, r.y, false, b, unused);
-    uint m = spectral_field_basis.order + 1u;
-    uint base = e * m * m;
+    spectral_field_eval(r.x, false, a, unused);
+    spectral_field_eval(r.y, false, b, unused);
+    const uint m = SPECTRAL_FIELD_ORDER + 1u;
+    uint base = e * SPECTRAL_VALUE_VEC4S;
     float v = 0.0;
-    for (uint j = 0u; j < m; ++j) {
-        float row = 0.0;
-        for (uint i = 0u; i < m; ++i) row += a[i] * spectral_values[base + j * m + i];
-        v += b[j] * row;
+    for (uint q = 0u; q < SPECTRAL_VALUE_VEC4S; ++q) {
+        vec4 w;
+        for (uint c = 0u; c < 4u; ++c) {
+            uint k = 4u * q + c;
+            w[c] = k < m * m ? a[k % m] * b[k / m] : 0.0;
+        }
+        v += dot(w, spectral_values[base + q]);
     }
     return v;
 }

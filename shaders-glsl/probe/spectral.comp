@@ -4,11 +4,12 @@
 #include "spectral_element.glsl"
 
 layout(local_size_x = 64) in;
-// Per probe: (element, xi, eta, 0) and (x, y, guess xi, guess eta).
+// Per probe: (element, xi, eta, 0) and (x, y, guess xi, guess eta). The bases are the
+// specialization constants of spectral_element.glsl.
 layout(std430, set = 0, binding = 2) readonly buffer Probes { vec4 probes[]; };
 // Per probe 16 vec4: (value, x, y, 0), (dx/dxi, dx/deta), (inverse xi, eta, converged, 0),
 // then for k = 0..12: (field l_k(xi), l_k'(xi), geometry g_k(xi), g_k'(xi)).
-layout(std430, set = 0, binding = 4) writeonly buffer Out { vec4 result[]; };
+layout(std430, set = 0, binding = 3) writeonly buffer Out { vec4 result[]; };
 layout(push_constant) uniform Push { uint n; } pc;
 
 void main() {
@@ -25,7 +26,7 @@ void main() {
     bool ok = spectral_inverse_map(e, t.xy, r);
     result[16u * i + 2u] = vec4(r, ok ? 1.0 : 0.0, 0.0);
     float a[SPECTRAL_MAX_NODES], da[SPECTRAL_MAX_NODES], g[SPECTRAL_MAX_NODES], dg[SPECTRAL_MAX_NODES];
-    spectral_basis_eval(spectral_field_basis, q.y, true, a, da);
-    spectral_basis_eval(spectral_geometry_basis, q.y, true, g, dg);
+    spectral_field_eval(q.y, true, a, da);
+    spectral_geometry_eval(q.y, true, g, dg);
     for (uint k = 0u; k < SPECTRAL_MAX_NODES; ++k) result[16u * i + 3u + k] = vec4(a[k], da[k], g[k], dg[k]);
 }

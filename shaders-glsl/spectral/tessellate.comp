@@ -21,14 +21,18 @@
 layout(local_size_x = 64) in;
 // Per element: (centre, radius) of a sphere containing it, (K, 0, 0, 0).
 struct SpectralPatch { vec4 centre_radius; vec4 curvature; };
-layout(std430, set = 0, binding = 4) readonly buffer Patches { SpectralPatch patches[]; };
+layout(std430, set = 0, binding = 3) readonly buffer Patches { SpectralPatch patches[]; };
 // The draw's VkDrawIndirectCommand (vertex count first), its capacity, elements skipped.
-layout(std430, set = 0, binding = 5) buffer Draw { uint vertex_count; uint instances; uint first_vertex; uint first_instance; uint capacity; uint skipped; } draw;
+layout(std430, set = 0, binding = 4) buffer Draw { uint vertex_count; uint instances; uint first_vertex; uint first_instance; uint capacity; uint skipped; } draw;
 struct DrawVertex { float x, y, z, xi, eta; uint element; };
-layout(std430, set = 0, binding = 6) writeonly buffer Vertices { DrawVertex vertices[]; };
+layout(std430, set = 0, binding = 5) writeonly buffer Vertices { DrawVertex vertices[]; };
 
 shared uint base;
 shared uint level;
+// The grid's (L + 1)² points when they fit (L ≤ 15): each evaluated once, then copied into the
+// six vertices of the cells around it. Larger levels evaluate per vertex.
+#define GRID_POINTS 256u
+shared vec3 grid[GRID_POINTS];
 
 uint tessellation_level(SpectralPatch p) {
     float depth = (pc.view_proj * vec4(p.centre_radius.xyz, 1.0)).w - p.centre_radius.w;
@@ -62,13 +66,27 @@ void main() {
     barrier();
     uint l = level;
     uint n = 6u * l * l;
+    uint points = (l + 1u) * (l + 1u);
+    bool shared_grid = points <= GRID_POINTS;
+    if (shared_grid) {
+        for (uint k = gl_LocalInvocationID.x; k < points; k += 64u) {
+            vec3 dxi, deta;
+            grid[k] = spectral_map(e, vec2(k % (l + 1u), k / (l + 1u)) / float(l), dxi, deta);
+        }
+    }
+    barrier();
     const uvec2 corner[6] = uvec2[6](uvec2(0, 0), uvec2(1, 0), uvec2(1, 1), uvec2(0, 0), uvec2(1, 1), uvec2(0, 1));
     for (uint k = gl_LocalInvocationID.x; k < n; k += 64u) {
         uint cell = k / 6u;
         uvec2 ij = uvec2(cell % l, cell / l) + corner[k % 6u];
         vec2 r = vec2(ij) / float(l);
-        vec3 dxi, deta;
-        vec3 x = spectral_map(e, r, dxi, deta);
+        vec3 x;
+        if (shared_grid) {
+            x = grid[ij.y * (l + 1u) + ij.x];
+        } else {
+            vec3 dxi, deta;
+            x = spectral_map(e, r, dxi, deta);
+        }
         vertices[base + k] = DrawVertex(x.x, x.y, x.z, r.x, r.y, e);
     }
 }

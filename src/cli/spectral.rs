@@ -246,27 +246,43 @@ fn covered(
     Ok(v.chunks_exact(4).filter(|p| p[3] >= 0.0).count())
 }
 
-/// Median device times (ms) of per-pixel and per-vertex frames of `mesh`, interleaved A/B.
+/// Median device times (ms) of per-pixel frames, per-vertex frames on the node grids and
+/// per-vertex frames on the per-pixel path's own tessellation, interleaved round by round.
 fn per_pixel_and_vertex(
-    gpu: &Gpu,
     profiler: &mut galerkin::gpu::Profiler,
     renderer: &mut SpectralRenderer,
     target: &RenderTarget,
     frames: usize,
-) -> Result<(f64, f64)> {
+) -> Result<[f64; 3]> {
     let pixel = SpectralView { overdraw: false, ..SpectralView::default() };
-    let vertex = SpectralView { per_vertex: true, ..pixel.clone() };
-    for _ in 0..2 {
-        renderer.frame(target, &pixel, profiler)?;
-        renderer.frame(target, &vertex, profiler)?;
+    let views = [
+        pixel.clone(),
+        SpectralView { per_vertex: true, ..pixel.clone() },
+        SpectralView { per_vertex: true, per_vertex_on_tessellation: true, ..pixel },
+    ];
+    let mut times = [Vec::new(), Vec::new(), Vec::new()];
+    for round in 0..frames + 2 {
+        for (k, v) in views.iter().enumerate() {
+            let ms = renderer.frame(target, v, profiler)?;
+            if round >= 2 {
+                times[k].push(ms);
+            }
+        }
     }
-    let (mut a, mut b) = (Vec::new(), Vec::new());
-    for _ in 0..frames {
-        a.push(renderer.frame(target, &pixel, profiler)?);
-        b.push(renderer.frame(target, &vertex, profiler)?);
-    }
-    let _ = gpu;
-    Ok((median(a), median(b)))
+    Ok(times.map(median))
+}
+
+/// Median device time (ms) of `frames` frames of `view`, after one unmeasured frame.
+fn timed(
+    renderer: &mut SpectralRenderer,
+    target: &RenderTarget,
+    view: &SpectralView,
+    profiler: &mut galerkin::gpu::Profiler,
+    frames: usize,
+) -> Result<f64> {
+    renderer.frame(target, view, profiler)?;
+    let ms = (0..frames).map(|_| renderer.frame(target, view, profiler)).collect::<Result<Vec<_>, _>>()?;
+    Ok(median(ms))
 }
 
 /// `galerkin bench spectral`: seed 002's table on this device.
@@ -277,61 +293,58 @@ pub fn bench(desc: &GpuDesc, args: &BenchArgs) -> Result<()> {
     let orders: Vec<usize> = if args.quick { vec![1, 3, 8] } else { (1..=8).collect() };
     let size = (1024, 768);
     let c = gpu.caps();
-    println!("Device: {} ({}); 1024×768, geometry of order 3 (GLL), GLL fields, median device time of {frames} frames per mode, per-pixel and per-vertex frames interleaved; edge overdraw off in both (the seed had none).\n", c.device_name, c.driver);
-    println!("| data | order | per-pixel ms (FPS) | per-vertex ms (FPS) | per-pixel ÷ per-vertex rate | fragments | ns per fragment | per-pixel device memory | node grids |");
-    println!("|---|---:|---:|---:|---:|---:|---:|---:|---:|");
+    println!(
+        "Device: {} ({}); 1024×768, geometry of order 3 (GLL), GLL fields, median device time of {frames} frames per mode, the three modes interleaved frame by frame; edge overdraw off in all (the seed had none). Per pixel: the surface tessellated to ½ px and the field evaluated per fragment. Per vertex, node grid: the seed's baseline (colour at the nodes, the geometry flat between them). Per vertex, same tessellation: the per-pixel path's triangles with colour at their vertices.\n",
+        c.device_name, c.driver
+    );
+    println!("| data | order | per pixel ms (FPS) | per vertex, node grid ms (FPS) | rate ÷ node grid | per vertex, same tessellation ms | rate ÷ same tessellation | triangles: per pixel / node grid | fragments | per-pixel device memory | node grids |");
+    println!("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
     let colormap = Colormap::viridis();
     let target = RenderTarget::new(&gpu, "bench spectral", size.0, size.1, ColorFormat::Rgba8)?;
+    let pixel = SpectralView { overdraw: false, ..SpectralView::default() };
     for name in ["artery", "coil"] {
         for &order in &orders {
             let mesh = Arc::new(generate::by_name(name, 3, order, NodeSet::GaussLobatto)?);
             let mut renderer = SpectralRenderer::new(&gpu, mesh.clone(), &colormap)?;
-            let (pp, pv) = per_pixel_and_vertex(&gpu, &mut profiler, &mut renderer, &target, frames)?;
-            let fragments = covered(
-                &mut renderer,
-                &gpu,
-                size,
-                &SpectralView { overdraw: false, ..SpectralView::default() },
-            )?;
+            let [pp, pv, pt] = per_pixel_and_vertex(&mut profiler, &mut renderer, &target, frames)?;
+            let fragments = covered(&mut renderer, &gpu, size, &pixel)?;
+            renderer.frame(&target, &pixel, &mut profiler)?;
+            let tessellated = renderer.last_tessellation()?.map_or(0, |t| t.0) / 3;
             let (bytes, grids) = renderer.device_bytes();
             println!(
-                "| {name} ({}) | {order} | {pp:.1} ({:.1}) | {pv:.1} ({:.1}) | {:.2}× | {fragments} | {:.0} | {:.2} MB | {:.2} MB |",
+                "| {name} ({}) | {order} | {pp:.1} ({:.1}) | {pv:.1} ({:.1}) | {:.2}× | {pt:.1} | {:.2}× | {tessellated} / {} | {fragments} | {:.2} MB | {:.2} MB |",
                 mesh.elements(),
                 1e3 / pp,
                 1e3 / pv,
                 pv / pp,
-                pp * 1e6 / fragments.max(1) as f64,
+                pt / pp,
+                renderer.primitive_counts()[1],
                 bytes as f64 / 1e6,
                 grids as f64 / 1e6
             );
         }
     }
-    println!("\nFrame time against pixels (coil, order 3, per pixel):\n\n| size | ms | fragments | ns per fragment |\n|---|---:|---:|---:|");
+    println!("\nFrame time against pixels (coil, order 3, per pixel; the tessellation follows the pixel size):\n\n| size | ms | fragments | triangles | ns per fragment |\n|---|---:|---:|---:|---:|");
     let coil = Arc::new(generate::by_name("coil", 3, 3, NodeSet::GaussLobatto)?);
     let mut renderer = SpectralRenderer::new(&gpu, coil, &colormap)?;
-    let pixel = SpectralView { overdraw: false, ..SpectralView::default() };
     for (w, h) in [(512, 384), (1024, 768), (2048, 1536)] {
         let t = RenderTarget::new(&gpu, "bench size", w, h, ColorFormat::Rgba8)?;
-        renderer.frame(&t, &pixel, &mut profiler)?;
-        let ms = median(
-            (0..frames).map(|_| renderer.frame(&t, &pixel, &mut profiler)).collect::<Result<Vec<_>, _>>()?,
-        );
+        let ms = timed(&mut renderer, &t, &pixel, &mut profiler, frames)?;
         let f = covered(&mut renderer, &gpu, (w, h), &pixel)?;
-        println!("| {w}×{h} | {ms:.1} | {f} | {:.0} |", ms * 1e6 / f.max(1) as f64);
+        renderer.frame(&t, &pixel, &mut profiler)?;
+        let tris = renderer.last_tessellation()?.map_or(0, |t| t.0) / 3;
+        println!("| {w}×{h} | {ms:.1} | {f} | {tris} | {:.0} |", ms * 1e6 / f.max(1) as f64);
     }
     drop(renderer);
-    println!("\nFrame time against elements (helices of 7 turns, 14 elements around, order 3, 1024×768, per pixel):\n\n| elements | ms | fragments |\n|---:|---:|---:|");
+    println!("\nFrame time against elements (helices of 7 turns, 14 elements around, order 3, 1024×768, per pixel):\n\n| elements | ms | fragments | triangles |\n|---:|---:|---:|---:|");
     for along in [60, 119, 238, 476] {
         let mesh = Arc::new(generate::coil(along, 14, 3, 3, NodeSet::GaussLobatto)?);
         let mut renderer = SpectralRenderer::new(&gpu, mesh.clone(), &colormap)?;
-        renderer.frame(&target, &pixel, &mut profiler)?;
-        let ms = median(
-            (0..frames)
-                .map(|_| renderer.frame(&target, &pixel, &mut profiler))
-                .collect::<Result<Vec<_>, _>>()?,
-        );
+        let ms = timed(&mut renderer, &target, &pixel, &mut profiler, frames)?;
         let f = covered(&mut renderer, &gpu, size, &pixel)?;
-        println!("| {} | {ms:.1} | {f} |", mesh.elements());
+        renderer.frame(&target, &pixel, &mut profiler)?;
+        let tris = renderer.last_tessellation()?.map_or(0, |t| t.0) / 3;
+        println!("| {} | {ms:.1} | {f} | {tris} |", mesh.elements());
     }
     drop((target, profiler));
     crate::check_validation(gpu)

@@ -18,8 +18,9 @@
 //!   (a crack between discontinuous neighbours shows the edge's own value, never the
 //!   background), or in front, dark, to show the mesh.
 //!
-//! Memory does not grow with the order beyond the coefficient buffer: the bases are 2 × 128
-//! bytes and the draw streams depend on the geometry's order only.
+//! Memory does not grow with the order beyond the coefficient buffer: the bases are
+//! specialization constants of the pipelines and the draw streams depend on the geometry's order
+//! only.
 
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -28,7 +29,7 @@ use ash::vk;
 use bytemuck::{Pod, Zeroable};
 use glam::Mat4;
 
-use super::basis::{Basis1d, NodeSet, MAX_ORDER};
+use super::basis::{NodeSet, MAX_ORDER};
 use super::error::SpectralError;
 use super::mesh::SpectralMesh;
 use super::proxy::{self, DrawVertex};
@@ -161,8 +162,12 @@ pub struct SpectralView {
     pub edges: bool,
     /// Edge overdraw behind the faces (fills cracks between discontinuous elements).
     pub overdraw: bool,
-    /// The seed's baseline: colour at the nodes, interpolated.
+    /// The seed's baseline: colour at the nodes, interpolated (node grids).
     pub per_vertex: bool,
+    /// With `per_vertex` on a surface: colour at the vertices of the per-pixel path's own
+    /// tessellation instead of the node grids — the same triangles, so the difference to per
+    /// pixel is the cost of the per-fragment evaluation alone.
+    pub per_vertex_on_tessellation: bool,
     /// The 2D view of a planar mesh; `None`: fit the mesh.
     pub view: Option<View2d>,
     /// The camera of a surface mesh; `None`: [`fit_camera`].
@@ -182,6 +187,7 @@ impl Default for SpectralView {
             edges: false,
             overdraw: true,
             per_vertex: false,
+            per_vertex_on_tessellation: false,
             view: None,
             camera: None,
             max_error_px: 0.5,
@@ -189,32 +195,34 @@ impl Default for SpectralView {
     }
 }
 
-/// `SpectralBasis` of `lagrange.glsl`.
-#[repr(C)]
-#[derive(Clone, Copy, Pod, Zeroable)]
-struct GpuBasis {
-    kind: u32,
-    order: u32,
-    pad: [u32; 2],
-    nodes: [f32; MAX_ORDER + 1],
-    weights: [f32; MAX_ORDER + 1],
+/// The specialization constants of `spectral_element.glsl` for `mesh`'s two bases: per basis
+/// its kind (0 Lagrange, 1 Bernstein) and order, then its nodes and barycentric weights as f32
+/// bits, each padded to [`MAX_ORDER`] + 1. Compiled into the pipelines, the evaluation loops
+/// unroll and the nodes fold into the code instead of being read per fragment.
+pub fn basis_specialization(mesh: &SpectralMesh) -> Vec<u32> {
+    let mut v = Vec::with_capacity(4 * (MAX_ORDER + 2));
+    for b in [&mesh.basis, &mesh.geometry] {
+        v.push(u32::from(b.set == NodeSet::Bernstein));
+        v.push(b.order as u32);
+        for list in [&b.nodes, &b.weights] {
+            v.extend((0..=MAX_ORDER).map(|k| (list.get(k).copied().unwrap_or(0.0) as f32).to_bits()));
+        }
+    }
+    v
 }
 
-impl GpuBasis {
-    fn of(b: &Basis1d) -> Self {
-        let mut g = GpuBasis {
-            kind: u32::from(b.set == NodeSet::Bernstein),
-            order: b.order as u32,
-            pad: [0; 2],
-            nodes: [0.0; MAX_ORDER + 1],
-            weights: [0.0; MAX_ORDER + 1],
-        };
-        for k in 0..b.len() {
-            g.nodes[k] = b.nodes[k] as f32;
-            g.weights[k] = b.weights[k] as f32;
+/// The coefficients of `field` at `step` as `spectral_element.glsl` reads them: f32, each
+/// element's (n + 1)² padded with zeros to a multiple of 4.
+pub fn padded_values(mesh: &SpectralMesh, field: usize, step: usize) -> Vec<f32> {
+    let per = mesh.values_per_element();
+    let stride = per.div_ceil(4) * 4;
+    let mut out = vec![0.0f32; stride * mesh.elements()];
+    for (e, chunk) in mesh.fields[field].steps[step].chunks_exact(per).enumerate() {
+        for (o, &v) in out[e * stride..].iter_mut().zip(chunk) {
+            *o = v as f32;
         }
-        g
     }
+    out
 }
 
 /// `spectral_push.glsl`.
@@ -262,7 +270,7 @@ pub struct SpectralRenderer {
     mesh: Arc<SpectralMesh>,
     _points: Buffer<[f32; 4]>,
     values: Buffer<f32>,
-    _bases: Buffer<GpuBasis>,
+    specialization: Vec<u32>,
     proxies: Buffer<DrawVertex>,
     node_grids: Buffer<DrawVertex>,
     edges: Buffer<DrawVertex>,
@@ -299,11 +307,9 @@ impl SpectralRenderer {
             mesh.points.iter().map(|p| [p[0] as f32, p[1] as f32, p[2] as f32, 0.0]).collect();
         let points =
             Buffer::from_slice(gpu, "spectral geometry", &points, storage).map_err(dev("uploading"))?;
-        let values: Vec<f32> = mesh.fields[0].steps[0].iter().map(|&v| v as f32).collect();
+        let values = padded_values(&mesh, 0, 0);
         let values =
             Buffer::from_slice(gpu, "spectral values", &values, storage).map_err(dev("uploading"))?;
-        let bases = [GpuBasis::of(&mesh.basis), GpuBasis::of(&mesh.geometry)];
-        let bases = Buffer::from_slice(gpu, "spectral bases", &bases, storage).map_err(dev("uploading"))?;
         let draw = proxy::build(&mesh);
         let vertex = vk::BufferUsageFlags::VERTEX_BUFFER;
         let upload = |name: &str, v: &[DrawVertex]| {
@@ -324,15 +330,15 @@ impl SpectralRenderer {
             Resource::Storage(points.binding().map_err(dev("binding"))?),
             Resource::Storage(values.binding().map_err(dev("binding"))?),
             colormap.resource(),
-            Resource::Storage(bases.binding().map_err(dev("binding"))?),
             Resource::Storage(patches.binding().map_err(dev("binding"))?),
         ];
+        let specialization = basis_specialization(&mesh);
         Ok(Self {
             gpu: gpu.clone(),
             mesh,
             _points: points,
             values,
-            _bases: bases,
+            specialization,
             proxies,
             node_grids,
             edges,
@@ -385,7 +391,7 @@ impl SpectralRenderer {
             )));
         }
         if self.shown != (field, step) {
-            let v: Vec<f32> = f.steps[step].iter().map(|&v| v as f32).collect();
+            let v = padded_values(&self.mesh, field, step);
             self.values.upload(&self.gpu, 0, &v).map_err(dev("uploading a time step"))?;
             self.shown = (field, step);
         }
@@ -401,7 +407,6 @@ impl SpectralRenderer {
             BindingKind::StorageBuffer,
             BindingKind::Texture,
             BindingKind::StorageBuffer,
-            BindingKind::StorageBuffer,
         ];
         let make = |lines: bool| {
             let name = if lines { "spectral edges" } else { "spectral elements" };
@@ -412,6 +417,7 @@ impl SpectralRenderer {
                 target.render_pass().raw(),
             );
             desc.bindings = &bindings;
+            desc.specialization = &self.specialization;
             desc.push_constant_bytes = std::mem::size_of::<SpectralPush>() as u32;
             desc.vertex_stride = std::mem::size_of::<DrawVertex>() as u32;
             desc.vertex_attributes = &[
@@ -479,7 +485,7 @@ impl SpectralRenderer {
     /// one level of slack per element against f32 rounding) and binds the pass.
     fn tessellator_for(&mut self, push: &SpectralPush) -> Result<()> {
         if self.tessellator.is_none() {
-            let bindings = [BindingKind::StorageBuffer; 7];
+            let bindings = [BindingKind::StorageBuffer; 6];
             let pipeline = ComputePipeline::new(
                 &self.gpu,
                 &ComputePipelineDesc {
@@ -487,8 +493,8 @@ impl SpectralRenderer {
                     spirv: shaders::spectral::TESSELLATE,
                     bindings: &bindings,
                     push_constant_bytes: std::mem::size_of::<SpectralPush>() as u32,
-                    specialization: &[],
-                    shared_bytes: 8,
+                    specialization: &self.specialization,
+                    shared_bytes: 8 + 256 * 16,
                 },
             )
             .map_err(dev("building the tessellation pass"))?;
@@ -581,7 +587,7 @@ impl SpectralRenderer {
         self.show(view.field, view.step)?;
         self.pipelines_for(target.format(), target)?;
         let push = self.push(target, view);
-        let surface = !self.planar && !view.per_vertex;
+        let surface = !self.planar && (!view.per_vertex || view.per_vertex_on_tessellation);
         if surface {
             self.tessellator_for(&push)?;
         }
@@ -735,7 +741,6 @@ impl SpectralRenderer {
     pub fn device_bytes(&self) -> (u64, u64) {
         let per_pixel = self._points.size_bytes()
             + self.values.size_bytes()
-            + self._bases.size_bytes()
             + self._patches.size_bytes()
             + self.proxies.size_bytes()
             + self.edges.size_bytes();

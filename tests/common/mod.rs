@@ -103,6 +103,19 @@ pub fn run_probe(
     push: &[u8],
     groups: u32,
 ) {
+    run_probe_specialized(gpu, name, spirv, buffers, push, groups, &[]);
+}
+
+/// [`run_probe`] with specialization constants 0, 1, … set to `specialization`.
+pub fn run_probe_specialized(
+    gpu: &galerkin::gpu::Gpu,
+    name: &str,
+    spirv: &'static [u32],
+    buffers: &[galerkin::gpu::BufferBinding],
+    push: &[u8],
+    groups: u32,
+    specialization: &[u32],
+) {
     use galerkin::gpu::{BindingKind, ComputePipeline, ComputePipelineDesc, Resource};
     let bindings = vec![BindingKind::StorageBuffer; buffers.len()];
     let pipeline = ComputePipeline::new(
@@ -112,7 +125,7 @@ pub fn run_probe(
             spirv,
             bindings: &bindings,
             push_constant_bytes: push.len() as u32,
-            specialization: &[],
+            specialization,
             shared_bytes: 0,
         },
     )
