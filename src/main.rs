@@ -359,6 +359,7 @@ fn demo(desc: &GpuDesc, scene_path: &Path, out: &Path) -> Result<()> {
         check.worst_speed
     );
     drop((renderer, colours, values));
+    cli::spectral::demo(&gpu, (w, h), out)?;
     check_validation(gpu)
 }
 

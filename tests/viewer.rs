@@ -131,3 +131,31 @@ fn the_spacetime_viewer_animates_t() {
     assert!(drawn > (w * h / 10) as usize, "only {drawn} pixels drawn");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn the_spectral_viewer_shows_a_surface() {
+    let x = Xvfb::start();
+    let dir = std::env::temp_dir().join(format!("galerkin-viewer-spectral-{}", std::process::id()));
+    let shot = dir.join("shot.png");
+    let out = Command::new(env!("CARGO_BIN_EXE_galerkin"))
+        .args(["spectral", "--validation", "--generate", "artery", "--order", "3", "--isolines", "8"])
+        .args(["--view", "--play", "--frames", "4", "--size", "320x200", "--screenshot"])
+        .arg(&shot)
+        .env("DISPLAY", &x.display)
+        .env_remove("WAYLAND_DISPLAY")
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "galerkin spectral --view failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(stdout.lines().any(|l| l.starts_with("viewer: 4 frames")), "{stdout}");
+    let (w, h, rgba) = read_png_rgba8(&shot).unwrap();
+    assert_eq!((w, h), (320, 200));
+    let background = galerkin::render::BACKGROUND.map(|v| (v * 255.0).round() as u8);
+    let drawn = rgba.chunks_exact(4).filter(|p| p[..3] != background[..3]).count();
+    assert!(drawn > (w * h / 20) as usize, "only {drawn} pixels drawn");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -42,6 +42,16 @@ pub trait ViewerContent {
     /// Work before a frame is recorded (it may submit its own work, e.g. a compute pass), with
     /// the seconds since the last frame. Returns true while animating (another frame is wanted).
     fn update(&mut self, target: &RenderTarget, seconds: f64) -> Result<bool>;
+    /// Records work the frame needs before its render pass (e.g. a compute pass that builds
+    /// what `record` draws). Default: none.
+    fn record_prepass(
+        &mut self,
+        _cmd: vk::CommandBuffer,
+        _target: &RenderTarget,
+        _camera: &Camera,
+    ) -> Result<()> {
+        Ok(())
+    }
     /// Records the frame's draws inside the target's render pass.
     fn record(&mut self, cmd: vk::CommandBuffer, target: &RenderTarget, camera: &Camera) -> Result<()>;
     /// A key the viewer does not use (a character, or " " for the space bar); true if it
@@ -278,8 +288,9 @@ impl State {
         let waits = [(swapchain.image_available, vk::PipelineStageFlags::TRANSFER)];
         let signals = [swapchain.render_finished[index as usize]];
         let (submission, recorded) = gpu.submit_with_semaphores(&waits, &signals, |cmd| {
+            let prepared = content.record_prepass(cmd, target, camera);
             target.record_begin(cmd, crate::render::BACKGROUND);
-            let recorded = content.record(cmd, target, camera);
+            let recorded = prepared.and_then(|()| content.record(cmd, target, camera));
             target.record_end(cmd);
             let dev = gpu.device();
             let color = vk::ImageAspectFlags::COLOR;

@@ -22,6 +22,8 @@ pub mod mesh;
 pub mod proxy;
 pub mod reference;
 pub mod render;
+#[cfg(feature = "viewer")]
+pub mod viewer;
 pub mod vtu;
 
 pub use basis::{Basis1d, NodeSet, MAX_ORDER};

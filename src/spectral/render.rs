@@ -356,6 +356,17 @@ impl SpectralRenderer {
         })
     }
 
+    /// Replaces the colour map (rebinding the draws); call when no frame is in flight.
+    pub fn set_colormap(&mut self, gpu: &Gpu, colormap: &Colormap) -> Result<()> {
+        self.colormap = colormap.upload(gpu).map_err(dev("uploading the colour map"))?;
+        self.resources[2] = self.colormap.resource();
+        self.pipelines.clear();
+        if let Some(t) = self.tessellator.as_mut() {
+            t.set = None;
+        }
+        Ok(())
+    }
+
     /// The mesh being shown.
     pub fn mesh(&self) -> &SpectralMesh {
         &self.mesh
