@@ -44,6 +44,8 @@ layout(constant_id = 24) const float SPECTRAL_FW9 = 0.0;
 layout(constant_id = 25) const float SPECTRAL_FW10 = 0.0;
 layout(constant_id = 26) const float SPECTRAL_FW11 = 0.0;
 layout(constant_id = 27) const float SPECTRAL_FW12 = 0.0;
+// Reference dimension: 2 (quadrilaterals) or 3 (hexahedra), id 56.
+layout(constant_id = 56) const uint SPECTRAL_DIM = 2u;
 layout(constant_id = 28) const uint SPECTRAL_GEOMETRY_KIND = 0u;
 layout(constant_id = 29) const uint SPECTRAL_GEOMETRY_ORDER = 1u;
 layout(constant_id = 30) const float SPECTRAL_GN0 = 0.0;
@@ -113,7 +115,8 @@ vec3 spectral_map(uint e, vec2 r, out vec3 dxi, out vec3 deta) {
 }
 
 // Whole vec4s of one element's coefficients.
-#define SPECTRAL_VALUE_VEC4S (((SPECTRAL_FIELD_ORDER + 1u) * (SPECTRAL_FIELD_ORDER + 1u) + 3u) / 4u)
+#define SPECTRAL_VALUES_PER_ELEMENT ((SPECTRAL_FIELD_ORDER + 1u) * (SPECTRAL_FIELD_ORDER + 1u) * (SPECTRAL_DIM == 3u ? SPECTRAL_FIELD_ORDER + 1u : 1u))
+#define SPECTRAL_VALUE_VEC4S ((SPECTRAL_VALUES_PER_ELEMENT + 3u) / 4u)
 
 // The field value of element e at reference point r: sum_ij l_i(xi) l_j(eta) F_ij, as the dot
 // product of the tensor weights with the coefficients, four at a time.
@@ -147,6 +150,77 @@ bool spectral_inverse_map(uint e, vec2 p, inout vec2 r) {
         r -= s;
         if (any(greaterThan(abs(r), vec2(10.0)))) return false;
         if (max(abs(s.x), abs(s.y)) < 1e-6) return true;
+    }
+    return true;
+}
+
+
+// Hexahedra (SPECTRAL_DIM == 3): node (i, j, k) at e (g+1)^3 + k (g+1)^2 + j (g+1) + i.
+
+// The geometry map x(xi, eta, zeta) of hexahedron e and its Jacobian (columns d/dxi, d/deta,
+// d/dzeta).
+vec3 spectral_map_hex(uint e, vec3 r, out mat3 jacobian) {
+    float a[SPECTRAL_MAX_NODES], da[SPECTRAL_MAX_NODES], b[SPECTRAL_MAX_NODES], db[SPECTRAL_MAX_NODES];
+    float c[SPECTRAL_MAX_NODES], dc[SPECTRAL_MAX_NODES];
+    spectral_geometry_eval(r.x, true, a, da);
+    spectral_geometry_eval(r.y, true, b, db);
+    spectral_geometry_eval(r.z, true, c, dc);
+    const uint m = SPECTRAL_GEOMETRY_ORDER + 1u;
+    uint base = e * m * m * m;
+    vec3 x = vec3(0.0), dx = vec3(0.0), dy = vec3(0.0), dz = vec3(0.0);
+    for (uint k = 0u; k < m; ++k) {
+        vec3 layer = vec3(0.0), dlayer_x = vec3(0.0), dlayer_y = vec3(0.0);
+        for (uint j = 0u; j < m; ++j) {
+            vec3 row = vec3(0.0), drow = vec3(0.0);
+            for (uint i = 0u; i < m; ++i) {
+                vec3 p = spectral_points[base + (k * m + j) * m + i].xyz;
+                row += a[i] * p;
+                drow += da[i] * p;
+            }
+            layer += b[j] * row;
+            dlayer_x += b[j] * drow;
+            dlayer_y += db[j] * row;
+        }
+        x += c[k] * layer;
+        dx += c[k] * dlayer_x;
+        dy += c[k] * dlayer_y;
+        dz += dc[k] * layer;
+    }
+    jacobian = mat3(dx, dy, dz);
+    return x;
+}
+
+// The field value of hexahedron e at r: sum_ijk l_i(xi) l_j(eta) l_k(zeta) F_ijk.
+float spectral_value_hex(uint e, vec3 r) {
+    float a[SPECTRAL_MAX_NODES], b[SPECTRAL_MAX_NODES], c[SPECTRAL_MAX_NODES], unused[SPECTRAL_MAX_NODES];
+    spectral_field_eval(r.x, false, a, unused);
+    spectral_field_eval(r.y, false, b, unused);
+    spectral_field_eval(r.z, false, c, unused);
+    const uint m = SPECTRAL_FIELD_ORDER + 1u;
+    uint base = e * SPECTRAL_VALUE_VEC4S;
+    float v = 0.0;
+    for (uint q = 0u; q < SPECTRAL_VALUE_VEC4S; ++q) {
+        vec4 w;
+        for (uint t = 0u; t < 4u; ++t) {
+            uint k = 4u * q + t;
+            w[t] = k < m * m * m ? a[k % m] * b[(k / m) % m] * c[k / (m * m)] : 0.0;
+        }
+        v += dot(w, spectral_values[base + q]);
+    }
+    return v;
+}
+
+// Newton's method for the reference point of hexahedron e that maps to p, from r; false if it
+// diverged or met a singular Jacobian.
+bool spectral_inverse_map_hex(uint e, vec3 p, inout vec3 r) {
+    for (int k = 0; k < SPECTRAL_NEWTON_ITERATIONS; ++k) {
+        mat3 j;
+        vec3 f = spectral_map_hex(e, r, j) - p;
+        if (determinant(j) == 0.0) return false;
+        vec3 s = inverse(j) * f;
+        r -= s;
+        if (any(greaterThan(abs(r), vec3(10.0)))) return false;
+        if (max(abs(s.x), max(abs(s.y), abs(s.z))) < 1e-6) return true;
     }
     return true;
 }

@@ -17,7 +17,8 @@ pub struct Source {
     /// Without FILE: the generated data set: `grid` (8 × 4 straight, skewed quadrilaterals;
     /// fields `waves` and the discontinuous `cells`), `annulus` (4 × 12 curved quadrilaterals,
     /// same fields), `artery` (the seed's 704-element tube with a stenosis) or `coil` (the
-    /// seed's 3332-element helix), both surfaces in 3D with field `pressure`. Analytic fields
+    /// seed's 3332-element helix), both surfaces in 3D with field `pressure`, or `shell` (3 × 6
+    /// × 4 curved hexahedra with field `temperature`, shown by --cut planes). Analytic fields
     /// with several time steps, sampled at the nodes — not solved.
     #[arg(long, default_value = "annulus")]
     pub generate: String,
@@ -47,8 +48,8 @@ impl Source {
 /// Arguments of `galerkin spectral`.
 #[derive(Args)]
 pub struct RenderArgs {
-    /// Data set: a VTK `.vtu` file of Lagrange quadrilaterals (planar or a surface in 3D).
-    /// Without it, a data set is generated (--generate).
+    /// Data set: a VTK `.vtu` file of Lagrange quadrilaterals (planar or a surface in 3D) or
+    /// hexahedra (shown by cut planes). Without it, a data set is generated (--generate).
     pub file: Option<PathBuf>,
     #[command(flatten)]
     pub source: Source,
@@ -80,6 +81,10 @@ pub struct RenderArgs {
     /// Colour at the nodes, interpolated (the seed's baseline) instead of per pixel.
     #[arg(long)]
     pub per_vertex: bool,
+    /// Hexahedral meshes: a cut plane, `x=V`, `y=V`, `z=V` or `A,B,C,D` (the plane
+    /// A x + B y + C z = D); repeat for several (at most 8). Default: z through the middle.
+    #[arg(long = "cut", value_name = "PLANE", value_parser = parse_plane)]
+    pub cuts: Vec<[f64; 4]>,
     /// Surfaces: the tessellation's screen-space error budget in pixels.
     #[arg(long, default_value_t = 0.5)]
     pub max_error: f64,
@@ -119,6 +124,27 @@ fn open_viewer(desc: &GpuDesc, mesh: Arc<SpectralMesh>, view: SpectralView, args
 #[cfg(not(feature = "viewer"))]
 fn open_viewer(_: &GpuDesc, _: Arc<SpectralMesh>, _: SpectralView, _: &RenderArgs) -> Result<()> {
     bail!("this build has no viewer: rebuild with the default `viewer` feature")
+}
+
+/// Parses `x=V`, `y=V`, `z=V` or `A,B,C,D`.
+fn parse_plane(s: &str) -> Result<[f64; 4], String> {
+    let num = |v: &str| v.trim().parse::<f64>().ok().filter(|v| v.is_finite());
+    if let Some((axis, v)) = s.split_once('=') {
+        let v = num(v).ok_or_else(|| format!("{s:?}: {v:?} is not a number"))?;
+        return match axis.trim() {
+            "x" => Ok([1.0, 0.0, 0.0, v]),
+            "y" => Ok([0.0, 1.0, 0.0, v]),
+            "z" => Ok([0.0, 0.0, 1.0, v]),
+            other => Err(format!("{s:?}: axis {other:?} is not x, y or z")),
+        };
+    }
+    let parts: Vec<f64> =
+        s.split(',').map(num).collect::<Option<_>>().ok_or_else(|| format!("{s:?}: not A,B,C,D"))?;
+    match parts[..] {
+        [a, b, c, d] if a != 0.0 || b != 0.0 || c != 0.0 => Ok([a, b, c, d]),
+        [_, _, _, _] => Err(format!("{s:?}: the normal (A, B, C) is zero")),
+        _ => Err(format!("{s:?}: expected x=V, y=V, z=V or A,B,C,D")),
+    }
 }
 
 /// Arguments of `galerkin spectral-gen`.
@@ -180,6 +206,7 @@ pub fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
         overdraw: !args.no_overdraw,
         per_vertex: args.per_vertex,
         max_error_px: args.max_error,
+        cuts: args.cuts.clone(),
         ..SpectralView::default()
     };
     if args.view {
@@ -230,14 +257,20 @@ pub fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
     println!(
         "spectral: {} {} elements of order {} ({} geometry of order {}), field {:?} step {}, range [{lo:.4}, {hi:.4}]; {} triangles ({}), {lines} edge lines; load {load_ms:.1} ms, render {draw_ms:.1} ms → {}",
         mesh.elements(),
-        if mesh.is_planar() { "planar" } else { "surface" },
+        match (mesh.shape, mesh.is_planar()) {
+            (galerkin::spectral::Shape::Hexahedron, _) => "hexahedral",
+            (_, true) => "planar",
+            (_, false) => "surface",
+        },
         mesh.basis.order,
         mesh.basis.set.name(),
         mesh.geometry.order,
         mesh.fields[field].name,
         args.step,
         if args.per_vertex { grids } else { proxies },
-        if args.per_vertex {
+        if mesh.shape == galerkin::spectral::Shape::Hexahedron {
+            "cut planes: section rectangles cut out per pixel"
+        } else if args.per_vertex {
             "node grids"
         } else if mesh.is_planar() {
             "proxies"

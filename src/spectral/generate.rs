@@ -9,6 +9,8 @@
 //!
 //! - [`artery`] and [`coil`]: the seed's surface data sets (704 and 3332 curved elements),
 //!   tubes in 3D with a field `pressure` over several time steps.
+//! - [`hex_shell`]: curved hexahedra (a quarter cylindrical shell) with a field `temperature`,
+//!   for cut planes.
 //!
 //! The planar meshes carry two fields: `waves` (smooth, several time steps) and `cells` (the same plus a
 //! different constant per element: discontinuous across every edge, for the crack tests).
@@ -232,8 +234,8 @@ pub fn sample(mesh: &SpectralMesh, f: impl Fn(usize, [f64; 3]) -> f64) -> Vec<f6
 }
 
 /// The generated data sets by name (`galerkin spectral --generate`): `grid` (8 × 4 straight,
-/// skewed quadrilaterals), `annulus` (4 × 12 curved), `artery` (704 curved surface elements)
-/// and `coil` (3332), with geometry of `geometry_order` (curved sets) and fields of `order` on
+/// skewed quadrilaterals), `annulus` (4 × 12 curved), `artery` (704 curved surface elements),
+/// `coil` (3332) and `shell` (3 × 6 × 4 curved hexahedra, shown by cut planes), with geometry of `geometry_order` (curved sets) and fields of `order` on
 /// `set`.
 pub fn by_name(
     name: &str,
@@ -246,8 +248,52 @@ pub fn by_name(
         "annulus" => annulus(4, 12, geometry_order, order, set),
         "artery" => artery(44, 16, geometry_order, order, set),
         "coil" => coil(238, 14, geometry_order, order, set),
+        "shell" => hex_shell(3, 6, 4, geometry_order, order, set),
         other => Err(SpectralError::Missing(format!(
-            "unknown data set {other:?} (available: grid, annulus, artery, coil)"
+            "unknown data set {other:?} (available: grid, annulus, artery, coil, shell)"
         ))),
     }
+}
+
+/// A curved hexahedral block for cut planes: the quarter cylindrical shell 0.5 ≤ r ≤ 1,
+/// 0 ≤ θ ≤ π/2, 0 ≤ z ≤ 1 in `nr` × `nt` × `nz` hexahedra with geometry of `geometry_order`
+/// on GLL points and a field `temperature` of `order` on `set` at [`STEPS`] times.
+pub fn hex_shell(
+    nr: usize,
+    nt: usize,
+    nz: usize,
+    geometry_order: usize,
+    order: usize,
+    set: NodeSet,
+) -> Result<SpectralMesh, SpectralError> {
+    let geometry = Basis1d::new(NodeSet::GaussLobatto, geometry_order)?;
+    let quarter = 0.5 * std::f64::consts::PI;
+    let mut points = Vec::with_capacity(nr * nt * nz * geometry.len().pow(3));
+    for iz in 0..nz {
+        for it in 0..nt {
+            for ir in 0..nr {
+                for &c in &geometry.nodes {
+                    for &b in &geometry.nodes {
+                        for &a in &geometry.nodes {
+                            let r = 0.5 + 0.5 * (ir as f64 + a) / nr as f64;
+                            let th = quarter * (it as f64 + b) / nt as f64;
+                            let z = (iz as f64 + c) / nz as f64;
+                            points.push([r * th.cos(), r * th.sin(), z]);
+                        }
+                    }
+                }
+            }
+        }
+    }
+    let basis = Basis1d::new(set, order)?;
+    let shell = SpectralMesh::new(Shape::Hexahedron, geometry, basis, points, Vec::new())?;
+    let times: Vec<f64> = (0..STEPS).map(|k| 0.5 * k as f64).collect();
+    let steps = times.iter().map(|&t| sample(&shell, |_, x| temperature(x, t))).collect();
+    let fields = vec![Field { name: "temperature".into(), times, steps }];
+    SpectralMesh::new(shell.shape, shell.geometry, shell.basis, shell.points, fields)
+}
+
+/// The analytic field `temperature` of [`hex_shell`] at time t.
+pub fn temperature(x: [f64; 3], t: f64) -> f64 {
+    (4.0 * x[0] + t).sin() * (3.0 * x[1]).cos() * (2.5 * x[2] - 0.5 * t).cos() + 0.3 * x[2]
 }

@@ -356,6 +356,30 @@ impl SpectralMesh {
         ((0..3).map(|c| (x[c] - p[c]).powi(2)).sum::<f64>().sqrt() < 1e-12 * scale).then_some(r)
     }
 
+    /// The hexahedron containing `p` and its reference point (the first, in element order,
+    /// whose inverse map lands in [−tol, 1 + tol]³), searching only elements whose control-point
+    /// box (grown by half its size) contains `p`.
+    pub fn locate_hex(&self, p: [f64; 3], tol: f64) -> Option<(usize, [f64; 3])> {
+        (0..self.elements()).find_map(|e| {
+            let pts = self.element_points(e);
+            let (mut lo, mut hi) = ([f64::MAX; 3], [f64::MIN; 3]);
+            for q in pts {
+                for c in 0..3 {
+                    lo[c] = lo[c].min(q[c]);
+                    hi[c] = hi[c].max(q[c]);
+                }
+            }
+            if (0..3).any(|c| {
+                let grow = 0.5 * (hi[c] - lo[c]);
+                p[c] < lo[c] - grow || p[c] > hi[c] + grow
+            }) {
+                return None;
+            }
+            let r = self.inverse_map_hex(e, p, [0.5; 3])?;
+            (r.iter().all(|&c| (-tol..=1.0 + tol).contains(&c))).then_some((e, r))
+        })
+    }
+
     fn check_orientation_hex(&self, e: usize) -> Result<(), SpectralError> {
         let s = 2 * self.geometry.order + 1;
         let mut sign = 0.0;

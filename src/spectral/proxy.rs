@@ -259,3 +259,24 @@ pub fn tessellation_level(patch: &[f32; 8], view_proj: &Mat4, pixels: f32, budge
     let l = (pixels / z * patch[4] / (4.0 * budget)).sqrt().ceil();
     l.clamp(1.0, cap) as u32
 }
+
+/// Per hexahedron, the Bernstein control points of its geometry ((g + 1)³, ξ fastest): their
+/// convex hull contains the element, so a plane that does not separate them misses it
+/// (`cut.comp`).
+pub fn bernstein_hull(mesh: &SpectralMesh) -> Vec<[f32; 4]> {
+    let g = mesh.geometry.order;
+    let bernstein = Basis1d::new(NodeSet::Bernstein, g).expect("same order as the geometry");
+    let dim = mesh.shape.dim() as usize;
+    let mut out = Vec::with_capacity(mesh.points.len());
+    for e in 0..mesh.elements() {
+        let pts = mesh.element_points(e);
+        let per: Vec<Vec<f64>> = (0..3)
+            .map(|c| {
+                let v: Vec<f64> = pts.iter().map(|p| p[c]).collect();
+                bernstein.tensor_interpolate(&mesh.geometry.nodes, &v, dim)
+            })
+            .collect();
+        out.extend((0..pts.len()).map(|k| [per[0][k] as f32, per[1][k] as f32, per[2][k] as f32, 0.0]));
+    }
+    out
+}

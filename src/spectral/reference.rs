@@ -127,3 +127,53 @@ pub fn check_pixels(
     }
     report
 }
+
+/// [`rounding_bound`] for hexahedra at r = (ξ, η, ζ): the triple sum's rounding,
+/// 12m ε Σ|ℓ_i ℓ_j ℓ_k F_ijk|, plus the field's change over the reference-point error that the
+/// f32 point on the cut plane causes, |∇_r f| ‖J⁻¹‖ (64 |x| + 12(g + 1) Σ|g g g X|) ε (the
+/// point is interpolated across the drawn rectangle: tens of ulps), times 4.
+pub fn rounding_bound_hex(mesh: &SpectralMesh, field: usize, step: usize, e: usize, r: [f64; 3]) -> f64 {
+    let eps = f64::from(f32::EPSILON);
+    let (fb, gb) = (&mesh.basis, &mesh.geometry);
+    let (m, gm) = (fb.len(), gb.len());
+    let mut v = [[0.0; 16]; 3];
+    let mut d = [[0.0; 16]; 3];
+    for a in 0..3 {
+        fb.eval(r[a], &mut v[a], Some(&mut d[a]));
+    }
+    let f = mesh.element_values(field, step, e);
+    let (mut s, mut grad) = (0.0, [0.0; 3]);
+    for k in 0..m {
+        for j in 0..m {
+            for i in 0..m {
+                let c = f[(k * m + j) * m + i];
+                s += (v[0][i] * v[1][j] * v[2][k] * c).abs();
+                grad[0] += d[0][i] * v[1][j] * v[2][k] * c;
+                grad[1] += v[0][i] * d[1][j] * v[2][k] * c;
+                grad[2] += v[0][i] * v[1][j] * d[2][k] * c;
+            }
+        }
+    }
+    let mut g = [[0.0; 16]; 3];
+    for a in 0..3 {
+        gb.eval(r[a], &mut g[a], None);
+    }
+    let pts = mesh.element_points(e);
+    let mut gs: f64 = 0.0;
+    for k in 0..gm {
+        for j in 0..gm {
+            for i in 0..gm {
+                let p = pts[(k * gm + j) * gm + i];
+                gs += (g[0][i] * g[1][j] * g[2][k]).abs() * p[0].abs().max(p[1].abs()).max(p[2].abs());
+            }
+        }
+    }
+    let (x, j) = mesh.map_hex(e, r);
+    let jm = glam::DMat3::from_cols(j[0].into(), j[1].into(), j[2].into());
+    let jinv = jm.inverse();
+    let norm =
+        (jinv.x_axis.length_squared() + jinv.y_axis.length_squared() + jinv.z_axis.length_squared()).sqrt();
+    let position = 64.0 * x[0].abs().max(x[1].abs()).max(x[2].abs()) + 12.0 * gm as f64 * gs;
+    let gradient = (grad[0] * grad[0] + grad[1] * grad[1] + grad[2] * grad[2]).sqrt();
+    4.0 * (12.0 * m as f64 * eps * s + gradient * norm * position * eps)
+}

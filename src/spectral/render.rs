@@ -52,6 +52,9 @@ pub const INSIDE_TOLERANCE: f64 = 1e-5;
 /// The largest tessellation level asked of the device (Vulkan guarantees at least 64).
 pub const MAX_TESSELLATION: u32 = 64;
 
+/// The most cut planes one view can have.
+pub const MAX_CUT_PLANES: usize = 8;
+
 /// A camera that shows all of `mesh` (its bounding sphere) from above the x–y diagonal.
 pub fn fit_camera(mesh: &SpectralMesh) -> Camera {
     let (mut lo, mut hi) = ([f64::MAX; 3], [f64::MIN; 3]);
@@ -174,6 +177,10 @@ pub struct SpectralView {
     pub camera: Option<Camera>,
     /// The surface tessellation's screen-space error budget in pixels.
     pub max_error_px: f64,
+    /// Cut planes (n_x, n_y, n_z, d): the points with n · x = d, through hexahedral meshes
+    /// (at most [`MAX_CUT_PLANES`]; the normal need not be unit). Empty: one plane z = the
+    /// middle of the mesh.
+    pub cuts: Vec<[f64; 4]>,
 }
 
 impl Default for SpectralView {
@@ -191,13 +198,14 @@ impl Default for SpectralView {
             view: None,
             camera: None,
             max_error_px: 0.5,
+            cuts: Vec::new(),
         }
     }
 }
 
 /// The specialization constants of `spectral_element.glsl` for `mesh`'s two bases: per basis
 /// its kind (0 Lagrange, 1 Bernstein) and order, then its nodes and barycentric weights as f32
-/// bits, each padded to [`MAX_ORDER`] + 1. Compiled into the pipelines, the evaluation loops
+/// bits, each padded to [`MAX_ORDER`] + 1; then the reference dimension. Compiled into the pipelines, the evaluation loops
 /// unroll and the nodes fold into the code instead of being read per fragment.
 pub fn basis_specialization(mesh: &SpectralMesh) -> Vec<u32> {
     let mut v = Vec::with_capacity(4 * (MAX_ORDER + 2));
@@ -208,7 +216,85 @@ pub fn basis_specialization(mesh: &SpectralMesh) -> Vec<u32> {
             v.extend((0..=MAX_ORDER).map(|k| (list.get(k).copied().unwrap_or(0.0) as f32).to_bits()));
         }
     }
+    // Id 56: the reference dimension.
+    v.push(mesh.shape.dim());
     v
+}
+
+/// `cut.comp`'s push constants.
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct CutPush {
+    elements: u32,
+    points_per_element: u32,
+}
+
+impl Cutter {
+    fn new(
+        gpu: &Gpu,
+        mesh: &SpectralMesh,
+        points: &Buffer<[f32; 4]>,
+        values: &Buffer<f32>,
+        specialization: &[u32],
+    ) -> Result<Self> {
+        let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
+        let hull = Buffer::from_slice(gpu, "spectral hulls", &proxy::bernstein_hull(mesh), storage)
+            .map_err(dev("uploading"))?;
+        let planes = Buffer::new(
+            gpu,
+            "spectral cut planes",
+            MAX_CUT_PLANES as u64,
+            storage | vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryKind::GpuOnly,
+        )
+        .map_err(dev("the cut pass"))?;
+        let draw = Buffer::new(
+            gpu,
+            "spectral cut draw",
+            4,
+            storage | vk::BufferUsageFlags::INDIRECT_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryKind::GpuOnly,
+        )
+        .map_err(dev("the cut pass"))?;
+        let vertices = Buffer::new(
+            gpu,
+            "spectral cut rectangles",
+            (mesh.elements() * MAX_CUT_PLANES * 6) as u64,
+            storage | vk::BufferUsageFlags::VERTEX_BUFFER,
+            MemoryKind::GpuOnly,
+        )
+        .map_err(dev("the cut pass"))?;
+        let pass = ComputePipeline::new(
+            gpu,
+            &ComputePipelineDesc {
+                name: "spectral cut",
+                spirv: shaders::spectral::CUT,
+                bindings: &[BindingKind::StorageBuffer; 7],
+                push_constant_bytes: std::mem::size_of::<CutPush>() as u32,
+                specialization,
+                shared_bytes: 0,
+            },
+        )
+        .map_err(dev("building the cut pass"))?;
+        let b = |r: crate::gpu::GpuResult<crate::gpu::BufferBinding>| {
+            r.map(Resource::Storage).map_err(dev("binding"))
+        };
+        let pass_set = pass
+            .bind(
+                gpu,
+                &[
+                    b(points.binding())?,
+                    b(values.binding())?,
+                    b(values.binding())?,
+                    b(planes.binding())?,
+                    b(hull.binding())?,
+                    b(draw.binding())?,
+                    b(vertices.binding())?,
+                ],
+            )
+            .map_err(dev("binding the cut pass"))?;
+        Ok(Self { pass, pass_set, planes, draw, vertices, _hull: hull, pipelines: HashMap::new() })
+    }
 }
 
 /// The coefficients of `field` at `step` as `spectral_element.glsl` reads them: f32, each
@@ -254,6 +340,18 @@ struct Pipelines {
     lines_set: DescriptorSet,
 }
 
+/// The cut-plane pass (`cut.comp`), its graphics pipelines (per colour format) and buffers:
+/// the planes, the elements' Bernstein hulls, the indirect draw and the section rectangles.
+struct Cutter {
+    pass: ComputePipeline,
+    pass_set: DescriptorSet,
+    planes: Buffer<[f32; 4]>,
+    draw: Buffer<u32>,
+    vertices: Buffer<DrawVertex>,
+    _hull: Buffer<[f32; 4]>,
+    pipelines: HashMap<ColorFormat, (GraphicsPipeline, DescriptorSet)>,
+}
+
 /// The surface tessellation pass and its output: the vertex stream and its indirect draw
 /// (`vertex_count, 1, 0, 0`, then the capacity in vertices and the elements skipped).
 struct Tessellator {
@@ -284,20 +382,17 @@ pub struct SpectralRenderer {
     pipelines: HashMap<ColorFormat, Pipelines>,
     ranges: HashMap<(usize, usize), (f64, f64)>,
     tessellator: Option<Tessellator>,
+    cutter: Option<Cutter>,
     /// Vertices the last surface frame reserved room for (the CPU bound of its tessellation).
     tessellated: u64,
 }
 
 impl SpectralRenderer {
     /// Uploads `mesh` (geometry, the first field's first step, bases, draw streams) and
-    /// `colormap`. Quadrilateral meshes: planar, or surfaces in 3D. Hexahedral meshes are drawn
-    /// by cut planes, not by this renderer.
+    /// `colormap`. Quadrilateral meshes: planar, or surfaces in 3D; hexahedral meshes: by cut
+    /// planes ([`SpectralView::cuts`]).
     pub fn new(gpu: &Gpu, mesh: Arc<SpectralMesh>, colormap: &Colormap) -> Result<Self> {
-        if mesh.shape != super::mesh::Shape::Quadrilateral {
-            return Err(SpectralError::Missing(
-                "hexahedral meshes are shown by cut planes (--cut), not as surfaces".into(),
-            ));
-        }
+        let hex = mesh.shape == super::mesh::Shape::Hexahedron;
         let planar = mesh.is_planar();
         if mesh.fields.is_empty() {
             return Err(SpectralError::Missing("the data set has no fields to show".into()));
@@ -310,7 +405,11 @@ impl SpectralRenderer {
         let values = padded_values(&mesh, 0, 0);
         let values =
             Buffer::from_slice(gpu, "spectral values", &values, storage).map_err(dev("uploading"))?;
-        let draw = proxy::build(&mesh);
+        let draw = if hex {
+            proxy::DrawGeometry { proxies: Vec::new(), node_grids: Vec::new(), edges: Vec::new() }
+        } else {
+            proxy::build(&mesh)
+        };
         let vertex = vk::BufferUsageFlags::VERTEX_BUFFER;
         let upload = |name: &str, v: &[DrawVertex]| {
             // A buffer cannot be empty: an unused stream (surfaces have no proxies) gets one
@@ -322,9 +421,12 @@ impl SpectralRenderer {
         let proxies = upload("spectral proxies", &draw.proxies)?;
         let node_grids = upload("spectral node grids", &draw.node_grids)?;
         let edges = upload("spectral edges", &draw.edges)?;
-        let patch_bounds = proxy::surface_patches(&mesh);
+        let patch_bounds = if hex { Vec::new() } else { proxy::surface_patches(&mesh) };
+        // A buffer cannot be empty: hexahedral meshes get one patch that is never read.
+        let no_patch = [[0.0f32; 8]];
+        let patch_slice = if patch_bounds.is_empty() { &no_patch[..] } else { &patch_bounds[..] };
         let patches =
-            Buffer::from_slice(gpu, "spectral patches", &patch_bounds, storage).map_err(dev("uploading"))?;
+            Buffer::from_slice(gpu, "spectral patches", patch_slice, storage).map_err(dev("uploading"))?;
         let colormap = colormap.upload(gpu).map_err(dev("uploading the colour map"))?;
         let resources = vec![
             Resource::Storage(points.binding().map_err(dev("binding"))?),
@@ -333,6 +435,8 @@ impl SpectralRenderer {
             Resource::Storage(patches.binding().map_err(dev("binding"))?),
         ];
         let specialization = basis_specialization(&mesh);
+        let cutter =
+            if hex { Some(Cutter::new(gpu, &mesh, &points, &values, &specialization)?) } else { None };
         Ok(Self {
             gpu: gpu.clone(),
             mesh,
@@ -352,6 +456,7 @@ impl SpectralRenderer {
             pipelines: HashMap::new(),
             ranges: HashMap::new(),
             tessellator: None,
+            cutter,
             tessellated: 0,
         })
     }
@@ -363,6 +468,9 @@ impl SpectralRenderer {
         self.pipelines.clear();
         if let Some(t) = self.tessellator.as_mut() {
             t.set = None;
+        }
+        if let Some(c) = self.cutter.as_mut() {
+            c.pipelines.clear();
         }
         Ok(())
     }
@@ -589,12 +697,146 @@ impl SpectralRenderer {
         Ok(())
     }
 
+    /// The cut planes of `view`, unit normals, as `cut.comp` reads them (default: z through the
+    /// middle of the mesh).
+    fn cut_planes(&self, view: &SpectralView) -> Result<Vec<[f32; 4]>> {
+        if view.cuts.len() > MAX_CUT_PLANES {
+            return Err(SpectralError::Missing(format!(
+                "{} cut planes; at most {MAX_CUT_PLANES}",
+                view.cuts.len()
+            )));
+        }
+        let default = {
+            let (lo, hi) =
+                self.mesh.points.iter().fold((f64::MAX, f64::MIN), |(a, b), p| (a.min(p[2]), b.max(p[2])));
+            vec![[0.0, 0.0, 1.0, 0.5 * (lo + hi)]]
+        };
+        let cuts = if view.cuts.is_empty() { &default } else { &view.cuts };
+        cuts.iter()
+            .enumerate()
+            .map(|(k, c)| {
+                let n = (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt();
+                if !(n.is_finite() && n > 0.0 && c[3].is_finite()) {
+                    return Err(SpectralError::Missing(format!("cut plane {k}: {c:?} has no direction")));
+                }
+                Ok([(c[0] / n) as f32, (c[1] / n) as f32, (c[2] / n) as f32, (c[3] / n) as f32])
+            })
+            .collect()
+    }
+
+    fn cut_pipeline_for(&mut self, target: &RenderTarget) -> Result<()> {
+        let format = target.format();
+        let Some(c) = self.cutter.as_mut() else { return Ok(()) };
+        if c.pipelines.contains_key(&format) {
+            return Ok(());
+        }
+        let bindings = [
+            BindingKind::StorageBuffer,
+            BindingKind::StorageBuffer,
+            BindingKind::Texture,
+            BindingKind::StorageBuffer,
+        ];
+        let mut desc = GraphicsPipelineDesc::new(
+            "spectral cut planes",
+            shaders::spectral::CUT_VERT,
+            shaders::spectral::CUT_FRAG,
+            target.render_pass().raw(),
+        );
+        desc.bindings = &bindings;
+        desc.specialization = &self.specialization;
+        desc.push_constant_bytes = std::mem::size_of::<SpectralPush>() as u32;
+        desc.vertex_stride = std::mem::size_of::<DrawVertex>() as u32;
+        desc.vertex_attributes = &[
+            (0, vk::Format::R32G32B32_SFLOAT, 0),
+            (1, vk::Format::R32G32_SFLOAT, 12),
+            (2, vk::Format::R32_UINT, 20),
+        ];
+        let pipeline = GraphicsPipeline::new(&self.gpu, &desc).map_err(dev("building the cut pipeline"))?;
+        let resources = [
+            self.resources[0],
+            self.resources[1],
+            self.resources[2],
+            Resource::Storage(c.planes.binding().map_err(dev("binding"))?),
+        ];
+        let set = pipeline.bind(&self.gpu, &resources).map_err(dev("binding the cut pipeline"))?;
+        c.pipelines.insert(format, (pipeline, set));
+        Ok(())
+    }
+
+    #[allow(clippy::type_complexity)]
+    fn prepare_cuts(
+        &mut self,
+        target: &RenderTarget,
+        view: &SpectralView,
+    ) -> Result<(Box<dyn FnOnce(vk::CommandBuffer) + '_>, Box<dyn FnOnce(vk::CommandBuffer) + '_>)> {
+        self.show(view.field, view.step)?;
+        self.cut_pipeline_for(target)?;
+        let planes = self.cut_planes(view)?;
+        let push = self.push(target, view);
+        let gpu = &self.gpu;
+        let c = self.cutter.as_ref().expect("a hexahedral mesh has a cutter");
+        let (pipeline, set) = &c.pipelines[&target.format()];
+        let extent = target.extent();
+        let cut_push = CutPush {
+            elements: self.mesh.elements() as u32,
+            points_per_element: self.mesh.points_per_element() as u32,
+        };
+        let pre = move |cmd: vk::CommandBuffer| {
+            let cs = vk::PipelineStageFlags::COMPUTE_SHADER;
+            let fs = vk::PipelineStageFlags::FRAGMENT_SHADER;
+            // The last frame has read what this pass rewrites.
+            gpu.memory_barrier(
+                cmd,
+                (
+                    vk::PipelineStageFlags::VERTEX_INPUT | vk::PipelineStageFlags::DRAW_INDIRECT | fs,
+                    vk::AccessFlags::empty(),
+                ),
+                (vk::PipelineStageFlags::TRANSFER | cs, vk::AccessFlags::empty()),
+            );
+            let header: [u32; 4] = [0, 1, 0, 0];
+            // SAFETY: both buffers are alive, created with TRANSFER_DST, and large enough
+            // (planes ≤ MAX_CUT_PLANES, checked in cut_planes).
+            unsafe {
+                gpu.device().cmd_update_buffer(cmd, c.draw.raw(), 0, bytemuck::cast_slice(&header));
+                gpu.device().cmd_update_buffer(cmd, c.planes.raw(), 0, bytemuck::cast_slice(&planes));
+            }
+            gpu.memory_barrier(
+                cmd,
+                (vk::PipelineStageFlags::TRANSFER, vk::AccessFlags::TRANSFER_WRITE),
+                (cs | fs, vk::AccessFlags::SHADER_READ | vk::AccessFlags::SHADER_WRITE),
+            );
+            let groups = (cut_push.elements.div_ceil(64), planes.len() as u32, 1);
+            c.pass.record_dispatch(
+                cmd,
+                &c.pass_set,
+                bytemuck::bytes_of(&cut_push),
+                [groups.0, groups.1, groups.2],
+            );
+            gpu.memory_barrier(
+                cmd,
+                (cs, vk::AccessFlags::SHADER_WRITE),
+                (
+                    vk::PipelineStageFlags::DRAW_INDIRECT | vk::PipelineStageFlags::VERTEX_INPUT,
+                    vk::AccessFlags::INDIRECT_COMMAND_READ | vk::AccessFlags::VERTEX_ATTRIBUTE_READ,
+                ),
+            );
+        };
+        let draw = move |cmd: vk::CommandBuffer| {
+            let bytes = bytemuck::bytes_of(&push);
+            pipeline.record_draw_indirect(cmd, extent, set, bytes, Some(c.vertices.raw()), (c.draw.raw(), 0));
+        };
+        Ok((Box::new(pre), Box::new(draw)))
+    }
+
     #[allow(clippy::type_complexity)]
     fn prepare(
         &mut self,
         target: &RenderTarget,
         view: &SpectralView,
     ) -> Result<(Box<dyn FnOnce(vk::CommandBuffer) + '_>, Box<dyn FnOnce(vk::CommandBuffer) + '_>)> {
+        if self.cutter.is_some() {
+            return self.prepare_cuts(target, view);
+        }
         self.show(view.field, view.step)?;
         self.pipelines_for(target.format(), target)?;
         let push = self.push(target, view);
