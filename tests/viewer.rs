@@ -159,3 +159,39 @@ fn the_spectral_viewer_shows_a_surface() {
     assert!(drawn > (w * h / 20) as usize, "only {drawn} pixels drawn");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn the_spectral_viewer_shows_cut_planes() {
+    let x = Xvfb::start();
+    let dir = std::env::temp_dir().join(format!("galerkin-viewer-spectral-cut-{}", std::process::id()));
+    let shot = dir.join("shot.png");
+    let out = Command::new(env!("CARGO_BIN_EXE_galerkin"))
+        .args([
+            "spectral",
+            "--validation",
+            "--generate",
+            "shell",
+            "--order",
+            "3",
+            "--cut",
+            "z=0.5",
+            "--cut",
+            "x=0.6",
+        ])
+        .args(["--view", "--frames", "3", "--size", "320x200", "--screenshot"])
+        .arg(&shot)
+        .env("DISPLAY", &x.display)
+        .env_remove("WAYLAND_DISPLAY")
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "galerkin spectral --view failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let (w, h, rgba) = read_png_rgba8(&shot).unwrap();
+    let background = galerkin::render::BACKGROUND.map(|v| (v * 255.0).round() as u8);
+    let drawn = rgba.chunks_exact(4).filter(|p| p[..3] != background[..3]).count();
+    assert!(drawn > (w * h / 40) as usize, "only {drawn} pixels drawn");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

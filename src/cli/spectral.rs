@@ -97,8 +97,9 @@ pub struct RenderArgs {
     pub out: PathBuf,
     /// Open the interactive viewer instead of writing an image: space plays/pauses the time
     /// steps, `.`/`,` step, l log scale, p palette, i/I more/fewer iso-lines, e edges, v
-    /// per-vertex colour, r narrows the range to its middle half, R restores it; arrows orbit
-    /// (surfaces), +/- zoom, S screenshot, Esc quits.
+    /// per-vertex colour, r narrows the range to its middle half, R restores it; cut planes: n
+    /// adds, c selects, j/k move, o/O turn about z, u/U tilt, x deletes; arrows orbit
+    /// (surfaces, cut planes), +/- zoom, S screenshot, Esc quits.
     #[arg(long)]
     pub view: bool,
     /// With --view: start playing the time steps.

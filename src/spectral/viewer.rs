@@ -2,8 +2,11 @@
 //! to look at one region in detail" and "animated over time steps" made interactive. Keys:
 //! space plays and pauses the time steps, `.` and `,` step; `l` log scale; `p` next palette;
 //! `i` more iso-lines, `I` fewer; `e` element edges; `v` per-vertex colour; `r` narrows the
-//! colour range to its middle half, `R` restores it. Surfaces orbit with the viewer's camera;
-//! planar meshes stay fitted to the window.
+//! colour range to its middle half, `R` restores it. Cut planes (hexahedral meshes): `n` adds
+//! a plane (through the middle, the next axis), `c` selects the next plane, `j`/`k` move the
+//! selected plane along its normal by 1/50 of the mesh, `o`/`O` turn its normal by 15° about
+//! z, `u`/`U` tilt it by 15° towards z, `x` deletes it. Surfaces and cut planes orbit with the
+//! viewer's camera; planar meshes stay fitted to the window.
 
 use std::sync::Arc;
 
@@ -33,6 +36,11 @@ pub struct SpectralContent {
     frames: u64,
     /// The palette changed: swap the colour map in `update`, when no frame is in flight.
     recolour: bool,
+    /// The selected cut plane.
+    selected: usize,
+    /// The mesh's bounding box: centre and size.
+    centre: [f64; 3],
+    extent: f64,
 }
 
 impl SpectralContent {
@@ -46,6 +54,19 @@ impl SpectralContent {
         playing: bool,
     ) -> Self {
         let palette = PALETTES.iter().position(|p| *p == palette).unwrap_or(0);
+        let (mut lo, mut hi) = ([f64::MAX; 3], [f64::MIN; 3]);
+        for p in &mesh.points {
+            for c in 0..3 {
+                lo[c] = lo[c].min(p[c]);
+                hi[c] = hi[c].max(p[c]);
+            }
+        }
+        let centre: [f64; 3] = std::array::from_fn(|c| 0.5 * (lo[c] + hi[c]));
+        let extent = (0..3).map(|c| hi[c] - lo[c]).fold(0.0, f64::max).max(1e-12);
+        let mut view = view;
+        if mesh.shape == super::Shape::Hexahedron && view.cuts.is_empty() {
+            view.cuts.push([0.0, 0.0, 1.0, centre[2]]);
+        }
         Self {
             mesh,
             renderer: None,
@@ -58,11 +79,36 @@ impl SpectralContent {
             clock: 0.0,
             frames: 0,
             recolour: false,
+            selected: 0,
+            centre,
+            extent,
         }
     }
 
     fn steps(&self) -> usize {
         self.mesh.fields[self.view.field].steps.len()
+    }
+
+    /// Turns the selected plane's normal by `angle` about z (`tilt`: towards z), keeping the
+    /// point where it meets the normal line through the mesh's centre.
+    fn turn(&mut self, angle: f64, tilt: bool) {
+        let Some(c) = self.view.cuts.get_mut(self.selected) else { return };
+        let len = (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt().max(1e-300);
+        let n = glam::DVec3::new(c[0], c[1], c[2]) / len;
+        let centre = glam::DVec3::from(self.centre);
+        let through = centre + (c[3] / len - n.dot(centre)) * n;
+        let m = if tilt {
+            let axis = n.cross(glam::DVec3::Z);
+            if axis.length() < 1e-9 {
+                glam::DMat3::from_rotation_x(angle)
+            } else {
+                glam::DMat3::from_axis_angle(axis.normalize(), angle)
+            }
+        } else {
+            glam::DMat3::from_rotation_z(angle)
+        };
+        let n = m * n;
+        *c = [n.x, n.y, n.z, n.dot(through)];
     }
 
     fn recolour(&mut self) -> Result<()> {
@@ -90,7 +136,20 @@ impl ViewerContent for SpectralContent {
             self.view.isolines,
             if self.view.edges { ", edges" } else { "" },
             if self.view.per_vertex { ", per-vertex colour" } else { ", per-pixel colour" },
-        )
+        ) + &if self.view.cuts.is_empty() {
+            String::new()
+        } else {
+            let c = self.view.cuts[self.selected];
+            format!(
+                " — {} cut plane(s), plane {}: {:.2}x + {:.2}y + {:.2}z = {:.3}",
+                self.view.cuts.len(),
+                self.selected,
+                c[0],
+                c[1],
+                c[2],
+                c[3]
+            )
+        }
     }
 
     fn size(&self) -> (u32, u32) {
@@ -165,6 +224,28 @@ impl ViewerContent for SpectralContent {
                 self.view.range = Some((lo + q, hi - q));
             }
             "R" => self.view.range = None,
+            "n" if self.view.cuts.len() < super::render::MAX_CUT_PLANES => {
+                let axis = self.view.cuts.len() % 3;
+                let mut c = [0.0; 4];
+                c[axis] = 1.0;
+                c[3] = self.centre[axis];
+                self.view.cuts.push(c);
+                self.selected = self.view.cuts.len() - 1;
+            }
+            "c" if !self.view.cuts.is_empty() => self.selected = (self.selected + 1) % self.view.cuts.len(),
+            "j" | "k" if self.selected < self.view.cuts.len() => {
+                let c = &mut self.view.cuts[self.selected];
+                let n = (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt();
+                c[3] += if key == "k" { 1.0 } else { -1.0 } * self.extent / 50.0 * n;
+            }
+            "o" => self.turn(15f64.to_radians(), false),
+            "O" => self.turn(-15f64.to_radians(), false),
+            "u" => self.turn(15f64.to_radians(), true),
+            "U" => self.turn(-15f64.to_radians(), true),
+            "x" if self.view.cuts.len() > 1 => {
+                self.view.cuts.remove(self.selected);
+                self.selected = self.selected.min(self.view.cuts.len() - 1);
+            }
             "p" | "P" => {
                 self.palette = (self.palette + 1) % PALETTES.len();
                 self.recolour = true;
@@ -176,5 +257,34 @@ impl ViewerContent for SpectralContent {
 
     fn summary(&self) -> Option<String> {
         Some(format!("viewer: {} frames, last time step {}", self.frames, self.view.step))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::spectral::generate::hex_shell;
+    use crate::spectral::NodeSet;
+
+    #[test]
+    fn cut_plane_keys_move_turn_add_and_delete_planes() {
+        let mesh = Arc::new(hex_shell(1, 2, 1, 2, 2, NodeSet::GaussLobatto).unwrap());
+        let mut c = SpectralContent::new(mesh, SpectralView::default(), "viridis", (64, 64), false);
+        assert_eq!(c.view.cuts, vec![[0.0, 0.0, 1.0, 0.5]], "a default plane through the middle");
+        assert!(c.key("k"));
+        assert!((c.view.cuts[0][3] - (0.5 + 1.0 / 50.0)).abs() < 1e-12, "moved by 1/50 of the mesh");
+        assert!(c.key("n") && c.view.cuts.len() == 2 && c.selected == 1);
+        // The new plane x = centre; turning it about z keeps its point on the centre line.
+        let before = c.view.cuts[1];
+        assert!(c.key("o"));
+        let after = c.view.cuts[1];
+        let angle = (before[0] * after[0] + before[1] * after[1]).acos();
+        assert!((angle - 15f64.to_radians()).abs() < 1e-12);
+        // The point where the old plane met the normal line through the centre.
+        let through = [before[3], c.centre[1], c.centre[2]];
+        let d = after[0] * through[0] + after[1] * through[1] + after[2] * through[2];
+        assert!((d - after[3]).abs() < 1e-12, "kept its point: {d} vs {}", after[3]);
+        assert!(c.key("x") && c.view.cuts.len() == 1 && c.selected == 0);
+        assert!(!c.key("x"), "the last plane stays");
     }
 }
