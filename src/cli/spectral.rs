@@ -92,7 +92,8 @@ pub struct RenderArgs {
     #[arg(long, value_name = "WxH", value_parser = crate::parse_size, default_value = "1024x768")]
     pub size: (u32, u32),
     /// Output image: .png (colour) or .exr (R, G, B of the picture and the raw value, xi, eta
-    /// and element of every pixel as float channels; NaN where no element).
+    /// and element of every pixel as float channels — for cut planes value, plane, zeta and
+    /// element; NaN where no element, element −(e + 1) where only edge overdraw drew).
     #[arg(long, default_value = "out/spectral.png")]
     pub out: PathBuf,
     /// Open the interactive viewer instead of writing an image: space plays/pauses the time
@@ -230,6 +231,7 @@ pub fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
     match ext.as_str() {
         "png" => write_png_rgba8(&args.out, w, h, &rgba)?,
         "exr" => {
+            let hex = mesh.shape == galerkin::spectral::Shape::Hexahedron;
             let data = RenderTarget::new(&gpu, "spectral values", w, h, ColorFormat::Rgba32F)?;
             let Pixels::Rgba32F(v) = renderer.render(&data, &view)? else {
                 bail!("a float target returned bytes")
@@ -245,8 +247,8 @@ pub fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
                     ("G", byte(1)),
                     ("B", byte(2)),
                     ("value", float(0)),
-                    ("xi", float(1)),
-                    ("eta", float(2)),
+                    (if hex { "plane" } else { "xi" }, float(1)),
+                    (if hex { "zeta" } else { "eta" }, float(2)),
                     ("element", float(3)),
                 ],
             )?;
