@@ -34,9 +34,9 @@ pub struct Source {
 }
 
 impl Source {
-    fn mesh(&self, file: Option<&Path>) -> Result<SpectralMesh> {
+    fn mesh(&self, file: Option<&Path>, grid_functions: &[PathBuf]) -> Result<SpectralMesh> {
         if let Some(path) = file {
-            return Ok(galerkin::spectral::load(path)?);
+            return Ok(galerkin::spectral::load(path, grid_functions)?);
         }
         let set = NodeSet::by_name(&self.nodes).with_context(|| {
             format!("unknown node set {:?} (gll, equispaced, gauss, bernstein)", self.nodes)
@@ -49,8 +49,14 @@ impl Source {
 #[derive(Args)]
 pub struct RenderArgs {
     /// Data set: a VTK `.vtu` file of Lagrange quadrilaterals (planar or a surface in 3D) or
-    /// hexahedra (shown by cut planes). Without it, a data set is generated (--generate).
+    /// hexahedra (shown by cut planes); an MFEM mesh ("MFEM mesh v1.0", straight or with a
+    /// curved `nodes` section) with --gf; or a GLVis "solution" stream saved to a file. Without
+    /// it, a data set is generated (--generate).
     pub file: Option<PathBuf>,
+    /// With an MFEM mesh (or after a solution stream): a GridFunction file (H1 or L2
+    /// collection); repeat for the time steps of one field, named after the first file.
+    #[arg(long = "gf", value_name = "FILE")]
+    pub grid_functions: Vec<PathBuf>,
     #[command(flatten)]
     pub source: Source,
     /// The field to show (default: the first).
@@ -161,7 +167,7 @@ pub struct GenArgs {
 
 /// `galerkin spectral-gen`.
 pub fn generate_file(args: &GenArgs) -> Result<()> {
-    let mesh = args.source.mesh(None)?;
+    let mesh = args.source.mesh(None, &[])?;
     galerkin::spectral::vtu::write(&args.out, &mesh)?;
     println!(
         "{}: {} elements of order {} (analytic fields sampled at the nodes — not solved)",
@@ -175,7 +181,7 @@ pub fn generate_file(args: &GenArgs) -> Result<()> {
 /// `galerkin spectral`.
 pub fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
     let loaded = Instant::now();
-    let mesh = Arc::new(args.source.mesh(args.file.as_deref())?);
+    let mesh = Arc::new(args.source.mesh(args.file.as_deref(), &args.grid_functions)?);
     let load_ms = loaded.elapsed().as_secs_f64() * 1e3;
     let field = mesh.field_index(args.field.as_deref())?;
     let steps = mesh.fields[field].steps.len();

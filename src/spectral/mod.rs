@@ -12,13 +12,15 @@
 //!   geometry map and evaluation; surfaces in 3D by adaptive tessellation on the device with a
 //!   screen-space error bound; colour maps (linear or log), iso-lines, edge overdraw, the
 //!   per-vertex baseline.
-//! - [`vtu`]: VTK Lagrange cells in `.vtu` files.
+//! - [`vtu`]: VTK Lagrange cells in `.vtu` files; [`mfem`]: MFEM meshes, GridFunctions and
+//!   GLVis solution streams.
 //! - [`reference`]: the per-pixel check against the f64 reference (tests and demo).
 
 pub mod basis;
 pub mod error;
 pub mod generate;
 pub mod mesh;
+pub mod mfem;
 pub mod proxy;
 pub mod reference;
 pub mod render;
@@ -31,13 +33,49 @@ pub use error::SpectralError;
 pub use mesh::{Field, Shape, SpectralMesh};
 pub use render::{fit_camera, SpectralRenderer, SpectralView, View2d, INSIDE_TOLERANCE, MAX_TESSELLATION};
 
-/// Loads a data set by its extension: `.vtu` (VTK Lagrange cells).
-pub fn load(path: &std::path::Path) -> Result<SpectralMesh, SpectralError> {
-    match path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() {
-        Some("vtu") => vtu::read(path),
-        _ => Err(SpectralError::File {
-            path: path.to_path_buf(),
-            detail: "unknown extension: expected .vtu".into(),
-        }),
+/// Loads a data set: a `.vtu` file (VTK Lagrange cells), a GLVis "solution" stream (a file
+/// starting with `solution`), or an MFEM mesh with `grid_functions` as the time steps of one
+/// field named after the first GridFunction file's stem.
+pub fn load(
+    path: &std::path::Path,
+    grid_functions: &[std::path::PathBuf],
+) -> Result<SpectralMesh, SpectralError> {
+    if path.extension().and_then(|e| e.to_str()).is_some_and(|e| e.eq_ignore_ascii_case("vtu")) {
+        if !grid_functions.is_empty() {
+            return Err(SpectralError::Missing(
+                "GridFunction files go with MFEM meshes, not .vtu files".into(),
+            ));
+        }
+        return vtu::read(path);
     }
+    let head = std::fs::read(path)
+        .map_err(|e| SpectralError::File { path: path.to_path_buf(), detail: e.to_string() })?;
+    let first = String::from_utf8_lossy(&head[..head.len().min(64)]).trim_start().to_string();
+    if first.starts_with("solution") {
+        let (mesh, gf) = mfem::read_solution(path)?;
+        let mut steps = vec![gf];
+        for g in grid_functions {
+            steps.push(mfem::read_grid_function(g)?);
+        }
+        return mfem::to_spectral(&mesh, &[("solution".to_string(), steps)]);
+    }
+    if first.starts_with("MFEM mesh") {
+        let mesh = mfem::read_mesh(path)?;
+        if grid_functions.is_empty() {
+            return Err(SpectralError::File {
+                path: path.to_path_buf(),
+                detail: "an MFEM mesh without fields: give its GridFunction files with --gf".into(),
+            });
+        }
+        let steps =
+            grid_functions.iter().map(|g| mfem::read_grid_function(g)).collect::<Result<Vec<_>, _>>()?;
+        let name = grid_functions[0].file_stem().and_then(|s| s.to_str()).unwrap_or("field").to_string();
+        return mfem::to_spectral(&mesh, &[(name, steps)]);
+    }
+    Err(SpectralError::File {
+        path: path.to_path_buf(),
+        detail:
+            "not a .vtu file, an MFEM mesh (\"MFEM mesh v1.0\") or a GLVis solution stream (\"solution\")"
+                .into(),
+    })
 }

@@ -1,0 +1,629 @@
+//! MFEM data (so MFEM users can view their output): meshes in the "MFEM mesh v1.0" text format
+//! with straight (`vertices`) or curved (`nodes`) geometry, GridFunction files, and the GLVis
+//! "solution" stream that concatenates a mesh and a GridFunction. Quadrilateral (geometry 3)
+//! and hexahedral (5) meshes; H1 and L2 finite element collections, with the basis type read
+//! from the collection's name (`H1_2D_P3`: Gauss–Lobatto; `H1Pos_…` / `H1@P_…`: Bernstein;
+//! `L2_2D_P3`: Gauss–Legendre; `L2_T1_…`: Gauss–Lobatto; …).
+//!
+//! Every element's degrees of freedom are gathered into this crate's lexicographic order (ξ
+//! fastest): L2 spaces store them element by element; H1 spaces number vertices, then edges,
+//! then faces, then interiors, and [`h1_element_dofs`] reassembles each element's tensor
+//! grid, reversing edge (and permuting face) DOFs where the element's orientation differs from
+//! the global one. Errors name the file and the line or element.
+
+use std::path::{Path, PathBuf};
+
+use super::basis::{Basis1d, NodeSet};
+use super::error::SpectralError;
+use super::mesh::{Field, Shape, SpectralMesh};
+
+/// MFEM's geometry id of a quadrilateral (`Geometry::SQUARE`).
+pub const GEOMETRY_SQUARE: u32 = 3;
+/// MFEM's geometry id of a hexahedron (`Geometry::CUBE`).
+pub const GEOMETRY_CUBE: u32 = 5;
+
+/// A finite element collection as named in MFEM files.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Collection {
+    /// H1 (continuous) or L2 (discontinuous).
+    pub continuous: bool,
+    /// The reference dimension.
+    pub dim: u32,
+    /// The polynomial order.
+    pub order: usize,
+    /// The basis's nodes (or Bernstein).
+    pub set: NodeSet,
+    /// The name as written.
+    pub name: String,
+}
+
+/// A finite element space header: collection, vector dimension and ordering.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Space {
+    /// The collection.
+    pub collection: Collection,
+    /// Components per DOF.
+    pub vdim: usize,
+    /// `Ordering: 1` (byVDIM: the components of one DOF together) or 0 (byNODES: all DOFs of
+    /// component 0, then component 1, …).
+    pub by_vdim: bool,
+}
+
+/// A GridFunction: its space and values.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GridFunction {
+    /// The space.
+    pub space: Space,
+    /// The values, in the space's numbering.
+    pub values: Vec<f64>,
+}
+
+/// An MFEM mesh: elements (vertex ids), vertex coordinates, and curved nodes if any.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MfemMesh {
+    /// The file.
+    pub path: PathBuf,
+    /// Reference dimension (2 or 3).
+    pub dim: u32,
+    /// Each element's vertices (4 or 8), in MFEM's order.
+    pub elements: Vec<Vec<usize>>,
+    /// Vertex coordinates (space dimension 2 or 3, padded to 3); empty when `nodes` holds the
+    /// geometry.
+    pub vertices: Vec<[f64; 3]>,
+    /// Number of vertices.
+    pub vertex_count: usize,
+    /// The curved geometry, a vector GridFunction, when the file has a `nodes` section.
+    pub nodes: Option<GridFunction>,
+}
+
+fn err(path: &Path, line: usize, detail: impl Into<String>) -> SpectralError {
+    SpectralError::File { path: path.to_path_buf(), detail: format!("line {line}: {}", detail.into()) }
+}
+
+/// The lines of a text file with their numbers, comments (`#…`) and blank lines skipped.
+struct Lines<'a> {
+    path: &'a Path,
+    lines: Vec<(usize, &'a str)>,
+    at: usize,
+}
+
+impl<'a> Lines<'a> {
+    fn new(path: &'a Path, text: &'a str) -> Self {
+        let lines = text
+            .lines()
+            .enumerate()
+            .map(|(k, l)| (k + 1, l.split('#').next().unwrap_or("").trim()))
+            .filter(|(_, l)| !l.is_empty())
+            .collect();
+        Self { path, lines, at: 0 }
+    }
+
+    fn line_number(&self) -> usize {
+        self.lines.get(self.at).or(self.lines.last()).map_or(0, |l| l.0)
+    }
+
+    fn next(&mut self, what: &str) -> Result<(usize, &'a str), SpectralError> {
+        let l = self
+            .lines
+            .get(self.at)
+            .copied()
+            .ok_or_else(|| err(self.path, self.line_number(), format!("the file ends before {what}")))?;
+        self.at += 1;
+        Ok(l)
+    }
+
+    fn peek(&self) -> Option<&'a str> {
+        self.lines.get(self.at).map(|l| l.1)
+    }
+
+    fn expect(&mut self, keyword: &str) -> Result<(), SpectralError> {
+        let (n, l) = self.next(keyword)?;
+        if l != keyword {
+            return Err(err(self.path, n, format!("expected {keyword:?}, found {l:?}")));
+        }
+        Ok(())
+    }
+
+    fn number<T: std::str::FromStr>(&mut self, what: &str) -> Result<T, SpectralError> {
+        let (n, l) = self.next(what)?;
+        l.parse().map_err(|_| err(self.path, n, format!("{what}: {l:?} is not a number")))
+    }
+
+    /// `Key: value`.
+    fn keyed(&mut self, key: &str) -> Result<(usize, &'a str), SpectralError> {
+        let (n, l) = self.next(key)?;
+        let v = l
+            .strip_prefix(key)
+            .and_then(|r| r.strip_prefix(':'))
+            .ok_or_else(|| err(self.path, n, format!("expected \"{key}: …\", found {l:?}")))?;
+        Ok((n, v.trim()))
+    }
+}
+
+/// Parses a collection name: `H1_2D_P3`, `H1Pos_3D_P2`, `H1@P_2D_P2`, `L2_2D_P1`,
+/// `L2_T1_3D_P4`, ….
+pub fn parse_collection(name: &str) -> Option<Collection> {
+    let (family, rest) = name.split_once('_')?;
+    let (continuous, mut set) = match family {
+        "H1" => (true, NodeSet::GaussLobatto),
+        "H1Pos" => (true, NodeSet::Bernstein),
+        f if f.starts_with("H1@") => (true, basis_char(f[3..].chars().next()?)?),
+        "L2" => (false, NodeSet::Gauss),
+        _ => return None,
+    };
+    let mut parts: Vec<&str> = rest.split('_').collect();
+    if !continuous && parts.first().is_some_and(|p| p.starts_with('T')) {
+        set = basis_id(parts[0][1..].parse().ok()?)?;
+        parts.remove(0);
+    }
+    let [d, p] = parts[..] else { return None };
+    let dim = d.strip_suffix('D')?.parse().ok()?;
+    let order = p.strip_prefix('P')?.parse().ok()?;
+    Some(Collection { continuous, dim, order, set, name: name.to_string() })
+}
+
+/// MFEM's `BasisType` ids (the `T<id>` of L2 names).
+fn basis_id(id: u32) -> Option<NodeSet> {
+    match id {
+        0 => Some(NodeSet::Gauss),
+        1 => Some(NodeSet::GaussLobatto),
+        2 => Some(NodeSet::Bernstein),
+        4 => Some(NodeSet::Equispaced),
+        _ => None,
+    }
+}
+
+/// MFEM's `BasisType` characters (the `@<c>` of H1 names).
+fn basis_char(c: char) -> Option<NodeSet> {
+    match c {
+        'g' => Some(NodeSet::Gauss),
+        'G' => Some(NodeSet::GaussLobatto),
+        'P' => Some(NodeSet::Bernstein),
+        'U' => Some(NodeSet::Equispaced),
+        _ => None,
+    }
+}
+
+fn read_space(lines: &mut Lines<'_>) -> Result<Space, SpectralError> {
+    lines.expect("FiniteElementSpace")?;
+    let (n, name) = lines.keyed("FiniteElementCollection")?;
+    let collection = parse_collection(name).ok_or_else(|| {
+        err(lines.path, n, format!("collection {name:?} is not an H1 or L2 collection this reader knows (H1_, H1Pos_, H1@<G|g|P|U>_, L2_, L2_T<0|1|2|4>_)"))
+    })?;
+    if !(1..=super::basis::MAX_ORDER).contains(&collection.order) {
+        return Err(err(
+            lines.path,
+            n,
+            format!("order {} is outside 1..={}", collection.order, super::basis::MAX_ORDER),
+        ));
+    }
+    let (n, vdim) = lines.keyed("VDim")?;
+    let vdim = vdim.parse().map_err(|_| err(lines.path, n, format!("VDim {vdim:?} is not a number")))?;
+    let (n, ordering) = lines.keyed("Ordering")?;
+    let by_vdim = match ordering {
+        "0" => false,
+        "1" => true,
+        o => return Err(err(lines.path, n, format!("Ordering {o:?} is neither 0 nor 1"))),
+    };
+    Ok(Space { collection, vdim, by_vdim })
+}
+
+fn read_values(lines: &mut Lines<'_>, stop_at_keyword: bool) -> Result<Vec<f64>, SpectralError> {
+    let mut values = Vec::new();
+    while let Some(l) = lines.peek() {
+        if stop_at_keyword
+            && l.chars().next().is_some_and(|c| c.is_ascii_alphabetic())
+            && l.parse::<f64>().is_err()
+        {
+            break;
+        }
+        let (n, l) = lines.next("values")?;
+        for w in l.split_whitespace() {
+            let v: f64 = w.parse().map_err(|_| err(lines.path, n, format!("{w:?} is not a number")))?;
+            values.push(v);
+        }
+    }
+    Ok(values)
+}
+
+fn read_mesh_lines(path: &Path, lines: &mut Lines<'_>) -> Result<MfemMesh, SpectralError> {
+    let (n, header) = lines.next("the header")?;
+    if !header.starts_with("MFEM mesh v1.") {
+        return Err(err(path, n, format!("expected \"MFEM mesh v1.0\", found {header:?}")));
+    }
+    lines.expect("dimension")?;
+    let dim: u32 = lines.number("dimension")?;
+    if dim != 2 && dim != 3 {
+        return Err(err(
+            path,
+            lines.line_number(),
+            format!("dimension {dim}: quadrilateral (2) and hexahedral (3) meshes only"),
+        ));
+    }
+    lines.expect("elements")?;
+    let count: usize = lines.number("the element count")?;
+    let (want_geometry, corners) = if dim == 2 { (GEOMETRY_SQUARE, 4) } else { (GEOMETRY_CUBE, 8) };
+    let mut elements = Vec::with_capacity(count);
+    for e in 0..count {
+        let (n, l) = lines.next("an element")?;
+        let w: Vec<usize> = l
+            .split_whitespace()
+            .map(|t| {
+                t.parse()
+                    .map_err(|_| err(path, n, format!("element {e}: {t:?} is not a non-negative integer")))
+            })
+            .collect::<Result<_, _>>()?;
+        if w.len() < 2 || w[1] as u32 != want_geometry || w.len() != 2 + corners {
+            return Err(err(
+                path,
+                n,
+                format!("element {e}: geometry {} with {} vertices (a {dim}D mesh needs geometry {want_geometry} with {corners})", w.get(1).copied().unwrap_or(0), w.len().saturating_sub(2)),
+            ));
+        }
+        elements.push(w[2..].to_vec());
+    }
+    // Skip the boundary.
+    if lines.peek() == Some("boundary") {
+        lines.next("boundary")?;
+        let b: usize = lines.number("the boundary count")?;
+        for _ in 0..b {
+            lines.next("a boundary element")?;
+        }
+    }
+    lines.expect("vertices")?;
+    let vertex_count: usize = lines.number("the vertex count")?;
+    for (e, el) in elements.iter().enumerate() {
+        if let Some(&v) = el.iter().find(|&&v| v >= vertex_count) {
+            return Err(SpectralError::File {
+                path: path.to_path_buf(),
+                detail: format!("element {e}: vertex {v} is out of range ({vertex_count} vertices)"),
+            });
+        }
+    }
+    let mut vertices = Vec::new();
+    let mut nodes = None;
+    if lines.peek() == Some("nodes") {
+        lines.next("nodes")?;
+        let space = read_space(lines)?;
+        let values = read_values(lines, true)?;
+        nodes = Some(GridFunction { space, values });
+    } else {
+        let sdim: usize = lines.number("the space dimension")?;
+        if !(1..=3).contains(&sdim) {
+            return Err(err(path, lines.line_number(), format!("space dimension {sdim}")));
+        }
+        for v in 0..vertex_count {
+            let (n, l) = lines.next("a vertex")?;
+            let c: Vec<f64> = l
+                .split_whitespace()
+                .map(|t| {
+                    t.parse::<f64>().map_err(|_| err(path, n, format!("vertex {v}: {t:?} is not a number")))
+                })
+                .collect::<Result<_, _>>()?;
+            if c.len() != sdim || c.iter().any(|x| !x.is_finite()) {
+                return Err(err(path, n, format!("vertex {v}: {} finite coordinates expected", sdim)));
+            }
+            vertices.push(std::array::from_fn(|k| c.get(k).copied().unwrap_or(0.0)));
+        }
+    }
+    Ok(MfemMesh { path: path.to_path_buf(), dim, elements, vertices, vertex_count, nodes })
+}
+
+/// Reads an MFEM mesh file.
+pub fn read_mesh(path: &Path) -> Result<MfemMesh, SpectralError> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| SpectralError::File { path: path.to_path_buf(), detail: e.to_string() })?;
+    let mut lines = Lines::new(path, &text);
+    read_mesh_lines(path, &mut lines)
+}
+
+/// Reads a GridFunction file.
+pub fn read_grid_function(path: &Path) -> Result<GridFunction, SpectralError> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| SpectralError::File { path: path.to_path_buf(), detail: e.to_string() })?;
+    let mut lines = Lines::new(path, &text);
+    let space = read_space(&mut lines)?;
+    let values = read_values(&mut lines, false)?;
+    Ok(GridFunction { space, values })
+}
+
+/// Reads a GLVis "solution" stream saved to a file: the keyword `solution`, a mesh, then a
+/// GridFunction.
+pub fn read_solution(path: &Path) -> Result<(MfemMesh, GridFunction), SpectralError> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| SpectralError::File { path: path.to_path_buf(), detail: e.to_string() })?;
+    let mut lines = Lines::new(path, &text);
+    lines.expect("solution")?;
+    let mesh = read_mesh_lines(path, &mut lines)?;
+    let space = read_space(&mut lines)?;
+    let values = read_values(&mut lines, false)?;
+    Ok((mesh, GridFunction { space, values }))
+}
+
+/// The vertices of an MFEM quadrilateral (counter-clockwise from (0, 0)) or hexahedron (bottom
+/// face counter-clockwise, then the top) in lexicographic order (ξ fastest).
+fn corners_lexicographic(element: &[usize]) -> Vec<usize> {
+    let q = |v: &[usize]| [v[0], v[1], v[3], v[2]];
+    let mut out = q(&element[..4]).to_vec();
+    if element.len() == 8 {
+        out.extend(q(&element[4..8]));
+    }
+    out
+}
+
+/// The values of `gf`'s component `c` at global DOF `dof`.
+fn component(gf: &GridFunction, dofs: usize, dof: usize, c: usize) -> f64 {
+    if gf.space.by_vdim {
+        gf.values[dof * gf.space.vdim + c]
+    } else {
+        gf.values[c * dofs + dof]
+    }
+}
+
+/// Builds the crate's mesh from an MFEM mesh and scalar GridFunctions on it (`fields`: a name
+/// and one GridFunction per time step). Checks every count against the space it claims.
+pub fn to_spectral(
+    mesh: &MfemMesh,
+    fields: &[(String, Vec<GridFunction>)],
+) -> Result<SpectralMesh, SpectralError> {
+    let path = &mesh.path;
+    let file = |detail: String| SpectralError::File { path: path.clone(), detail };
+    let shape = if mesh.dim == 2 { Shape::Quadrilateral } else { Shape::Hexahedron };
+    let topology = Topology::new(mesh);
+    // Geometry.
+    let (geometry, points) = match &mesh.nodes {
+        None => {
+            let basis = Basis1d::new(NodeSet::Equispaced, 1)?;
+            let points = mesh
+                .elements
+                .iter()
+                .flat_map(|el| corners_lexicographic(el).into_iter().map(|v| mesh.vertices[v]))
+                .collect();
+            (basis, points)
+        }
+        Some(nodes) => {
+            let c = &nodes.space.collection;
+            if c.dim != mesh.dim {
+                return Err(file(format!(
+                    "nodes: collection {} is {}D on a {}D mesh",
+                    c.name, c.dim, mesh.dim
+                )));
+            }
+            let dofs = topology.dof_count(c)?;
+            let sdim = nodes.space.vdim;
+            if !(2..=3).contains(&sdim) || nodes.values.len() != dofs * sdim {
+                return Err(file(format!(
+                    "nodes: {} values for {dofs} DOFs × VDim {sdim} of {}",
+                    nodes.values.len(),
+                    c.name
+                )));
+            }
+            let mut points = Vec::with_capacity(mesh.elements.len() * (c.order + 1).pow(mesh.dim));
+            for e in 0..mesh.elements.len() {
+                for d in topology.element_dofs(c, e) {
+                    points.push(std::array::from_fn(|k| {
+                        if k < sdim {
+                            component(nodes, dofs, d, k)
+                        } else {
+                            0.0
+                        }
+                    }));
+                }
+            }
+            (Basis1d::new(c.set, c.order)?, points)
+        }
+    };
+    // Fields: all steps on one collection.
+    let mut out_fields = Vec::new();
+    let mut basis: Option<Basis1d> = None;
+    for (name, steps) in fields {
+        let mut values = Vec::new();
+        for (k, gf) in steps.iter().enumerate() {
+            let c = &gf.space.collection;
+            if gf.space.vdim != 1 {
+                return Err(file(format!(
+                    "field {name:?} step {k}: VDim {} (scalar fields only)",
+                    gf.space.vdim
+                )));
+            }
+            if c.dim != mesh.dim {
+                return Err(file(format!(
+                    "field {name:?}: collection {} is {}D on a {}D mesh",
+                    c.name, c.dim, mesh.dim
+                )));
+            }
+            let b = Basis1d::new(c.set, c.order)?;
+            match &basis {
+                Some(prev) if prev.set != b.set || prev.order != b.order => {
+                    return Err(file(format!(
+                    "field {name:?}: collection {} differs from the first field's (one basis per data set)",
+                    c.name
+                )))
+                }
+                _ => basis = Some(b),
+            }
+            let dofs = topology.dof_count(c)?;
+            if gf.values.len() != dofs {
+                return Err(file(format!(
+                    "field {name:?} step {k}: {} values for {dofs} DOFs of {}",
+                    gf.values.len(),
+                    c.name
+                )));
+            }
+            let mut v = Vec::with_capacity(mesh.elements.len() * (c.order + 1).pow(mesh.dim));
+            for e in 0..mesh.elements.len() {
+                v.extend(topology.element_dofs(c, e).into_iter().map(|d| gf.values[d]));
+            }
+            values.push(v);
+        }
+        out_fields.push(Field {
+            name: name.clone(),
+            times: (0..values.len()).map(|k| k as f64).collect(),
+            steps: values,
+        });
+    }
+    let basis = basis.ok_or_else(|| file("no fields".into()))?;
+    SpectralMesh::new(shape, geometry, basis, points, out_fields).map_err(|e| file(e.to_string()))
+}
+
+/// MFEM's local edges of a quadrilateral (`Geometry::Constants<SQUARE>::Edges`).
+const QUAD_EDGES: [[usize; 2]; 4] = [[0, 1], [1, 2], [2, 3], [3, 0]];
+/// MFEM's local edges of a hexahedron.
+const HEX_EDGES: [[usize; 2]; 12] =
+    [[0, 1], [1, 2], [3, 2], [0, 3], [4, 5], [5, 6], [7, 6], [4, 7], [0, 4], [1, 5], [2, 6], [3, 7]];
+/// MFEM's local faces of a hexahedron (`FaceVert`), each walked from its first vertex.
+const HEX_FACES: [[usize; 4]; 6] =
+    [[3, 2, 1, 0], [0, 1, 5, 4], [1, 2, 6, 5], [2, 3, 7, 6], [3, 0, 4, 7], [4, 5, 6, 7]];
+/// The corner (0 or 1 per axis) of each local vertex in the reference cell.
+const CORNERS: [[usize; 3]; 8] =
+    [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [0, 0, 1], [1, 0, 1], [1, 1, 1], [0, 1, 1]];
+
+/// The mesh's entities as MFEM numbers them: edges and faces by first appearance, walking
+/// the elements in order and each element's local edges (faces) in MFEM's order; a global
+/// edge runs from its lower to its higher vertex id; a global face keeps the vertex order of
+/// the first element that has it.
+struct Topology<'a> {
+    mesh: &'a MfemMesh,
+    /// Per element, its local edges' global numbers.
+    element_edges: Vec<Vec<usize>>,
+    /// Per element, its local faces' global numbers (hexahedra).
+    element_faces: Vec<Vec<usize>>,
+    /// Each global face's vertices in its own frame.
+    faces: Vec<[usize; 4]>,
+    edges: usize,
+}
+
+impl<'a> Topology<'a> {
+    fn new(mesh: &'a MfemMesh) -> Self {
+        let hex = mesh.dim == 3;
+        let local_edges: &[[usize; 2]] = if hex { &HEX_EDGES } else { &QUAD_EDGES };
+        let mut edge_ids = std::collections::HashMap::new();
+        let mut face_ids = std::collections::HashMap::new();
+        let mut faces = Vec::new();
+        let mut element_edges = Vec::with_capacity(mesh.elements.len());
+        let mut element_faces = Vec::with_capacity(mesh.elements.len());
+        for v in &mesh.elements {
+            element_edges.push(
+                local_edges
+                    .iter()
+                    .map(|&[a, b]| {
+                        let key = (v[a].min(v[b]), v[a].max(v[b]));
+                        let next = edge_ids.len();
+                        *edge_ids.entry(key).or_insert(next)
+                    })
+                    .collect(),
+            );
+            if hex {
+                element_faces.push(
+                    HEX_FACES
+                        .iter()
+                        .map(|f| {
+                            let verts = f.map(|k| v[k]);
+                            let mut key = verts;
+                            key.sort_unstable();
+                            let next = faces.len();
+                            let id = *face_ids.entry(key).or_insert(next);
+                            if id == next {
+                                faces.push(verts);
+                            }
+                            id
+                        })
+                        .collect(),
+                );
+            }
+        }
+        Self { mesh, element_edges, element_faces, faces, edges: edge_ids.len() }
+    }
+
+    /// Global DOFs of a space of collection `c`.
+    fn dof_count(&self, c: &Collection) -> Result<usize, SpectralError> {
+        let (p, d) = (c.order, self.mesh.dim);
+        let elements = self.mesh.elements.len();
+        if !c.continuous {
+            return Ok(elements * (p + 1).pow(d));
+        }
+        if c.set == NodeSet::Gauss {
+            return Err(SpectralError::File {
+                path: self.mesh.path.clone(),
+                detail: format!("{}: an H1 space needs nodes at the endpoints", c.name),
+            });
+        }
+        let n = p - 1;
+        Ok(self.mesh.vertex_count + self.edges * n + self.faces.len() * n * n + elements * n.pow(d))
+    }
+
+    /// Element `e`'s global DOFs of collection `c` in lexicographic order (ξ fastest).
+    fn element_dofs(&self, c: &Collection, e: usize) -> Vec<usize> {
+        let p = c.order;
+        let d = self.mesh.dim as usize;
+        let m = p + 1;
+        let count = m.pow(d as u32);
+        if !c.continuous {
+            return (0..count).map(|k| e * count + k).collect();
+        }
+        let n = p - 1;
+        let v = &self.mesh.elements[e];
+        let nv = self.mesh.vertex_count;
+        let edge_base = nv;
+        let face_base = edge_base + self.edges * n;
+        let body_base = face_base + self.faces.len() * n * n;
+        let corners = if d == 3 { 8 } else { 4 };
+        let corner_of = |k: usize| [CORNERS[k][0] * p, CORNERS[k][1] * p, CORNERS[k][2] * p];
+        let local_edges: &[[usize; 2]] = if d == 3 { &HEX_EDGES } else { &QUAD_EDGES };
+        (0..count)
+            .map(|flat| {
+                let ijk = [flat % m, (flat / m) % m, if d == 3 { flat / (m * m) } else { 0 }];
+                let on = |a: usize| ijk[a] == 0 || ijk[a] == p;
+                let boundary_axes = (0..d).filter(|&a| on(a)).count();
+                match d - boundary_axes {
+                    // A vertex.
+                    0 => v[(0..corners).find(|&k| corner_of(k) == ijk).expect("a corner")],
+                    // On an edge: the local edge whose ends agree on the fixed axes.
+                    1 => {
+                        let free = (0..d).find(|&a| !on(a)).expect("one free axis");
+                        let (k, &[a, b]) = local_edges
+                            .iter()
+                            .enumerate()
+                            .find(|(_, [a, b])| {
+                                let (ca, cb) = (corner_of(*a), corner_of(*b));
+                                (0..d).all(|x| x == free || (ca[x] == ijk[x] && cb[x] == ijk[x]))
+                            })
+                            .expect("an edge");
+                        // Position along the local edge, from its first vertex.
+                        let t = ijk[free].abs_diff(corner_of(a)[free]);
+                        let j = t - 1;
+                        let j = if v[a] < v[b] { j } else { n - 1 - j };
+                        edge_base + self.element_edges[e][k] * n + j
+                    }
+                    // On a face (hexahedra): the local face whose corners share the fixed axis.
+                    2 if d == 3 => {
+                        let fixed = (0..3).find(|&a| on(a)).expect("one fixed axis");
+                        let (k, f) = HEX_FACES
+                            .iter()
+                            .enumerate()
+                            .find(|(_, f)| f.iter().all(|&c| corner_of(c)[fixed] == ijk[fixed]))
+                            .expect("a face");
+                        // The point's coordinates (s, t) ∈ [0, p]² in the global face's frame:
+                        // each global corner's position in the lattice, then the affine frame.
+                        let global = self.faces[self.element_faces[e][k]];
+                        let lattice = |g: usize| {
+                            corner_of(f[f.iter().position(|&c| v[c] == g).expect("shared vertex")])
+                        };
+                        let (o, s_end, t_end) = (lattice(global[0]), lattice(global[1]), lattice(global[3]));
+                        let along = |end: [usize; 3]| {
+                            let axis = (0..3).find(|&x| end[x] != o[x]).expect("an edge of the face");
+                            ijk[axis].abs_diff(o[axis])
+                        };
+                        let (s, t) = (along(s_end), along(t_end));
+                        face_base + self.element_faces[e][k] * n * n + (s - 1) + (t - 1) * n
+                    }
+                    // Interior: lexicographic over 1..p−1.
+                    _ => {
+                        let inner: usize = (0..d).rev().fold(0, |acc, a| acc * n + (ijk[a] - 1));
+                        body_base + e * n.pow(d as u32) + inner
+                    }
+                }
+            })
+            .collect()
+    }
+}
