@@ -413,3 +413,51 @@ fn cut_planes_through_curved_hexahedra_are_pixel_exact() {
         }
     }
 }
+
+/// A 2D field as a height field: every covered pixel shows the polynomial at a reference point
+/// whose lifted point (x, y, scale · f) projects within ½ pixel of the pixel centre.
+#[test]
+fn height_fields_show_the_field_within_half_a_pixel() {
+    let gpu = common::gpu();
+    let mesh = Arc::new(annulus(2, 4, 3, 5, NodeSet::GaussLobatto).unwrap());
+    let size = (256u32, 192u32);
+    let mut r = SpectralRenderer::new(&gpu, mesh.clone(), &Colormap::viridis()).unwrap();
+    let view = SpectralView { overdraw: false, height: Some(0.2), ..SpectralView::default() };
+    let target = RenderTarget::new(&gpu, "height", size.0, size.1, ColorFormat::Rgba32F).unwrap();
+    let Pixels::Rgba32F(pixels) = r.render(&target, &view).unwrap() else { unreachable!() };
+    // The camera the renderer fits to the lifted box.
+    let (lo, hi) = r.range(&view);
+    let (mut a, mut b) = ([f64::MAX; 3], [f64::MIN; 3]);
+    for p in &mesh.points {
+        for c in 0..2 {
+            a[c] = a[c].min(p[c]);
+            b[c] = b[c].max(p[c]);
+        }
+    }
+    a[2] = 0.2 * lo;
+    b[2] = 0.2 * hi;
+    let camera = galerkin::spectral::render::camera_for_box(a, b);
+    let (mut covered, mut worst, mut worst_value) = (0, 0.0f64, 0.0f64);
+    for py in 0..size.1 {
+        for px in 0..size.0 {
+            let t = &pixels[4 * (py * size.0 + px) as usize..][..4];
+            if t[3].is_nan() {
+                continue;
+            }
+            covered += 1;
+            let (e, q) = (t[3] as usize, [f64::from(t[1]), f64::from(t[2])]);
+            let (x, _) = mesh.map(e, q[0], q[1]);
+            let f = mesh.value(0, 0, e, q[0], q[1]);
+            let (sx, sy) = camera.project(glam::DVec3::new(x[0], x[1], 0.2 * f), size.0, size.1);
+            worst = worst.max((sx - (f64::from(px) + 0.5)).hypot(sy - (f64::from(py) + 0.5)));
+            let bound = galerkin::spectral::reference::rounding_bound(&mesh, 0, 0, e, q);
+            worst_value = worst_value.max((f64::from(t[0]) - f).abs() / bound);
+        }
+    }
+    eprintln!(
+        "height field: {covered} pixels, farthest {worst:.3} px, value error {worst_value:.3} of its bound"
+    );
+    assert!(covered > 2000, "{covered}");
+    assert!(worst <= 0.5 + 0.01, "a pixel shows a point {worst} px away");
+    assert!(worst_value <= 1.0);
+}

@@ -138,6 +138,24 @@ float spectral_value(uint e, vec2 r) {
     return v;
 }
 
+// The field value of element e at r and its derivatives along xi and eta: (f, f_xi, f_eta).
+vec3 spectral_value_gradient(uint e, vec2 r) {
+    float a[SPECTRAL_MAX_NODES], da[SPECTRAL_MAX_NODES], b[SPECTRAL_MAX_NODES], db[SPECTRAL_MAX_NODES];
+    spectral_field_eval(r.x, true, a, da);
+    spectral_field_eval(r.y, true, b, db);
+    const uint m = SPECTRAL_FIELD_ORDER + 1u;
+    uint base = e * SPECTRAL_VALUE_VEC4S;
+    vec3 v = vec3(0.0);
+    for (uint q = 0u; q < SPECTRAL_VALUE_VEC4S; ++q) {
+        vec4 f = spectral_values[base + q];
+        for (uint c = 0u; c < 4u; ++c) {
+            uint k = 4u * q + c;
+            if (k < m * m) v += f[c] * vec3(a[k % m] * b[k / m], da[k % m] * b[k / m], a[k % m] * db[k / m]);
+        }
+    }
+    return v;
+}
+
 // Newton's method for the reference point of planar element e that maps to p, from r; returns
 // false if it diverged. Stops when the step is below 1e-6 (a few f32 ulps of [0, 1]).
 bool spectral_inverse_map(uint e, vec2 p, inout vec2 r) {

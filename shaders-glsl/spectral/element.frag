@@ -13,6 +13,7 @@
 #include "spectral_push.glsl"
 #include "colormap.glsl"
 #include "phong.glsl"
+#include "spectral_patches.glsl"
 
 layout(location = 0) in vec2 in_reference;
 layout(location = 1) flat in uint element;
@@ -56,6 +57,13 @@ void main() {
     if (surface && mode != SPECTRAL_MODE_EDGE_LINES) {
         vec3 dxi, deta;
         spectral_map(element, r, dxi, deta);
+        float height = patches[element].curvature.y;
+        if (height != 0.0) {
+            // The height field's exact normal: the tangents lifted by scale * (f_xi, f_eta).
+            vec3 g = spectral_value_gradient(element, r);
+            dxi.z += height * g.y;
+            deta.z += height * g.z;
+        }
         vec3 n = normalize(cross(dxi, deta));
         vec3 view = normalize(pc.pixel_to_world.xyz - world);
         vec3 light = normalize(view + vec3(0.2, 0.3, 0.5));

@@ -4,6 +4,7 @@
 // field is evaluated here, at the node, and interpolated (the seed's baseline).
 #include "spectral_element.glsl"
 #include "spectral_push.glsl"
+#include "spectral_patches.glsl"
 
 layout(location = 0) in vec3 position;
 layout(location = 1) in vec2 reference;
@@ -14,9 +15,13 @@ layout(location = 2) out float out_value;
 layout(location = 3) out vec3 out_world;
 
 void main() {
-    gl_Position = spectral_clip(position);
+    // Height fields lift every vertex (tessellated or on an edge line) to z = scale * f.
+    vec3 x = position;
+    float height = patches[element].curvature.y;
+    if (pc.flags.w == SPECTRAL_SURFACE && height != 0.0) x.z = height * spectral_value(element, reference);
+    gl_Position = spectral_clip(x);
     out_reference = reference;
     out_element = element;
     out_value = pc.flags.z == SPECTRAL_MODE_PER_VERTEX ? spectral_value(element, reference) : 0.0;
-    out_world = position;
+    out_world = x;
 }

@@ -19,9 +19,7 @@
 #include "spectral_push.glsl"
 
 layout(local_size_x = 64) in;
-// Per element: (centre, radius) of a sphere containing it, (K, 0, 0, 0).
-struct SpectralPatch { vec4 centre_radius; vec4 curvature; };
-layout(std430, set = 0, binding = 3) readonly buffer Patches { SpectralPatch patches[]; };
+#include "spectral_patches.glsl"
 // The draw's VkDrawIndirectCommand (vertex count first), its capacity, elements skipped.
 layout(std430, set = 0, binding = 4) buffer Draw { uint vertex_count; uint instances; uint first_vertex; uint first_instance; uint capacity; uint skipped; } draw;
 struct DrawVertex { float x, y, z, xi, eta; uint element; };
@@ -66,12 +64,15 @@ void main() {
     barrier();
     uint l = level;
     uint n = 6u * l * l;
+    float height = e < elements ? patches[e].curvature.y : 0.0;
     uint points = (l + 1u) * (l + 1u);
     bool shared_grid = points <= GRID_POINTS;
     if (shared_grid) {
         for (uint k = gl_LocalInvocationID.x; k < points; k += 64u) {
             vec3 dxi, deta;
-            grid[k] = spectral_map(e, vec2(k % (l + 1u), k / (l + 1u)) / float(l), dxi, deta);
+            vec2 r = vec2(k % (l + 1u), k / (l + 1u)) / float(l);
+            grid[k] = spectral_map(e, r, dxi, deta);
+            if (height != 0.0) grid[k].z = height * spectral_value(e, r);
         }
     }
     barrier();
@@ -86,6 +87,7 @@ void main() {
         } else {
             vec3 dxi, deta;
             x = spectral_map(e, r, dxi, deta);
+            if (height != 0.0) x.z = height * spectral_value(e, r);
         }
         vertices[base + k] = DrawVertex(x.x, x.y, x.z, r.x, r.y, e);
     }

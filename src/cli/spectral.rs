@@ -87,6 +87,10 @@ pub struct RenderArgs {
     /// Colour at the nodes, interpolated (the seed's baseline) instead of per pixel.
     #[arg(long)]
     pub per_vertex: bool,
+    /// Planar meshes: show the field as a height field z = SCALE · f, lit with its exact
+    /// normals (`--height` alone: the field's range becomes a quarter of the mesh's width).
+    #[arg(long, value_name = "SCALE", num_args = 0..=1, default_missing_value = "0", allow_negative_numbers = true)]
+    pub height: Option<f64>,
     /// Hexahedral meshes: a cut plane, `x=V`, `y=V`, `z=V` or `A,B,C,D` (the plane
     /// A x + B y + C z = D); repeat for several (at most 8). Default: z through the middle.
     #[arg(long = "cut", value_name = "PLANE", value_parser = parse_plane)]
@@ -104,7 +108,7 @@ pub struct RenderArgs {
     pub out: PathBuf,
     /// Open the interactive viewer instead of writing an image: space plays/pauses the time
     /// steps, `.`/`,` step, l log scale, p palette, i/I more/fewer iso-lines, e edges, v
-    /// per-vertex colour, r narrows the range to its middle half, R restores it; cut planes: n
+    /// per-vertex colour, h height field (planar meshes), r narrows the range to its middle half, R restores it; cut planes: n
     /// adds, c selects, j/k move, o/O turn about z, u/U tilt, x deletes; arrows orbit
     /// (surfaces, cut planes), +/- zoom, S screenshot, Esc quits.
     #[arg(long)]
@@ -215,6 +219,7 @@ pub fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
         per_vertex: args.per_vertex,
         max_error_px: args.max_error,
         cuts: args.cuts.clone(),
+        height: args.height,
         ..SpectralView::default()
     };
     if args.view {
@@ -281,7 +286,7 @@ pub fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
             "cut planes: section rectangles cut out per pixel"
         } else if args.per_vertex {
             "node grids"
-        } else if mesh.is_planar() {
+        } else if mesh.is_planar() && args.height.is_none() {
             "proxies"
         } else {
             "tessellated on the device"

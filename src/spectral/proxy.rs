@@ -183,22 +183,46 @@ fn edges(mesh: &SpectralMesh, e: usize, out: &mut Vec<DrawVertex>) {
     }
 }
 
-/// Per element, for the surface tessellation (`surface.tesc`): a sphere containing the element
-/// (centre and radius of its Bernstein control net, whose convex hull contains it) and
+/// Per element, for the surface tessellation (`tessellate.comp`): a sphere containing the
+/// element (centre and radius of its Bernstein control net, whose convex hull contains it) and
 /// K = max(|x_ξξ|, |x_ηη|) + |x_ξη| bounded on the whole element by the control net's
 /// differences: |x_ξξ| ≤ g(g − 1) max|B_{i+2,j} − 2B_{i+1,j} + B_{ij}|, likewise η, and
-/// |x_ξη| ≤ g² max|B_{i+1,j+1} − B_{i+1,j} − B_{i,j+1} + B_{ij}|.
+/// |x_ξη| ≤ g² max|B_{i+1,j+1} − B_{i+1,j} − B_{i,j+1} + B_{ij}|. The last float is the height
+/// scale (0: the geometry itself).
 pub fn surface_patches(mesh: &SpectralMesh) -> Vec<[f32; 8]> {
-    let g = mesh.geometry.order;
+    patches_of(mesh, mesh.geometry.order, 0.0, |e, xi, eta| mesh.map(e, xi, eta).0)
+}
+
+/// [`surface_patches`] of the height field of a planar mesh: the surface
+/// (x(ξ, η), y(ξ, η), `scale` · f(ξ, η)) of `field` at `step`, a vector polynomial of degree
+/// max(g, n) per axis.
+pub fn height_patches(mesh: &SpectralMesh, field: usize, step: usize, scale: f64) -> Vec<[f32; 8]> {
+    let order = mesh.geometry.order.max(mesh.basis.order);
+    patches_of(mesh, order, scale, |e, xi, eta| {
+        let (x, _) = mesh.map(e, xi, eta);
+        [x[0], x[1], scale * mesh.value(field, step, e, xi, eta)]
+    })
+}
+
+/// The bounds of the surface `surface(e, ξ, η)`, a polynomial of degree `order` per axis: its
+/// Bernstein control net from its values at the order's GLL points.
+fn patches_of(
+    mesh: &SpectralMesh,
+    order: usize,
+    scale: f64,
+    surface: impl Fn(usize, f64, f64) -> [f64; 3],
+) -> Vec<[f32; 8]> {
+    let g = order;
     let m = g + 1;
-    let bernstein = Basis1d::new(NodeSet::Bernstein, g).expect("same order as the geometry");
+    let bernstein = Basis1d::new(NodeSet::Bernstein, g).expect("an order of a mesh basis");
+    let nodes = super::basis::gauss_lobatto_nodes(g);
     (0..mesh.elements())
         .map(|e| {
-            let pts = mesh.element_points(e);
+            let samples: Vec<[f64; 3]> = (0..m * m).map(|k| surface(e, nodes[k % m], nodes[k / m])).collect();
             let per: Vec<Vec<f64>> = (0..3)
                 .map(|c| {
-                    let v: Vec<f64> = pts.iter().map(|p| p[c]).collect();
-                    bernstein.tensor_interpolate(&mesh.geometry.nodes, &v, 2)
+                    let v: Vec<f64> = samples.iter().map(|p| p[c]).collect();
+                    bernstein.tensor_interpolate(&nodes, &v, 2)
                 })
                 .collect();
             let b = |i: usize, j: usize| [per[0][j * m + i], per[1][j * m + i], per[2][j * m + i]];
@@ -238,7 +262,7 @@ pub fn surface_patches(mesh: &SpectralMesh) -> Vec<[f32; 8]> {
                 // Rounded up so the f32 sphere still contains the element.
                 (radius * (1.0 + 1e-6)) as f32,
                 (k * (1.0 + 1e-6)) as f32,
-                0.0,
+                scale as f32,
                 0.0,
                 0.0,
             ]

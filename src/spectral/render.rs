@@ -64,6 +64,11 @@ pub fn fit_camera(mesh: &SpectralMesh) -> Camera {
             hi[c] = hi[c].max(p[c]);
         }
     }
+    camera_for_box(lo, hi)
+}
+
+/// A camera that shows the box [`lo`, `hi`] (its bounding sphere) from above the x–y diagonal.
+pub fn camera_for_box(lo: [f64; 3], hi: [f64; 3]) -> Camera {
     let centre: [f64; 3] = std::array::from_fn(|c| 0.5 * (lo[c] + hi[c]));
     let radius = (0..3).map(|c| (hi[c] - lo[c]).powi(2)).sum::<f64>().sqrt().max(1e-12) * 0.5;
     let fov: f64 = 40.0;
@@ -177,6 +182,10 @@ pub struct SpectralView {
     pub camera: Option<Camera>,
     /// The surface tessellation's screen-space error budget in pixels.
     pub max_error_px: f64,
+    /// Planar meshes: show the field as a height field z = scale · f (lit with its exact
+    /// normals, seen through `camera`) instead of flat. `Some(0.0)`: a scale that makes the
+    /// field's range a quarter of the mesh's size.
+    pub height: Option<f64>,
     /// Cut planes (n_x, n_y, n_z, d): the points with n · x = d, through hexahedral meshes
     /// (at most [`MAX_CUT_PLANES`]; the normal need not be unit). Empty: one plane z = the
     /// middle of the mesh.
@@ -198,6 +207,7 @@ impl Default for SpectralView {
             view: None,
             camera: None,
             max_error_px: 0.5,
+            height: None,
             cuts: Vec::new(),
         }
     }
@@ -374,6 +384,9 @@ pub struct SpectralRenderer {
     edges: Buffer<DrawVertex>,
     _patches: Buffer<[f32; 8]>,
     patch_bounds: Vec<[f32; 8]>,
+    /// What the uploaded patches describe: the geometry (`None`) or a height field
+    /// (field, step, scale bits).
+    patches_for: Option<(usize, usize, u64)>,
     counts: [u32; 3],
     planar: bool,
     colormap: ColormapTexture,
@@ -448,6 +461,7 @@ impl SpectralRenderer {
             edges,
             _patches: patches,
             patch_bounds,
+            patches_for: None,
             counts,
             planar,
             colormap,
@@ -483,7 +497,8 @@ impl SpectralRenderer {
     /// Triangles drawn per frame in per-pixel mode (planar: the proxies; surfaces: at most
     /// this many in the last frame's tessellation) and per-vertex mode, and edge lines.
     pub fn primitive_counts(&self) -> [u64; 3] {
-        let per_pixel = if self.planar { u64::from(self.counts[0]) / 3 } else { self.tessellated / 3 };
+        let flat = self.planar && self.patches_for.is_none();
+        let per_pixel = if flat { u64::from(self.counts[0]) / 3 } else { self.tessellated / 3 };
         [per_pixel, u64::from(self.counts[1]) / 3, u64::from(self.counts[2]) / 2]
     }
 
@@ -556,14 +571,61 @@ impl SpectralRenderer {
         Ok(())
     }
 
+    /// The height scale `view` asks for (planar meshes), its automatic value resolved.
+    pub fn height_scale(&mut self, view: &SpectralView) -> Option<f64> {
+        let scale = view.height.filter(|_| self.planar)?;
+        if scale != 0.0 {
+            return Some(scale);
+        }
+        let (lo, hi) = self.range(view);
+        let size = self.mesh.points.iter().fold((f64::MAX, f64::MIN), |(a, b), p| (a.min(p[0]), b.max(p[0])));
+        Some(0.25 * (size.1 - size.0) / (hi - lo).max(1e-300))
+    }
+
+    /// Uploads the patches `view` needs: the height field's when it shows one.
+    fn patches_for_view(&mut self, view: &SpectralView) -> Result<()> {
+        let want = self.height_scale(view).map(|s| (view.field, view.step, s.to_bits()));
+        if want == self.patches_for || self.patch_bounds.is_empty() {
+            return Ok(());
+        }
+        self.patch_bounds = match want {
+            Some((f, step, s)) => proxy::height_patches(&self.mesh, f, step, f64::from_bits(s)),
+            None => proxy::surface_patches(&self.mesh),
+        };
+        self._patches.upload(&self.gpu, 0, &self.patch_bounds).map_err(dev("uploading the patches"))?;
+        self.patches_for = want;
+        Ok(())
+    }
+
+    /// A camera that shows the height field of `view` (its box, z from the scaled range).
+    fn height_camera(&mut self, view: &SpectralView, scale: f64) -> Camera {
+        let (lo, hi) = self.range(view);
+        let (mut a, mut b) = ([f64::MAX; 3], [f64::MIN; 3]);
+        for p in &self.mesh.points {
+            for c in 0..2 {
+                a[c] = a[c].min(p[c]);
+                b[c] = b[c].max(p[c]);
+            }
+        }
+        a[2] = (scale * lo).min(scale * hi);
+        b[2] = (scale * lo).max(scale * hi);
+        camera_for_box(a, b)
+    }
+
     fn push(&mut self, target: &RenderTarget, view: &SpectralView) -> SpectralPush {
         let e = target.extent();
         let (lo, hi) = self.range(view);
-        let (view_proj, pixel_to_world) = if self.planar {
+        let height = self.height_scale(view);
+        let flat = self.planar && height.is_none();
+        let (view_proj, pixel_to_world) = if flat {
             let v2 = view.view.unwrap_or_else(|| View2d::fit(&self.mesh, e.width, e.height));
             (v2.view_proj(e.width, e.height), v2.pixel_to_world(e.width, e.height))
         } else {
-            let camera = view.camera.unwrap_or_else(|| fit_camera(&self.mesh));
+            let camera = match (view.camera, height) {
+                (Some(c), _) => c,
+                (None, Some(s)) => self.height_camera(view, s),
+                (None, None) => fit_camera(&self.mesh),
+            };
             let aspect = target.aspect();
             let tan_half = (0.5 * camera.fov_y_degrees.to_radians()).tan();
             // Pixels per world unit at view depth 1, times 1 + the tangent of the half-diagonal
@@ -582,7 +644,7 @@ impl SpectralRenderer {
                 u32::from(target.format() == ColorFormat::Rgba32F),
                 u32::from(view.log),
                 if view.per_vertex { MODE_PER_VERTEX } else { MODE_PER_PIXEL },
-                u32::from(!self.planar),
+                u32::from(!flat),
             ],
         }
     }
@@ -839,8 +901,11 @@ impl SpectralRenderer {
         }
         self.show(view.field, view.step)?;
         self.pipelines_for(target.format(), target)?;
+        self.patches_for_view(view)?;
         let push = self.push(target, view);
-        let surface = !self.planar && (!view.per_vertex || view.per_vertex_on_tessellation);
+        let lifted = !self.planar || push.flags[3] == 1;
+        // A height field is always drawn from the tessellation (the node grids are flat).
+        let surface = lifted && (!view.per_vertex || view.per_vertex_on_tessellation || self.planar);
         if surface {
             self.tessellator_for(&push)?;
         }
@@ -848,7 +913,7 @@ impl SpectralRenderer {
         let extent = target.extent();
         let (edges, edge_count) = (self.edges.raw(), self.counts[2]);
         let (overdraw, mesh_lines) = (view.overdraw, view.edges);
-        let offsets = if self.planar { PLANAR_OFFSETS } else { SURFACE_OFFSETS };
+        let offsets = if lifted { SURFACE_OFFSETS } else { PLANAR_OFFSETS };
         let gpu = &self.gpu;
         let tess = self.tessellator.as_ref().filter(|_| surface);
         let capacity = self.tessellated as u32;

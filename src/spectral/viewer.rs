@@ -1,7 +1,8 @@
 //! Spectral elements in the interactive viewer (feature `viewer`), seed 002's "scale the data
 //! to look at one region in detail" and "animated over time steps" made interactive. Keys:
 //! space plays and pauses the time steps, `.` and `,` step; `l` log scale; `p` next palette;
-//! `i` more iso-lines, `I` fewer; `e` element edges; `v` per-vertex colour; `r` narrows the
+//! `i` more iso-lines, `I` fewer; `e` element edges; `v` per-vertex colour; `h` height field
+//! (planar meshes); `r` narrows the
 //! colour range to its middle half, `R` restores it. Cut planes (hexahedral meshes): `n` adds
 //! a plane (through the middle, the next axis), `c` selects the next plane, `j`/`k` move the
 //! selected plane along its normal by 1/50 of the mesh, `o`/`O` turn its normal by 15° about
@@ -210,6 +211,9 @@ impl ViewerContent for SpectralContent {
             "." => self.view.step = (self.view.step + 1) % steps,
             "," => self.view.step = (self.view.step + steps - 1) % steps,
             "l" | "L" => self.view.log = !self.view.log,
+            "h" | "H" if self.mesh.is_planar() => {
+                self.view.height = if self.view.height.is_some() { None } else { Some(0.0) };
+            }
             "i" => self.view.isolines += 2,
             "I" => self.view.isolines = self.view.isolines.saturating_sub(2),
             "e" | "E" => self.view.edges = !self.view.edges,
