@@ -9,6 +9,11 @@ use std::collections::HashMap;
 use std::fmt::Write;
 use std::path::PathBuf;
 
+mod common;
+
+use std::sync::Arc;
+
+use galerkin::render::{ColorFormat, Colormap, Pixels, RenderTarget};
 use galerkin::spectral::basis::gauss_lobatto_nodes;
 use galerkin::spectral::{load, mfem, Shape};
 
@@ -334,4 +339,29 @@ fn collection_names_and_malformed_files() {
     // A mesh without fields.
     let e = load(&mesh_path, &[]).unwrap_err().to_string();
     assert!(e.contains("--gf"), "{e}");
+}
+
+/// The loaded curved-node H1 quadrilaterals render pixel-exactly too (every covered pixel
+/// against the f64 pull-back, within its f32 bound; none missing).
+#[test]
+fn mfem_quadrilaterals_render_per_pixel() {
+    let gpu = common::gpu();
+    let p = 3;
+    let (elements, vertices) = two_cells(false);
+    let dofs = h1_positions(&elements, &vertices, p, false);
+    let mesh_path = scratch("render.mesh");
+    std::fs::write(&mesh_path, mesh_text(&elements, &vertices, false, Some(("H1_2D_P3", &dofs, true))))
+        .unwrap();
+    let gf_path = scratch("render.gf");
+    let values: Vec<f64> = dofs.iter().map(|x| poly(p, *x)).collect();
+    std::fs::write(&gf_path, gf_text("H1_2D_P3", &values)).unwrap();
+    let mesh = Arc::new(load(&mesh_path, &[gf_path]).unwrap());
+    let mut r = galerkin::spectral::SpectralRenderer::new(&gpu, mesh.clone(), &Colormap::viridis()).unwrap();
+    let (w, h) = (160, 96);
+    let target = RenderTarget::new(&gpu, "mfem", w, h, ColorFormat::Rgba32F).unwrap();
+    let view = galerkin::spectral::SpectralView { overdraw: false, ..Default::default() };
+    let Pixels::Rgba32F(px) = r.render(&target, &view).unwrap() else { unreachable!() };
+    let v2 = galerkin::spectral::View2d::fit(&mesh, w, h);
+    let report = galerkin::spectral::reference::check_pixels(&mesh, 0, 0, &v2, (w, h), &px);
+    assert!(report.covered > 3000 && report.passed(), "{report:?}");
 }
