@@ -170,11 +170,22 @@ fn tube(
             }
         }
     }
-    let basis = Basis1d::new(set, order)?;
-    let shell = SpectralMesh::new(Shape::Quadrilateral, geometry, basis, points, Vec::new())?;
+    with_field(Shape::Quadrilateral, geometry, points, Basis1d::new(set, order)?, "pressure", pressure)
+}
+
+/// The mesh of `points` with one field `name` = `f(x, t)` sampled at [`STEPS`] times.
+fn with_field(
+    shape: Shape,
+    geometry: Basis1d,
+    points: Vec<[f64; 3]>,
+    basis: Basis1d,
+    name: &str,
+    f: fn([f64; 3], f64) -> f64,
+) -> Result<SpectralMesh, SpectralError> {
+    let shell = SpectralMesh::new(shape, geometry, basis, points, Vec::new())?;
     let times: Vec<f64> = (0..STEPS).map(|k| 0.5 * k as f64).collect();
-    let steps = times.iter().map(|&t| sample(&shell, |_, x| pressure(x, t))).collect();
-    let fields = vec![Field { name: "pressure".into(), times, steps }];
+    let steps = times.iter().map(|&t| sample(&shell, |_, x| f(x, t))).collect();
+    let fields = vec![Field { name: name.into(), times, steps }];
     SpectralMesh::new(shell.shape, shell.geometry, shell.basis, shell.points, fields)
 }
 
@@ -285,12 +296,7 @@ pub fn hex_shell(
             }
         }
     }
-    let basis = Basis1d::new(set, order)?;
-    let shell = SpectralMesh::new(Shape::Hexahedron, geometry, basis, points, Vec::new())?;
-    let times: Vec<f64> = (0..STEPS).map(|k| 0.5 * k as f64).collect();
-    let steps = times.iter().map(|&t| sample(&shell, |_, x| temperature(x, t))).collect();
-    let fields = vec![Field { name: "temperature".into(), times, steps }];
-    SpectralMesh::new(shell.shape, shell.geometry, shell.basis, shell.points, fields)
+    with_field(Shape::Hexahedron, geometry, points, Basis1d::new(set, order)?, "temperature", temperature)
 }
 
 /// The analytic field `temperature` of [`hex_shell`] at time t.

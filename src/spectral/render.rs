@@ -321,6 +321,19 @@ pub fn padded_values(mesh: &SpectralMesh, field: usize, step: usize) -> Vec<f32>
     out
 }
 
+/// The attributes of a [`DrawVertex`]: position, reference coordinates, element.
+const DRAW_VERTEX_ATTRIBUTES: [crate::gpu::VertexAttribute; 3] =
+    [(0, vk::Format::R32G32B32_SFLOAT, 0), (1, vk::Format::R32G32_SFLOAT, 12), (2, vk::Format::R32_UINT, 20)];
+
+/// The four bindings of every spectral draw: geometry, coefficients, colour map, and the
+/// patches (planar and surface meshes) or planes (cut planes).
+const DRAW_BINDINGS: [BindingKind; 4] = [
+    BindingKind::StorageBuffer,
+    BindingKind::StorageBuffer,
+    BindingKind::Texture,
+    BindingKind::StorageBuffer,
+];
+
 /// `spectral_push.glsl`.
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
@@ -536,12 +549,6 @@ impl SpectralRenderer {
         if self.pipelines.contains_key(&format) {
             return Ok(());
         }
-        let bindings = [
-            BindingKind::StorageBuffer,
-            BindingKind::StorageBuffer,
-            BindingKind::Texture,
-            BindingKind::StorageBuffer,
-        ];
         let make = |lines: bool| {
             let name = if lines { "spectral edges" } else { "spectral elements" };
             let mut desc = GraphicsPipelineDesc::new(
@@ -550,15 +557,11 @@ impl SpectralRenderer {
                 shaders::spectral::ELEMENT_FRAG,
                 target.render_pass().raw(),
             );
-            desc.bindings = &bindings;
+            desc.bindings = &DRAW_BINDINGS;
             desc.specialization = &self.specialization;
             desc.push_constant_bytes = std::mem::size_of::<SpectralPush>() as u32;
             desc.vertex_stride = std::mem::size_of::<DrawVertex>() as u32;
-            desc.vertex_attributes = &[
-                (0, vk::Format::R32G32B32_SFLOAT, 0),
-                (1, vk::Format::R32G32_SFLOAT, 12),
-                (2, vk::Format::R32_UINT, 20),
-            ];
+            desc.vertex_attributes = &DRAW_VERTEX_ATTRIBUTES;
             if lines {
                 desc.topology = vk::PrimitiveTopology::LINE_LIST;
             }
@@ -792,27 +795,17 @@ impl SpectralRenderer {
         if c.pipelines.contains_key(&format) {
             return Ok(());
         }
-        let bindings = [
-            BindingKind::StorageBuffer,
-            BindingKind::StorageBuffer,
-            BindingKind::Texture,
-            BindingKind::StorageBuffer,
-        ];
         let mut desc = GraphicsPipelineDesc::new(
             "spectral cut planes",
             shaders::spectral::CUT_VERT,
             shaders::spectral::CUT_FRAG,
             target.render_pass().raw(),
         );
-        desc.bindings = &bindings;
+        desc.bindings = &DRAW_BINDINGS;
         desc.specialization = &self.specialization;
         desc.push_constant_bytes = std::mem::size_of::<SpectralPush>() as u32;
         desc.vertex_stride = std::mem::size_of::<DrawVertex>() as u32;
-        desc.vertex_attributes = &[
-            (0, vk::Format::R32G32B32_SFLOAT, 0),
-            (1, vk::Format::R32G32_SFLOAT, 12),
-            (2, vk::Format::R32_UINT, 20),
-        ];
+        desc.vertex_attributes = &DRAW_VERTEX_ATTRIBUTES;
         let pipeline = GraphicsPipeline::new(&self.gpu, &desc).map_err(dev("building the cut pipeline"))?;
         let resources = [
             self.resources[0],
@@ -969,30 +962,17 @@ impl SpectralRenderer {
                 ),
                 None => p.fill.record_draw(cmd, extent, &p.fill_set, bytes, Some(faces), face_count),
             }
-            let mut lines = push;
-            if overdraw {
-                lines.flags[2] = MODE_EDGE_OVERDRAW;
-                lines.misc[0] = offsets[0];
-                p.lines.record_draw(
-                    cmd,
-                    extent,
-                    &p.lines_set,
-                    bytemuck::bytes_of(&lines),
-                    Some(edges),
-                    edge_count,
-                );
-            }
-            if mesh_lines {
-                lines.flags[2] = MODE_EDGE_LINES;
-                lines.misc[0] = offsets[1];
-                p.lines.record_draw(
-                    cmd,
-                    extent,
-                    &p.lines_set,
-                    bytemuck::bytes_of(&lines),
-                    Some(edges),
-                    edge_count,
-                );
+            // Edge overdraw behind the faces, then the mesh lines in front.
+            for (on, mode, offset) in
+                [(overdraw, MODE_EDGE_OVERDRAW, offsets[0]), (mesh_lines, MODE_EDGE_LINES, offsets[1])]
+            {
+                if on {
+                    let mut lines = push;
+                    lines.flags[2] = mode;
+                    lines.misc[0] = offset;
+                    let bytes = bytemuck::bytes_of(&lines);
+                    p.lines.record_draw(cmd, extent, &p.lines_set, bytes, Some(edges), edge_count);
+                }
             }
         };
         Ok((Box::new(pre), Box::new(draw)))
