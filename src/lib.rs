@@ -14,7 +14,7 @@
 //!
 //! The layers: [`gpu`] (Vulkan, knows nothing of the maths), [`render`] (targets, images,
 //! colour maps, camera, viewer), [`demo`] (the first passes with their CPU references),
-//! [`bench`] (the device's ceilings), [`tensor`] and [`reduce`] (seed 000 §3–4), [`spacetime`]
+//! [`mod@bench`] (the device's ceilings), [`tensor`] and [`reduce`] (seed 000 §3–4), [`spacetime`]
 //! (seed 003), [`spectral`] (seed 002).
 
 pub mod bench;

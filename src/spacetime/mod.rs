@@ -2,7 +2,7 @@
 //!
 //! A spacetime mesh (vertices (x, y, t), tetrahedra) carries per element a cubic displacement
 //! in local coordinates ([`cubic`]). To show time `t`, the mesh is sliced with the plane
-//! `t = const` ([`slice`]; a compute pass on the device), and every slice polygon is drawn with
+//! `t = const` ([`mod@slice`]; a compute pass on the device), and every slice polygon is drawn with
 //! the height `|v|` computed per vertex and the strain energy density and the exact normal of
 //! the height field computed per pixel ([`SpacetimeRenderer`]), its edges drawn again to fill
 //! cracks between discontinuous neighbours (§4.3).

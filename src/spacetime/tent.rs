@@ -1,5 +1,5 @@
 //! A tent-pitching spacetime mesher (the *Tent Pitcher* of seed 003 §3.2, after Üngör and
-//! Sheffer, seed reference [25]): a front over a conforming 2D triangulation advances by lifting
+//! Sheffer, seed reference \[25\]): a front over a conforming 2D triangulation advances by lifting
 //! one vertex at a time in time, as far as a causality bound allows, and every lift fills a
 //! *tent* of tetrahedra. Local refinement near moving wave fronts, slab by slab, makes the
 //! spacetime mesh non-conforming, as in the seed's data (§3.2, §4: "a (potentially

@@ -7,7 +7,7 @@
 //!
 //! Every element's degrees of freedom are gathered into this crate's lexicographic order (ξ
 //! fastest): L2 spaces store them element by element; H1 spaces number vertices, then edges,
-//! then faces, then interiors, and [`h1_element_dofs`] reassembles each element's tensor
+//! then faces, then interiors, and `Topology::element_dofs` reassembles each element's tensor
 //! grid, reversing edge (and permuting face) DOFs where the element's orientation differs from
 //! the global one. Errors name the file and the line or element.
 

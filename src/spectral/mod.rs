@@ -14,7 +14,7 @@
 //!   per-vertex baseline.
 //! - [`vtu`]: VTK Lagrange cells in `.vtu` files; [`mfem`]: MFEM meshes, GridFunctions and
 //!   GLVis solution streams.
-//! - [`reference`]: the per-pixel check against the f64 reference (tests and demo).
+//! - [`mod@reference`]: the per-pixel check against the f64 reference (tests and demo).
 
 pub mod basis;
 pub mod error;

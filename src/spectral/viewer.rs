@@ -45,7 +45,7 @@ pub struct SpectralContent {
 }
 
 impl SpectralContent {
-    /// Shows `mesh` as `view` in a `size` window with `palette` (a name of [`PALETTES`] or
+    /// Shows `mesh` as `view` in a `size` window with `palette` (a name of `PALETTES` or
     /// another map); `playing` starts stepping through time at once.
     pub fn new(
         mesh: Arc<SpectralMesh>,

@@ -7,7 +7,7 @@
 //! reproduced by [`vtk_point_index`].
 //!
 //! Every one-component point-data array is a field. Arrays named `NAME_t0`, `NAME_t1`, … are
-//! the time steps of field `NAME` (this is how [`write`] stores several steps; ParaView shows
+//! the time steps of field `NAME` (this is how [`fn@write`] stores several steps; ParaView shows
 //! them as separate arrays). All cells must be of one shape and one order. The container
 //! (encodings, compression) is [`crate::vtk`]'s. Errors name the file and the element or array.
 

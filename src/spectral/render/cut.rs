@@ -1,0 +1,209 @@
+//! Cut planes through hexahedral meshes (the seed's future work, across many elements): the
+//! pass that finds the crossed elements and draws a rectangle containing each section
+//! (`cut.comp`), and the pipeline whose fragments pull their plane point back into the element
+//! (`cut.vert`/`cut.frag`).
+
+use std::collections::HashMap;
+
+use ash::vk;
+
+use super::*;
+
+/// `cut.comp`'s push constants.
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct CutPush {
+    elements: u32,
+    points_per_element: u32,
+}
+
+impl Cutter {
+    pub(super) fn new(
+        gpu: &Gpu,
+        mesh: &SpectralMesh,
+        points: &Buffer<[f32; 4]>,
+        values: &Buffer<f32>,
+        specialization: &[u32],
+    ) -> Result<Self> {
+        let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
+        let hull = Buffer::from_slice(gpu, "spectral hulls", &proxy::bernstein_hull(mesh), storage)
+            .map_err(dev("uploading"))?;
+        let planes = Buffer::new(
+            gpu,
+            "spectral cut planes",
+            MAX_CUT_PLANES as u64,
+            storage | vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryKind::GpuOnly,
+        )
+        .map_err(dev("the cut pass"))?;
+        let draw = Buffer::new(
+            gpu,
+            "spectral cut draw",
+            4,
+            storage | vk::BufferUsageFlags::INDIRECT_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryKind::GpuOnly,
+        )
+        .map_err(dev("the cut pass"))?;
+        let vertices = Buffer::new(
+            gpu,
+            "spectral cut rectangles",
+            (mesh.elements() * MAX_CUT_PLANES * 6) as u64,
+            storage | vk::BufferUsageFlags::VERTEX_BUFFER,
+            MemoryKind::GpuOnly,
+        )
+        .map_err(dev("the cut pass"))?;
+        let pass = ComputePipeline::new(
+            gpu,
+            &ComputePipelineDesc {
+                name: "spectral cut",
+                spirv: shaders::spectral::CUT,
+                bindings: &[BindingKind::StorageBuffer; 7],
+                push_constant_bytes: std::mem::size_of::<CutPush>() as u32,
+                specialization,
+                shared_bytes: 0,
+            },
+        )
+        .map_err(dev("building the cut pass"))?;
+        let b = |r: crate::gpu::GpuResult<crate::gpu::BufferBinding>| {
+            r.map(Resource::Storage).map_err(dev("binding"))
+        };
+        let pass_set = pass
+            .bind(
+                gpu,
+                &[
+                    b(points.binding())?,
+                    b(values.binding())?,
+                    b(values.binding())?,
+                    b(planes.binding())?,
+                    b(hull.binding())?,
+                    b(draw.binding())?,
+                    b(vertices.binding())?,
+                ],
+            )
+            .map_err(dev("binding the cut pass"))?;
+        Ok(Self { pass, pass_set, planes, draw, vertices, _hull: hull, pipelines: HashMap::new() })
+    }
+}
+
+impl SpectralRenderer {
+    /// The cut planes of `view`, unit normals, as `cut.comp` reads them (default: z through the
+    /// middle of the mesh).
+    pub(super) fn cut_planes(&self, view: &SpectralView) -> Result<Vec<[f32; 4]>> {
+        if view.cuts.len() > MAX_CUT_PLANES {
+            return Err(SpectralError::Missing(format!(
+                "{} cut planes; at most {MAX_CUT_PLANES}",
+                view.cuts.len()
+            )));
+        }
+        let default = {
+            let (lo, hi) =
+                self.mesh.points.iter().fold((f64::MAX, f64::MIN), |(a, b), p| (a.min(p[2]), b.max(p[2])));
+            vec![[0.0, 0.0, 1.0, 0.5 * (lo + hi)]]
+        };
+        let cuts = if view.cuts.is_empty() { &default } else { &view.cuts };
+        cuts.iter()
+            .enumerate()
+            .map(|(k, c)| {
+                let n = (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt();
+                if !(n.is_finite() && n > 0.0 && c[3].is_finite()) {
+                    return Err(SpectralError::Missing(format!("cut plane {k}: {c:?} has no direction")));
+                }
+                Ok([(c[0] / n) as f32, (c[1] / n) as f32, (c[2] / n) as f32, (c[3] / n) as f32])
+            })
+            .collect()
+    }
+
+    pub(super) fn cut_pipeline_for(&mut self, target: &RenderTarget) -> Result<()> {
+        let format = target.format();
+        let Some(c) = self.cutter.as_mut() else { return Ok(()) };
+        if c.pipelines.contains_key(&format) {
+            return Ok(());
+        }
+        let mut desc = GraphicsPipelineDesc::new(
+            "spectral cut planes",
+            shaders::spectral::CUT_VERT,
+            shaders::spectral::CUT_FRAG,
+            target.render_pass().raw(),
+        );
+        desc.bindings = &DRAW_BINDINGS;
+        desc.specialization = &self.specialization;
+        desc.push_constant_bytes = std::mem::size_of::<SpectralPush>() as u32;
+        desc.vertex_stride = std::mem::size_of::<DrawVertex>() as u32;
+        desc.vertex_attributes = &DRAW_VERTEX_ATTRIBUTES;
+        let pipeline = GraphicsPipeline::new(&self.gpu, &desc).map_err(dev("building the cut pipeline"))?;
+        let resources = [
+            self.resources[0],
+            self.resources[1],
+            self.resources[2],
+            Resource::Storage(c.planes.binding().map_err(dev("binding"))?),
+        ];
+        let set = pipeline.bind(&self.gpu, &resources).map_err(dev("binding the cut pipeline"))?;
+        c.pipelines.insert(format, (pipeline, set));
+        Ok(())
+    }
+
+    #[allow(clippy::type_complexity)]
+    pub(super) fn prepare_cuts(
+        &mut self,
+        target: &RenderTarget,
+        view: &SpectralView,
+    ) -> Result<(Box<dyn FnOnce(vk::CommandBuffer) + '_>, Box<dyn FnOnce(vk::CommandBuffer) + '_>)> {
+        self.show(view.field, view.step)?;
+        self.cut_pipeline_for(target)?;
+        let planes = self.cut_planes(view)?;
+        let push = self.push(target, view);
+        let gpu = &self.gpu;
+        let c = self.cutter.as_ref().expect("a hexahedral mesh has a cutter");
+        let (pipeline, set) = &c.pipelines[&target.format()];
+        let extent = target.extent();
+        let cut_push = CutPush {
+            elements: self.mesh.elements() as u32,
+            points_per_element: self.mesh.points_per_element() as u32,
+        };
+        let pre = move |cmd: vk::CommandBuffer| {
+            let cs = vk::PipelineStageFlags::COMPUTE_SHADER;
+            let fs = vk::PipelineStageFlags::FRAGMENT_SHADER;
+            // The last frame has read what this pass rewrites.
+            gpu.memory_barrier(
+                cmd,
+                (
+                    vk::PipelineStageFlags::VERTEX_INPUT | vk::PipelineStageFlags::DRAW_INDIRECT | fs,
+                    vk::AccessFlags::empty(),
+                ),
+                (vk::PipelineStageFlags::TRANSFER | cs, vk::AccessFlags::empty()),
+            );
+            let header: [u32; 4] = [0, 1, 0, 0];
+            // SAFETY: both buffers are alive, created with TRANSFER_DST, and large enough
+            // (planes ≤ MAX_CUT_PLANES, checked in cut_planes).
+            unsafe {
+                gpu.device().cmd_update_buffer(cmd, c.draw.raw(), 0, bytemuck::cast_slice(&header));
+                gpu.device().cmd_update_buffer(cmd, c.planes.raw(), 0, bytemuck::cast_slice(&planes));
+            }
+            gpu.memory_barrier(
+                cmd,
+                (vk::PipelineStageFlags::TRANSFER, vk::AccessFlags::TRANSFER_WRITE),
+                (cs | fs, vk::AccessFlags::SHADER_READ | vk::AccessFlags::SHADER_WRITE),
+            );
+            let groups = (cut_push.elements.div_ceil(64), planes.len() as u32, 1);
+            c.pass.record_dispatch(
+                cmd,
+                &c.pass_set,
+                bytemuck::bytes_of(&cut_push),
+                [groups.0, groups.1, groups.2],
+            );
+            gpu.memory_barrier(
+                cmd,
+                (cs, vk::AccessFlags::SHADER_WRITE),
+                (
+                    vk::PipelineStageFlags::DRAW_INDIRECT | vk::PipelineStageFlags::VERTEX_INPUT,
+                    vk::AccessFlags::INDIRECT_COMMAND_READ | vk::AccessFlags::VERTEX_ATTRIBUTE_READ,
+                ),
+            );
+        };
+        let draw = move |cmd: vk::CommandBuffer| {
+            let bytes = bytemuck::bytes_of(&push);
+            pipeline.record_draw_indirect(cmd, extent, set, bytes, Some(c.vertices.raw()), (c.draw.raw(), 0));
+        };
+        Ok((Box::new(pre), Box::new(draw)))
+    }
+}

@@ -1,0 +1,162 @@
+//! Surfaces in 3D and height fields: the bounds that set each element's tessellation level, the
+//! compute pass that tessellates (`tessellate.comp`), and its counts checked against the CPU
+//! twin of the level.
+
+use ash::vk;
+
+use super::*;
+
+impl SpectralRenderer {
+    /// The height scale `view` asks for (planar meshes), its automatic value resolved.
+    pub fn height_scale(&mut self, view: &SpectralView) -> Option<f64> {
+        let scale = view.height.filter(|_| self.planar)?;
+        if scale != 0.0 {
+            return Some(scale);
+        }
+        let (lo, hi) = self.range(view);
+        let size = self.mesh.points.iter().fold((f64::MAX, f64::MIN), |(a, b), p| (a.min(p[0]), b.max(p[0])));
+        Some(0.25 * (size.1 - size.0) / (hi - lo).max(1e-300))
+    }
+
+    /// Uploads the patches `view` needs: the height field's when it shows one.
+    pub(super) fn patches_for_view(&mut self, view: &SpectralView) -> Result<()> {
+        let want = self.height_scale(view).map(|s| (view.field, view.step, s.to_bits()));
+        if want == self.patches_for || self.patch_bounds.is_empty() {
+            return Ok(());
+        }
+        self.patch_bounds = match want {
+            Some((f, step, s)) => proxy::height_patches(&self.mesh, f, step, f64::from_bits(s)),
+            None => proxy::surface_patches(&self.mesh),
+        };
+        self._patches.upload(&self.gpu, 0, &self.patch_bounds).map_err(dev("uploading the patches"))?;
+        self.patches_for = want;
+        Ok(())
+    }
+
+    /// A camera that shows the height field of `view` (its box, z from the scaled range).
+    pub(super) fn height_camera(&mut self, view: &SpectralView, scale: f64) -> Camera {
+        let (lo, hi) = self.range(view);
+        let (mut a, mut b) = ([f64::MAX; 3], [f64::MIN; 3]);
+        for p in &self.mesh.points {
+            for c in 0..2 {
+                a[c] = a[c].min(p[c]);
+                b[c] = b[c].max(p[c]);
+            }
+        }
+        a[2] = (scale * lo).min(scale * hi);
+        b[2] = (scale * lo).max(scale * hi);
+        camera_for_box(a, b)
+    }
+
+    /// Makes room for this frame's surface tessellation (the CPU bound of the device's levels,
+    /// one level of slack per element against f32 rounding) and binds the pass.
+    pub(super) fn tessellator_for(&mut self, push: &SpectralPush) -> Result<()> {
+        if self.tessellator.is_none() {
+            let bindings = [BindingKind::StorageBuffer; 6];
+            let pipeline = ComputePipeline::new(
+                &self.gpu,
+                &ComputePipelineDesc {
+                    name: "spectral tessellation",
+                    spirv: shaders::spectral::TESSELLATE,
+                    bindings: &bindings,
+                    push_constant_bytes: std::mem::size_of::<SpectralPush>() as u32,
+                    specialization: &self.specialization,
+                    shared_bytes: 8 + 256 * 16,
+                },
+            )
+            .map_err(dev("building the tessellation pass"))?;
+            let draw = Buffer::new(
+                &self.gpu,
+                "spectral tessellation draw",
+                6,
+                vk::BufferUsageFlags::STORAGE_BUFFER
+                    | vk::BufferUsageFlags::INDIRECT_BUFFER
+                    | vk::BufferUsageFlags::TRANSFER_DST
+                    | vk::BufferUsageFlags::TRANSFER_SRC,
+                MemoryKind::GpuOnly,
+            )
+            .map_err(dev("the tessellation pass"))?;
+            self.tessellator = Some(Tessellator { pipeline, draw, vertices: None, set: None });
+        }
+        let view_proj = Mat4::from_cols_array(&push.view_proj);
+        let need: u64 = self
+            .patch_bounds
+            .iter()
+            .map(|p| {
+                let l = u64::from(proxy::tessellation_level(
+                    p,
+                    &view_proj,
+                    push.pixel_to_world[3],
+                    push.misc[2],
+                    push.misc[3],
+                ));
+                if l == 0 {
+                    0
+                } else {
+                    6 * (l + 1) * (l + 1)
+                }
+            })
+            .sum::<u64>()
+            .max(6);
+        let max = self.gpu.max_binding_bytes() / std::mem::size_of::<DrawVertex>() as u64;
+        let need = need.min(max);
+        self.tessellated = need;
+        let t = self.tessellator.as_mut().expect("made above");
+        if t.vertices.as_ref().is_none_or(|v| v.len() < need) {
+            // Grow by half again, so a slowly moving camera does not reallocate every frame.
+            let len = (need + need / 2).min(max);
+            t.set = None;
+            t.vertices = None;
+            t.vertices = Some(
+                Buffer::new(
+                    &self.gpu,
+                    "spectral tessellated vertices",
+                    len,
+                    vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::VERTEX_BUFFER,
+                    MemoryKind::GpuOnly,
+                )
+                .map_err(dev("the tessellation pass"))?,
+            );
+        }
+        if t.set.is_none() {
+            let vertices = t.vertices.as_ref().expect("made above");
+            let mut resources = self.resources.clone();
+            // Binding 2 (the colour map in the draws) is unused by the pass: bind the values.
+            resources[2] = Resource::Storage(self.values.binding().map_err(dev("binding"))?);
+            resources.push(Resource::Storage(t.draw.binding().map_err(dev("binding"))?));
+            resources.push(Resource::Storage(vertices.binding().map_err(dev("binding"))?));
+            t.set =
+                Some(t.pipeline.bind(&self.gpu, &resources).map_err(dev("binding the tessellation pass"))?);
+        }
+        Ok(())
+    }
+
+    /// The last surface tessellation as the device did it: vertices written and elements
+    /// skipped for want of room (0 unless the frame needed more than one storage binding);
+    /// `None` before the first surface frame.
+    pub fn last_tessellation(&self) -> Result<Option<(u32, u32)>> {
+        let Some(t) = &self.tessellator else { return Ok(None) };
+        let d = t.draw.download(&self.gpu).map_err(dev("reading the tessellation's counts"))?;
+        Ok(Some((d[0], d[5])))
+    }
+
+    /// The vertices the CPU twin of the tessellation levels ([`proxy::tessellation_level`])
+    /// gives `view` in `target`: 6 L² per element.
+    pub fn expected_tessellation(&mut self, target: &RenderTarget, view: &SpectralView) -> u64 {
+        let push = self.push(target, view);
+        let view_proj = Mat4::from_cols_array(&push.view_proj);
+        self.patch_bounds
+            .iter()
+            .map(|p| {
+                let l = u64::from(proxy::tessellation_level(
+                    p,
+                    &view_proj,
+                    push.pixel_to_world[3],
+                    push.misc[2],
+                    push.misc[3],
+                ));
+                6 * l * l
+            })
+            .sum()
+    }
+}

@@ -1,0 +1,166 @@
+//! Where the spectral renderer looks from: the 2D view of planar meshes (pixel centres in world
+//! coordinates, for the per-pixel check), cameras fitted to meshes and boxes, and the options of
+//! a view.
+
+use glam::Mat4;
+
+use crate::render::Camera;
+use crate::spectral::SpectralMesh;
+
+/// A camera that shows all of `mesh` (its bounding sphere) from above the x–y diagonal.
+pub fn fit_camera(mesh: &SpectralMesh) -> Camera {
+    let (mut lo, mut hi) = ([f64::MAX; 3], [f64::MIN; 3]);
+    for p in &mesh.points {
+        for c in 0..3 {
+            lo[c] = lo[c].min(p[c]);
+            hi[c] = hi[c].max(p[c]);
+        }
+    }
+    camera_for_box(lo, hi)
+}
+
+/// A camera that shows the box [`lo`, `hi`] (its bounding sphere) from above the x–y diagonal.
+pub fn camera_for_box(lo: [f64; 3], hi: [f64; 3]) -> Camera {
+    let centre: [f64; 3] = std::array::from_fn(|c| 0.5 * (lo[c] + hi[c]));
+    let radius = (0..3).map(|c| (hi[c] - lo[c]).powi(2)).sum::<f64>().sqrt().max(1e-12) * 0.5;
+    let fov: f64 = 40.0;
+    let distance = 1.05 * radius / (0.5 * fov.to_radians()).sin();
+    let dir: [f64; 3] = [0.45, -0.75, 0.55];
+    let n = (dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]).sqrt();
+    Camera {
+        eye: std::array::from_fn(|c| centre[c] + distance * dir[c] / n),
+        target: centre,
+        up: [0.0, 0.0, 1.0],
+        fov_y_degrees: fov,
+        near: (distance - 1.5 * radius).max(1e-3 * distance),
+        far: distance + 1.5 * radius,
+    }
+}
+
+/// A 2D view of a planar mesh: the world point at the image centre and the world size of a
+/// pixel (square pixels, y up).
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub struct View2d {
+    /// World (x, y) at the centre of the image.
+    pub centre: [f64; 2],
+    /// World units per pixel.
+    pub pixel_size: f64,
+}
+
+impl View2d {
+    /// The view that fits `mesh`'s geometry points (with a 4 % margin) into `width` × `height`.
+    pub fn fit(mesh: &SpectralMesh, width: u32, height: u32) -> Self {
+        let (mut lo, mut hi) = ([f64::MAX; 2], [f64::MIN; 2]);
+        for p in &mesh.points {
+            for c in 0..2 {
+                lo[c] = lo[c].min(p[c]);
+                hi[c] = hi[c].max(p[c]);
+            }
+        }
+        let size = ((hi[0] - lo[0]) / f64::from(width)).max((hi[1] - lo[1]) / f64::from(height));
+        Self { centre: [0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1])], pixel_size: 1.04 * size.max(1e-30) }
+    }
+
+    /// The world point at the centre of pixel (`px`, `py`) (row 0 at the top) of a
+    /// `width` × `height` image — the point each pixel shows.
+    pub fn pixel_centre(&self, px: u32, py: u32, width: u32, height: u32) -> [f64; 2] {
+        [
+            self.centre[0] + (f64::from(px) + 0.5 - 0.5 * f64::from(width)) * self.pixel_size,
+            self.centre[1] - (f64::from(py) + 0.5 - 0.5 * f64::from(height)) * self.pixel_size,
+        ]
+    }
+
+    /// The orthographic projection of this view (Vulkan clip space, y down).
+    pub(super) fn view_proj(&self, width: u32, height: u32) -> Mat4 {
+        let (sx, sy) =
+            (2.0 / (self.pixel_size * f64::from(width)), 2.0 / (self.pixel_size * f64::from(height)));
+        Mat4::from_cols_array(&[
+            sx as f32,
+            0.0,
+            0.0,
+            0.0,
+            0.0,
+            -sy as f32,
+            0.0,
+            0.0,
+            0.0,
+            0.0,
+            0.0,
+            0.0,
+            (-sx * self.centre[0]) as f32,
+            (sy * self.centre[1]) as f32,
+            0.0,
+            1.0,
+        ])
+    }
+
+    /// World (x, y) of framebuffer coordinate (0, 0) and the world step per framebuffer unit.
+    pub(super) fn pixel_to_world(&self, width: u32, height: u32) -> [f32; 4] {
+        [
+            (self.centre[0] - 0.5 * f64::from(width) * self.pixel_size) as f32,
+            (self.centre[1] + 0.5 * f64::from(height) * self.pixel_size) as f32,
+            self.pixel_size as f32,
+            -self.pixel_size as f32,
+        ]
+    }
+}
+
+/// What to show and how (`galerkin spectral` options).
+#[derive(Clone, Debug, PartialEq)]
+pub struct SpectralView {
+    /// The field (index into the mesh's fields).
+    pub field: usize,
+    /// Its time step.
+    pub step: usize,
+    /// Colour range; `None`: the field's sampled range at this step.
+    pub range: Option<(f64, f64)>,
+    /// Logarithmic colour scale (positive ranges).
+    pub log: bool,
+    /// Iso-lines per colour range (0: none).
+    pub isolines: u32,
+    /// Draw the element edges in front, dark (the mesh).
+    pub edges: bool,
+    /// Edge overdraw behind the faces (fills cracks between discontinuous elements).
+    pub overdraw: bool,
+    /// The seed's baseline: colour at the nodes, interpolated (node grids).
+    pub per_vertex: bool,
+    /// With `per_vertex` on a surface: colour at the vertices of the per-pixel path's own
+    /// tessellation instead of the node grids — the same triangles, so the difference to per
+    /// pixel is the cost of the per-fragment evaluation alone.
+    pub per_vertex_on_tessellation: bool,
+    /// The 2D view of a planar mesh; `None`: fit the mesh.
+    pub view: Option<View2d>,
+    /// The camera of a surface mesh; `None`: [`fit_camera`].
+    pub camera: Option<Camera>,
+    /// The surface tessellation's screen-space error budget in pixels.
+    pub max_error_px: f64,
+    /// Planar meshes: show the field as a height field z = scale · f (lit with its exact
+    /// normals, seen through `camera`) instead of flat. `Some(0.0)`: a scale that makes the
+    /// field's range a quarter of the mesh's size.
+    pub height: Option<f64>,
+    /// Cut planes (n_x, n_y, n_z, d): the points with n · x = d, through hexahedral meshes
+    /// (at most [`super::MAX_CUT_PLANES`]; the normal need not be unit). Empty: one plane z = the
+    /// middle of the mesh.
+    pub cuts: Vec<[f64; 4]>,
+}
+
+impl Default for SpectralView {
+    fn default() -> Self {
+        Self {
+            field: 0,
+            step: 0,
+            range: None,
+            log: false,
+            isolines: 0,
+            edges: false,
+            overdraw: true,
+            per_vertex: false,
+            per_vertex_on_tessellation: false,
+            view: None,
+            camera: None,
+            max_error_px: 0.5,
+            height: None,
+            cuts: Vec::new(),
+        }
+    }
+}
