@@ -12,9 +12,10 @@
 // factor), z ≥ the element's nearest view depth. So L = ceil(sqrt(P K / (4 z budget))) keeps
 // every point within `budget` pixels, up to the level cap. Twin: proxy::tessellation_level.
 //
-// One workgroup per element: its first invocation reserves 6 L² vertices in the output (a
-// compare-and-swap that never passes the capacity: an element that does not fit is skipped
-// and counted), then the workgroup writes them.
+// One invocation per element (lanes run across elements, no barriers): it reserves 6 L²
+// vertices in the output (a compare-and-swap that never passes the capacity: an element that
+// does not fit is skipped and counted), then walks its cells row by row, evaluating each grid
+// point once per row pair (the previous column's two points carry over).
 #include "spectral_element.glsl"
 #include "spectral_push.glsl"
 
@@ -25,13 +26,6 @@ layout(std430, set = 0, binding = 4) buffer Draw { uint vertex_count; uint insta
 struct DrawVertex { float x, y, z, xi, eta; uint element; };
 layout(std430, set = 0, binding = 5) writeonly buffer Vertices { DrawVertex vertices[]; };
 
-shared uint base;
-shared uint level;
-// The grid's (L + 1)² points when they fit (L ≤ 15): each evaluated once, then copied into the
-// six vertices of the cells around it. Larger levels evaluate per vertex.
-#define GRID_POINTS 256u
-shared vec3 grid[GRID_POINTS];
-
 uint tessellation_level(SpectralPatch p) {
     float depth = (pc.view_proj * vec4(p.centre_radius.xyz, 1.0)).w - p.centre_radius.w;
     if (depth + 2.0 * p.centre_radius.w <= 0.0) return 0u;  // wholly behind the eye
@@ -40,55 +34,49 @@ uint tessellation_level(SpectralPatch p) {
     return uint(clamp(l, 1.0, pc.misc.w));
 }
 
+// The (lifted) surface point at r.
+vec3 surface_point(uint e, vec2 r, float height) {
+    vec3 dxi, deta;
+    vec3 x = spectral_map(e, r, dxi, deta);
+    if (height != 0.0) x.z = height * spectral_value(e, r);
+    return x;
+}
+
 void main() {
-    uint e = gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x;
-    uint elements = patches.length();
-    if (gl_LocalInvocationID.x == 0u) {
-        uint l = e < elements ? tessellation_level(patches[e]) : 0u;
-        uint n = 6u * l * l;
-        uint old = draw.vertex_count;
-        while (n > 0u) {
-            if (old + n > draw.capacity) {
-                atomicAdd(draw.skipped, 1u);
-                n = 0u;
-                l = 0u;
-                break;
-            }
-            uint seen = atomicCompSwap(draw.vertex_count, old, old + n);
-            if (seen == old) break;
-            old = seen;
-        }
-        base = old;
-        level = l;
-    }
-    barrier();
-    uint l = level;
+    uint e = gl_GlobalInvocationID.y * gl_NumWorkGroups.x * gl_WorkGroupSize.x + gl_GlobalInvocationID.x;
+    if (e >= patches.length()) return;
+    uint l = tessellation_level(patches[e]);
     uint n = 6u * l * l;
-    float height = e < elements ? patches[e].curvature.y : 0.0;
-    uint points = (l + 1u) * (l + 1u);
-    bool shared_grid = points <= GRID_POINTS;
-    if (shared_grid) {
-        for (uint k = gl_LocalInvocationID.x; k < points; k += 64u) {
-            vec3 dxi, deta;
-            vec2 r = vec2(k % (l + 1u), k / (l + 1u)) / float(l);
-            grid[k] = spectral_map(e, r, dxi, deta);
-            if (height != 0.0) grid[k].z = height * spectral_value(e, r);
+    if (n == 0u) return;
+    uint base = draw.vertex_count;
+    while (true) {
+        if (base + n > draw.capacity) {
+            atomicAdd(draw.skipped, 1u);
+            return;
         }
+        uint seen = atomicCompSwap(draw.vertex_count, base, base + n);
+        if (seen == base) break;
+        base = seen;
     }
-    barrier();
-    const uvec2 corner[6] = uvec2[6](uvec2(0, 0), uvec2(1, 0), uvec2(1, 1), uvec2(0, 0), uvec2(1, 1), uvec2(0, 1));
-    for (uint k = gl_LocalInvocationID.x; k < n; k += 64u) {
-        uint cell = k / 6u;
-        uvec2 ij = uvec2(cell % l, cell / l) + corner[k % 6u];
-        vec2 r = vec2(ij) / float(l);
-        vec3 x;
-        if (shared_grid) {
-            x = grid[ij.y * (l + 1u) + ij.x];
-        } else {
-            vec3 dxi, deta;
-            x = spectral_map(e, r, dxi, deta);
-            if (height != 0.0) x.z = height * spectral_value(e, r);
+    float height = patches[e].curvature.y;
+    uint k = base;
+    for (uint j = 0u; j < l; ++j) {
+        vec2 r00 = vec2(0u, j) / float(l), r01 = vec2(0u, j + 1u) / float(l);
+        vec3 x00 = surface_point(e, r00, height), x01 = surface_point(e, r01, height);
+        for (uint i = 0u; i < l; ++i) {
+            vec2 r10 = vec2(i + 1u, j) / float(l), r11 = vec2(i + 1u, j + 1u) / float(l);
+            vec3 x10 = surface_point(e, r10, height), x11 = surface_point(e, r11, height);
+            vertices[k + 0u] = DrawVertex(x00.x, x00.y, x00.z, r00.x, r00.y, e);
+            vertices[k + 1u] = DrawVertex(x10.x, x10.y, x10.z, r10.x, r10.y, e);
+            vertices[k + 2u] = DrawVertex(x11.x, x11.y, x11.z, r11.x, r11.y, e);
+            vertices[k + 3u] = DrawVertex(x00.x, x00.y, x00.z, r00.x, r00.y, e);
+            vertices[k + 4u] = DrawVertex(x11.x, x11.y, x11.z, r11.x, r11.y, e);
+            vertices[k + 5u] = DrawVertex(x01.x, x01.y, x01.z, r01.x, r01.y, e);
+            k += 6u;
+            x00 = x10;
+            x01 = x11;
+            r00 = r10;
+            r01 = r11;
         }
-        vertices[base + k] = DrawVertex(x.x, x.y, x.z, r.x, r.y, e);
     }
 }

@@ -458,8 +458,10 @@ impl SpectralRenderer {
                 (vk::PipelineStageFlags::TRANSFER, vk::AccessFlags::TRANSFER_WRITE),
                 (cs, vk::AccessFlags::SHADER_READ | vk::AccessFlags::SHADER_WRITE),
             );
-            let x = elements.clamp(1, 65_535);
-            let y = elements.div_ceil(x);
+            // One invocation per element, 64 per workgroup.
+            let groups = elements.div_ceil(64).max(1);
+            let x = groups.min(65_535);
+            let y = groups.div_ceil(x);
             let set = t.set.as_ref().expect("bound in tessellator_for");
             t.pipeline.record_dispatch(cmd, set, bytemuck::bytes_of(&push), [x as u32, y as u32, 1]);
             gpu.memory_barrier(

@@ -61,7 +61,7 @@ impl SpectralRenderer {
                     bindings: &bindings,
                     push_constant_bytes: std::mem::size_of::<SpectralPush>() as u32,
                     specialization: &self.specialization,
-                    shared_bytes: 8 + 256 * 16,
+                    shared_bytes: 0,
                 },
             )
             .map_err(dev("building the tessellation pass"))?;
