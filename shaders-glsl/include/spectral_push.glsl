@@ -10,8 +10,8 @@
 layout(push_constant) uniform SpectralPush {
     mat4 view_proj;
     // Planar: world (x, y) of framebuffer coordinate 0 and the world step per pixel along x
-    // and y. Surface: the eye (x, y, z) and pixels per world unit at view depth 1 (times the
-    // off-axis factor), for the tessellation's screen-space error bound.
+    // and y. Surface: the eye (x, y, z) and pixels per world unit at view depth 1, for the
+    // tessellation's screen-space error bound.
     vec4 pixel_to_world;
     // Colour range lo, hi; ramp texels; iso-lines per range (0: none).
     vec4 range;

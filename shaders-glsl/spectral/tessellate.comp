@@ -8,9 +8,12 @@
 // at its vertices errs by at most R² / 2 · sup_u |D²_u x| (Waldron 1998) ≤ h² / 4 · K, where
 // K = max(|x_ξξ|, |x_ηη|) + |x_ξη| bounds the directional second derivatives of the geometry
 // map (from its Bernstein control net, src/spectral/proxy.rs). A world error e moves the image
-// by at most e · P / z pixels (P: pixels per world unit at view depth 1, times the off-axis
-// factor), z ≥ the element's nearest view depth. So L = ceil(sqrt(P K / (4 z budget))) keeps
-// every point within `budget` pixels, up to the level cap. Twin: proxy::tessellation_level.
+// of a point at view coordinates (X, Y, Z) by at most f e (1 + |(X, Y)| / Z) / Z pixels (f:
+// pixels per world unit at view depth 1); over the element's sphere (centre c, radius r),
+// Z ≥ z = depth(c) − r and |X| / Z ≤ (|clip_x(c)| + s_x r) / (s_x z) with s_x the length of the
+// view-projection's first row (likewise Y), so P = f (1 + |(t_x, t_y)|) bounds the scale. So
+// L = ceil(sqrt(P K / (4 z budget))) keeps every point within `budget` pixels, up to the level
+// cap. Twin: proxy::tessellation_level.
 //
 // One invocation per element (lanes run across elements, no barriers): it reserves 6 L²
 // vertices in the output (a compare-and-swap that never passes the capacity: an element that
@@ -27,10 +30,17 @@ struct DrawVertex { float x, y, z, xi, eta; uint element; };
 layout(std430, set = 0, binding = 5) writeonly buffer Vertices { DrawVertex vertices[]; };
 
 uint tessellation_level(SpectralPatch p) {
-    float depth = (pc.view_proj * vec4(p.centre_radius.xyz, 1.0)).w - p.centre_radius.w;
-    if (depth + 2.0 * p.centre_radius.w <= 0.0) return 0u;  // wholly behind the eye
-    float z = max(depth, 1e-3 * p.centre_radius.w);
-    float l = ceil(sqrt(pc.pixel_to_world.w / z * p.curvature.x / (4.0 * pc.misc.z)));
+    float r = p.centre_radius.w;
+    vec4 c = pc.view_proj * vec4(p.centre_radius.xyz, 1.0);
+    float depth = c.w - r;
+    if (depth + 2.0 * r <= 0.0) return 0u;  // wholly behind the eye
+    float z = max(depth, 1e-3 * r);
+    float sx = length(vec3(pc.view_proj[0][0], pc.view_proj[1][0], pc.view_proj[2][0]));
+    float sy = length(vec3(pc.view_proj[0][1], pc.view_proj[1][1], pc.view_proj[2][1]));
+    float tx = (abs(c.x) + sx * r) / (sx * z);
+    float ty = (abs(c.y) + sy * r) / (sy * z);
+    float pixels = pc.pixel_to_world.w * (1.0 + sqrt(tx * tx + ty * ty));
+    float l = ceil(sqrt(pixels / z * p.curvature.x / (4.0 * pc.misc.z)));
     return uint(clamp(l, 1.0, pc.misc.w));
 }
 

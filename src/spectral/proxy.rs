@@ -272,14 +272,23 @@ fn patches_of(
 
 /// The tessellation level `tessellate.comp` gives a surface element (its twin, in the same f32
 /// arithmetic): L = ceil(sqrt(P K / (4 z budget))) clamped to [1, `cap`], 0 for an element
-/// wholly behind the eye; `patch` from [`surface_patches`], P pixels per world unit at view
-/// depth 1 (times the off-axis factor), z the element's nearest view depth.
-pub fn tessellation_level(patch: &[f32; 8], view_proj: &Mat4, pixels: f32, budget: f32, cap: f32) -> u32 {
-    let depth = (*view_proj * Vec4::new(patch[0], patch[1], patch[2], 1.0)).w - patch[3];
-    if depth + 2.0 * patch[3] <= 0.0 {
+/// wholly behind the eye; `patch` from [`surface_patches`], `focal` the pixels per world unit
+/// at view depth 1, P = focal · (1 + the element's own off-axis tangent bound), z the element's
+/// nearest view depth (derivation in `tessellate.comp`).
+pub fn tessellation_level(patch: &[f32; 8], view_proj: &Mat4, focal: f32, budget: f32, cap: f32) -> u32 {
+    let r = patch[3];
+    let c = *view_proj * Vec4::new(patch[0], patch[1], patch[2], 1.0);
+    let depth = c.w - r;
+    if depth + 2.0 * r <= 0.0 {
         return 0;
     }
-    let z = depth.max(1e-3 * patch[3]);
+    let z = depth.max(1e-3 * r);
+    let row =
+        |k: usize| glam::Vec3::new(view_proj.x_axis[k], view_proj.y_axis[k], view_proj.z_axis[k]).length();
+    let (sx, sy) = (row(0), row(1));
+    let tx = (c.x.abs() + sx * r) / (sx * z);
+    let ty = (c.y.abs() + sy * r) / (sy * z);
+    let pixels = focal * (1.0 + (tx * tx + ty * ty).sqrt());
     let l = (pixels / z * patch[4] / (4.0 * budget)).sqrt().ceil();
     l.clamp(1.0, cap) as u32
 }

@@ -362,10 +362,9 @@ impl SpectralRenderer {
             };
             let aspect = target.aspect();
             let tan_half = (0.5 * camera.fov_y_degrees.to_radians()).tan();
-            // Pixels per world unit at view depth 1, times 1 + the tangent of the half-diagonal
-            // field of view (a depth error moves an off-axis point's image too).
-            let pixels =
-                0.5 * f64::from(e.height) / tan_half * (1.0 + tan_half * (1.0 + aspect * aspect).sqrt());
+            // Pixels per world unit at view depth 1 (the tessellation adds each element's
+            // off-axis factor).
+            let pixels = 0.5 * f64::from(e.height) / tan_half;
             let eye = camera.eye.map(|c| c as f32);
             (camera.view_proj_f32(aspect), [eye[0], eye[1], eye[2], pixels as f32])
         };
