@@ -325,23 +325,29 @@ fn covered(
     Ok(v.chunks_exact(4).filter(|p| p[3] >= 0.0).count())
 }
 
-/// Median device times (ms) of per-pixel frames, per-vertex frames on the node grids and
-/// per-vertex frames on the per-pixel path's own tessellation, interleaved round by round.
+/// Median device times (ms) of per-pixel frames (tessellated anew each frame, as when the
+/// camera moves), per-vertex frames on the node grids, per-vertex frames on the per-pixel
+/// path's own tessellation, and per-pixel frames that reuse the last tessellation (camera
+/// still), interleaved round by round.
 fn per_pixel_and_vertex(
     profiler: &mut galerkin::gpu::Profiler,
     renderer: &mut SpectralRenderer,
     target: &RenderTarget,
     frames: usize,
-) -> Result<[f64; 3]> {
+) -> Result<[f64; 4]> {
     let pixel = SpectralView { overdraw: false, ..SpectralView::default() };
     let views = [
         pixel.clone(),
         SpectralView { per_vertex: true, ..pixel.clone() },
-        SpectralView { per_vertex: true, per_vertex_on_tessellation: true, ..pixel },
+        SpectralView { per_vertex: true, per_vertex_on_tessellation: true, ..pixel.clone() },
+        pixel,
     ];
-    let mut times = [Vec::new(), Vec::new(), Vec::new()];
+    let mut times = [Vec::new(), Vec::new(), Vec::new(), Vec::new()];
     for round in 0..frames + 2 {
         for (k, v) in views.iter().enumerate() {
+            if k < 3 {
+                renderer.invalidate_tessellation();
+            }
             let ms = renderer.frame(target, v, profiler)?;
             if round >= 2 {
                 times[k].push(ms);
@@ -360,7 +366,12 @@ fn timed(
     frames: usize,
 ) -> Result<f64> {
     renderer.frame(target, view, profiler)?;
-    let ms = (0..frames).map(|_| renderer.frame(target, view, profiler)).collect::<Result<Vec<_>, _>>()?;
+    let ms = (0..frames)
+        .map(|_| {
+            renderer.invalidate_tessellation();
+            renderer.frame(target, view, profiler)
+        })
+        .collect::<Result<Vec<_>, _>>()?;
     Ok(median(ms))
 }
 
@@ -373,11 +384,11 @@ pub fn bench(desc: &GpuDesc, args: &BenchArgs) -> Result<()> {
     let size = (1024, 768);
     let c = gpu.caps();
     println!(
-        "Device: {} ({}); 1024×768, geometry of order 3 (GLL), GLL fields, median device time of {frames} frames per mode, the three modes interleaved frame by frame; edge overdraw off in all (the seed had none). Per pixel: the surface tessellated to ½ px and the field evaluated per fragment. Per vertex, node grid: the seed's baseline (colour at the nodes, the geometry flat between them). Per vertex, same tessellation: the per-pixel path's triangles with colour at their vertices.\n",
+        "Device: {} ({}); 1024×768, geometry of order 3 (GLL), GLL fields, median device time of {frames} frames per mode, the four modes interleaved frame by frame; edge overdraw off in all (the seed had none). Per pixel: the surface tessellated anew to ½ px each frame (as when the camera moves) and the field evaluated per fragment. Per vertex, node grid: the seed's baseline (colour at the nodes, the geometry flat between them). Per vertex, same tessellation: the per-pixel path's triangles with colour at their vertices. Per pixel, camera still: the last tessellation reused (time stepping, range changes).\n",
         c.device_name, c.driver
     );
-    println!("| data | order | per pixel ms (FPS) | per vertex, node grid ms (FPS) | rate ÷ node grid | per vertex, same tessellation ms | rate ÷ same tessellation | triangles: per pixel / node grid | fragments | per-pixel device memory | node grids |");
-    println!("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
+    println!("| data | order | per pixel ms (FPS) | per vertex, node grid ms (FPS) | rate ÷ node grid | per vertex, same tessellation ms | rate ÷ same tessellation | per pixel, camera still ms | its rate ÷ node grid | triangles: per pixel / node grid | fragments | per-pixel device memory | node grids |");
+    println!("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
     let colormap = Colormap::viridis();
     let target = RenderTarget::new(&gpu, "bench spectral", size.0, size.1, ColorFormat::Rgba8)?;
     let pixel = SpectralView { overdraw: false, ..SpectralView::default() };
@@ -385,18 +396,19 @@ pub fn bench(desc: &GpuDesc, args: &BenchArgs) -> Result<()> {
         for &order in &orders {
             let mesh = Arc::new(generate::by_name(name, 3, order, NodeSet::GaussLobatto)?);
             let mut renderer = SpectralRenderer::new(&gpu, mesh.clone(), &colormap)?;
-            let [pp, pv, pt] = per_pixel_and_vertex(&mut profiler, &mut renderer, &target, frames)?;
+            let [pp, pv, pt, ps] = per_pixel_and_vertex(&mut profiler, &mut renderer, &target, frames)?;
             let fragments = covered(&mut renderer, &gpu, size, &pixel)?;
             renderer.frame(&target, &pixel, &mut profiler)?;
             let tessellated = renderer.last_tessellation()?.map_or(0, |t| t.0) / 3;
             let (bytes, grids) = renderer.device_bytes();
             println!(
-                "| {name} ({}) | {order} | {pp:.1} ({:.1}) | {pv:.1} ({:.1}) | {:.2}× | {pt:.1} | {:.2}× | {tessellated} / {} | {fragments} | {:.2} MB | {:.2} MB |",
+                "| {name} ({}) | {order} | {pp:.1} ({:.1}) | {pv:.1} ({:.1}) | {:.2}× | {pt:.1} | {:.2}× | {ps:.1} | {:.2}× | {tessellated} / {} | {fragments} | {:.2} MB | {:.2} MB |",
                 mesh.elements(),
                 1e3 / pp,
                 1e3 / pv,
                 pv / pp,
                 pt / pp,
+                pv / ps,
                 renderer.primitive_counts()[1],
                 bytes as f64 / 1e6,
                 grids as f64 / 1e6

@@ -147,6 +147,10 @@ struct Cutter {
     pipelines: HashMap<ColorFormat, (GraphicsPipeline, DescriptorSet)>,
 }
 
+/// What a tessellation depends on: the view-projection, the focal scale, the error budget and
+/// level cap (f32 bits), and which patches (geometry or a height field) it used.
+type TessellationKey = [u32; 22];
+
 /// The surface tessellation pass and its output: the vertex stream and its indirect draw
 /// (`vertex_count, 1, 0, 0`, then the capacity in vertices and the elements skipped).
 struct Tessellator {
@@ -183,6 +187,9 @@ pub struct SpectralRenderer {
     cutter: Option<Cutter>,
     /// Vertices the last surface frame reserved room for (the CPU bound of its tessellation).
     tessellated: u64,
+    /// The inputs of the tessellation the vertex stream holds (view, scale, budget, cap,
+    /// patches), set when a pass is recorded: a frame with the same inputs reuses it.
+    tessellation_key: std::cell::Cell<Option<TessellationKey>>,
 }
 
 impl SpectralRenderer {
@@ -257,6 +264,7 @@ impl SpectralRenderer {
             tessellator: None,
             cutter,
             tessellated: 0,
+            tessellation_key: std::cell::Cell::new(None),
         })
     }
 
@@ -425,7 +433,9 @@ impl SpectralRenderer {
         let lifted = !self.planar || push.flags[3] == 1;
         // A height field is always drawn from the tessellation (the node grids are flat).
         let surface = lifted && (!view.per_vertex || view.per_vertex_on_tessellation || self.planar);
-        if surface {
+        let key = self.tessellation_key_of(&push);
+        let fresh = surface && self.tessellation_key.get() == Some(key);
+        if surface && !fresh {
             self.tessellator_for(&push)?;
         }
         let p = &self.pipelines[&target.format()];
@@ -437,8 +447,13 @@ impl SpectralRenderer {
         let tess = self.tessellator.as_ref().filter(|_| surface);
         let capacity = self.tessellated as u32;
         let elements = self.mesh.elements() as u64;
+        let key_cell = &self.tessellation_key;
         let pre = move |cmd: vk::CommandBuffer| {
             let Some(t) = tess else { return };
+            if fresh {
+                // The stream already holds this view's tessellation (e.g. a new time step).
+                return;
+            }
             let cs = vk::PipelineStageFlags::COMPUTE_SHADER;
             // The last frame's draw has read the buffers this pass rewrites.
             gpu.memory_barrier(
@@ -471,6 +486,7 @@ impl SpectralRenderer {
                     vk::AccessFlags::INDIRECT_COMMAND_READ | vk::AccessFlags::VERTEX_ATTRIBUTE_READ,
                 ),
             );
+            key_cell.set(Some(key));
         };
         let (faces, face_count) = if view.per_vertex {
             (self.node_grids.raw(), self.counts[1])

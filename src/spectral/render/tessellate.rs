@@ -48,6 +48,28 @@ impl SpectralRenderer {
         camera_for_box(a, b)
     }
 
+    /// The inputs of a tessellation for `push` with the current patches.
+    pub(super) fn tessellation_key_of(&self, push: &SpectralPush) -> TessellationKey {
+        let mut k = [0u32; 22];
+        for (i, v) in push.view_proj.iter().enumerate() {
+            k[i] = v.to_bits();
+        }
+        k[16] = push.pixel_to_world[3].to_bits();
+        k[17] = push.misc[2].to_bits();
+        k[18] = push.misc[3].to_bits();
+        let (field, step, scale) = self.patches_for.unwrap_or((usize::MAX, usize::MAX, 0));
+        k[19] = field as u32;
+        k[20] = step as u32;
+        k[21] = (scale ^ (scale >> 32)) as u32;
+        k
+    }
+
+    /// Forgets the tessellation the vertex stream holds, so the next frame tessellates again
+    /// (benchmarks of a moving camera).
+    pub fn invalidate_tessellation(&mut self) {
+        self.tessellation_key.set(None);
+    }
+
     /// Makes room for this frame's surface tessellation (the CPU bound of the device's levels,
     /// one level of slack per element against f32 rounding) and binds the pass.
     pub(super) fn tessellator_for(&mut self, push: &SpectralPush) -> Result<()> {
@@ -105,6 +127,7 @@ impl SpectralRenderer {
         if t.vertices.as_ref().is_none_or(|v| v.len() < need) {
             // Grow by half again, so a slowly moving camera does not reallocate every frame.
             let len = (need + need / 2).min(max);
+            self.tessellation_key.set(None);
             t.set = None;
             t.vertices = None;
             t.vertices = Some(
