@@ -58,6 +58,23 @@ pub struct SpectralMesh {
     pub fields: Vec<Field>,
 }
 
+/// The axis-aligned box [lo, hi] of `points`.
+pub fn bounds_of(points: &[[f64; 3]]) -> ([f64; 3], [f64; 3]) {
+    points.iter().fold(([f64::MAX; 3], [f64::MIN; 3]), |(lo, hi), p| {
+        (std::array::from_fn(|c| lo[c].min(p[c])), std::array::from_fn(|c| hi[c].max(p[c])))
+    })
+}
+
+/// Whether `p` lies in the box of an element's control points grown by half its size on each
+/// side (Lagrange geometry can bulge past its nodes a little), on the first `dims` axes.
+fn near_box(points: &[[f64; 3]], p: &[f64], dims: usize) -> bool {
+    let (lo, hi) = bounds_of(points);
+    (0..dims).all(|c| {
+        let grow = 0.5 * (hi[c] - lo[c]);
+        p[c] >= lo[c] - grow && p[c] <= hi[c] + grow
+    })
+}
+
 /// Newton iterations of the inverse map: quadratic convergence from a guess inside the
 /// element takes 3–6 steps for the curved meshes here; the cap only stops divergence.
 pub const NEWTON_ITERATIONS: usize = 12;
@@ -129,6 +146,11 @@ impl SpectralMesh {
     /// Number of elements.
     pub fn elements(&self) -> usize {
         self.points.len() / self.geometry.len().pow(self.shape.dim())
+    }
+
+    /// The box [lo, hi] of every geometry point.
+    pub fn bounds(&self) -> ([f64; 3], [f64; 3]) {
+        bounds_of(&self.points)
     }
 
     /// Whether this is a quadrilateral mesh with z = 0 at every geometry point (drawn in 2D).
@@ -231,18 +253,7 @@ impl SpectralMesh {
     /// whose bounding box (grown by `tol` of its size) contains `p`.
     pub fn locate(&self, p: [f64; 2], tol: f64) -> Option<(usize, [f64; 2])> {
         (0..self.elements()).find_map(|e| {
-            let pts = self.element_points(e);
-            let (mut lo, mut hi) = ([f64::MAX; 2], [f64::MIN; 2]);
-            // The control points' box, grown by half its size: Lagrange geometry can bulge
-            // past its nodes a little.
-            for q in pts {
-                for c in 0..2 {
-                    lo[c] = lo[c].min(q[c]);
-                    hi[c] = hi[c].max(q[c]);
-                }
-            }
-            let grow = [0.5 * (hi[0] - lo[0]), 0.5 * (hi[1] - lo[1])];
-            if (0..2).any(|c| p[c] < lo[c] - grow[c] || p[c] > hi[c] + grow[c]) {
+            if !near_box(self.element_points(e), &p, 2) {
                 return None;
             }
             let r = self.inverse_map(e, p, [0.5, 0.5])?;
@@ -361,18 +372,7 @@ impl SpectralMesh {
     /// box (grown by half its size) contains `p`.
     pub fn locate_hex(&self, p: [f64; 3], tol: f64) -> Option<(usize, [f64; 3])> {
         (0..self.elements()).find_map(|e| {
-            let pts = self.element_points(e);
-            let (mut lo, mut hi) = ([f64::MAX; 3], [f64::MIN; 3]);
-            for q in pts {
-                for c in 0..3 {
-                    lo[c] = lo[c].min(q[c]);
-                    hi[c] = hi[c].max(q[c]);
-                }
-            }
-            if (0..3).any(|c| {
-                let grow = 0.5 * (hi[c] - lo[c]);
-                p[c] < lo[c] - grow || p[c] > hi[c] + grow
-            }) {
+            if !near_box(self.element_points(e), &p, 3) {
                 return None;
             }
             let r = self.inverse_map_hex(e, p, [0.5; 3])?;

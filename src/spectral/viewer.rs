@@ -55,13 +55,7 @@ impl SpectralContent {
         playing: bool,
     ) -> Self {
         let palette = PALETTES.iter().position(|p| *p == palette).unwrap_or(0);
-        let (mut lo, mut hi) = ([f64::MAX; 3], [f64::MIN; 3]);
-        for p in &mesh.points {
-            for c in 0..3 {
-                lo[c] = lo[c].min(p[c]);
-                hi[c] = hi[c].max(p[c]);
-            }
-        }
+        let (lo, hi) = mesh.bounds();
         let centre: [f64; 3] = std::array::from_fn(|c| 0.5 * (lo[c] + hi[c]));
         let extent = (0..3).map(|c| hi[c] - lo[c]).fold(0.0, f64::max).max(1e-12);
         let mut view = view;

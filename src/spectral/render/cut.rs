@@ -95,11 +95,8 @@ impl SpectralRenderer {
                 view.cuts.len()
             )));
         }
-        let default = {
-            let (lo, hi) =
-                self.mesh.points.iter().fold((f64::MAX, f64::MIN), |(a, b), p| (a.min(p[2]), b.max(p[2])));
-            vec![[0.0, 0.0, 1.0, 0.5 * (lo + hi)]]
-        };
+        let (lo, hi) = self.bounds;
+        let default = vec![[0.0, 0.0, 1.0, 0.5 * (lo[2] + hi[2])]];
         let cuts = if view.cuts.is_empty() { &default } else { &view.cuts };
         cuts.iter()
             .enumerate()
@@ -115,29 +112,21 @@ impl SpectralRenderer {
 
     pub(super) fn cut_pipeline_for(&mut self, target: &RenderTarget) -> Result<()> {
         let format = target.format();
-        let Some(c) = self.cutter.as_mut() else { return Ok(()) };
+        let Some(c) = self.cutter.as_ref() else { return Ok(()) };
         if c.pipelines.contains_key(&format) {
             return Ok(());
         }
-        let mut desc = GraphicsPipelineDesc::new(
+        let planes = Resource::Storage(c.planes.binding().map_err(dev("binding"))?);
+        let desc = self.draw_desc(
             "spectral cut planes",
             shaders::spectral::CUT_VERT,
             shaders::spectral::CUT_FRAG,
-            target.render_pass().raw(),
+            target,
         );
-        desc.bindings = &DRAW_BINDINGS;
-        desc.specialization = &self.specialization;
-        desc.push_constant_bytes = std::mem::size_of::<SpectralPush>() as u32;
-        desc.vertex_stride = std::mem::size_of::<DrawVertex>() as u32;
-        desc.vertex_attributes = &DRAW_VERTEX_ATTRIBUTES;
         let pipeline = GraphicsPipeline::new(&self.gpu, &desc).map_err(dev("building the cut pipeline"))?;
-        let resources = [
-            self.resources[0],
-            self.resources[1],
-            self.resources[2],
-            Resource::Storage(c.planes.binding().map_err(dev("binding"))?),
-        ];
+        let resources = [self.resources[0], self.resources[1], self.resources[2], planes];
         let set = pipeline.bind(&self.gpu, &resources).map_err(dev("binding the cut pipeline"))?;
+        let c = self.cutter.as_mut().expect("checked above");
         c.pipelines.insert(format, (pipeline, set));
         Ok(())
     }

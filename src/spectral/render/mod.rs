@@ -176,6 +176,8 @@ pub struct SpectralRenderer {
     /// What the uploaded patches describe: the geometry (`None`) or a height field
     /// (field, step, scale bits).
     patches_for: Option<(usize, usize, u64)>,
+    /// The mesh's box, computed once (views and cameras are fitted to it every frame).
+    bounds: ([f64; 3], [f64; 3]),
     counts: [u32; 3],
     planar: bool,
     colormap: ColormapTexture,
@@ -240,6 +242,7 @@ impl SpectralRenderer {
             Resource::Storage(patches.binding().map_err(dev("binding"))?),
         ];
         let specialization = basis_specialization(&mesh);
+        let bounds = mesh.bounds();
         let cutter =
             if hex { Some(Cutter::new(gpu, &mesh, &points, &values, &specialization)?) } else { None };
         Ok(Self {
@@ -254,6 +257,7 @@ impl SpectralRenderer {
             _patches: patches,
             patch_bounds,
             patches_for: None,
+            bounds,
             counts,
             planar,
             colormap,
@@ -325,23 +329,36 @@ impl SpectralRenderer {
         Ok(())
     }
 
+    /// A pipeline description for the spectral draws: their bindings, the bases'
+    /// specialization, the push constants and the [`DrawVertex`] stream.
+    fn draw_desc<'a>(
+        &'a self,
+        name: &'a str,
+        vertex: &'a [u32],
+        fragment: &'a [u32],
+        target: &RenderTarget,
+    ) -> GraphicsPipelineDesc<'a> {
+        let mut desc = GraphicsPipelineDesc::new(name, vertex, fragment, target.render_pass().raw());
+        desc.bindings = &DRAW_BINDINGS;
+        desc.specialization = &self.specialization;
+        desc.push_constant_bytes = std::mem::size_of::<SpectralPush>() as u32;
+        desc.vertex_stride = std::mem::size_of::<DrawVertex>() as u32;
+        desc.vertex_attributes = &DRAW_VERTEX_ATTRIBUTES;
+        desc
+    }
+
     fn pipelines_for(&mut self, format: ColorFormat, target: &RenderTarget) -> Result<()> {
         if self.pipelines.contains_key(&format) {
             return Ok(());
         }
         let make = |lines: bool| {
             let name = if lines { "spectral edges" } else { "spectral elements" };
-            let mut desc = GraphicsPipelineDesc::new(
+            let mut desc = self.draw_desc(
                 name,
                 shaders::spectral::ELEMENT_VERT,
                 shaders::spectral::ELEMENT_FRAG,
-                target.render_pass().raw(),
+                target,
             );
-            desc.bindings = &DRAW_BINDINGS;
-            desc.specialization = &self.specialization;
-            desc.push_constant_bytes = std::mem::size_of::<SpectralPush>() as u32;
-            desc.vertex_stride = std::mem::size_of::<DrawVertex>() as u32;
-            desc.vertex_attributes = &DRAW_VERTEX_ATTRIBUTES;
             if lines {
                 desc.topology = vk::PrimitiveTopology::LINE_LIST;
             }
@@ -360,13 +377,14 @@ impl SpectralRenderer {
         let height = self.height_scale(view);
         let flat = self.planar && height.is_none();
         let (view_proj, pixel_to_world) = if flat {
-            let v2 = view.view.unwrap_or_else(|| View2d::fit(&self.mesh, e.width, e.height));
+            let (lo, hi) = self.bounds;
+            let v2 = view.view.unwrap_or_else(|| View2d::fit_box(lo, hi, e.width, e.height));
             (v2.view_proj(e.width, e.height), v2.pixel_to_world(e.width, e.height))
         } else {
             let camera = match (view.camera, height) {
                 (Some(c), _) => c,
                 (None, Some(s)) => self.height_camera(view, s),
-                (None, None) => fit_camera(&self.mesh),
+                (None, None) => camera_for_box(self.bounds.0, self.bounds.1),
             };
             let aspect = target.aspect();
             let tan_half = (0.5 * camera.fov_y_degrees.to_radians()).tan();

@@ -14,8 +14,8 @@ impl SpectralRenderer {
             return Some(scale);
         }
         let (lo, hi) = self.range(view);
-        let size = self.mesh.points.iter().fold((f64::MAX, f64::MIN), |(a, b), p| (a.min(p[0]), b.max(p[0])));
-        Some(0.25 * (size.1 - size.0) / (hi - lo).max(1e-300))
+        let (a, b) = self.bounds;
+        Some(0.25 * (b[0] - a[0]) / (hi - lo).max(1e-300))
     }
 
     /// Uploads the patches `view` needs: the height field's when it shows one.
@@ -36,13 +36,7 @@ impl SpectralRenderer {
     /// A camera that shows the height field of `view` (its box, z from the scaled range).
     pub(super) fn height_camera(&mut self, view: &SpectralView, scale: f64) -> Camera {
         let (lo, hi) = self.range(view);
-        let (mut a, mut b) = ([f64::MAX; 3], [f64::MIN; 3]);
-        for p in &self.mesh.points {
-            for c in 0..2 {
-                a[c] = a[c].min(p[c]);
-                b[c] = b[c].max(p[c]);
-            }
-        }
+        let (mut a, mut b) = self.bounds;
         a[2] = (scale * lo).min(scale * hi);
         b[2] = (scale * lo).max(scale * hi);
         camera_for_box(a, b)
@@ -62,6 +56,14 @@ impl SpectralRenderer {
         k[20] = step as u32;
         k[21] = (scale ^ (scale >> 32)) as u32;
         k
+    }
+
+    /// Each element's tessellation level for `push` by the CPU twin of `tessellate.comp`.
+    fn cpu_levels<'a>(&'a self, push: &'a SpectralPush) -> impl Iterator<Item = u32> + 'a {
+        let view_proj = Mat4::from_cols_array(&push.view_proj);
+        self.patch_bounds.iter().map(move |p| {
+            proxy::tessellation_level(p, &view_proj, push.pixel_to_world[3], push.misc[2], push.misc[3])
+        })
     }
 
     /// Forgets the tessellation the vertex stream holds, so the next frame tessellates again
@@ -100,18 +102,11 @@ impl SpectralRenderer {
             .map_err(dev("the tessellation pass"))?;
             self.tessellator = Some(Tessellator { pipeline, draw, vertices: None, set: None });
         }
-        let view_proj = Mat4::from_cols_array(&push.view_proj);
         let need: u64 = self
-            .patch_bounds
-            .iter()
-            .map(|p| {
-                let l = u64::from(proxy::tessellation_level(
-                    p,
-                    &view_proj,
-                    push.pixel_to_world[3],
-                    push.misc[2],
-                    push.misc[3],
-                ));
+            .cpu_levels(push)
+            .map(|l| {
+                let l = u64::from(l);
+                // One level of slack against f32 rounding differences with the device.
                 if l == 0 {
                     0
                 } else {
@@ -167,19 +162,6 @@ impl SpectralRenderer {
     /// gives `view` in `target`: 6 L² per element.
     pub fn expected_tessellation(&mut self, target: &RenderTarget, view: &SpectralView) -> u64 {
         let push = self.push(target, view);
-        let view_proj = Mat4::from_cols_array(&push.view_proj);
-        self.patch_bounds
-            .iter()
-            .map(|p| {
-                let l = u64::from(proxy::tessellation_level(
-                    p,
-                    &view_proj,
-                    push.pixel_to_world[3],
-                    push.misc[2],
-                    push.misc[3],
-                ));
-                6 * l * l
-            })
-            .sum()
+        self.cpu_levels(&push).map(|l| 6 * u64::from(l) * u64::from(l)).sum()
     }
 }

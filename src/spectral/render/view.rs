@@ -9,13 +9,7 @@ use crate::spectral::SpectralMesh;
 
 /// A camera that shows all of `mesh` (its bounding sphere) from above the x–y diagonal.
 pub fn fit_camera(mesh: &SpectralMesh) -> Camera {
-    let (mut lo, mut hi) = ([f64::MAX; 3], [f64::MIN; 3]);
-    for p in &mesh.points {
-        for c in 0..3 {
-            lo[c] = lo[c].min(p[c]);
-            hi[c] = hi[c].max(p[c]);
-        }
-    }
+    let (lo, hi) = mesh.bounds();
     camera_for_box(lo, hi)
 }
 
@@ -50,13 +44,13 @@ pub struct View2d {
 impl View2d {
     /// The view that fits `mesh`'s geometry points (with a 4 % margin) into `width` × `height`.
     pub fn fit(mesh: &SpectralMesh, width: u32, height: u32) -> Self {
-        let (mut lo, mut hi) = ([f64::MAX; 2], [f64::MIN; 2]);
-        for p in &mesh.points {
-            for c in 0..2 {
-                lo[c] = lo[c].min(p[c]);
-                hi[c] = hi[c].max(p[c]);
-            }
-        }
+        let (lo, hi) = mesh.bounds();
+        Self::fit_box(lo, hi, width, height)
+    }
+
+    /// The view that fits the box [`lo`, `hi`] (x and y; with a 4 % margin) into `width` ×
+    /// `height`.
+    pub fn fit_box(lo: [f64; 3], hi: [f64; 3], width: u32, height: u32) -> Self {
         let size = ((hi[0] - lo[0]) / f64::from(width)).max((hi[1] - lo[1]) / f64::from(height));
         Self { centre: [0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1])], pixel_size: 1.04 * size.max(1e-30) }
     }
