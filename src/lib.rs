@@ -15,11 +15,13 @@
 //! The layers: [`gpu`] (Vulkan, knows nothing of the maths), [`render`] (targets, images,
 //! colour maps, camera, viewer), [`demo`] (the first passes with their CPU references),
 //! [`mod@bench`] (the device's ceilings), [`tensor`] and [`reduce`] (seed 000 §3–4), [`spacetime`]
-//! (seed 003), [`spectral`] (seed 002).
+//! (seed 003), [`spectral`] (seed 002),
+//! [`radiosity`] (seed 000 §8–9).
 
 pub mod bench;
 pub mod demo;
 pub mod gpu;
+pub mod radiosity;
 pub mod reduce;
 pub mod render;
 pub mod spacetime;

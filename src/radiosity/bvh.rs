@@ -1,0 +1,151 @@
+//! A bounding-volume hierarchy over the scene's triangles and the segment test that decides
+//! `Vis(i, j)` of Eq. 15: built on the CPU (median splits on the longest axis of the
+//! centroids' box), traversed here in f64 (the CPU path and reference) and, flattened to f32,
+//! in the compute shader `radiosity/form_factors.comp`.
+
+use glam::DVec3;
+
+/// Triangles per leaf at most.
+const LEAF_SIZE: usize = 4;
+
+/// One node of the flattened tree: its box, and either its children (`count == 0`: the left
+/// child is the next node, the right child at `right_or_first`) or its triangles
+/// (`count > 0`: `order[right_or_first ..][.. count]`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BvhNode {
+    /// Box minimum.
+    pub lo: DVec3,
+    /// Box maximum.
+    pub hi: DVec3,
+    /// Right child (inner node) or first triangle (leaf).
+    pub right_or_first: u32,
+    /// Triangles in a leaf; 0 for an inner node.
+    pub count: u32,
+}
+
+/// The hierarchy and the triangles it holds.
+#[derive(Clone, Debug)]
+pub struct Bvh {
+    /// Nodes, depth first (a node's left child follows it).
+    pub nodes: Vec<BvhNode>,
+    /// Triangle indices in leaf order.
+    pub order: Vec<u32>,
+    /// Triangle corners, by triangle index.
+    pub triangles: Vec<[DVec3; 3]>,
+}
+
+impl Bvh {
+    /// Builds the hierarchy over `triangles`.
+    pub fn new(triangles: Vec<[DVec3; 3]>) -> Self {
+        let mut order: Vec<u32> = (0..triangles.len() as u32).collect();
+        let centroids: Vec<DVec3> = triangles.iter().map(|t| (t[0] + t[1] + t[2]) / 3.0).collect();
+        let mut nodes = Vec::with_capacity(2 * triangles.len() / LEAF_SIZE + 1);
+        if !triangles.is_empty() {
+            build(&triangles, &centroids, &mut order, 0, &mut nodes);
+        }
+        Self { nodes, order, triangles }
+    }
+
+    /// Whether the open segment from `a` to `b` (end points excluded by a relative margin)
+    /// crosses any triangle other than `skip`.
+    pub fn occluded(&self, a: DVec3, b: DVec3, skip: [u32; 2]) -> bool {
+        if self.nodes.is_empty() {
+            return false;
+        }
+        let d = b - a;
+        let inv = d.recip();
+        let (t_lo, t_hi) = (SEGMENT_MARGIN, 1.0 - SEGMENT_MARGIN);
+        let mut stack = [0u32; 64];
+        let mut top = 1;
+        while top > 0 {
+            top -= 1;
+            let index = stack[top];
+            let node = &self.nodes[index as usize];
+            if !slab(node.lo, node.hi, a, inv, t_lo, t_hi) {
+                continue;
+            }
+            if node.count == 0 {
+                stack[top] = node.right_or_first;
+                stack[top + 1] = index + 1;
+                top += 2;
+            } else {
+                let first = node.right_or_first as usize;
+                for &t in &self.order[first..first + node.count as usize] {
+                    if t != skip[0] && t != skip[1] {
+                        if let Some(s) = segment_triangle(a, d, &self.triangles[t as usize]) {
+                            if s > t_lo && s < t_hi {
+                                return true;
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        false
+    }
+}
+
+/// The part of the segment cut off at each end, relative to its length: rays start and end on
+/// the two faces themselves, so their own planes must not count.
+pub const SEGMENT_MARGIN: f64 = 1e-7;
+
+fn build(tris: &[[DVec3; 3]], centroids: &[DVec3], order: &mut [u32], first: usize, nodes: &mut Vec<BvhNode>) -> usize {
+    let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
+    let (mut clo, mut chi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
+    for &t in order.iter() {
+        for p in tris[t as usize] {
+            lo = lo.min(p);
+            hi = hi.max(p);
+        }
+        clo = clo.min(centroids[t as usize]);
+        chi = chi.max(centroids[t as usize]);
+    }
+    let me = nodes.len();
+    nodes.push(BvhNode { lo, hi, right_or_first: first as u32, count: order.len() as u32 });
+    let extent = chi - clo;
+    if order.len() <= LEAF_SIZE || extent.max_element() <= 0.0 {
+        return me;
+    }
+    let axis = if extent.x >= extent.y && extent.x >= extent.z { 0 } else if extent.y >= extent.z { 1 } else { 2 };
+    let mid = order.len() / 2;
+    order.select_nth_unstable_by(mid, |a, b| centroids[*a as usize][axis].total_cmp(&centroids[*b as usize][axis]));
+    let (left, right) = order.split_at_mut(mid);
+    build(tris, centroids, left, first, nodes);
+    let r = build(tris, centroids, right, first + mid, nodes);
+    nodes[me].right_or_first = r as u32;
+    nodes[me].count = 0;
+    me
+}
+
+/// Whether the segment `a + s·d`, `s ∈ [t_lo, t_hi]`, meets the box (slab test; `inv = 1/d`).
+fn slab(lo: DVec3, hi: DVec3, a: DVec3, inv: DVec3, t_lo: f64, t_hi: f64) -> bool {
+    let t0 = (lo - a) * inv;
+    let t1 = (hi - a) * inv;
+    let near = t0.min(t1).max_element().max(t_lo);
+    let far = t0.max(t1).min_element().min(t_hi);
+    // NaN (0·∞ for a segment in a box's face plane) compares false: treat as a hit.
+    !(near > far)
+}
+
+/// Möller–Trumbore: the parameter `s` where `a + s·d` meets the triangle, edges included.
+pub fn segment_triangle(a: DVec3, d: DVec3, t: &[DVec3; 3]) -> Option<f64> {
+    let e1 = t[1] - t[0];
+    let e2 = t[2] - t[0];
+    let p = d.cross(e2);
+    let det = e1.dot(p);
+    if det.abs() < 1e-300 {
+        return None;
+    }
+    let inv = 1.0 / det;
+    let s = a - t[0];
+    let u = s.dot(p) * inv;
+    if !(0.0..=1.0).contains(&u) {
+        return None;
+    }
+    let q = s.cross(e1);
+    let v = d.dot(q) * inv;
+    if v < 0.0 || u + v > 1.0 {
+        return None;
+    }
+    Some(e2.dot(q) * inv)
+}

@@ -1,0 +1,60 @@
+//! Errors of the radiosity module: a bad scene names the file and line or the parameter, a bad
+//! mesh names the face or vertex.
+
+use std::path::PathBuf;
+
+/// What can go wrong with a radiosity scene or its solution.
+#[derive(Debug, thiserror::Error)]
+pub enum RadiosityError {
+    /// A scene file that does not parse or does not validate.
+    #[error("{path}:{line}: {message}")]
+    Scene {
+        /// The file.
+        path: PathBuf,
+        /// 1-based line (0 when the file could not be read at all).
+        line: usize,
+        /// What is wrong.
+        message: String,
+    },
+    /// A parameter value outside its declared range, or an unknown parameter.
+    #[error("parameter {name}: {message}")]
+    Parameter {
+        /// The parameter.
+        name: String,
+        /// What is wrong.
+        message: String,
+    },
+    /// A face with (numerically) zero area.
+    #[error("face {face} ({part}): degenerate triangle (area {area:e} m²)")]
+    DegenerateFace {
+        /// The face.
+        face: usize,
+        /// The scene part it belongs to.
+        part: String,
+        /// Its area.
+        area: f64,
+    },
+    /// A NaN or infinity in a vertex, albedo or light.
+    #[error("{what} is not finite")]
+    NotFinite {
+        /// Which value (names the vertex or face).
+        what: String,
+    },
+    /// A mesh whose arrays disagree (a face referencing a missing vertex, wrong lengths).
+    #[error("{0}")]
+    Mesh(String),
+    /// An OBJ file that cannot be used.
+    #[error("{path}: {message}")]
+    Obj {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong.
+        message: String,
+    },
+    /// The linear solve failed (a singular `I − ρF`: albedo ≥ 1 in a closed scene).
+    #[error("radiosity solve: {0}")]
+    Solve(String),
+    /// A device error.
+    #[error(transparent)]
+    Gpu(#[from] crate::gpu::GpuError),
+}

@@ -1,0 +1,63 @@
+//! Radiosity on deforming scenes (seed 000 §8–9).
+//!
+//! A scene ([`SceneSpec`], TOML) is generated as one triangle mesh of fixed topology whose
+//! vertex positions `g` depend on the design parameters ([`architecture::build`]). The full
+//! radiosity — the ground truth and the training data of the reduced model — samples the form
+//! factors at face centroids (Eq. 15, [`form_factor`]) with visibility by segment casting
+//! against a BVH ([`bvh`]), lights the scene by area lights in the openings or by a sky seen
+//! through them ([`lighting`]) and solves Eq. 14 per colour channel ([`solve`]).
+
+pub mod architecture;
+pub mod bvh;
+mod error;
+pub mod form_factor;
+pub mod lighting;
+pub mod mesh;
+pub mod scene;
+pub mod solve;
+
+pub use error::RadiosityError;
+pub use form_factor::FormFactors;
+pub use mesh::{FaceGeometry, FaceKind, SceneMesh};
+pub use scene::{LightMode, Lights, Parameters, SceneSpec, PARAMETERS};
+pub use solve::Rgb;
+
+/// Relative change at which the Jacobi sweeps stop (f64: far below what a picture shows).
+pub const JACOBI_TOLERANCE: f64 = 1e-10;
+/// Sweeps allowed: `max ρ^k < 10⁻¹⁰` needs `k ≈ 23 / −ln(max ρ)`, about 130 for ρ = 0.85.
+pub const JACOBI_MAX_SWEEPS: usize = 2000;
+
+/// A full-space radiosity solution of one configuration.
+#[derive(Clone, Debug)]
+pub struct FullSolution {
+    /// The mesh at the configuration.
+    pub mesh: SceneMesh,
+    /// Its face geometry.
+    pub geometry: FaceGeometry,
+    /// `F` (Eq. 15).
+    pub form_factors: FormFactors,
+    /// `e`.
+    pub emission: Vec<Rgb>,
+    /// `b` (Eq. 14).
+    pub radiosity: Vec<Rgb>,
+    /// Jacobi sweeps taken.
+    pub sweeps: usize,
+}
+
+/// Full radiosity of the scene at parameters `p` on the CPU (f64).
+pub fn full_radiosity(spec: &SceneSpec, p: &Parameters) -> Result<FullSolution, RadiosityError> {
+    spec.check(p)?;
+    let mesh = architecture::build(spec, p)?;
+    full_radiosity_of(mesh, &spec.lights)
+}
+
+/// Full radiosity of a given mesh under `lights` (CPU, f64).
+pub fn full_radiosity_of(mesh: SceneMesh, lights: &Lights) -> Result<FullSolution, RadiosityError> {
+    mesh.validate()?;
+    let geometry = mesh.geometry();
+    let form_factors = form_factor::form_factors(&mesh, form_factor::NearField::default());
+    let emission = lighting::emission(&mesh, &geometry, lights, &form_factors);
+    let (radiosity, sweeps) =
+        solve::solve_jacobi(&form_factors, &mesh.albedo, &emission, JACOBI_TOLERANCE, JACOBI_MAX_SWEEPS)?;
+    Ok(FullSolution { mesh, geometry, form_factors, emission, radiosity, sweeps })
+}
