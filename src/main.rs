@@ -8,6 +8,7 @@ use std::time::Instant;
 use anyhow::{bail, Context, Result};
 
 mod cli {
+    pub mod radiosity;
     pub mod spacetime;
     pub mod spectral;
 }
@@ -80,6 +81,12 @@ enum Command {
     Spectral(cli::spectral::RenderArgs),
     /// Generate a spectral-element data set to a .vtu file (analytic fields, not solved).
     SpectralGen(cli::spectral::GenArgs),
+    /// Radiosity on the deforming two-room scene (seed 000 §8–9): full radiosity of a
+    /// configuration, drawn to PNG or EXR.
+    Radiosity {
+        #[command(subcommand)]
+        action: cli::radiosity::Action,
+    },
     /// Benchmarks.
     Bench {
         #[command(subcommand)]
@@ -146,6 +153,7 @@ fn run(cli: Cli) -> Result<()> {
         Command::SpacetimeGen(args) => cli::spacetime::generate_file(&args),
         Command::SpacetimeConvert(args) => cli::spacetime::convert(&args),
         Command::Spectral(args) => cli::spectral::render(&desc, &args),
+        Command::Radiosity { action } => cli::radiosity::run(&desc, &action),
         Command::SpectralGen(args) => cli::spectral::generate_file(&args),
         Command::Bench { what: BenchWhat::Gpu { quick } } => bench_gpu(&desc, quick),
         Command::Bench { what: BenchWhat::Reduce { quick } } => bench_reduce(&desc, quick),

@@ -38,7 +38,8 @@ fn parallel_unit_squares_match_the_closed_form() {
         let (x, y) = (1.0f64, 1.0f64);
         let (x2, y2) = ((1.0 + x * x), (1.0 + y * y));
         2.0 / (std::f64::consts::PI * x * y)
-            * ((x2 * y2 / (1.0 + x * x + y * y)).sqrt().ln() + x * y2.sqrt() * (x / y2.sqrt()).atan()
+            * ((x2 * y2 / (1.0 + x * x + y * y)).sqrt().ln()
+                + x * y2.sqrt() * (x / y2.sqrt()).atan()
                 + y * x2.sqrt() * (y / x2.sqrt()).atan()
                 - x * x.atan()
                 - y * y.atan())
@@ -78,12 +79,12 @@ fn unit_box(cells: usize) -> SceneMesh {
     let o = DVec3::ZERO;
     // Each side lit inwards: u × v points into the box.
     let sides = [
-        (o, x, y),     // floor, normal +z
-        (z, y, x),     // ceiling, normal −z
-        (o, z, x),     // y = 0, normal +y
-        (y, x, z),     // y = 1, normal −y
-        (o, y, z),     // x = 0, normal +x
-        (x, z, y),     // x = 1, normal −x
+        (o, x, y), // floor, normal +z
+        (z, y, x), // ceiling, normal −z
+        (o, z, x), // y = 0, normal +y
+        (y, x, z), // y = 1, normal −y
+        (o, y, z), // x = 0, normal +x
+        (x, z, y), // x = 1, normal −x
     ];
     let mut mesh = SceneMesh::parallelogram(sides[0].0, sides[0].1, sides[0].2, cells, [0.5; 3], "side");
     for (o, u, v) in &sides[1..] {
@@ -120,7 +121,10 @@ fn closed_box_rows_sum_to_one_and_reciprocity_holds() {
                 assert_eq!(f.get(i, i), 0.0);
                 for j in 0..f.n {
                     let (a, b) = (g.areas[i] * f.get(i, j), g.areas[j] * f.get(j, i));
-                    assert!((a - b).abs() <= 1e-12 * a.abs().max(b.abs()), "A{i} F{i}{j} = {a}, A{j} F{j}{i} = {b}");
+                    assert!(
+                        (a - b).abs() <= 1e-12 * a.abs().max(b.abs()),
+                        "A{i} F{i}{j} = {a}, A{j} F{j}{i} = {b}"
+                    );
                 }
             }
         }
@@ -140,7 +144,9 @@ fn bvh_visibility_matches_brute_force() {
     let brute = |i: usize, j: usize| {
         let (a, b) = (g.centroids[i], g.centroids[j]);
         !(0..tris.len()).any(|k| {
-            k != i && k != j && segment_triangle(a, b - a, &tris[k]).is_some_and(|s| s > 1e-7 && s < 1.0 - 1e-7)
+            k != i
+                && k != j
+                && segment_triangle(a, b - a, &tris[k]).is_some_and(|s| s > 1e-7 && s < 1.0 - 1e-7)
         })
     };
     let mut blocked = 0;

@@ -121,11 +121,15 @@ pub(crate) fn check_layout(spec: &SceneSpec, p: &Parameters) -> Result<(), (&'st
     }
     let [cube1, cube2, bed, headboard] = furniture(&l);
     let inside = |(lo, hi): (DVec3, DVec3), x0: f64, x1: f64, z1: f64| {
-        lo.x >= x0 + FURNITURE_GAP / 2.0 && hi.x <= x1 - FURNITURE_GAP / 2.0 && lo.y > 0.0 && hi.y < l.w && hi.z < z1
+        lo.x >= x0 + FURNITURE_GAP / 2.0
+            && hi.x <= x1 - FURNITURE_GAP / 2.0
+            && lo.y > 0.0
+            && hi.y < l.w
+            && hi.z < z1
     };
-    if !(inside(cube1, 0.0, l.l1, l.h) && inside(cube2, 0.0, l.l1, l.h))
-        || !(inside(bed, l.x2, l.x2 + l.l2, l.hb) && inside(headboard, l.x2, l.x2 + l.l2, l.hb))
-    {
+    let fits_living = inside(cube1, 0.0, l.l1, l.h) && inside(cube2, 0.0, l.l1, l.h);
+    let fits_bedroom = inside(bed, l.x2, l.x2 + l.l2, l.hb) && inside(headboard, l.x2, l.x2 + l.l2, l.hb);
+    if !(fits_living && fits_bedroom) {
         return Err(("rooms", "the rooms are too small for the furniture".into()));
     }
     Ok(())
@@ -148,7 +152,12 @@ fn furniture(l: &Layout) -> [(DVec3, DVec3); 4] {
 
 /// The five visible sides of a box standing on the floor (no bottom), lit outwards;
 /// `omit_north` leaves out the +y side (where the bed touches its headboard).
-fn box_panels<'a>(part: &'static str, albedo: [f64; 3], (lo, hi): (DVec3, DVec3), omit_north: bool) -> Vec<Panel<'a>> {
+fn box_panels<'a>(
+    part: &'static str,
+    albedo: [f64; 3],
+    (lo, hi): (DVec3, DVec3),
+    omit_north: bool,
+) -> Vec<Panel<'a>> {
     let panel = |u: [f64; 2], v: [f64; 2], inward: DVec3, map: Box<dyn Fn(f64, f64) -> DVec3 + 'a>| Panel {
         part,
         albedo,
@@ -178,14 +187,8 @@ fn panels<'a>(spec: &'a SceneSpec, l: &'a Layout) -> Vec<Panel<'a>> {
     let dh = r.door_height;
     let (dy0, dy1) = (l.door_y - l.door / 2.0, l.door_y + l.door / 2.0);
     let centred = |lo: f64, hi: f64, size: f64| vec![lo, (lo + hi - size) / 2.0, (lo + hi + size) / 2.0, hi];
-    let plain = |part, albedo, u: [f64; 2], v: [f64; 2], inward, map: Box<dyn Fn(f64, f64) -> DVec3 + 'a>| Panel {
-        part,
-        albedo,
-        u: u.to_vec(),
-        v: v.to_vec(),
-        special: Vec::new(),
-        map,
-        inward,
+    let plain = |part, albedo, u: [f64; 2], v: [f64; 2], inward, map: Box<dyn Fn(f64, f64) -> DVec3 + 'a>| {
+        Panel { part, albedo, u: u.to_vec(), v: v.to_vec(), special: Vec::new(), map, inward }
     };
     let (l1, w, h, x2, l2, hb) = (l.l1, l.w, l.h, l.x2, l.l2, l.hb);
     // Heights on walls under the tilted ceiling: exact below `knee`, stretched above it to
@@ -198,7 +201,14 @@ fn panels<'a>(spec: &'a SceneSpec, l: &'a Layout) -> Vec<Panel<'a>> {
         }
     };
     let mut out = vec![
-        plain("living floor", m.living_floor, [0.0, l1], [0.0, w], DVec3::Z, Box::new(|u, v| DVec3::new(u, v, 0.0))),
+        plain(
+            "living floor",
+            m.living_floor,
+            [0.0, l1],
+            [0.0, w],
+            DVec3::Z,
+            Box::new(|u, v| DVec3::new(u, v, 0.0)),
+        ),
         Panel {
             part: "living ceiling",
             albedo: m.living_ceiling,
@@ -217,12 +227,22 @@ fn panels<'a>(spec: &'a SceneSpec, l: &'a Layout) -> Vec<Panel<'a>> {
             map: Box::new(|u, v| DVec3::new(u, 0.0, v)),
             inward: DVec3::Y,
         },
-        plain("living north wall", m.living_walls, [0.0, l1], [0.0, h], -DVec3::Y, Box::new(move |u, v| {
-            DVec3::new(u, w, stretch(v, 0.0, w))
-        })),
-        plain("living west wall", m.living_walls, [0.0, w], [0.0, h], DVec3::X, Box::new(move |u, v| {
-            DVec3::new(0.0, u, stretch(v, 0.0, u))
-        })),
+        plain(
+            "living north wall",
+            m.living_walls,
+            [0.0, l1],
+            [0.0, h],
+            -DVec3::Y,
+            Box::new(move |u, v| DVec3::new(u, w, stretch(v, 0.0, w))),
+        ),
+        plain(
+            "living west wall",
+            m.living_walls,
+            [0.0, w],
+            [0.0, h],
+            DVec3::X,
+            Box::new(move |u, v| DVec3::new(0.0, u, stretch(v, 0.0, u))),
+        ),
         Panel {
             part: "living door wall",
             albedo: m.living_walls,
@@ -232,10 +252,38 @@ fn panels<'a>(spec: &'a SceneSpec, l: &'a Layout) -> Vec<Panel<'a>> {
             map: Box::new(move |u, v| DVec3::new(l1, u, stretch(v, dh, u))),
             inward: -DVec3::X,
         },
-        plain("door frame", m.door_frame, [l1, x2], [0.0, dh], DVec3::Y, Box::new(move |u, v| DVec3::new(u, dy0, v))),
-        plain("door frame", m.door_frame, [l1, x2], [0.0, dh], -DVec3::Y, Box::new(move |u, v| DVec3::new(u, dy1, v))),
-        plain("door frame", m.door_frame, [l1, x2], [dy0, dy1], -DVec3::Z, Box::new(move |u, v| DVec3::new(u, v, dh))),
-        plain("door frame", m.door_frame, [l1, x2], [dy0, dy1], DVec3::Z, Box::new(move |u, v| DVec3::new(u, v, 0.0))),
+        plain(
+            "door frame",
+            m.door_frame,
+            [l1, x2],
+            [0.0, dh],
+            DVec3::Y,
+            Box::new(move |u, v| DVec3::new(u, dy0, v)),
+        ),
+        plain(
+            "door frame",
+            m.door_frame,
+            [l1, x2],
+            [0.0, dh],
+            -DVec3::Y,
+            Box::new(move |u, v| DVec3::new(u, dy1, v)),
+        ),
+        plain(
+            "door frame",
+            m.door_frame,
+            [l1, x2],
+            [dy0, dy1],
+            -DVec3::Z,
+            Box::new(move |u, v| DVec3::new(u, v, dh)),
+        ),
+        plain(
+            "door frame",
+            m.door_frame,
+            [l1, x2],
+            [dy0, dy1],
+            DVec3::Z,
+            Box::new(move |u, v| DVec3::new(u, v, 0.0)),
+        ),
         Panel {
             part: "bedroom door wall",
             albedo: m.bedroom_walls,
@@ -245,10 +293,22 @@ fn panels<'a>(spec: &'a SceneSpec, l: &'a Layout) -> Vec<Panel<'a>> {
             map: Box::new(move |u, v| DVec3::new(x2, u, v)),
             inward: DVec3::X,
         },
-        plain("bedroom floor", m.bedroom_floor, [x2, x2 + l2], [0.0, w], DVec3::Z, Box::new(|u, v| DVec3::new(u, v, 0.0))),
-        plain("bedroom ceiling", m.bedroom_ceiling, [x2, x2 + l2], [0.0, w], -DVec3::Z, Box::new(move |u, v| {
-            DVec3::new(u, v, hb)
-        })),
+        plain(
+            "bedroom floor",
+            m.bedroom_floor,
+            [x2, x2 + l2],
+            [0.0, w],
+            DVec3::Z,
+            Box::new(|u, v| DVec3::new(u, v, 0.0)),
+        ),
+        plain(
+            "bedroom ceiling",
+            m.bedroom_ceiling,
+            [x2, x2 + l2],
+            [0.0, w],
+            -DVec3::Z,
+            Box::new(move |u, v| DVec3::new(u, v, hb)),
+        ),
         Panel {
             part: "bedroom south wall",
             albedo: m.bedroom_walls,
@@ -258,12 +318,22 @@ fn panels<'a>(spec: &'a SceneSpec, l: &'a Layout) -> Vec<Panel<'a>> {
             map: Box::new(|u, v| DVec3::new(u, 0.0, v)),
             inward: DVec3::Y,
         },
-        plain("bedroom north wall", m.bedroom_walls, [x2, x2 + l2], [0.0, hb], -DVec3::Y, Box::new(move |u, v| {
-            DVec3::new(u, w, v)
-        })),
-        plain("bedroom east wall", m.bedroom_walls, [0.0, w], [0.0, hb], -DVec3::X, Box::new(move |u, v| {
-            DVec3::new(x2 + l2, u, v)
-        })),
+        plain(
+            "bedroom north wall",
+            m.bedroom_walls,
+            [x2, x2 + l2],
+            [0.0, hb],
+            -DVec3::Y,
+            Box::new(move |u, v| DVec3::new(u, w, v)),
+        ),
+        plain(
+            "bedroom east wall",
+            m.bedroom_walls,
+            [0.0, w],
+            [0.0, hb],
+            -DVec3::X,
+            Box::new(move |u, v| DVec3::new(x2 + l2, u, v)),
+        ),
     ];
     let [cube1, cube2, bed, headboard] = furniture(l);
     out.extend(box_panels("cube", m.furniture, cube1, false));

@@ -89,7 +89,13 @@ impl Bvh {
 /// the two faces themselves, so their own planes must not count.
 pub const SEGMENT_MARGIN: f64 = 1e-7;
 
-fn build(tris: &[[DVec3; 3]], centroids: &[DVec3], order: &mut [u32], first: usize, nodes: &mut Vec<BvhNode>) -> usize {
+fn build(
+    tris: &[[DVec3; 3]],
+    centroids: &[DVec3],
+    order: &mut [u32],
+    first: usize,
+    nodes: &mut Vec<BvhNode>,
+) -> usize {
     let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
     let (mut clo, mut chi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
     for &t in order.iter() {
@@ -106,9 +112,17 @@ fn build(tris: &[[DVec3; 3]], centroids: &[DVec3], order: &mut [u32], first: usi
     if order.len() <= LEAF_SIZE || extent.max_element() <= 0.0 {
         return me;
     }
-    let axis = if extent.x >= extent.y && extent.x >= extent.z { 0 } else if extent.y >= extent.z { 1 } else { 2 };
+    let axis = if extent.x >= extent.y && extent.x >= extent.z {
+        0
+    } else if extent.y >= extent.z {
+        1
+    } else {
+        2
+    };
     let mid = order.len() / 2;
-    order.select_nth_unstable_by(mid, |a, b| centroids[*a as usize][axis].total_cmp(&centroids[*b as usize][axis]));
+    order.select_nth_unstable_by(mid, |a, b| {
+        centroids[*a as usize][axis].total_cmp(&centroids[*b as usize][axis])
+    });
     let (left, right) = order.split_at_mut(mid);
     build(tris, centroids, left, first, nodes);
     let r = build(tris, centroids, right, first + mid, nodes);
@@ -123,8 +137,8 @@ fn slab(lo: DVec3, hi: DVec3, a: DVec3, inv: DVec3, t_lo: f64, t_hi: f64) -> boo
     let t1 = (hi - a) * inv;
     let near = t0.min(t1).max_element().max(t_lo);
     let far = t0.max(t1).min_element().min(t_hi);
-    // NaN (0·∞ for a segment in a box's face plane) compares false: treat as a hit.
-    !(near > far)
+    // NaN (0·∞ for a segment in a box's face plane) is unordered: treat it as a hit.
+    near.partial_cmp(&far) != Some(std::cmp::Ordering::Greater)
 }
 
 /// Möller–Trumbore: the parameter `s` where `a + s·d` meets the triangle, edges included.
@@ -148,4 +162,47 @@ pub fn segment_triangle(a: DVec3, d: DVec3, t: &[DVec3; 3]) -> Option<f64> {
         return None;
     }
     Some(e2.dot(q) * inv)
+}
+
+impl Bvh {
+    /// The nearest triangle the ray `origin + s·dir` (`s > 0`) meets from its front (the side
+    /// its counter-clockwise corners face), and `s`: what a pixel of a back-face-culled
+    /// rendering shows (the render test's reference).
+    pub fn closest_front_hit(&self, origin: DVec3, dir: DVec3) -> Option<(u32, f64)> {
+        if self.nodes.is_empty() {
+            return None;
+        }
+        let inv = dir.recip();
+        let mut best: Option<(u32, f64)> = None;
+        let mut stack = [0u32; 64];
+        let mut top = 1;
+        while top > 0 {
+            top -= 1;
+            let index = stack[top];
+            let node = &self.nodes[index as usize];
+            let limit = best.map_or(f64::INFINITY, |b| b.1);
+            if !slab(node.lo, node.hi, origin, inv, 0.0, limit) {
+                continue;
+            }
+            if node.count == 0 {
+                stack[top] = node.right_or_first;
+                stack[top + 1] = index + 1;
+                top += 2;
+            } else {
+                let first = node.right_or_first as usize;
+                for &t in &self.order[first..first + node.count as usize] {
+                    let tri = &self.triangles[t as usize];
+                    if (tri[1] - tri[0]).cross(tri[2] - tri[0]).dot(dir) >= 0.0 {
+                        continue;
+                    }
+                    if let Some(s) = segment_triangle(origin, dir, tri) {
+                        if s > 0.0 && s < best.map_or(f64::INFINITY, |b| b.1) {
+                            best = Some((t, s));
+                        }
+                    }
+                }
+            }
+        }
+        best
+    }
 }

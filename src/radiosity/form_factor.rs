@@ -144,7 +144,13 @@ pub fn patch_form_factor(mesh: &SceneMesh, a: &[usize], b: &[usize], near: NearF
     let total: f64 = a.iter().map(|&i| g.areas[i]).sum();
     let sum: f64 = a
         .par_iter()
-        .map(|&i| g.areas[i] * b.iter().filter(|&&j| facing(&g, i, j)).map(|&j| unoccluded_form_factor(&g, i, j, near)).sum::<f64>())
+        .map(|&i| {
+            g.areas[i]
+                * b.iter()
+                    .filter(|&&j| facing(&g, i, j))
+                    .map(|&j| unoccluded_form_factor(&g, i, j, near))
+                    .sum::<f64>()
+        })
         .sum();
     sum / total
 }

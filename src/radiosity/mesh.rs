@@ -106,7 +106,9 @@ impl SceneMesh {
     /// 10⁻¹⁰ of the squared bounding-box diagonal), naming the face or vertex.
     pub fn validate(&self) -> Result<(), RadiosityError> {
         let n = self.faces.len();
-        for (what, len) in [("albedo", self.albedo.len()), ("kind", self.kind.len()), ("part", self.part.len())] {
+        for (what, len) in
+            [("albedo", self.albedo.len()), ("kind", self.kind.len()), ("part", self.part.len())]
+        {
             if len != n {
                 return Err(RadiosityError::Mesh(format!("{what}: {len} entries for {n} faces")));
             }
@@ -129,7 +131,10 @@ impl SceneMesh {
             return Err(RadiosityError::NotFinite { what: format!("albedo of face {i}") });
         }
         if let Some(i) = self.albedo.iter().position(|a| a.iter().any(|x| !(0.0..1.0).contains(x))) {
-            return Err(RadiosityError::Mesh(format!("face {i}: albedo {:?} is outside [0, 1)", self.albedo[i])));
+            return Err(RadiosityError::Mesh(format!(
+                "face {i}: albedo {:?} is outside [0, 1)",
+                self.albedo[i]
+            )));
         }
         let (lo, hi) = self
             .vertices
@@ -138,8 +143,12 @@ impl SceneMesh {
         let scale = if self.vertices.is_empty() { 1.0 } else { (hi - lo).length_squared().max(1e-300) };
         let geometry = self.geometry();
         for (i, &area) in geometry.areas.iter().enumerate() {
-            if !(area > 1e-10 * scale) {
-                return Err(RadiosityError::DegenerateFace { face: i, part: self.part_of(i).to_string(), area });
+            if area.is_nan() || area <= 1e-10 * scale {
+                return Err(RadiosityError::DegenerateFace {
+                    face: i,
+                    part: self.part_of(i).to_string(),
+                    area,
+                });
             }
         }
         Ok(())
@@ -162,7 +171,14 @@ impl SceneMesh {
 
     /// A parallelogram `origin + a·u + b·v`, `a, b ∈ [0, 1]`, split into `cells × cells`
     /// cells of two triangles each, lit on the side of `u × v`: the closed-form test patches.
-    pub fn parallelogram(origin: DVec3, u: DVec3, v: DVec3, cells: usize, albedo: [f64; 3], part: &str) -> Self {
+    pub fn parallelogram(
+        origin: DVec3,
+        u: DVec3,
+        v: DVec3,
+        cells: usize,
+        albedo: [f64; 3],
+        part: &str,
+    ) -> Self {
         let m = cells.max(1);
         let index = |i: usize, j: usize| (i * (m + 1) + j) as u32;
         let mut vertices = Vec::with_capacity((m + 1) * (m + 1));

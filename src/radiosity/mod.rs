@@ -5,7 +5,8 @@
 //! radiosity — the ground truth and the training data of the reduced model — samples the form
 //! factors at face centroids (Eq. 15, [`form_factor`]) with visibility by segment casting
 //! against a BVH ([`bvh`]), lights the scene by area lights in the openings or by a sky seen
-//! through them ([`lighting`]) and solves Eq. 14 per colour channel ([`solve`]).
+//! through them ([`lighting`]) and solves Eq. 14 per colour channel ([`solve`]). Solutions are
+//! drawn by a graphics pipeline ([`render`]).
 
 pub mod architecture;
 pub mod bvh;
@@ -13,6 +14,7 @@ mod error;
 pub mod form_factor;
 pub mod lighting;
 pub mod mesh;
+pub mod render;
 pub mod scene;
 pub mod solve;
 

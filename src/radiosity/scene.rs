@@ -160,7 +160,10 @@ impl SceneSpec {
             if !(lo.is_finite() && hi.is_finite() && lo <= hi && (lo..=hi).contains(&p.default)) {
                 return fail(
                     &format!("[parameters.{name}]"),
-                    format!("{name}: needs a finite range lo <= default <= hi, got [{lo}, {hi}] and {}", p.default),
+                    format!(
+                        "{name}: needs a finite range lo <= default <= hi, got [{lo}, {hi}] and {}",
+                        p.default
+                    ),
                 );
             }
         }
@@ -172,20 +175,33 @@ impl SceneSpec {
         if (r.living[1] - r.bedroom[1]).abs() > 1e-9 {
             return fail("bedroom", "the bedroom's depth must equal the living room's".into());
         }
-        let positive = [r.wall_thickness, r.door_height, r.window_sill, r.window_height, r.bedroom_window_ratio];
+        let positive =
+            [r.wall_thickness, r.door_height, r.window_sill, r.window_height, r.bedroom_window_ratio];
         if positive.iter().any(|v| !(v.is_finite() && *v > 0.0)) {
             return fail("wall_thickness", "wall thickness, door height, window sill and height and the bedroom window ratio must be positive".into());
         }
-        if r.door_height >= r.living[2].min(r.bedroom[2]) || r.window_sill + r.window_height >= r.living[2].min(r.bedroom[2]) {
+        if r.door_height >= r.living[2].min(r.bedroom[2])
+            || r.window_sill + r.window_height >= r.living[2].min(r.bedroom[2])
+        {
             return fail("door_height", "the door and the windows must end below the ceilings".into());
         }
         if !(spec.resolution.cell.is_finite() && (0.02..=10.0).contains(&spec.resolution.cell)) {
-            return fail("cell", format!("resolution.cell must be 0.02 to 10 m, got {}", spec.resolution.cell));
+            return fail(
+                "cell",
+                format!("resolution.cell must be 0.02 to 10 m, got {}", spec.resolution.cell),
+            );
         }
         let m = &spec.materials;
         let albedos = [
-            m.living_walls, m.living_floor, m.living_ceiling, m.bedroom_walls, m.bedroom_floor,
-            m.bedroom_ceiling, m.door_frame, m.furniture, m.bed,
+            m.living_walls,
+            m.living_floor,
+            m.living_ceiling,
+            m.bedroom_walls,
+            m.bedroom_floor,
+            m.bedroom_ceiling,
+            m.door_frame,
+            m.furniture,
+            m.bed,
         ];
         if albedos.iter().flatten().any(|a| !(a.is_finite() && (0.0..1.0).contains(a))) {
             return fail("[materials]", "every albedo must be in [0, 1)".into());
@@ -193,7 +209,10 @@ impl SceneSpec {
         let l = &spec.lights;
         let light = [l.window_exitance, l.sky_zenith].concat();
         if light.iter().any(|v| !(v.is_finite() && *v >= 0.0)) || !(0.0..1.0).contains(&l.ground_albedo) {
-            return fail("[lights]", "light values must be finite and non-negative, ground_albedo in [0, 1)".into());
+            return fail(
+                "[lights]",
+                "light values must be finite and non-negative, ground_albedo in [0, 1)".into(),
+            );
         }
         // Every corner of the parameter box must give a valid mesh.
         for corner in 0..16u32 {
@@ -205,8 +224,7 @@ impl SceneSpec {
                 let name = e.0;
                 return fail(&format!("[parameters.{name}]"), format!("{name}: {} (at {p:?})", e.1));
             }
-            let mesh = super::architecture::build(&spec, &p)
-                .and_then(|m| m.validate().map(|_| m));
+            let mesh = super::architecture::build(&spec, &p).and_then(|m| m.validate().map(|_| m));
             if let Err(e) = mesh {
                 return fail("[parameters", format!("the range corner {p:?} gives a bad mesh: {e}"));
             }

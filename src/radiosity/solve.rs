@@ -37,7 +37,7 @@ pub fn solve_direct(f: &FormFactors, albedo: &[Rgb], e: &[Rgb]) -> Result<Vec<Rg
         let a = Mat::from_fn(n, n, |i, j| f64::from(u8::from(i == j)) - albedo[i][c] * f.values[i * n + j]);
         let lu = a.partial_piv_lu();
         let u = lu.U();
-        if let Some(i) = (0..n).find(|&i| !(u[(i, i)].abs() > 1e-12)) {
+        if let Some(i) = (0..n).find(|&i| u[(i, i)].is_nan() || u[(i, i)].abs() <= 1e-12) {
             return Err(RadiosityError::Solve(format!("I − ρF is singular (channel {c}, pivot {i})")));
         }
         let rhs = Mat::from_fn(n, 1, |i, _| e[i][c]);
@@ -78,7 +78,11 @@ pub fn solve_jacobi(
                 [0, 1, 2].map(|c| e[i][c] + albedo[i][c] * s[c])
             })
             .collect();
-        let change = next.iter().zip(&b).flat_map(|(x, y)| (0..3).map(move |c| (x[c] - y[c]).abs())).fold(0.0, f64::max);
+        let change = next
+            .iter()
+            .zip(&b)
+            .flat_map(|(x, y)| (0..3).map(move |c| (x[c] - y[c]).abs()))
+            .fold(0.0, f64::max);
         let top = next.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
         b = next;
         if change <= tolerance * top {

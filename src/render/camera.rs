@@ -94,9 +94,15 @@ impl Camera {
     /// The world-space ray (origin on the near plane, unit direction) through the centre of
     /// pixel (`px`, `py`) of a `width`×`height` image, pixel (0, 0) at the top left.
     pub fn pixel_ray(&self, px: u32, py: u32, width: u32, height: u32) -> (DVec3, DVec3) {
+        self.ray_through(f64::from(px) + 0.5, f64::from(py) + 0.5, width, height)
+    }
+
+    /// The world-space ray through the continuous pixel position (`x`, `y`) (pixel centres at
+    /// +0.5) of a `width`×`height` image.
+    pub fn ray_through(&self, x: f64, y: f64, width: u32, height: u32) -> (DVec3, DVec3) {
         let inv = self.view_proj(f64::from(width) / f64::from(height)).inverse();
-        let x = 2.0 * (f64::from(px) + 0.5) / f64::from(width) - 1.0;
-        let y = 2.0 * (f64::from(py) + 0.5) / f64::from(height) - 1.0;
+        let x = 2.0 * x / f64::from(width) - 1.0;
+        let y = 2.0 * y / f64::from(height) - 1.0;
         let near = inv * DVec4::new(x, y, 0.0, 1.0);
         let far = inv * DVec4::new(x, y, 1.0, 1.0);
         let (a, b) = (near.truncate() / near.w, far.truncate() / far.w);

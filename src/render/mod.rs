@@ -1,5 +1,5 @@
 //! Rendering support shared by every renderer: offscreen render targets and readback, PNG and
-//! EXR writers, colour maps as 1D textures, a camera, and (feature `viewer`) the window.
+//! EXR writers, colour maps as 1D textures, exposure tone mapping, a camera, and (feature `viewer`) the window.
 
 mod camera;
 mod colormap;
@@ -8,6 +8,7 @@ mod error;
 mod image_io;
 mod phong;
 mod target;
+mod tonemap;
 #[cfg(feature = "viewer")]
 pub mod viewer;
 
@@ -20,3 +21,4 @@ pub use error::RenderError;
 pub use image_io::{read_png_rgba8, write_exr_channels, write_exr_rgba, write_png_rgba8};
 pub use phong::{phong, PHONG_AMBIENT, PHONG_DIFFUSE, PHONG_SHININESS, PHONG_SPECULAR};
 pub use target::{ColorFormat, Pixels, RenderTarget};
+pub use tonemap::{auto_exposure, srgb_encode, tone_map};
