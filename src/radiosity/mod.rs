@@ -12,6 +12,7 @@ pub mod architecture;
 pub mod bvh;
 mod error;
 pub mod form_factor;
+pub mod gpu;
 pub mod lighting;
 pub mod mesh;
 pub mod render;

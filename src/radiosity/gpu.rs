@@ -1,0 +1,290 @@
+//! Full radiosity on the device: the form factors of every pair in a compute pass
+//! (`form_factors.comp`: the facing test, the BVH walked per pair, Eq. 15) and Eq. 14 by Jacobi
+//! sweeps (`jacobi.comp`), F resident on the device. `F` (`n²` floats) is bound in row blocks
+//! of at most one storage binding (128 MiB on lavapipe).
+//!
+//! The CPU path ([`super::form_factor::form_factors`], [`super::solve`]) is the f64 reference
+//! and, on a CPU rasteriser such as lavapipe, the faster one ([`Backend::Auto`] picks it).
+//!
+//! [`Backend::Auto`]: crate::reduce::Backend::Auto
+
+use ash::vk;
+use bytemuck::{Pod, Zeroable};
+
+use super::bvh::Bvh;
+use super::error::RadiosityError;
+use super::form_factor::{bvh_of, FormFactors, NearField};
+use super::mesh::SceneMesh;
+use super::solve::Rgb;
+use crate::gpu::{
+    shaders, BindingKind, Buffer, ComputePipeline, ComputePipelineDesc, DescriptorSet, Gpu, MemoryKind,
+    Resource,
+};
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct Push {
+    n: u32,
+    row0: u32,
+    rows: u32,
+    extra: u32,
+}
+
+/// The two compute pipelines.
+pub struct GpuRadiosity {
+    form_factors: [ComputePipeline; 2],
+    jacobi: ComputePipeline,
+}
+
+/// The BVH flattened for `form_factors.comp`: nodes (two vec4 each) and triangles in leaf
+/// order (three vec4 each, the face index's bits in corner 0's w).
+pub fn flatten_bvh(bvh: &Bvh) -> (Vec<[f32; 4]>, Vec<[f32; 4]>) {
+    let mut nodes = Vec::with_capacity(2 * bvh.nodes.len());
+    for n in &bvh.nodes {
+        nodes.push([n.lo.x as f32, n.lo.y as f32, n.lo.z as f32, f32::from_bits(n.right_or_first)]);
+        nodes.push([n.hi.x as f32, n.hi.y as f32, n.hi.z as f32, f32::from_bits(n.count)]);
+    }
+    let mut tris = Vec::with_capacity(3 * bvh.order.len());
+    for &t in &bvh.order {
+        let c = bvh.triangles[t as usize];
+        tris.push([c[0].x as f32, c[0].y as f32, c[0].z as f32, f32::from_bits(t)]);
+        for p in &c[1..] {
+            tris.push([p.x as f32, p.y as f32, p.z as f32, 0.0]);
+        }
+    }
+    (nodes, tris)
+}
+
+/// `F` on the device, in row blocks.
+pub struct DeviceFormFactors {
+    n: usize,
+    rows: Buffer<f32>,
+    /// (first row, rows) per block.
+    blocks: Vec<(u32, u32)>,
+}
+
+impl DeviceFormFactors {
+    /// Number of faces.
+    pub fn n(&self) -> usize {
+        self.n
+    }
+
+    /// Reads `F` back (f32 widened to f64).
+    pub fn download(&self, gpu: &Gpu) -> Result<FormFactors, RadiosityError> {
+        let v = self.rows.download(gpu)?;
+        Ok(FormFactors { n: self.n, values: v.into_iter().map(f64::from).collect() })
+    }
+}
+
+/// Rows per block: as many as fit one binding, a multiple of the rows that keep block
+/// offsets aligned to `minStorageBufferOffsetAlignment`.
+fn row_blocks(gpu: &Gpu, n: usize) -> Result<Vec<(u32, u32)>, RadiosityError> {
+    let row_bytes = 4 * n as u64;
+    let align_rows = (gpu.caps().min_storage_buffer_offset_alignment / 4).max(1);
+    let per = (gpu.max_binding_bytes() / row_bytes.max(1)) / align_rows * align_rows;
+    if per == 0 {
+        return Err(RadiosityError::Mesh(format!(
+            "{n} faces: {align_rows} rows of F exceed one storage binding ({} bytes)",
+            gpu.max_binding_bytes()
+        )));
+    }
+    let mut blocks = Vec::new();
+    let mut r0 = 0u64;
+    while r0 < n as u64 {
+        let rows = per.min(n as u64 - r0);
+        blocks.push((r0 as u32, rows as u32));
+        r0 += rows;
+    }
+    Ok(blocks)
+}
+
+fn storage<T: Pod>(gpu: &Gpu, name: &str, data: &[T]) -> Result<Buffer<T>, RadiosityError> {
+    let b = Buffer::new(
+        gpu,
+        name,
+        data.len().max(1) as u64,
+        vk::BufferUsageFlags::STORAGE_BUFFER,
+        MemoryKind::GpuOnly,
+    )?;
+    if !data.is_empty() {
+        b.upload(gpu, 0, data)?;
+    }
+    Ok(b)
+}
+
+impl GpuRadiosity {
+    /// Builds the pipelines.
+    pub fn new(gpu: &Gpu) -> Result<Self, RadiosityError> {
+        let ff = |regularised: u32| {
+            ComputePipeline::new(
+                gpu,
+                &ComputePipelineDesc {
+                    name: "radiosity form factors",
+                    spirv: shaders::radiosity::FORM_FACTORS,
+                    bindings: &[BindingKind::StorageBuffer; 4],
+                    push_constant_bytes: std::mem::size_of::<Push>() as u32,
+                    specialization: &[regularised],
+                    shared_bytes: 0,
+                },
+            )
+        };
+        let jacobi = ComputePipeline::new(
+            gpu,
+            &ComputePipelineDesc {
+                name: "radiosity jacobi",
+                spirv: shaders::radiosity::JACOBI,
+                bindings: &[BindingKind::StorageBuffer; 5],
+                push_constant_bytes: std::mem::size_of::<Push>() as u32,
+                specialization: &[],
+                shared_bytes: 0,
+            },
+        )?;
+        Ok(Self { form_factors: [ff(0)?, ff(1)?], jacobi })
+    }
+
+    /// Every `F_ij` of `mesh` on the device (f32; the facing test's threshold is 10⁻⁵
+    /// relative instead of the CPU's 10⁻⁹, above f32's rounding of a cosine).
+    pub fn form_factors(
+        &self,
+        gpu: &Gpu,
+        mesh: &SceneMesh,
+        near: NearField,
+    ) -> Result<DeviceFormFactors, RadiosityError> {
+        mesh.validate()?;
+        let n = mesh.len();
+        let g = mesh.geometry();
+        let faces: Vec<[f32; 4]> = (0..n)
+            .flat_map(|i| {
+                let (c, m) = (g.centroids[i], g.normals[i]);
+                [
+                    [c.x as f32, c.y as f32, c.z as f32, g.areas[i] as f32],
+                    [m.x as f32, m.y as f32, m.z as f32, g.edge_squares[i] as f32],
+                ]
+            })
+            .collect();
+        let bvh = bvh_of(mesh);
+        let (nodes, tris) = flatten_bvh(&bvh);
+        let faces = storage(gpu, "radiosity faces", &faces)?;
+        let nodes_buf = storage(gpu, "radiosity bvh nodes", &nodes)?;
+        let tris = storage(gpu, "radiosity bvh triangles", &tris)?;
+        let rows = Buffer::<f32>::new(
+            gpu,
+            "radiosity form factors",
+            (n * n).max(1) as u64,
+            vk::BufferUsageFlags::STORAGE_BUFFER,
+            MemoryKind::GpuOnly,
+        )?;
+        let blocks = row_blocks(gpu, n)?;
+        let pipeline = &self.form_factors[usize::from(near == NearField::Regularised)];
+        let sets: Vec<DescriptorSet> = blocks
+            .iter()
+            .map(|&(r0, count)| {
+                pipeline.bind(
+                    gpu,
+                    &[
+                        Resource::Storage(faces.binding()?),
+                        Resource::Storage(nodes_buf.binding()?),
+                        Resource::Storage(tris.binding()?),
+                        Resource::Storage(rows.binding_range(crate::gpu::Chunk {
+                            first: u64::from(r0) * n as u64,
+                            len: u64::from(count) * n as u64,
+                        })),
+                    ],
+                )
+            })
+            .collect::<Result<_, _>>()?;
+        gpu.run(|cmd| {
+            for (&(row0, count), set) in blocks.iter().zip(&sets) {
+                let push = Push { n: n as u32, row0, rows: count, extra: bvh.nodes.len() as u32 };
+                let groups = [(n as u32).div_ceil(8), count.div_ceil(8), 1];
+                pipeline.record_dispatch(cmd, set, bytemuck::bytes_of(&push), groups);
+            }
+        })?;
+        Ok(DeviceFormFactors { n, rows, blocks })
+    }
+
+    /// Eq. 14 by Jacobi sweeps on the device from `b = e`, in batches of 8 sweeps, until the
+    /// last sweep changes no value by more than `tolerance · max|b|` (f32: use ≥ 10⁻⁶).
+    pub fn solve(
+        &self,
+        gpu: &Gpu,
+        f: &DeviceFormFactors,
+        albedo: &[Rgb],
+        e: &[Rgb],
+        tolerance: f64,
+        max_sweeps: usize,
+    ) -> Result<(Vec<Rgb>, usize), RadiosityError> {
+        let n = f.n;
+        if albedo.len() != n || e.len() != n {
+            return Err(RadiosityError::Mesh(format!(
+                "{} albedos and {} emissions for {n} faces",
+                albedo.len(),
+                e.len()
+            )));
+        }
+        let pack =
+            |v: &[Rgb]| v.iter().map(|c| [c[0] as f32, c[1] as f32, c[2] as f32, 0.0]).collect::<Vec<_>>();
+        let albedo_buf = storage(gpu, "radiosity albedo", &pack(albedo))?;
+        let emission = storage(gpu, "radiosity emission", &pack(e))?;
+        let b = [storage(gpu, "radiosity b (even)", &pack(e))?, storage(gpu, "radiosity b (odd)", &pack(e))?];
+        // Per block: the set reading b[0] and writing b[1], and the reverse.
+        let mut sets = Vec::new();
+        for &(r0, count) in &f.blocks {
+            let chunk =
+                crate::gpu::Chunk { first: u64::from(r0) * n as u64, len: u64::from(count) * n as u64 };
+            let mut pair = Vec::new();
+            for (src, dst) in [(0, 1), (1, 0)] {
+                pair.push(self.jacobi.bind(
+                    gpu,
+                    &[
+                        Resource::Storage(f.rows.binding_range(chunk)),
+                        Resource::Storage(albedo_buf.binding()?),
+                        Resource::Storage(emission.binding()?),
+                        Resource::Storage(b[src].binding()?),
+                        Resource::Storage(b[dst].binding()?),
+                    ],
+                )?);
+            }
+            sets.push(pair);
+        }
+        const BATCH: usize = 8;
+        let mut sweeps = 0;
+        while sweeps < max_sweeps {
+            gpu.run(|cmd| {
+                for k in 0..BATCH {
+                    for (&(row0, count), pair) in f.blocks.iter().zip(&sets) {
+                        let push = Push { n: n as u32, row0, rows: count, extra: 0 };
+                        self.jacobi.record_dispatch(
+                            cmd,
+                            &pair[(sweeps + k) % 2],
+                            bytemuck::bytes_of(&push),
+                            [count.div_ceil(64), 1, 1],
+                        );
+                    }
+                    gpu.compute_to_compute_barrier(cmd);
+                }
+            })?;
+            sweeps += BATCH;
+            // After an even number of sweeps the newest iterate is in b[0], the one before in b[1].
+            let newest = b[0].download(gpu)?;
+            let before = b[1].download(gpu)?;
+            let change = newest
+                .iter()
+                .zip(&before)
+                .flat_map(|(x, y)| (0..3).map(move |c| (x[c] - y[c]).abs()))
+                .fold(0f32, f32::max);
+            let top = newest.iter().flat_map(|x| x[..3].iter()).fold(0f32, |m, v| m.max(v.abs()));
+            if !change.is_finite() {
+                return Err(RadiosityError::Solve(format!(
+                    "Jacobi diverged on the device by sweep {sweeps}"
+                )));
+            }
+            if f64::from(change) <= tolerance * f64::from(top) {
+                return Ok((newest.iter().map(|x| [x[0], x[1], x[2]].map(f64::from)).collect(), sweeps));
+            }
+        }
+        Err(RadiosityError::Solve(format!(
+            "Jacobi did not converge to {tolerance:e} in {max_sweeps} sweeps on the device"
+        )))
+    }
+}
