@@ -5,7 +5,7 @@ use std::collections::BTreeMap;
 
 use super::basis::Bases;
 use super::error::ReduceError;
-use super::eval::{evaluate, signature, Operands};
+use super::eval::{evaluate, signature, Operands, Value};
 use super::expr::Expr;
 use super::gpu_eval::Backend;
 use super::premultiply::{
@@ -263,6 +263,24 @@ impl Operands for FullOperands<'_> {
         match &self.model.tensors[name].data {
             FullTensor::Dense(t) => t.clone(),
             FullTensor::Sparse(s) => s.to_dense(),
+        }
+    }
+
+    fn tensor_value(&self, name: &str) -> Value {
+        match &self.model.tensors[name].data {
+            FullTensor::Dense(t) => Value::Dense(t.clone()),
+            FullTensor::Sparse(s) => Value::Sparse(s.clone()),
+        }
+    }
+
+    fn contract_tensor_sparse(
+        &self,
+        name: &str,
+        args: &[(usize, &[f64])],
+    ) -> Option<Result<SparseTensor, TensorError>> {
+        match &self.model.tensors[name].data {
+            FullTensor::Sparse(s) if s.order() >= args.len() + 2 => Some(s.contract_axes_sparse(name, args)),
+            _ => None,
         }
     }
 

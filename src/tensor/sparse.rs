@@ -255,6 +255,125 @@ impl SparseTensor {
     }
 }
 
+impl SparseTensor {
+    /// `Q ⊗_a x ⊗_b y …` kept sparse: the remaining axes' entries, duplicates summed and
+    /// symmetric groups expanded, zeros dropped. What a full-space evaluation needs when the
+    /// result is itself large and sparse (seed 000 Table 2: `H ⊗₂ r` is an `n² × n²`
+    /// diagonal).
+    pub fn contract_axes_sparse(
+        &self,
+        what: &str,
+        args: &[(usize, &[f64])],
+    ) -> Result<SparseTensor, TensorError> {
+        let mut contracted: Vec<Option<&[f64]>> = vec![None; self.order()];
+        for &(axis, x) in args {
+            match self.shape.get(axis) {
+                None => return Err(TensorError::NoSuchAxis { what: what.into(), axis, order: self.order() }),
+                Some(&n) if n != x.len() => {
+                    return Err(TensorError::Shape { what: what.into(), axis, expected: n, found: x.len() })
+                }
+                Some(_) if contracted[axis].is_some() => {
+                    return Err(TensorError::NoSuchAxis {
+                        what: format!("{what} (axis contracted twice)"),
+                        axis,
+                        order: self.order(),
+                    })
+                }
+                Some(_) => contracted[axis] = Some(x),
+            }
+        }
+        let kept: Vec<usize> = (0..self.order()).filter(|&a| contracted[a].is_none()).collect();
+        let mut acc: std::collections::HashMap<Vec<u32>, f64> = std::collections::HashMap::new();
+        for e in 0..self.nnz() {
+            for c in self.expanded_coords(e) {
+                let mut v = self.values[e];
+                for (axis, x) in contracted.iter().enumerate() {
+                    if let Some(x) = x {
+                        v *= x[c[axis] as usize];
+                    }
+                }
+                if v != 0.0 {
+                    *acc.entry(kept.iter().map(|&a| c[a]).collect()).or_insert(0.0) += v;
+                }
+            }
+        }
+        let mut entries: Vec<(Vec<u32>, f64)> = acc.into_iter().filter(|(_, v)| *v != 0.0).collect();
+        entries.sort_unstable_by(|a, b| a.0.cmp(&b.0));
+        let shape: Vec<usize> = kept.iter().map(|&a| self.shape[a]).collect();
+        let mut coords = Vec::with_capacity(entries.len() * kept.len());
+        let mut values = Vec::with_capacity(entries.len());
+        for (c, v) in entries {
+            coords.extend(c);
+            values.push(v);
+        }
+        Ok(SparseTensor { shape, coords, values, symmetric: Vec::new() })
+    }
+
+    /// The diagonal of a square matrix whose every entry lies on it; `None` otherwise.
+    pub fn diagonal(&self) -> Option<Vec<f64>> {
+        if self.order() != 2 || self.shape[0] != self.shape[1] {
+            return None;
+        }
+        let mut d = vec![0.0; self.shape[0]];
+        for e in 0..self.nnz() {
+            let c = self.coords_of(e);
+            if c[0] != c[1] {
+                return None;
+            }
+            d[c[0] as usize] += self.values[e];
+        }
+        Some(d)
+    }
+
+    /// The diagonal matrix with `d` on its diagonal.
+    pub fn from_diagonal(d: &[f64]) -> Self {
+        let coords = (0..d.len() as u32).flat_map(|i| [i, i]).collect();
+        Self { shape: vec![d.len(), d.len()], coords, values: d.to_vec(), symmetric: Vec::new() }
+    }
+
+    /// `self + s·other` (same shape), as concatenated entries.
+    pub fn add_scaled(&self, other: &SparseTensor, s: f64) -> Result<SparseTensor, TensorError> {
+        if let Some(axis) =
+            (0..self.order().max(other.order())).find(|&a| self.shape.get(a) != other.shape.get(a))
+        {
+            return Err(TensorError::Shape {
+                what: "sparse sum".into(),
+                axis,
+                expected: self.shape.get(axis).copied().unwrap_or(0),
+                found: other.shape.get(axis).copied().unwrap_or(0),
+            });
+        }
+        let expand = |t: &SparseTensor| -> (Vec<u32>, Vec<f64>) {
+            let mut coords = Vec::new();
+            let mut values = Vec::new();
+            for e in 0..t.nnz() {
+                for c in t.expanded_coords(e) {
+                    coords.extend(c);
+                    values.push(t.values[e]);
+                }
+            }
+            (coords, values)
+        };
+        let (mut coords, mut values) = expand(self);
+        let (c2, v2) = expand(other);
+        coords.extend(c2);
+        values.extend(v2.into_iter().map(|v| s * v));
+        Ok(SparseTensor { shape: self.shape.clone(), coords, values, symmetric: Vec::new() })
+    }
+
+    /// `c · self`.
+    pub fn scale(&self, c: f64) -> SparseTensor {
+        let mut t = self.clone();
+        t.values.iter_mut().for_each(|v| *v *= c);
+        t
+    }
+
+    /// Number of values the dense equivalent holds (saturating).
+    pub fn dense_len(&self) -> usize {
+        self.shape.iter().fold(1usize, |a, &n| a.saturating_mul(n))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -274,6 +393,14 @@ mod tests {
         let r = d.contract_axes(&[(1, &x), (2, &y)]).unwrap();
         assert!(s.max_abs_diff(&r) < 1e-15);
         assert!(SparseTensor::from_coords("Q", &[2, 2], vec![0, 2], vec![1.0]).is_err());
+        // Kept sparse: the same values.
+        let k = q.contract_axes_sparse("Q", &[(2, &y)]).unwrap();
+        assert!(k.to_dense().max_abs_diff(&d.contract_axes(&[(2, &y)]).unwrap()) < 1e-15);
+        let diag = SparseTensor::from_diagonal(&[1.0, 2.0]);
+        assert_eq!(diag.diagonal(), Some(vec![1.0, 2.0]));
+        assert_eq!(k.diagonal(), None);
+        let sum = diag.add_scaled(&diag.scale(2.0), -1.0).unwrap();
+        assert_eq!(sum.to_dense().data(), &[-1.0, 0.0, 0.0, -2.0]);
     }
 
     #[test]
