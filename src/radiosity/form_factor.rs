@@ -137,6 +137,25 @@ pub fn form_factors(mesh: &SceneMesh, near: NearField) -> FormFactors {
     FormFactors { n, values }
 }
 
+/// `Vis(i, j)` of every pair at `k = n·i + j` (1 or 0): the visibility input `v` of Table 2.
+pub fn visibility(mesh: &SceneMesh) -> Vec<f64> {
+    let n = mesh.len();
+    let g = mesh.geometry();
+    let bvh = bvh_of(mesh);
+    let rows: Vec<Vec<u32>> = (0..n)
+        .into_par_iter()
+        .map(|i| (i + 1..n).filter(|&j| visible(&bvh, &g, i, j)).map(|j| j as u32).collect())
+        .collect();
+    let mut v = vec![0.0; n * n];
+    for (i, row) in rows.iter().enumerate() {
+        for &j in row {
+            v[i * n + j as usize] = 1.0;
+            v[j as usize * n + i] = 1.0;
+        }
+    }
+    v
+}
+
 /// Form factors between two face sets of one mesh without visibility (for closed forms):
 /// the area-weighted `F_{A→B} = Σ_{i∈A} Aᵢ Σ_{j∈B} F_ij / Σ_{i∈A} Aᵢ`.
 pub fn patch_form_factor(mesh: &SceneMesh, a: &[usize], b: &[usize], near: NearField) -> f64 {

@@ -6,10 +6,12 @@
 //! factors at face centroids (Eq. 15, [`form_factor`]) with visibility by segment casting
 //! against a BVH ([`bvh`]), lights the scene by area lights in the openings or by a sky seen
 //! through them ([`lighting`]) and solves Eq. 14 per colour channel ([`solve`]). Solutions are
-//! drawn by a graphics pipeline ([`render`]).
+//! drawn by a graphics pipeline ([`render`]). The same radiosity as Table 2's chain of
+//! tensor operations, for the reduction core, is [`chain`].
 
 pub mod architecture;
 pub mod bvh;
+pub mod chain;
 mod error;
 pub mod form_factor;
 pub mod gpu;

@@ -1,0 +1,178 @@
+//! Seed 000 Table 2: radiosity as a composition of tensor contractions, a diagonal inverse, a
+//! diagonal inverse square root and a matrix inverse, written with the reduction core's
+//! [`Expr`] so that [`Model::reduce`] premultiplies it like any other function.
+//!
+//! With `n` faces, `V` vertices and pairs `k = n·i + j` (the paper's unrolling of `F`), from
+//! the geometry `g` (3V), the visibility `v` (n², §8.3) and the emission `e` (3n: the three
+//! colour channels stacked, `e[c·n + i]`):
+//!
+//! | quantity | element form | tensor form | axes (bases) |
+//! |---|---|---|---|
+//! | normals | `nᵢ = (g_{i1} − g_{i0}) × (g_{i2} − g_{i0})` | `n = N ⊗₁ g ⊗₂ g` | N: n, g, g |
+//! | scaled cosines | `s_k = nᵢ·(cⱼ − cᵢ)` | `s = S ⊗₁ n ⊗₂ g` | S: sh, n, g |
+//! | squared distances | `r_k = |cᵢ − cⱼ|² (+ (Lᵢ + Lⱼ)/16π)` | `r = R ⊗₁ g ⊗₂ g` | R: r, g, g |
+//! | half form factors | `h_k = s_k / r_k` | `h = (H ⊗₂ r)⁻¹ ⊗₁ s` | H: sh, sh, r |
+//! | visibility-free form factors | `c_k = h_k h_{kᵀ} / 2π` | `c = C ⊗₁ h ⊗₂ h` | C: c, sh, sh |
+//! | area-free form factors | `d_k = c_k v_k` | `d = D ⊗₁ c ⊗₂ v` | D: dp, c, v |
+//! | squared areas | `aᵢ = nᵢ·nᵢ` | `a = A ⊗₁ n ⊗₂ n` | A: a, n, n |
+//! | form factors | `p_k = d_k / √aᵢ` | `p = (P ⊗₂ a)^(−½) ⊗₁ d` | P: dp, dp, a |
+//! | radiosity | `b = (I − ρF)⁻¹ e` | `b = (I − E ⊗₂ p)⁻¹ ⊗₁ e` | I: b, b; E: b, b, dp |
+//!
+//! The bases carry the paper's constraints in their names: `B_s = B_h` ("sh"), `B_d = B_p`
+//! ("dp"), `B_e = B_b` ("b") — §4's rule that an inverted or rooted matrix has one basis on
+//! both axes. Two constants differ from the table as printed, to make `p` *equal* the form
+//! factors of [`super::form_factor`]: `1/2π` in `C` (with `|nᵢ| = 2Aᵢ`, `s_ij s_ji / (r² · 2Aᵢ)`
+//! is `2π F_ij`), and the near-field term in `R` ([`NearField`]; `Lᵢ` is quadratic in `g`, so
+//! `r` stays `R ⊗ g ⊗ g`). Diagonal pairs (`i = j`) have no entries: `s`, `r`, `h` are 0 there
+//! and the core's diagonal inverse maps 0/0 to 0.
+//!
+//! Sizes: `S` has 18 entries per pair and `R` up to 180, so the tensors here are for scenes
+//! of a few hundred faces (the tests, and the reduction's premultiplication, which streams
+//! pairs in chunks rather than building them whole).
+
+use std::f64::consts::PI;
+
+use super::form_factor::NearField;
+use super::mesh::SceneMesh;
+use crate::reduce::{Expr, Model};
+use crate::tensor::SparseTensor;
+
+/// `n = N ⊗₁ g ⊗₂ g`.
+pub fn normals() -> Expr {
+    Expr::tensor("N").times(1, Expr::input("g")).times(2, Expr::input("g"))
+}
+
+/// `p = (P ⊗₂ a)^(−½) ⊗₁ d`, the form factors `F_ij` at `k = n·i + j`, through every row of
+/// Table 2 above it.
+pub fn form_factors() -> Expr {
+    let g = || Expr::input("g");
+    let s = Expr::tensor("S").times(1, normals()).times(2, g());
+    let r = Expr::tensor("R").times(1, g()).times(2, g());
+    let h = Expr::tensor("H").times(2, r).inverse().times(1, s);
+    let c = Expr::tensor("C").times(1, h.clone()).times(2, h);
+    let d = Expr::tensor("D").times(1, c).times(2, Expr::input("v"));
+    let a = Expr::tensor("A").times(1, normals()).times(2, normals());
+    Expr::tensor("P").times(2, a).inverse_sqrt().times(1, d)
+}
+
+/// `b = (I − E ⊗₂ p)⁻¹ ⊗₁ e` (Eq. 16), the three channels stacked.
+pub fn radiosity() -> Expr {
+    Expr::tensor("I").minus(Expr::tensor("E").times(2, form_factors())).inverse().times(1, Expr::input("e"))
+}
+
+/// Table 2's tensors for `mesh`'s topology and albedo, as a model computing `output`
+/// ([`form_factors`] or [`radiosity`]); inputs `g`, `v` and `e`.
+pub fn table2_model(mesh: &SceneMesh, near: NearField, output: Expr) -> Model {
+    let n = mesh.len();
+    let nv = mesh.vertices.len();
+    let pairs = n * n;
+    let (n3, g3) = (3 * n, 3 * nv);
+    let faces = &mesh.faces;
+
+    let mut tn = SparseTensor::new(&[n3, g3, g3]);
+    for (i, f) in faces.iter().enumerate() {
+        let [v0, v1, v2] = f.map(|v| v as usize);
+        for (p, q) in [(v1, v2), (v0, v1), (v2, v0)] {
+            for a in 0..3 {
+                let (b, c) = ((a + 1) % 3, (a + 2) % 3);
+                tn.push(&[3 * i + a, 3 * p + b, 3 * q + c], 1.0);
+                tn.push(&[3 * i + a, 3 * p + c, 3 * q + b], -1.0);
+            }
+        }
+    }
+
+    let mut ts = SparseTensor::new(&[pairs, n3, g3]);
+    let mut tr = SparseTensor::new(&[pairs, g3, g3]);
+    let mut th = SparseTensor::new(&[pairs, pairs, pairs]);
+    let mut tc = SparseTensor::new(&[pairs, pairs, pairs]);
+    let mut td = SparseTensor::new(&[pairs, pairs, pairs]);
+    let mut tp = SparseTensor::new(&[pairs, pairs, n]);
+    let near_c = 1.0 / (16.0 * PI);
+    for i in 0..n {
+        for j in 0..n {
+            let k = n * i + j;
+            tp.push(&[k, k, i], 1.0);
+            if i == j {
+                continue;
+            }
+            // c_j − c_i = Σ_v w_v g_v.
+            let mut w: Vec<(usize, f64)> = Vec::with_capacity(6);
+            for (face, sign) in [(j, 1.0 / 3.0), (i, -1.0 / 3.0)] {
+                for &v in &faces[face] {
+                    match w.iter_mut().find(|(u, _)| *u == v as usize) {
+                        Some(e) => e.1 += sign,
+                        None => w.push((v as usize, sign)),
+                    }
+                }
+            }
+            for a in 0..3 {
+                for &(v, wv) in &w {
+                    if wv != 0.0 {
+                        ts.push(&[k, 3 * i + a, 3 * v + a], wv);
+                        for &(u, wu) in &w {
+                            if wu != 0.0 {
+                                tr.push(&[k, 3 * v + a, 3 * u + a], wv * wu);
+                            }
+                        }
+                    }
+                }
+                if near == NearField::Regularised {
+                    for face in [i, j] {
+                        let [v0, v1, v2] = faces[face].map(|v| v as usize);
+                        for (p, q) in [(v0, v1), (v1, v2), (v2, v0)] {
+                            tr.push(&[k, 3 * p + a, 3 * p + a], near_c);
+                            tr.push(&[k, 3 * q + a, 3 * q + a], near_c);
+                            tr.push(&[k, 3 * p + a, 3 * q + a], -near_c);
+                            tr.push(&[k, 3 * q + a, 3 * p + a], -near_c);
+                        }
+                    }
+                }
+            }
+            th.push(&[k, k, k], 1.0);
+            tc.push(&[k, k, n * j + i], 1.0 / (2.0 * PI));
+            td.push(&[k, k, k], 1.0);
+        }
+    }
+
+    let mut ta = SparseTensor::new(&[n, n3, n3]);
+    for i in 0..n {
+        for a in 0..3 {
+            ta.push(&[i, 3 * i + a, 3 * i + a], 1.0);
+        }
+    }
+    let mut te = SparseTensor::new(&[3 * n, 3 * n, pairs]);
+    let mut ti = SparseTensor::new(&[3 * n, 3 * n]);
+    for c in 0..3 {
+        for i in 0..n {
+            ti.push(&[c * n + i, c * n + i], 1.0);
+            let rho = mesh.albedo[i][c];
+            if rho != 0.0 {
+                for j in 0..n {
+                    if i != j {
+                        te.push(&[c * n + i, c * n + j, n * i + j], rho);
+                    }
+                }
+            }
+        }
+    }
+
+    Model::new(output)
+        .with_tensor("N", &["n", "g", "g"], tn)
+        .with_tensor("S", &["sh", "n", "g"], ts)
+        .with_tensor("R", &["r", "g", "g"], tr)
+        .with_tensor("H", &["sh", "sh", "r"], th)
+        .with_tensor("C", &["c", "sh", "sh"], tc)
+        .with_tensor("D", &["dp", "c", "v"], td)
+        .with_tensor("A", &["a", "n", "n"], ta)
+        .with_tensor("P", &["dp", "dp", "a"], tp)
+        .with_tensor("E", &["b", "b", "dp"], te)
+        .with_tensor("I", &["b", "b"], ti)
+        .with_input("g", "g")
+        .with_input("v", "v")
+        .with_input("e", "b")
+}
+
+/// The emission stacked by channel (`e[c·n + i]`), the layout of [`radiosity`]'s `e` and `b`.
+pub fn stack_channels(per_face: &[[f64; 3]]) -> Vec<f64> {
+    (0..3).flat_map(|c| per_face.iter().map(move |v| v[c])).collect()
+}
