@@ -47,7 +47,7 @@ fn distance_from_span(u: &Tensor, b: &Basis) -> f64 {
 #[test]
 fn pca_recovers_a_low_rank_subspace() {
     let (s, u) = snapshots(300, &[4.0, 3.0, 1.5, 0.5], 1);
-    let p = pca("u", &mut &s, Truncation { energy: 1.0, max_modes: 100 }).unwrap();
+    let p = pca("u", &mut &s, Truncation { energy: 1.0, max_modes: 100, centred: false }).unwrap();
     assert_eq!(p.basis.reduced_dim(), 4, "rank 4: the zero singular values are not kept");
     // Orthonormal to 1e-12: Gram–Schmidt twice leaves O(n·ε) ≈ 1e-13 here.
     assert!(p.basis.orthonormality_error() < 1e-12);
@@ -63,12 +63,38 @@ fn truncation_counts_energy_in_sigma_squared_and_respects_the_cap() {
     let sigma = [10.0, 5.0, 2.0, 1.0, 0.1];
     let (s, _) = snapshots(200, &sigma, 7);
     // Σσ² = 130.01: two modes hold 125/130.01 = 0.9615 ≥ 0.95 (in σ they would hold only 0.83).
-    let p = pca("u", &mut &s, Truncation { energy: 0.95, max_modes: 10 }).unwrap();
+    let p = pca("u", &mut &s, Truncation { energy: 0.95, max_modes: 10, centred: false }).unwrap();
     assert_eq!(p.basis.reduced_dim(), 2);
     assert!((p.energy - 125.0 / 130.01).abs() < 1e-12, "{}", p.energy);
-    let capped = pca("u", &mut &s, Truncation { energy: 0.95, max_modes: 1 }).unwrap();
+    let capped = pca("u", &mut &s, Truncation { energy: 0.95, max_modes: 1, centred: false }).unwrap();
     assert_eq!(capped.basis.reduced_dim(), 1);
-    assert!(pca("u", &mut &s, Truncation { energy: 0.0, max_modes: 1 }).is_err());
+    assert!(pca("u", &mut &s, Truncation { energy: 0.0, max_modes: 1, centred: false }).is_err());
+}
+
+/// Centred PCA: snapshots that share a large common part (a mean holding almost all the raw
+/// energy) keep their variation. Raw PCA at 99.9 % keeps just the mean direction; centred PCA
+/// keeps the mean and the variation modes, and then reproduces every snapshot.
+#[test]
+fn centred_pca_keeps_the_variation_beside_a_dominant_mean() {
+    let (variation, _) = snapshots(400, &[0.5, 0.2], 3);
+    let (n, k) = (variation.shape()[0], variation.shape()[1]);
+    let mut data = variation.data().to_vec();
+    for i in 0..n {
+        for j in 0..k {
+            data[i * k + j] += 10.0 * (1.0 + (i as f64 * 0.01).sin());
+        }
+    }
+    let s = galerkin::tensor::Tensor::from_vec(&[n, k], data).unwrap();
+    let raw = pca("g", &mut &s, Truncation { energy: 0.999, max_modes: 60, centred: false }).unwrap();
+    assert_eq!(raw.basis.reduced_dim(), 1, "the raw energy is all in the mean");
+    let centred = pca("g", &mut &s, Truncation { energy: 0.999, max_modes: 60, centred: true }).unwrap();
+    assert_eq!(centred.basis.reduced_dim(), 3, "the mean and two variation modes");
+    assert!(centred.basis.orthonormality_error() < 1e-12);
+    assert!(distance_from_span(&s, &centred.basis) < 1e-9 * 10.0 * (n as f64).sqrt());
+    // Snapshots that do not vary at all: the mean alone.
+    let same = galerkin::tensor::Tensor::from_vec(&[3, 2], vec![1.0, 1.0, 2.0, 2.0, 3.0, 3.0]).unwrap();
+    let p = pca("e", &mut &same, Truncation { energy: 0.999, max_modes: 60, centred: true }).unwrap();
+    assert_eq!(p.basis.reduced_dim(), 1);
 }
 
 #[test]
@@ -83,7 +109,7 @@ fn streaming_pca_matches_an_independent_thin_svd() {
         (0..n).flat_map(|i| (0..5).map(move |j| (i, j))).map(|(i, j)| svd.U()[(i, j)]).collect(),
     )
     .unwrap();
-    let truncation = Truncation { energy: 1.0, max_modes: 5 };
+    let truncation = Truncation { energy: 1.0, max_modes: 5, centred: false };
 
     // From a file, read in blocks.
     let dir = std::env::temp_dir().join(format!("galerkin-pca-{}", std::process::id()));
@@ -139,7 +165,7 @@ fn pca_with_the_gram_matrix_on_the_gpu_finds_the_same_subspace() {
     let gpu = common::gpu();
     // Rows span two 4096-row blocks; a well-separated spectrum, so f32 Gram entries resolve it.
     let (s, u) = snapshots(6000, &[5.0, 3.0, 2.0, 1.0], 31);
-    let truncation = Truncation { energy: 0.999, max_modes: 10 };
+    let truncation = Truncation { energy: 0.999, max_modes: 10, centred: false };
     let cpu = pca("u", &mut &s, truncation).unwrap();
     let on_gpu = pca_with("u", &mut &s, truncation, Backend::Gpu, Some(&gpu)).unwrap();
     assert_eq!(on_gpu.basis.reduced_dim(), cpu.basis.reduced_dim());

@@ -17,9 +17,12 @@ pub mod form_factor;
 pub mod gpu;
 pub mod lighting;
 pub mod mesh;
+pub mod reduced;
 pub mod render;
 pub mod scene;
 pub mod solve;
+pub mod train;
+pub mod visibility;
 
 pub use error::RadiosityError;
 pub use form_factor::FormFactors;

@@ -130,13 +130,18 @@ impl SnapshotSource for SnapshotFile {
 pub struct Truncation {
     /// Keep the fewest modes whose σ² sum to at least this fraction of the total (0 < e ≤ 1).
     pub energy: f64,
-    /// And never more than this many.
+    /// And never more than this many (the mean included, when centred).
     pub max_modes: usize,
+    /// Analyse the *variance*: the modes of the snapshots minus their mean, the mean itself
+    /// added to the basis. Without it the energy fraction is of the raw snapshots, which for
+    /// quantities with a large common part (vertex positions: the mean holds 99.9 % of the
+    /// energy of a deforming room) keeps nothing that varies.
+    pub centred: bool,
 }
 
 impl Default for Truncation {
     fn default() -> Self {
-        Self { energy: 0.9999, max_modes: usize::MAX }
+        Self { energy: 0.9999, max_modes: usize::MAX, centred: false }
     }
 }
 
@@ -200,31 +205,54 @@ pub fn pca_with(
     if let Some(d) = &device {
         gram = d.read()?;
     }
+    if truncation.centred {
+        // The Gram matrix of the centred snapshots S(I − 11ᵀ/k) is (I − 11ᵀ/k) G (I − 11ᵀ/k).
+        let row_mean: Vec<f64> =
+            (0..k).map(|i| gram[i * k..(i + 1) * k].iter().sum::<f64>() / k as f64).collect();
+        let all_mean = row_mean.iter().sum::<f64>() / k as f64;
+        for i in 0..k {
+            for j in 0..k {
+                gram[i * k + j] += all_mean - row_mean[i] - row_mean[j];
+            }
+        }
+    }
     let (values, vectors) = symmetric_eigen(name, &Tensor::from_vec(&[k, k], gram).expect("k×k"))
         .map_err(|source| ReduceError::Tensor { context: format!("PCA of `{name}`"), source })?;
     // Descending; tiny negative eigenvalues of G are rounding.
     let order: Vec<usize> = (0..k).rev().collect();
     let sigma2: Vec<f64> = order.iter().map(|&i| values[i].max(0.0)).collect();
     let total: f64 = sigma2.iter().sum();
-    if total <= 0.0 {
+    if total <= 0.0 && !truncation.centred {
         return Err(bad("every snapshot is zero".into()));
     }
     let floor = sigma2[0] * (k as f64) * f64::EPSILON;
+    let max_modes = truncation.max_modes - usize::from(truncation.centred);
     let mut m = 0;
     let mut kept = 0.0;
-    while m < k && m < truncation.max_modes && sigma2[m] > floor && kept < truncation.energy * total {
+    while m < k && m < max_modes && sigma2[m] > floor && kept < truncation.energy * total {
         kept += sigma2[m];
         m += 1;
     }
-    let m = m.max(1);
-    // Pass 2: the basis rows, B_b = S_b V_m Σ_m⁻¹.
-    let mut vs = vec![0.0; k * m];
-    for (c, &i) in order.iter().take(m).enumerate() {
-        let s = sigma2[c].sqrt();
+    let m = if truncation.centred { m } else { m.max(1) };
+    // Pass 2: the basis rows, B_b = S_b V_m Σ_m⁻¹ (centred: the mean S 1/k first, and the
+    // centred coefficients (I − 11ᵀ/k) vᵢ / σᵢ).
+    let offset = usize::from(truncation.centred);
+    let cols = m + offset;
+    let mut vs = vec![0.0; k * cols];
+    if truncation.centred {
         for r in 0..k {
-            vs[r * m + c] = vectors.data()[r * k + i] / s;
+            vs[r * cols] = 1.0 / k as f64;
         }
     }
+    for (c, &i) in order.iter().take(m).enumerate() {
+        let s = sigma2[c].sqrt();
+        let mean = (0..k).map(|r| vectors.data()[r * k + i]).sum::<f64>() / k as f64;
+        let centre = if truncation.centred { mean } else { 0.0 };
+        for r in 0..k {
+            vs[r * cols + c + offset] = (vectors.data()[r * k + i] - centre) / s;
+        }
+    }
+    let m = cols;
     let mut b = vec![0.0; n * m];
     for start in (0..n).step_by(BLOCK_ROWS) {
         let end = (start + BLOCK_ROWS).min(n);
@@ -235,7 +263,8 @@ pub fn pca_with(
     }
     // Small σ amplify rounding in S v / σ: re-orthonormalise (Gram–Schmidt twice).
     let basis = Basis::orthonormalize(name, &Tensor::from_vec(&[n, m], b).expect("n×m"))?;
-    Ok(Pca { basis, singular_values: sigma2.iter().map(|s| s.sqrt()).collect(), energy: kept / total })
+    let energy = if total > 0.0 { kept / total } else { 1.0 };
+    Ok(Pca { basis, singular_values: sigma2.iter().map(|s| s.sqrt()).collect(), energy })
 }
 
 /// The Gram matrix accumulated on the device: `G (k × k) += S_bᵀ · S_b` per block of rows.
