@@ -6,8 +6,12 @@ use std::time::Instant;
 use anyhow::{bail, Context, Result};
 use clap::{Args, Subcommand};
 use galerkin::gpu::{Gpu, GpuDesc};
+use galerkin::radiosity::reduced::{relative_error, ReducedRadiosity};
 use galerkin::radiosity::render::{
     camera_for, default_exposure, display_radiance, draw_picture, scene_vertices, Shading, Viewpoint,
+};
+use galerkin::radiosity::train::{
+    sample_parameters, solve_configurations, train as train_model, TrainOptions,
 };
 use galerkin::radiosity::{full_radiosity, LightMode, SceneSpec, PARAMETERS};
 use galerkin::render::{write_exr_channels, write_png_rgba8};
@@ -15,10 +19,57 @@ use galerkin::render::{write_exr_channels, write_png_rgba8};
 /// `galerkin radiosity` subcommands.
 #[derive(Subcommand)]
 pub enum Action {
-    /// Solve the full radiosity (Eq. 14 with the form factors of Eq. 15, visibility by ray
-    /// casting) of a scene at one parameter vector and draw it to PNG or EXR (EXR: the raw
-    /// radiance R, G, B and the face index beside the tone-mapped colour).
+    /// Solve the radiosity of a scene at one parameter vector — full (Eq. 14 with the form
+    /// factors of Eq. 15, visibility by ray casting) or, with --model, reduced — and draw it
+    /// to PNG or EXR (EXR: the raw radiance R, G, B and the face index beside the colour).
     Render(RenderArgs),
+    /// Train the reduced radiosity of a scene (seed 000 §8.2–8.3, §9): sample the design
+    /// space, solve every sample in full, PCA every quantity of Table 2, premultiply, learn
+    /// the visibility; writes DIR/model.safetensors and DIR/visibility.safetensors.
+    Train(TrainArgs),
+    /// Run the two animation sequences through the design space (420 and 500 frames, many
+    /// configurations not trained on) reduced and full, and report the per-frame relative
+    /// error, the frame rates and their ratio: a table (CSV) and a plot (PNG).
+    Compare(CompareArgs),
+}
+
+/// Arguments of `galerkin radiosity train`.
+#[derive(Args)]
+pub struct TrainArgs {
+    /// Scene file (TOML). Area lights only (the sky's direct light is outside the model).
+    pub scene: PathBuf,
+    /// Output directory.
+    #[arg(long, default_value = "out/radiosity-model")]
+    pub out: PathBuf,
+    /// Number of sampled configurations (the paper: 540): every axis's extremes, the corners
+    /// of the parameter box, then a Latin hypercube.
+    #[arg(long, default_value_t = 540)]
+    pub samples: usize,
+    /// Fraction of each quantity's variance its basis keeps (the paper: 0.999).
+    #[arg(long, default_value_t = 0.999)]
+    pub energy: f64,
+    /// Most vectors per quantity's basis (the paper: 60; the merged e/b basis gets twice).
+    #[arg(long, default_value_t = 60)]
+    pub cap: usize,
+    /// Seed of the Latin hypercube.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+}
+
+/// Arguments of `galerkin radiosity compare`.
+#[derive(Args)]
+pub struct CompareArgs {
+    /// Scene file (TOML), the one the model was trained on.
+    pub scene: PathBuf,
+    /// The trained model's directory.
+    #[arg(long, default_value = "out/radiosity-model")]
+    pub model: PathBuf,
+    /// Frames of the two sequences (the paper: 420 and 500).
+    #[arg(long, value_delimiter = ',', default_values_t = [420, 500])]
+    pub frames: Vec<usize>,
+    /// Where the table (compare.csv) and the plot (compare.png) go.
+    #[arg(long, default_value = "out/radiosity-compare")]
+    pub out: PathBuf,
 }
 
 /// Arguments of `galerkin radiosity render`.
@@ -32,6 +83,9 @@ pub struct RenderArgs {
     /// defaults; values outside the scene's ranges are refused.
     #[arg(long = "params", value_name = "NAME=VALUE", value_delimiter = ',', value_parser = parse_param)]
     pub params: Vec<(String, f64)>,
+    /// A trained model's directory (`galerkin radiosity train`): draw the reduced radiosity.
+    #[arg(long)]
+    pub model: Option<PathBuf>,
     /// Override the scene's lighting: area (emitting openings) or sky (overcast sky outside).
     #[arg(long, value_parser = ["area", "sky"])]
     pub lights: Option<String>,
@@ -66,6 +120,8 @@ fn parse_param(s: &str) -> Result<(String, f64), String> {
 pub fn run(desc: &GpuDesc, action: &Action) -> Result<()> {
     match action {
         Action::Render(args) => render(desc, args),
+        Action::Train(args) => train(args),
+        Action::Compare(args) => compare(args),
     }
 }
 
@@ -80,7 +136,35 @@ fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
     }
     let p = spec.parameters_from(&args.params).with_context(|| format!("{}", args.scene.display()))?;
     let start = Instant::now();
-    let s = full_radiosity(&spec, &p)?;
+    let mut s = match &args.model {
+        None => full_radiosity(&spec, &p)?,
+        Some(dir) => {
+            let model = ReducedRadiosity::load(dir)?;
+            let mesh = galerkin::radiosity::architecture::build(&spec, &p)?;
+            if mesh.len() != model.faces() {
+                bail!("{}: the model has {} faces, the scene {}", dir.display(), model.faces(), mesh.len());
+            }
+            let (b, _) = model.evaluate(&mesh.g())?;
+            let geometry = mesh.geometry();
+            let n = mesh.len();
+            galerkin::radiosity::FullSolution {
+                form_factors: galerkin::radiosity::FormFactors { n: 0, values: Vec::new() },
+                emission: vec![[0.0; 3]; n],
+                radiosity: b,
+                sweeps: 0,
+                geometry,
+                mesh,
+            }
+        }
+    };
+    if args.model.is_some() {
+        // Openings show their emission, which the reduced model reproduces only approximately.
+        for i in 0..s.mesh.len() {
+            if s.mesh.kind[i].is_opening() && spec.lights.mode == LightMode::Area {
+                s.radiosity[i] = spec.lights.window_exitance;
+            }
+        }
+    }
     let solve_s = start.elapsed().as_secs_f64();
     let radiance = display_radiance(&s.mesh, &s.geometry, &spec.lights, &s.radiosity);
     let exposure = args.exposure.unwrap_or_else(|| default_exposure(&s.mesh, &s.geometry, &radiance));
@@ -115,13 +199,227 @@ fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
     }
     let p_text: Vec<String> = PARAMETERS.iter().zip(&p).map(|(n, v)| format!("{n}={v}")).collect();
     println!(
-        "radiosity: {} faces, {} lights, {}; full solve {solve_s:.2} s ({} Jacobi sweeps), exposure {exposure:.3} → {}",
+        "radiosity: {} faces, {} lights, {}; {} {solve_s:.3} s, exposure {exposure:.3} → {}",
         s.mesh.len(),
         if spec.lights.mode == LightMode::Sky { "sky" } else { "area" },
         p_text.join(" "),
-        s.sweeps,
+        if args.model.is_some() {
+            "reduced model loaded and evaluated in".to_string()
+        } else {
+            format!("full solve ({} Jacobi sweeps)", s.sweeps)
+        },
         args.out.display()
     );
     drop(picture);
     crate::check_validation(gpu)
+}
+
+fn progress_bar(len: u64, what: &str) -> indicatif::ProgressBar {
+    let bar = indicatif::ProgressBar::new(len);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template(&format!(
+            "{what:<28} {{bar:30}} {{pos}}/{{len}} eta {{eta}}"
+        ))
+        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    bar
+}
+
+fn train(args: &TrainArgs) -> Result<()> {
+    let spec = SceneSpec::load(&args.scene)?;
+    if !(args.energy > 0.0 && args.energy <= 1.0) || args.cap == 0 || args.samples < 2 {
+        bail!("--energy must be in (0, 1], --cap at least 1, --samples at least 2");
+    }
+    let options = TrainOptions {
+        samples: args.samples,
+        energy: args.energy,
+        cap: args.cap,
+        radiosity_cap: 2 * args.cap,
+        seed: args.seed,
+        ..TrainOptions::default()
+    };
+    let start = Instant::now();
+    let params = sample_parameters(&spec.ranges(), &spec.defaults(), args.samples, args.seed);
+    let bar = progress_bar(params.len() as u64, "full radiosity of samples");
+    let configurations =
+        solve_configurations(&spec, &params, options.near, &|done| bar.set_position(done as u64))?;
+    bar.finish();
+    let solve_s = start.elapsed().as_secs_f64();
+    let bars = std::sync::Mutex::new(std::collections::BTreeMap::<String, indicatif::ProgressBar>::new());
+    let (model, report) = train_model(&spec, &configurations, &options, &|stage, done, total| {
+        let mut bars = bars.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+        let label = if stage == "pca" { "PCA of Table 2's quantities" } else { "premultiplying tensors" };
+        let bar = bars.entry(stage.to_string()).or_insert_with(|| progress_bar(total, label));
+        bar.set_length(total);
+        bar.set_position(done);
+    })?;
+    for bar in bars.into_inner().unwrap_or_else(std::sync::PoisonError::into_inner).values() {
+        bar.finish();
+    }
+    model.save(&args.out)?;
+    println!(
+        "radiosity train: {} faces, {} samples solved in {solve_s:.1} s, trained in {:.1} s → {}",
+        model.faces(),
+        configurations.len(),
+        start.elapsed().as_secs_f64() - solve_s,
+        args.out.display()
+    );
+    println!("| quantity | full dimension | vectors | variance kept |\n|---|---:|---:|---:|");
+    for (name, dim, m, energy) in &report.bases {
+        println!("| {name} | {dim} | {m} | {:.4} % |", 100.0 * energy);
+    }
+    for (name, m) in &report.merged {
+        println!("merged basis {name}: {m} vectors");
+    }
+    let bytes: u64 = ["model.safetensors", "visibility.safetensors"]
+        .iter()
+        .filter_map(|f| std::fs::metadata(args.out.join(f)).ok())
+        .map(|m| m.len())
+        .sum();
+    println!("model size on disk: {:.1} MB", bytes as f64 / 1e6);
+    Ok(())
+}
+
+/// A smooth closed path through the parameter box: parameter `a` at frame `f` of `frames`.
+fn sequence(spec: &SceneSpec, which: usize, f: usize, frames: usize) -> [f64; 4] {
+    let t = f as f64 / frames as f64;
+    let ranges = spec.ranges();
+    let (freq, phase): ([f64; 4], [f64; 4]) = if which == 0 {
+        ([1.0, 2.0, 1.0, 1.5], [0.0, 1.0, 2.5, 0.5])
+    } else {
+        ([2.0, 1.0, 3.0, 1.0], [1.3, 0.2, 0.7, 2.9])
+    };
+    std::array::from_fn(|a| {
+        let u = 0.5 + 0.47 * (2.0 * std::f64::consts::PI * freq[a] * t + phase[a]).sin();
+        ranges[a][0] + u * (ranges[a][1] - ranges[a][0])
+    })
+}
+
+fn compare(args: &CompareArgs) -> Result<()> {
+    let spec = SceneSpec::load(&args.scene)?;
+    let model = ReducedRadiosity::load(&args.model)?;
+    std::fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
+    let mut rows = vec![
+        "sequence,frame,window_width,skylight_size,door_width,ceiling_tilt,relative_error,full_ms,reduced_ms"
+            .to_string(),
+    ];
+    let mut series: Vec<Vec<f64>> = Vec::new();
+    let (mut full_times, mut reduced_times) = (Vec::new(), Vec::new());
+    let mut parts = [0.0f64; 4];
+    for (which, &frames) in args.frames.iter().enumerate() {
+        let bar = progress_bar(frames as u64, &format!("sequence {} (full and reduced)", which + 1));
+        let mut errors = Vec::with_capacity(frames);
+        for f in 0..frames {
+            let p = sequence(&spec, which % 2, f, frames);
+            let t = Instant::now();
+            let full = full_radiosity(&spec, &p)?;
+            let full_s = t.elapsed().as_secs_f64();
+            let t = Instant::now();
+            let mesh = galerkin::radiosity::architecture::build(&spec, &p)?;
+            let (b, times) = model.evaluate(&mesh.g())?;
+            let reduced_s = t.elapsed().as_secs_f64();
+            parts[0] += times.project;
+            parts[1] += times.visibility;
+            parts[2] += times.chain;
+            parts[3] += times.lift;
+            let e = relative_error(&b, &full.radiosity, &full.geometry.areas);
+            errors.push(e);
+            full_times.push(full_s);
+            reduced_times.push(reduced_s);
+            rows.push(format!(
+                "{},{f},{},{},{},{},{e:.6},{:.3},{:.4}",
+                which + 1,
+                p[0],
+                p[1],
+                p[2],
+                p[3],
+                full_s * 1e3,
+                reduced_s * 1e3
+            ));
+            bar.inc(1);
+        }
+        bar.finish();
+        series.push(errors);
+    }
+    let csv = args.out.join("compare.csv");
+    std::fs::write(&csv, rows.join("\n") + "\n").with_context(|| format!("writing {}", csv.display()))?;
+    let plot = args.out.join("compare.png");
+    write_error_plot(&plot, &series)?;
+    let median = |v: &mut Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        v[v.len() / 2]
+    };
+    let (full_med, reduced_med) = (median(&mut full_times), median(&mut reduced_times));
+    let all: Vec<f64> = series.iter().flatten().copied().collect();
+    let total: f64 = parts.iter().sum();
+    println!("| sequence | frames | mean relative error | worst frame |\n|---|---:|---:|---:|");
+    for (which, e) in series.iter().enumerate() {
+        let mean = e.iter().sum::<f64>() / e.len().max(1) as f64;
+        let worst = e.iter().fold(0.0f64, |m, v| m.max(*v));
+        println!("| {} | {} | {:.2} % | {:.2} % |", which + 1, e.len(), 100.0 * mean, 100.0 * worst);
+    }
+    println!(
+        "all frames: mean {:.2} %, worst {:.2} %; median frame: full {:.1} ms ({:.2} FPS), reduced {:.3} ms ({:.0} FPS, mesh build and lift included): {:.0}× faster",
+        100.0 * all.iter().sum::<f64>() / all.len().max(1) as f64,
+        100.0 * all.iter().fold(0.0f64, |m, v| m.max(*v)),
+        full_med * 1e3,
+        1.0 / full_med,
+        reduced_med * 1e3,
+        1.0 / reduced_med,
+        full_med / reduced_med
+    );
+    println!(
+        "reduced frame: project g {:.0} %, learned visibility (Eq. 17) {:.0} %, Table 2 chain {:.0} %, lift b {:.0} % (of the model's own time)",
+        100.0 * parts[0] / total,
+        100.0 * parts[1] / total,
+        100.0 * parts[2] / total,
+        100.0 * parts[3] / total
+    );
+    println!("→ {} and {}", csv.display(), plot.display());
+    Ok(())
+}
+
+/// Relative error per frame as a line plot (one colour per sequence) with a grid every 1 %.
+fn write_error_plot(path: &std::path::Path, series: &[Vec<f64>]) -> Result<()> {
+    let (w, h) = (900u32, 360u32);
+    let (left, bottom, top, right) = (40.0, 20.0, 10.0, 10.0);
+    let mut rgba = vec![255u8; (w * h * 4) as usize];
+    let top_error = series.iter().flatten().fold(0.01f64, |m, v| m.max(*v)) * 1.1;
+    let mut put = |x: i64, y: i64, c: [u8; 3]| {
+        if x >= 0 && y >= 0 && (x as u32) < w && (y as u32) < h {
+            let k = ((y as u32 * w + x as u32) * 4) as usize;
+            rgba[k..k + 3].copy_from_slice(&c);
+        }
+    };
+    let plot_w = f64::from(w) - left - right;
+    let plot_h = f64::from(h) - top - bottom;
+    let to_y = |e: f64| (top + plot_h * (1.0 - e / top_error)) as i64;
+    let mut level = 0.0;
+    while level <= top_error {
+        for x in left as i64..(f64::from(w) - right) as i64 {
+            put(x, to_y(level), if level == 0.0 { [0, 0, 0] } else { [220, 220, 220] });
+        }
+        level += 0.01;
+    }
+    for y in top as i64..(f64::from(h) - bottom) as i64 {
+        put(left as i64, y, [0, 0, 0]);
+    }
+    let colours = [[31u8, 119, 180], [214, 39, 40], [44, 160, 44]];
+    for (s, errors) in series.iter().enumerate() {
+        let n = errors.len().max(2);
+        let mut last: Option<(i64, i64)> = None;
+        for (f, e) in errors.iter().enumerate() {
+            let x = (left + plot_w * f as f64 / (n - 1) as f64) as i64;
+            let y = to_y(*e);
+            if let Some((x0, y0)) = last {
+                let steps = (x - x0).abs().max((y - y0).abs()).max(1);
+                for k in 0..=steps {
+                    put(x0 + (x - x0) * k / steps, y0 + (y - y0) * k / steps, colours[s % 3]);
+                }
+            }
+            last = Some((x, y));
+        }
+    }
+    write_png_rgba8(path, w, h, &rgba)?;
+    Ok(())
 }

@@ -26,7 +26,7 @@
 //! `r` stays `R ⊗ g ⊗ g`). Diagonal pairs (`i = j`) have no entries: `s`, `r`, `h` are 0 there
 //! and the core's diagonal inverse maps 0/0 to 0.
 //!
-//! Sizes: `S` has 18 entries per pair and `R` up to 180, so the tensors here are for scenes
+//! Sizes: `S` has 18 entries per pair and `R` (stored symmetric in its geometry axes) up to 117, so the tensors here are for scenes
 //! of a few hundred faces (the tests, and the reduction's premultiplication, which streams
 //! pairs in chunks rather than building them whole).
 
@@ -82,7 +82,8 @@ pub fn table2_model(mesh: &SceneMesh, near: NearField, output: Expr) -> Model {
     }
 
     let mut ts = SparseTensor::new(&[pairs, n3, g3]);
-    let mut tr = SparseTensor::new(&[pairs, g3, g3]);
+    // R is symmetric in its two geometry axes: one entry per unordered pair of indices.
+    let mut tr = SparseTensor::new(&[pairs, g3, g3]).with_symmetric_axes(&[1, 2]).expect("two equal axes");
     let mut th = SparseTensor::new(&[pairs, pairs, pairs]);
     let mut tc = SparseTensor::new(&[pairs, pairs, pairs]);
     let mut td = SparseTensor::new(&[pairs, pairs, pairs]);
@@ -110,7 +111,7 @@ pub fn table2_model(mesh: &SceneMesh, near: NearField, output: Expr) -> Model {
                     if wv != 0.0 {
                         ts.push(&[k, 3 * i + a, 3 * v + a], wv);
                         for &(u, wu) in &w {
-                            if wu != 0.0 {
+                            if wu != 0.0 && u >= v {
                                 tr.push(&[k, 3 * v + a, 3 * u + a], wv * wu);
                             }
                         }
@@ -123,7 +124,6 @@ pub fn table2_model(mesh: &SceneMesh, near: NearField, output: Expr) -> Model {
                             tr.push(&[k, 3 * p + a, 3 * p + a], near_c);
                             tr.push(&[k, 3 * q + a, 3 * q + a], near_c);
                             tr.push(&[k, 3 * p + a, 3 * q + a], -near_c);
-                            tr.push(&[k, 3 * q + a, 3 * p + a], -near_c);
                         }
                     }
                 }

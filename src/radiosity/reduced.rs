@@ -2,13 +2,17 @@
 //! reduced visibility (Eq. 17), evaluate Table 2's chain on the premultiplied tensors, lift
 //! the radiosity to the faces.
 
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, HashMap};
+use std::path::Path;
 use std::time::Instant;
+
+use safetensors::tensor::{Dtype, SafeTensors, TensorView};
 
 use super::error::RadiosityError;
 use super::solve::Rgb;
 use super::visibility::LearnedVisibility;
 use crate::reduce::ReducedModel;
+use crate::tensor::Tensor;
 
 /// The reduced model and its learned visibility.
 #[derive(Clone, Debug)]
@@ -108,6 +112,93 @@ impl ReducedRadiosity {
         times.lift = (t4 - t3).as_secs_f64();
         let n = self.faces;
         Ok(((0..n).map(|i| [b[i], b[n + i], b[2 * n + i]]).collect(), times))
+    }
+}
+
+/// The `format` metadata of a reduced radiosity's learned-visibility file.
+pub const FORMAT: &str = "galerkin-reduced-radiosity";
+/// Its version.
+pub const VERSION: u32 = 1;
+
+impl ReducedRadiosity {
+    /// Writes `dir/model.safetensors` (the core's reduced model: Table 2's premultiplied
+    /// tensors and the bases of `g` and `b`) and `dir/visibility.safetensors` (`B_gᵀ G`,
+    /// `B_vᵀ V`, `ê`, f64), each to a temporary name first.
+    pub fn save(&self, dir: &Path) -> Result<(), RadiosityError> {
+        let fail = |detail: String| RadiosityError::Obj { path: dir.to_path_buf(), message: detail };
+        std::fs::create_dir_all(dir).map_err(|e| fail(e.to_string()))?;
+        self.model.save(&dir.join("model.safetensors")).map_err(|e| fail(e.to_string()))?;
+        let bytes = |t: &[f64]| t.iter().flat_map(|v| v.to_le_bytes()).collect::<Vec<u8>>();
+        let entries = [
+            (
+                "geometry",
+                bytes(self.visibility.geometry().data()),
+                self.visibility.geometry().shape().to_vec(),
+            ),
+            (
+                "visibility",
+                bytes(self.visibility.visibility().data()),
+                self.visibility.visibility().shape().to_vec(),
+            ),
+            ("emission", bytes(&self.emission_hat), vec![self.emission_hat.len()]),
+        ];
+        let views = entries
+            .iter()
+            .map(|(n, b, s)| TensorView::new(Dtype::F64, s.clone(), b).map(|v| (n.to_string(), v)))
+            .collect::<Result<Vec<_>, _>>()
+            .map_err(|e| fail(e.to_string()))?;
+        let meta: HashMap<String, String> = [
+            ("format".to_string(), FORMAT.to_string()),
+            ("version".to_string(), VERSION.to_string()),
+            ("faces".to_string(), self.faces.to_string()),
+        ]
+        .into();
+        let buffer = safetensors::serialize(views, Some(meta)).map_err(|e| fail(e.to_string()))?;
+        let path = dir.join("visibility.safetensors");
+        let tmp = dir.join(format!(".visibility.safetensors.{}.tmp", std::process::id()));
+        std::fs::write(&tmp, buffer).map_err(|e| fail(e.to_string()))?;
+        std::fs::rename(&tmp, &path).map_err(|e| fail(e.to_string()))
+    }
+
+    /// Reads what [`ReducedRadiosity::save`] wrote; errors name the file and what is wrong.
+    pub fn load(dir: &Path) -> Result<Self, RadiosityError> {
+        let model = ReducedModel::load(&dir.join("model.safetensors")).map_err(|e| RadiosityError::Obj {
+            path: dir.join("model.safetensors"),
+            message: e.to_string(),
+        })?;
+        let path = dir.join("visibility.safetensors");
+        let fail = |m: String| RadiosityError::Obj { path: path.clone(), message: m };
+        let bytes = std::fs::read(&path).map_err(|e| fail(e.to_string()))?;
+        let (_, meta) = SafeTensors::read_metadata(&bytes).map_err(|e| fail(e.to_string()))?;
+        let meta = meta.metadata().clone().unwrap_or_default();
+        if meta.get("format").map(String::as_str) != Some(FORMAT) {
+            return Err(fail(format!("not a {FORMAT} file")));
+        }
+        if meta.get("version").and_then(|v| v.parse::<u32>().ok()).is_none_or(|v| v > VERSION) {
+            return Err(fail(format!(
+                "version {:?} is not one this build reads (≤ {VERSION})",
+                meta.get("version")
+            )));
+        }
+        let faces: usize =
+            meta.get("faces").and_then(|v| v.parse().ok()).ok_or_else(|| fail("no face count".into()))?;
+        let file = SafeTensors::deserialize(&bytes).map_err(|e| fail(e.to_string()))?;
+        let read = |name: &str| -> Result<Tensor, RadiosityError> {
+            let v = file.tensor(name).map_err(|e| fail(format!("{name}: {e}")))?;
+            if v.dtype() != Dtype::F64 {
+                return Err(fail(format!("{name}: expected f64")));
+            }
+            let data = v
+                .data()
+                .chunks_exact(8)
+                .map(|b| f64::from_le_bytes(b.try_into().expect("8 bytes")))
+                .collect();
+            Tensor::from_vec(v.shape(), data).map_err(|e| fail(format!("{name}: {e}")))
+        };
+        let learned = LearnedVisibility::new(read("geometry")?, read("visibility")?)
+            .map_err(|e| fail(e.to_string()))?;
+        let emission = read("emission")?.into_data();
+        Self::new(model, learned, emission, faces).map_err(|e| fail(e.to_string()))
     }
 }
 

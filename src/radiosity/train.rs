@@ -106,10 +106,10 @@ pub fn sample_parameters(ranges: &[[f64; 2]], defaults: &[f64], samples: usize, 
             out.push(p);
         }
     };
-    for a in 0..d {
-        for end in 0..2 {
+    for (a, range) in ranges.iter().enumerate() {
+        for &end in range {
             let mut p = defaults.to_vec();
-            p[a] = ranges[a][end];
+            p[a] = end;
             push(p, &mut out);
         }
     }
@@ -131,10 +131,12 @@ pub fn sample_parameters(ranges: &[[f64; 2]], defaults: &[f64], samples: usize, 
         })
         .collect();
     for i in 0..rest {
-        let p = (0..d)
-            .map(|a| {
-                let u = (strata[a][i] as f64 + splitmix(&mut state)) / rest as f64;
-                ranges[a][0] + u * (ranges[a][1] - ranges[a][0])
+        let p = strata
+            .iter()
+            .zip(ranges)
+            .map(|(stratum, range)| {
+                let u = (stratum[i] as f64 + splitmix(&mut state)) / rest as f64;
+                range[0] + u * (range[1] - range[0])
             })
             .collect();
         push(p, &mut out);
@@ -418,12 +420,14 @@ pub fn train(
     let mesh = space.mesh(&first.params)?;
     let model = table2_model(&mesh, options.near, radiosity_expr());
     let premultiply_progress = |done: f64, total: f64| progress("premultiply", done as u64, total as u64);
-    let reduced = model
+    let mut reduced = model
         .reduce_with(
             &bases,
             &ReduceOptions { progress: Some(&premultiply_progress), ..ReduceOptions::default() },
         )
         .map_err(reduce_err)?;
+    // The visibility is always given reduced (Eq. 17): its n²-row basis stays out of the model.
+    reduced.forget_input_basis("v").map_err(reduce_err)?;
     // The learned visibility: B_gᵀ G and B_vᵀ V.
     let t = configurations.len();
     let (bg, bv) = (&bases["g"], &bases["v"]);
@@ -438,10 +442,11 @@ pub fn train(
             vt[i * t + c] = x;
         }
     }
-    let learned = LearnedVisibility {
-        geometry: Tensor::from_vec(&[bg.reduced_dim(), t], gt).expect("shape matches"),
-        visibility: Tensor::from_vec(&[bv.reduced_dim(), t], vt).expect("shape matches"),
-    };
+    let learned = LearnedVisibility::new(
+        Tensor::from_vec(&[bg.reduced_dim(), t], gt).expect("shape matches"),
+        Tensor::from_vec(&[bv.reduced_dim(), t], vt).expect("shape matches"),
+    )
+    .map_err(|e| RadiosityError::Solve(e.to_string()))?;
     let emission_hat = bases["b"].project(&stack_channels(&first.emission));
     Ok((ReducedRadiosity::new(reduced, learned, emission_hat, n)?, report))
 }

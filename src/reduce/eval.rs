@@ -7,7 +7,7 @@ use rayon::prelude::*;
 
 use super::error::ReduceError;
 use super::expr::Expr;
-use crate::tensor::{solve, spd_power, transpose, SparseTensor, Tensor, TensorError};
+use crate::tensor::{solve, spd_power, spd_power_apply, transpose, SparseTensor, Tensor, TensorError};
 
 /// Where an evaluation takes its tensors and inputs from, for a batch of input sets.
 pub(crate) trait Operands: Sync {
@@ -340,6 +340,23 @@ fn evaluate_values(e: &Expr, ops: &impl Operands) -> Result<Vec<Value>, ReduceEr
                             })
                         })
                         .collect();
+                }
+            }
+            // M^p ⊗₁ v (M symmetric) is applied through M's eigendecomposition, never formed;
+            // a sparse diagonal M elementwise.
+            if let (Expr::Power(m, p), [(axis, v)]) = (base.as_ref(), values.as_slice()) {
+                if v[0].order() == 1 && *axis <= 1 {
+                    let what = m.to_string();
+                    let mv = evaluate_values(m, ops)?;
+                    return per_item(batch, |b| {
+                        let x = v[b].data();
+                        let y = match mv[b].diagonal() {
+                            Some(d) => diagonal_power(&what, &d, *p)
+                                .map(|dp| dp.iter().zip(x).map(|(a, b)| a * b).collect()),
+                            None => mv[b].dense(&what).and_then(|mb| spd_power_apply(&what, &mb, *p, x)),
+                        };
+                        y.map(|y| Value::Dense(Tensor::vector(y))).map_err(tensor_err(e))
+                    });
                 }
             }
             let t = evaluate_values(base, ops)?;

@@ -139,9 +139,15 @@ impl ReducedModel {
             }
             tensors.insert(name, ReducedTensor { axes: axis_names, data });
         }
-        for b in output_axes.iter().chain(inputs.values()) {
+        for b in &output_axes {
             if !bases.contains_key(b) {
-                return Err(fail(format!("basis `{b}` (of an input or the output) is missing")));
+                return Err(fail(format!("basis `{b}` (of the output) is missing")));
+            }
+        }
+        // An input's basis may have been dropped (given reduced); its size is then the tensors'.
+        for b in inputs.values() {
+            if !bases.contains_key(b) && !dims.contains_key(b) {
+                return Err(fail(format!("basis `{b}` (of an input) is missing and no tensor axis uses it")));
             }
         }
         let model = ReducedModel::new(tensors, inputs, output, output_axes, bases);

@@ -58,10 +58,39 @@ impl ReducedModel {
         self.bases.get(name)
     }
 
+    /// Drops the basis of input `name`, which callers will always give already reduced (seed
+    /// 000 §8.3: the reduced visibility comes from the learned model, never from projecting a
+    /// full visibility), so that the run-time model does not carry it — for radiosity the
+    /// visibility basis has `n²` rows. Refused for a basis the output is lifted with.
+    pub fn forget_input_basis(&mut self, name: &str) -> Result<(), ReduceError> {
+        let b = self.inputs.get(name).ok_or_else(|| ReduceError::UnknownInput(name.to_string()))?.clone();
+        if self.output_axes.contains(&b) {
+            return Err(ReduceError::BadBasis {
+                basis: b,
+                detail: format!("input `{name}` shares its basis with the output, which is lifted with it"),
+            });
+        }
+        self.bases.remove(&b);
+        Ok(())
+    }
+
+    /// The reduced dimension of basis `name`: the basis's, or read off the tensors' axes for a
+    /// forgotten input basis.
+    pub fn reduced_dim(&self, name: &str) -> Option<usize> {
+        self.bases.get(name).map(Basis::reduced_dim).or_else(|| {
+            self.tensors
+                .values()
+                .find_map(|t| t.axes.iter().position(|a| a == name).map(|axis| t.data.shape()[axis]))
+        })
+    }
+
     /// `x̂ = B_xᵀ x` for input `name`.
     pub fn project_input(&self, name: &str, x: &[f64]) -> Result<Vec<f64>, ReduceError> {
         let b = self.inputs.get(name).ok_or_else(|| ReduceError::UnknownInput(name.to_string()))?;
-        let basis = &self.bases[b];
+        let basis = self.bases.get(b).ok_or_else(|| ReduceError::UnknownBasis {
+            basis: b.clone(),
+            needed_by: format!("projecting input `{name}` (its basis was dropped: give it reduced)"),
+        })?;
         if x.len() != basis.full_dim() {
             return Err(ReduceError::InputLength {
                 input: name.into(),
@@ -98,7 +127,7 @@ impl ReducedModel {
         for inputs in batch {
             for (name, b) in &self.inputs {
                 if let Some(x) = inputs.get(name.as_str()) {
-                    let m = self.bases[b].reduced_dim();
+                    let Some(m) = self.reduced_dim(b) else { continue };
                     if x.len() != m {
                         return Err(ReduceError::InputLength {
                             input: name.clone(),

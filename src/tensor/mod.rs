@@ -18,5 +18,5 @@ mod sparse;
 pub use dense::{Scalar, Tensor};
 pub use error::TensorError;
 pub(crate) use linalg::{check_system, pivot_tolerance};
-pub use linalg::{matmul, solve, solve_many, spd_power, symmetric_eigen, transpose};
+pub use linalg::{matmul, solve, solve_many, spd_power, spd_power_apply, symmetric_eigen, transpose};
 pub use sparse::{distinct_permutations, SparseTensor};
