@@ -104,6 +104,10 @@ enum BenchWhat {
     /// Seed 002's table: FPS of orders 1–8 on the artery (704) and coil (3332) at 1024×768,
     /// per pixel against per vertex in the same run; frame time against pixels and elements.
     Spectral(cli::spectral::BenchArgs),
+    /// Full radiosity (seed 000 §8): form factors with visibility and the Jacobi solve of
+    /// Eq. 14, on the CPU and the device, for the small and the full two-room scene. The
+    /// reduced model's rate is measured by `galerkin radiosity compare`.
+    Radiosity(cli::radiosity::BenchArgs),
     /// The reduction core: premultiplication of the fluid volume tensor at the paper's cavity
     /// size (88,671 cells, m = 128, m_g = 5) next to faer's GEMM of its final stage, reduced
     /// evaluation per call and per batch, and premultiplication time against cells and m.
@@ -159,6 +163,7 @@ fn run(cli: Cli) -> Result<()> {
         Command::Bench { what: BenchWhat::Reduce { quick } } => bench_reduce(&desc, quick),
         Command::Bench { what: BenchWhat::Spacetime(args) } => cli::spacetime::bench(&desc, &args),
         Command::Bench { what: BenchWhat::Spectral(args) } => cli::spectral::bench(&desc, &args),
+        Command::Bench { what: BenchWhat::Radiosity(args) } => cli::radiosity::bench(&desc, &args),
     }
 }
 
@@ -368,6 +373,7 @@ fn demo(desc: &GpuDesc, scene_path: &Path, out: &Path) -> Result<()> {
     );
     drop((renderer, colours, values));
     cli::spectral::demo(&gpu, (w, h), out)?;
+    cli::radiosity::demo(&gpu, (w, h), out)?;
     check_validation(gpu)
 }
 

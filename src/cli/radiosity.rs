@@ -423,3 +423,149 @@ fn write_error_plot(path: &std::path::Path, series: &[Vec<f64>]) -> Result<()> {
     write_png_rgba8(path, w, h, &rgba)?;
     Ok(())
 }
+
+/// Arguments of `galerkin bench radiosity`.
+#[derive(Args)]
+pub struct BenchArgs {
+    /// Scene files to measure.
+    #[arg(default_values = ["scenes/radiosity/two_rooms_small.toml", "scenes/radiosity/two_rooms.toml"])]
+    pub scenes: Vec<PathBuf>,
+    /// Runs per measurement (the median is reported).
+    #[arg(long, default_value_t = 3)]
+    pub runs: usize,
+    /// Skip the device (lavapipe takes about a minute per full-scene form-factor pass).
+    #[arg(long)]
+    pub cpu_only: bool,
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+/// `galerkin bench radiosity`: the full radiosity's stages on the CPU (f64) and the device
+/// (f32), medians of `--runs`.
+pub fn bench(desc: &GpuDesc, args: &BenchArgs) -> Result<()> {
+    use galerkin::radiosity::form_factor::{form_factors, NearField};
+    use galerkin::radiosity::gpu::GpuRadiosity;
+    use galerkin::radiosity::lighting::emission;
+    use galerkin::radiosity::solve::solve_jacobi;
+    let gpu = if args.cpu_only { None } else { Some(Gpu::new(desc)?) };
+    let device = gpu.as_ref().map(GpuRadiosity::new).transpose()?;
+    if let Some(g) = &gpu {
+        println!("device: {}", g.caps().device_name);
+    }
+    println!("| scene | faces | pairs | path | form factors (s) | solve (s) | sweeps | frame (s) |");
+    println!("|---|---:|---:|---|---:|---:|---:|---:|");
+    for scene in &args.scenes {
+        let spec = SceneSpec::load(scene)?;
+        let mesh = galerkin::radiosity::architecture::build(&spec, &spec.defaults())?;
+        let n = mesh.len();
+        let name = scene.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+        let (mut ff, mut sv, mut sweeps) = (Vec::new(), Vec::new(), 0);
+        for _ in 0..args.runs.max(1) {
+            let t = Instant::now();
+            let f = form_factors(&mesh, NearField::Regularised);
+            ff.push(t.elapsed().as_secs_f64());
+            let e = emission(&mesh, &mesh.geometry(), &spec.lights, &f);
+            let t = Instant::now();
+            let (_, k) = solve_jacobi(&f, &mesh.albedo, &e, galerkin::radiosity::JACOBI_TOLERANCE, 2000)?;
+            sv.push(t.elapsed().as_secs_f64());
+            sweeps = k;
+        }
+        let (a, b) = (median(ff), median(sv));
+        println!("| {name} | {n} | {} | CPU f64 (rayon, 2 threads) | {a:.3} | {b:.3} | {sweeps} | {:.3} |", n * n, a + b);
+        if let (Some(gpu), Some(device)) = (&gpu, &device) {
+            let (mut ff, mut sv, mut sweeps) = (Vec::new(), Vec::new(), 0);
+            let runs = if n > 2000 { 1 } else { args.runs.max(1) };
+            for _ in 0..runs {
+                let t = Instant::now();
+                let f = device.form_factors(gpu, &mesh, NearField::Regularised)?;
+                ff.push(t.elapsed().as_secs_f64());
+                let e: Vec<[f64; 3]> =
+                    mesh.kind.iter().map(|k| if k.is_opening() { spec.lights.window_exitance } else { [0.0; 3] }).collect();
+                let t = Instant::now();
+                let (_, k) = device.solve(gpu, &f, &mesh.albedo, &e, 1e-6, 2000)?;
+                sv.push(t.elapsed().as_secs_f64());
+                sweeps = k;
+            }
+            let (a, b) = (median(ff), median(sv));
+            println!(
+                "| {name} | {n} | {} | device f32{} | {a:.3} | {b:.3} | {sweeps} | {:.3} |",
+                n * n,
+                if runs == 1 { " (1 run)" } else { "" },
+                a + b
+            );
+        }
+    }
+    if let Some(gpu) = gpu {
+        drop(device);
+        crate::check_validation(gpu)?;
+    }
+    Ok(())
+}
+
+/// The radiosity part of `galerkin demo`: the full radiosity of the small two-room scene,
+/// solved on the CPU (f64) and on the device (f32) and compared, drawn from the living room,
+/// every pixel whose neighbourhood sees one face checked against an f64 ray cast.
+pub fn demo(gpu: &Gpu, size: (u32, u32), out: &std::path::Path) -> Result<()> {
+    use galerkin::radiosity::form_factor::{bvh_of, NearField};
+    use galerkin::radiosity::gpu::GpuRadiosity;
+    let scene = std::path::Path::new("scenes/radiosity/two_rooms_small.toml");
+    let spec = SceneSpec::load(scene)?;
+    let p = spec.defaults();
+    let start = Instant::now();
+    let s = full_radiosity(&spec, &p)?;
+    let cpu_s = start.elapsed().as_secs_f64();
+    let device = GpuRadiosity::new(gpu)?;
+    let start = Instant::now();
+    let f = device.form_factors(gpu, &s.mesh, NearField::Regularised)?;
+    let (b, _) = device.solve(gpu, &f, &s.mesh.albedo, &s.emission, 1e-6, 2000)?;
+    let gpu_s = start.elapsed().as_secs_f64();
+    let top = s.radiosity.iter().flatten().fold(0.0f64, |m, v| m.max(*v));
+    let worst = b
+        .iter()
+        .zip(&s.radiosity)
+        .flat_map(|(x, y)| (0..3).map(move |c| (x[c] - y[c]).abs()))
+        .fold(0.0f64, f64::max)
+        / top;
+    if worst > 1e-5 {
+        bail!("radiosity: the device's solution differs from the CPU's by {worst:.2e} of the largest value");
+    }
+    let radiance = display_radiance(&s.mesh, &s.geometry, &spec.lights, &s.radiosity);
+    let exposure = default_exposure(&s.mesh, &s.geometry, &radiance);
+    let camera = camera_for(&spec, Viewpoint::Living);
+    let vertices = scene_vertices(&s.mesh, &s.geometry, &radiance, Shading::Flat);
+    let picture = draw_picture(gpu, &vertices, &camera, exposure, size)?;
+    let (w, h) = size;
+    let bvh = bvh_of(&s.mesh);
+    let (mut checked, mut wrong) = (0, 0);
+    for py in (0..h).step_by(3) {
+        for px in (0..w).step_by(3) {
+            let hit = |dx: f64, dy: f64| {
+                let (o, d) = camera.ray_through(f64::from(px) + 0.5 + dx, f64::from(py) + 0.5 + dy, w, h);
+                bvh.closest_front_hit(o, d).map(|h| h.0)
+            };
+            let Some(face) = hit(0.0, 0.0) else { continue };
+            if [(-0.75, -0.75), (0.75, -0.75), (-0.75, 0.75), (0.75, 0.75)].iter().all(|&(x, y)| hit(x, y) == Some(face)) {
+                checked += 1;
+                let k = ((py * w + px) * 4) as usize;
+                let r = radiance[face as usize];
+                let ok = picture.raw[k + 3] == face as f32
+                    && (0..3).all(|c| (f64::from(picture.raw[k + c]) - r[c]).abs() <= 1e-6 * top);
+                wrong += usize::from(!ok);
+            }
+        }
+    }
+    if wrong > 0 {
+        bail!("radiosity: {wrong} of {checked} checked pixels do not show their face's radiance");
+    }
+    let path = out.join("radiosity.png");
+    write_png_rgba8(&path, w, h, &picture.rgba)?;
+    println!(
+        "radiosity: the two-room scene ({} faces, area lights), full radiosity on the CPU (f64) in {cpu_s:.2} s and on the device (f32) in {gpu_s:.2} s, agreeing to {worst:.1e} of the largest value; {checked} pixels checked against f64 ray casting → {}",
+        s.mesh.len(),
+        path.display()
+    );
+    Ok(())
+}
