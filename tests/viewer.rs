@@ -183,3 +183,32 @@ fn the_spectral_viewer_shows_cut_planes() {
     );
     assert!(drawn > 0.025, "only {drawn} of the pixels drawn");
 }
+
+/// The radiosity viewer solves while the parameters sweep (full radiosity: no trained model
+/// needed) and fills the window with the room.
+#[test]
+fn the_radiosity_viewer_sweeps_the_parameters() {
+    let x = Xvfb::start();
+    let dir = std::env::temp_dir().join(format!("galerkin-viewer-radiosity-{}", std::process::id()));
+    let shot = dir.join("shot.png");
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/radiosity/two_rooms_small.toml");
+    let out = Command::new(env!("CARGO_BIN_EXE_galerkin"))
+        .args(["--validation", "radiosity", "view"])
+        .arg(&scene)
+        .args(["--play", "--frames", "4", "--size", "320x200", "--screenshot"])
+        .arg(&shot)
+        .env("DISPLAY", &x.display)
+        .env_remove("WAYLAND_DISPLAY")
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "galerkin radiosity view failed: {}", String::from_utf8_lossy(&out.stderr));
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(stdout.contains("radiosity: 496 faces, full mode"), "{stdout}");
+    let (w, h, rgba) = read_png_rgba8(&shot).unwrap();
+    assert_eq!((w, h), (320, 200));
+    let background = galerkin::render::BACKGROUND.map(|v| (v * 255.0).round() as u8);
+    let drawn = rgba.chunks_exact(4).filter(|p| p[..3] != background[..3]).count();
+    // From inside the living room every pixel sees a wall, the floor or the ceiling.
+    assert!(drawn as f64 > 0.99 * f64::from(w * h), "only {drawn} of {} pixels drawn", w * h);
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -23,6 +23,11 @@ pub enum Action {
     /// factors of Eq. 15, visibility by ray casting) or, with --model, reduced — and draw it
     /// to PNG or EXR (EXR: the raw radiance R, G, B and the face index beside the colour).
     Render(RenderArgs),
+    /// Open the scene in a window: keys change the design parameters (w/W window, k/K
+    /// skylight, d/D door, t/T tilt), f switches reduced/full (with --model), m flat/smooth
+    /// shading, e/E exposure, space sweeps the parameters; the title shows the mode, the
+    /// solve's time and the frame rate.
+    View(ViewArgs),
     /// Train the reduced radiosity of a scene (seed 000 §8.2–8.3, §9): sample the design
     /// space, solve every sample in full, PCA every quantity of Table 2, premultiply, learn
     /// the visibility; writes DIR/model.safetensors and DIR/visibility.safetensors.
@@ -54,6 +59,40 @@ pub struct TrainArgs {
     /// Seed of the Latin hypercube.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
+}
+
+/// Arguments of `galerkin radiosity view`.
+#[derive(Args)]
+pub struct ViewArgs {
+    /// Scene file (TOML).
+    pub scene: PathBuf,
+    /// A trained model's directory: start in reduced mode (f switches to full).
+    #[arg(long)]
+    pub model: Option<PathBuf>,
+    /// Initial design parameters as NAME=VALUE (see `radiosity render --help`).
+    #[arg(long = "params", value_name = "NAME=VALUE", value_delimiter = ',', value_parser = parse_param)]
+    pub params: Vec<(String, f64)>,
+    /// Viewpoint (arrow keys orbit from there).
+    #[arg(long, value_enum, default_value_t = Viewpoint::Living)]
+    pub view: Viewpoint,
+    /// Flat or smooth shading (m toggles).
+    #[arg(long, value_enum, default_value_t = Shading::Flat)]
+    pub shading: Shading,
+    /// Exposure; default: automatic from the first solution.
+    #[arg(long)]
+    pub exposure: Option<f64>,
+    /// Window size.
+    #[arg(long, value_name = "WxH", value_parser = crate::parse_size, default_value = "1024x768")]
+    pub size: (u32, u32),
+    /// Start sweeping the parameters (space toggles).
+    #[arg(long)]
+    pub play: bool,
+    /// Quit after this many frames (scripted runs), saving the screenshot.
+    #[arg(long)]
+    pub frames: Option<u64>,
+    /// Where S (and a scripted run's last frame) saves the screenshot.
+    #[arg(long, default_value = "out/radiosity-screenshot.png")]
+    pub screenshot: PathBuf,
 }
 
 /// Arguments of `galerkin radiosity compare`.
@@ -121,6 +160,7 @@ pub fn run(desc: &GpuDesc, action: &Action) -> Result<()> {
     match action {
         Action::Render(args) => render(desc, args),
         Action::Train(args) => train(args),
+        Action::View(args) => view(desc, args),
         Action::Compare(args) => compare(args),
     }
 }
@@ -474,7 +514,11 @@ pub fn bench(desc: &GpuDesc, args: &BenchArgs) -> Result<()> {
             sweeps = k;
         }
         let (a, b) = (median(ff), median(sv));
-        println!("| {name} | {n} | {} | CPU f64 (rayon, 2 threads) | {a:.3} | {b:.3} | {sweeps} | {:.3} |", n * n, a + b);
+        println!(
+            "| {name} | {n} | {} | CPU f64 (rayon, 2 threads) | {a:.3} | {b:.3} | {sweeps} | {:.3} |",
+            n * n,
+            a + b
+        );
         if let (Some(gpu), Some(device)) = (&gpu, &device) {
             let (mut ff, mut sv, mut sweeps) = (Vec::new(), Vec::new(), 0);
             let runs = if n > 2000 { 1 } else { args.runs.max(1) };
@@ -482,8 +526,11 @@ pub fn bench(desc: &GpuDesc, args: &BenchArgs) -> Result<()> {
                 let t = Instant::now();
                 let f = device.form_factors(gpu, &mesh, NearField::Regularised)?;
                 ff.push(t.elapsed().as_secs_f64());
-                let e: Vec<[f64; 3]> =
-                    mesh.kind.iter().map(|k| if k.is_opening() { spec.lights.window_exitance } else { [0.0; 3] }).collect();
+                let e: Vec<[f64; 3]> = mesh
+                    .kind
+                    .iter()
+                    .map(|k| if k.is_opening() { spec.lights.window_exitance } else { [0.0; 3] })
+                    .collect();
                 let t = Instant::now();
                 let (_, k) = device.solve(gpu, &f, &mesh.albedo, &e, 1e-6, 2000)?;
                 sv.push(t.elapsed().as_secs_f64());
@@ -547,7 +594,10 @@ pub fn demo(gpu: &Gpu, size: (u32, u32), out: &std::path::Path) -> Result<()> {
                 bvh.closest_front_hit(o, d).map(|h| h.0)
             };
             let Some(face) = hit(0.0, 0.0) else { continue };
-            if [(-0.75, -0.75), (0.75, -0.75), (-0.75, 0.75), (0.75, 0.75)].iter().all(|&(x, y)| hit(x, y) == Some(face)) {
+            if [(-0.75, -0.75), (0.75, -0.75), (-0.75, 0.75), (0.75, 0.75)]
+                .iter()
+                .all(|&(x, y)| hit(x, y) == Some(face))
+            {
                 checked += 1;
                 let k = ((py * w + px) * 4) as usize;
                 let r = radiance[face as usize];
@@ -568,4 +618,38 @@ pub fn demo(gpu: &Gpu, size: (u32, u32), out: &std::path::Path) -> Result<()> {
         path.display()
     );
     Ok(())
+}
+
+#[cfg(feature = "viewer")]
+fn view(desc: &GpuDesc, args: &ViewArgs) -> Result<()> {
+    use galerkin::radiosity::viewer::{RadiosityContent, ViewSettings};
+    use galerkin::render::viewer::{run, ViewOptions};
+    let spec = SceneSpec::load(&args.scene)?;
+    let p = spec.parameters_from(&args.params).with_context(|| format!("{}", args.scene.display()))?;
+    let model = args.model.as_deref().map(ReducedRadiosity::load).transpose()?;
+    let exposure = match args.exposure {
+        Some(e) if e.is_finite() && e > 0.0 => e,
+        Some(e) => bail!("--exposure must be positive, got {e}"),
+        None => {
+            let s = full_radiosity(&spec, &p)?;
+            let radiance = display_radiance(&s.mesh, &s.geometry, &spec.lights, &s.radiosity);
+            default_exposure(&s.mesh, &s.geometry, &radiance)
+        }
+    };
+    let settings = ViewSettings {
+        params: p,
+        view: args.view,
+        shading: args.shading,
+        exposure,
+        size: args.size,
+        playing: args.play,
+    };
+    let content = RadiosityContent::new(spec, model, settings);
+    let options = ViewOptions { frames: args.frames, screenshot: args.screenshot.clone(), resize_to: None };
+    run(desc.clone(), Box::new(content), options)
+}
+
+#[cfg(not(feature = "viewer"))]
+fn view(_: &GpuDesc, _: &ViewArgs) -> Result<()> {
+    bail!("this build has no window: rebuild with the `viewer` feature (on by default)")
 }

@@ -22,6 +22,8 @@ pub mod render;
 pub mod scene;
 pub mod solve;
 pub mod train;
+#[cfg(feature = "viewer")]
+pub mod viewer;
 pub mod visibility;
 
 pub use error::RadiosityError;

@@ -1,0 +1,231 @@
+//! The radiosity scene in the interactive viewer (feature `viewer`): seed 000 §9's lighting
+//! design made interactive. Keys: `w`/`W` narrower/wider windows, `k`/`K` smaller/larger
+//! skylight, `d`/`D` narrower/wider door, `t`/`T` less/more ceiling tilt (each a twentieth of
+//! its range), `f` switches between the reduced model and the full radiosity (with a model),
+//! `m` flat/smooth shading, `e`/`E` darker/brighter exposure, space plays and pauses a sweep
+//! through the parameters. The title shows the mode, the parameters, the solve's time and the
+//! frame rate.
+
+use std::time::Instant;
+
+use anyhow::Result;
+use ash::vk;
+
+use super::reduced::ReducedRadiosity;
+use super::render::{
+    camera_for, display_radiance, scene_vertices, Output, SceneRenderer, Shading, Viewpoint,
+};
+use super::scene::{LightMode, Parameters, SceneSpec, PARAMETERS};
+use super::{architecture, full_radiosity, SceneMesh};
+use crate::gpu::Gpu;
+use crate::render::viewer::ViewerContent;
+use crate::render::{Camera, RenderTarget};
+
+/// How the viewer starts.
+#[derive(Clone, Copy, Debug)]
+pub struct ViewSettings {
+    /// Design parameters.
+    pub params: Parameters,
+    /// Viewpoint.
+    pub view: Viewpoint,
+    /// Shading.
+    pub shading: Shading,
+    /// Exposure.
+    pub exposure: f64,
+    /// Window size.
+    pub size: (u32, u32),
+    /// Sweep the parameters from the start.
+    pub playing: bool,
+}
+
+/// The viewer's radiosity content.
+pub struct RadiosityContent {
+    spec: SceneSpec,
+    model: Option<ReducedRadiosity>,
+    params: Parameters,
+    reduced: bool,
+    shading: Shading,
+    exposure: f64,
+    view: Viewpoint,
+    size: (u32, u32),
+    renderer: Option<SceneRenderer>,
+    dirty: bool,
+    playing: bool,
+    clock: f64,
+    solve_ms: f64,
+    fps: f64,
+    frames: u64,
+    mesh_faces: usize,
+}
+
+impl RadiosityContent {
+    /// Shows `spec` as `settings` say, reduced when `model` is given.
+    pub fn new(spec: SceneSpec, model: Option<ReducedRadiosity>, settings: ViewSettings) -> Self {
+        let reduced = model.is_some();
+        let ViewSettings { params, view, shading, exposure, size, playing } = settings;
+        Self {
+            spec,
+            model,
+            params,
+            reduced,
+            shading,
+            exposure,
+            view,
+            size,
+            renderer: None,
+            dirty: true,
+            playing,
+            clock: 0.0,
+            solve_ms: 0.0,
+            fps: 0.0,
+            frames: 0,
+            mesh_faces: 0,
+        }
+    }
+
+    /// Solves the current configuration (reduced or full) and uploads its vertices.
+    fn solve(&mut self) -> Result<()> {
+        let start = Instant::now();
+        let mesh: SceneMesh = architecture::build(&self.spec, &self.params)?;
+        let (mesh, geometry, b) = match (&self.model, self.reduced) {
+            (Some(model), true) => {
+                let (mut b, _) = model.evaluate(&mesh.g())?;
+                if self.spec.lights.mode == LightMode::Area {
+                    for (i, k) in mesh.kind.iter().enumerate() {
+                        if k.is_opening() {
+                            b[i] = self.spec.lights.window_exitance;
+                        }
+                    }
+                }
+                let geometry = mesh.geometry();
+                (mesh, geometry, b)
+            }
+            _ => {
+                let s = full_radiosity(&self.spec, &self.params)?;
+                (s.mesh, s.geometry, s.radiosity)
+            }
+        };
+        self.solve_ms = start.elapsed().as_secs_f64() * 1e3;
+        let radiance = display_radiance(&mesh, &geometry, &self.spec.lights, &b);
+        let vertices = scene_vertices(&mesh, &geometry, &radiance, self.shading);
+        self.mesh_faces = mesh.len();
+        if let Some(r) = &mut self.renderer {
+            r.update(&vertices);
+        }
+        Ok(())
+    }
+
+    fn nudge(&mut self, axis: usize, steps: f64) -> bool {
+        let [lo, hi] = self.spec.ranges()[axis];
+        let v = (self.params[axis] + steps * (hi - lo) / 20.0).clamp(lo, hi);
+        let changed = v != self.params[axis];
+        self.params[axis] = v;
+        changed
+    }
+}
+
+impl ViewerContent for RadiosityContent {
+    fn title(&self) -> String {
+        let p: Vec<String> =
+            PARAMETERS.iter().zip(&self.params).map(|(n, v)| format!("{n} {v:.2}")).collect();
+        format!(
+            "galerkin radiosity — {} ({:.1} ms) — {} — {:.0} FPS",
+            if self.reduced { "reduced" } else { "full" },
+            self.solve_ms,
+            p.join(", "),
+            self.fps
+        )
+    }
+
+    fn size(&self) -> (u32, u32) {
+        self.size
+    }
+
+    fn camera(&self) -> Camera {
+        camera_for(&self.spec, self.view)
+    }
+
+    fn start(&mut self, gpu: &Gpu, target: &RenderTarget) -> Result<()> {
+        let faces = architecture::build(&self.spec, &self.params)?.len();
+        self.renderer = Some(SceneRenderer::new(gpu, target.render_pass(), Output::Colour, faces)?);
+        self.dirty = true;
+        Ok(())
+    }
+
+    fn update(&mut self, _: &RenderTarget, seconds: f64) -> Result<bool> {
+        if seconds > 0.0 {
+            self.fps = 0.9 * self.fps + 0.1 / seconds.max(1e-6);
+        }
+        if self.playing && self.frames > 0 {
+            // One sweep through the box every 20 s.
+            self.clock += seconds.min(0.1);
+            let ranges = self.spec.ranges();
+            let t = self.clock / 20.0;
+            for (a, range) in ranges.iter().enumerate() {
+                let u = 0.5 + 0.47 * (2.0 * std::f64::consts::PI * (a as f64 + 1.0) * t + a as f64).sin();
+                self.params[a] = range[0] + u * (range[1] - range[0]);
+            }
+            self.dirty = true;
+        }
+        if std::mem::take(&mut self.dirty) {
+            self.solve()?;
+        }
+        self.frames += 1;
+        Ok(self.playing)
+    }
+
+    fn record(&mut self, cmd: vk::CommandBuffer, target: &RenderTarget, camera: &Camera) -> Result<()> {
+        if let Some(r) = &self.renderer {
+            r.record(cmd, target.extent(), camera, self.exposure);
+        }
+        Ok(())
+    }
+
+    fn key(&mut self, key: &str) -> bool {
+        let changed = match key {
+            "w" => self.nudge(0, -1.0),
+            "W" => self.nudge(0, 1.0),
+            "k" => self.nudge(1, -1.0),
+            "K" => self.nudge(1, 1.0),
+            "d" => self.nudge(2, -1.0),
+            "D" => self.nudge(2, 1.0),
+            "t" => self.nudge(3, -1.0),
+            "T" => self.nudge(3, 1.0),
+            "f" if self.model.is_some() => {
+                self.reduced = !self.reduced;
+                true
+            }
+            "m" => {
+                self.shading = if self.shading == Shading::Flat { Shading::Smooth } else { Shading::Flat };
+                true
+            }
+            "e" => {
+                self.exposure /= 1.25;
+                return true;
+            }
+            "E" => {
+                self.exposure *= 1.25;
+                return true;
+            }
+            " " => {
+                self.playing = !self.playing;
+                return true;
+            }
+            _ => false,
+        };
+        self.dirty |= changed;
+        changed
+    }
+
+    fn summary(&self) -> Option<String> {
+        let p: Vec<String> =
+            PARAMETERS.iter().zip(&self.params).map(|(n, v)| format!("{n}={v:.3}")).collect();
+        Some(format!(
+            "radiosity: {} faces, {} mode, last solve {:.1} ms, at {}",
+            self.mesh_faces,
+            if self.reduced { "reduced" } else { "full" },
+            self.solve_ms,
+            p.join(",")
+        ))
+    }
+}
