@@ -69,21 +69,9 @@ pub struct ViewArgs {
     /// A trained model's directory: start in reduced mode (f switches to full).
     #[arg(long)]
     pub model: Option<PathBuf>,
-    /// Initial design parameters as NAME=VALUE (see `radiosity render --help`).
-    #[arg(long = "params", value_name = "NAME=VALUE", value_delimiter = ',', value_parser = parse_param)]
-    pub params: Vec<(String, f64)>,
-    /// Viewpoint (arrow keys orbit from there).
-    #[arg(long, value_enum, default_value_t = Viewpoint::Living)]
-    pub view: Viewpoint,
-    /// Flat or smooth shading (m toggles).
-    #[arg(long, value_enum, default_value_t = Shading::Flat)]
-    pub shading: Shading,
-    /// Exposure; default: automatic from the first solution.
-    #[arg(long)]
-    pub exposure: Option<f64>,
-    /// Window size.
-    #[arg(long, value_name = "WxH", value_parser = crate::parse_size, default_value = "1024x768")]
-    pub size: (u32, u32),
+    /// The starting configuration and view (arrow keys orbit, m toggles the shading).
+    #[command(flatten)]
+    pub look: Look,
     /// Start sweeping the parameters (space toggles).
     #[arg(long)]
     pub play: bool,
@@ -111,23 +99,14 @@ pub struct CompareArgs {
     pub out: PathBuf,
 }
 
-/// Arguments of `galerkin radiosity render`.
+/// What a picture or window shows: the configuration and how it is looked at.
 #[derive(Args)]
-pub struct RenderArgs {
-    /// Scene file (TOML), e.g. scenes/radiosity/two_rooms.toml (about 5,000 faces) or
-    /// two_rooms_small.toml (496 faces).
-    pub scene: PathBuf,
+pub struct Look {
     /// Design parameters as NAME=VALUE, comma-separated or repeated: window_width,
     /// skylight_size, door_width (metres), ceiling_tilt (degrees). Unset ones take the scene's
     /// defaults; values outside the scene's ranges are refused.
     #[arg(long = "params", value_name = "NAME=VALUE", value_delimiter = ',', value_parser = parse_param)]
     pub params: Vec<(String, f64)>,
-    /// A trained model's directory (`galerkin radiosity train`): draw the reduced radiosity.
-    #[arg(long)]
-    pub model: Option<PathBuf>,
-    /// Override the scene's lighting: area (emitting openings) or sky (overcast sky outside).
-    #[arg(long, value_parser = ["area", "sky"])]
-    pub lights: Option<String>,
     /// Viewpoint.
     #[arg(long, value_enum, default_value_t = Viewpoint::Living)]
     pub view: Viewpoint,
@@ -137,9 +116,26 @@ pub struct RenderArgs {
     /// Exposure (1 / radiance shown at 63 % of white); default: automatic from the solution.
     #[arg(long)]
     pub exposure: Option<f64>,
-    /// Image size.
+    /// Image or window size.
     #[arg(long, value_name = "WxH", value_parser = crate::parse_size, default_value = "1024x768")]
     pub size: (u32, u32),
+}
+
+/// Arguments of `galerkin radiosity render`.
+#[derive(Args)]
+pub struct RenderArgs {
+    /// Scene file (TOML), e.g. scenes/radiosity/two_rooms.toml (4,974 faces) or
+    /// two_rooms_small.toml (496 faces).
+    pub scene: PathBuf,
+    /// A trained model's directory (`galerkin radiosity train`): draw the reduced radiosity.
+    #[arg(long)]
+    pub model: Option<PathBuf>,
+    /// Override the scene's lighting: area (emitting openings) or sky (overcast sky outside).
+    #[arg(long, value_parser = ["area", "sky"])]
+    pub lights: Option<String>,
+    /// The configuration and the view.
+    #[command(flatten)]
+    pub look: Look,
     /// Output image: .png (tone-mapped sRGB) or .exr (colour and raw radiance and face index).
     #[arg(long, default_value = "out/radiosity.png")]
     pub out: PathBuf,
@@ -174,7 +170,10 @@ fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
     if let Some(mode) = &args.lights {
         spec.lights.mode = if mode == "sky" { LightMode::Sky } else { LightMode::Area };
     }
-    let p = spec.parameters_from(&args.params).with_context(|| format!("{}", args.scene.display()))?;
+    let p = spec.parameters_from(&args.look.params).with_context(|| format!("{}", args.scene.display()))?;
+    if args.model.is_some() && spec.lights.mode != LightMode::Area {
+        bail!("reduced models are trained with area lights (the sky's direct light is not reduced yet): drop --model or use --lights area");
+    }
     let start = Instant::now();
     let mut s = match &args.model {
         None => full_radiosity(&spec, &p)?,
@@ -207,15 +206,15 @@ fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
     }
     let solve_s = start.elapsed().as_secs_f64();
     let radiance = display_radiance(&s.mesh, &s.geometry, &spec.lights, &s.radiosity);
-    let exposure = args.exposure.unwrap_or_else(|| default_exposure(&s.mesh, &s.geometry, &radiance));
+    let exposure = args.look.exposure.unwrap_or_else(|| default_exposure(&s.mesh, &s.geometry, &radiance));
     if !(exposure.is_finite() && exposure > 0.0) {
         bail!("--exposure must be positive, got {exposure}");
     }
     let gpu = Gpu::new(desc)?;
-    let vertices = scene_vertices(&s.mesh, &s.geometry, &radiance, args.shading);
-    let camera = camera_for(&spec, args.view);
-    let picture = draw_picture(&gpu, &vertices, &camera, exposure, args.size)?;
-    let (w, h) = args.size;
+    let vertices = scene_vertices(&s.mesh, &s.geometry, &radiance, args.look.shading);
+    let camera = camera_for(&spec, args.look.view);
+    let picture = draw_picture(&gpu, &vertices, &camera, exposure, args.look.size)?;
+    let (w, h) = args.look.size;
     if ext == "png" {
         write_png_rgba8(&args.out, w, h, &picture.rgba)?;
     } else {
@@ -625,9 +624,9 @@ fn view(desc: &GpuDesc, args: &ViewArgs) -> Result<()> {
     use galerkin::radiosity::viewer::{RadiosityContent, ViewSettings};
     use galerkin::render::viewer::{run, ViewOptions};
     let spec = SceneSpec::load(&args.scene)?;
-    let p = spec.parameters_from(&args.params).with_context(|| format!("{}", args.scene.display()))?;
+    let p = spec.parameters_from(&args.look.params).with_context(|| format!("{}", args.scene.display()))?;
     let model = args.model.as_deref().map(ReducedRadiosity::load).transpose()?;
-    let exposure = match args.exposure {
+    let exposure = match args.look.exposure {
         Some(e) if e.is_finite() && e > 0.0 => e,
         Some(e) => bail!("--exposure must be positive, got {e}"),
         None => {
@@ -638,10 +637,10 @@ fn view(desc: &GpuDesc, args: &ViewArgs) -> Result<()> {
     };
     let settings = ViewSettings {
         params: p,
-        view: args.view,
-        shading: args.shading,
+        view: args.look.view,
+        shading: args.look.shading,
         exposure,
-        size: args.size,
+        size: args.look.size,
         playing: args.play,
     };
     let content = RadiosityContent::new(spec, model, settings);

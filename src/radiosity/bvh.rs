@@ -46,22 +46,28 @@ impl Bvh {
         Self { nodes, order, triangles }
     }
 
-    /// Whether the open segment from `a` to `b` (end points excluded by a relative margin)
-    /// crosses any triangle other than `skip`.
-    pub fn occluded(&self, a: DVec3, b: DVec3, skip: [u32; 2]) -> bool {
+    /// Walks the nodes whose boxes the ray `a + s·d` meets for `s ∈ [t_lo, limit()]`, depth
+    /// first, handing each leaf triangle to `visit`; stops when `visit` says so. `limit` is
+    /// asked again at every node (a closest-hit search shrinks it).
+    fn walk(
+        &self,
+        a: DVec3,
+        d: DVec3,
+        t_lo: f64,
+        limit: impl Fn() -> f64,
+        mut visit: impl FnMut(u32) -> std::ops::ControlFlow<()>,
+    ) {
         if self.nodes.is_empty() {
-            return false;
+            return;
         }
-        let d = b - a;
         let inv = d.recip();
-        let (t_lo, t_hi) = (SEGMENT_MARGIN, 1.0 - SEGMENT_MARGIN);
         let mut stack = [0u32; 64];
         let mut top = 1;
         while top > 0 {
             top -= 1;
             let index = stack[top];
             let node = &self.nodes[index as usize];
-            if !slab(node.lo, node.hi, a, inv, t_lo, t_hi) {
+            if !slab(node.lo, node.hi, a, inv, t_lo, limit()) {
                 continue;
             }
             if node.count == 0 {
@@ -71,17 +77,58 @@ impl Bvh {
             } else {
                 let first = node.right_or_first as usize;
                 for &t in &self.order[first..first + node.count as usize] {
-                    if t != skip[0] && t != skip[1] {
-                        if let Some(s) = segment_triangle(a, d, &self.triangles[t as usize]) {
-                            if s > t_lo && s < t_hi {
-                                return true;
-                            }
-                        }
+                    if visit(t).is_break() {
+                        return;
                     }
                 }
             }
         }
-        false
+    }
+
+    /// Whether the open segment from `a` to `b` (end points excluded by a relative margin)
+    /// crosses any triangle other than `skip`.
+    pub fn occluded(&self, a: DVec3, b: DVec3, skip: [u32; 2]) -> bool {
+        let d = b - a;
+        let (t_lo, t_hi) = (SEGMENT_MARGIN, 1.0 - SEGMENT_MARGIN);
+        let mut hit = false;
+        self.walk(
+            a,
+            d,
+            t_lo,
+            || t_hi,
+            |t| {
+                if t != skip[0] && t != skip[1] {
+                    if let Some(s) = segment_triangle(a, d, &self.triangles[t as usize]) {
+                        if s > t_lo && s < t_hi {
+                            hit = true;
+                            return std::ops::ControlFlow::Break(());
+                        }
+                    }
+                }
+                std::ops::ControlFlow::Continue(())
+            },
+        );
+        hit
+    }
+
+    /// The nearest triangle the ray `origin + s·dir` (`s > 0`) meets from its front (the side
+    /// its counter-clockwise corners face), and `s`: what a pixel of a back-face-culled
+    /// rendering shows (the render test's reference).
+    pub fn closest_front_hit(&self, origin: DVec3, dir: DVec3) -> Option<(u32, f64)> {
+        let best = std::cell::Cell::new(None::<(u32, f64)>);
+        let limit = || best.get().map_or(f64::INFINITY, |b| b.1);
+        self.walk(origin, dir, 0.0, limit, |t| {
+            let tri = &self.triangles[t as usize];
+            if (tri[1] - tri[0]).cross(tri[2] - tri[0]).dot(dir) < 0.0 {
+                if let Some(s) = segment_triangle(origin, dir, tri) {
+                    if s > 0.0 && s < limit() {
+                        best.set(Some((t, s)));
+                    }
+                }
+            }
+            std::ops::ControlFlow::Continue(())
+        });
+        best.get()
     }
 }
 
@@ -162,47 +209,4 @@ pub fn segment_triangle(a: DVec3, d: DVec3, t: &[DVec3; 3]) -> Option<f64> {
         return None;
     }
     Some(e2.dot(q) * inv)
-}
-
-impl Bvh {
-    /// The nearest triangle the ray `origin + s·dir` (`s > 0`) meets from its front (the side
-    /// its counter-clockwise corners face), and `s`: what a pixel of a back-face-culled
-    /// rendering shows (the render test's reference).
-    pub fn closest_front_hit(&self, origin: DVec3, dir: DVec3) -> Option<(u32, f64)> {
-        if self.nodes.is_empty() {
-            return None;
-        }
-        let inv = dir.recip();
-        let mut best: Option<(u32, f64)> = None;
-        let mut stack = [0u32; 64];
-        let mut top = 1;
-        while top > 0 {
-            top -= 1;
-            let index = stack[top];
-            let node = &self.nodes[index as usize];
-            let limit = best.map_or(f64::INFINITY, |b| b.1);
-            if !slab(node.lo, node.hi, origin, inv, 0.0, limit) {
-                continue;
-            }
-            if node.count == 0 {
-                stack[top] = node.right_or_first;
-                stack[top + 1] = index + 1;
-                top += 2;
-            } else {
-                let first = node.right_or_first as usize;
-                for &t in &self.order[first..first + node.count as usize] {
-                    let tri = &self.triangles[t as usize];
-                    if (tri[1] - tri[0]).cross(tri[2] - tri[0]).dot(dir) >= 0.0 {
-                        continue;
-                    }
-                    if let Some(s) = segment_triangle(origin, dir, tri) {
-                        if s > 0.0 && s < best.map_or(f64::INFINITY, |b| b.1) {
-                            best = Some((t, s));
-                        }
-                    }
-                }
-            }
-        }
-        best
-    }
 }

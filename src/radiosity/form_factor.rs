@@ -120,12 +120,7 @@ pub fn bvh_of(mesh: &SceneMesh) -> Bvh {
 pub fn form_factors(mesh: &SceneMesh, near: NearField) -> FormFactors {
     let n = mesh.len();
     let g = mesh.geometry();
-    let bvh = bvh_of(mesh);
-    // Upper triangle of the visibility, row by row; then both form factors of each pair.
-    let vis: Vec<Vec<u32>> = (0..n)
-        .into_par_iter()
-        .map(|i| (i + 1..n).filter(|&j| visible(&bvh, &g, i, j)).map(|j| j as u32).collect())
-        .collect();
+    let vis = visible_pairs(mesh, &g);
     let mut values = vec![0.0; n * n];
     for (i, row) in vis.iter().enumerate() {
         for &j in row {
@@ -137,15 +132,21 @@ pub fn form_factors(mesh: &SceneMesh, near: NearField) -> FormFactors {
     FormFactors { n, values }
 }
 
+/// The visible pairs `i < j`, row by row (rows in parallel; each unordered pair's segment
+/// is cast once).
+fn visible_pairs(mesh: &SceneMesh, g: &FaceGeometry) -> Vec<Vec<u32>> {
+    let n = mesh.len();
+    let bvh = bvh_of(mesh);
+    (0..n)
+        .into_par_iter()
+        .map(|i| (i + 1..n).filter(|&j| visible(&bvh, g, i, j)).map(|j| j as u32).collect())
+        .collect()
+}
+
 /// `Vis(i, j)` of every pair at `k = n·i + j` (1 or 0): the visibility input `v` of Table 2.
 pub fn visibility(mesh: &SceneMesh) -> Vec<f64> {
     let n = mesh.len();
-    let g = mesh.geometry();
-    let bvh = bvh_of(mesh);
-    let rows: Vec<Vec<u32>> = (0..n)
-        .into_par_iter()
-        .map(|i| (i + 1..n).filter(|&j| visible(&bvh, &g, i, j)).map(|j| j as u32).collect())
-        .collect();
+    let rows = visible_pairs(mesh, &mesh.geometry());
     let mut v = vec![0.0; n * n];
     for (i, row) in rows.iter().enumerate() {
         for &j in row {

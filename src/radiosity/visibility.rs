@@ -134,15 +134,26 @@ impl LearnedVisibility {
 /// unknowns): the Lawson–Hanson active set in Bro & de Jong's form, the passive-set systems
 /// solved by Cholesky. The same iterates as [`nnls`] on `A` itself.
 pub fn nnls_normal(ata: &[f64], atb: &[f64], n: usize) -> Vec<f64> {
-    let mut x = vec![0.0; n];
-    let mut passive = vec![false; n];
     let scale = ata.iter().fold(0.0f64, |m, v| m.max(v.abs())).max(1e-300);
-    let tol = 1e-13 * scale * (n as f64).sqrt();
     let gradient = |x: &[f64]| -> Vec<f64> {
         (0..n)
             .map(|i| atb[i] - (0..n).filter(|&j| x[j] != 0.0).map(|j| ata[i * n + j] * x[j]).sum::<f64>())
             .collect()
     };
+    lawson_hanson(n, 1e-13 * scale * (n as f64).sqrt(), gradient, |cols| cholesky_solve(ata, n, cols, atb))
+}
+
+/// The Lawson–Hanson active-set iteration for `min ‖Ax − b‖, x ≥ 0` over `n` unknowns, given
+/// the negative gradient `Aᵀ(b − Ax)` and the unconstrained least-squares solution on a set of
+/// passive columns; `tol` is the gradient below which a variable stays at zero.
+fn lawson_hanson(
+    n: usize,
+    tol: f64,
+    gradient: impl Fn(&[f64]) -> Vec<f64>,
+    passive_solve: impl Fn(&[usize]) -> Vec<f64>,
+) -> Vec<f64> {
+    let mut x = vec![0.0; n];
+    let mut passive = vec![false; n];
     for _ in 0..3 * n + 10 {
         let w = gradient(&x);
         let Some(t) = (0..n).filter(|&j| !passive[j] && w[j] > tol).max_by(|&p, &q| w[p].total_cmp(&w[q]))
@@ -152,13 +163,14 @@ pub fn nnls_normal(ata: &[f64], atb: &[f64], n: usize) -> Vec<f64> {
         passive[t] = true;
         loop {
             let cols: Vec<usize> = (0..n).filter(|&j| passive[j]).collect();
-            let z = cholesky_solve(ata, n, &cols, atb);
+            let z = passive_solve(&cols);
             if z.iter().all(|&v| v > 0.0) {
                 for (&j, &v) in cols.iter().zip(&z) {
                     x[j] = v;
                 }
                 break;
             }
+            // Step towards z until a passive variable reaches zero; drop those.
             let alpha = cols
                 .iter()
                 .zip(&z)
@@ -254,51 +266,16 @@ fn least_squares(a: &[f64], rows: usize, n: usize, cols: &[usize], b: &[f64]) ->
 /// (`rows × n`), by Householder QR of the passive columns: the reference for
 /// [`nnls_normal`].
 pub fn nnls(a: &[f64], rows: usize, n: usize, b: &[f64]) -> Vec<f64> {
-    let mut x = vec![0.0; n];
-    let mut passive = vec![false; n];
     let residual = |x: &[f64]| -> Vec<f64> {
         (0..rows).map(|i| b[i] - (0..n).map(|j| a[i * n + j] * x[j]).sum::<f64>()).collect()
     };
+    let gradient = |x: &[f64]| -> Vec<f64> {
+        let r = residual(x);
+        (0..n).map(|j| (0..rows).map(|i| a[i * n + j] * r[i]).sum()).collect()
+    };
     let scale =
         a.iter().fold(0.0f64, |m, v| m.max(v.abs())) * b.iter().fold(0.0f64, |m, v| m.max(v.abs())).max(1.0);
-    let tol = 1e-12 * scale * rows as f64;
-    for _ in 0..3 * n + 10 {
-        let r = residual(&x);
-        let w: Vec<f64> = (0..n).map(|j| (0..rows).map(|i| a[i * n + j] * r[i]).sum()).collect();
-        let Some(t) = (0..n).filter(|&j| !passive[j] && w[j] > tol).max_by(|&p, &q| w[p].total_cmp(&w[q]))
-        else {
-            break;
-        };
-        passive[t] = true;
-        loop {
-            let cols: Vec<usize> = (0..n).filter(|&j| passive[j]).collect();
-            let z = least_squares(a, rows, n, &cols, b);
-            if z.iter().all(|&v| v > 0.0) {
-                for (&j, &v) in cols.iter().zip(&z) {
-                    x[j] = v;
-                }
-                break;
-            }
-            // Step towards z until a passive variable reaches zero; drop those.
-            let alpha = cols
-                .iter()
-                .zip(&z)
-                .filter(|(_, &zj)| zj <= 0.0)
-                .map(|(&j, &zj)| x[j] / (x[j] - zj))
-                .fold(f64::INFINITY, f64::min);
-            for (&j, &zj) in cols.iter().zip(&z) {
-                x[j] += alpha * (zj - x[j]);
-                if x[j] <= 1e-15 {
-                    x[j] = 0.0;
-                    passive[j] = false;
-                }
-            }
-            if !passive.iter().any(|&p| p) {
-                break;
-            }
-        }
-    }
-    x
+    lawson_hanson(n, 1e-12 * scale * rows as f64, gradient, |cols| least_squares(a, rows, n, cols, b))
 }
 
 #[cfg(test)]

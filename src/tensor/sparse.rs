@@ -218,23 +218,7 @@ impl SparseTensor {
     /// `Q ⊗_a x ⊗_b y …` straight from the nonzeros: each entry's value times the vectors'
     /// components at its indices on the contracted axes, added at its remaining indices.
     pub fn contract_axes(&self, what: &str, args: &[(usize, &[f64])]) -> Result<Tensor, TensorError> {
-        let mut contracted = vec![None; self.order()];
-        for &(axis, x) in args {
-            match self.shape.get(axis) {
-                None => return Err(TensorError::NoSuchAxis { what: what.into(), axis, order: self.order() }),
-                Some(&n) if n != x.len() => {
-                    return Err(TensorError::Shape { what: what.into(), axis, expected: n, found: x.len() })
-                }
-                Some(_) if contracted[axis].is_some() => {
-                    return Err(TensorError::NoSuchAxis {
-                        what: format!("{what} (axis contracted twice)"),
-                        axis,
-                        order: self.order(),
-                    })
-                }
-                Some(_) => contracted[axis] = Some(x),
-            }
-        }
+        let contracted = self.contracted_axes(what, args)?;
         let kept: Vec<usize> = (0..self.order()).filter(|&a| contracted[a].is_none()).collect();
         let out_shape: Vec<usize> = kept.iter().map(|&a| self.shape[a]).collect();
         let out_strides = strides(&out_shape);
@@ -265,23 +249,7 @@ impl SparseTensor {
         what: &str,
         args: &[(usize, &[f64])],
     ) -> Result<SparseTensor, TensorError> {
-        let mut contracted: Vec<Option<&[f64]>> = vec![None; self.order()];
-        for &(axis, x) in args {
-            match self.shape.get(axis) {
-                None => return Err(TensorError::NoSuchAxis { what: what.into(), axis, order: self.order() }),
-                Some(&n) if n != x.len() => {
-                    return Err(TensorError::Shape { what: what.into(), axis, expected: n, found: x.len() })
-                }
-                Some(_) if contracted[axis].is_some() => {
-                    return Err(TensorError::NoSuchAxis {
-                        what: format!("{what} (axis contracted twice)"),
-                        axis,
-                        order: self.order(),
-                    })
-                }
-                Some(_) => contracted[axis] = Some(x),
-            }
-        }
+        let contracted = self.contracted_axes(what, args)?;
         let kept: Vec<usize> = (0..self.order()).filter(|&a| contracted[a].is_none()).collect();
         let mut acc: std::collections::HashMap<Vec<u32>, f64> = std::collections::HashMap::new();
         for e in 0..self.nnz() {
@@ -307,6 +275,32 @@ impl SparseTensor {
             values.push(v);
         }
         Ok(SparseTensor { shape, coords, values, symmetric: Vec::new() })
+    }
+
+    /// The vector each axis is contracted with (`None`: kept), checking the axes and lengths.
+    fn contracted_axes<'a>(
+        &self,
+        what: &str,
+        args: &[(usize, &'a [f64])],
+    ) -> Result<Vec<Option<&'a [f64]>>, TensorError> {
+        let mut contracted: Vec<Option<&[f64]>> = vec![None; self.order()];
+        for &(axis, x) in args {
+            match self.shape.get(axis) {
+                None => return Err(TensorError::NoSuchAxis { what: what.into(), axis, order: self.order() }),
+                Some(&n) if n != x.len() => {
+                    return Err(TensorError::Shape { what: what.into(), axis, expected: n, found: x.len() })
+                }
+                Some(_) if contracted[axis].is_some() => {
+                    return Err(TensorError::NoSuchAxis {
+                        what: format!("{what} (axis contracted twice)"),
+                        axis,
+                        order: self.order(),
+                    })
+                }
+                Some(_) => contracted[axis] = Some(x),
+            }
+        }
+        Ok(contracted)
     }
 
     /// The diagonal of a square matrix whose every entry lies on it; `None` otherwise.
