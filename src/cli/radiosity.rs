@@ -59,6 +59,10 @@ pub struct TrainArgs {
     /// Seed of the Latin hypercube.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
+    /// Override the scene's lighting: area (emitting openings, inside the model) or sky
+    /// (direct light from an overcast sky computed at run time outside it).
+    #[arg(long, value_parser = ["area", "sky"])]
+    pub lights: Option<String>,
 }
 
 /// Arguments of `galerkin radiosity view`.
@@ -97,6 +101,9 @@ pub struct CompareArgs {
     /// Where the table (compare.csv) and the plot (compare.png) go.
     #[arg(long, default_value = "out/radiosity-compare")]
     pub out: PathBuf,
+    /// Override the scene's lighting (must match the model's).
+    #[arg(long, value_parser = ["area", "sky"])]
+    pub lights: Option<String>,
 }
 
 /// What a picture or window shows: the configuration and how it is looked at.
@@ -166,24 +173,25 @@ fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
     if ext != "png" && ext != "exr" {
         bail!("{}: unknown image format {ext:?}: expected .png or .exr", args.out.display());
     }
-    let mut spec = SceneSpec::load(&args.scene)?;
-    if let Some(mode) = &args.lights {
-        spec.lights.mode = if mode == "sky" { LightMode::Sky } else { LightMode::Area };
-    }
+    let spec = load_scene(&args.scene, args.lights.as_deref())?;
     let p = spec.parameters_from(&args.look.params).with_context(|| format!("{}", args.scene.display()))?;
-    if args.model.is_some() && spec.lights.mode != LightMode::Area {
-        bail!("reduced models are trained with area lights (the sky's direct light is not reduced yet): drop --model or use --lights area");
-    }
     let start = Instant::now();
     let mut s = match &args.model {
         None => full_radiosity(&spec, &p)?,
         Some(dir) => {
             let model = ReducedRadiosity::load(dir)?;
+            if model.light_mode() != spec.lights.mode {
+                bail!(
+                    "{}: the model was trained with {:?} lighting; pass --lights to match",
+                    dir.display(),
+                    model.light_mode()
+                );
+            }
             let mesh = galerkin::radiosity::architecture::build(&spec, &p)?;
             if mesh.len() != model.faces() {
                 bail!("{}: the model has {} faces, the scene {}", dir.display(), model.faces(), mesh.len());
             }
-            let (b, _) = model.evaluate(&mesh.g())?;
+            let (b, _) = model.evaluate(&mesh)?;
             let geometry = mesh.geometry();
             let n = mesh.len();
             galerkin::radiosity::FullSolution {
@@ -264,8 +272,19 @@ fn progress_bar(len: u64, what: &str) -> indicatif::ProgressBar {
     bar
 }
 
+/// The scene with its lighting overridden by `--lights`.
+fn load_scene(path: &std::path::Path, lights: Option<&str>) -> Result<SceneSpec> {
+    let mut spec = SceneSpec::load(path)?;
+    match lights {
+        Some("sky") => spec.lights.mode = LightMode::Sky,
+        Some(_) => spec.lights.mode = LightMode::Area,
+        None => {}
+    }
+    Ok(spec)
+}
+
 fn train(args: &TrainArgs) -> Result<()> {
-    let spec = SceneSpec::load(&args.scene)?;
+    let spec = load_scene(&args.scene, args.lights.as_deref())?;
     if !(args.energy > 0.0 && args.energy <= 1.0) || args.cap == 0 || args.samples < 2 {
         bail!("--energy must be in (0, 1], --cap at least 1, --samples at least 2");
     }
@@ -335,8 +354,15 @@ fn sequence(spec: &SceneSpec, which: usize, f: usize, frames: usize) -> [f64; 4]
 }
 
 fn compare(args: &CompareArgs) -> Result<()> {
-    let spec = SceneSpec::load(&args.scene)?;
+    let spec = load_scene(&args.scene, args.lights.as_deref())?;
     let model = ReducedRadiosity::load(&args.model)?;
+    if model.light_mode() != spec.lights.mode {
+        bail!(
+            "{}: the model was trained with {:?} lighting; pass --lights to match",
+            args.model.display(),
+            model.light_mode()
+        );
+    }
     std::fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
     let mut rows = vec![
         "sequence,frame,window_width,skylight_size,door_width,ceiling_tilt,relative_error,full_ms,reduced_ms"
@@ -355,10 +381,10 @@ fn compare(args: &CompareArgs) -> Result<()> {
             let full_s = t.elapsed().as_secs_f64();
             let t = Instant::now();
             let mesh = galerkin::radiosity::architecture::build(&spec, &p)?;
-            let (b, times) = model.evaluate(&mesh.g())?;
+            let (b, times) = model.evaluate(&mesh)?;
             let reduced_s = t.elapsed().as_secs_f64();
             parts[0] += times.project;
-            parts[1] += times.visibility;
+            parts[1] += times.visibility + times.direct;
             parts[2] += times.chain;
             parts[3] += times.lift;
             let e = relative_error(&b, &full.radiosity, &full.geometry.areas);
@@ -408,7 +434,7 @@ fn compare(args: &CompareArgs) -> Result<()> {
         full_med / reduced_med
     );
     println!(
-        "reduced frame: project g {:.0} %, learned visibility (Eq. 17) {:.0} %, Table 2 chain {:.0} %, lift b {:.0} % (of the model's own time)",
+        "reduced frame: project g {:.0} %, learned visibility (Eq. 17, and the sky's direct light in sky mode) {:.0} %, Table 2 chain {:.0} %, lift b {:.0} % (of the model's own time)",
         100.0 * parts[0] / total,
         100.0 * parts[1] / total,
         100.0 * parts[2] / total,
@@ -626,6 +652,10 @@ fn view(desc: &GpuDesc, args: &ViewArgs) -> Result<()> {
     let spec = SceneSpec::load(&args.scene)?;
     let p = spec.parameters_from(&args.look.params).with_context(|| format!("{}", args.scene.display()))?;
     let model = args.model.as_deref().map(ReducedRadiosity::load).transpose()?;
+    let mut spec = spec;
+    if let Some(m) = &model {
+        spec.lights.mode = m.light_mode();
+    }
     let exposure = match args.look.exposure {
         Some(e) if e.is_finite() && e > 0.0 => e,
         Some(e) => bail!("--exposure must be positive, got {e}"),

@@ -1,6 +1,12 @@
 //! The reduced radiosity at run time (seed 000 §8.2–8.3): project the geometry, predict the
 //! reduced visibility (Eq. 17), evaluate Table 2's chain on the premultiplied tensors, lift
 //! the radiosity to the faces.
+//!
+//! Direct light both ways of §9: area lights in the openings are a fixed emission inside the
+//! model (`ê` precomputed); the sky's light is computed at run time outside it ([`SkyLight`]):
+//! `eᵢ = ρᵢ Σ_{j opening} w_ij F⁰_ij π L(d_ij)` from the current geometry (`F⁰` the form factor
+//! without visibility) and the visibility of face–opening pairs blended with Eq. 17's weights,
+//! `w_ij = Σ_t x_t Vis_t(i, j)` (stored as bits per training configuration), then projected.
 
 use std::collections::{BTreeMap, HashMap};
 use std::path::Path;
@@ -9,6 +15,10 @@ use std::time::Instant;
 use safetensors::tensor::{Dtype, SafeTensors, TensorView};
 
 use super::error::RadiosityError;
+use super::form_factor::{facing, unoccluded_form_factor, NearField};
+use super::lighting::sky_radiance;
+use super::mesh::SceneMesh;
+use super::scene::{LightMode, Lights};
 use super::solve::Rgb;
 use super::visibility::LearnedVisibility;
 use crate::reduce::ReducedModel;
@@ -21,6 +31,57 @@ pub struct ReducedRadiosity {
     visibility: LearnedVisibility,
     emission_hat: Vec<f64>,
     faces: usize,
+    sky: Option<SkyLight>,
+}
+
+/// The sky's direct light, computed at run time (see the module documentation).
+#[derive(Clone, Debug, PartialEq)]
+pub struct SkyLight {
+    /// The sky (zenith radiance, ground albedo).
+    pub lights: Lights,
+    /// The opening faces.
+    pub openings: Vec<u32>,
+    /// Per training configuration, `Vis(i, openings[o])` at bit `i·openings.len() + o`.
+    pub bits: Vec<Vec<u64>>,
+    /// The near-field treatment the model was trained with.
+    pub near: NearField,
+}
+
+impl SkyLight {
+    /// `e` for `mesh` with Eq. 17's weights `x` over the training configurations.
+    pub fn emission(&self, mesh: &SceneMesh, x: &[f64]) -> Vec<Rgb> {
+        let g = mesh.geometry();
+        let no = self.openings.len();
+        let used: Vec<(usize, f64)> = x.iter().copied().enumerate().filter(|(_, w)| *w > 0.0).collect();
+        (0..mesh.len())
+            .map(|i| {
+                if mesh.kind[i].is_opening() {
+                    return [0.0; 3];
+                }
+                let mut irradiance = [0.0; 3];
+                for (o, &j) in self.openings.iter().enumerate() {
+                    let j = j as usize;
+                    if !facing(&g, i, j) {
+                        continue;
+                    }
+                    let k = i * no + o;
+                    let w: f64 = used
+                        .iter()
+                        .filter(|(t, _)| self.bits[*t][k / 64] >> (k % 64) & 1 == 1)
+                        .map(|(_, w)| w)
+                        .sum();
+                    if w > 0.0 {
+                        let f = w * unoccluded_form_factor(&g, i, j, self.near);
+                        let l = sky_radiance(&self.lights, (g.centroids[j] - g.centroids[i]).normalize());
+                        for c in 0..3 {
+                            irradiance[c] += f * std::f64::consts::PI * l[c];
+                        }
+                    }
+                }
+                [0, 1, 2].map(|c| mesh.albedo[i][c] * irradiance[c])
+            })
+            .collect()
+    }
 }
 
 /// Where a reduced frame's time went (seconds).
@@ -34,6 +95,8 @@ pub struct ReducedTimes {
     pub chain: f64,
     /// `b = B_b b̂`.
     pub lift: f64,
+    /// The sky's direct light (sky mode only).
+    pub direct: f64,
 }
 
 impl ReducedRadiosity {
@@ -43,6 +106,7 @@ impl ReducedRadiosity {
         visibility: LearnedVisibility,
         emission_hat: Vec<f64>,
         faces: usize,
+        sky: Option<SkyLight>,
     ) -> Result<Self, RadiosityError> {
         let bad = |m: String| RadiosityError::Solve(format!("reduced radiosity model: {m}"));
         model.check().map_err(|e| bad(e.to_string()))?;
@@ -52,7 +116,16 @@ impl ReducedRadiosity {
                 return Err(bad(format!("basis `{name}` has {} rows for {faces} faces", b.full_dim())));
             }
         }
-        Ok(Self { model, visibility, emission_hat, faces })
+        if let Some(sky) = &sky {
+            let t = visibility.geometry().shape()[1];
+            let words = (faces * sky.openings.len()).div_ceil(64);
+            if sky.bits.len() != t || sky.bits.iter().any(|b| b.len() != words) {
+                return Err(bad(format!(
+                    "the sky's visibility bits do not match {t} configurations of {faces} faces"
+                )));
+            }
+        }
+        Ok(Self { model, visibility, emission_hat, faces, sky })
     }
 
     /// The core's reduced model.
@@ -91,17 +164,47 @@ impl ReducedRadiosity {
         d
     }
 
-    /// Radiosity per face for vertex positions `g`, and where the time went.
-    pub fn evaluate(&self, g: &[f64]) -> Result<(Vec<Rgb>, ReducedTimes), RadiosityError> {
+    /// How the model was trained to be lit.
+    pub fn light_mode(&self) -> LightMode {
+        if self.sky.is_some() {
+            LightMode::Sky
+        } else {
+            LightMode::Area
+        }
+    }
+
+    /// Radiosity per face of `mesh` (the scene's topology at some parameters), and where the
+    /// time went.
+    pub fn evaluate(&self, mesh: &SceneMesh) -> Result<(Vec<Rgb>, ReducedTimes), RadiosityError> {
         let err = |e: crate::reduce::ReduceError| RadiosityError::Solve(e.to_string());
+        if mesh.len() != self.faces {
+            return Err(RadiosityError::Mesh(format!(
+                "the model has {} faces, the mesh {}",
+                self.faces,
+                mesh.len()
+            )));
+        }
         let mut times = ReducedTimes::default();
         let t0 = Instant::now();
-        let ghat = self.model.project_input("g", g).map_err(err)?;
+        let ghat = self.model.project_input("g", &mesh.g()).map_err(err)?;
         let t1 = Instant::now();
-        let (vhat, _) = self.visibility.predict(&ghat);
+        let (vhat, x) = self.visibility.predict(&ghat);
+        let t2 = Instant::now();
+        let sky_hat;
+        let ehat = match &self.sky {
+            Some(sky) => {
+                let e = sky.emission(mesh, &x);
+                let basis =
+                    self.model.basis("b").ok_or_else(|| RadiosityError::Solve("no basis `b`".into()))?;
+                sky_hat = basis.project(&super::chain::stack_channels(&e));
+                sky_hat.as_slice()
+            }
+            None => self.emission_hat.as_slice(),
+        };
+        times.direct = t2.elapsed().as_secs_f64();
         let t2 = Instant::now();
         let inputs: BTreeMap<&str, &[f64]> =
-            [("g", ghat.as_slice()), ("v", vhat.as_slice()), ("e", self.emission_hat.as_slice())].into();
+            [("g", ghat.as_slice()), ("v", vhat.as_slice()), ("e", ehat)].into();
         let bhat = self.model.evaluate(&inputs).map_err(err)?;
         let t3 = Instant::now();
         let b = self.model.lift(bhat.data()).map_err(err)?;
@@ -129,30 +232,46 @@ impl ReducedRadiosity {
         std::fs::create_dir_all(dir).map_err(|e| fail(e.to_string()))?;
         self.model.save(&dir.join("model.safetensors")).map_err(|e| fail(e.to_string()))?;
         let bytes = |t: &[f64]| t.iter().flat_map(|v| v.to_le_bytes()).collect::<Vec<u8>>();
-        let entries = [
+        let mut entries = vec![
             (
                 "geometry",
+                Dtype::F64,
                 bytes(self.visibility.geometry().data()),
                 self.visibility.geometry().shape().to_vec(),
             ),
             (
                 "visibility",
+                Dtype::F64,
                 bytes(self.visibility.visibility().data()),
                 self.visibility.visibility().shape().to_vec(),
             ),
-            ("emission", bytes(&self.emission_hat), vec![self.emission_hat.len()]),
+            ("emission", Dtype::F64, bytes(&self.emission_hat), vec![self.emission_hat.len()]),
         ];
-        let views = entries
-            .iter()
-            .map(|(n, b, s)| TensorView::new(Dtype::F64, s.clone(), b).map(|v| (n.to_string(), v)))
-            .collect::<Result<Vec<_>, _>>()
-            .map_err(|e| fail(e.to_string()))?;
-        let meta: HashMap<String, String> = [
+        let mut meta: HashMap<String, String> = [
             ("format".to_string(), FORMAT.to_string()),
             ("version".to_string(), VERSION.to_string()),
             ("faces".to_string(), self.faces.to_string()),
         ]
         .into();
+        if let Some(sky) = &self.sky {
+            let openings: Vec<f64> = sky.openings.iter().map(|&o| f64::from(o)).collect();
+            entries.push(("sky_openings", Dtype::F64, bytes(&openings), vec![openings.len()]));
+            let words = sky.bits.first().map_or(0, Vec::len);
+            let raw: Vec<u8> = sky.bits.iter().flatten().flat_map(|w| w.to_le_bytes()).collect();
+            entries.push(("sky_visibility_bits", Dtype::U8, raw, vec![sky.bits.len(), 8 * words]));
+            let l = &sky.lights;
+            meta.insert(
+                "sky_zenith".into(),
+                format!("{} {} {}", l.sky_zenith[0], l.sky_zenith[1], l.sky_zenith[2]),
+            );
+            meta.insert("ground_albedo".into(), l.ground_albedo.to_string());
+            meta.insert("near_field".into(), format!("{:?}", sky.near));
+        }
+        let views = entries
+            .iter()
+            .map(|(n, d, b, s)| TensorView::new(*d, s.clone(), b).map(|v| (n.to_string(), v)))
+            .collect::<Result<Vec<_>, _>>()
+            .map_err(|e| fail(e.to_string()))?;
         let buffer = safetensors::serialize(views, Some(meta)).map_err(|e| fail(e.to_string()))?;
         let path = dir.join("visibility.safetensors");
         let tmp = dir.join(format!(".visibility.safetensors.{}.tmp", std::process::id()));
@@ -198,7 +317,45 @@ impl ReducedRadiosity {
         let learned = LearnedVisibility::new(read("geometry")?, read("visibility")?)
             .map_err(|e| fail(e.to_string()))?;
         let emission = read("emission")?.into_data();
-        Self::new(model, learned, emission, faces).map_err(|e| fail(e.to_string()))
+        let sky = match meta.get("sky_zenith") {
+            None => None,
+            Some(z) => {
+                let z: Vec<f64> = z.split_whitespace().filter_map(|v| v.parse().ok()).collect();
+                let ground = meta.get("ground_albedo").and_then(|v| v.parse().ok());
+                let (Ok(zenith), Some(ground_albedo)) = (<[f64; 3]>::try_from(z), ground) else {
+                    return Err(fail("bad sky metadata".into()));
+                };
+                let near = match meta.get("near_field").map(String::as_str) {
+                    Some("Eq15") => NearField::Eq15,
+                    _ => NearField::Regularised,
+                };
+                let openings = read("sky_openings")?.into_data().into_iter().map(|v| v as u32).collect();
+                let v = file
+                    .tensor("sky_visibility_bits")
+                    .map_err(|e| fail(format!("sky_visibility_bits: {e}")))?;
+                let per = v.shape().get(1).copied().unwrap_or(0);
+                if v.dtype() != Dtype::U8 || per % 8 != 0 {
+                    return Err(fail("sky_visibility_bits: expected u8 rows of whole 64-bit words".into()));
+                }
+                let bits = v
+                    .data()
+                    .chunks_exact(per.max(1))
+                    .map(|row| {
+                        row.chunks_exact(8)
+                            .map(|b| u64::from_le_bytes(b.try_into().expect("8 bytes")))
+                            .collect()
+                    })
+                    .collect();
+                let lights = Lights {
+                    mode: LightMode::Sky,
+                    window_exitance: [0.0; 3],
+                    sky_zenith: zenith,
+                    ground_albedo,
+                };
+                Some(SkyLight { lights, openings, bits, near })
+            }
+        };
+        Self::new(model, learned, emission, faces, sky).map_err(|e| fail(e.to_string()))
     }
 }
 

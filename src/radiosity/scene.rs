@@ -87,7 +87,7 @@ pub enum LightMode {
 }
 
 /// The lights.
-#[derive(Clone, Debug, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Lights {
     /// `area` or `sky`.

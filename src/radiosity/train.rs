@@ -17,7 +17,7 @@ use super::error::RadiosityError;
 use super::form_factor::{squared_distance, visibility, FormFactors, NearField};
 use super::lighting::emission;
 use super::mesh::{FaceGeometry, SceneMesh};
-use super::reduced::ReducedRadiosity;
+use super::reduced::{ReducedRadiosity, SkyLight};
 use super::scene::{LightMode, Lights, SceneSpec};
 use super::solve::{solve_jacobi, Rgb};
 use super::visibility::LearnedVisibility;
@@ -358,19 +358,15 @@ pub struct TrainingReport {
 /// Progress of a training stage: (stage name, done, total).
 pub type Progress<'a> = &'a (dyn Fn(&str, u64, u64) + Sync);
 
-/// Trains the reduced radiosity of `space` from solved `configurations` (area lights only:
-/// the sky's direct light is computed outside the model and is not reduced yet).
+/// Trains the reduced radiosity of `space` from solved `configurations`, lit as
+/// `space.lights()` says (sky lighting keeps the face–opening visibility of every
+/// configuration for the run time's direct light).
 pub fn train(
     space: &dyn DesignSpace,
     configurations: &[Configuration],
     options: &TrainOptions,
     progress: Progress<'_>,
 ) -> Result<(ReducedRadiosity, TrainingReport), RadiosityError> {
-    if space.lights().mode != LightMode::Area {
-        return Err(RadiosityError::Solve(
-            "training needs area lights (lights.mode = \"area\"): the sky's direct light is computed outside the model, and its reduction is not built yet".into(),
-        ));
-    }
     let Some(first) = configurations.first() else {
         return Err(RadiosityError::Solve("no training configurations".into()));
     };
@@ -448,5 +444,27 @@ pub fn train(
     )
     .map_err(|e| RadiosityError::Solve(e.to_string()))?;
     let emission_hat = bases["b"].project(&stack_channels(&first.emission));
-    Ok((ReducedRadiosity::new(reduced, learned, emission_hat, n)?, report))
+    // Sky lighting: the face–opening visibility of every configuration, for the run time's
+    // direct light.
+    let sky = (space.lights().mode == LightMode::Sky).then(|| {
+        let openings: Vec<u32> = (0..n as u32).filter(|&j| mesh.kind[j as usize].is_opening()).collect();
+        let no = openings.len();
+        let bits = configurations
+            .iter()
+            .map(|c| {
+                let mut b = vec![0u64; (n * no).div_ceil(64)];
+                for i in 0..n {
+                    for (o, &j) in openings.iter().enumerate() {
+                        if c.visible(n * i + j as usize) {
+                            let k = i * no + o;
+                            b[k / 64] |= 1 << (k % 64);
+                        }
+                    }
+                }
+                b
+            })
+            .collect();
+        SkyLight { lights: space.lights().clone(), openings, bits, near: options.near }
+    });
+    Ok((ReducedRadiosity::new(reduced, learned, emission_hat, n, sky)?, report))
 }

@@ -89,7 +89,7 @@ impl RadiosityContent {
         let mesh: SceneMesh = architecture::build(&self.spec, &self.params)?;
         let (mesh, geometry, b) = match (&self.model, self.reduced) {
             (Some(model), true) => {
-                let (mut b, _) = model.evaluate(&mesh.g())?;
+                let (mut b, _) = model.evaluate(&mesh)?;
                 if self.spec.lights.mode == LightMode::Area {
                     for (i, k) in mesh.kind.iter().enumerate() {
                         if k.is_opening() {
