@@ -223,18 +223,10 @@ impl SparseTensor {
         let out_shape: Vec<usize> = kept.iter().map(|&a| self.shape[a]).collect();
         let out_strides = strides(&out_shape);
         let mut out = Tensor::zeros(&out_shape);
-        for e in 0..self.nnz() {
-            for c in self.expanded_coords(e) {
-                let mut v = self.values[e];
-                for (axis, x) in contracted.iter().enumerate() {
-                    if let Some(x) = x {
-                        v *= x[c[axis] as usize];
-                    }
-                }
-                let o: usize = kept.iter().zip(&out_strides).map(|(&a, &s)| c[a] as usize * s).sum();
-                out.data_mut()[o] += v;
-            }
-        }
+        self.for_each_contracted(&contracted, |c, v| {
+            let o: usize = kept.iter().zip(&out_strides).map(|(&a, &s)| c[a] as usize * s).sum();
+            out.data_mut()[o] += v;
+        });
         Ok(out)
     }
 }
@@ -252,19 +244,11 @@ impl SparseTensor {
         let contracted = self.contracted_axes(what, args)?;
         let kept: Vec<usize> = (0..self.order()).filter(|&a| contracted[a].is_none()).collect();
         let mut acc: std::collections::HashMap<Vec<u32>, f64> = std::collections::HashMap::new();
-        for e in 0..self.nnz() {
-            for c in self.expanded_coords(e) {
-                let mut v = self.values[e];
-                for (axis, x) in contracted.iter().enumerate() {
-                    if let Some(x) = x {
-                        v *= x[c[axis] as usize];
-                    }
-                }
-                if v != 0.0 {
-                    *acc.entry(kept.iter().map(|&a| c[a]).collect()).or_insert(0.0) += v;
-                }
+        self.for_each_contracted(&contracted, |c, v| {
+            if v != 0.0 {
+                *acc.entry(kept.iter().map(|&a| c[a]).collect()).or_insert(0.0) += v;
             }
-        }
+        });
         let mut entries: Vec<(Vec<u32>, f64)> = acc.into_iter().filter(|(_, v)| *v != 0.0).collect();
         entries.sort_unstable_by(|a, b| a.0.cmp(&b.0));
         let shape: Vec<usize> = kept.iter().map(|&a| self.shape[a]).collect();
@@ -275,6 +259,22 @@ impl SparseTensor {
             values.push(v);
         }
         Ok(SparseTensor { shape, coords, values, symmetric: Vec::new() })
+    }
+
+    /// Every full entry (symmetric groups expanded) with its value times the contracted
+    /// vectors' components at its indices.
+    fn for_each_contracted(&self, contracted: &[Option<&[f64]>], mut f: impl FnMut(&[u32], f64)) {
+        for e in 0..self.nnz() {
+            for c in self.expanded_coords(e) {
+                let mut v = self.values[e];
+                for (axis, x) in contracted.iter().enumerate() {
+                    if let Some(x) = x {
+                        v *= x[c[axis] as usize];
+                    }
+                }
+                f(&c, v);
+            }
+        }
     }
 
     /// The vector each axis is contracted with (`None`: kept), checking the axes and lengths.
