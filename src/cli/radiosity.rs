@@ -274,6 +274,11 @@ fn progress_bar(len: u64, what: &str) -> indicatif::ProgressBar {
 
 /// The scene with its lighting overridden by `--lights`.
 fn load_scene(path: &std::path::Path, lights: Option<&str>) -> Result<SceneSpec> {
+    if std::fs::read_to_string(path)
+        .is_ok_and(|t| t.lines().any(|l| l.trim_start().starts_with("base") && l.contains('=')))
+    {
+        bail!("{}: an OBJ scene can be trained and compared; render and view draw the generated two-room scene only (camera placement for arbitrary scenes is not built)", path.display());
+    }
     let mut spec = SceneSpec::load(path)?;
     match lights {
         Some("sky") => spec.lights.mode = LightMode::Sky,
@@ -283,8 +288,47 @@ fn load_scene(path: &std::path::Path, lights: Option<&str>) -> Result<SceneSpec>
     Ok(spec)
 }
 
+/// A scene to train or compare: the generated two rooms, or a user's OBJ scene with
+/// deformation targets (a scene file with `base = "…obj"`).
+enum AnyScene {
+    Rooms(Box<SceneSpec>),
+    Obj(Box<galerkin::radiosity::obj::ObjScene>),
+}
+
+impl AnyScene {
+    fn load(path: &std::path::Path, lights: Option<&str>) -> Result<Self> {
+        let text = std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+        let is_obj = text.lines().any(|l| l.trim_start().starts_with("base") && l.contains('='));
+        if !is_obj {
+            return Ok(AnyScene::Rooms(Box::new(load_scene(path, lights)?)));
+        }
+        let mut scene = galerkin::radiosity::obj::ObjScene::load(path)?;
+        match lights {
+            Some("sky") => scene.set_light_mode(LightMode::Sky),
+            Some(_) => scene.set_light_mode(LightMode::Area),
+            None => {}
+        }
+        Ok(AnyScene::Obj(Box::new(scene)))
+    }
+
+    fn space(&self) -> &dyn galerkin::radiosity::train::DesignSpace {
+        match self {
+            AnyScene::Rooms(s) => s.as_ref(),
+            AnyScene::Obj(s) => s.as_ref(),
+        }
+    }
+
+    fn names(&self) -> Vec<String> {
+        match self {
+            AnyScene::Rooms(_) => PARAMETERS.iter().map(|s| s.to_string()).collect(),
+            AnyScene::Obj(s) => s.names().iter().map(|s| s.to_string()).collect(),
+        }
+    }
+}
+
 fn train(args: &TrainArgs) -> Result<()> {
-    let spec = load_scene(&args.scene, args.lights.as_deref())?;
+    let scene = AnyScene::load(&args.scene, args.lights.as_deref())?;
+    let spec = scene.space();
     if !(args.energy > 0.0 && args.energy <= 1.0) || args.cap == 0 || args.samples < 2 {
         bail!("--energy must be in (0, 1], --cap at least 1, --samples at least 2");
     }
@@ -300,11 +344,11 @@ fn train(args: &TrainArgs) -> Result<()> {
     let params = sample_parameters(&spec.ranges(), &spec.defaults(), args.samples, args.seed);
     let bar = progress_bar(params.len() as u64, "full radiosity of samples");
     let configurations =
-        solve_configurations(&spec, &params, options.near, &|done| bar.set_position(done as u64))?;
+        solve_configurations(spec, &params, options.near, &|done| bar.set_position(done as u64))?;
     bar.finish();
     let solve_s = start.elapsed().as_secs_f64();
     let bars = std::sync::Mutex::new(std::collections::BTreeMap::<String, indicatif::ProgressBar>::new());
-    let (model, report) = train_model(&spec, &configurations, &options, &|stage, done, total| {
+    let (model, report) = train_model(spec, &configurations, &options, &|stage, done, total| {
         let mut bars = bars.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
         let label = if stage == "pca" { "PCA of Table 2's quantities" } else { "premultiplying tensors" };
         let bar = bars.entry(stage.to_string()).or_insert_with(|| progress_bar(total, label));
@@ -339,24 +383,29 @@ fn train(args: &TrainArgs) -> Result<()> {
 }
 
 /// A smooth closed path through the parameter box: parameter `a` at frame `f` of `frames`.
-fn sequence(spec: &SceneSpec, which: usize, f: usize, frames: usize) -> [f64; 4] {
+fn sequence(ranges: &[[f64; 2]], which: usize, f: usize, frames: usize) -> Vec<f64> {
     let t = f as f64 / frames as f64;
-    let ranges = spec.ranges();
     let (freq, phase): ([f64; 4], [f64; 4]) = if which == 0 {
         ([1.0, 2.0, 1.0, 1.5], [0.0, 1.0, 2.5, 0.5])
     } else {
         ([2.0, 1.0, 3.0, 1.0], [1.3, 0.2, 0.7, 2.9])
     };
-    std::array::from_fn(|a| {
-        let u = 0.5 + 0.47 * (2.0 * std::f64::consts::PI * freq[a] * t + phase[a]).sin();
-        ranges[a][0] + u * (ranges[a][1] - ranges[a][0])
-    })
+    ranges
+        .iter()
+        .enumerate()
+        .map(|(a, r)| {
+            let u = 0.5
+                + 0.47 * (2.0 * std::f64::consts::PI * freq[a % 4] * t + phase[a % 4] + (a / 4) as f64).sin();
+            r[0] + u * (r[1] - r[0])
+        })
+        .collect()
 }
 
 fn compare(args: &CompareArgs) -> Result<()> {
-    let spec = load_scene(&args.scene, args.lights.as_deref())?;
+    let scene = AnyScene::load(&args.scene, args.lights.as_deref())?;
+    let spec = scene.space();
     let model = ReducedRadiosity::load(&args.model)?;
-    if model.light_mode() != spec.lights.mode {
+    if model.light_mode() != spec.lights().mode {
         bail!(
             "{}: the model was trained with {:?} lighting; pass --lights to match",
             args.model.display(),
@@ -364,10 +413,9 @@ fn compare(args: &CompareArgs) -> Result<()> {
         );
     }
     std::fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
-    let mut rows = vec![
-        "sequence,frame,window_width,skylight_size,door_width,ceiling_tilt,relative_error,full_ms,reduced_ms"
-            .to_string(),
-    ];
+    let mut rows =
+        vec![format!("sequence,frame,{},relative_error,full_ms,reduced_ms", scene.names().join(","))];
+    let ranges = spec.ranges();
     let mut series: Vec<Vec<f64>> = Vec::new();
     let (mut full_times, mut reduced_times) = (Vec::new(), Vec::new());
     let mut parts = [0.0f64; 4];
@@ -375,12 +423,12 @@ fn compare(args: &CompareArgs) -> Result<()> {
         let bar = progress_bar(frames as u64, &format!("sequence {} (full and reduced)", which + 1));
         let mut errors = Vec::with_capacity(frames);
         for f in 0..frames {
-            let p = sequence(&spec, which % 2, f, frames);
+            let p = sequence(&ranges, which % 2, f, frames);
             let t = Instant::now();
-            let full = full_radiosity(&spec, &p)?;
+            let full = galerkin::radiosity::full_radiosity_of(spec.mesh(&p)?, spec.lights())?;
             let full_s = t.elapsed().as_secs_f64();
             let t = Instant::now();
-            let mesh = galerkin::radiosity::architecture::build(&spec, &p)?;
+            let mesh = spec.mesh(&p)?;
             let (b, times) = model.evaluate(&mesh)?;
             let reduced_s = t.elapsed().as_secs_f64();
             parts[0] += times.project;
@@ -391,13 +439,11 @@ fn compare(args: &CompareArgs) -> Result<()> {
             errors.push(e);
             full_times.push(full_s);
             reduced_times.push(reduced_s);
+            let values: Vec<String> = p.iter().map(|v| v.to_string()).collect();
             rows.push(format!(
-                "{},{f},{},{},{},{},{e:.6},{:.3},{:.4}",
+                "{},{f},{},{e:.6},{:.3},{:.4}",
                 which + 1,
-                p[0],
-                p[1],
-                p[2],
-                p[3],
+                values.join(","),
                 full_s * 1e3,
                 reduced_s * 1e3
             ));

@@ -17,6 +17,7 @@ pub mod form_factor;
 pub mod gpu;
 pub mod lighting;
 pub mod mesh;
+pub mod obj;
 pub mod reduced;
 pub mod render;
 pub mod scene;
