@@ -151,8 +151,8 @@ pub struct RenderArgs {
 fn parse_param(s: &str) -> Result<(String, f64), String> {
     let (name, value) = s.split_once('=').ok_or_else(|| format!("{s:?}: expected NAME=VALUE"))?;
     let name = name.trim();
-    if !PARAMETERS.contains(&name) {
-        return Err(format!("unknown parameter {name:?} (the scene has {})", PARAMETERS.join(", ")));
+    if name.is_empty() {
+        return Err(format!("{s:?}: the parameter's name is empty"));
     }
     let v: f64 = value.trim().parse().map_err(|_| format!("{name}: {value:?} is not a number"))?;
     Ok((name.to_string(), v))
@@ -173,21 +173,23 @@ fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
     if ext != "png" && ext != "exr" {
         bail!("{}: unknown image format {ext:?}: expected .png or .exr", args.out.display());
     }
-    let spec = load_scene(&args.scene, args.lights.as_deref())?;
-    let p = spec.parameters_from(&args.look.params).with_context(|| format!("{}", args.scene.display()))?;
+    let scene = AnyScene::load(&args.scene, args.lights.as_deref())?;
+    let p = scene.parameters_from(&args.look.params).with_context(|| format!("{}", args.scene.display()))?;
+    let space = scene.space();
+    let lights = space.lights().clone();
     let start = Instant::now();
     let mut s = match &args.model {
-        None => full_radiosity(&spec, &p)?,
+        None => galerkin::radiosity::full_radiosity_of(space.mesh(&p)?, &lights)?,
         Some(dir) => {
             let model = ReducedRadiosity::load(dir)?;
-            if model.light_mode() != spec.lights.mode {
+            if model.light_mode() != lights.mode {
                 bail!(
                     "{}: the model was trained with {:?} lighting; pass --lights to match",
                     dir.display(),
                     model.light_mode()
                 );
             }
-            let mesh = galerkin::radiosity::architecture::build(&spec, &p)?;
+            let mesh = space.mesh(&p)?;
             if mesh.len() != model.faces() {
                 bail!("{}: the model has {} faces, the scene {}", dir.display(), model.faces(), mesh.len());
             }
@@ -207,20 +209,23 @@ fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
     if args.model.is_some() {
         // Openings show their emission, which the reduced model reproduces only approximately.
         for i in 0..s.mesh.len() {
-            if s.mesh.kind[i].is_opening() && spec.lights.mode == LightMode::Area {
-                s.radiosity[i] = spec.lights.window_exitance;
+            if s.mesh.kind[i].is_opening() && lights.mode == LightMode::Area {
+                s.radiosity[i] = lights.window_exitance;
             }
         }
     }
     let solve_s = start.elapsed().as_secs_f64();
-    let radiance = display_radiance(&s.mesh, &s.geometry, &spec.lights, &s.radiosity);
+    let radiance = display_radiance(&s.mesh, &s.geometry, &lights, &s.radiosity);
     let exposure = args.look.exposure.unwrap_or_else(|| default_exposure(&s.mesh, &s.geometry, &radiance));
     if !(exposure.is_finite() && exposure > 0.0) {
         bail!("--exposure must be positive, got {exposure}");
     }
     let gpu = Gpu::new(desc)?;
     let vertices = scene_vertices(&s.mesh, &s.geometry, &radiance, args.look.shading);
-    let camera = camera_for(&spec, args.look.view);
+    let camera = match &scene {
+        AnyScene::Rooms(spec) => camera_for(spec, args.look.view),
+        AnyScene::Obj(_) => fit_camera(&s.mesh),
+    };
     let picture = draw_picture(&gpu, &vertices, &camera, exposure, args.look.size)?;
     let (w, h) = args.look.size;
     if ext == "png" {
@@ -244,11 +249,11 @@ fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
             ],
         )?;
     }
-    let p_text: Vec<String> = PARAMETERS.iter().zip(&p).map(|(n, v)| format!("{n}={v}")).collect();
+    let p_text: Vec<String> = scene.names().iter().zip(&p).map(|(n, v)| format!("{n}={v}")).collect();
     println!(
         "radiosity: {} faces, {} lights, {}; {} {solve_s:.3} s, exposure {exposure:.3} → {}",
         s.mesh.len(),
-        if spec.lights.mode == LightMode::Sky { "sky" } else { "area" },
+        if lights.mode == LightMode::Sky { "sky" } else { "area" },
         p_text.join(" "),
         if args.model.is_some() {
             "reduced model loaded and evaluated in".to_string()
@@ -277,7 +282,7 @@ fn load_scene(path: &std::path::Path, lights: Option<&str>) -> Result<SceneSpec>
     if std::fs::read_to_string(path)
         .is_ok_and(|t| t.lines().any(|l| l.trim_start().starts_with("base") && l.contains('=')))
     {
-        bail!("{}: an OBJ scene can be trained and compared; render and view draw the generated two-room scene only (camera placement for arbitrary scenes is not built)", path.display());
+        bail!("{}: the viewer shows the generated two-room scene only (its keys and viewpoints are the two rooms'); render, train and compare take OBJ scenes", path.display());
     }
     let mut spec = SceneSpec::load(path)?;
     match lights {
@@ -286,6 +291,26 @@ fn load_scene(path: &std::path::Path, lights: Option<&str>) -> Result<SceneSpec>
         None => {}
     }
     Ok(spec)
+}
+
+/// A camera outside `mesh`'s bounding box, above its south-west, looking at its centre: with
+/// back faces culled it looks into rooms through their walls.
+fn fit_camera(mesh: &galerkin::radiosity::SceneMesh) -> galerkin::render::Camera {
+    let (lo, hi) = mesh
+        .vertices
+        .iter()
+        .fold((glam::DVec3::INFINITY, glam::DVec3::NEG_INFINITY), |(lo, hi), v| (lo.min(*v), hi.max(*v)));
+    let centre = 0.5 * (lo + hi);
+    let extent = (hi - lo).max_element().max(1e-9);
+    let eye = centre + extent * glam::DVec3::new(-0.7, -1.6, 1.3);
+    galerkin::render::Camera {
+        eye: eye.to_array(),
+        target: centre.to_array(),
+        up: [0.0, 0.0, 1.0],
+        fov_y_degrees: 45.0,
+        near: 0.01 * extent,
+        far: 100.0 * extent,
+    }
 }
 
 /// A scene to train or compare: the generated two rooms, or a user's OBJ scene with
@@ -316,6 +341,24 @@ impl AnyScene {
             AnyScene::Rooms(s) => s.as_ref(),
             AnyScene::Obj(s) => s.as_ref(),
         }
+    }
+
+    /// Parameters from `name=value` pairs over the defaults; unknown names are refused.
+    fn parameters_from(&self, pairs: &[(String, f64)]) -> Result<Vec<f64>> {
+        if let AnyScene::Rooms(spec) = self {
+            return Ok(spec.parameters_from(pairs)?.to_vec());
+        }
+        let names = self.names();
+        let space = self.space();
+        let mut p = space.defaults();
+        for (name, v) in pairs {
+            let Some(a) = names.iter().position(|n| n == name) else {
+                bail!("parameter {name}: unknown (the scene has {})", names.join(", "));
+            };
+            p[a] = *v;
+        }
+        space.mesh(&p)?;
+        Ok(p)
     }
 
     fn names(&self) -> Vec<String> {
@@ -695,7 +738,7 @@ pub fn demo(gpu: &Gpu, size: (u32, u32), out: &std::path::Path) -> Result<()> {
 fn view(desc: &GpuDesc, args: &ViewArgs) -> Result<()> {
     use galerkin::radiosity::viewer::{RadiosityContent, ViewSettings};
     use galerkin::render::viewer::{run, ViewOptions};
-    let spec = SceneSpec::load(&args.scene)?;
+    let spec = load_scene(&args.scene, None)?;
     let p = spec.parameters_from(&args.look.params).with_context(|| format!("{}", args.scene.display()))?;
     let model = args.model.as_deref().map(ReducedRadiosity::load).transpose()?;
     let mut spec = spec;
