@@ -24,6 +24,7 @@ pub mod gpu;
 pub mod radiosity;
 pub mod reduce;
 pub mod render;
+pub mod scene_file;
 pub mod spacetime;
 pub mod spectral;
 pub mod tensor;

@@ -178,8 +178,12 @@ fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
     let space = scene.space();
     let lights = space.lights().clone();
     let start = Instant::now();
-    let mut s = match &args.model {
-        None => galerkin::radiosity::full_radiosity_of(space.mesh(&p)?, &lights)?,
+    let mesh = space.mesh(&p)?;
+    let (mesh, geometry, radiosity, how) = match &args.model {
+        None => {
+            let s = galerkin::radiosity::full_radiosity_of(mesh, &lights)?;
+            (s.mesh, s.geometry, s.radiosity, format!("full solve ({} Jacobi sweeps)", s.sweeps))
+        }
         Some(dir) => {
             let model = ReducedRadiosity::load(dir)?;
             if model.light_mode() != lights.mode {
@@ -189,51 +193,36 @@ fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
                     model.light_mode()
                 );
             }
-            let mesh = space.mesh(&p)?;
             if mesh.len() != model.faces() {
                 bail!("{}: the model has {} faces, the scene {}", dir.display(), model.faces(), mesh.len());
             }
             let (b, _) = model.evaluate(&mesh)?;
             let geometry = mesh.geometry();
-            let n = mesh.len();
-            galerkin::radiosity::FullSolution {
-                form_factors: galerkin::radiosity::FormFactors { n: 0, values: Vec::new() },
-                emission: vec![[0.0; 3]; n],
-                radiosity: b,
-                sweeps: 0,
-                geometry,
-                mesh,
-            }
+            (mesh, geometry, b, "reduced model loaded and evaluated in".to_string())
         }
     };
-    if args.model.is_some() {
-        // Openings show their emission, which the reduced model reproduces only approximately.
-        for i in 0..s.mesh.len() {
-            if s.mesh.kind[i].is_opening() && lights.mode == LightMode::Area {
-                s.radiosity[i] = lights.window_exitance;
-            }
-        }
-    }
     let solve_s = start.elapsed().as_secs_f64();
-    let radiance = display_radiance(&s.mesh, &s.geometry, &lights, &s.radiosity);
-    let exposure = args.look.exposure.unwrap_or_else(|| default_exposure(&s.mesh, &s.geometry, &radiance));
+    let radiance = display_radiance(&mesh, &geometry, &lights, &radiosity);
+    let exposure = args.look.exposure.unwrap_or_else(|| default_exposure(&mesh, &geometry, &radiance));
     if !(exposure.is_finite() && exposure > 0.0) {
         bail!("--exposure must be positive, got {exposure}");
     }
     let gpu = Gpu::new(desc)?;
-    let vertices = scene_vertices(&s.mesh, &s.geometry, &radiance, args.look.shading);
+    let vertices = scene_vertices(&mesh, &geometry, &radiance, args.look.shading);
     let camera = match &scene {
         AnyScene::Rooms(spec) => camera_for(spec, args.look.view),
-        AnyScene::Obj(_) => fit_camera(&s.mesh),
+        AnyScene::Obj(_) => {
+            let (lo, hi) = mesh.bounds();
+            galerkin::render::camera_for_box(lo.to_array(), hi.to_array())
+        }
     };
     let picture = draw_picture(&gpu, &vertices, &camera, exposure, args.look.size)?;
     let (w, h) = args.look.size;
     if ext == "png" {
         write_png_rgba8(&args.out, w, h, &picture.rgba)?;
     } else {
-        let byte =
-            |c: usize| picture.rgba.chunks_exact(4).map(|p| f32::from(p[c]) / 255.0).collect::<Vec<f32>>();
-        let float = |c: usize| picture.raw.chunks_exact(4).map(|p| p[c]).collect::<Vec<f32>>();
+        let byte = |c: usize| galerkin::render::rgba8_channel(&picture.rgba, c);
+        let float = |c: usize| galerkin::render::rgba32f_channel(&picture.raw, c);
         write_exr_channels(
             &args.out,
             w,
@@ -251,15 +240,10 @@ fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
     }
     let p_text: Vec<String> = scene.names().iter().zip(&p).map(|(n, v)| format!("{n}={v}")).collect();
     println!(
-        "radiosity: {} faces, {} lights, {}; {} {solve_s:.3} s, exposure {exposure:.3} → {}",
-        s.mesh.len(),
+        "radiosity: {} faces, {} lights, {}; {how} {solve_s:.3} s, exposure {exposure:.3} → {}",
+        mesh.len(),
         if lights.mode == LightMode::Sky { "sky" } else { "area" },
         p_text.join(" "),
-        if args.model.is_some() {
-            "reduced model loaded and evaluated in".to_string()
-        } else {
-            format!("full solve ({} Jacobi sweeps)", s.sweeps)
-        },
         args.out.display()
     );
     drop(picture);
@@ -277,11 +261,15 @@ fn progress_bar(len: u64, what: &str) -> indicatif::ProgressBar {
     bar
 }
 
+/// Whether a scene file describes an OBJ scene (a `base = "….obj"` key) rather than the
+/// generated two rooms.
+fn is_obj_scene(text: &str) -> bool {
+    text.lines().any(|l| l.trim_start().starts_with("base") && l.contains('='))
+}
+
 /// The scene with its lighting overridden by `--lights`.
 fn load_scene(path: &std::path::Path, lights: Option<&str>) -> Result<SceneSpec> {
-    if std::fs::read_to_string(path)
-        .is_ok_and(|t| t.lines().any(|l| l.trim_start().starts_with("base") && l.contains('=')))
-    {
+    if std::fs::read_to_string(path).is_ok_and(|t| is_obj_scene(&t)) {
         bail!("{}: the viewer shows the generated two-room scene only (its keys and viewpoints are the two rooms'); render, train and compare take OBJ scenes", path.display());
     }
     let mut spec = SceneSpec::load(path)?;
@@ -291,26 +279,6 @@ fn load_scene(path: &std::path::Path, lights: Option<&str>) -> Result<SceneSpec>
         None => {}
     }
     Ok(spec)
-}
-
-/// A camera outside `mesh`'s bounding box, above its south-west, looking at its centre: with
-/// back faces culled it looks into rooms through their walls.
-fn fit_camera(mesh: &galerkin::radiosity::SceneMesh) -> galerkin::render::Camera {
-    let (lo, hi) = mesh
-        .vertices
-        .iter()
-        .fold((glam::DVec3::INFINITY, glam::DVec3::NEG_INFINITY), |(lo, hi), v| (lo.min(*v), hi.max(*v)));
-    let centre = 0.5 * (lo + hi);
-    let extent = (hi - lo).max_element().max(1e-9);
-    let eye = centre + extent * glam::DVec3::new(-0.7, -1.6, 1.3);
-    galerkin::render::Camera {
-        eye: eye.to_array(),
-        target: centre.to_array(),
-        up: [0.0, 0.0, 1.0],
-        fov_y_degrees: 45.0,
-        near: 0.01 * extent,
-        far: 100.0 * extent,
-    }
 }
 
 /// A scene to train or compare: the generated two rooms, or a user's OBJ scene with
@@ -323,8 +291,7 @@ enum AnyScene {
 impl AnyScene {
     fn load(path: &std::path::Path, lights: Option<&str>) -> Result<Self> {
         let text = std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
-        let is_obj = text.lines().any(|l| l.trim_start().starts_with("base") && l.contains('='));
-        if !is_obj {
+        if !is_obj_scene(&text) {
             return Ok(AnyScene::Rooms(Box::new(load_scene(path, lights)?)));
         }
         let mut scene = galerkin::radiosity::obj::ObjScene::load(path)?;
@@ -616,12 +583,12 @@ pub fn bench(desc: &GpuDesc, args: &BenchArgs) -> Result<()> {
         let mesh = galerkin::radiosity::architecture::build(&spec, &spec.defaults())?;
         let n = mesh.len();
         let name = scene.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
-        let (mut ff, mut sv, mut sweeps) = (Vec::new(), Vec::new(), 0);
+        let (mut ff, mut sv, mut sweeps, mut e) = (Vec::new(), Vec::new(), 0, Vec::new());
         for _ in 0..args.runs.max(1) {
             let t = Instant::now();
             let f = form_factors(&mesh, NearField::Regularised);
             ff.push(t.elapsed().as_secs_f64());
-            let e = emission(&mesh, &mesh.geometry(), &spec.lights, &f);
+            e = emission(&mesh, &mesh.geometry(), &spec.lights, &f);
             let t = Instant::now();
             let (_, k) = solve_jacobi(&f, &mesh.albedo, &e, galerkin::radiosity::JACOBI_TOLERANCE, 2000)?;
             sv.push(t.elapsed().as_secs_f64());
@@ -640,11 +607,6 @@ pub fn bench(desc: &GpuDesc, args: &BenchArgs) -> Result<()> {
                 let t = Instant::now();
                 let f = device.form_factors(gpu, &mesh, NearField::Regularised)?;
                 ff.push(t.elapsed().as_secs_f64());
-                let e: Vec<[f64; 3]> = mesh
-                    .kind
-                    .iter()
-                    .map(|k| if k.is_opening() { spec.lights.window_exitance } else { [0.0; 3] })
-                    .collect();
                 let t = Instant::now();
                 let (_, k) = device.solve(gpu, &f, &mesh.albedo, &e, 1e-6, 2000)?;
                 sv.push(t.elapsed().as_secs_f64());

@@ -247,8 +247,8 @@ pub fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
             let Pixels::Rgba32F(v) = renderer.render(&data, &view)? else {
                 bail!("a float target returned bytes")
             };
-            let byte = |c: usize| rgba.chunks_exact(4).map(|p| f32::from(p[c]) / 255.0).collect::<Vec<f32>>();
-            let float = |c: usize| v.chunks_exact(4).map(|p| p[c]).collect::<Vec<f32>>();
+            let byte = |c: usize| galerkin::render::rgba8_channel(&rgba, c);
+            let float = |c: usize| galerkin::render::rgba32f_channel(&v, c);
             write_exr_channels(
                 &args.out,
                 w,

@@ -14,16 +14,7 @@ use crate::render::Camera;
 pub const MAX_AXPY_LEN: u64 = 1 << 29;
 
 /// A bad scene file.
-#[derive(Debug, thiserror::Error)]
-#[error("{path}:{line}: {message}")]
-pub struct SceneError {
-    /// The file.
-    pub path: PathBuf,
-    /// 1-based line (0 when the file could not be read at all).
-    pub line: usize,
-    /// What is wrong.
-    pub message: String,
-}
+pub use crate::scene_file::SceneFileError as SceneError;
 
 /// Output image size.
 #[derive(Clone, Copy, Debug, Deserialize)]
@@ -95,27 +86,14 @@ pub struct DemoScene {
 impl DemoScene {
     /// Reads and validates a scene file.
     pub fn load(path: &Path) -> Result<Self, SceneError> {
-        let text = std::fs::read_to_string(path).map_err(|e| SceneError {
-            path: path.to_path_buf(),
-            line: 0,
-            message: e.to_string(),
-        })?;
-        Self::parse(&text, path)
+        Self::parse(&crate::scene_file::read(path)?, path)
     }
 
     /// Parses and validates scene text; `path` names it in errors.
     pub fn parse(text: &str, path: &Path) -> Result<Self, SceneError> {
-        let line_of = |offset: usize| text[..offset.min(text.len())].matches('\n').count() + 1;
-        let mut scene: DemoScene = toml::from_str(text).map_err(|e| SceneError {
-            path: path.to_path_buf(),
-            line: e.span().map_or(1, |s| line_of(s.start)),
-            message: e.message().to_string(),
-        })?;
+        let mut scene: DemoScene = crate::scene_file::parse(text, path)?;
         scene.dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
-        let fail = |key: &str, message: String| {
-            let line = text.find(key).map_or(1, line_of);
-            Err(SceneError { path: path.to_path_buf(), line, message })
-        };
+        let fail = |key: &str, message: String| Err(crate::scene_file::error_at(text, path, key, message));
         let ImageSize { width, height } = scene.image;
         if !(1..=16384).contains(&width) || !(1..=16384).contains(&height) {
             return fail("width", format!("image size {width}x{height} must be 1 to 16384 on each axis"));

@@ -6,16 +6,9 @@ use std::path::PathBuf;
 /// What can go wrong with a radiosity scene or its solution.
 #[derive(Debug, thiserror::Error)]
 pub enum RadiosityError {
-    /// A scene file that does not parse or does not validate.
-    #[error("{path}:{line}: {message}")]
-    Scene {
-        /// The file.
-        path: PathBuf,
-        /// 1-based line (0 when the file could not be read at all).
-        line: usize,
-        /// What is wrong.
-        message: String,
-    },
+    /// A scene file that does not parse or does not validate (names the file and line).
+    #[error(transparent)]
+    Scene(#[from] crate::scene_file::SceneFileError),
     /// A parameter value outside its declared range, or an unknown parameter.
     #[error("parameter {name}: {message}")]
     Parameter {
@@ -43,9 +36,9 @@ pub enum RadiosityError {
     /// A mesh whose arrays disagree (a face referencing a missing vertex, wrong lengths).
     #[error("{0}")]
     Mesh(String),
-    /// An OBJ file that cannot be used.
+    /// A file that cannot be used: an OBJ file, a saved reduced model.
     #[error("{path}: {message}")]
-    Obj {
+    File {
         /// The file.
         path: PathBuf,
         /// What is wrong.

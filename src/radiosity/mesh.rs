@@ -136,10 +136,7 @@ impl SceneMesh {
                 self.albedo[i]
             )));
         }
-        let (lo, hi) = self
-            .vertices
-            .iter()
-            .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), v| (lo.min(*v), hi.max(*v)));
+        let (lo, hi) = self.bounds();
         let scale = if self.vertices.is_empty() { 1.0 } else { (hi - lo).length_squared().max(1e-300) };
         let geometry = self.geometry();
         for (i, &area) in geometry.areas.iter().enumerate() {
@@ -152,6 +149,13 @@ impl SceneMesh {
             }
         }
         Ok(())
+    }
+
+    /// The bounding box of the vertices (min, max corners).
+    pub fn bounds(&self) -> (DVec3, DVec3) {
+        self.vertices
+            .iter()
+            .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), v| (lo.min(*v), hi.max(*v)))
     }
 
     /// The same topology with new vertex positions `g` (3 per vertex); validated.

@@ -37,6 +37,7 @@ use super::error::RadiosityError;
 use super::mesh::{FaceKind, SceneMesh};
 use super::scene::Lights;
 use super::train::DesignSpace;
+use crate::scene_file;
 
 /// One deformation target.
 #[derive(Clone, Debug, Deserialize)]
@@ -99,9 +100,9 @@ pub struct ObjScene {
 fn read_obj(path: &Path) -> Result<Vec<tobj::Model>, RadiosityError> {
     let options = tobj::LoadOptions { triangulate: true, single_index: true, ..Default::default() };
     let (models, _) = tobj::load_obj(path, &options)
-        .map_err(|e| RadiosityError::Obj { path: path.to_path_buf(), message: e.to_string() })?;
+        .map_err(|e| RadiosityError::File { path: path.to_path_buf(), message: e.to_string() })?;
     if models.is_empty() {
-        return Err(RadiosityError::Obj { path: path.to_path_buf(), message: "no objects".into() });
+        return Err(RadiosityError::File { path: path.to_path_buf(), message: "no objects".into() });
     }
     Ok(models)
 }
@@ -122,20 +123,10 @@ impl ObjScene {
     /// Reads the scene file and its OBJ files; errors name the file (and the line of the
     /// scene file, or the object and face).
     pub fn load(path: &Path) -> Result<Self, RadiosityError> {
-        let text = std::fs::read_to_string(path).map_err(|e| RadiosityError::Scene {
-            path: path.to_path_buf(),
-            line: 0,
-            message: e.to_string(),
-        })?;
-        let line_of = |offset: usize| text[..offset.min(text.len())].matches('\n').count() + 1;
-        let spec: ObjSceneFile = toml::from_str(&text).map_err(|e| RadiosityError::Scene {
-            path: path.to_path_buf(),
-            line: e.span().map_or(1, |s| line_of(s.start)),
-            message: e.message().to_string(),
-        })?;
+        let text = scene_file::read(path)?;
+        let spec: ObjSceneFile = scene_file::parse(&text, path)?;
         let fail = |key: &str, message: String| {
-            let line = text.find(key).map_or(1, line_of);
-            RadiosityError::Scene { path: path.to_path_buf(), line, message }
+            RadiosityError::from(scene_file::error_at(&text, path, key, message))
         };
         let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
         let base_path = dir.join(&spec.base);
@@ -184,7 +175,7 @@ impl ObjScene {
             offset += (m.mesh.positions.len() / 3) as u32;
         }
         base.validate()
-            .map_err(|e| RadiosityError::Obj { path: base_path.clone(), message: e.to_string() })?;
+            .map_err(|e| RadiosityError::File { path: base_path.clone(), message: e.to_string() })?;
         let mut targets = Vec::new();
         for t in spec.targets {
             let [lo, hi] = t.range;
@@ -211,7 +202,7 @@ impl ObjScene {
             let p = positions(&m);
             let base_faces: Vec<u32> = base.faces.iter().flatten().copied().collect();
             if p.len() != base.vertices.len() || faces != base_faces {
-                return Err(RadiosityError::Obj {
+                return Err(RadiosityError::File {
                     path: target_path,
                     message: format!(
                         "target {} must have the base's vertices and faces ({} vertices, {} faces), found {} and {}",

@@ -145,23 +145,10 @@ impl ReducedRadiosity {
 
     /// Reduced dimension of every basis of Table 2, by name (read off the reduced tensors).
     pub fn dimensions(&self) -> BTreeMap<String, usize> {
-        let mut d = BTreeMap::new();
-        for (tensor, axes) in [
-            ("N", ["n", "g", "g"]),
-            ("S", ["sh", "n", "g"]),
-            ("R", ["r", "g", "g"]),
-            ("C", ["c", "sh", "sh"]),
-            ("D", ["dp", "c", "v"]),
-            ("A", ["a", "n", "n"]),
-            ("E", ["b", "b", "dp"]),
-        ] {
-            if let Some(t) = self.model.tensor(tensor) {
-                for (name, &m) in axes.iter().zip(t.shape()) {
-                    d.insert(name.to_string(), m);
-                }
-            }
-        }
-        d
+        self.model
+            .tensors()
+            .flat_map(|(_, axes, t)| axes.iter().cloned().zip(t.shape().iter().copied()))
+            .collect()
     }
 
     /// How the model was trained to be lit.
@@ -228,7 +215,7 @@ impl ReducedRadiosity {
     /// tensors and the bases of `g` and `b`) and `dir/visibility.safetensors` (`B_gᵀ G`,
     /// `B_vᵀ V`, `ê`, f64), each to a temporary name first.
     pub fn save(&self, dir: &Path) -> Result<(), RadiosityError> {
-        let fail = |detail: String| RadiosityError::Obj { path: dir.to_path_buf(), message: detail };
+        let fail = |detail: String| RadiosityError::File { path: dir.to_path_buf(), message: detail };
         std::fs::create_dir_all(dir).map_err(|e| fail(e.to_string()))?;
         self.model.save(&dir.join("model.safetensors")).map_err(|e| fail(e.to_string()))?;
         let bytes = |t: &[f64]| t.iter().flat_map(|v| v.to_le_bytes()).collect::<Vec<u8>>();
@@ -281,12 +268,12 @@ impl ReducedRadiosity {
 
     /// Reads what [`ReducedRadiosity::save`] wrote; errors name the file and what is wrong.
     pub fn load(dir: &Path) -> Result<Self, RadiosityError> {
-        let model = ReducedModel::load(&dir.join("model.safetensors")).map_err(|e| RadiosityError::Obj {
+        let model = ReducedModel::load(&dir.join("model.safetensors")).map_err(|e| RadiosityError::File {
             path: dir.join("model.safetensors"),
             message: e.to_string(),
         })?;
         let path = dir.join("visibility.safetensors");
-        let fail = |m: String| RadiosityError::Obj { path: path.clone(), message: m };
+        let fail = |m: String| RadiosityError::File { path: path.clone(), message: m };
         let bytes = std::fs::read(&path).map_err(|e| fail(e.to_string()))?;
         let (_, meta) = SafeTensors::read_metadata(&bytes).map_err(|e| fail(e.to_string()))?;
         let meta = meta.metadata().clone().unwrap_or_default();

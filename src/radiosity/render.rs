@@ -50,11 +50,14 @@ pub struct SceneVertex {
 }
 
 /// The radiance each face shows: `bᵢ/π` for surfaces (Lambertian); for openings in area mode
-/// their emission `bᵢ/π`, in sky mode the sky's radiance looking out through them.
+/// their exitance `window_exitance/π` (which is `bᵢ/π` of the full solution, albedo 0, and what
+/// a reduced solution only approximates), in sky mode the sky's radiance looking out through
+/// them.
 pub fn display_radiance(mesh: &SceneMesh, geometry: &FaceGeometry, lights: &Lights, b: &[Rgb]) -> Vec<Rgb> {
     (0..mesh.len())
         .map(|i| match (mesh.kind[i], lights.mode) {
-            (FaceKind::Surface, _) | (_, LightMode::Area) => b[i].map(|v| v / PI),
+            (FaceKind::Surface, _) => b[i].map(|v| v / PI),
+            (_, LightMode::Area) => lights.window_exitance.map(|v| v / PI),
             (_, LightMode::Sky) => super::lighting::sky_radiance(lights, -geometry.normals[i].normalize()),
         })
         .collect()

@@ -9,6 +9,7 @@ use std::path::Path;
 use serde::Deserialize;
 
 use super::error::RadiosityError;
+use crate::scene_file;
 
 /// The design parameters of the two-room scene, in the order of a parameter vector.
 pub const PARAMETERS: [&str; 4] = ["window_width", "skylight_size", "door_width", "ceiling_tilt"];
@@ -122,28 +123,15 @@ pub type Parameters = [f64; 4];
 impl SceneSpec {
     /// Reads and validates a scene file.
     pub fn load(path: &Path) -> Result<Self, RadiosityError> {
-        let text = std::fs::read_to_string(path).map_err(|e| RadiosityError::Scene {
-            path: path.to_path_buf(),
-            line: 0,
-            message: e.to_string(),
-        })?;
-        Self::parse(&text, path)
+        Self::parse(&scene_file::read(path)?, path)
     }
 
     /// Parses and validates scene text; `path` names it in errors. The geometry is built at
     /// every corner of the parameter box and checked, so a range that would fold a wall or
     /// close an opening is refused here, naming the parameter.
     pub fn parse(text: &str, path: &Path) -> Result<Self, RadiosityError> {
-        let line_of = |offset: usize| text[..offset.min(text.len())].matches('\n').count() + 1;
-        let spec: SceneSpec = toml::from_str(text).map_err(|e| RadiosityError::Scene {
-            path: path.to_path_buf(),
-            line: e.span().map_or(1, |s| line_of(s.start)),
-            message: e.message().to_string(),
-        })?;
-        let fail = |key: &str, message: String| {
-            let line = text.find(key).map_or(1, line_of);
-            Err(RadiosityError::Scene { path: path.to_path_buf(), line, message })
-        };
+        let spec: SceneSpec = scene_file::parse(text, path)?;
+        let fail = |key: &str, message: String| Err(scene_file::error_at(text, path, key, message).into());
         for name in spec.parameters.keys() {
             if !PARAMETERS.contains(&name.as_str()) {
                 return fail(

@@ -14,7 +14,7 @@ use rayon::prelude::*;
 
 use super::chain::{radiosity as radiosity_expr, stack_channels, table2_model};
 use super::error::RadiosityError;
-use super::form_factor::{squared_distance, visibility, FormFactors, NearField};
+use super::form_factor::{form_factors, squared_distance, NearField};
 use super::lighting::emission;
 use super::mesh::{FaceGeometry, SceneMesh};
 use super::reduced::{ReducedRadiosity, SkyLight};
@@ -168,22 +168,6 @@ impl Configuration {
     }
 }
 
-/// `F` from face geometry and visibility bits.
-fn form_factors_of(g: &FaceGeometry, vis: &[f64], near: NearField) -> FormFactors {
-    let n = g.areas.len();
-    let values = (0..n * n)
-        .into_par_iter()
-        .map(|k| {
-            if vis[k] > 0.0 {
-                super::form_factor::unoccluded_form_factor(g, k / n, k % n, near)
-            } else {
-                0.0
-            }
-        })
-        .collect();
-    FormFactors { n, values }
-}
-
 /// Solves the full radiosity of every configuration (visibility, form factors, Jacobi).
 pub fn solve_configurations(
     space: &dyn DesignSpace,
@@ -195,12 +179,13 @@ pub fn solve_configurations(
     for (t, p) in params.iter().enumerate() {
         let mesh = space.mesh(p)?;
         let geometry = mesh.geometry();
-        let vis = visibility(&mesh);
-        let f = form_factors_of(&geometry, &vis, near);
+        let f = form_factors(&mesh, near);
         let e = emission(&mesh, &geometry, space.lights(), &f);
         let (b, _) = solve_jacobi(&f, &mesh.albedo, &e, JACOBI_TOLERANCE, JACOBI_MAX_SWEEPS)?;
-        let mut bits = vec![0u64; vis.len().div_ceil(64)];
-        for (k, v) in vis.iter().enumerate() {
+        // Vis(i, j) = 1 exactly where F_ij > 0 (visible pairs face each other: both scaled
+        // cosines are positive).
+        let mut bits = vec![0u64; f.values.len().div_ceil(64)];
+        for (k, v) in f.values.iter().enumerate() {
             if *v > 0.0 {
                 bits[k / 64] |= 1 << (k % 64);
             }

@@ -15,8 +15,8 @@ use super::reduced::ReducedRadiosity;
 use super::render::{
     camera_for, display_radiance, scene_vertices, Output, SceneRenderer, Shading, Viewpoint,
 };
-use super::scene::{LightMode, Parameters, SceneSpec, PARAMETERS};
-use super::{architecture, full_radiosity, SceneMesh};
+use super::scene::{Parameters, SceneSpec, PARAMETERS};
+use super::{architecture, full_radiosity_of, SceneMesh};
 use crate::gpu::Gpu;
 use crate::render::viewer::ViewerContent;
 use crate::render::{Camera, RenderTarget};
@@ -89,19 +89,12 @@ impl RadiosityContent {
         let mesh: SceneMesh = architecture::build(&self.spec, &self.params)?;
         let (mesh, geometry, b) = match (&self.model, self.reduced) {
             (Some(model), true) => {
-                let (mut b, _) = model.evaluate(&mesh)?;
-                if self.spec.lights.mode == LightMode::Area {
-                    for (i, k) in mesh.kind.iter().enumerate() {
-                        if k.is_opening() {
-                            b[i] = self.spec.lights.window_exitance;
-                        }
-                    }
-                }
+                let (b, _) = model.evaluate(&mesh)?;
                 let geometry = mesh.geometry();
                 (mesh, geometry, b)
             }
             _ => {
-                let s = full_radiosity(&self.spec, &self.params)?;
+                let s = full_radiosity_of(mesh, &self.spec.lights)?;
                 (s.mesh, s.geometry, s.radiosity)
             }
         };

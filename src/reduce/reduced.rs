@@ -53,6 +53,11 @@ impl ReducedModel {
         &self.output_axes
     }
 
+    /// Every reduced tensor's name, axis bases and data.
+    pub fn tensors(&self) -> impl Iterator<Item = (&str, &[String], &Tensor)> {
+        self.tensors.iter().map(|(n, t)| (n.as_str(), t.axes.as_slice(), &t.data))
+    }
+
     /// The basis called `name` (those of the inputs and the output are kept).
     pub fn basis(&self, name: &str) -> Option<&Basis> {
         self.bases.get(name)

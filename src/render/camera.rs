@@ -126,3 +126,21 @@ impl Camera {
         ((x + 1.0) * 0.5 * f64::from(width), (y + 1.0) * 0.5 * f64::from(height))
     }
 }
+
+/// A camera that shows the box [`lo`, `hi`] (its bounding sphere) from above the x–y diagonal.
+pub fn camera_for_box(lo: [f64; 3], hi: [f64; 3]) -> Camera {
+    let centre: [f64; 3] = std::array::from_fn(|c| 0.5 * (lo[c] + hi[c]));
+    let radius = (0..3).map(|c| (hi[c] - lo[c]).powi(2)).sum::<f64>().sqrt().max(1e-12) * 0.5;
+    let fov: f64 = 40.0;
+    let distance = 1.05 * radius / (0.5 * fov.to_radians()).sin();
+    let dir: [f64; 3] = [0.45, -0.75, 0.55];
+    let n = (dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]).sqrt();
+    Camera {
+        eye: std::array::from_fn(|c| centre[c] + distance * dir[c] / n),
+        target: centre,
+        up: [0.0, 0.0, 1.0],
+        fov_y_degrees: fov,
+        near: (distance - 1.5 * radius).max(1e-3 * distance),
+        far: distance + 1.5 * radius,
+    }
+}

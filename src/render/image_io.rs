@@ -129,3 +129,14 @@ pub fn write_exr_channels(
     }
     result
 }
+
+/// Channel `c` of RGBA8 pixels as floats in [0, 1]: an image's colour beside raw values in an
+/// EXR file.
+pub fn rgba8_channel(rgba: &[u8], c: usize) -> Vec<f32> {
+    rgba.chunks_exact(4).map(|p| f32::from(p[c]) / 255.0).collect()
+}
+
+/// Channel `c` of RGBA32F pixels.
+pub fn rgba32f_channel(rgba: &[f32], c: usize) -> Vec<f32> {
+    rgba.chunks_exact(4).map(|p| p[c]).collect()
+}

@@ -43,7 +43,8 @@ mod cut;
 mod tessellate;
 mod view;
 
-pub use view::{camera_for_box, fit_camera, SpectralView, View2d};
+pub use crate::render::camera_for_box;
+pub use view::{fit_camera, SpectralView, View2d};
 
 type Result<T> = std::result::Result<T, SpectralError>;
 fn dev(context: &str) -> impl Fn(crate::gpu::GpuError) -> SpectralError + '_ {
