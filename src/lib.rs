@@ -21,6 +21,7 @@
 pub mod bench;
 pub mod demo;
 pub mod gpu;
+pub mod mesh;
 pub mod radiosity;
 pub mod reduce;
 pub mod render;

@@ -80,6 +80,14 @@ pub enum TensorError {
         /// The offending eigenvalue.
         eigenvalue: f64,
     },
+    /// A sparse factorisation failed (a non-positive pivot where the matrix must be definite).
+    #[error("{what}: sparse factorisation failed: {detail}")]
+    Factorisation {
+        /// The operand.
+        what: String,
+        /// What the factoriser reported.
+        detail: String,
+    },
     /// A value that must be finite is not.
     #[error("{what}: {detail}")]
     NotFinite {

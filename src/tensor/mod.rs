@@ -14,9 +14,11 @@ mod error;
 pub mod gpu;
 mod linalg;
 mod sparse;
+mod sparse_symmetric;
 
 pub use dense::{Scalar, Tensor};
 pub use error::TensorError;
 pub(crate) use linalg::{check_system, pivot_tolerance};
 pub use linalg::{matmul, solve, solve_many, spd_power, spd_power_apply, symmetric_eigen, transpose};
 pub use sparse::{distinct_permutations, SparseTensor};
+pub use sparse_symmetric::{Factorisation, SparseSymmetricSolver, SymmetricPattern};

@@ -1,0 +1,218 @@
+//! Harmonic (Laplacian) deformation of a mesh's interior from its boundary motion (seed 000
+//! §6.1): the displacement d of the free vertices solves `L_FF d_F = −L_FB d_B`, with L the
+//! cell-weighted graph Laplacian of the mesh edges. Its pattern and symbolic Cholesky
+//! factorisation are computed once and reused for every frame; cells that shrink get stiffer
+//! (their weight grows as `(vol₀ / vol)²`, clamped) and the solve is repeated, which is the
+//! seed's "increase the weights around inverted elements". A frame that still has an
+//! inverted cell is refused, naming the frame and the cell.
+
+use crate::tensor::{Factorisation, SparseSymmetricSolver, SymmetricPattern};
+
+use super::{MeshError, SimplexMesh};
+
+/// Stiffening rounds per frame before an inverted cell is reported.
+const STIFFEN_ROUNDS: usize = 8;
+
+/// A base mesh prepared for harmonic deformation with a fixed set of prescribed vertices.
+#[derive(Debug)]
+pub struct HarmonicDeformation {
+    base: SimplexMesh,
+    base_volumes: Vec<f64>,
+    /// Index of each vertex among the free ones (`u32::MAX` if prescribed).
+    free_index: Vec<u32>,
+    free: Vec<u32>,
+    solver: SparseSymmetricSolver,
+    /// Per (cell, edge) the pattern slots of (a,a), (b,b), (a,b) for free a, b (MAX if absent).
+    edge_slots: Vec<[usize; 3]>,
+}
+
+impl HarmonicDeformation {
+    /// Prepares `base` with `prescribed` vertices (the boundary) whose positions each frame
+    /// supplies; every other vertex follows harmonically.
+    pub fn new(base: &SimplexMesh, prescribed: &[u32]) -> Result<Self, MeshError> {
+        let nv = base.vertex_count();
+        let mut free_index = vec![0u32; nv];
+        for &v in prescribed {
+            if v as usize >= nv {
+                return Err(MeshError::Structure(format!(
+                    "prescribed vertex {v} of a mesh with {nv} vertices"
+                )));
+            }
+            free_index[v as usize] = u32::MAX;
+        }
+        let mut free = Vec::new();
+        for (v, slot) in free_index.iter_mut().enumerate() {
+            if *slot != u32::MAX {
+                *slot = free.len() as u32;
+                free.push(v as u32);
+            }
+        }
+        let dim = base.dim();
+        let mut entries = Vec::new();
+        for c in 0..base.cell_count() {
+            let cell = base.cell(c);
+            for i in 0..=dim {
+                for j in i + 1..=dim {
+                    let (a, b) = (free_index[cell[i] as usize], free_index[cell[j] as usize]);
+                    if a != u32::MAX && b != u32::MAX {
+                        entries.push((a as usize, b as usize));
+                    }
+                }
+            }
+        }
+        let pattern = SymmetricPattern::new(free.len(), entries);
+        let mut edge_slots = Vec::new();
+        for c in 0..base.cell_count() {
+            let cell = base.cell(c);
+            for i in 0..=dim {
+                for j in i + 1..=dim {
+                    let (a, b) = (free_index[cell[i] as usize], free_index[cell[j] as usize]);
+                    let slot = |r: u32, s: u32| {
+                        if r == u32::MAX || s == u32::MAX {
+                            usize::MAX
+                        } else {
+                            pattern.slot(r as usize, s as usize).expect("edge in pattern")
+                        }
+                    };
+                    edge_slots.push([slot(a, a), slot(b, b), slot(a, b)]);
+                }
+            }
+        }
+        let solver = SparseSymmetricSolver::new(pattern, Factorisation::Llt)
+            .map_err(|e| MeshError::Solve(format!("harmonic deformation: {e}")))?;
+        Ok(Self { base: base.clone(), base_volumes: base.volumes(), free_index, free, solver, edge_slots })
+    }
+
+    /// Number of vertices that follow harmonically.
+    pub fn free_count(&self) -> usize {
+        self.free.len()
+    }
+
+    /// The deformed mesh for frame `frame`, with the prescribed vertices at their positions in
+    /// `target` (a full geometry vector; its free entries are ignored).
+    pub fn deform(&mut self, target: &[f64], frame: usize) -> Result<SimplexMesh, MeshError> {
+        let dim = self.base.dim();
+        let g0 = self.base.g();
+        if target.len() != g0.len() {
+            return Err(MeshError::Structure(format!(
+                "frame {frame}: target of {} coordinates for a mesh of {}",
+                target.len(),
+                g0.len()
+            )));
+        }
+        let mut weights = vec![1.0; self.base.cell_count()];
+        let mut last = None;
+        for _ in 0..STIFFEN_ROUNDS {
+            let g = self.solve(target, &weights, frame)?;
+            let vols = self.base.volumes_at(&g);
+            let mut ok = true;
+            for (c, (&v, &v0)) in vols.iter().zip(&self.base_volumes).enumerate() {
+                let ratio = v / v0;
+                if ratio < 0.25 {
+                    ok &= ratio > 0.0;
+                    weights[c] *= (0.25 / ratio.max(1e-3)).powi(2).min(1e4);
+                }
+            }
+            last = Some(g);
+            if ok {
+                break;
+            }
+        }
+        let g = last.expect("at least one round");
+        let _ = dim;
+        self.base.with_g(g, Some(frame))
+    }
+
+    fn solve(&mut self, target: &[f64], weights: &[f64], frame: usize) -> Result<Vec<f64>, MeshError> {
+        let dim = self.base.dim();
+        let g0 = self.base.g();
+        let nf = self.free.len();
+        let mut values = vec![0.0; self.solver.pattern().nnz()];
+        let mut rhs = vec![0.0; nf * dim];
+        let mut e = 0;
+        for c in 0..self.base.cell_count() {
+            let cell = self.base.cell(c);
+            let w = weights[c];
+            for i in 0..=dim {
+                for j in i + 1..=dim {
+                    let [aa, bb, ab] = self.edge_slots[e];
+                    e += 1;
+                    let (va, vb) = (cell[i] as usize, cell[j] as usize);
+                    if aa != usize::MAX {
+                        values[aa] += w;
+                    }
+                    if bb != usize::MAX {
+                        values[bb] += w;
+                    }
+                    if ab != usize::MAX {
+                        values[ab] -= w;
+                    }
+                    // A prescribed neighbour moves the free vertex: −L_FB d_B = +w d_B.
+                    for (free_v, other) in [(va, vb), (vb, va)] {
+                        let fi = self.free_index[free_v];
+                        if fi != u32::MAX && self.free_index[other] == u32::MAX {
+                            for k in 0..dim {
+                                rhs[k * nf + fi as usize] +=
+                                    w * (target[dim * other + k] - g0[dim * other + k]);
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        self.solver.factorise("harmonic deformation", &values).map_err(|e| {
+            MeshError::Solve(format!("frame {frame}: {e} (a free vertex with no prescribed path?)"))
+        })?;
+        let mut g = target.to_vec();
+        for k in 0..dim {
+            let col = &mut rhs[k * nf..(k + 1) * nf];
+            self.solver.solve_in_place(col);
+            for (i, &v) in self.free.iter().enumerate() {
+                g[dim * v as usize + k] = g0[dim * v as usize + k] + col[i];
+            }
+        }
+        Ok(g)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::tunnel::{tunnel, TunnelSpec};
+
+    #[test]
+    fn scaling_the_obstacle_moves_the_interior_smoothly_and_keeps_the_walls() {
+        let t = tunnel(&TunnelSpec { cell: 0.1, ..Default::default() }).expect("tunnel");
+        let prescribed: Vec<u32> = t.obstacle.iter().chain(&t.outer).copied().collect();
+        let mut h = HarmonicDeformation::new(&t.mesh, &prescribed).expect("prepare");
+        // No boundary motion: no motion at all.
+        let same = h.deform(t.mesh.g(), 0).expect("identity");
+        assert!(same.g().iter().zip(t.mesh.g()).all(|(a, b)| (a - b).abs() < 1e-12));
+        for (frame, scale) in [0.5, 1.6].into_iter().enumerate() {
+            let mut target = t.mesh.g().to_vec();
+            let c = t.spec.centre;
+            for &v in &t.obstacle {
+                for k in 0..2 {
+                    let i = 2 * v as usize + k;
+                    target[i] = c[k] + scale * (target[i] - c[k]);
+                }
+            }
+            let m = h.deform(&target, frame).expect("deformed");
+            let area: f64 = m.volumes().iter().sum();
+            let obstacle = 3.0 * 3f64.sqrt() / 4.0 * (scale * t.spec.radius).powi(2);
+            assert!((area - (t.spec.length * t.spec.height - obstacle)).abs() < 1e-12);
+            for &v in &t.outer {
+                assert_eq!(m.point(v as usize), t.mesh.point(v as usize));
+            }
+        }
+        // Far too large: the obstacle leaves the tunnel and cells invert; refused with the frame.
+        let mut target = t.mesh.g().to_vec();
+        for &v in &t.obstacle {
+            target[2 * v as usize + 1] += 2.0;
+        }
+        match h.deform(&target, 7) {
+            Err(MeshError::Inverted { frame: Some(7), .. }) => {}
+            other => panic!("expected an inverted cell in frame 7, got {other:?}"),
+        }
+    }
+}
