@@ -20,6 +20,7 @@
 
 pub mod bench;
 pub mod demo;
+pub mod fluid;
 pub mod gpu;
 pub mod mesh;
 pub mod radiosity;

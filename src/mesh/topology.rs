@@ -183,6 +183,11 @@ impl Topology {
         &self.representative
     }
 
+    /// Number of cells.
+    pub fn cell_count(&self) -> usize {
+        self.cell_faces.len() / (self.dim + 1)
+    }
+
     /// The spatial dimension.
     pub fn dim(&self) -> usize {
         self.dim

@@ -1,0 +1,21 @@
+//! Fluids on deforming simplicial meshes in the full space (seed 000 §5, Fig. 2 left): the
+//! ground truth and training-data source of the reduced fluids.
+//!
+//! - [`operators`]: the volume, flux-to-momentum, advection, diffusion, divergence and
+//!   boundary tensors as the reduction core's sparse tensors, and their direct per-cell
+//!   evaluation (tested to agree);
+//! - [`projection`]: the pressure projection of Eq. 10 as a sparse quasi-definite LDLᵀ solve
+//!   with a reused symbolic factorisation;
+//! - [`solver`]: the time step (induced flux, RK4 advection–diffusion, projection, flux to
+//!   velocity), with the sign and −V̇u decisions documented there;
+//! - [`scene`] and [`snapshots`]: TOML scenes and the streaming snapshot format.
+
+mod error;
+pub mod operators;
+pub mod projection;
+pub mod scene;
+pub mod snapshots;
+pub mod solver;
+
+pub use error::FluidError;
+pub use solver::{FluidParams, FluidSolver, FluidState, StepReport};

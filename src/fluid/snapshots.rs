@@ -1,0 +1,275 @@
+//! Training snapshots on disk: a streaming, chunked format the reduction core's streaming PCA
+//! reads without loading everything (seed 000 §6.1: "collect snapshots of simulation
+//! quantities into large matrices, where each column represents a simulation frame").
+//!
+//! A snapshot directory holds
+//!
+//! - `snapshots.json`: `{"format": "galerkin-fluid-snapshots", "version": 1, "dim": d,
+//!   "cells": n_c, "faces": n_f, "vertices": n_v, "frame_time": Δt, "frames": k,
+//!   "periodic_axis": a | null, "quantities": {"u": len, "p": len, "f": len, "g": len,
+//!   "h": len}}`, rewritten after every frame, so an interrupted run is a valid shorter one;
+//! - `mesh.json`: the topology, `{"dim": d, "cells": [v₀, v₁, …]}` (d + 1 indices per cell);
+//! - one file per quantity, `u.f64 p.f64 f.f64 g.f64 h.f64`: little-endian f64, one frame
+//!   after another (frame k of quantity q starts at byte `8·k·len_q`). u and p have d
+//!   components per cell (`u[d·c + k]`), f and h one per face (outward from the face's first
+//!   cell), g d per vertex. Frame 0 is the initial state (its h is zero).
+//!
+//! [`SnapshotReader::source`] presents one quantity as a [`SnapshotSource`] (rows × frames)
+//! reading only the rows asked for.
+
+use std::fs::{File, OpenOptions};
+use std::io::{Read, Seek, SeekFrom, Write};
+use std::ops::Range;
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+
+use crate::reduce::{ReduceError, SnapshotSource};
+use crate::tensor::Tensor;
+
+use super::FluidError;
+
+/// The quantities, in file order.
+pub const QUANTITIES: [&str; 5] = ["u", "p", "f", "g", "h"];
+
+/// The header `snapshots.json`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SnapshotMeta {
+    /// Always "galerkin-fluid-snapshots".
+    pub format: String,
+    /// Format version (1).
+    pub version: u32,
+    /// Spatial dimension.
+    pub dim: usize,
+    /// Cells.
+    pub cells: usize,
+    /// Faces.
+    pub faces: usize,
+    /// Vertices.
+    pub vertices: usize,
+    /// Time between frames.
+    pub frame_time: f64,
+    /// Frames written.
+    pub frames: usize,
+    /// The periodic axis, if any.
+    pub periodic_axis: Option<usize>,
+}
+
+impl SnapshotMeta {
+    /// Length of one frame of `quantity`.
+    pub fn len(&self, quantity: &str) -> usize {
+        match quantity {
+            "u" | "p" => self.dim * self.cells,
+            "f" | "h" => self.faces,
+            "g" => self.dim * self.vertices,
+            _ => 0,
+        }
+    }
+}
+
+#[derive(Serialize, Deserialize)]
+struct MeshFile {
+    dim: usize,
+    cells: Vec<u32>,
+}
+
+fn io(path: &Path, e: impl std::fmt::Display) -> FluidError {
+    FluidError::File { path: path.to_path_buf(), message: e.to_string() }
+}
+
+/// Appends frames to a snapshot directory.
+#[derive(Debug)]
+pub struct SnapshotWriter {
+    dir: PathBuf,
+    meta: SnapshotMeta,
+    files: Vec<File>,
+}
+
+impl SnapshotWriter {
+    /// Creates the directory (refusing one that already holds snapshots unless `overwrite`)
+    /// and writes the mesh.
+    pub fn create(
+        dir: &Path,
+        meta: SnapshotMeta,
+        cells: &[u32],
+        overwrite: bool,
+    ) -> Result<Self, FluidError> {
+        if dir.join("snapshots.json").exists() && !overwrite {
+            return Err(io(dir, "already holds snapshots (pass --force to overwrite)"));
+        }
+        std::fs::create_dir_all(dir).map_err(|e| io(dir, e))?;
+        let mesh =
+            serde_json::to_vec(&MeshFile { dim: meta.dim, cells: cells.to_vec() }).map_err(|e| io(dir, e))?;
+        std::fs::write(dir.join("mesh.json"), mesh).map_err(|e| io(&dir.join("mesh.json"), e))?;
+        let mut files = Vec::new();
+        for q in QUANTITIES {
+            let path = dir.join(format!("{q}.f64"));
+            files.push(File::create(&path).map_err(|e| io(&path, e))?);
+        }
+        let mut writer = Self { dir: dir.to_path_buf(), meta: SnapshotMeta { frames: 0, ..meta }, files };
+        writer.write_meta()?;
+        Ok(writer)
+    }
+
+    /// Appends one frame (each quantity's length checked).
+    pub fn push(&mut self, u: &[f64], p: &[f64], f: &[f64], g: &[f64], h: &[f64]) -> Result<(), FluidError> {
+        for (i, (q, data)) in QUANTITIES.iter().zip([u, p, f, g, h]).enumerate() {
+            if data.len() != self.meta.len(q) {
+                return Err(FluidError::State(format!(
+                    "snapshot {q} has {} values, the mesh needs {}",
+                    data.len(),
+                    self.meta.len(q)
+                )));
+            }
+            let bytes: Vec<u8> = data.iter().flat_map(|v| v.to_le_bytes()).collect();
+            let path = self.dir.join(format!("{q}.f64"));
+            self.files[i].write_all(&bytes).map_err(|e| io(&path, e))?;
+        }
+        self.meta.frames += 1;
+        self.write_meta()
+    }
+
+    /// The header as written so far.
+    pub fn meta(&self) -> &SnapshotMeta {
+        &self.meta
+    }
+
+    fn write_meta(&mut self) -> Result<(), FluidError> {
+        for (q, file) in QUANTITIES.iter().zip(&mut self.files) {
+            file.flush().map_err(|e| io(&self.dir.join(format!("{q}.f64")), e))?;
+        }
+        let path = self.dir.join("snapshots.json");
+        let tmp = self.dir.join("snapshots.json.tmp");
+        let text = serde_json::to_string_pretty(&self.meta).map_err(|e| io(&path, e))?;
+        std::fs::write(&tmp, text).map_err(|e| io(&tmp, e))?;
+        std::fs::rename(&tmp, &path).map_err(|e| io(&path, e))
+    }
+}
+
+/// Reads a snapshot directory.
+#[derive(Debug)]
+pub struct SnapshotReader {
+    dir: PathBuf,
+    meta: SnapshotMeta,
+    cells: Vec<u32>,
+}
+
+impl SnapshotReader {
+    /// Opens `dir`, checking the header, the mesh and every file's length.
+    pub fn open(dir: &Path) -> Result<Self, FluidError> {
+        let path = dir.join("snapshots.json");
+        let text = std::fs::read_to_string(&path).map_err(|e| io(&path, e))?;
+        let meta: SnapshotMeta = serde_json::from_str(&text).map_err(|e| io(&path, e))?;
+        if meta.format != "galerkin-fluid-snapshots" || meta.version != 1 {
+            return Err(io(
+                &path,
+                format!(
+                    "format {} version {}: not a galerkin fluid snapshot directory",
+                    meta.format, meta.version
+                ),
+            ));
+        }
+        let mpath = dir.join("mesh.json");
+        let mesh: MeshFile = serde_json::from_slice(&std::fs::read(&mpath).map_err(|e| io(&mpath, e))?)
+            .map_err(|e| io(&mpath, e))?;
+        if mesh.dim != meta.dim || mesh.cells.len() != meta.cells * (meta.dim + 1) {
+            return Err(io(
+                &mpath,
+                format!(
+                    "{} cell indices, the header says {} cells in {}D",
+                    mesh.cells.len(),
+                    meta.cells,
+                    meta.dim
+                ),
+            ));
+        }
+        for q in QUANTITIES {
+            let qpath = dir.join(format!("{q}.f64"));
+            let len = std::fs::metadata(&qpath).map_err(|e| io(&qpath, e))?.len();
+            let need = (8 * meta.len(q) * meta.frames) as u64;
+            if len < need {
+                return Err(io(&qpath, format!("{len} bytes, {} frames need {need}", meta.frames)));
+            }
+        }
+        Ok(Self { dir: dir.to_path_buf(), meta, cells: mesh.cells })
+    }
+
+    /// The header.
+    pub fn meta(&self) -> &SnapshotMeta {
+        &self.meta
+    }
+
+    /// The cells (d + 1 vertex indices each).
+    pub fn cells(&self) -> &[u32] {
+        &self.cells
+    }
+
+    /// Frame `k` of `quantity`.
+    pub fn frame(&self, quantity: &str, k: usize) -> Result<Vec<f64>, FluidError> {
+        let len = self.meta.len(quantity);
+        let path = self.dir.join(format!("{quantity}.f64"));
+        if len == 0 {
+            return Err(io(&path, format!("unknown quantity {quantity} (one of {QUANTITIES:?})")));
+        }
+        if k >= self.meta.frames {
+            return Err(io(&path, format!("frame {k}: the run has {} frames", self.meta.frames)));
+        }
+        let mut file = File::open(&path).map_err(|e| io(&path, e))?;
+        read_f64(&mut file, (8 * len * k) as u64, len).map_err(|e| io(&path, e))
+    }
+
+    /// One quantity as rows × frames snapshots for the streaming PCA.
+    pub fn source(&self, quantity: &str) -> Result<FrameSnapshots, FluidError> {
+        let path = self.dir.join(format!("{quantity}.f64"));
+        let len = self.meta.len(quantity);
+        if len == 0 {
+            return Err(io(&path, format!("unknown quantity {quantity} (one of {QUANTITIES:?})")));
+        }
+        let file = OpenOptions::new().read(true).open(&path).map_err(|e| io(&path, e))?;
+        Ok(FrameSnapshots { path, file, len, frames: self.meta.frames })
+    }
+}
+
+fn read_f64(file: &mut File, offset: u64, n: usize) -> std::io::Result<Vec<f64>> {
+    let mut bytes = vec![0u8; 8 * n];
+    file.seek(SeekFrom::Start(offset))?;
+    file.read_exact(&mut bytes)?;
+    Ok(bytes.chunks_exact(8).map(|b| f64::from_le_bytes(b.try_into().expect("8 bytes"))).collect())
+}
+
+/// One quantity of a snapshot directory as a [`SnapshotSource`]: a block of rows is read
+/// from every frame (one seek per frame), never the whole matrix.
+#[derive(Debug)]
+pub struct FrameSnapshots {
+    path: PathBuf,
+    file: File,
+    len: usize,
+    frames: usize,
+}
+
+impl SnapshotSource for FrameSnapshots {
+    fn dim(&self) -> usize {
+        self.len
+    }
+    fn count(&self) -> usize {
+        self.frames
+    }
+    fn rows(&mut self, rows: Range<usize>) -> Result<Tensor, ReduceError> {
+        let k = self.frames;
+        let mut out = vec![0.0; rows.len() * k];
+        for frame in 0..k {
+            let offset = (8 * (frame * self.len + rows.start)) as u64;
+            let col = read_f64(&mut self.file, offset, rows.len()).map_err(|e| ReduceError::BadBasis {
+                basis: format!("snapshots {}", self.path.display()),
+                detail: e.to_string(),
+            })?;
+            for (i, v) in col.into_iter().enumerate() {
+                out[i * k + frame] = v;
+            }
+        }
+        Tensor::from_vec(&[rows.len(), k], out).map_err(|e| ReduceError::BadBasis {
+            basis: format!("snapshots {}", self.path.display()),
+            detail: e.to_string(),
+        })
+    }
+}

@@ -1,0 +1,318 @@
+//! The full-space fluid of seed 000 §5 on the CPU: the tensors against their per-cell
+//! evaluation, the conventions (uniform flow exactness, skew advection, dissipative
+//! diffusion, swept volumes against volume change), the projection's properties, steps on a
+//! moving mesh, scenes and snapshots.
+//!
+//! Tolerances: quantities computed by different orders of floating-point sums of O(1) terms
+//! agree to ~1e-13 (we allow 1e-12 relative); the projection is a regularised LDLᵀ with
+//! iterative refinement, converged to a residual of 1e-14 relative, so its velocities agree
+//! to 1e-10 relative (the issue's divergence bound).
+
+use galerkin::fluid::operators::{
+    add_laplacian, advect, advection_tensor, divergence, flux_to_momentum_tensor, laplacian_tensor,
+    uniform_flux, volume_tensor, CellOperators,
+};
+use galerkin::fluid::scene::FluidScene;
+use galerkin::fluid::snapshots::{SnapshotMeta, SnapshotReader, SnapshotWriter};
+use galerkin::fluid::{FluidError, FluidParams, FluidSolver, FluidState};
+use galerkin::mesh::kuhn::kuhn_box;
+use galerkin::mesh::{Periodic, SimplexMesh, Topology};
+use galerkin::reduce::SnapshotSource;
+
+/// A deterministic pseudo-random sequence in [-1, 1).
+struct Lcg(u64);
+impl Lcg {
+    fn next(&mut self) -> f64 {
+        self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        ((self.0 >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
+    }
+}
+
+/// `mesh` with its interior vertices (off every side of the bounding box) moved by up to
+/// `amount` of a cell.
+fn jiggle(mesh: &SimplexMesh, amount: f64, seed: u64) -> Vec<f64> {
+    let d = mesh.dim();
+    let (lo, hi) = mesh.bounds();
+    let mut rng = Lcg(seed);
+    let mut g = mesh.g().to_vec();
+    for v in 0..mesh.vertex_count() {
+        let p = mesh.point(v);
+        if (0..d).any(|k| (p[k] - lo[k]).abs() < 1e-12 || (p[k] - hi[k]).abs() < 1e-12) {
+            continue;
+        }
+        for k in 0..d {
+            g[d * v + k] += amount * rng.next();
+        }
+    }
+    g
+}
+
+fn channel(dim: usize, n: usize) -> (SimplexMesh, Topology) {
+    let counts = if dim == 2 { [2 * n, n, 0] } else { [2 * n, n, n] };
+    let base = kuhn_box(dim, counts, [2.0, 1.0, 1.0]).expect("box");
+    let h = 1.0 / n as f64;
+    let mesh = base.with_g(jiggle(&base, 0.2 * h, 7), None).expect("jiggled");
+    let topo = Topology::new(&mesh, Some(Periodic { axis: 0 })).expect("topology");
+    (mesh, topo)
+}
+
+fn max_abs(x: &[f64]) -> f64 {
+    x.iter().fold(0.0f64, |m, v| m.max(v.abs()))
+}
+
+fn energy(vols: &[f64], u: &[f64], d: usize) -> f64 {
+    vols.iter().enumerate().map(|(c, v)| 0.5 * v * (0..d).map(|k| u[d * c + k].powi(2)).sum::<f64>()).sum()
+}
+
+#[test]
+fn the_tensors_agree_with_the_per_cell_operators_in_2d_and_3d() {
+    for dim in [2, 3] {
+        let (mesh, topo) = channel(dim, if dim == 2 { 4 } else { 2 });
+        let g = mesh.g().to_vec();
+        let ops = CellOperators::new(&mesh, &topo, &g);
+        let nc = mesh.cell_count();
+        let mut rng = Lcg(3);
+        let u: Vec<f64> = (0..dim * nc).map(|_| rng.next()).collect();
+        let f: Vec<f64> = (0..topo.face_count()).map(|_| rng.next()).collect();
+        // V ⊗ u ⊗ g … g = vol · u.
+        let vt = volume_tensor(&mesh);
+        let mut args: Vec<(usize, &[f64])> = vec![(1, &u)];
+        for axis in 2..2 + dim {
+            args.push((axis, &g));
+        }
+        let p = vt.contract_axes("V", &args).expect("contract V");
+        for c in 0..nc {
+            for k in 0..dim {
+                let want = ops.volumes[c] * u[dim * c + k];
+                assert!((p.data()[dim * c + k] - want).abs() < 1e-12, "{dim}D volume tensor, cell {c}");
+            }
+        }
+        // (P ⊗₂ g) f.
+        let pt = flux_to_momentum_tensor(&mesh, &topo);
+        let pm = pt.contract_axes("P", &[(1, &f), (2, &g)]).expect("contract P");
+        let direct = ops.flux_to_momentum(&topo, &f);
+        assert!(pm.data().iter().zip(&direct).all(|(a, b)| (a - b).abs() < 1e-12), "{dim}D P");
+        // (A ⊗₂ f) u.
+        let at = advection_tensor(&topo);
+        let am = at.contract_axes("A", &[(1, &u), (2, &f)]).expect("contract A");
+        let mut direct = vec![0.0; dim * nc];
+        advect(&topo, &f, &u, &mut direct);
+        assert!(am.data().iter().zip(&direct).all(|(a, b)| (a - b).abs() < 1e-12), "{dim}D A");
+        // Δ u.
+        let lt = laplacian_tensor(&topo);
+        let lm = lt.contract_axes("Δ", &[(1, &u)]).expect("contract Δ");
+        let mut direct = vec![0.0; dim * nc];
+        add_laplacian(&topo, &u, 1.0, &mut direct);
+        assert!(lm.data().iter().zip(&direct).all(|(a, b)| (a - b).abs() < 1e-12), "{dim}D Δ");
+        // Diffusion dissipates: uᵀΔu < 0 for a non-constant u.
+        let dot: f64 = u.iter().zip(&direct).map(|(a, b)| a * b).sum();
+        assert!(dot < 0.0, "{dim}D: uᵀΔu = {dot} must be negative (Eq. 9 with the dissipative sign)");
+    }
+}
+
+#[test]
+fn uniform_flow_is_reproduced_exactly_by_flux_to_velocity() {
+    for dim in [2, 3] {
+        let (mesh, topo) = channel(dim, if dim == 2 { 6 } else { 3 });
+        let velocity = [0.7, -0.3, 0.45];
+        let f = uniform_flux(&mesh, &topo, velocity);
+        let ops = CellOperators::new(&mesh, &topo, mesh.g());
+        let u = ops.flux_to_velocity(&topo, &f);
+        for c in 0..mesh.cell_count() {
+            for k in 0..dim {
+                assert!(
+                    (u[dim * c + k] - velocity[k]).abs() < 1e-12,
+                    "{dim}D cell {c} axis {k}: {}",
+                    u[dim * c + k]
+                );
+            }
+        }
+        // A uniform flux is divergence-free.
+        assert!(max_abs(&divergence(&topo, &f)) < 1e-13);
+    }
+}
+
+#[test]
+fn advection_is_skew_for_divergence_free_fluxes() {
+    let (mesh, topo) = channel(2, 8);
+    let params = FluidParams { viscosity: 0.0, forcing: [0.0; 3], frame_time: 0.01 };
+    let mut solver = FluidSolver::new(mesh.clone(), topo.clone(), params).expect("solver");
+    let mut rng = Lcg(11);
+    let d = 2;
+    let random: Vec<f64> = (0..d * mesh.cell_count()).map(|_| rng.next()).collect();
+    let state = solver.initial_state(mesh.g().to_vec(), &random).expect("projected");
+    let u: Vec<f64> = (0..d * mesh.cell_count()).map(|_| rng.next()).collect();
+    let mut au = vec![0.0; u.len()];
+    advect(&topo, &state.f, &u, &mut au);
+    let skew: f64 = u.iter().zip(&au).map(|(a, b)| a * b).sum();
+    let scale: f64 = state.f.iter().map(|f| f.abs()).sum::<f64>() * max_abs(&u).powi(2);
+    assert!(skew.abs() < 1e-12 * scale, "uᵀ(A⊗f)u = {skew:e} (scale {scale:e})");
+    // A flux with divergence is not skew: the conventions are what makes it vanish.
+    let mut g = state.f.clone();
+    g[0] += 1.0;
+    advect(&topo, &g, &u, &mut au);
+    let not_skew: f64 = u.iter().zip(&au).map(|(a, b)| a * b).sum();
+    assert!(not_skew.abs() > 1e-6);
+}
+
+#[test]
+fn induced_fluxes_sweep_exactly_the_change_of_cell_volumes() {
+    for dim in [2, 3] {
+        let (mesh, topo) = channel(dim, if dim == 2 { 6 } else { 2 });
+        let params = FluidParams { viscosity: 0.0, forcing: [0.0; 3], frame_time: 0.25 };
+        let solver = FluidSolver::new(mesh.clone(), topo, params).expect("solver");
+        let g1 = jiggle(&mesh, 0.15 / 6.0, 99);
+        let h = solver.induced_flux(mesh.g(), &g1);
+        let div = divergence(solver.topology(), &h);
+        let (v0, v1) = (mesh.volumes(), mesh.volumes_at(&g1));
+        for c in 0..mesh.cell_count() {
+            let dv = v1[c] - v0[c];
+            assert!(
+                (div[c] * 0.25 - dv).abs() < 1e-14,
+                "{dim}D cell {c}: Σσh·Δt = {} vs ΔV = {dv}",
+                div[c] * 0.25
+            );
+        }
+        // Only interior vertices moved: no flux through the boundary.
+        assert!(solver.topology().boundary_faces().iter().all(|&f| h[f as usize].abs() < 1e-15));
+    }
+}
+
+#[test]
+fn the_projection_reproduces_uniform_flow_is_idempotent_and_never_adds_energy() {
+    let (mesh, topo) = channel(2, 8);
+    let params = FluidParams { viscosity: 0.0, forcing: [0.0; 3], frame_time: 0.01 };
+    let mut solver = FluidSolver::new(mesh.clone(), topo, params).expect("solver");
+    let d = 2;
+    let nc = mesh.cell_count();
+    let uniform: Vec<f64> = (0..nc).flat_map(|_| [1.0, 0.0]).collect();
+    let s = solver.initial_state(mesh.g().to_vec(), &uniform).expect("projected");
+    assert!(
+        s.u.iter().zip(&uniform).all(|(a, b)| (a - b).abs() < 1e-10),
+        "uniform flow along the walls survives"
+    );
+    let vols = mesh.volumes();
+    let mut rng = Lcg(5);
+    for trial in 0..3 {
+        let u: Vec<f64> = (0..d * nc).map(|_| rng.next()).collect();
+        let s1 = solver.initial_state(mesh.g().to_vec(), &u).expect("projection 1");
+        let s2 = solver.initial_state(mesh.g().to_vec(), &s1.u).expect("projection 2");
+        let diff = s1.u.iter().zip(&s2.u).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+        assert!(diff < 1e-10 * max_abs(&s1.u), "trial {trial}: projection not idempotent ({diff:e})");
+        let (e0, e1) = (energy(&vols, &u, d), energy(&vols, &s1.u, d));
+        assert!(e1 <= e0 * (1.0 + 1e-12), "trial {trial}: energy {e0} → {e1}");
+        let div = divergence(solver.topology(), &s1.f);
+        let scale = s1.f.iter().map(|f| f.abs()).fold(0.0, f64::max);
+        assert!(max_abs(&div) <= 1e-10 * scale, "trial {trial}: divergence {:e}", max_abs(&div));
+        let walls: f64 = solver.topology().boundary_faces().iter().map(|&f| s1.f[f as usize].abs()).sum();
+        assert!(walls <= 1e-10 * scale, "no flux through the walls");
+    }
+}
+
+#[test]
+fn uniform_flow_stays_uniform_on_a_moving_mesh_and_energy_never_grows() {
+    // The −V̇u term and the exact swept volumes: a moving interior must not disturb a
+    // uniform flow (seed 000 §5.4: "velocities do not translate simply because their
+    // discretization element moves through space").
+    let (mesh, topo) = channel(2, 6);
+    let params = FluidParams { viscosity: 2e-3, forcing: [0.0; 3], frame_time: 0.05 };
+    let mut solver = FluidSolver::new(mesh.clone(), topo, params).expect("solver");
+    let nc = mesh.cell_count();
+    let uniform: Vec<f64> = (0..nc).flat_map(|_| [0.8, 0.0]).collect();
+    let mut state = solver.initial_state(mesh.g().to_vec(), &uniform).expect("start");
+    for frame in 1..=6 {
+        let g = jiggle(&mesh, 0.15 / 6.0, frame as u64);
+        let (next, report) = solver.step(&state, &g, frame).expect("step");
+        let err = next.u.iter().zip(&uniform).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+        assert!(err < 1e-9, "frame {frame}: uniform flow disturbed by {err:e}");
+        assert!(report.projection.relative_divergence < 1e-10);
+        assert!(max_abs(&report.h) > 1e-3, "the mesh really moves");
+        state = next;
+    }
+    // A random divergence-free flow on a static mesh, no viscosity: RK4 and the projection
+    // may only lose energy.
+    let params = FluidParams { viscosity: 0.0, forcing: [0.0; 3], frame_time: 0.05 };
+    let mut solver = FluidSolver::new(mesh.clone(), solver.topology().clone(), params).expect("solver");
+    let mut rng = Lcg(17);
+    let u: Vec<f64> = (0..2 * nc).map(|_| rng.next()).collect();
+    let mut state: FluidState = solver.initial_state(mesh.g().to_vec(), &u).expect("start");
+    let mut e = solver.energy(&state);
+    let e0 = e;
+    for frame in 1..=10 {
+        let (next, _) = solver.step(&state, mesh.g(), frame).expect("step");
+        let e1 = solver.energy(&next);
+        assert!(e1 <= e * (1.0 + 1e-12), "frame {frame}: energy grew {e} → {e1}");
+        state = next;
+        e = e1;
+    }
+    assert!(e > 0.1 * e0, "not all dissipated: {e0} → {e}");
+}
+
+#[test]
+fn a_net_change_of_volume_is_refused_naming_the_frame() {
+    // Moving a wall outward grows the domain: no incompressible flow fits.
+    let base = kuhn_box(2, [4, 4, 0], [1.0, 1.0, 0.0]).expect("box");
+    let topo = Topology::new(&base, None).expect("topology");
+    let params = FluidParams { viscosity: 0.0, forcing: [0.0; 3], frame_time: 0.1 };
+    let mut solver = FluidSolver::new(base.clone(), topo, params).expect("solver");
+    let state = solver.initial_state(base.g().to_vec(), &vec![0.0; 2 * base.cell_count()]).expect("rest");
+    let mut g = base.g().to_vec();
+    for v in 0..base.vertex_count() {
+        g[2 * v + 1] *= 1.1;
+    }
+    match solver.step(&state, &g, 3) {
+        Err(FluidError::VolumeChange { frame: 3, .. }) => {}
+        other => panic!("expected a refused volume change in frame 3, got {other:?}"),
+    }
+}
+
+#[test]
+fn tunnel_scenes_load_and_bad_keys_name_their_line() {
+    let text = std::fs::read_to_string("scenes/fluid/tunnel_small.toml").expect("scene");
+    let scene = FluidScene::parse(&text, std::path::Path::new("tunnel_small.toml")).expect("loads");
+    assert!(scene.mesh.cell_count() > 200);
+    let bad = text.replace("viscosity = ", "viscosity = -");
+    let err = FluidScene::parse(&bad, std::path::Path::new("bad.toml"))
+        .expect_err("negative viscosity")
+        .to_string();
+    let line = bad.lines().position(|l| l.starts_with("viscosity")).expect("key") + 1;
+    assert!(err.contains(&format!("bad.toml:{line}:")), "{err}");
+    let unknown = text.replace("[flow]", "[flow]\nspeed = 3");
+    assert!(FluidScene::parse(&unknown, std::path::Path::new("u.toml")).is_err());
+}
+
+#[test]
+fn snapshots_stream_back_by_frame_and_by_rows() {
+    let dir = std::env::temp_dir().join(format!("galerkin-snapshots-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let (mesh, topo) = channel(2, 3);
+    let meta = SnapshotMeta {
+        format: "galerkin-fluid-snapshots".into(),
+        version: 1,
+        dim: 2,
+        cells: mesh.cell_count(),
+        faces: topo.face_count(),
+        vertices: mesh.vertex_count(),
+        frame_time: 0.1,
+        frames: 0,
+        periodic_axis: Some(0),
+    };
+    let mut w = SnapshotWriter::create(&dir, meta.clone(), mesh.cells(), false).expect("create");
+    let (nu, nf, ng) = (2 * mesh.cell_count(), topo.face_count(), mesh.g().len());
+    for k in 0..4 {
+        let u: Vec<f64> = (0..nu).map(|i| (k * 1000 + i) as f64).collect();
+        let f: Vec<f64> = (0..nf).map(|i| -((k * 1000 + i) as f64)).collect();
+        w.push(&u, &u, &f, &mesh.g()[..ng], &f).expect("push");
+    }
+    assert!(w.push(&[1.0], &[1.0], &[1.0], &[1.0], &[1.0]).is_err(), "wrong lengths refused");
+    assert!(SnapshotWriter::create(&dir, meta, mesh.cells(), false).is_err(), "no silent overwrite");
+    let r = SnapshotReader::open(&dir).expect("open");
+    assert_eq!(r.meta().frames, 4);
+    assert_eq!(r.frame("u", 2).expect("frame")[5], 2005.0);
+    let mut src = r.source("f").expect("source");
+    assert_eq!((src.dim(), src.count()), (nf, 4));
+    let rows = src.rows(3..6).expect("rows");
+    assert_eq!(rows.get(&[1, 3]), -3004.0);
+    assert!(r.frame("u", 9).is_err() && r.frame("q", 0).is_err());
+    std::fs::remove_dir_all(&dir).expect("clean up");
+}
