@@ -11,7 +11,9 @@
 //! - [`scene`] and [`snapshots`]: TOML scenes and the streaming snapshot format.
 
 mod error;
+pub mod gpu;
 pub mod operators;
+pub mod particles;
 pub mod projection;
 pub mod scene;
 pub mod snapshots;

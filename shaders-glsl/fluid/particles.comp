@@ -1,0 +1,176 @@
+#version 450
+// Marker particles (seed 000 §6.5), one invocation per particle, the whole frame's substeps
+// in one dispatch (particles are independent). Twin of src/fluid/particles.rs
+// (advect_particles): the cell velocity rebuilt from the fluxes (Eq. 13) at the frame's end
+// geometry, explicit Euler, the geometry moving linearly from g0 to g1 across the substeps, and after each substep the
+// capped walk across faces (with the periodic translation across wrap faces), the grid hash
+// when the walk is lost, and clamping into the cell at a wall.
+#include "simplex.glsl"
+
+layout(local_size_x = 64) in;
+
+layout(std430, set = 0, binding = 0) readonly buffer G0 { float g0[]; };
+layout(std430, set = 0, binding = 1) readonly buffer G1 { float g1[]; };
+layout(std430, set = 0, binding = 2) readonly buffer Cells { uint cells[]; };
+// Per (cell, local face): face index, bit 31 set if the cell's sign σ is −1.
+layout(std430, set = 0, binding = 3) readonly buffer Faces { uint face_info[]; };
+// Per (cell, local face): neighbour + 1 in bits 0..27 (0: a wall), its local index of the face
+// in bits 28..29, bit 30 set for a wrap face.
+layout(std430, set = 0, binding = 4) readonly buffer Links { uint links[]; };
+layout(std430, set = 0, binding = 5) readonly buffer Flux { float flux[]; };
+// xyz position, w the cell's bits.
+layout(std430, set = 0, binding = 6) buffer Particles { vec4 particles[]; };
+layout(std430, set = 0, binding = 7) readonly buffer GridStart { uint grid_start[]; };
+layout(std430, set = 0, binding = 8) readonly buffer GridCells { uint grid_cells[]; };
+// walked, hashed, clamped.
+layout(std430, set = 0, binding = 9) buffer Counts { uint counts[]; };
+
+layout(push_constant) uniform Push {
+    uint dim;
+    uint count;
+    uint substeps;
+    float frame_time;
+    vec4 grid_lo;     // xyz
+    vec4 grid_size;   // xyz
+    uvec4 grid_dims;  // xyz
+} pc;
+
+const uint WALK_CAP = 64u;
+const float INSIDE = -1e-6;  // f32: a few ulps of a barycentric weight
+
+vec3 vertex_at(uint v, float t) {
+    vec3 a = vec3(0.0);
+    vec3 b = vec3(0.0);
+    for (uint k = 0u; k < pc.dim; ++k) {
+        a[k] = g0[pc.dim * v + k];
+        b[k] = g1[pc.dim * v + k];
+    }
+    return a + t * (b - a);
+}
+
+void cell_points(uint c, float t, out vec3 p[4]) {
+    p[3] = vec3(0.0);
+    for (uint i = 0u; i <= pc.dim; ++i) {
+        p[i] = vertex_at(cells[(pc.dim + 1u) * c + i], t);
+    }
+}
+
+// Eq. 13: u_c = V⁻¹ Σ_faces σ f (x_face − x_c).
+vec3 cell_velocity(uint c, float t) {
+    vec3 p[4];
+    cell_points(c, t, p);
+    float vol = simplex_volume(pc.dim, p);
+    vec3 xc = simplex_centroid(pc.dim, p);
+    vec3 u = vec3(0.0);
+    for (uint l = 0u; l <= pc.dim; ++l) {
+        uint info = face_info[(pc.dim + 1u) * c + l];
+        float sigma = (info & 0x80000000u) != 0u ? -1.0 : 1.0;
+        float f = sigma * flux[info & 0x7fffffffu];
+        u += f * (simplex_face_centroid(pc.dim, p, l) - xc);
+    }
+    return u / vol;
+}
+
+// Barycentric-clipped closest point of the cell.
+vec3 clamp_into(vec3 p[4], float vol, vec3 x) {
+    float w[4];
+    float s = 0.0;
+    for (uint k = 0u; k <= pc.dim; ++k) {
+        w[k] = max(simplex_barycentric(pc.dim, p, vol, k, x), 0.0);
+        s += w[k];
+    }
+    if (s <= 0.0) {
+        return simplex_centroid(pc.dim, p);
+    }
+    vec3 out_p = vec3(0.0);
+    for (uint k = 0u; k <= pc.dim; ++k) {
+        out_p += (w[k] / s) * p[k];
+    }
+    return out_p;
+}
+
+bool inside(uint c, float t, vec3 x) {
+    vec3 p[4];
+    cell_points(c, t, p);
+    float vol = simplex_volume(pc.dim, p);
+    for (uint k = 0u; k <= pc.dim; ++k) {
+        if (simplex_barycentric(pc.dim, p, vol, k, x) < INSIDE) {
+            return false;
+        }
+    }
+    return true;
+}
+
+// 0 walked, 1 hashed, 2 clamped.
+uint locate(inout vec3 x, inout uint c, float t) {
+    for (uint step = 0u; step < WALK_CAP; ++step) {
+        vec3 p[4];
+        cell_points(c, t, p);
+        float vol = simplex_volume(pc.dim, p);
+        uint worst_k = 0u;
+        float worst = 1e30;
+        for (uint k = 0u; k <= pc.dim; ++k) {
+            float b = simplex_barycentric(pc.dim, p, vol, k, x);
+            if (b < worst) {
+                worst = b;
+                worst_k = k;
+            }
+        }
+        if (worst >= INSIDE) {
+            return 0u;
+        }
+        uint link = links[(pc.dim + 1u) * c + worst_k];
+        uint e1 = link & 0x0fffffffu;
+        if (e1 == 0u) {
+            x = clamp_into(p, vol, x);
+            return 2u;
+        }
+        uint e = e1 - 1u;
+        if ((link & 0x40000000u) != 0u) {
+            vec3 q[4];
+            cell_points(e, t, q);
+            uint theirs = (link >> 28) & 3u;
+            x += simplex_face_centroid(pc.dim, q, theirs) - simplex_face_centroid(pc.dim, p, worst_k);
+        }
+        c = e;
+    }
+    uvec3 cell_index = uvec3(0u);
+    for (uint k = 0u; k < 3u; ++k) {
+        float s = floor((x[k] - pc.grid_lo[k]) / pc.grid_size[k]);
+        cell_index[k] = uint(clamp(s, 0.0, float(pc.grid_dims[k] - 1u)));
+    }
+    uint bucket = (cell_index.z * pc.grid_dims.y + cell_index.y) * pc.grid_dims.x + cell_index.x;
+    for (uint i = grid_start[bucket]; i < grid_start[bucket + 1u]; ++i) {
+        uint cand = grid_cells[i];
+        if (inside(cand, t, x)) {
+            c = cand;
+            return 1u;
+        }
+    }
+    vec3 p[4];
+    cell_points(c, t, p);
+    x = clamp_into(p, simplex_volume(pc.dim, p), x);
+    return 2u;
+}
+
+void main() {
+    uint i = gl_GlobalInvocationID.x;
+    if (i >= pc.count) {
+        return;
+    }
+    vec3 x = particles[i].xyz;
+    uint c = floatBitsToUint(particles[i].w);
+    float dt = pc.frame_time / float(pc.substeps);
+    uint tally[3] = uint[3](0u, 0u, 0u);
+    for (uint s = 0u; s < pc.substeps; ++s) {
+        x += dt * cell_velocity(c, 1.0);
+        float t1 = float(s + 1u) / float(pc.substeps);
+        tally[locate(x, c, t1)] += 1u;
+    }
+    particles[i] = vec4(x, uintBitsToFloat(c));
+    for (uint k = 0u; k < 3u; ++k) {
+        if (tally[k] != 0u) {
+            atomicAdd(counts[k], tally[k]);
+        }
+    }
+}

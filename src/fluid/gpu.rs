@@ -1,0 +1,245 @@
+//! Marker particles on the device (seed 000 §6.5): `particles.comp` advects every particle
+//! through a frame's substeps in one dispatch, the twin of
+//! [`super::particles::advect_particles`] (the CPU f64 reference) in f32. The topology is
+//! uploaded once; each frame uploads the two geometries, the fluxes and the grid hash. The
+//! particle buffer stays on the device, where the renderer reads it.
+
+use ash::vk;
+use bytemuck::{Pod, Zeroable};
+
+use super::particles::{AdvectReport, GridHash, Particle};
+use super::FluidError;
+use crate::gpu::{
+    shaders, BindingKind, Buffer, ComputePipeline, ComputePipelineDesc, Gpu, MemoryKind, Resource,
+};
+use crate::mesh::{FaceKind, SimplexMesh, Topology};
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct Push {
+    dim: u32,
+    count: u32,
+    substeps: u32,
+    frame_time: f32,
+    grid_lo: [f32; 4],
+    grid_size: [f32; 4],
+    grid_dims: [u32; 4],
+}
+
+fn gpu_err(e: crate::gpu::GpuError) -> FluidError {
+    FluidError::State(format!("device: {e}"))
+}
+
+fn storage<T: Pod>(gpu: &Gpu, name: &str, data: &[T]) -> Result<Buffer<T>, FluidError> {
+    let b = Buffer::new(
+        gpu,
+        name,
+        data.len().max(1) as u64,
+        vk::BufferUsageFlags::STORAGE_BUFFER,
+        MemoryKind::GpuOnly,
+    )
+    .map_err(gpu_err)?;
+    if !data.is_empty() {
+        b.upload(gpu, 0, data).map_err(gpu_err)?;
+    }
+    Ok(b)
+}
+
+/// Per (cell, local face) links for the walk: neighbour + 1 (bits 0–27, 0 for a wall), the
+/// neighbour's local index of the face (bits 28–29), wrap flag (bit 30).
+pub fn walk_links(topo: &Topology) -> Result<Vec<u32>, FluidError> {
+    let d = topo.dim();
+    if topo.cell_count() >= (1 << 28) - 1 {
+        return Err(FluidError::State(format!(
+            "{} cells: the device walk packs cells in 28 bits",
+            topo.cell_count()
+        )));
+    }
+    let mut out = Vec::with_capacity(topo.cell_count() * (d + 1));
+    for c in 0..topo.cell_count() {
+        for l in 0..=d {
+            let f = topo.cell_face(c, l);
+            let link = match topo.neighbour(c, l) {
+                None => 0,
+                Some(e) => {
+                    let [a, _] = topo.face_cells(f);
+                    let locals = topo.face_local(f);
+                    let theirs = if a as usize == c { locals[1] } else { locals[0] };
+                    let wrap = u32::from(topo.kind(f) == FaceKind::Wrap);
+                    (e as u32 + 1) | (u32::from(theirs) << 28) | (wrap << 30)
+                }
+            };
+            out.push(link);
+        }
+    }
+    Ok(out)
+}
+
+/// The particle pass with its topology and particles resident.
+pub struct GpuParticles {
+    pipeline: ComputePipeline,
+    dim: usize,
+    count: usize,
+    cells: Buffer<u32>,
+    faces: Buffer<u32>,
+    links: Buffer<u32>,
+    particles: Buffer<[f32; 4]>,
+    counts: Buffer<u32>,
+}
+
+impl GpuParticles {
+    /// Uploads `mesh`'s topology and `particles`.
+    pub fn new(
+        gpu: &Gpu,
+        mesh: &SimplexMesh,
+        topo: &Topology,
+        particles: &[Particle],
+    ) -> Result<Self, FluidError> {
+        let pipeline = ComputePipeline::new(
+            gpu,
+            &ComputePipelineDesc {
+                name: "fluid particles",
+                spirv: shaders::fluid::PARTICLES,
+                bindings: &[BindingKind::StorageBuffer; 10],
+                push_constant_bytes: std::mem::size_of::<Push>() as u32,
+                specialization: &[],
+                shared_bytes: 0,
+            },
+        )
+        .map_err(gpu_err)?;
+        let d = mesh.dim();
+        let face_info: Vec<u32> = (0..mesh.cell_count())
+            .flat_map(|c| {
+                (0..=d).map(move |l| {
+                    let f = topo.cell_face(c, l) as u32;
+                    if topo.sign(c, l) < 0.0 {
+                        f | 0x8000_0000
+                    } else {
+                        f
+                    }
+                })
+            })
+            .collect();
+        let links = walk_links(topo)?;
+        Ok(Self {
+            pipeline,
+            dim: d,
+            count: particles.len(),
+            cells: storage(gpu, "fluid cells", mesh.cells())?,
+            faces: storage(gpu, "fluid cell faces", &face_info)?,
+            links: storage(gpu, "fluid walk links", &links)?,
+            particles: storage(gpu, "fluid particles", &pack(particles))?,
+            counts: storage(gpu, "fluid particle counts", &[0u32; 3])?,
+        })
+    }
+
+    /// Number of particles.
+    pub fn count(&self) -> usize {
+        self.count
+    }
+
+    /// The particle buffer (xyz position, w the cell's bits) for drawing.
+    pub fn buffer(&self) -> &Buffer<[f32; 4]> {
+        &self.particles
+    }
+
+    /// Replaces the particles.
+    pub fn upload(&mut self, gpu: &Gpu, particles: &[Particle]) -> Result<(), FluidError> {
+        if particles.len() != self.count {
+            return Err(FluidError::State(format!(
+                "{} particles for a pass of {}",
+                particles.len(),
+                self.count
+            )));
+        }
+        self.particles.upload(gpu, 0, &pack(particles)).map_err(gpu_err)
+    }
+
+    /// Advects through one frame (see [`super::particles::advect_particles`]).
+    #[allow(clippy::too_many_arguments)]
+    pub fn advect(
+        &self,
+        gpu: &Gpu,
+        mesh: &SimplexMesh,
+        g0: &[f64],
+        g1: &[f64],
+        f: &[f64],
+        frame_time: f64,
+        substeps: usize,
+    ) -> Result<AdvectReport, FluidError> {
+        if self.count == 0 {
+            return Ok(AdvectReport::default());
+        }
+        let narrow = |x: &[f64]| x.iter().map(|&v| v as f32).collect::<Vec<f32>>();
+        let grid = GridHash::new(mesh, &[g0, g1]);
+        let (lo, size, dims, start, grid_cells) = grid.parts();
+        let g0b = storage(gpu, "fluid g0", &narrow(g0))?;
+        let g1b = storage(gpu, "fluid g1", &narrow(g1))?;
+        let fb = storage(gpu, "fluid flux", &narrow(f))?;
+        let sb = storage(gpu, "fluid grid start", start)?;
+        let cb = storage(gpu, "fluid grid cells", grid_cells)?;
+        self.counts.upload(gpu, 0, &[0u32; 3]).map_err(gpu_err)?;
+        let b = |x: &Buffer<_>| x.binding().map(Resource::Storage);
+        let set = self
+            .pipeline
+            .bind(
+                gpu,
+                &[
+                    b(&g0b).map_err(gpu_err)?,
+                    b(&g1b).map_err(gpu_err)?,
+                    self.cells.binding().map(Resource::Storage).map_err(gpu_err)?,
+                    self.faces.binding().map(Resource::Storage).map_err(gpu_err)?,
+                    self.links.binding().map(Resource::Storage).map_err(gpu_err)?,
+                    b(&fb).map_err(gpu_err)?,
+                    self.particles.binding().map(Resource::Storage).map_err(gpu_err)?,
+                    sb.binding().map(Resource::Storage).map_err(gpu_err)?,
+                    cb.binding().map(Resource::Storage).map_err(gpu_err)?,
+                    self.counts.binding().map(Resource::Storage).map_err(gpu_err)?,
+                ],
+            )
+            .map_err(gpu_err)?;
+        let push = Push {
+            dim: self.dim as u32,
+            count: self.count as u32,
+            substeps: substeps.max(1) as u32,
+            frame_time: frame_time as f32,
+            grid_lo: [lo[0] as f32, lo[1] as f32, lo[2] as f32, 0.0],
+            grid_size: [size[0] as f32, size[1] as f32, size[2] as f32, 0.0],
+            grid_dims: [dims[0] as u32, dims[1] as u32, dims[2] as u32, 0],
+        };
+        gpu.run(|cmd| {
+            self.pipeline.record_dispatch(
+                cmd,
+                &set,
+                bytemuck::bytes_of(&push),
+                [(self.count as u32).div_ceil(64), 1, 1],
+            );
+        })
+        .map_err(gpu_err)?;
+        let counts = self.counts.download(gpu).map_err(gpu_err)?;
+        Ok(AdvectReport {
+            walked: counts[0] as usize,
+            hashed: counts[1] as usize,
+            clamped: counts[2] as usize,
+        })
+    }
+
+    /// Reads the particles back.
+    pub fn download(&self, gpu: &Gpu) -> Result<Vec<Particle>, FluidError> {
+        let v = self.particles.download(gpu).map_err(gpu_err)?;
+        Ok(v.into_iter()
+            .take(self.count)
+            .map(|p| Particle {
+                position: [f64::from(p[0]), f64::from(p[1]), f64::from(p[2])],
+                cell: p[3].to_bits(),
+            })
+            .collect())
+    }
+}
+
+fn pack(particles: &[Particle]) -> Vec<[f32; 4]> {
+    particles
+        .iter()
+        .map(|p| [p.position[0] as f32, p.position[1] as f32, p.position[2] as f32, f32::from_bits(p.cell)])
+        .collect()
+}

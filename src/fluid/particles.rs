@@ -1,0 +1,317 @@
+//! Massless marker particles (seed 000 §6.5), the CPU f64 reference of the compute pass.
+//!
+//! Each particle remembers the cell that contains it. Its velocity is the cell's, rebuilt
+//! locally from the flux (Eq. 13: `u_c = (V⁻¹(g)(P⊗g)f)_c`, which touches only the cell's
+//! own vertices and faces), with the frame's end state: the flux f_{t+1} and the geometry
+//! g_{t+1} it belongs to (a flux means a velocity only with its own faces; evaluated on
+//! other geometry a uniform flow would not stay uniform). Explicit Euler, `substeps` per
+//! frame; the mesh moves linearly from g_t to g_{t+1} across the substeps, so the particle
+//! is found in its cell of the moving mesh (the mesh carries particles into other cells by
+//! moving under them, not by dragging them). After every substep the particle's cell is
+//! found again by walking: from the remembered cell, step across the face with the most
+//! negative barycentric coordinate (across the periodic boundary with the period's
+//! translation) until the cell contains the particle, at most [`WALK_CAP`] steps; a walk that
+//! gets lost falls back to a uniform grid hash of the cells' bounding boxes. A particle
+//! pushed out of the domain through a wall (Euler's error near a curved streamline) is put
+//! back at the closest point of its last cell.
+
+use std::cell::OnceCell;
+
+use crate::mesh::geometry::{centroid, face_area_normal, face_centroid, signed_volume, Point};
+use crate::mesh::{point_of, FaceKind, SimplexMesh, Topology};
+
+/// Most faces a walk crosses before the grid hash takes over.
+pub const WALK_CAP: usize = 64;
+
+/// A marker: position (z = 0 in 2D) and the cell containing it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Particle {
+    /// Position.
+    pub position: Point,
+    /// The containing cell.
+    pub cell: u32,
+}
+
+/// The velocity of cell `c` from the fluxes (Eq. 13), at geometry `g`.
+pub fn cell_velocity(mesh: &SimplexMesh, topo: &Topology, g: &[f64], f: &[f64], c: usize) -> Point {
+    let d = mesh.dim();
+    let p = mesh.cell_points_at(g, c);
+    let vol = signed_volume(d, &p);
+    let xc = centroid(&p);
+    let mut u = [0.0; 3];
+    for l in 0..=d {
+        let xf = face_centroid(&p, l);
+        let flux = topo.sign(c, l) * f[topo.cell_face(c, l)];
+        for k in 0..d {
+            u[k] += flux * (xf[k] - xc[k]) / vol;
+        }
+    }
+    u
+}
+
+/// Barycentric coordinates of `x` in the simplex `p` (the weight of vertex k is the signed
+/// volume of the simplex with x in place of vertex k, over the volume).
+pub fn barycentric(dim: usize, p: &[Point], x: Point) -> [f64; 4] {
+    let vol = signed_volume(dim, p);
+    let mut b = [0.0; 4];
+    for k in 0..=dim {
+        // λ_k = 1 + (x − x_k)·∇λ_k with ∇λ_k = −A_k n_k / (d vol).
+        let n = face_area_normal(dim, p, k);
+        let dot: f64 = (0..dim).map(|i| (x[i] - p[k][i]) * n[i]).sum();
+        b[k] = 1.0 - dot / (dim as f64 * vol);
+    }
+    b
+}
+
+/// A uniform grid over the mesh's bounds listing the cells whose bounding boxes overlap
+/// each grid cell: the walk's fallback.
+#[derive(Clone, Debug)]
+pub struct GridHash {
+    lo: Point,
+    size: Point,
+    dims: [usize; 3],
+    start: Vec<u32>,
+    cells: Vec<u32>,
+}
+
+impl GridHash {
+    /// About one mesh cell per grid cell; each cell listed under every bucket its bounding
+    /// box touches in any of the geometries `gs` (a frame's start and end: the boxes of every
+    /// geometry in between lie inside their union).
+    pub fn new(mesh: &SimplexMesh, gs: &[&[f64]]) -> Self {
+        let d = mesh.dim();
+        let nc = mesh.cell_count();
+        let mut lo = [f64::INFINITY; 3];
+        let mut hi = [f64::NEG_INFINITY; 3];
+        for g in gs {
+            for v in 0..mesh.vertex_count() {
+                let p = point_of(d, g, v);
+                for k in 0..d {
+                    lo[k] = lo[k].min(p[k]);
+                    hi[k] = hi[k].max(p[k]);
+                }
+            }
+        }
+        let extent: Vec<f64> = (0..d).map(|k| (hi[k] - lo[k]).max(1e-300)).collect();
+        let volume: f64 = extent.iter().product();
+        let h = (volume / nc.max(1) as f64).powf(1.0 / d as f64);
+        let mut dims = [1usize; 3];
+        let mut size = [1.0; 3];
+        for k in 0..d {
+            dims[k] = ((extent[k] / h).ceil() as usize).clamp(1, 4096);
+            size[k] = extent[k] / dims[k] as f64;
+        }
+        let total = dims[0] * dims[1] * dims[2];
+        let mut lists: Vec<Vec<u32>> = vec![Vec::new(); total];
+        for c in 0..nc {
+            let p: Vec<Point> = gs.iter().flat_map(|g| mesh.cell_points_at(g, c)).collect();
+            let mut a = [0usize; 3];
+            let mut b = [0usize; 3];
+            for k in 0..d {
+                let (mn, mx) =
+                    p.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(m, n), q| (m.min(q[k]), n.max(q[k])));
+                a[k] = (((mn - lo[k]) / size[k]).floor().max(0.0) as usize).min(dims[k] - 1);
+                b[k] = (((mx - lo[k]) / size[k]).floor().max(0.0) as usize).min(dims[k] - 1);
+            }
+            for z in a[2]..=b[2] {
+                for y in a[1]..=b[1] {
+                    for x in a[0]..=b[0] {
+                        lists[(z * dims[1] + y) * dims[0] + x].push(c as u32);
+                    }
+                }
+            }
+        }
+        let mut start = Vec::with_capacity(total + 1);
+        let mut cells = Vec::new();
+        start.push(0);
+        for l in lists {
+            cells.extend(l);
+            start.push(cells.len() as u32);
+        }
+        Self { lo, size, dims, start, cells }
+    }
+
+    /// The grid cell of `x`, clamped to the grid.
+    pub fn bucket(&self, x: Point) -> usize {
+        let mut i = [0usize; 3];
+        for k in 0..3 {
+            i[k] = (((x[k] - self.lo[k]) / self.size[k]).floor().max(0.0) as usize).min(self.dims[k] - 1);
+        }
+        (i[2] * self.dims[1] + i[1]) * self.dims[0] + i[0]
+    }
+
+    /// The mesh cells listed in bucket `b`.
+    pub fn candidates(&self, b: usize) -> &[u32] {
+        &self.cells[self.start[b] as usize..self.start[b + 1] as usize]
+    }
+
+    /// Grid layout for the GPU: origin, bucket size, bucket counts, CSR start and cells.
+    pub fn parts(&self) -> (Point, Point, [usize; 3], &[u32], &[u32]) {
+        (self.lo, self.size, self.dims, &self.start, &self.cells)
+    }
+}
+
+/// Where a relocation ended.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Located {
+    /// The walk found the cell.
+    Walked,
+    /// The grid hash found it.
+    Hashed,
+    /// Outside the domain: clamped into its last cell.
+    Clamped,
+}
+
+/// Tolerance on barycentric coordinates for "inside".
+const INSIDE: f64 = -1e-12;
+
+/// Finds the cell containing `particle.position` at geometry `g`, walking from its cell; a
+/// walk that reaches its cap asks the grid hash (`grid`, built by `make_grid` on first need).
+pub fn locate(
+    mesh: &SimplexMesh,
+    topo: &Topology,
+    g: &[f64],
+    grid: &OnceCell<GridHash>,
+    make_grid: &dyn Fn() -> GridHash,
+    particle: &mut Particle,
+) -> Located {
+    let d = mesh.dim();
+    let mut c = particle.cell as usize;
+    for _ in 0..WALK_CAP {
+        let p = mesh.cell_points_at(g, c);
+        let b = barycentric(d, &p, particle.position);
+        let (k, worst) =
+            (0..=d).map(|k| (k, b[k])).fold((0, f64::INFINITY), |m, x| if x.1 < m.1 { x } else { m });
+        if worst >= INSIDE {
+            particle.cell = c as u32;
+            return Located::Walked;
+        }
+        match topo.neighbour(c, k) {
+            None => {
+                // Through a wall: back to the closest point of this cell.
+                particle.position = clamp_into(d, &p, particle.position);
+                particle.cell = c as u32;
+                return Located::Clamped;
+            }
+            Some(e) => {
+                if topo.kind(topo.cell_face(c, k)) == FaceKind::Wrap {
+                    let shift = wrap_shift(mesh, topo, g, c, k, e);
+                    for i in 0..d {
+                        particle.position[i] += shift[i];
+                    }
+                }
+                c = e;
+            }
+        }
+    }
+    let grid = grid.get_or_init(make_grid);
+    for &cand in grid.candidates(grid.bucket(particle.position)) {
+        let p = mesh.cell_points_at(g, cand as usize);
+        let b = barycentric(d, &p, particle.position);
+        if (0..=d).all(|k| b[k] >= INSIDE) {
+            particle.cell = cand;
+            return Located::Hashed;
+        }
+    }
+    let p = mesh.cell_points_at(g, c);
+    particle.position = clamp_into(d, &p, particle.position);
+    particle.cell = c as u32;
+    Located::Clamped
+}
+
+/// The translation from cell `c`'s copy of its wrap face `k` to neighbour `e`'s copy.
+pub fn wrap_shift(mesh: &SimplexMesh, topo: &Topology, g: &[f64], c: usize, k: usize, e: usize) -> Point {
+    let f = topo.cell_face(c, k);
+    let [a, _] = topo.face_cells(f);
+    let locals = topo.face_local(f);
+    let (mine, theirs) = if a as usize == c { (locals[0], locals[1]) } else { (locals[1], locals[0]) };
+    let pc = face_centroid(&mesh.cell_points_at(g, c), mine as usize);
+    let pe = face_centroid(&mesh.cell_points_at(g, e), theirs as usize);
+    [pe[0] - pc[0], pe[1] - pc[1], pe[2] - pc[2]]
+}
+
+/// The point of simplex `p` nearest to `x` in barycentric terms: negative weights clipped
+/// and the rest renormalised (inside the cell, on the face the particle crossed).
+fn clamp_into(dim: usize, p: &[Point], x: Point) -> Point {
+    let b = barycentric(dim, p, x);
+    let mut w: Vec<f64> = (0..=dim).map(|k| b[k].max(0.0)).collect();
+    let s: f64 = w.iter().sum();
+    if s <= 0.0 {
+        return centroid(p);
+    }
+    for v in &mut w {
+        *v /= s;
+    }
+    let mut out = [0.0; 3];
+    for (k, q) in p.iter().enumerate() {
+        for i in 0..3 {
+            out[i] += w[k] * q[i];
+        }
+    }
+    out
+}
+
+/// Counts of how particles were relocated during one frame.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct AdvectReport {
+    /// Relocations found by walking.
+    pub walked: usize,
+    /// Relocations the grid hash found.
+    pub hashed: usize,
+    /// Particles clamped back into the domain.
+    pub clamped: usize,
+}
+
+/// Advects `particles` through one frame: the fluxes `f` (of the frame's end state) carry
+/// them while the geometry moves from `g0` to `g1`; `substeps` explicit Euler steps of
+/// `frame_time / substeps` (the seed: 10).
+#[allow(clippy::too_many_arguments)]
+pub fn advect_particles(
+    mesh: &SimplexMesh,
+    topo: &Topology,
+    g0: &[f64],
+    g1: &[f64],
+    f: &[f64],
+    frame_time: f64,
+    substeps: usize,
+    particles: &mut [Particle],
+) -> AdvectReport {
+    let d = mesh.dim();
+    let dt = frame_time / substeps as f64;
+    let mut report = AdvectReport::default();
+    let mut g = g0.to_vec();
+    let grid = OnceCell::new();
+    let make_grid = || GridHash::new(mesh, &[g0, g1]);
+    for s in 0..substeps {
+        // The velocity of the frame's end state (f belongs to g1), then the mesh moves on.
+        for p in particles.iter_mut() {
+            let u = cell_velocity(mesh, topo, g1, f, p.cell as usize);
+            for k in 0..d {
+                p.position[k] += dt * u[k];
+            }
+        }
+        let t = (s + 1) as f64 / substeps as f64;
+        for (gi, (a, b)) in g.iter_mut().zip(g0.iter().zip(g1)) {
+            *gi = a + t * (b - a);
+        }
+        for p in particles.iter_mut() {
+            match locate(mesh, topo, &g, &grid, &make_grid, p) {
+                Located::Walked => report.walked += 1,
+                Located::Hashed => report.hashed += 1,
+                Located::Clamped => report.clamped += 1,
+            }
+        }
+    }
+    report
+}
+
+/// `count` particles seeded at the centroids of evenly spaced cells (deterministic).
+pub fn seed_particles(mesh: &SimplexMesh, count: usize) -> Vec<Particle> {
+    let nc = mesh.cell_count();
+    (0..count)
+        .map(|i| {
+            let c = (i * nc) / count.max(1);
+            Particle { position: mesh.cell_centroid(c), cell: c as u32 }
+        })
+        .collect()
+}
