@@ -8,6 +8,7 @@ use std::time::Instant;
 use anyhow::{bail, Context, Result};
 
 mod cli {
+    pub mod fluid;
     pub mod radiosity;
     pub mod spacetime;
     pub mod spectral;
@@ -87,6 +88,12 @@ enum Command {
         #[command(subcommand)]
         action: cli::radiosity::Action,
     },
+    /// Fluids on deforming simplicial meshes (seed 000 §5–7): simulate a scene in the full
+    /// space to a snapshot directory, draw its frames with marker particles.
+    Fluid {
+        #[command(subcommand)]
+        action: cli::fluid::Action,
+    },
     /// Benchmarks.
     Bench {
         #[command(subcommand)]
@@ -158,6 +165,7 @@ fn run(cli: Cli) -> Result<()> {
         Command::SpacetimeConvert(args) => cli::spacetime::convert(&args),
         Command::Spectral(args) => cli::spectral::render(&desc, &args),
         Command::Radiosity { action } => cli::radiosity::run(&desc, &action),
+        Command::Fluid { action } => cli::fluid::run(&desc, &action),
         Command::SpectralGen(args) => cli::spectral::generate_file(&args),
         Command::Bench { what: BenchWhat::Gpu { quick } } => bench_gpu(&desc, quick),
         Command::Bench { what: BenchWhat::Reduce { quick } } => bench_reduce(&desc, quick),

@@ -7,6 +7,7 @@
 //! agree to ~1e-13 (we allow 1e-12 relative); the projection is a regularised LDLᵀ with
 //! iterative refinement, converged to a residual of 1e-14 relative, so its velocities agree
 //! to 1e-10 relative (the divergence bound).
+#![allow(clippy::needless_range_loop)]
 
 use galerkin::fluid::operators::{
     add_laplacian, advect, advection_tensor, divergence, flux_to_momentum_tensor, laplacian_tensor,

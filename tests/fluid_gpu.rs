@@ -1,6 +1,7 @@
 //! Marker particles (seed 000 §6.5) on the device against the CPU f64 reference, and both
 //! against the closed form: a uniform flow carries every particle by U·t, across the
 //! periodic boundary, while the mesh moves under it.
+#![allow(clippy::needless_range_loop)]
 
 mod common;
 

@@ -10,11 +10,15 @@
 //!   velocity), with the sign and −V̇u decisions documented there;
 //! - [`scene`] and [`snapshots`]: TOML scenes and the streaming snapshot format.
 
+// Numerical code indexes several arrays by the same cell, face or axis.
+#![allow(clippy::needless_range_loop)]
+
 mod error;
 pub mod gpu;
 pub mod operators;
 pub mod particles;
 pub mod projection;
+pub mod render;
 pub mod scene;
 pub mod snapshots;
 pub mod solver;

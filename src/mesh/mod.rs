@@ -8,6 +8,9 @@
 //! the periodic (wrap) faces. Generators: [`tunnel`] (the 2D periodic tunnel of §7.1) and
 //! [`kuhn`] (boxes of Kuhn simplices for tests and scaling); deformation: [`deform`].
 
+// Numerical code indexes several arrays by the same cell, face or axis.
+#![allow(clippy::needless_range_loop)]
+
 pub mod deform;
 mod error;
 pub mod geometry;
@@ -39,7 +42,7 @@ impl SimplexMesh {
                 "dimension {dim}: only 2 (triangles) and 3 (tetrahedra)"
             )));
         }
-        if g.len() % dim != 0 || cells.len() % (dim + 1) != 0 {
+        if !g.len().is_multiple_of(dim) || !cells.len().is_multiple_of(dim + 1) {
             return Err(MeshError::Structure(format!(
                 "{} coordinates and {} cell indices are not multiples of {dim} and {}",
                 g.len(),

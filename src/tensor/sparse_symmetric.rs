@@ -66,11 +66,11 @@ impl SymmetricPattern {
     pub fn mul(&self, values: &[f64], x: &[f64]) -> Vec<f64> {
         let mut y = vec![0.0; self.n];
         for c in 0..self.n {
-            for s in self.col_ptr[c]..self.col_ptr[c + 1] {
-                let r = self.row_idx[s];
-                y[r] += values[s] * x[c];
+            let span = self.col_ptr[c]..self.col_ptr[c + 1];
+            for (&r, &v) in self.row_idx[span.clone()].iter().zip(&values[span]) {
+                y[r] += v * x[c];
                 if r != c {
-                    y[c] += values[s] * x[r];
+                    y[c] += v * x[r];
                 }
             }
         }

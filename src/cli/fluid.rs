@@ -1,0 +1,276 @@
+//! `galerkin fluid …`: seed 000 §5–7's full-space fluid on deforming simplicial meshes.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::{bail, Context, Result};
+use clap::{Args, Subcommand};
+use galerkin::fluid::gpu::GpuParticles;
+use galerkin::fluid::particles::seed_particles;
+use galerkin::fluid::render::{cell_speeds, draw_picture, DrawStyle, View2d};
+use galerkin::fluid::scene::FluidScene;
+use galerkin::fluid::snapshots::{SnapshotMeta, SnapshotReader, SnapshotWriter};
+use galerkin::fluid::FluidSolver;
+use galerkin::gpu::{Gpu, GpuDesc};
+use galerkin::mesh::{Periodic, SimplexMesh, Topology};
+use galerkin::render::{rgba32f_channel, rgba8_channel, write_exr_channels, write_png_rgba8, Colormap};
+
+/// `galerkin fluid` subcommands.
+#[derive(Subcommand)]
+pub enum Action {
+    /// Simulate a scene in the full space (seed 000 Fig. 2, left) and write its snapshots
+    /// (u, p, f, g, h per frame; the format is documented in src/fluid/snapshots.rs) to
+    /// --out. Prints the per-stage times (t_a advection + diffusion, t_p projection).
+    Simulate(SimulateArgs),
+    /// Draw one frame of a snapshot directory: cells by speed or plain, and marker particles
+    /// advected from frame 0 on the device (Eq. 13, 10 Euler substeps per frame), to PNG or
+    /// EXR (EXR: the raw speed, cell index and kind — 0 cell, 1 particle — beside the colour).
+    Render(RenderArgs),
+}
+
+/// Arguments of `galerkin fluid simulate`.
+#[derive(Args)]
+pub struct SimulateArgs {
+    /// Scene file (TOML), e.g. scenes/fluid/tunnel_small.toml.
+    pub scene: PathBuf,
+    /// Frames to simulate (default: the scene's `flow.frames`).
+    #[arg(long)]
+    pub frames: Option<usize>,
+    /// Snapshot directory to write.
+    #[arg(long, default_value = "out/fluid")]
+    pub out: PathBuf,
+    /// Overwrite a directory that already holds snapshots.
+    #[arg(long)]
+    pub force: bool,
+}
+
+/// Arguments of `galerkin fluid render`.
+#[derive(Args)]
+pub struct RenderArgs {
+    /// Snapshot directory written by `galerkin fluid simulate`.
+    pub dir: PathBuf,
+    /// Frame to draw (default: the last).
+    #[arg(long)]
+    pub frame: Option<usize>,
+    /// Output image (.png or .exr).
+    #[arg(long, default_value = "out/fluid.png")]
+    pub out: PathBuf,
+    /// Marker particles, seeded at frame 0 (0: none).
+    #[arg(long, default_value_t = 4000)]
+    pub particles: usize,
+    /// Colour the cells by speed (the particles then draw white); otherwise the cells are
+    /// grey and the particles carry the speed colours.
+    #[arg(long)]
+    pub cells: bool,
+    /// Colour map: a built-in name (viridis, cool-warm, grey) or a ramp image file.
+    #[arg(long, default_value = "viridis")]
+    pub colormap: String,
+    /// Speed range of the ramp, LO,HI (default: 0 to the frame's largest cell speed).
+    #[arg(long, value_name = "LO,HI", value_parser = parse_range)]
+    pub range: Option<(f64, f64)>,
+    /// Image size.
+    #[arg(long, default_value = "1600x500", value_parser = crate::parse_size)]
+    pub size: (u32, u32),
+    /// Particle sprite radius in pixels.
+    #[arg(long, default_value_t = 1.6)]
+    pub sprite: f64,
+}
+
+fn parse_range(s: &str) -> Result<(f64, f64), String> {
+    let (a, b) = s.split_once(',').ok_or("expected LO,HI")?;
+    let lo: f64 = a.trim().parse().map_err(|e| format!("{a}: {e}"))?;
+    let hi: f64 = b.trim().parse().map_err(|e| format!("{b}: {e}"))?;
+    if !(lo.is_finite() && hi.is_finite() && hi > lo) {
+        return Err(format!("{s}: need finite LO < HI"));
+    }
+    Ok((lo, hi))
+}
+
+/// Runs a `galerkin fluid` action.
+pub fn run(desc: &GpuDesc, action: &Action) -> Result<()> {
+    match action {
+        Action::Simulate(args) => simulate(args),
+        Action::Render(args) => render(desc, args),
+    }
+}
+
+fn progress_bar(len: u64, what: &str) -> indicatif::ProgressBar {
+    let bar = indicatif::ProgressBar::new(len);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template(&format!(
+            "{what:<20} {{bar:30}} {{pos}}/{{len}} eta {{eta}} {{msg}}"
+        ))
+        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    bar
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+fn simulate(args: &SimulateArgs) -> Result<()> {
+    let scene = FluidScene::load(&args.scene)?;
+    let frames = args.frames.unwrap_or(scene.frames);
+    let mesh = scene.mesh.clone();
+    let topo = scene.topology.clone();
+    let t_setup = Instant::now();
+    let mut solver = FluidSolver::new(mesh.clone(), topo.clone(), scene.params)?;
+    let mut state = solver.initial_state(mesh.g().to_vec(), &scene.initial_velocity)?;
+    let setup_s = t_setup.elapsed().as_secs_f64();
+    let d = mesh.dim();
+    let meta = SnapshotMeta {
+        format: "galerkin-fluid-snapshots".into(),
+        version: 1,
+        dim: d,
+        cells: mesh.cell_count(),
+        faces: topo.face_count(),
+        vertices: mesh.vertex_count(),
+        frame_time: scene.params.frame_time,
+        frames: 0,
+        periodic_axis: Some(0),
+    };
+    let mut writer = SnapshotWriter::create(&args.out, meta, mesh.cells(), args.force)?;
+    let momenta = |state: &galerkin::fluid::FluidState| -> Vec<f64> {
+        let vols = mesh.volumes_at(&state.g);
+        state.u.iter().enumerate().map(|(i, u)| vols[i / d] * u).collect()
+    };
+    writer.push(&state.u, &momenta(&state), &state.f, &state.g, &vec![0.0; topo.face_count()])?;
+    println!(
+        "fluid: {} — {} cells, {} faces ({} on the boundary), {} vertices; obstacle scale {}; projection factor {} entries; setup {setup_s:.2} s",
+        args.scene.display(),
+        mesh.cell_count(),
+        topo.face_count(),
+        topo.boundary_faces().len(),
+        mesh.vertex_count(),
+        scene.obstacle_scale,
+        solver.projection_factor_len()
+    );
+    let bar = progress_bar(frames as u64, "simulating");
+    let (mut ta, mut tp, mut worst_div) = (Vec::new(), Vec::new(), 0.0f64);
+    let mut substeps = 0;
+    let e0 = solver.energy(&state);
+    for frame in 1..=frames {
+        let g = state.g.clone();
+        let (next, report) = solver.step(&state, &g, frame)?;
+        writer.push(&next.u, &momenta(&next), &next.f, &next.g, &report.h)?;
+        ta.push(report.advection_seconds);
+        tp.push(report.projection_seconds);
+        worst_div = worst_div.max(report.projection.relative_divergence);
+        substeps = report.substeps;
+        state = next;
+        bar.set_message(format!("energy {:.4}", solver.energy(&state)));
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    println!(
+        "{frames} frames: t_a {:.4} s (advection + diffusion, {substeps} RK4 substeps), t_p {:.4} s (projection) per frame (medians); energy {e0:.5} → {:.5}; worst relative divergence {worst_div:.1e} → {}",
+        median(ta),
+        median(tp),
+        solver.energy(&state),
+        args.out.display()
+    );
+    Ok(())
+}
+
+/// The mesh and topology of a snapshot directory at frame `k`.
+fn snapshot_mesh(reader: &SnapshotReader, k: usize) -> Result<(SimplexMesh, Topology)> {
+    let meta = reader.meta();
+    let g = reader.frame("g", k)?;
+    let mesh = SimplexMesh::new(meta.dim, g, reader.cells().to_vec())?;
+    let topo = Topology::new(&mesh, meta.periodic_axis.map(|axis| Periodic { axis }))?;
+    if topo.face_count() != meta.faces {
+        bail!("the snapshot mesh has {} faces, its header says {}", topo.face_count(), meta.faces);
+    }
+    Ok((mesh, topo))
+}
+
+fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
+    let ext = args.out.extension().and_then(|e| e.to_str()).unwrap_or_default().to_ascii_lowercase();
+    if ext != "png" && ext != "exr" {
+        bail!("{}: unknown image format {ext:?}: expected .png or .exr", args.out.display());
+    }
+    let reader = SnapshotReader::open(&args.dir)?;
+    let meta = reader.meta().clone();
+    if meta.frames == 0 {
+        bail!("{}: no frames", args.dir.display());
+    }
+    let frame = args.frame.unwrap_or(meta.frames - 1);
+    if frame >= meta.frames {
+        bail!("{}: frame {frame} asked, the run has frames 0 to {}", args.dir.display(), meta.frames - 1);
+    }
+    if meta.dim != 2 {
+        bail!("{}: a {}D run: `fluid render` draws 2D runs so far", args.dir.display(), meta.dim);
+    }
+    let colormap = Colormap::by_name(&args.colormap)?;
+    let (mesh, topo) = snapshot_mesh(&reader, 0)?;
+    let gpu = Gpu::new(desc)?;
+    let start = Instant::now();
+    let particles = if args.particles > 0 {
+        let seeds = seed_particles(&mesh, args.particles);
+        let device = GpuParticles::new(&gpu, &mesh, &topo, &seeds)?;
+        let bar = progress_bar(frame as u64, "advecting particles");
+        let mut g0 = reader.frame("g", 0)?;
+        for k in 1..=frame {
+            let g1 = reader.frame("g", k)?;
+            let f = reader.frame("f", k)?;
+            device.advect(&gpu, &mesh, &g0, &g1, &f, meta.frame_time, 10)?;
+            g0 = g1;
+            bar.inc(1);
+        }
+        bar.finish_and_clear();
+        Some(device)
+    } else {
+        None
+    };
+    let g = reader.frame("g", frame)?;
+    let f = reader.frame("f", frame)?;
+    let speeds = cell_speeds(&mesh, &topo, &g, &f);
+    let range = args.range.unwrap_or((0.0, speeds.iter().fold(0.0f64, |m, v| m.max(*v)).max(1e-12)));
+    let style = DrawStyle { colormap, range, log: false, colour_cells: args.cells, sprite_px: args.sprite };
+    let (lo, hi) = mesh.bounds();
+    let view = View2d::fit([lo[0], lo[1]], [hi[0], hi[1]], args.size, 0.02);
+    let picture = draw_picture(&gpu, &mesh, &g, &speeds, particles.as_ref(), &style, &view, args.size)?;
+    let (w, h) = args.size;
+    write_image(&args.out, &ext, w, h, &picture.rgba, &picture.raw)?;
+    println!(
+        "fluid render: frame {frame} of {} ({} cells, {} particles), speed range {:.3}..{:.3}, {:.2} s → {}",
+        args.dir.display(),
+        mesh.cell_count(),
+        args.particles,
+        range.0,
+        range.1,
+        start.elapsed().as_secs_f64(),
+        args.out.display()
+    );
+    drop(particles);
+    crate::check_validation(gpu)
+}
+
+fn write_image(path: &Path, ext: &str, w: u32, h: u32, rgba: &[u8], raw: &[f32]) -> Result<()> {
+    if ext == "png" {
+        write_png_rgba8(path, w, h, rgba)?;
+    } else {
+        let byte = |c: usize| rgba8_channel(rgba, c);
+        let float = |c: usize| rgba32f_channel(raw, c);
+        write_exr_channels(
+            path,
+            w,
+            h,
+            vec![
+                ("R", byte(0)),
+                ("G", byte(1)),
+                ("B", byte(2)),
+                ("speed", float(0)),
+                ("cell", float(1)),
+                ("kind", float(2)),
+            ],
+        )
+        .with_context(|| format!("writing {}", path.display()))?;
+    }
+    Ok(())
+}

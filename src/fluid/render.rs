@@ -1,0 +1,354 @@
+//! Drawing a 2D fluid frame (seed 000 §6.5): a graphics pipeline over the cells, each showing
+//! its speed |u_c| (constant per cell, Eq. 13) on a colour ramp or a plain grey, then the
+//! marker particles as round sprites read straight from the compute pass's buffer, coloured
+//! by the speed of their cell (or white over a coloured field). The obstacle is the hole in
+//! the mesh. A float target gets the raw speed, the cell index and what drew the pixel (0
+//! cell, 1 particle) instead: EXR output and the tests, whose reference locates each pixel
+//! centre in the mesh in f64.
+
+use ash::vk;
+use bytemuck::{Pod, Zeroable};
+
+use super::gpu::GpuParticles;
+use super::operators::CellOperators;
+use super::FluidError;
+use crate::gpu::{
+    shaders, BindingKind, Buffer, DescriptorSet, Gpu, GraphicsPipeline, GraphicsPipelineDesc, MemoryKind,
+    RenderPass, Resource,
+};
+use crate::mesh::{SimplexMesh, Topology};
+use crate::render::{ColorFormat, Colormap, ColormapTexture, Pixels, RenderTarget, BACKGROUND};
+
+fn gpu_err(e: crate::gpu::GpuError) -> FluidError {
+    FluidError::State(format!("device: {e}"))
+}
+
+/// The visible rectangle of the plane: the mesh's bounds with a margin, widened to the
+/// image's aspect ratio. Maps world (x, y) to clip space (y down, Vulkan) and pixel centres
+/// back to the world.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct View2d {
+    /// Lower-left corner.
+    pub lo: [f64; 2],
+    /// Upper-right corner.
+    pub hi: [f64; 2],
+}
+
+impl View2d {
+    /// Fits `[lo, hi]` with a relative `margin` into a `width × height` image.
+    pub fn fit(lo: [f64; 2], hi: [f64; 2], (width, height): (u32, u32), margin: f64) -> Self {
+        let (mut w, mut h) = ((hi[0] - lo[0]) * (1.0 + 2.0 * margin), (hi[1] - lo[1]) * (1.0 + 2.0 * margin));
+        let aspect = f64::from(width) / f64::from(height.max(1));
+        if w / h > aspect {
+            h = w / aspect;
+        } else {
+            w = h * aspect;
+        }
+        let c = [0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1])];
+        Self { lo: [c[0] - 0.5 * w, c[1] - 0.5 * h], hi: [c[0] + 0.5 * w, c[1] + 0.5 * h] }
+    }
+
+    /// Column-major clip transform: x → [−1, 1] left to right, y → [−1, 1] top to bottom.
+    pub fn view_proj(&self) -> [f32; 16] {
+        let sx = 2.0 / (self.hi[0] - self.lo[0]);
+        let sy = -2.0 / (self.hi[1] - self.lo[1]);
+        let tx = -1.0 - sx * self.lo[0];
+        let ty = 1.0 - sy * self.lo[1];
+        [
+            sx as f32, 0.0, 0.0, 0.0, //
+            0.0, sy as f32, 0.0, 0.0, //
+            0.0, 0.0, 0.0, 0.0, //
+            tx as f32, ty as f32, 0.5, 1.0,
+        ]
+    }
+
+    /// The world point at the centre of pixel (px, py).
+    pub fn pixel_centre(&self, px: u32, py: u32, (width, height): (u32, u32)) -> [f64; 2] {
+        [
+            self.lo[0] + (f64::from(px) + 0.5) / f64::from(width) * (self.hi[0] - self.lo[0]),
+            self.hi[1] - (f64::from(py) + 0.5) / f64::from(height) * (self.hi[1] - self.lo[1]),
+        ]
+    }
+
+    /// The pixel coordinates (continuous, from the top-left corner) of a world point.
+    pub fn project(&self, p: [f64; 2], (width, height): (u32, u32)) -> [f64; 2] {
+        [
+            (p[0] - self.lo[0]) / (self.hi[0] - self.lo[0]) * f64::from(width),
+            (self.hi[1] - p[1]) / (self.hi[1] - self.lo[1]) * f64::from(height),
+        ]
+    }
+}
+
+/// One corner of a cell triangle as the vertex stage reads it.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct CellVertex {
+    /// Position (z = 0).
+    pub position: [f32; 3],
+    /// The cell's speed.
+    pub value: f32,
+    /// The cell.
+    pub cell: u32,
+}
+
+/// |u_c| of every cell from the fluxes (Eq. 13).
+pub fn cell_speeds(mesh: &SimplexMesh, topo: &Topology, g: &[f64], f: &[f64]) -> Vec<f64> {
+    let d = mesh.dim();
+    let u = CellOperators::new(mesh, topo, g).flux_to_velocity(topo, f);
+    u.chunks(d).map(|v| v.iter().map(|x| x * x).sum::<f64>().sqrt()).collect()
+}
+
+/// The triangle stream of a 2D mesh at geometry `g` with per-cell `values`.
+pub fn cell_vertices(mesh: &SimplexMesh, g: &[f64], values: &[f64]) -> Vec<CellVertex> {
+    let mut out = Vec::with_capacity(3 * mesh.cell_count());
+    for c in 0..mesh.cell_count() {
+        for p in mesh.cell_points_at(g, c) {
+            out.push(CellVertex {
+                position: [p[0] as f32, p[1] as f32, 0.0],
+                value: values[c] as f32,
+                cell: c as u32,
+            });
+        }
+    }
+    out
+}
+
+/// How cells and particles are coloured.
+#[derive(Clone, Debug)]
+pub struct DrawStyle {
+    /// The ramp.
+    pub colormap: Colormap,
+    /// Speed range of the ramp.
+    pub range: (f64, f64),
+    /// Logarithmic ramp.
+    pub log: bool,
+    /// Cells coloured by speed (else plain grey, particles carry the colour).
+    pub colour_cells: bool,
+    /// Particle sprite radius in pixels (0: no particles).
+    pub sprite_px: f64,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct Push {
+    view_proj: [f32; 16],
+    range: [f32; 4],
+    sprite: [f32; 4],
+}
+
+/// What the fragment stages write.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Output {
+    /// Colour (8-bit target).
+    Colour,
+    /// Raw speed, cell index and kind (0 cell, 1 particle), to a float target.
+    Raw,
+}
+
+/// The cell and sprite pipelines for one render pass.
+pub struct FluidRenderer {
+    cells: GraphicsPipeline,
+    sprites: GraphicsPipeline,
+    colormap: ColormapTexture,
+    cell_set: DescriptorSet,
+    vertices: Buffer<CellVertex>,
+    speeds: Buffer<f32>,
+    count: u32,
+}
+
+impl FluidRenderer {
+    /// Pipelines drawing into `pass` for meshes of up to `cells` cells.
+    pub fn new(
+        gpu: &Gpu,
+        pass: &RenderPass,
+        output: Output,
+        colormap: &Colormap,
+        cells: usize,
+    ) -> Result<Self, FluidError> {
+        let spec = [u32::from(output == Output::Raw)];
+        let mut desc = GraphicsPipelineDesc::new(
+            "fluid cells",
+            shaders::fluid::CELLS_VERT,
+            shaders::fluid::CELLS_FRAG,
+            pass.raw(),
+        );
+        desc.push_constant_bytes = std::mem::size_of::<Push>() as u32;
+        desc.vertex_stride = std::mem::size_of::<CellVertex>() as u32;
+        desc.vertex_attributes = &[
+            (0, vk::Format::R32G32B32_SFLOAT, 0),
+            (1, vk::Format::R32_SFLOAT, 12),
+            (2, vk::Format::R32_UINT, 16),
+        ];
+        desc.bindings = &[BindingKind::Texture];
+        desc.specialization = &spec;
+        let cell_pipeline = GraphicsPipeline::new(gpu, &desc).map_err(gpu_err)?;
+        let mut desc = GraphicsPipelineDesc::new(
+            "fluid particles",
+            shaders::fluid::SPRITES_VERT,
+            shaders::fluid::SPRITES_FRAG,
+            pass.raw(),
+        );
+        desc.push_constant_bytes = std::mem::size_of::<Push>() as u32;
+        desc.bindings = &[BindingKind::Texture, BindingKind::StorageBuffer, BindingKind::StorageBuffer];
+        desc.specialization = &spec;
+        let sprites = GraphicsPipeline::new(gpu, &desc).map_err(gpu_err)?;
+        let colormap = colormap.upload(gpu).map_err(gpu_err)?;
+        let cell_set = cell_pipeline.bind(gpu, &[colormap.resource()]).map_err(gpu_err)?;
+        let vertices = Buffer::new(
+            gpu,
+            "fluid cell vertices",
+            (3 * cells.max(1)) as u64,
+            vk::BufferUsageFlags::VERTEX_BUFFER,
+            MemoryKind::CpuToGpu,
+        )
+        .map_err(gpu_err)?;
+        let speeds = Buffer::new(
+            gpu,
+            "fluid cell speeds",
+            cells.max(1) as u64,
+            vk::BufferUsageFlags::STORAGE_BUFFER,
+            MemoryKind::CpuToGpu,
+        )
+        .map_err(gpu_err)?;
+        Ok(Self { cells: cell_pipeline, sprites, colormap, cell_set, vertices, speeds, count: 0 })
+    }
+
+    /// Replaces the cells and their speeds (no draw of the previous ones may be in flight).
+    pub fn update(&mut self, vertices: &[CellVertex], speeds: &[f64]) {
+        if let Some(dst) = self.vertices.mapped_mut() {
+            let n = vertices.len().min(dst.len());
+            dst[..n].copy_from_slice(&vertices[..n]);
+            self.count = n as u32;
+        }
+        if let Some(dst) = self.speeds.mapped_mut() {
+            for (d, s) in dst.iter_mut().zip(speeds) {
+                *d = *s as f32;
+            }
+        }
+    }
+
+    /// The sprite pipeline's resources for `particles` (bind once per particle buffer).
+    pub fn particle_set(&self, gpu: &Gpu, particles: &GpuParticles) -> Result<DescriptorSet, FluidError> {
+        self.sprites
+            .bind(
+                gpu,
+                &[
+                    self.colormap.resource(),
+                    Resource::Storage(particles.buffer().binding().map_err(gpu_err)?),
+                    Resource::Storage(self.speeds.binding().map_err(gpu_err)?),
+                ],
+            )
+            .map_err(gpu_err)
+    }
+
+    /// Records the cells, then the particles (inside the target's render pass).
+    pub fn record(
+        &self,
+        cmd: vk::CommandBuffer,
+        extent: vk::Extent2D,
+        view: &View2d,
+        style: &DrawStyle,
+        particles: Option<(&DescriptorSet, usize)>,
+    ) {
+        let half = [
+            (2.0 * style.sprite_px / f64::from(extent.width.max(1))) as f32,
+            (2.0 * style.sprite_px / f64::from(extent.height.max(1))) as f32,
+        ];
+        let push = Push {
+            view_proj: view.view_proj(),
+            range: [
+                style.range.0 as f32,
+                style.range.1 as f32,
+                self.colormap.texels() as f32,
+                f32::from(u8::from(style.log)),
+            ],
+            sprite: [
+                half[0],
+                half[1],
+                f32::from(u8::from(style.colour_cells)),
+                f32::from(u8::from(style.colour_cells)),
+            ],
+        };
+        self.cells.record_draw(
+            cmd,
+            extent,
+            &self.cell_set,
+            bytemuck::bytes_of(&push),
+            Some(self.vertices.raw()),
+            self.count,
+        );
+        if let Some((set, count)) = particles {
+            if style.sprite_px > 0.0 && count > 0 {
+                self.sprites.record_draw(
+                    cmd,
+                    extent,
+                    set,
+                    bytemuck::bytes_of(&push),
+                    None,
+                    (6 * count) as u32,
+                );
+            }
+        }
+    }
+}
+
+/// One drawn frame: sRGB bytes and raw floats (speed, cell, kind, 1; cell −1 on the background).
+pub struct FluidPicture {
+    /// Width.
+    pub width: u32,
+    /// Height.
+    pub height: u32,
+    /// RGBA8, rows from the top.
+    pub rgba: Vec<u8>,
+    /// RGBA32F, rows from the top.
+    pub raw: Vec<f32>,
+}
+
+/// Draws the 2D `mesh` at geometry `g` with cell `speeds` and optional particles into new
+/// colour and raw targets and reads them back.
+#[allow(clippy::too_many_arguments)]
+pub fn draw_picture(
+    gpu: &Gpu,
+    mesh: &SimplexMesh,
+    g: &[f64],
+    speeds: &[f64],
+    particles: Option<&GpuParticles>,
+    style: &DrawStyle,
+    view: &View2d,
+    (width, height): (u32, u32),
+) -> Result<FluidPicture, FluidError> {
+    if mesh.dim() != 2 {
+        return Err(FluidError::State(format!(
+            "drawing {}D meshes: only 2D frames are drawn so far",
+            mesh.dim()
+        )));
+    }
+    let vertices = cell_vertices(mesh, g, speeds);
+    let colour =
+        RenderTarget::new(gpu, "fluid colour", width, height, ColorFormat::Rgba8).map_err(gpu_err)?;
+    let raw = RenderTarget::new(gpu, "fluid raw", width, height, ColorFormat::Rgba32F).map_err(gpu_err)?;
+    let mut out = Vec::new();
+    for (target, output, clear) in
+        [(&colour, Output::Colour, BACKGROUND), (&raw, Output::Raw, [0.0, -1.0, 0.0, 0.0])]
+    {
+        let mut r =
+            FluidRenderer::new(gpu, target.render_pass(), output, &style.colormap, mesh.cell_count())?;
+        r.update(&vertices, speeds);
+        let set = particles.map(|p| r.particle_set(gpu, p)).transpose()?;
+        let pset = set.as_ref().zip(particles.map(GpuParticles::count));
+        out.push(
+            target
+                .render(gpu, clear, |cmd| r.record(cmd, target.extent(), view, style, pset))
+                .map_err(gpu_err)?,
+        );
+    }
+    let raw_pixels = match out.pop() {
+        Some(Pixels::Rgba32F(v)) => v,
+        _ => return Err(FluidError::State("a float target reads back floats".into())),
+    };
+    let rgba = match out.pop() {
+        Some(Pixels::Rgba8(v)) => v,
+        _ => return Err(FluidError::State("an RGBA8 target reads back bytes".into())),
+    };
+    Ok(FluidPicture { width, height, rgba, raw: raw_pixels })
+}
