@@ -15,6 +15,8 @@ pub mod deform;
 mod error;
 pub mod geometry;
 pub mod kuhn;
+pub mod sdf;
+pub mod stuffing;
 mod topology;
 pub mod tunnel;
 
