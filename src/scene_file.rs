@@ -39,7 +39,19 @@ pub fn parse<T: DeserializeOwned>(text: &str, path: &Path) -> Result<T, SceneFil
     })
 }
 
-/// An error at the first line of `text` that mentions `key` (line 1 if none does).
+/// An error at the line of `text` that assigns `key` (`key = …`) or opens the table `[key]`;
+/// failing that, the first line outside comments that mentions it (line 1 if none does).
 pub fn error_at(text: &str, path: &Path, key: &str, message: String) -> SceneFileError {
-    SceneFileError { path: path.to_path_buf(), line: text.find(key).map_or(1, |o| line_of(text, o)), message }
+    let code = |l: &str| l.split('#').next().unwrap_or_default().to_string();
+    let assigns = |l: &str| {
+        let t = code(l);
+        let t = t.trim();
+        t.strip_prefix(key).is_some_and(|rest| rest.trim_start().starts_with('=')) || t == format!("[{key}]")
+    };
+    let line = text
+        .lines()
+        .position(assigns)
+        .or_else(|| text.lines().position(|l| code(l).contains(key)))
+        .map_or(1, |i| i + 1);
+    SceneFileError { path: path.to_path_buf(), line, message }
 }

@@ -317,3 +317,66 @@ fn snapshots_stream_back_by_frame_and_by_rows() {
     assert!(r.frame("u", 9).is_err() && r.frame("q", 0).is_err());
     std::fs::remove_dir_all(&dir).expect("clean up");
 }
+
+#[test]
+fn the_cavity_keeps_its_volume_and_every_training_run_stays_valid() {
+    use galerkin::fluid::cavity::{enclosed_volume, training_run, Cavity, TRAINING_RUNS};
+    let mut scene = FluidScene::load(std::path::Path::new("scenes/fluid/cavity_small.toml")).expect("scene");
+    let galerkin::fluid::scene::Motion::Cavity { cavity, .. } = &mut scene.motion else {
+        panic!("a cavity scene");
+    };
+    let rest = cavity.rest_volume();
+    let frames = 12;
+    for run in 0..TRAINING_RUNS {
+        let amounts = training_run(run).expect("run");
+        // The deepest frame of every run: valid cells, the rest volume to 1e-12.
+        let a = Cavity::compression(amounts, frames / 2, frames);
+        let m = cavity.geometry(a, frames / 2).unwrap_or_else(|e| panic!("run {run}: {e}"));
+        let total: f64 = m.volumes().iter().sum();
+        assert!((total - rest).abs() < 1e-12 * rest, "run {run}: volume {total} vs {rest}");
+        let enclosed = enclosed_volume(&m, &cavity.topology, m.g());
+        assert!((enclosed - total).abs() < 1e-12 * rest);
+        // The compressed cavity really is smaller.
+        let i = (0..3).find(|&i| amounts[i] > 0.0).expect("one compressed");
+        let c = cavity.spec().small_centres()[i];
+        let r0 = cavity
+            .surface
+            .iter()
+            .map(|&v| dist3(cavity.mesh.point(v as usize), c))
+            .fold(f64::INFINITY, f64::min);
+        let r1 = cavity.surface.iter().map(|&v| dist3(m.point(v as usize), c)).fold(f64::INFINITY, f64::min);
+        assert!(r1 < r0 * (1.0 - 0.5 * a[i]), "run {run}: cavity {i} not compressed ({r0} → {r1})");
+    }
+    assert!(training_run(TRAINING_RUNS).is_none());
+    // Simulate a few frames of run 0: compression pushes fluid out, divergence-free.
+    let mut solver =
+        FluidSolver::new(scene.mesh.clone(), scene.topology.clone(), scene.params).expect("solver");
+    let mut state = solver.initial_state(scene.mesh.g().to_vec(), &scene.initial_velocity).expect("start");
+    for frame in 1..=3 {
+        let g = scene.geometry(frame).expect("geometry");
+        let (next, report) = solver.step(&state, &g, frame).expect("step");
+        assert!(report.projection.relative_divergence < 1e-10);
+        // No flux relative to the moving wall.
+        for &f in solver.topology().boundary_faces() {
+            assert!((next.f[f as usize] - report.h[f as usize]).abs() < 1e-9 * max_abs(&report.h));
+        }
+        state = next;
+    }
+    assert!(solver.energy(&state) > 1e-6, "the compression moves the fluid");
+    // Bad cavities are refused naming the key.
+    let text = std::fs::read_to_string("scenes/fluid/cavity_small.toml").expect("scene");
+    for (from, to, key) in [
+        ("run = 0", "run = 14", "run"),
+        ("tunnel_radius = 0.22", "tunnel_radius = 0.5", "tunnel_radius"),
+        ("initial_velocity = [0.0, 0.0, 0.0]", "initial_velocity = [0.0, 0.0]", "initial_velocity"),
+    ] {
+        let bad = text.replace(from, to);
+        let err = FluidScene::parse(&bad, std::path::Path::new("c.toml")).expect_err(key).to_string();
+        let line = bad.lines().position(|l| l.starts_with(key)).expect("key") + 1;
+        assert!(err.contains(&format!("c.toml:{line}:")), "{key}: {err}");
+    }
+}
+
+fn dist3(a: [f64; 3], b: [f64; 3]) -> f64 {
+    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
+}

@@ -114,7 +114,7 @@ fn median(mut v: Vec<f64>) -> f64 {
 }
 
 fn simulate(args: &SimulateArgs) -> Result<()> {
-    let scene = FluidScene::load(&args.scene)?;
+    let mut scene = FluidScene::load(&args.scene)?;
     let frames = args.frames.unwrap_or(scene.frames);
     let mesh = scene.mesh.clone();
     let topo = scene.topology.clone();
@@ -132,7 +132,7 @@ fn simulate(args: &SimulateArgs) -> Result<()> {
         vertices: mesh.vertex_count(),
         frame_time: scene.params.frame_time,
         frames: 0,
-        periodic_axis: Some(0),
+        periodic_axis: scene.periodic_axis,
     };
     let mut writer = SnapshotWriter::create(&args.out, meta, mesh.cells(), args.force)?;
     let momenta = |state: &galerkin::fluid::FluidState| -> Vec<f64> {
@@ -141,21 +141,24 @@ fn simulate(args: &SimulateArgs) -> Result<()> {
     };
     writer.push(&state.u, &momenta(&state), &state.f, &state.g, &vec![0.0; topo.face_count()])?;
     println!(
-        "fluid: {} — {} cells, {} faces ({} on the boundary), {} vertices; obstacle scale {}; projection factor {} entries; setup {setup_s:.2} s",
+        "fluid: {} ({}) — {}D, {} cells, {} faces ({} on the boundary), {} vertices; projection factor {} entries; setup {setup_s:.2} s",
         args.scene.display(),
+        scene.description,
+        d,
         mesh.cell_count(),
         topo.face_count(),
         topo.boundary_faces().len(),
         mesh.vertex_count(),
-        scene.obstacle_scale,
         solver.projection_factor_len()
     );
     let bar = progress_bar(frames as u64, "simulating");
-    let (mut ta, mut tp, mut worst_div) = (Vec::new(), Vec::new(), 0.0f64);
+    let (mut td, mut ta, mut tp, mut worst_div) = (Vec::new(), Vec::new(), Vec::new(), 0.0f64);
     let mut substeps = 0;
     let e0 = solver.energy(&state);
     for frame in 1..=frames {
-        let g = state.g.clone();
+        let t0 = Instant::now();
+        let g = scene.geometry(frame)?;
+        td.push(t0.elapsed().as_secs_f64());
         let (next, report) = solver.step(&state, &g, frame)?;
         writer.push(&next.u, &momenta(&next), &next.f, &next.g, &report.h)?;
         ta.push(report.advection_seconds);
@@ -168,7 +171,8 @@ fn simulate(args: &SimulateArgs) -> Result<()> {
     }
     bar.finish_and_clear();
     println!(
-        "{frames} frames: t_a {:.4} s (advection + diffusion, {substeps} RK4 substeps), t_p {:.4} s (projection) per frame (medians); energy {e0:.5} → {:.5}; worst relative divergence {worst_div:.1e} → {}",
+        "{frames} frames: t_d {:.4} s (deformation), t_a {:.4} s (advection + diffusion, {substeps} RK4 substeps), t_p {:.4} s (projection) per frame (medians); energy {e0:.5} → {:.5}; worst relative divergence {worst_div:.1e} → {}",
+        median(td),
         median(ta),
         median(tp),
         solver.energy(&state),

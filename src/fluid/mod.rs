@@ -13,6 +13,7 @@
 // Numerical code indexes several arrays by the same cell, face or axis.
 #![allow(clippy::needless_range_loop)]
 
+pub mod cavity;
 mod error;
 pub mod gpu;
 pub mod operators;

@@ -1,4 +1,5 @@
-//! Fluid scenes (TOML). Today: the 2D periodic tunnel of seed 000 §7.1. The seed gives no
+//! Fluid scenes (TOML): the 2D periodic tunnel of seed 000 §7.1 and the 3D cavity of §7.2.
+//! For the tunnel the seed gives no
 //! domain, forcing, viscosity or time step; ours, in `scenes/fluid/tunnel*.toml`:
 //!
 //! - domain `[0, 4] × [0, 1]`, periodic in x, free-slip walls at y = 0 and 1 (no flux
@@ -9,6 +10,27 @@
 //! - the flow starts uniform, u = (1, 0), projected to be divergence-free around the
 //!   obstacle; no forcing; μ = 1e-3; 50 frames per time unit (Δt = 0.02), RK4 substeps from
 //!   the stability bound.
+//!
+//! The 3D deforming cavity of §7.2 ([`super::cavity`]), in `scenes/fluid/cavity*.toml`: the
+//! fluid starts at rest and is driven by the compression of the small cavities (one of the
+//! 14 training runs), μ = 1e-3, Δt = 0.02, 60 frames (compress over 30, re-inflate over 30).
+//!
+//! ```toml
+//! [cavity]            # crate::fluid::cavity::CavitySpec
+//! central_radius = 1.0
+//! small_radius = 0.45
+//! small_distance = 1.9
+//! tunnel_radius = 0.16
+//! spacing = 0.09      # lattice spacing of the stuffing
+//! run = 0             # training run, 0 to 13
+//! [flow]
+//! initial_velocity = [0.0, 0.0, 0.0]
+//! viscosity = 1e-3
+//! frame_time = 0.02
+//! frames = 60
+//! ```
+//!
+//! The tunnel:
 //!
 //! ```toml
 //! [tunnel]            # the base mesh (crate::mesh::tunnel)
@@ -32,6 +54,7 @@ use std::path::Path;
 
 use serde::Deserialize;
 
+use super::cavity::{training_run, Cavity, CavitySpec, TRAINING_RUNS};
 use crate::mesh::deform::HarmonicDeformation;
 use crate::mesh::tunnel::{tunnel, TunnelSpec};
 use crate::mesh::{Periodic, SimplexMesh, Topology};
@@ -42,7 +65,8 @@ use super::{FluidError, FluidParams};
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct SceneSpec {
-    tunnel: TunnelKeys,
+    tunnel: Option<TunnelKeys>,
+    cavity: Option<CavityKeys>,
     #[serde(default)]
     obstacle: ObstacleKeys,
     flow: FlowKeys,
@@ -66,6 +90,18 @@ fn half() -> f64 {
 
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
+struct CavityKeys {
+    central_radius: f64,
+    small_radius: f64,
+    small_distance: f64,
+    tunnel_radius: f64,
+    spacing: f64,
+    #[serde(default)]
+    run: usize,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
 struct ObstacleKeys {
     #[serde(default = "one")]
     scale: f64,
@@ -84,23 +120,39 @@ fn one() -> f64 {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct FlowKeys {
-    initial_velocity: [f64; 2],
+    initial_velocity: Vec<f64>,
     #[serde(default)]
-    forcing: [f64; 2],
+    forcing: Vec<f64>,
     viscosity: f64,
     frame_time: f64,
     frames: usize,
 }
 
-/// A loaded fluid scene: the mesh at its simulation geometry, topology, parameters and the
-/// initial velocity.
+/// How a scene's boundary moves.
+#[derive(Debug)]
+pub enum Motion {
+    /// A fixed mesh (the tunnel).
+    Static,
+    /// The cavity's compressions (seed 000 §7.2).
+    Cavity {
+        /// The stuffed cavity with its deformation.
+        cavity: Box<Cavity>,
+        /// Deepest compression of each small cavity (the training run's).
+        amounts: [f64; 3],
+        /// The training run.
+        run: usize,
+    },
+}
+
+/// A loaded fluid scene: the mesh at its simulation geometry, topology, parameters, the
+/// initial velocity and the boundary motion.
 #[derive(Debug)]
 pub struct FluidScene {
-    /// The base mesh (obstacle at the spec's radius).
+    /// The base mesh (the tunnel's obstacle at the spec's radius; the cavity at rest).
     pub base: SimplexMesh,
-    /// The mesh deformed to the scene's obstacle scale (the simulation's geometry).
+    /// The mesh at frame 0 (the tunnel deformed to its obstacle scale).
     pub mesh: SimplexMesh,
-    /// Its topology (periodic in x).
+    /// Its topology.
     pub topology: Topology,
     /// Solver parameters.
     pub params: FluidParams,
@@ -108,9 +160,17 @@ pub struct FluidScene {
     pub initial_velocity: Vec<f64>,
     /// Frames to simulate by default.
     pub frames: usize,
-    /// Obstacle scale relative to the base mesh.
+    /// Obstacle scale relative to the base mesh (the tunnel; 1 otherwise).
     pub obstacle_scale: f64,
+    /// The periodic axis (the tunnel's x), if any.
+    pub periodic_axis: Option<usize>,
+    /// The boundary motion.
+    pub motion: Motion,
+    /// One line describing the scene.
+    pub description: String,
 }
+
+type Fail<'a> = Box<dyn Fn(&str, String) -> FluidError + 'a>;
 
 impl FluidScene {
     /// Reads and builds the scene in `path`; errors name the file and line of the bad key.
@@ -121,9 +181,8 @@ impl FluidScene {
     /// Builds the scene from TOML `text` (`path` names it in errors).
     pub fn parse(text: &str, path: &Path) -> Result<Self, FluidError> {
         let spec: SceneSpec = scene_file::parse(text, path)?;
-        let fail = |key: &str, message: String| -> FluidError {
-            scene_file::error_at(text, path, key, message).into()
-        };
+        let fail: Fail =
+            Box::new(|key: &str, message: String| scene_file::error_at(text, path, key, message).into());
         let positive = |key: &str, v: f64| {
             if v.is_finite() && v > 0.0 {
                 Ok(())
@@ -131,22 +190,55 @@ impl FluidScene {
                 Err(fail(key, format!("{key} = {v}: must be positive")))
             }
         };
-        let t = &spec.tunnel;
-        positive("length", t.length)?;
-        positive("height", t.height)?;
-        positive("radius", t.radius)?;
-        positive("cell", t.cell)?;
-        positive("obstacle_refinement", t.obstacle_refinement)?;
         positive("frame_time", spec.flow.frame_time)?;
-        let s = spec.obstacle.scale;
-        if !(s.is_finite() && s > 0.0 && s < 2.5) {
-            return Err(fail("scale", format!("scale = {s}: must be in (0, 2.5)")));
-        }
         if !(spec.flow.viscosity.is_finite() && spec.flow.viscosity >= 0.0) {
             return Err(fail("viscosity", format!("viscosity = {}: must be ≥ 0", spec.flow.viscosity)));
         }
         if spec.flow.initial_velocity.iter().chain(&spec.flow.forcing).any(|v| !v.is_finite()) {
             return Err(fail("initial_velocity", "velocities and forcing must be finite".into()));
+        }
+        let dim = if spec.cavity.is_some() { 3 } else { 2 };
+        if spec.flow.initial_velocity.len() != dim {
+            return Err(fail(
+                "initial_velocity",
+                format!("initial_velocity needs {dim} components in a {dim}D scene"),
+            ));
+        }
+        if !spec.flow.forcing.is_empty() && spec.flow.forcing.len() != dim {
+            return Err(fail("forcing", format!("forcing needs {dim} components in a {dim}D scene")));
+        }
+        let mut forcing = [0.0; 3];
+        forcing[..spec.flow.forcing.len()].copy_from_slice(&spec.flow.forcing);
+        let params =
+            FluidParams { viscosity: spec.flow.viscosity, forcing, frame_time: spec.flow.frame_time };
+        match (&spec.tunnel, &spec.cavity) {
+            (Some(_), Some(_)) => Err(fail("cavity", "a scene is a [tunnel] or a [cavity], not both".into())),
+            (None, None) => Err(fail("flow", "a scene needs a [tunnel] or a [cavity] table".into())),
+            (Some(t), None) => Self::tunnel(t, &spec, params, &fail),
+            (None, Some(c)) => Self::cavity(c, &spec, params, &fail),
+        }
+    }
+
+    fn tunnel(
+        t: &TunnelKeys,
+        spec: &SceneSpec,
+        params: FluidParams,
+        fail: &Fail,
+    ) -> Result<Self, FluidError> {
+        for (key, v) in [
+            ("length", t.length),
+            ("height", t.height),
+            ("radius", t.radius),
+            ("cell", t.cell),
+            ("obstacle_refinement", t.obstacle_refinement),
+        ] {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(fail(key, format!("{key} = {v}: must be positive")));
+            }
+        }
+        let s = spec.obstacle.scale;
+        if !(s.is_finite() && s > 0.0 && s < 2.5) {
+            return Err(fail("scale", format!("scale = {s}: must be in (0, 2.5)")));
         }
         let tunnel_spec = TunnelSpec {
             length: t.length,
@@ -157,7 +249,7 @@ impl FluidScene {
             obstacle_refinement: t.obstacle_refinement,
         };
         let meshed = tunnel(&tunnel_spec).map_err(|e| fail("tunnel", e.to_string()))?;
-        let mesh = if (s - 1.0).abs() > 0.0 {
+        let mesh = if s != 1.0 {
             let prescribed: Vec<u32> = meshed.obstacle.iter().chain(&meshed.outer).copied().collect();
             let mut deform = HarmonicDeformation::new(&meshed.mesh, &prescribed)?;
             let mut target = meshed.mesh.g().to_vec();
@@ -172,21 +264,87 @@ impl FluidScene {
             meshed.mesh.clone()
         };
         let topology = Topology::new(&mesh, Some(Periodic { axis: 0 }))?;
-        let [ux, uy] = spec.flow.initial_velocity;
-        let initial_velocity = (0..mesh.cell_count()).flat_map(|_| [ux, uy]).collect();
-        let [fx, fy] = spec.flow.forcing;
+        let initial_velocity =
+            (0..mesh.cell_count()).flat_map(|_| spec.flow.initial_velocity.clone()).collect();
         Ok(Self {
             base: meshed.mesh,
             mesh,
             topology,
-            params: FluidParams {
-                viscosity: spec.flow.viscosity,
-                forcing: [fx, fy, 0.0],
-                frame_time: spec.flow.frame_time,
-            },
+            params,
             initial_velocity,
             frames: spec.flow.frames,
             obstacle_scale: s,
+            periodic_axis: Some(0),
+            motion: Motion::Static,
+            description: format!("periodic tunnel, obstacle scale {s}"),
         })
+    }
+
+    fn cavity(
+        c: &CavityKeys,
+        spec: &SceneSpec,
+        params: FluidParams,
+        fail: &Fail,
+    ) -> Result<Self, FluidError> {
+        for (key, v) in [
+            ("central_radius", c.central_radius),
+            ("small_radius", c.small_radius),
+            ("small_distance", c.small_distance),
+            ("tunnel_radius", c.tunnel_radius),
+            ("spacing", c.spacing),
+        ] {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(fail(key, format!("{key} = {v}: must be positive")));
+            }
+        }
+        if c.small_distance <= c.central_radius + c.small_radius {
+            return Err(fail("small_distance", "the small cavities must not overlap the central one".into()));
+        }
+        if c.tunnel_radius >= c.small_radius {
+            return Err(fail("tunnel_radius", "tunnels must be thinner than the small cavities".into()));
+        }
+        let amounts = training_run(c.run).ok_or_else(|| {
+            fail("run", format!("run = {}: the training runs are 0 to {}", c.run, TRAINING_RUNS - 1))
+        })?;
+        let cavity_spec = CavitySpec {
+            central_radius: c.central_radius,
+            small_radius: c.small_radius,
+            small_distance: c.small_distance,
+            tunnel_radius: c.tunnel_radius,
+            spacing: c.spacing,
+        };
+        let cavity = Cavity::new(&cavity_spec).map_err(|e| fail("cavity", e.to_string()))?;
+        let mesh = cavity.mesh.clone();
+        let topology = cavity.topology.clone();
+        let initial_velocity =
+            (0..mesh.cell_count()).flat_map(|_| spec.flow.initial_velocity.clone()).collect();
+        Ok(Self {
+            base: mesh.clone(),
+            mesh,
+            topology,
+            params,
+            initial_velocity,
+            frames: spec.flow.frames,
+            obstacle_scale: 1.0,
+            periodic_axis: None,
+            motion: Motion::Cavity { cavity: Box::new(cavity), amounts, run: c.run },
+            description: format!(
+                "deforming cavity, training run {} (deepest compressions {amounts:?})",
+                c.run
+            ),
+        })
+    }
+
+    /// The geometry vector of frame `frame` (the tunnel: fixed; the cavity: its compressions
+    /// at that frame, volume renormalised, interior harmonic). An inverted frame is refused
+    /// naming it.
+    pub fn geometry(&mut self, frame: usize) -> Result<Vec<f64>, FluidError> {
+        match &mut self.motion {
+            Motion::Static => Ok(self.mesh.g().to_vec()),
+            Motion::Cavity { cavity, amounts, .. } => {
+                let a = Cavity::compression(*amounts, frame, self.frames);
+                Ok(cavity.geometry(a, frame)?.g().to_vec())
+            }
+        }
     }
 }
