@@ -115,6 +115,10 @@ enum BenchWhat {
     /// Eq. 14, on the CPU and the device, for the small and the full two-room scene. The
     /// reduced model's rate is measured by `galerkin radiosity compare`.
     Radiosity(cli::radiosity::BenchArgs),
+    /// Full-space fluid (seed 000 §5, Table 1): seconds per step for deformation, advection
+    /// and projection on the deforming cavity from 10³ to 3·10⁵ cells next to the paper's,
+    /// and particle advection (10,000 particles) on the CPU and the device.
+    Fluid(cli::fluid::BenchArgs),
     /// The reduction core: premultiplication of the fluid volume tensor at the paper's cavity
     /// size (88,671 cells, m = 128, m_g = 5) next to faer's GEMM of its final stage, reduced
     /// evaluation per call and per batch, and premultiplication time against cells and m.
@@ -172,6 +176,7 @@ fn run(cli: Cli) -> Result<()> {
         Command::Bench { what: BenchWhat::Spacetime(args) } => cli::spacetime::bench(&desc, &args),
         Command::Bench { what: BenchWhat::Spectral(args) } => cli::spectral::bench(&desc, &args),
         Command::Bench { what: BenchWhat::Radiosity(args) } => cli::radiosity::bench(&desc, &args),
+        Command::Bench { what: BenchWhat::Fluid(args) } => cli::fluid::bench(&desc, &args),
     }
 }
 

@@ -6,7 +6,7 @@ use std::time::Instant;
 use anyhow::{bail, Context, Result};
 use clap::{Args, Subcommand};
 use galerkin::fluid::gpu::GpuParticles;
-use galerkin::fluid::particles::seed_particles;
+use galerkin::fluid::particles::{advect_particles, seed_particles};
 use galerkin::fluid::render::{cell_speeds, draw_picture, DrawStyle, View2d};
 use galerkin::fluid::scene::FluidScene;
 use galerkin::fluid::snapshots::{SnapshotMeta, SnapshotReader, SnapshotWriter};
@@ -154,6 +154,7 @@ fn simulate(args: &SimulateArgs) -> Result<()> {
     let bar = progress_bar(frames as u64, "simulating");
     let (mut td, mut ta, mut tp, mut worst_div) = (Vec::new(), Vec::new(), Vec::new(), 0.0f64);
     let mut substeps = 0;
+    let (mut refactorised, mut gmres_steps) = (0, 0);
     let e0 = solver.energy(&state);
     for frame in 1..=frames {
         let t0 = Instant::now();
@@ -165,16 +166,19 @@ fn simulate(args: &SimulateArgs) -> Result<()> {
         tp.push(report.projection_seconds);
         worst_div = worst_div.max(report.projection.relative_divergence);
         substeps = report.substeps;
+        refactorised += usize::from(report.projection.refactorised);
+        gmres_steps += report.projection.refinements;
         state = next;
         bar.set_message(format!("energy {:.4}", solver.energy(&state)));
         bar.inc(1);
     }
     bar.finish_and_clear();
     println!(
-        "{frames} frames: t_d {:.4} s (deformation), t_a {:.4} s (advection + diffusion, {substeps} RK4 substeps), t_p {:.4} s (projection) per frame (medians); energy {e0:.5} → {:.5}; worst relative divergence {worst_div:.1e} → {}",
+        "{frames} frames: t_d {:.4} s (deformation), t_a {:.4} s (advection + diffusion, {substeps} RK4 substeps), t_p {:.4} s (projection: {refactorised} refactorisations, {:.1} GMRES steps per frame) per frame (medians); energy {e0:.5} → {:.5}; worst relative divergence {worst_div:.1e} → {}",
         median(td),
         median(ta),
         median(tp),
+        gmres_steps as f64 / frames.max(1) as f64,
         solver.energy(&state),
         args.out.display()
     );
@@ -277,4 +281,111 @@ fn write_image(path: &Path, ext: &str, w: u32, h: u32, rgba: &[u8], raw: &[f32])
         .with_context(|| format!("writing {}", path.display()))?;
     }
     Ok(())
+}
+
+/// Arguments of `galerkin bench fluid`.
+#[derive(Args)]
+pub struct BenchArgs {
+    /// Smaller sizes and fewer frames: a minute instead of several.
+    #[arg(long)]
+    pub quick: bool,
+    /// Frames measured per size (medians are reported).
+    #[arg(long, default_value_t = 5)]
+    pub frames: usize,
+}
+
+/// Table 1 of seed 000: full-space seconds per step (deformation, advection, projection) and
+/// particle advection, for the cavity (88,671 cells) and the eagle (300,217 cells).
+const PAPER: [(&str, usize, f64, f64, f64); 2] =
+    [("cavity", 88_671, 2.17, 18.4, 220.0), ("eagle", 300_217, 2.92, 18.9, 82.0)];
+const PAPER_PARTICLES_S: f64 = 0.308;
+
+/// `galerkin bench fluid`: per-stage times of the full-space step on the deforming cavity at
+/// sizes from 10³ to 3·10⁵ cells, next to Table 1, and particle advection (CPU and device).
+pub fn bench(desc: &GpuDesc, args: &BenchArgs) -> Result<()> {
+    use galerkin::fluid::cavity::{training_run, Cavity, CavitySpec};
+    let spacings: &[f64] = if args.quick { &[0.3, 0.2, 0.14] } else { &[0.4, 0.2, 0.135, 0.09, 0.0605] };
+    let frames = args.frames.max(2);
+    let gpu = Gpu::new(desc)?;
+    println!("device: {} ({})", gpu.caps().device_name, gpu.caps().driver);
+    println!();
+    println!("| cells | faces | vertices | setup s | t_d s | t_a s (substeps) | t_p s (refactorised) | factor MB |");
+    println!("|---:|---:|---:|---:|---:|---:|---:|---:|");
+    let mut rows = Vec::new();
+    for &h in spacings {
+        let spec = CavitySpec { spacing: h, tunnel_radius: 0.16f64.max(1.1 * h), ..CavitySpec::default() };
+        let t0 = Instant::now();
+        let mut cavity = Cavity::new(&spec)?;
+        let mesh = cavity.mesh.clone();
+        let topo = cavity.topology.clone();
+        let params = galerkin::fluid::FluidParams { viscosity: 1e-3, forcing: [0.0; 3], frame_time: 0.02 };
+        let mut solver = FluidSolver::new(mesh.clone(), topo.clone(), params)?;
+        let setup = t0.elapsed().as_secs_f64();
+        let mut state = solver.initial_state(mesh.g().to_vec(), &vec![0.0; 3 * mesh.cell_count()])?;
+        let amounts = training_run(0).unwrap_or([0.3, 0.0, 0.0]);
+        let (mut td, mut ta, mut tp) = (Vec::new(), Vec::new(), Vec::new());
+        let mut substeps = 0;
+        let mut refactor = 0;
+        // Frames 1..: the compression is under way, so the mesh moves every frame.
+        for frame in 1..=frames {
+            let t = Instant::now();
+            let g = cavity.geometry(Cavity::compression(amounts, frame, 20), frame)?.g().to_vec();
+            td.push(t.elapsed().as_secs_f64());
+            let (next, report) = solver.step(&state, &g, frame)?;
+            ta.push(report.advection_seconds);
+            tp.push(report.projection_seconds);
+            substeps = report.substeps;
+            refactor += usize::from(report.projection.refactorised);
+            state = next;
+        }
+        let row = (mesh.cell_count(), median(td), median(ta), median(tp));
+        println!(
+            "| {} | {} | {} | {setup:.2} | {:.4} | {:.4} ({substeps}) | {:.3} ({refactor}/{frames}) | {:.0} |",
+            mesh.cell_count(),
+            topo.face_count(),
+            mesh.vertex_count(),
+            row.1,
+            row.2,
+            row.3,
+            solver.projection_factor_len() as f64 * 8.0 / 1e6
+        );
+        rows.push((row, mesh, topo, state));
+    }
+    println!();
+    println!("Against Table 1 (the paper's times over ours at the nearest size; goal ≥ 10×):");
+    println!();
+    println!("| paper row | paper cells | our cells | t_d ratio | t_a ratio | t_p ratio |");
+    println!("|---|---:|---:|---:|---:|---:|");
+    for (name, cells, pd, pa, pp) in PAPER {
+        if let Some(((c, d, a, p), ..)) = rows.iter().min_by_key(|r| (r.0 .0 as i64 - cells as i64).abs()) {
+            println!("| {name} | {cells} | {c} | {:.0}× | {:.0}× | {:.0}× |", pd / d, pa / a, pp / p);
+        }
+    }
+    // Particles: 10,000 in the cavity nearest the paper's size, one frame of 10 substeps.
+    if let Some((_, mesh, topo, state)) = rows.iter().min_by_key(|r| (r.0 .0 as i64 - 88_671).abs()) {
+        let seeds = seed_particles(mesh, 10_000);
+        let mut cpu_times = Vec::new();
+        let mut dev_times = Vec::new();
+        let mut device = GpuParticles::new(&gpu, mesh, topo, &seeds)?;
+        for _ in 0..3 {
+            let mut p = seeds.clone();
+            let t = Instant::now();
+            advect_particles(mesh, topo, &state.g, &state.g, &state.f, 0.02, 10, &mut p);
+            cpu_times.push(t.elapsed().as_secs_f64());
+            device.upload(&gpu, &seeds)?;
+            let t = Instant::now();
+            device.advect(&gpu, mesh, &state.g, &state.g, &state.f, 0.02, 10)?;
+            dev_times.push(t.elapsed().as_secs_f64());
+        }
+        let (c, d) = (median(cpu_times), median(dev_times));
+        println!();
+        println!(
+            "Particles: 10,000 in {} cells, one frame of 10 Euler substeps: CPU {c:.4} s, device {d:.4} s (paper t_pa {PAPER_PARTICLES_S} s: {:.0}× and {:.0}×)",
+            mesh.cell_count(),
+            PAPER_PARTICLES_S / c,
+            PAPER_PARTICLES_S / d
+        );
+    }
+    drop(rows);
+    crate::check_validation(gpu)
 }

@@ -23,6 +23,8 @@
 //!   printed `−μV⁻¹Δ` would add energy.
 //! - Divergence: `(div f)_c = Σ_faces σ f`; boundary selector D picks the boundary faces.
 
+use rayon::prelude::*;
+
 use crate::mesh::geometry::{face_area_normal, face_centroid, signed_volume};
 use crate::mesh::{SimplexMesh, Topology};
 use crate::tensor::SparseTensor;
@@ -291,36 +293,34 @@ impl CellOperators {
     }
 }
 
-/// ṗ = (A ⊗₂ f) u (Eq. 6), evaluated per cell.
+/// ṗ = (A ⊗₂ f) u (Eq. 6), evaluated per cell (cells in parallel).
 pub fn advect(topo: &Topology, f: &[f64], u: &[f64], out: &mut [f64]) {
     let d = topo.dim();
-    for c in 0..topo.cell_count() {
-        for k in 0..d {
-            out[d * c + k] = 0.0;
-        }
+    out.par_chunks_mut(d).enumerate().for_each(|(c, o)| {
+        o.fill(0.0);
         for l in 0..=d {
             let flux = -0.5 * topo.sign(c, l) * f[topo.cell_face(c, l)];
             let e = topo.neighbour(c, l);
             for k in 0..d {
                 let ue = e.map_or(0.0, |e| u[d * e + k]);
-                out[d * c + k] += flux * (u[d * c + k] + ue);
+                o[k] += flux * (u[d * c + k] + ue);
             }
         }
-    }
+    });
 }
 
-/// out += s·Δu (Eq. 9's graph Laplacian), evaluated per cell.
+/// out += s·Δu (Eq. 9's graph Laplacian), evaluated per cell (cells in parallel).
 pub fn add_laplacian(topo: &Topology, u: &[f64], s: f64, out: &mut [f64]) {
     let d = topo.dim();
-    for c in 0..topo.cell_count() {
+    out.par_chunks_mut(d).enumerate().for_each(|(c, o)| {
         for l in 0..=d {
             if let Some(e) = topo.neighbour(c, l) {
                 for k in 0..d {
-                    out[d * c + k] += s * (u[d * e + k] - u[d * c + k]);
+                    o[k] += s * (u[d * e + k] - u[d * c + k]);
                 }
             }
         }
-    }
+    });
 }
 
 /// (div f)_c = Σ_faces σ f.

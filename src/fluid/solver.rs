@@ -23,6 +23,8 @@
 
 use std::time::Instant;
 
+use rayon::prelude::*;
+
 use crate::mesh::geometry::swept_volume;
 use crate::mesh::{SimplexMesh, Topology};
 
@@ -165,7 +167,6 @@ impl FluidSolver {
         frame: usize,
     ) -> Result<(FluidState, StepReport), FluidError> {
         let d = self.mesh.dim();
-        let nc = self.mesh.cell_count();
         self.check_len("geometry", g_next.len(), self.mesh.g().len())?;
         self.mesh.with_g(g_next.to_vec(), Some(frame))?;
         let h = self.induced_flux(&state.g, g_next);
@@ -181,11 +182,11 @@ impl FluidSolver {
         let rhs = |u: &[f64], out: &mut [f64]| {
             advect(topo, &rel, u, out);
             add_laplacian(topo, u, mu, out);
-            for c in 0..nc {
+            out.par_chunks_mut(d).zip(u.par_chunks(d)).enumerate().for_each(|(c, (o, uc))| {
                 for k in 0..d {
-                    out[d * c + k] = (out[d * c + k] - vdot[c] * u[d * c + k]) / ops.volumes[c] + forcing[k];
+                    o[k] = (o[k] - vdot[c] * uc[k]) / ops.volumes[c] + forcing[k];
                 }
-            }
+            });
         };
         let mut u = state.u.clone();
         let n = u.len();

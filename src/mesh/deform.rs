@@ -24,6 +24,9 @@ pub struct HarmonicDeformation {
     solver: SparseSymmetricSolver,
     /// Per (cell, edge) the pattern slots of (a,a), (b,b), (a,b) for free a, b (MAX if absent).
     edge_slots: Vec<[usize; 3]>,
+    /// The cell weights of the current numerical factorisation (the uniform weights' factor
+    /// is kept across frames: only stiffened frames refactorise).
+    factored_weights: Option<Vec<f64>>,
 }
 
 impl HarmonicDeformation {
@@ -80,7 +83,15 @@ impl HarmonicDeformation {
         }
         let solver = SparseSymmetricSolver::new(pattern, Factorisation::Llt)
             .map_err(|e| MeshError::Solve(format!("harmonic deformation: {e}")))?;
-        Ok(Self { base: base.clone(), base_volumes: base.volumes(), free_index, free, solver, edge_slots })
+        Ok(Self {
+            base: base.clone(),
+            base_volumes: base.volumes(),
+            free_index,
+            free,
+            solver,
+            edge_slots,
+            factored_weights: None,
+        })
     }
 
     /// Number of vertices that follow harmonically.
@@ -160,9 +171,13 @@ impl HarmonicDeformation {
                 }
             }
         }
-        self.solver.factorise("harmonic deformation", &values).map_err(|e| {
-            MeshError::Solve(format!("frame {frame}: {e} (a free vertex with no prescribed path?)"))
-        })?;
+        if self.factored_weights.as_deref() != Some(weights) {
+            self.factored_weights = None;
+            self.solver.factorise("harmonic deformation", &values).map_err(|e| {
+                MeshError::Solve(format!("frame {frame}: {e} (a free vertex with no prescribed path?)"))
+            })?;
+            self.factored_weights = Some(weights.to_vec());
+        }
         let mut g = target.to_vec();
         for k in 0..dim {
             let col = &mut rhs[k * nf..(k + 1) * nf];

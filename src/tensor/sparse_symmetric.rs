@@ -82,6 +82,11 @@ impl SymmetricPattern {
     }
 }
 
+/// faer's parallelism: every core rayon has (supernodal factorisation and solves).
+fn parallelism() -> Par {
+    Par::rayon(rayon::current_num_threads().max(1))
+}
+
 /// Which numerical factorisation.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Factorisation {
@@ -146,7 +151,7 @@ impl SparseSymmetricSolver {
             return Err(TensorError::NotFinite { what: what.into(), detail: format!("matrix entry {i}") });
         }
         let a = SparseColMatRef::new(self.pattern.symbolic(), values);
-        let par = Par::Seq;
+        let par = parallelism();
         self.factored = false;
         match self.kind {
             Factorisation::Llt => {
@@ -200,7 +205,7 @@ impl SparseSymmetricSolver {
     pub fn solve_in_place(&self, rhs: &mut [f64]) {
         assert!(self.factored, "factorise before solving");
         let n = self.pattern.n;
-        let par = Par::Seq;
+        let par = parallelism();
         let req = self.symbolic.solve_in_place_scratch::<f64>(1, par);
         let mut mem = MemBuffer::new(req);
         let stack = MemStack::new(&mut mem);
