@@ -387,6 +387,7 @@ fn demo(desc: &GpuDesc, scene_path: &Path, out: &Path) -> Result<()> {
     drop((renderer, colours, values));
     cli::spectral::demo(&gpu, (w, h), out)?;
     cli::radiosity::demo(&gpu, (w, h), out)?;
+    cli::fluid::demo(&gpu, (w, h), out)?;
     check_validation(gpu)
 }
 

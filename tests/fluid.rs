@@ -380,3 +380,30 @@ fn the_cavity_keeps_its_volume_and_every_training_run_stays_valid() {
 fn dist3(a: [f64; 3], b: [f64; 3]) -> f64 {
     ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
 }
+
+#[test]
+fn a_users_gmsh_mesh_runs_as_a_periodic_scene() {
+    let dir = std::env::temp_dir().join(format!("galerkin-msh-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let (mesh, _) = channel(3, 2);
+    std::fs::write(dir.join("channel.msh"), galerkin::mesh::gmsh::write_msh(&mesh, true)).expect("write msh");
+    let scene_text = "[mesh]\nfile = \"channel.msh\"\nperiodic_axis = 0\n[flow]\ninitial_velocity = [0.5, 0.0, 0.0]\nviscosity = 1e-3\nframe_time = 0.05\nframes = 3\n";
+    std::fs::write(dir.join("scene.toml"), scene_text).expect("write scene");
+    let mut scene = FluidScene::load(&dir.join("scene.toml")).expect("scene");
+    assert_eq!(scene.mesh.cell_count(), mesh.cell_count());
+    let mut solver =
+        FluidSolver::new(scene.mesh.clone(), scene.topology.clone(), scene.params).expect("solver");
+    let mut state = solver.initial_state(scene.mesh.g().to_vec(), &scene.initial_velocity).expect("start");
+    for frame in 1..=2 {
+        let g = scene.geometry(frame).expect("static");
+        state = solver.step(&state, &g, frame).expect("step").0;
+    }
+    let err =
+        state.u.chunks(3).map(|u| (u[0] - 0.5).abs().max(u[1].abs()).max(u[2].abs())).fold(0.0, f64::max);
+    assert!(err < 1e-9, "uniform flow through the periodic channel: {err}");
+    // A missing mesh file names the scene line of `file`.
+    std::fs::write(dir.join("bad.toml"), scene_text.replace("channel.msh", "nope.msh")).expect("write");
+    let e = FluidScene::load(&dir.join("bad.toml")).expect_err("missing").to_string();
+    assert!(e.contains("bad.toml:2:") && e.contains("nope.msh"), "{e}");
+    std::fs::remove_dir_all(&dir).expect("clean up");
+}

@@ -30,6 +30,21 @@
 //! frames = 60
 //! ```
 //!
+//! A user's mesh (Gmsh MSH 4.1, ASCII or binary, triangles or tetrahedra; the path relative to
+//! the scene file), static, optionally periodic along one axis (the two sides matched
+//! geometrically):
+//!
+//! ```toml
+//! [mesh]
+//! file = "channel.msh"
+//! periodic_axis = 0   # optional
+//! [flow]
+//! initial_velocity = [1.0, 0.0, 0.0]
+//! viscosity = 1e-3
+//! frame_time = 0.02
+//! frames = 100
+//! ```
+//!
 //! The tunnel:
 //!
 //! ```toml
@@ -56,6 +71,7 @@ use serde::Deserialize;
 
 use super::cavity::{training_run, Cavity, CavitySpec, TRAINING_RUNS};
 use crate::mesh::deform::HarmonicDeformation;
+use crate::mesh::gmsh::read_msh;
 use crate::mesh::tunnel::{tunnel, TunnelSpec};
 use crate::mesh::{Periodic, SimplexMesh, Topology};
 use crate::scene_file;
@@ -67,6 +83,7 @@ use super::{FluidError, FluidParams};
 struct SceneSpec {
     tunnel: Option<TunnelKeys>,
     cavity: Option<CavityKeys>,
+    mesh: Option<MeshKeys>,
     #[serde(default)]
     obstacle: ObstacleKeys,
     flow: FlowKeys,
@@ -86,6 +103,14 @@ struct TunnelKeys {
 
 fn half() -> f64 {
     0.5
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct MeshKeys {
+    file: String,
+    #[serde(default)]
+    periodic_axis: Option<usize>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -197,7 +222,18 @@ impl FluidScene {
         if spec.flow.initial_velocity.iter().chain(&spec.flow.forcing).any(|v| !v.is_finite()) {
             return Err(fail("initial_velocity", "velocities and forcing must be finite".into()));
         }
-        let dim = if spec.cavity.is_some() { 3 } else { 2 };
+        let user_mesh = match &spec.mesh {
+            Some(m) => {
+                let file = path.parent().unwrap_or(Path::new(".")).join(&m.file);
+                Some(read_msh(&file).map_err(|e| fail("file", e.to_string()))?)
+            }
+            None => None,
+        };
+        let dim = match &user_mesh {
+            Some(m) => m.dim(),
+            None if spec.cavity.is_some() => 3,
+            None => 2,
+        };
         if spec.flow.initial_velocity.len() != dim {
             return Err(fail(
                 "initial_velocity",
@@ -211,11 +247,40 @@ impl FluidScene {
         forcing[..spec.flow.forcing.len()].copy_from_slice(&spec.flow.forcing);
         let params =
             FluidParams { viscosity: spec.flow.viscosity, forcing, frame_time: spec.flow.frame_time };
+        let kinds = usize::from(spec.tunnel.is_some())
+            + usize::from(spec.cavity.is_some())
+            + usize::from(user_mesh.is_some());
+        if kinds != 1 {
+            return Err(fail("flow", "a scene needs exactly one of [tunnel], [cavity] and [mesh]".into()));
+        }
+        if let (Some(mesh), Some(keys)) = (user_mesh, &spec.mesh) {
+            if keys.periodic_axis.is_some_and(|a| a >= mesh.dim()) {
+                return Err(fail(
+                    "periodic_axis",
+                    format!("periodic_axis in a {}D mesh must be below {}", mesh.dim(), mesh.dim()),
+                ));
+            }
+            let topology = Topology::new(&mesh, keys.periodic_axis.map(|axis| Periodic { axis }))
+                .map_err(|e| fail("file", e.to_string()))?;
+            let initial_velocity =
+                (0..mesh.cell_count()).flat_map(|_| spec.flow.initial_velocity.clone()).collect();
+            return Ok(Self {
+                base: mesh.clone(),
+                description: format!("{} ({}D, {} cells)", keys.file, mesh.dim(), mesh.cell_count()),
+                mesh,
+                topology,
+                params,
+                initial_velocity,
+                frames: spec.flow.frames,
+                obstacle_scale: 1.0,
+                periodic_axis: keys.periodic_axis,
+                motion: Motion::Static,
+            });
+        }
         match (&spec.tunnel, &spec.cavity) {
-            (Some(_), Some(_)) => Err(fail("cavity", "a scene is a [tunnel] or a [cavity], not both".into())),
-            (None, None) => Err(fail("flow", "a scene needs a [tunnel] or a [cavity] table".into())),
-            (Some(t), None) => Self::tunnel(t, &spec, params, &fail),
-            (None, Some(c)) => Self::cavity(c, &spec, params, &fail),
+            (Some(t), _) => Self::tunnel(t, &spec, params, &fail),
+            (_, Some(c)) => Self::cavity(c, &spec, params, &fail),
+            (None, None) => unreachable!("one kind, checked above"),
         }
     }
 
@@ -333,6 +398,19 @@ impl FluidScene {
                 c.run
             ),
         })
+    }
+
+    /// Chooses the cavity's training run (0 to 13); refused for other scenes.
+    pub fn set_run(&mut self, run: usize) -> Result<(), FluidError> {
+        let Motion::Cavity { amounts, run: current, .. } = &mut self.motion else {
+            return Err(FluidError::State("--run applies to cavity scenes only".into()));
+        };
+        *amounts = training_run(run).ok_or_else(|| {
+            FluidError::State(format!("run {run}: the training runs are 0 to {}", TRAINING_RUNS - 1))
+        })?;
+        *current = run;
+        self.description = format!("deforming cavity, training run {run} (deepest compressions {amounts:?})");
+        Ok(())
     }
 
     /// The geometry vector of frame `frame` (the tunnel: fixed; the cavity: its compressions

@@ -14,6 +14,7 @@
 pub mod deform;
 mod error;
 pub mod geometry;
+pub mod gmsh;
 pub mod kuhn;
 pub mod sdf;
 pub mod stuffing;
