@@ -15,7 +15,9 @@
 //! pushed out of the domain through a wall (Euler's error near a curved streamline) is put
 //! back at the closest point of its last cell.
 
-use std::cell::OnceCell;
+use std::sync::OnceLock;
+
+use rayon::prelude::*;
 
 use crate::mesh::geometry::{centroid, face_area_normal, face_centroid, signed_volume, Point};
 use crate::mesh::{point_of, FaceKind, SimplexMesh, Topology};
@@ -35,12 +37,13 @@ pub struct Particle {
 /// The velocity of cell `c` from the fluxes (Eq. 13), at geometry `g`.
 pub fn cell_velocity(mesh: &SimplexMesh, topo: &Topology, g: &[f64], f: &[f64], c: usize) -> Point {
     let d = mesh.dim();
-    let p = mesh.cell_points_at(g, c);
-    let vol = signed_volume(d, &p);
-    let xc = centroid(&p);
+    let at = MovingGeometry { mesh, g0: g, g1: g, t: 0.0 };
+    let p = &at.points(c)[..=d];
+    let vol = signed_volume(d, p);
+    let xc = centroid(p);
     let mut u = [0.0; 3];
     for l in 0..=d {
-        let xf = face_centroid(&p, l);
+        let xf = face_centroid(p, l);
         let flux = topo.sign(c, l) * f[topo.cell_face(c, l)];
         for k in 0..d {
             u[k] += flux * (xf[k] - xc[k]) / vol;
@@ -165,21 +168,49 @@ pub enum Located {
 /// Tolerance on barycentric coordinates for "inside".
 const INSIDE: f64 = -1e-12;
 
-/// Finds the cell containing `particle.position` at geometry `g`, walking from its cell; a
+/// The mesh at time `t` ∈ [0, 1] of a frame whose vertices move linearly from `g0` to `g1`;
+/// only the vertices of the cells a particle visits are interpolated.
+#[derive(Clone, Copy)]
+pub struct MovingGeometry<'a> {
+    /// The topology's mesh.
+    pub mesh: &'a SimplexMesh,
+    /// Geometry at the frame's start.
+    pub g0: &'a [f64],
+    /// Geometry at its end.
+    pub g1: &'a [f64],
+    /// Fraction of the frame.
+    pub t: f64,
+}
+
+impl MovingGeometry<'_> {
+    /// The corners of cell `c` (the first `dim + 1` entries).
+    pub fn points(&self, c: usize) -> [Point; 4] {
+        let d = self.mesh.dim();
+        let mut out = [[0.0; 3]; 4];
+        for (i, &v) in self.mesh.cell(c).iter().enumerate() {
+            for k in 0..d {
+                let j = d * v as usize + k;
+                out[i][k] = self.g0[j] + self.t * (self.g1[j] - self.g0[j]);
+            }
+        }
+        out
+    }
+}
+
+/// Finds the cell containing `particle.position` in the mesh `at`, walking from its cell; a
 /// walk that reaches its cap asks the grid hash (`grid`, built by `make_grid` on first need).
 pub fn locate(
-    mesh: &SimplexMesh,
+    at: &MovingGeometry,
     topo: &Topology,
-    g: &[f64],
-    grid: &OnceCell<GridHash>,
-    make_grid: &dyn Fn() -> GridHash,
+    grid: &OnceLock<GridHash>,
+    make_grid: &(dyn Fn() -> GridHash + Sync),
     particle: &mut Particle,
 ) -> Located {
-    let d = mesh.dim();
+    let d = at.mesh.dim();
     let mut c = particle.cell as usize;
     for _ in 0..WALK_CAP {
-        let p = mesh.cell_points_at(g, c);
-        let b = barycentric(d, &p, particle.position);
+        let p = at.points(c);
+        let b = barycentric(d, &p[..=d], particle.position);
         let (k, worst) =
             (0..=d).map(|k| (k, b[k])).fold((0, f64::INFINITY), |m, x| if x.1 < m.1 { x } else { m });
         if worst >= INSIDE {
@@ -189,13 +220,13 @@ pub fn locate(
         match topo.neighbour(c, k) {
             None => {
                 // Through a wall: back to the closest point of this cell.
-                particle.position = clamp_into(d, &p, particle.position);
+                particle.position = clamp_into(d, &p[..=d], particle.position);
                 particle.cell = c as u32;
                 return Located::Clamped;
             }
             Some(e) => {
                 if topo.kind(topo.cell_face(c, k)) == FaceKind::Wrap {
-                    let shift = wrap_shift(mesh, topo, g, c, k, e);
+                    let shift = wrap_shift(at, topo, c, k, e);
                     for i in 0..d {
                         particle.position[i] += shift[i];
                     }
@@ -206,27 +237,28 @@ pub fn locate(
     }
     let grid = grid.get_or_init(make_grid);
     for &cand in grid.candidates(grid.bucket(particle.position)) {
-        let p = mesh.cell_points_at(g, cand as usize);
-        let b = barycentric(d, &p, particle.position);
+        let p = at.points(cand as usize);
+        let b = barycentric(d, &p[..=d], particle.position);
         if (0..=d).all(|k| b[k] >= INSIDE) {
             particle.cell = cand;
             return Located::Hashed;
         }
     }
-    let p = mesh.cell_points_at(g, c);
-    particle.position = clamp_into(d, &p, particle.position);
+    let p = at.points(c);
+    particle.position = clamp_into(d, &p[..=d], particle.position);
     particle.cell = c as u32;
     Located::Clamped
 }
 
 /// The translation from cell `c`'s copy of its wrap face `k` to neighbour `e`'s copy.
-pub fn wrap_shift(mesh: &SimplexMesh, topo: &Topology, g: &[f64], c: usize, k: usize, e: usize) -> Point {
+pub fn wrap_shift(at: &MovingGeometry, topo: &Topology, c: usize, k: usize, e: usize) -> Point {
+    let d = at.mesh.dim();
     let f = topo.cell_face(c, k);
     let [a, _] = topo.face_cells(f);
     let locals = topo.face_local(f);
     let (mine, theirs) = if a as usize == c { (locals[0], locals[1]) } else { (locals[1], locals[0]) };
-    let pc = face_centroid(&mesh.cell_points_at(g, c), mine as usize);
-    let pe = face_centroid(&mesh.cell_points_at(g, e), theirs as usize);
+    let pc = face_centroid(&at.points(c)[..=d], mine as usize);
+    let pe = face_centroid(&at.points(e)[..=d], theirs as usize);
     [pe[0] - pc[0], pe[1] - pc[1], pe[2] - pc[2]]
 }
 
@@ -264,7 +296,8 @@ pub struct AdvectReport {
 
 /// Advects `particles` through one frame: the fluxes `f` (of the frame's end state) carry
 /// them while the geometry moves from `g0` to `g1`; `substeps` explicit Euler steps of
-/// `frame_time / substeps` (the seed: 10).
+/// `frame_time / substeps` (the seed: 10). Particles are independent: each runs its substeps
+/// on its own, in parallel.
 #[allow(clippy::too_many_arguments)]
 pub fn advect_particles(
     mesh: &SimplexMesh,
@@ -278,31 +311,32 @@ pub fn advect_particles(
 ) -> AdvectReport {
     let d = mesh.dim();
     let dt = frame_time / substeps as f64;
-    let mut report = AdvectReport::default();
-    let mut g = g0.to_vec();
-    let grid = OnceCell::new();
+    let grid = OnceLock::new();
     let make_grid = || GridHash::new(mesh, &[g0, g1]);
-    for s in 0..substeps {
-        // The velocity of the frame's end state (f belongs to g1), then the mesh moves on.
-        for p in particles.iter_mut() {
-            let u = cell_velocity(mesh, topo, g1, f, p.cell as usize);
-            for k in 0..d {
-                p.position[k] += dt * u[k];
+    particles
+        .par_iter_mut()
+        .map(|p| {
+            let mut report = AdvectReport::default();
+            for s in 0..substeps {
+                // The velocity of the frame's end state (f belongs to g1), then the mesh moves on.
+                let u = cell_velocity(mesh, topo, g1, f, p.cell as usize);
+                for k in 0..d {
+                    p.position[k] += dt * u[k];
+                }
+                let at = MovingGeometry { mesh, g0, g1, t: (s + 1) as f64 / substeps as f64 };
+                match locate(&at, topo, &grid, &make_grid, p) {
+                    Located::Walked => report.walked += 1,
+                    Located::Hashed => report.hashed += 1,
+                    Located::Clamped => report.clamped += 1,
+                }
             }
-        }
-        let t = (s + 1) as f64 / substeps as f64;
-        for (gi, (a, b)) in g.iter_mut().zip(g0.iter().zip(g1)) {
-            *gi = a + t * (b - a);
-        }
-        for p in particles.iter_mut() {
-            match locate(mesh, topo, &g, &grid, &make_grid, p) {
-                Located::Walked => report.walked += 1,
-                Located::Hashed => report.hashed += 1,
-                Located::Clamped => report.clamped += 1,
-            }
-        }
-    }
-    report
+            report
+        })
+        .reduce(AdvectReport::default, |a, b| AdvectReport {
+            walked: a.walked + b.walked,
+            hashed: a.hashed + b.hashed,
+            clamped: a.clamped + b.clamped,
+        })
 }
 
 /// `count` particles seeded at the centroids of evenly spaced cells (deterministic).

@@ -28,7 +28,7 @@ use rayon::prelude::*;
 use crate::mesh::geometry::swept_volume;
 use crate::mesh::{SimplexMesh, Topology};
 
-use super::operators::{add_laplacian, advect, divergence, CellOperators};
+use super::operators::{divergence, CellOperators};
 use super::projection::{Projection, ProjectionReport};
 use super::FluidError;
 
@@ -80,6 +80,73 @@ pub struct FluidSolver {
     topo: Topology,
     params: FluidParams,
     projection: Projection,
+    stencil: Stencil,
+}
+
+/// Each cell's faces, signs and neighbours flattened for the advection–diffusion rate: the
+/// same operators as [`super::operators::advect`] and [`super::operators::add_laplacian`] in
+/// one pass over the cells.
+#[derive(Debug)]
+struct Stencil {
+    dim: usize,
+    faces: Vec<u32>,
+    signs: Vec<f64>,
+    /// Neighbour per (cell, local face), `u32::MAX` across a wall.
+    neighbours: Vec<u32>,
+}
+
+impl Stencil {
+    fn new(topo: &Topology) -> Self {
+        let d = topo.dim();
+        let n = topo.cell_count() * (d + 1);
+        let (mut faces, mut signs, mut neighbours) =
+            (Vec::with_capacity(n), Vec::with_capacity(n), Vec::with_capacity(n));
+        for c in 0..topo.cell_count() {
+            for l in 0..=d {
+                faces.push(topo.cell_face(c, l) as u32);
+                signs.push(topo.sign(c, l));
+                neighbours.push(topo.neighbour(c, l).map_or(u32::MAX, |e| e as u32));
+            }
+        }
+        Self { dim: d, faces, signs, neighbours }
+    }
+
+    /// `out = V⁻¹[(A⊗rel)u − V̇u + μΔu] + e`, cells in parallel.
+    #[allow(clippy::too_many_arguments)]
+    fn rate(
+        &self,
+        rel: &[f64],
+        vdot: &[f64],
+        volumes: &[f64],
+        mu: f64,
+        forcing: [f64; 3],
+        u: &[f64],
+        out: &mut [f64],
+    ) {
+        let d = self.dim;
+        out.par_chunks_mut(d).enumerate().for_each(|(c, o)| {
+            let uc = &u[d * c..d * c + d];
+            o.fill(0.0);
+            for l in 0..=d {
+                let s = c * (d + 1) + l;
+                let flux = -0.5 * self.signs[s] * rel[self.faces[s] as usize];
+                let e = self.neighbours[s];
+                if e == u32::MAX {
+                    for k in 0..d {
+                        o[k] += flux * uc[k];
+                    }
+                } else {
+                    let ue = &u[d * e as usize..d * e as usize + d];
+                    for k in 0..d {
+                        o[k] += flux * (uc[k] + ue[k]) + mu * (ue[k] - uc[k]);
+                    }
+                }
+            }
+            for k in 0..d {
+                o[k] = (o[k] - vdot[c] * uc[k]) / volumes[c] + forcing[k];
+            }
+        });
+    }
 }
 
 impl FluidSolver {
@@ -98,7 +165,8 @@ impl FluidSolver {
             return Err(FluidError::State("forcing must be finite".into()));
         }
         let projection = Projection::new(&topo)?;
-        Ok(Self { mesh, topo, params, projection })
+        let stencil = Stencil::new(&topo);
+        Ok(Self { mesh, topo, params, projection, stencil })
     }
 
     /// The mesh (topology and reference geometry).
@@ -166,7 +234,6 @@ impl FluidSolver {
         g_next: &[f64],
         frame: usize,
     ) -> Result<(FluidState, StepReport), FluidError> {
-        let d = self.mesh.dim();
         self.check_len("geometry", g_next.len(), self.mesh.g().len())?;
         self.mesh.with_g(g_next.to_vec(), Some(frame))?;
         let h = self.induced_flux(&state.g, g_next);
@@ -178,15 +245,9 @@ impl FluidSolver {
         let dt = self.params.frame_time / substeps as f64;
         let mu = self.params.viscosity;
         let forcing = self.params.forcing;
-        let topo = &self.topo;
+        let stencil = &self.stencil;
         let rhs = |u: &[f64], out: &mut [f64]| {
-            advect(topo, &rel, u, out);
-            add_laplacian(topo, u, mu, out);
-            out.par_chunks_mut(d).zip(u.par_chunks(d)).enumerate().for_each(|(c, (o, uc))| {
-                for k in 0..d {
-                    o[k] = (o[k] - vdot[c] * uc[k]) / ops.volumes[c] + forcing[k];
-                }
-            });
+            stencil.rate(&rel, &vdot, &ops.volumes, mu, forcing, u, out);
         };
         let mut u = state.u.clone();
         let n = u.len();
@@ -254,5 +315,37 @@ impl FluidSolver {
 fn axpy(x: &[f64], a: f64, y: &[f64], out: &mut [f64]) {
     for ((o, xi), yi) in out.iter_mut().zip(x).zip(y) {
         *o = xi + a * yi;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::fluid::operators::{add_laplacian, advect};
+    use crate::mesh::kuhn::kuhn_box;
+    use crate::mesh::Periodic;
+
+    #[test]
+    fn the_fused_rate_is_advection_plus_diffusion_over_the_volume() {
+        let mesh = kuhn_box(3, [4, 2, 2], [2.0, 1.0, 1.0]).expect("box");
+        let topo = Topology::new(&mesh, Some(Periodic { axis: 0 })).expect("topology");
+        let stencil = Stencil::new(&topo);
+        let n = 3 * mesh.cell_count();
+        let u: Vec<f64> = (0..n).map(|i| ((i * 37 % 101) as f64 / 50.0) - 1.0).collect();
+        let rel: Vec<f64> = (0..topo.face_count()).map(|i| ((i * 53 % 97) as f64 / 48.0) - 1.0).collect();
+        let vdot: Vec<f64> = (0..mesh.cell_count()).map(|i| (i % 7) as f64 * 0.01).collect();
+        let vols = mesh.volumes();
+        let (mu, forcing) = (0.3, [0.1, -0.2, 0.05]);
+        let mut fused = vec![0.0; n];
+        stencil.rate(&rel, &vdot, &vols, mu, forcing, &u, &mut fused);
+        let mut plain = vec![0.0; n];
+        advect(&topo, &rel, &u, &mut plain);
+        add_laplacian(&topo, &u, mu, &mut plain);
+        for c in 0..mesh.cell_count() {
+            for k in 0..3 {
+                let want = (plain[3 * c + k] - vdot[c] * u[3 * c + k]) / vols[c] + forcing[k];
+                assert!((fused[3 * c + k] - want).abs() < 1e-12, "cell {c} axis {k}");
+            }
+        }
     }
 }

@@ -71,8 +71,15 @@ pub fn centroid(p: &[Point]) -> Point {
 
 /// Centroid of the face opposite vertex `k`.
 pub fn face_centroid(p: &[Point], k: usize) -> Point {
-    let others: Vec<Point> = p.iter().enumerate().filter(|&(i, _)| i != k).map(|(_, q)| *q).collect();
-    centroid(&others)
+    let mut c = [0.0; 3];
+    for (i, q) in p.iter().enumerate() {
+        if i != k {
+            for j in 0..3 {
+                c[j] += q[j];
+            }
+        }
+    }
+    c.map(|x| x / (p.len() - 1) as f64)
 }
 
 /// Volume swept by the face opposite `k` as the simplex moves linearly from `p0` to `p1`,
