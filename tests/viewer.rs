@@ -212,3 +212,32 @@ fn the_radiosity_viewer_sweeps_the_parameters() {
     assert!(drawn as f64 > 0.99 * f64::from(w * h), "only {drawn} of {} pixels drawn", w * h);
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// The fluid viewer steps the small tunnel and draws particles over it.
+#[test]
+fn the_fluid_viewer_plays_the_tunnel() {
+    let x = Xvfb::start();
+    let dir = std::env::temp_dir().join(format!("galerkin-viewer-fluid-{}", std::process::id()));
+    let shot = dir.join("shot.png");
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/fluid/tunnel_small.toml");
+    let out = Command::new(env!("CARGO_BIN_EXE_galerkin"))
+        .args(["--validation", "fluid", "view"])
+        .arg(&scene)
+        .args(["--play", "--frames", "5", "--size", "360x120", "--particles", "2000", "--screenshot"])
+        .arg(&shot)
+        .env("DISPLAY", &x.display)
+        .env_remove("WAYLAND_DISPLAY")
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "galerkin fluid view failed: {}", String::from_utf8_lossy(&out.stderr));
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(stdout.contains("2000 particles, stopped at frame"), "{stdout}");
+    let (w, h, rgba) = read_png_rgba8(&shot).unwrap();
+    assert_eq!((w, h), (360, 120));
+    let background = galerkin::render::BACKGROUND.map(|v| (v * 255.0).round() as u8);
+    let drawn = rgba.chunks_exact(4).filter(|p| p[..3] != background[..3]).count();
+    // The tunnel (aspect 4:1 in a 3:1 window) covers most of the window, minus the obstacle.
+    assert!(drawn as f64 > 0.6 * f64::from(w * h), "only {drawn} of {} pixels drawn", w * h);
+    std::fs::remove_dir_all(&dir).unwrap();
+}

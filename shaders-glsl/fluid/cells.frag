@@ -1,5 +1,6 @@
 #version 450
-// Colour from the ramp (OUTPUT_RAW = 0) or the raw speed and cell index (OUTPUT_RAW = 1).
+// Colour from the ramp (OUTPUT_RAW = 0) or the raw value, cell index and kind (0 cell, 2
+// surface) (OUTPUT_RAW = 1).
 #include "push.glsl"
 #include "colormap.glsl"
 
@@ -11,8 +12,13 @@ layout(location = 1) flat in uint v_cell;
 layout(location = 0) out vec4 color;
 
 void main() {
+    // pc.sprite.z: 0 plain cells, 1 cells on the ramp, 2 a shaded surface (value = shade).
     if (OUTPUT_RAW == 1u) {
-        color = vec4(v_value, float(v_cell), 0.0, 1.0);
+        color = vec4(v_value, float(v_cell), pc.sprite.z == 2.0 ? 2.0 : 0.0, 1.0);
+        return;
+    }
+    if (pc.sprite.z == 2.0) {
+        color = vec4(vec3(0.80, 0.82, 0.88) * v_value, 1.0);
         return;
     }
     if (pc.sprite.z == 0.0) {

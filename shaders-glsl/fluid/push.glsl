@@ -2,6 +2,7 @@
 layout(push_constant) uniform Push {
     mat4 view_proj;
     vec4 range;    // x: lo, y: hi, z: colour-map texels, w: 1 for a log scale
-    vec4 sprite;   // x, y: particle half-size in clip units; z: cells coloured (1) or plain (0);
+    vec4 sprite;   // x, y: particle half-size in clip units; z: cells plain (0), coloured (1),
+                   // or a shaded surface (2);
                    // w: particles coloured by speed (0) or white (1)
 } pc;

@@ -7,7 +7,7 @@ use anyhow::{bail, Context, Result};
 use clap::{Args, Subcommand};
 use galerkin::fluid::gpu::GpuParticles;
 use galerkin::fluid::particles::{advect_particles, seed_particles};
-use galerkin::fluid::render::{cell_speeds, draw_picture, DrawStyle, View2d};
+use galerkin::fluid::render::{cell_speeds, draw_picture, DrawStyle, Projection, View2d};
 use galerkin::fluid::scene::FluidScene;
 use galerkin::fluid::snapshots::{SnapshotMeta, SnapshotReader, SnapshotWriter};
 use galerkin::fluid::FluidSolver;
@@ -22,10 +22,38 @@ pub enum Action {
     /// (u, p, f, g, h per frame; the format is documented in src/fluid/snapshots.rs) to
     /// --out. Prints the per-stage times (t_a advection + diffusion, t_p projection).
     Simulate(SimulateArgs),
-    /// Draw one frame of a snapshot directory: cells by speed or plain, and marker particles
-    /// advected from frame 0 on the device (Eq. 13, 10 Euler substeps per frame), to PNG or
-    /// EXR (EXR: the raw speed, cell index and kind — 0 cell, 1 particle — beside the colour).
+    /// Draw one frame of a snapshot directory: in 2D the cells by speed or plain, in 3D the
+    /// domain's walls as a cutaway (far walls shaded, near ones culled); marker particles
+    /// advected from frame 0 on the device (Eq. 13, 10 Euler substeps per frame) on top; to PNG
+    /// or EXR (EXR: the raw value, cell index and kind — 0 cell, 1 particle, 2 wall — beside
+    /// the colour).
     Render(RenderArgs),
+    /// Play a 2D scene in a window: the full simulation steps every frame and the particles
+    /// are advected on the device. Keys: space plays/pauses, c colours cells by speed, r
+    /// restarts, Esc quits, S saves a screenshot.
+    View(ViewArgs),
+}
+
+/// Arguments of `galerkin fluid view`.
+#[derive(Args)]
+pub struct ViewArgs {
+    /// Scene file (TOML), 2D, e.g. scenes/fluid/tunnel_small.toml.
+    pub scene: PathBuf,
+    /// Marker particles.
+    #[arg(long, default_value_t = 8000)]
+    pub particles: usize,
+    /// Start playing.
+    #[arg(long)]
+    pub play: bool,
+    /// Quit after presenting this many frames (scripted runs and tests).
+    #[arg(long)]
+    pub frames: Option<u64>,
+    /// Window size.
+    #[arg(long, default_value = "1200x400", value_parser = crate::parse_size)]
+    pub size: (u32, u32),
+    /// Where S (and, with --frames, the last frame) saves a screenshot.
+    #[arg(long, default_value = "out/fluid-screenshot.png")]
+    pub screenshot: PathBuf,
 }
 
 /// Arguments of `galerkin fluid simulate`.
@@ -94,7 +122,23 @@ pub fn run(desc: &GpuDesc, action: &Action) -> Result<()> {
     match action {
         Action::Simulate(args) => simulate(args),
         Action::Render(args) => render(desc, args),
+        Action::View(args) => view(desc, args),
     }
+}
+
+#[cfg(feature = "viewer")]
+fn view(desc: &GpuDesc, args: &ViewArgs) -> Result<()> {
+    use galerkin::fluid::viewer::FluidContent;
+    use galerkin::render::viewer::{run, ViewOptions};
+    let scene = FluidScene::load(&args.scene)?;
+    let content = FluidContent::new(scene, args.particles, args.size, args.play)?;
+    let options = ViewOptions { frames: args.frames, screenshot: args.screenshot.clone(), resize_to: None };
+    run(desc.clone(), Box::new(content), options)
+}
+
+#[cfg(not(feature = "viewer"))]
+fn view(_: &GpuDesc, _: &ViewArgs) -> Result<()> {
+    bail!("this build has no window: rebuild with the `viewer` feature (on by default)")
 }
 
 fn progress_bar(len: u64, what: &str) -> indicatif::ProgressBar {
@@ -217,9 +261,6 @@ fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
     if frame >= meta.frames {
         bail!("{}: frame {frame} asked, the run has frames 0 to {}", args.dir.display(), meta.frames - 1);
     }
-    if meta.dim != 2 {
-        bail!("{}: a {}D run: `fluid render` draws 2D runs so far", args.dir.display(), meta.dim);
-    }
     let colormap = Colormap::by_name(&args.colormap)?;
     let (mesh, topo) = snapshot_mesh(&reader, 0)?;
     let gpu = Gpu::new(desc)?;
@@ -247,8 +288,13 @@ fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
     let range = args.range.unwrap_or((0.0, speeds.iter().fold(0.0f64, |m, v| m.max(*v)).max(1e-12)));
     let style = DrawStyle { colormap, range, log: false, colour_cells: args.cells, sprite_px: args.sprite };
     let (lo, hi) = mesh.bounds();
-    let view = View2d::fit([lo[0], lo[1]], [hi[0], hi[1]], args.size, 0.02);
-    let picture = draw_picture(&gpu, &mesh, &g, &speeds, particles.as_ref(), &style, &view, args.size)?;
+    let projection = if meta.dim == 2 {
+        Projection::Plane(View2d::fit([lo[0], lo[1]], [hi[0], hi[1]], args.size, 0.02))
+    } else {
+        Projection::Perspective(galerkin::render::camera_for_box(lo, hi))
+    };
+    let picture =
+        draw_picture(&gpu, (&mesh, &topo), &g, &speeds, particles.as_ref(), &style, &projection, args.size)?;
     let (w, h) = args.size;
     write_image(&args.out, &ext, w, h, &picture.rgba, &picture.raw)?;
     println!(
@@ -447,7 +493,16 @@ pub fn demo(gpu: &Gpu, (w, h): (u32, u32), out: &Path) -> Result<()> {
     };
     let (lo, hi) = mesh.bounds();
     let view = View2d::fit([lo[0], lo[1]], [hi[0], hi[1]], (w, h), 0.02);
-    let picture = draw_picture(gpu, mesh, &state.g, &speeds, Some(&device), &style, &view, (w, h))?;
+    let picture = draw_picture(
+        gpu,
+        (mesh, topo),
+        &state.g,
+        &speeds,
+        Some(&device),
+        &style,
+        &Projection::Plane(view),
+        (w, h),
+    )?;
     write_png_rgba8(&out.join("fluid.png"), w, h, &picture.rgba)?;
     println!(
         "fluid: tunnel of {} triangles, 20 frames in {seconds:.2} s (divergence ≤ {worst_div:.0e}); {close} of {} device particles within 1e-4 of the CPU (worst {worst_particle:.1e}) → {}",

@@ -23,6 +23,8 @@ pub mod render;
 pub mod scene;
 pub mod snapshots;
 pub mod solver;
+#[cfg(feature = "viewer")]
+pub mod viewer;
 
 pub use error::FluidError;
 pub use solver::{FluidParams, FluidSolver, FluidState, StepReport};

@@ -1,9 +1,12 @@
-//! Drawing a 2D fluid frame (seed 000 §6.5): a graphics pipeline over the cells, each showing
-//! its speed |u_c| (constant per cell, Eq. 13) on a colour ramp or a plain grey, then the
-//! marker particles as round sprites read straight from the compute pass's buffer, coloured
-//! by the speed of their cell (or white over a coloured field). The obstacle is the hole in
-//! the mesh. A float target gets the raw speed, the cell index and what drew the pixel (0
-//! cell, 1 particle) instead: EXR output and the tests, whose reference locates each pixel
+//! Drawing a fluid frame (seed 000 §6.5). In 2D: a graphics pipeline over the cells, each
+//! showing its speed |u_c| (constant per cell, Eq. 13) on a colour ramp or a plain grey; the
+//! obstacle is the hole in the mesh. In 3D: the domain's boundary (walls and obstacle
+//! surface) with front faces culled — a cutaway: one looks through the near walls at the far
+//! ones, shaded by a headlight. Then the marker particles as round sprites read straight from
+//! the compute pass's buffer, coloured by the speed of their cell (or white over coloured
+//! cells), depth-tested (in 3D a far wall nearer the eye hides the particles behind it). A
+//! float target gets the raw value, the cell index and what drew the pixel (0 cell, 1
+//! particle, 2 wall) instead: EXR output and the tests, whose 2D reference locates each pixel
 //! centre in the mesh in f64.
 
 use ash::vk;
@@ -113,6 +116,43 @@ pub fn cell_vertices(mesh: &SimplexMesh, g: &[f64], values: &[f64]) -> Vec<CellV
     out
 }
 
+/// The boundary triangles of a 3D mesh at geometry `g`, wound so their outward normal faces
+/// the viewer when seen from outside, each carrying a Lambert shade (headlight from `eye`) as
+/// its value and its cell: the domain's walls, the obstacle surface the particles move in.
+pub fn surface_vertices(mesh: &SimplexMesh, topo: &Topology, g: &[f64], eye: [f64; 3]) -> Vec<CellVertex> {
+    use crate::mesh::geometry::{face_area_normal, face_centroid};
+    let mut out = Vec::with_capacity(3 * topo.boundary_faces().len());
+    for &f in topo.boundary_faces() {
+        let [c, _] = topo.face_cells(f as usize);
+        let l = topo.face_local(f as usize)[0] as usize;
+        let p = mesh.cell_points_at(g, c as usize);
+        let n = face_area_normal(3, &p, l);
+        let x = face_centroid(&p, l);
+        let to_eye = [eye[0] - x[0], eye[1] - x[1], eye[2] - x[2]];
+        let len = |v: [f64; 3]| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt().max(1e-300);
+        let cos = (n[0] * to_eye[0] + n[1] * to_eye[1] + n[2] * to_eye[2]) / (len(n) * len(to_eye));
+        let shade = 0.35 + 0.65 * cos.abs();
+        let mut corners: Vec<usize> = (0..4).filter(|&i| i != l).collect();
+        // Counter-clockwise about the outward normal.
+        let (a, b, q) = (p[corners[0]], p[corners[1]], p[corners[2]]);
+        let e1 = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
+        let e2 = [q[0] - a[0], q[1] - a[1], q[2] - a[2]];
+        let cross =
+            [e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]];
+        if cross[0] * n[0] + cross[1] * n[1] + cross[2] * n[2] < 0.0 {
+            corners.swap(1, 2);
+        }
+        for i in corners {
+            out.push(CellVertex {
+                position: [p[i][0] as f32, p[i][1] as f32, p[i][2] as f32],
+                value: shade as f32,
+                cell: c,
+            });
+        }
+    }
+    out
+}
+
 /// How cells and particles are coloured.
 #[derive(Clone, Debug)]
 pub struct DrawStyle {
@@ -145,9 +185,31 @@ pub enum Output {
     Raw,
 }
 
-/// The cell and sprite pipelines for one render pass.
+/// How the scene is projected: the plane (2D) or a perspective camera (3D).
+#[derive(Clone, Copy, Debug)]
+pub enum Projection {
+    /// A 2D frame.
+    Plane(View2d),
+    /// A 3D frame from a camera.
+    Perspective(crate::render::Camera),
+}
+
+impl Projection {
+    fn view_proj(&self, extent: vk::Extent2D) -> [f32; 16] {
+        match self {
+            Self::Plane(v) => v.view_proj(),
+            Self::Perspective(c) => {
+                let aspect = f64::from(extent.width) / f64::from(extent.height.max(1));
+                c.view_proj_f32(aspect).to_cols_array()
+            }
+        }
+    }
+}
+
+/// The cell, surface and sprite pipelines for one render pass.
 pub struct FluidRenderer {
     cells: GraphicsPipeline,
+    surface: GraphicsPipeline,
     sprites: GraphicsPipeline,
     colormap: ColormapTexture,
     cell_set: DescriptorSet,
@@ -157,12 +219,14 @@ pub struct FluidRenderer {
 }
 
 impl FluidRenderer {
-    /// Pipelines drawing into `pass` for meshes of up to `cells` cells.
+    /// Pipelines drawing into `pass` up to `triangles` triangles (cells in 2D, boundary faces
+    /// in 3D) over meshes of up to `cells` cells.
     pub fn new(
         gpu: &Gpu,
         pass: &RenderPass,
         output: Output,
         colormap: &Colormap,
+        triangles: usize,
         cells: usize,
     ) -> Result<Self, FluidError> {
         let spec = [u32::from(output == Output::Raw)];
@@ -182,6 +246,11 @@ impl FluidRenderer {
         desc.bindings = &[BindingKind::Texture];
         desc.specialization = &spec;
         let cell_pipeline = GraphicsPipeline::new(gpu, &desc).map_err(gpu_err)?;
+        // The 3D surface: the same stages, front faces culled, so from outside one sees the
+        // far walls through the near ones (a cutaway) with the particles in front of them.
+        desc.name = "fluid surface";
+        desc.cull_mode = vk::CullModeFlags::FRONT;
+        let surface = GraphicsPipeline::new(gpu, &desc).map_err(gpu_err)?;
         let mut desc = GraphicsPipelineDesc::new(
             "fluid particles",
             shaders::fluid::SPRITES_VERT,
@@ -197,7 +266,7 @@ impl FluidRenderer {
         let vertices = Buffer::new(
             gpu,
             "fluid cell vertices",
-            (3 * cells.max(1)) as u64,
+            (3 * triangles.max(1)) as u64,
             vk::BufferUsageFlags::VERTEX_BUFFER,
             MemoryKind::CpuToGpu,
         )
@@ -210,7 +279,7 @@ impl FluidRenderer {
             MemoryKind::CpuToGpu,
         )
         .map_err(gpu_err)?;
-        Ok(Self { cells: cell_pipeline, sprites, colormap, cell_set, vertices, speeds, count: 0 })
+        Ok(Self { cells: cell_pipeline, surface, sprites, colormap, cell_set, vertices, speeds, count: 0 })
     }
 
     /// Replaces the cells and their speeds (no draw of the previous ones may be in flight).
@@ -241,12 +310,13 @@ impl FluidRenderer {
             .map_err(gpu_err)
     }
 
-    /// Records the cells, then the particles (inside the target's render pass).
+    /// Records the cells (2D) or the surface (3D: what `update` was given, from
+    /// [`surface_vertices`]), then the particles (inside the target's render pass).
     pub fn record(
         &self,
         cmd: vk::CommandBuffer,
         extent: vk::Extent2D,
-        view: &View2d,
+        projection: &Projection,
         style: &DrawStyle,
         particles: Option<(&DescriptorSet, usize)>,
     ) {
@@ -254,22 +324,20 @@ impl FluidRenderer {
             (2.0 * style.sprite_px / f64::from(extent.width.max(1))) as f32,
             (2.0 * style.sprite_px / f64::from(extent.height.max(1))) as f32,
         ];
+        let surface = matches!(projection, Projection::Perspective(_));
+        let mode = if surface { 2.0 } else { f32::from(u8::from(style.colour_cells)) };
         let push = Push {
-            view_proj: view.view_proj(),
+            view_proj: projection.view_proj(extent),
             range: [
                 style.range.0 as f32,
                 style.range.1 as f32,
                 self.colormap.texels() as f32,
                 f32::from(u8::from(style.log)),
             ],
-            sprite: [
-                half[0],
-                half[1],
-                f32::from(u8::from(style.colour_cells)),
-                f32::from(u8::from(style.colour_cells)),
-            ],
+            sprite: [half[0], half[1], mode, f32::from(u8::from(style.colour_cells && !surface))],
         };
-        self.cells.record_draw(
+        let pipeline = if surface { &self.surface } else { &self.cells };
+        pipeline.record_draw(
             cmd,
             extent,
             &self.cell_set,
@@ -309,21 +377,24 @@ pub struct FluidPicture {
 #[allow(clippy::too_many_arguments)]
 pub fn draw_picture(
     gpu: &Gpu,
-    mesh: &SimplexMesh,
+    (mesh, topo): (&SimplexMesh, &Topology),
     g: &[f64],
     speeds: &[f64],
     particles: Option<&GpuParticles>,
     style: &DrawStyle,
-    view: &View2d,
+    projection: &Projection,
     (width, height): (u32, u32),
 ) -> Result<FluidPicture, FluidError> {
-    if mesh.dim() != 2 {
-        return Err(FluidError::State(format!(
-            "drawing {}D meshes: only 2D frames are drawn so far",
-            mesh.dim()
-        )));
-    }
-    let vertices = cell_vertices(mesh, g, speeds);
+    let vertices = match (mesh.dim(), projection) {
+        (2, Projection::Plane(_)) => cell_vertices(mesh, g, speeds),
+        (3, Projection::Perspective(camera)) => surface_vertices(mesh, topo, g, camera.eye),
+        (d, _) => {
+            return Err(FluidError::State(format!(
+                "a {d}D frame needs the {} projection",
+                if d == 2 { "plane" } else { "perspective" }
+            )))
+        }
+    };
     let colour =
         RenderTarget::new(gpu, "fluid colour", width, height, ColorFormat::Rgba8).map_err(gpu_err)?;
     let raw = RenderTarget::new(gpu, "fluid raw", width, height, ColorFormat::Rgba32F).map_err(gpu_err)?;
@@ -331,14 +402,20 @@ pub fn draw_picture(
     for (target, output, clear) in
         [(&colour, Output::Colour, BACKGROUND), (&raw, Output::Raw, [0.0, -1.0, 0.0, 0.0])]
     {
-        let mut r =
-            FluidRenderer::new(gpu, target.render_pass(), output, &style.colormap, mesh.cell_count())?;
+        let mut r = FluidRenderer::new(
+            gpu,
+            target.render_pass(),
+            output,
+            &style.colormap,
+            vertices.len() / 3,
+            speeds.len(),
+        )?;
         r.update(&vertices, speeds);
         let set = particles.map(|p| r.particle_set(gpu, p)).transpose()?;
         let pset = set.as_ref().zip(particles.map(GpuParticles::count));
         out.push(
             target
-                .render(gpu, clear, |cmd| r.record(cmd, target.extent(), view, style, pset))
+                .render(gpu, clear, |cmd| r.record(cmd, target.extent(), projection, style, pset))
                 .map_err(gpu_err)?,
         );
     }
