@@ -20,6 +20,7 @@ pub mod sdf;
 pub mod stuffing;
 mod topology;
 pub mod tunnel;
+pub mod volume;
 
 pub use error::MeshError;
 pub use geometry::Point;
