@@ -407,3 +407,47 @@ fn a_users_gmsh_mesh_runs_as_a_periodic_scene() {
     assert!(e.contains("bad.toml:2:") && e.contains("nope.msh"), "{e}");
     std::fs::remove_dir_all(&dir).expect("clean up");
 }
+
+#[test]
+fn the_streaming_pca_reads_velocity_snapshots_from_disk() {
+    use galerkin::reduce::{pca, Truncation};
+    let dir = std::env::temp_dir().join(format!("galerkin-fluid-pca-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let scene = FluidScene::load(std::path::Path::new("scenes/fluid/tunnel_small.toml")).expect("scene");
+    let (mesh, topo) = (&scene.mesh, &scene.topology);
+    let mut solver = FluidSolver::new(mesh.clone(), topo.clone(), scene.params).expect("solver");
+    let mut state = solver.initial_state(mesh.g().to_vec(), &scene.initial_velocity).expect("start");
+    let meta = SnapshotMeta {
+        format: "galerkin-fluid-snapshots".into(),
+        version: 1,
+        dim: 2,
+        cells: mesh.cell_count(),
+        faces: topo.face_count(),
+        vertices: mesh.vertex_count(),
+        frame_time: scene.params.frame_time,
+        frames: 0,
+        periodic_axis: Some(0),
+    };
+    let mut w = SnapshotWriter::create(&dir, meta, mesh.cells(), false).expect("create");
+    let mut frames = Vec::new();
+    for frame in 0..12 {
+        if frame > 0 {
+            state = solver.step(&state, mesh.g(), frame).expect("step").0;
+        }
+        let zeros = vec![0.0; topo.face_count()];
+        w.push(&state.u, &state.u, &state.f, &state.g, &zeros).expect("push");
+        frames.push(state.u.clone());
+    }
+    let reader = SnapshotReader::open(&dir).expect("open");
+    let mut source = reader.source("u").expect("u");
+    let basis = pca("u", &mut source, Truncation { energy: 0.999999, max_modes: 12, centred: false }).expect("pca");
+    assert!(basis.basis.reduced_dim() >= 2 && basis.basis.reduced_dim() <= 12);
+    // Every frame is captured to the energy left out.
+    for (k, u) in frames.iter().enumerate() {
+        let back = basis.basis.lift(&basis.basis.project(u));
+        let err: f64 = u.iter().zip(&back).map(|(a, b)| (a - b).powi(2)).sum::<f64>();
+        let norm: f64 = u.iter().map(|a| a * a).sum::<f64>();
+        assert!(err <= 1e-4 * norm, "frame {k}: relative error² {}", err / norm);
+    }
+    std::fs::remove_dir_all(&dir).expect("clean up");
+}
