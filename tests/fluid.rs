@@ -440,7 +440,8 @@ fn the_streaming_pca_reads_velocity_snapshots_from_disk() {
     }
     let reader = SnapshotReader::open(&dir).expect("open");
     let mut source = reader.source("u").expect("u");
-    let basis = pca("u", &mut source, Truncation { energy: 0.999999, max_modes: 12, centred: false }).expect("pca");
+    let basis =
+        pca("u", &mut source, Truncation { energy: 0.999999, max_modes: 12, centred: false }).expect("pca");
     assert!(basis.basis.reduced_dim() >= 2 && basis.basis.reduced_dim() <= 12);
     // Every frame is captured to the energy left out.
     for (k, u) in frames.iter().enumerate() {

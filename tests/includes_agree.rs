@@ -1,6 +1,7 @@
 //! The GLSL includes and their Rust twins agree: `colormap.glsl` with `render::colormap`
-//! (`ramp_coordinate`, `ramp_texcoord`) and `polynomial.glsl` with `demo::polynomial`,
-//! evaluated by a probe compute shader at the same inputs.
+//! (`ramp_coordinate`, `ramp_texcoord`), `polynomial.glsl` with `demo::polynomial`, and
+//! `simplex.glsl` with `mesh::geometry` and the particles' barycentric coordinates, evaluated
+//! by probe compute shaders at the same inputs.
 
 mod common;
 
@@ -65,5 +66,76 @@ fn glsl_includes_match_their_rust_twins() {
         let want = p32.eval(x, y);
         let tol = 8.0 * f64::from(f32::EPSILON) * p32.abs_sum(x, y);
         assert!((f64::from(out[i][2]) - want).abs() <= tol, "cubic at ({x}, {y}): {} vs {want}", out[i][2]);
+    }
+}
+
+#[test]
+fn simplex_glsl_matches_the_mesh_geometry() {
+    use galerkin::fluid::particles::barycentric;
+    use galerkin::mesh::geometry::{centroid, face_area_normal, face_centroid, signed_volume};
+    let gpu = common::gpu();
+    let r = common::random_f32(64 * 16, 21);
+    let n = 64;
+    let mut corners: Vec<[f32; 4]> = Vec::new();
+    let mut points: Vec<[f32; 4]> = Vec::new();
+    for i in 0..n {
+        let dim = if i % 2 == 0 { 2 } else { 3 };
+        // A unit simplex, perturbed and positively oriented.
+        let base = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+        for (k, b) in base.iter().enumerate() {
+            let q = |j: usize| (b[j] + 0.2 * r[16 * i + 3 * k + j]) as f32;
+            corners.push(if k <= dim {
+                [q(0), q(1), if dim == 3 { q(2) } else { 0.0 }, 0.0]
+            } else {
+                [0.0; 4]
+            });
+        }
+        points.push([
+            0.3 + 0.5 * r[16 * i + 12],
+            0.2 + 0.5 * r[16 * i + 13],
+            if dim == 3 { 0.2 } else { 0.0 },
+            dim as f32,
+        ]);
+    }
+    let usage = vk::BufferUsageFlags::STORAGE_BUFFER;
+    let cb = Buffer::from_slice(&gpu, "corners", &corners, usage).unwrap();
+    let pb = Buffer::from_slice(&gpu, "points", &points, usage).unwrap();
+    let ob = Buffer::<[f32; 4]>::new(&gpu, "out", 8 * n as u64, usage, MemoryKind::GpuOnly).unwrap();
+    let bindings = [cb.binding(), pb.binding(), ob.binding()].map(|b| b.unwrap());
+    common::run_probe(
+        &gpu,
+        "simplex probe",
+        shaders::probe::SIMPLEX,
+        &bindings,
+        &(n as u32).to_ne_bytes(),
+        1,
+    );
+    let out = ob.download(&gpu).unwrap();
+    // f32 against f64 on O(1) coordinates: a few ulps of the O(1) terms.
+    let close = |a: f32, b: f64, what: &str| assert!((f64::from(a) - b).abs() < 2e-6, "{what}: {a} vs {b}");
+    for i in 0..n {
+        let dim = points[i][3] as usize;
+        let p: Vec<[f64; 3]> =
+            (0..=dim).map(|k| [0, 1, 2].map(|j| f64::from(corners[4 * i + k][j]))).collect();
+        let o = &out[8 * i..8 * i + 8];
+        close(o[0][0], signed_volume(dim, &p), "volume");
+        let c = centroid(&p);
+        let fc = face_centroid(&p, 0);
+        for j in 0..3 {
+            close(o[1][j], c[j], "centroid");
+            close(o[6][j], fc[j], "face centroid");
+        }
+        for k in 0..=dim {
+            let nk = face_area_normal(dim, &p, k);
+            for j in 0..3 {
+                close(o[2 + k][j], nk[j], "face normal");
+            }
+        }
+        let x = [0, 1, 2].map(|j| f64::from(points[i][j]));
+        let b = barycentric(dim, &p, x);
+        for k in 0..=dim {
+            // The weight divides by the volume (≥ 1/6 here): 1e-5.
+            assert!((f64::from(o[7][k]) - b[k]).abs() < 1e-5, "barycentric {k}: {} vs {}", o[7][k], b[k]);
+        }
     }
 }
