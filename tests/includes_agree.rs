@@ -83,7 +83,7 @@ fn simplex_glsl_matches_the_mesh_geometry() {
         // A unit simplex, perturbed and positively oriented.
         let base = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
         for (k, b) in base.iter().enumerate() {
-            let q = |j: usize| (b[j] + 0.2 * r[16 * i + 3 * k + j]) as f32;
+            let q = |j: usize| b[j] + 0.2 * r[16 * i + 3 * k + j];
             corners.push(if k <= dim {
                 [q(0), q(1), if dim == 3 { q(2) } else { 0.0 }, 0.0]
             } else {
