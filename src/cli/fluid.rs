@@ -446,7 +446,11 @@ pub fn bench(desc: &GpuDesc, args: &BenchArgs) -> Result<()> {
 /// particles advected on the device and checked against the CPU reference, the last frame
 /// drawn to `out/fluid.png`.
 pub fn demo(gpu: &Gpu, (w, h): (u32, u32), out: &Path) -> Result<()> {
-    let scene = FluidScene::load(Path::new("scenes/fluid/tunnel_small.toml"))?;
+    // Built in, so the demo runs from any directory.
+    let scene = FluidScene::parse(
+        include_str!("../../scenes/fluid/tunnel_small.toml"),
+        Path::new("scenes/fluid/tunnel_small.toml"),
+    )?;
     let (mesh, topo) = (&scene.mesh, &scene.topology);
     let mut solver = FluidSolver::new(mesh.clone(), topo.clone(), scene.params)?;
     let mut state = solver.initial_state(mesh.g().to_vec(), &scene.initial_velocity)?;
