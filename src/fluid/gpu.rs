@@ -9,9 +9,7 @@ use bytemuck::{Pod, Zeroable};
 
 use super::particles::{AdvectReport, GridHash, Particle};
 use super::FluidError;
-use crate::gpu::{
-    shaders, BindingKind, Buffer, ComputePipeline, ComputePipelineDesc, Gpu, MemoryKind, Resource,
-};
+use crate::gpu::{shaders, BindingKind, Buffer, ComputePipeline, ComputePipelineDesc, Gpu, Resource};
 use crate::mesh::{FaceKind, SimplexMesh, Topology};
 
 #[repr(C)]
@@ -31,18 +29,7 @@ fn gpu_err(e: crate::gpu::GpuError) -> FluidError {
 }
 
 fn storage<T: Pod>(gpu: &Gpu, name: &str, data: &[T]) -> Result<Buffer<T>, FluidError> {
-    let b = Buffer::new(
-        gpu,
-        name,
-        data.len().max(1) as u64,
-        vk::BufferUsageFlags::STORAGE_BUFFER,
-        MemoryKind::GpuOnly,
-    )
-    .map_err(gpu_err)?;
-    if !data.is_empty() {
-        b.upload(gpu, 0, data).map_err(gpu_err)?;
-    }
-    Ok(b)
+    Ok(Buffer::from_slice(gpu, name, data, vk::BufferUsageFlags::STORAGE_BUFFER).map_err(gpu_err)?)
 }
 
 /// Per (cell, local face) links for the walk: neighbour + 1 (bits 0–27, 0 for a wall), the

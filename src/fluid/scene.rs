@@ -197,6 +197,14 @@ pub struct FluidScene {
 
 type Fail<'a> = Box<dyn Fn(&str, String) -> FluidError + 'a>;
 
+/// Refuses the first key whose value is not positive and finite, naming its line.
+fn require_positive(fail: &Fail, keys: &[(&str, f64)]) -> Result<(), FluidError> {
+    match keys.iter().find(|(_, v)| !(v.is_finite() && *v > 0.0)) {
+        Some((key, v)) => Err(fail(key, format!("{key} = {v}: must be positive"))),
+        None => Ok(()),
+    }
+}
+
 impl FluidScene {
     /// Reads and builds the scene in `path`; errors name the file and line of the bad key.
     pub fn load(path: &Path) -> Result<Self, FluidError> {
@@ -290,17 +298,16 @@ impl FluidScene {
         params: FluidParams,
         fail: &Fail,
     ) -> Result<Self, FluidError> {
-        for (key, v) in [
-            ("length", t.length),
-            ("height", t.height),
-            ("radius", t.radius),
-            ("cell", t.cell),
-            ("obstacle_refinement", t.obstacle_refinement),
-        ] {
-            if !(v.is_finite() && v > 0.0) {
-                return Err(fail(key, format!("{key} = {v}: must be positive")));
-            }
-        }
+        require_positive(
+            fail,
+            &[
+                ("length", t.length),
+                ("height", t.height),
+                ("radius", t.radius),
+                ("cell", t.cell),
+                ("obstacle_refinement", t.obstacle_refinement),
+            ],
+        )?;
         let s = spec.obstacle.scale;
         if !(s.is_finite() && s > 0.0 && s < 2.5) {
             return Err(fail("scale", format!("scale = {s}: must be in (0, 2.5)")));
@@ -351,17 +358,16 @@ impl FluidScene {
         params: FluidParams,
         fail: &Fail,
     ) -> Result<Self, FluidError> {
-        for (key, v) in [
-            ("central_radius", c.central_radius),
-            ("small_radius", c.small_radius),
-            ("small_distance", c.small_distance),
-            ("tunnel_radius", c.tunnel_radius),
-            ("spacing", c.spacing),
-        ] {
-            if !(v.is_finite() && v > 0.0) {
-                return Err(fail(key, format!("{key} = {v}: must be positive")));
-            }
-        }
+        require_positive(
+            fail,
+            &[
+                ("central_radius", c.central_radius),
+                ("small_radius", c.small_radius),
+                ("small_distance", c.small_distance),
+                ("tunnel_radius", c.tunnel_radius),
+                ("spacing", c.spacing),
+            ],
+        )?;
         if c.small_distance <= c.central_radius + c.small_radius {
             return Err(fail("small_distance", "the small cavities must not overlap the central one".into()));
         }

@@ -127,10 +127,14 @@ impl<T: Pod> Buffer<T> {
         })
     }
 
-    /// A device-local buffer holding a copy of `data`.
+    /// A device-local buffer holding a copy of `data` (an empty slice gets one unwritten
+    /// element, so that it can still be bound).
     pub fn from_slice(gpu: &Gpu, name: &str, data: &[T], usage: vk::BufferUsageFlags) -> GpuResult<Self> {
-        let b = Self::new(gpu, name, data.len() as u64, usage, MemoryKind::GpuOnly)?;
-        b.upload(gpu, 0, data)?;
+        // An empty slice gets one (unwritten) element, so that it can still be bound.
+        let b = Self::new(gpu, name, data.len().max(1) as u64, usage, MemoryKind::GpuOnly)?;
+        if !data.is_empty() {
+            b.upload(gpu, 0, data)?;
+        }
         Ok(b)
     }
 

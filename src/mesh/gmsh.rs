@@ -129,6 +129,16 @@ impl<'a> Reader<'a> {
         }
     }
 
+    /// A `$Nodes`/`$Elements` header: the number of entity blocks (then the total count and
+    /// the tag range, not needed).
+    fn blocks(&mut self) -> Result<u64, MeshError> {
+        let blocks = self.size()?;
+        for _ in 0..3 {
+            self.size()?;
+        }
+        Ok(blocks)
+    }
+
     fn expect_end(&mut self, name: &str) -> Result<(), MeshError> {
         let l = self.line()?;
         if l == format!("$End{name}") {
@@ -191,10 +201,7 @@ pub fn parse_msh(bytes: &[u8], path: &Path) -> Result<SimplexMesh, MeshError> {
                 seen_format = true;
             }
             "Nodes" if seen_format => {
-                let blocks = r.size()?;
-                let _total = r.size()?;
-                let _min = r.size()?;
-                let _max = r.size()?;
+                let blocks = r.blocks()?;
                 for _ in 0..blocks {
                     let _dim = r.int()?;
                     let _tag = r.int()?;
@@ -217,10 +224,7 @@ pub fn parse_msh(bytes: &[u8], path: &Path) -> Result<SimplexMesh, MeshError> {
                 r.expect_end("Nodes")?;
             }
             "Elements" if seen_format => {
-                let blocks = r.size()?;
-                let _total = r.size()?;
-                let _min = r.size()?;
-                let _max = r.size()?;
+                let blocks = r.blocks()?;
                 for _ in 0..blocks {
                     let _dim = r.int()?;
                     let _entity = r.int()?;

@@ -99,17 +99,7 @@ fn row_blocks(gpu: &Gpu, n: usize) -> Result<Vec<(u32, u32)>, RadiosityError> {
 }
 
 fn storage<T: Pod>(gpu: &Gpu, name: &str, data: &[T]) -> Result<Buffer<T>, RadiosityError> {
-    let b = Buffer::new(
-        gpu,
-        name,
-        data.len().max(1) as u64,
-        vk::BufferUsageFlags::STORAGE_BUFFER,
-        MemoryKind::GpuOnly,
-    )?;
-    if !data.is_empty() {
-        b.upload(gpu, 0, data)?;
-    }
-    Ok(b)
+    Ok(Buffer::from_slice(gpu, name, data, vk::BufferUsageFlags::STORAGE_BUFFER)?)
 }
 
 impl GpuRadiosity {
