@@ -29,7 +29,7 @@ fn gpu_err(e: crate::gpu::GpuError) -> FluidError {
 }
 
 fn storage<T: Pod>(gpu: &Gpu, name: &str, data: &[T]) -> Result<Buffer<T>, FluidError> {
-    Ok(Buffer::from_slice(gpu, name, data, vk::BufferUsageFlags::STORAGE_BUFFER).map_err(gpu_err)?)
+    Buffer::from_slice(gpu, name, data, vk::BufferUsageFlags::STORAGE_BUFFER).map_err(gpu_err)
 }
 
 /// Per (cell, local face) links for the walk: neighbour + 1 (bits 0–27, 0 for a wall), the
