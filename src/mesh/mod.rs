@@ -11,6 +11,7 @@
 // Numerical code indexes several arrays by the same cell, face or axis.
 #![allow(clippy::needless_range_loop)]
 
+pub mod bvh;
 pub mod deform;
 mod error;
 pub mod geometry;

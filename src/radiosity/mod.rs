@@ -10,7 +10,7 @@
 //! tensor operations, for the reduction core, is [`chain`].
 
 pub mod architecture;
-pub mod bvh;
+pub use crate::mesh::bvh;
 pub mod chain;
 mod error;
 pub mod form_factor;

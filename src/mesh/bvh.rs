@@ -1,7 +1,9 @@
-//! A bounding-volume hierarchy over the scene's triangles and the segment test that decides
-//! `Vis(i, j)` of Eq. 15: built on the CPU (median splits on the longest axis of the
-//! centroids' box), traversed here in f64 (the CPU path and reference) and, flattened to f32,
-//! in the compute shader `radiosity/form_factors.comp`.
+//! A bounding-volume hierarchy over triangles, built on the CPU (median splits on the longest
+//! axis of the centroids' box): the segment test that decides the radiosity's `Vis(i, j)` of
+//! seed 000 Eq. 15 (traversed here in f64 and, flattened to f32, in the compute shader
+//! `radiosity/form_factors.comp`), the closest hit of a ray, and for signed distances to a
+//! closed surface ([`super::sdf::ObjSurface`]) the nearest triangle and the number of
+//! crossings of a ray.
 
 use glam::DVec3;
 
@@ -130,6 +132,97 @@ impl Bvh {
         });
         best.get()
     }
+}
+
+impl Bvh {
+    /// The distance from `p` to the nearest triangle and that triangle (branch and bound on
+    /// the boxes' distances); `None` for an empty hierarchy.
+    pub fn nearest(&self, p: DVec3) -> Option<(f64, u32)> {
+        if self.nodes.is_empty() {
+            return None;
+        }
+        let box_distance = |n: &BvhNode| (n.lo - p).max(p - n.hi).max(DVec3::ZERO).length();
+        let mut best = (f64::INFINITY, 0u32);
+        let mut stack = vec![0u32];
+        while let Some(index) = stack.pop() {
+            let node = &self.nodes[index as usize];
+            if box_distance(node) >= best.0 {
+                continue;
+            }
+            if node.count == 0 {
+                // Nearer child last, so it is visited first.
+                let (l, r) = (index + 1, node.right_or_first);
+                let (dl, dr) = (box_distance(&self.nodes[l as usize]), box_distance(&self.nodes[r as usize]));
+                if dl < dr {
+                    stack.extend([r, l]);
+                } else {
+                    stack.extend([l, r]);
+                }
+            } else {
+                let first = node.right_or_first as usize;
+                for &t in &self.order[first..first + node.count as usize] {
+                    let d = point_triangle_distance(p, &self.triangles[t as usize]);
+                    if d < best.0 {
+                        best = (d, t);
+                    }
+                }
+            }
+        }
+        Some(best)
+    }
+
+    /// How many triangles the ray `origin + s·dir` (`s > 0`) crosses.
+    pub fn crossings(&self, origin: DVec3, dir: DVec3) -> usize {
+        let mut n = 0;
+        self.walk(
+            origin,
+            dir,
+            0.0,
+            || f64::INFINITY,
+            |t| {
+                if segment_triangle(origin, dir, &self.triangles[t as usize]).is_some_and(|s| s > 0.0) {
+                    n += 1;
+                }
+                std::ops::ControlFlow::Continue(())
+            },
+        );
+        n
+    }
+}
+
+/// Distance from `p` to the triangle `t` (Ericson's closest-point regions).
+pub fn point_triangle_distance(p: DVec3, t: &[DVec3; 3]) -> f64 {
+    let (a, b, c) = (t[0], t[1], t[2]);
+    let (ab, ac, ap) = (b - a, c - a, p - a);
+    let (d1, d2) = (ab.dot(ap), ac.dot(ap));
+    if d1 <= 0.0 && d2 <= 0.0 {
+        return ap.length();
+    }
+    let bp = p - b;
+    let (d3, d4) = (ab.dot(bp), ac.dot(bp));
+    if d3 >= 0.0 && d4 <= d3 {
+        return bp.length();
+    }
+    let vc = d1 * d4 - d3 * d2;
+    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
+        return (p - (a + ab * (d1 / (d1 - d3)))).length();
+    }
+    let cp = p - c;
+    let (d5, d6) = (ab.dot(cp), ac.dot(cp));
+    if d6 >= 0.0 && d5 <= d6 {
+        return cp.length();
+    }
+    let vb = d5 * d2 - d1 * d6;
+    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
+        return (p - (a + ac * (d2 / (d2 - d6)))).length();
+    }
+    let va = d3 * d6 - d5 * d4;
+    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
+        return (p - (b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6))))).length();
+    }
+    let denom = 1.0 / (va + vb + vc);
+    let (v, w) = (vb * denom, vc * denom);
+    (p - (a + ab * v + ac * w)).length()
 }
 
 /// The part of the segment cut off at each end, relative to its length: rays start and end on
