@@ -99,9 +99,9 @@ pub struct RenderArgs {
     /// Speed range of the ramp, LO,HI (default: 0 to the frame's largest cell speed).
     #[arg(long, value_name = "LO,HI", value_parser = parse_range)]
     pub range: Option<(f64, f64)>,
-    /// Image size.
-    #[arg(long, default_value = "1600x500", value_parser = crate::parse_size)]
-    pub size: (u32, u32),
+    /// Image size (default 1600x500 for 2D runs, 1024x768 for 3D).
+    #[arg(long, value_parser = crate::parse_size)]
+    pub size: Option<(u32, u32)>,
     /// Particle sprite radius in pixels.
     #[arg(long, default_value_t = 1.6)]
     pub sprite: f64,
@@ -288,14 +288,15 @@ fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
     let range = args.range.unwrap_or((0.0, speeds.iter().fold(0.0f64, |m, v| m.max(*v)).max(1e-12)));
     let style = DrawStyle { colormap, range, log: false, colour_cells: args.cells, sprite_px: args.sprite };
     let (lo, hi) = mesh.bounds();
+    let size = args.size.unwrap_or(if meta.dim == 2 { (1600, 500) } else { (1024, 768) });
     let projection = if meta.dim == 2 {
-        Projection::Plane(View2d::fit([lo[0], lo[1]], [hi[0], hi[1]], args.size, 0.02))
+        Projection::Plane(View2d::fit([lo[0], lo[1]], [hi[0], hi[1]], size, 0.02))
     } else {
         Projection::Perspective(galerkin::render::camera_for_box(lo, hi))
     };
     let picture =
-        draw_picture(&gpu, (&mesh, &topo), &g, &speeds, particles.as_ref(), &style, &projection, args.size)?;
-    let (w, h) = args.size;
+        draw_picture(&gpu, (&mesh, &topo), &g, &speeds, particles.as_ref(), &style, &projection, size)?;
+    let (w, h) = size;
     write_image(&args.out, &ext, w, h, &picture.rgba, &picture.raw)?;
     println!(
         "fluid render: frame {frame} of {} ({} cells, {} particles), speed range {:.3}..{:.3}, {:.2} s → {}",
