@@ -20,7 +20,7 @@ use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
 use super::caps::Capabilities;
 use super::commands::Tracker;
 use super::debug::ValidationLog;
-use super::error::{GpuError, GpuResult};
+use super::error::{GpuError, GpuResult, VkContext};
 use super::instance;
 
 /// How to create a [`Gpu`]. `Default` reads the environment:
@@ -314,6 +314,15 @@ impl Gpu {
                 owns_device: p.owns,
             }),
         })
+    }
+
+    /// Waits until the queue has finished everything submitted to it, presentation included:
+    /// before destroying objects (a swapchain's semaphores) that a present may still be
+    /// waiting on, which no fence covers.
+    pub fn wait_queue_idle(&self) -> GpuResult<()> {
+        let queue = self.shared.queue.lock().unwrap_or_else(|p| p.into_inner());
+        // SAFETY: the queue is externally synchronised by its mutex.
+        unsafe { self.shared.raw.queue_wait_idle(*queue) }.vk("vkQueueWaitIdle")
     }
 
     /// What the device can do.

@@ -244,6 +244,9 @@ impl State {
         }
         let old = self.swapchain.take();
         let swapchain = Swapchain::new(&self.gpu, &self.surface, size.width, size.height, old.as_ref())?;
+        // The last present may still wait on the old swapchain's semaphores: the frame's fence
+        // does not cover presentation.
+        self.gpu.wait_queue_idle()?;
         drop(old);
         let e = swapchain.extent();
         if e != self.target.extent() {
@@ -439,6 +442,8 @@ impl State {
 
     fn finish(mut self) -> Result<()> {
         self.wait_last_frame()?;
+        // The last present too, before the swapchain's semaphores go.
+        self.gpu.wait_queue_idle()?;
         let log = self.gpu.validation_log();
         drop(self);
         if let Some(errors) = log.map(|l| l.errors()).filter(|e| !e.is_empty()) {
