@@ -180,6 +180,19 @@ fn run(cli: Cli) -> Result<()> {
     }
 }
 
+/// A progress bar with an ETA for long work (`what` on the left, a message after the ETA);
+/// indicatif hides it when stderr is not a terminal.
+pub(crate) fn progress_bar(len: u64, what: &str) -> indicatif::ProgressBar {
+    let bar = indicatif::ProgressBar::new(len);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template(&format!(
+            "{what:<28} {{bar:30}} {{pos}}/{{len}} eta {{eta}} {{msg}}"
+        ))
+        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    bar
+}
+
 /// After the work: fail if validation was on and reported errors.
 pub(crate) fn check_validation(gpu: Gpu) -> Result<()> {
     let log = gpu.validation_log();

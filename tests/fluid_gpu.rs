@@ -52,7 +52,7 @@ fn uniform_flow_carries_particles_exactly_across_the_periodic_side_on_a_moving_m
         let mut state = solver.initial_state(base.g().to_vec(), &uniform).expect("start");
         let mut cpu = seed_particles(&base, 300);
         let start: Vec<Particle> = cpu.clone();
-        let device = GpuParticles::new(&gpu, &base, &topo, &cpu).expect("upload");
+        let mut device = GpuParticles::new(&gpu, &base, &topo, &cpu).expect("upload");
         let frames = 20; // 20 × 0.1 × 1.3 = 2.6: every particle crosses the periodic side
         let (mut worst_cpu, mut worst_gpu) = (0.0f64, 0.0f64);
         for frame in 1..=frames {

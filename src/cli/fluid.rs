@@ -141,25 +141,6 @@ fn view(_: &GpuDesc, _: &ViewArgs) -> Result<()> {
     bail!("this build has no window: rebuild with the `viewer` feature (on by default)")
 }
 
-fn progress_bar(len: u64, what: &str) -> indicatif::ProgressBar {
-    let bar = indicatif::ProgressBar::new(len);
-    bar.set_style(
-        indicatif::ProgressStyle::with_template(&format!(
-            "{what:<20} {{bar:30}} {{pos}}/{{len}} eta {{eta}} {{msg}}"
-        ))
-        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
-    );
-    bar
-}
-
-fn median(mut v: Vec<f64>) -> f64 {
-    if v.is_empty() {
-        return f64::NAN;
-    }
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
-}
-
 fn simulate(args: &SimulateArgs) -> Result<()> {
     let mut scene = FluidScene::load(&args.scene)?;
     if let Some(run) = args.run {
@@ -173,17 +154,7 @@ fn simulate(args: &SimulateArgs) -> Result<()> {
     let mut state = solver.initial_state(mesh.g().to_vec(), &scene.initial_velocity)?;
     let setup_s = t_setup.elapsed().as_secs_f64();
     let d = mesh.dim();
-    let meta = SnapshotMeta {
-        format: "galerkin-fluid-snapshots".into(),
-        version: 1,
-        dim: d,
-        cells: mesh.cell_count(),
-        faces: topo.face_count(),
-        vertices: mesh.vertex_count(),
-        frame_time: scene.params.frame_time,
-        frames: 0,
-        periodic_axis: scene.periodic_axis,
-    };
+    let meta = SnapshotMeta::new(&mesh, &topo, scene.params.frame_time, scene.periodic_axis);
     let mut writer = SnapshotWriter::create(&args.out, meta, mesh.cells(), args.force)?;
     let momenta = |state: &galerkin::fluid::FluidState| -> Vec<f64> {
         let vols = mesh.volumes_at(&state.g);
@@ -201,7 +172,7 @@ fn simulate(args: &SimulateArgs) -> Result<()> {
         mesh.vertex_count(),
         solver.projection_factor_len()
     );
-    let bar = progress_bar(frames as u64, "simulating");
+    let bar = crate::progress_bar(frames as u64, "simulating");
     let (mut td, mut ta, mut tp, mut worst_div) = (Vec::new(), Vec::new(), Vec::new(), 0.0f64);
     let mut substeps = 0;
     let (mut refactorised, mut gmres_steps) = (0, 0);
@@ -217,7 +188,7 @@ fn simulate(args: &SimulateArgs) -> Result<()> {
         worst_div = worst_div.max(report.projection.relative_divergence);
         substeps = report.substeps;
         refactorised += usize::from(report.projection.refactorised);
-        gmres_steps += report.projection.refinements;
+        gmres_steps += report.projection.gmres_steps;
         state = next;
         bar.set_message(format!("energy {:.4}", solver.energy(&state)));
         bar.inc(1);
@@ -225,9 +196,9 @@ fn simulate(args: &SimulateArgs) -> Result<()> {
     bar.finish_and_clear();
     println!(
         "{frames} frames: t_d {:.4} s (deformation), t_a {:.4} s (advection + diffusion, {substeps} RK4 substeps), t_p {:.4} s (projection: {refactorised} refactorisations, {:.1} GMRES steps per frame) per frame (medians); energy {e0:.5} → {:.5}; worst relative divergence {worst_div:.1e} → {}",
-        median(td),
-        median(ta),
-        median(tp),
+        galerkin::bench::median_f64(&mut td),
+        galerkin::bench::median_f64(&mut ta),
+        galerkin::bench::median_f64(&mut tp),
         gmres_steps as f64 / frames.max(1) as f64,
         solver.energy(&state),
         args.out.display()
@@ -267,8 +238,8 @@ fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
     let start = Instant::now();
     let particles = if args.particles > 0 {
         let seeds = seed_particles(&mesh, args.particles);
-        let device = GpuParticles::new(&gpu, &mesh, &topo, &seeds)?;
-        let bar = progress_bar(frame as u64, "advecting particles");
+        let mut device = GpuParticles::new(&gpu, &mesh, &topo, &seeds)?;
+        let bar = crate::progress_bar(frame as u64, "advecting particles");
         let mut g0 = reader.frame("g", 0)?;
         for k in 1..=frame {
             let g1 = reader.frame("g", k)?;
@@ -382,7 +353,7 @@ pub fn bench(desc: &GpuDesc, args: &BenchArgs) -> Result<()> {
         // Frames 1..: the compression is under way, so the mesh moves every frame.
         for frame in 1..=frames {
             let t = Instant::now();
-            let g = cavity.geometry(Cavity::compression(amounts, frame, 20), frame)?.g().to_vec();
+            let g = cavity.geometry(Cavity::compression(amounts, frame, 20), frame)?;
             td.push(t.elapsed().as_secs_f64());
             let (next, report) = solver.step(&state, &g, frame)?;
             ta.push(report.advection_seconds);
@@ -391,7 +362,12 @@ pub fn bench(desc: &GpuDesc, args: &BenchArgs) -> Result<()> {
             refactor += usize::from(report.projection.refactorised);
             state = next;
         }
-        let row = (mesh.cell_count(), median(td), median(ta), median(tp));
+        let row = (
+            mesh.cell_count(),
+            galerkin::bench::median_f64(&mut td),
+            galerkin::bench::median_f64(&mut ta),
+            galerkin::bench::median_f64(&mut tp),
+        );
         println!(
             "| {} | {} | {} | {setup:.2} | {:.4} | {:.4} ({substeps}) | {:.3} ({refactor}/{frames}) | {:.0} |",
             mesh.cell_count(),
@@ -430,7 +406,8 @@ pub fn bench(desc: &GpuDesc, args: &BenchArgs) -> Result<()> {
             device.advect(&gpu, mesh, &state.g, &state.g, &state.f, 0.02, 10)?;
             dev_times.push(t.elapsed().as_secs_f64());
         }
-        let (c, d) = (median(cpu_times), median(dev_times));
+        let (c, d) =
+            (galerkin::bench::median_f64(&mut cpu_times), galerkin::bench::median_f64(&mut dev_times));
         println!();
         println!(
             "Particles: 10,000 in {} cells, one frame of 10 Euler substeps: CPU {c:.4} s, device {d:.4} s (paper t_pa {PAPER_PARTICLES_S} s: {:.0}× and {:.0}×)",
@@ -456,7 +433,7 @@ pub fn demo(gpu: &Gpu, (w, h): (u32, u32), out: &Path) -> Result<()> {
     let mut solver = FluidSolver::new(mesh.clone(), topo.clone(), scene.params)?;
     let mut state = solver.initial_state(mesh.g().to_vec(), &scene.initial_velocity)?;
     let seeds = seed_particles(mesh, 3000);
-    let device = GpuParticles::new(gpu, mesh, topo, &seeds)?;
+    let mut device = GpuParticles::new(gpu, mesh, topo, &seeds)?;
     let mut cpu = seeds.clone();
     let dt = scene.params.frame_time;
     let (mut worst_div, mut worst_particle) = (0.0f64, 0.0f64);

@@ -250,17 +250,6 @@ fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
     crate::check_validation(gpu)
 }
 
-fn progress_bar(len: u64, what: &str) -> indicatif::ProgressBar {
-    let bar = indicatif::ProgressBar::new(len);
-    bar.set_style(
-        indicatif::ProgressStyle::with_template(&format!(
-            "{what:<28} {{bar:30}} {{pos}}/{{len}} eta {{eta}}"
-        ))
-        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
-    );
-    bar
-}
-
 /// Whether a scene file describes an OBJ scene (a `base = "….obj"` key) rather than the
 /// generated two rooms.
 fn is_obj_scene(text: &str) -> bool {
@@ -352,7 +341,7 @@ fn train(args: &TrainArgs) -> Result<()> {
     };
     let start = Instant::now();
     let params = sample_parameters(&spec.ranges(), &spec.defaults(), args.samples, args.seed);
-    let bar = progress_bar(params.len() as u64, "full radiosity of samples");
+    let bar = crate::progress_bar(params.len() as u64, "full radiosity of samples");
     let configurations =
         solve_configurations(spec, &params, options.near, &|done| bar.set_position(done as u64))?;
     bar.finish();
@@ -361,7 +350,7 @@ fn train(args: &TrainArgs) -> Result<()> {
     let (model, report) = train_model(spec, &configurations, &options, &|stage, done, total| {
         let mut bars = bars.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
         let label = if stage == "pca" { "PCA of Table 2's quantities" } else { "premultiplying tensors" };
-        let bar = bars.entry(stage.to_string()).or_insert_with(|| progress_bar(total, label));
+        let bar = bars.entry(stage.to_string()).or_insert_with(|| crate::progress_bar(total, label));
         bar.set_length(total);
         bar.set_position(done);
     })?;
@@ -430,7 +419,7 @@ fn compare(args: &CompareArgs) -> Result<()> {
     let (mut full_times, mut reduced_times) = (Vec::new(), Vec::new());
     let mut parts = [0.0f64; 4];
     for (which, &frames) in args.frames.iter().enumerate() {
-        let bar = progress_bar(frames as u64, &format!("sequence {} (full and reduced)", which + 1));
+        let bar = crate::progress_bar(frames as u64, &format!("sequence {} (full and reduced)", which + 1));
         let mut errors = Vec::with_capacity(frames);
         for f in 0..frames {
             let p = sequence(&ranges, which % 2, f, frames);
@@ -559,11 +548,6 @@ pub struct BenchArgs {
     pub cpu_only: bool,
 }
 
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
-}
-
 /// `galerkin bench radiosity`: the full radiosity's stages on the CPU (f64) and the device
 /// (f32), medians of `--runs`.
 pub fn bench(desc: &GpuDesc, args: &BenchArgs) -> Result<()> {
@@ -594,7 +578,7 @@ pub fn bench(desc: &GpuDesc, args: &BenchArgs) -> Result<()> {
             sv.push(t.elapsed().as_secs_f64());
             sweeps = k;
         }
-        let (a, b) = (median(ff), median(sv));
+        let (a, b) = (galerkin::bench::median_f64(&mut ff), galerkin::bench::median_f64(&mut sv));
         println!(
             "| {name} | {n} | {} | CPU f64 (rayon, 2 threads) | {a:.3} | {b:.3} | {sweeps} | {:.3} |",
             n * n,
@@ -612,7 +596,7 @@ pub fn bench(desc: &GpuDesc, args: &BenchArgs) -> Result<()> {
                 sv.push(t.elapsed().as_secs_f64());
                 sweeps = k;
             }
-            let (a, b) = (median(ff), median(sv));
+            let (a, b) = (galerkin::bench::median_f64(&mut ff), galerkin::bench::median_f64(&mut sv));
             println!(
                 "| {name} | {n} | {} | device f32{} | {a:.3} | {b:.3} | {sweeps} | {:.3} |",
                 n * n,

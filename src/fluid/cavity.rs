@@ -214,7 +214,7 @@ impl Cavity {
 
     /// The whole mesh's geometry at `frame` (boundary map, then harmonic interior); an
     /// inverted cell is refused naming the frame.
-    pub fn geometry(&mut self, a: [f64; 3], frame: usize) -> Result<SimplexMesh, MeshError> {
+    pub fn geometry(&mut self, a: [f64; 3], frame: usize) -> Result<Vec<f64>, MeshError> {
         let target = self.boundary_for(a);
         self.deform.deform(&target, frame)
     }

@@ -9,8 +9,10 @@ use bytemuck::{Pod, Zeroable};
 
 use super::particles::{AdvectReport, GridHash, Particle};
 use super::FluidError;
-use crate::gpu::{shaders, BindingKind, Buffer, ComputePipeline, ComputePipelineDesc, Gpu, Resource};
-use crate::mesh::{FaceKind, SimplexMesh, Topology};
+use crate::gpu::{
+    shaders, BindingKind, Buffer, ComputePipeline, ComputePipelineDesc, DescriptorSet, Gpu, Resource,
+};
+use crate::mesh::{FaceKind, Point, SimplexMesh, Topology};
 
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
@@ -72,6 +74,22 @@ pub struct GpuParticles {
     links: Buffer<u32>,
     particles: Buffer<[f32; 4]>,
     counts: Buffer<u32>,
+    /// The frame's geometries and fluxes (f32), rewritten per frame.
+    g0: Buffer<f32>,
+    g1: Buffer<f32>,
+    flux: Buffer<f32>,
+    /// The grid hash and descriptor set of the last geometries, kept while they repeat (a
+    /// static mesh builds and uploads its grid once).
+    frame: Option<FrameGeometry>,
+}
+
+/// What depends on a frame's two geometries.
+struct FrameGeometry {
+    g0: Vec<f64>,
+    g1: Vec<f64>,
+    grid: (Point, Point, [usize; 3]),
+    _grid_buffers: (Buffer<u32>, Buffer<u32>),
+    set: DescriptorSet,
 }
 
 impl GpuParticles {
@@ -117,6 +135,10 @@ impl GpuParticles {
             links: storage(gpu, "fluid walk links", &links)?,
             particles: storage(gpu, "fluid particles", &pack(particles))?,
             counts: storage(gpu, "fluid particle counts", &[0u32; 3])?,
+            g0: storage(gpu, "fluid g0", &vec![0f32; mesh.g().len()])?,
+            g1: storage(gpu, "fluid g1", &vec![0f32; mesh.g().len()])?,
+            flux: storage(gpu, "fluid flux", &vec![0f32; topo.face_count()])?,
+            frame: None,
         })
     }
 
@@ -145,7 +167,7 @@ impl GpuParticles {
     /// Advects through one frame (see [`super::particles::advect_particles`]).
     #[allow(clippy::too_many_arguments)]
     pub fn advect(
-        &self,
+        &mut self,
         gpu: &Gpu,
         mesh: &SimplexMesh,
         g0: &[f64],
@@ -157,34 +179,56 @@ impl GpuParticles {
         if self.count == 0 {
             return Ok(AdvectReport::default());
         }
+        if g0.len() != self.g0.len() as usize || g1.len() != g0.len() || f.len() != self.flux.len() as usize {
+            return Err(FluidError::State(format!(
+                "particles: geometries of {} and {} coordinates and {} fluxes for a mesh of {} and {}",
+                g0.len(),
+                g1.len(),
+                f.len(),
+                self.g0.len(),
+                self.flux.len()
+            )));
+        }
         let narrow = |x: &[f64]| x.iter().map(|&v| v as f32).collect::<Vec<f32>>();
-        let grid = GridHash::new(mesh, &[g0, g1]);
-        let (lo, size, dims, start, grid_cells) = grid.parts();
-        let g0b = storage(gpu, "fluid g0", &narrow(g0))?;
-        let g1b = storage(gpu, "fluid g1", &narrow(g1))?;
-        let fb = storage(gpu, "fluid flux", &narrow(f))?;
-        let sb = storage(gpu, "fluid grid start", start)?;
-        let cb = storage(gpu, "fluid grid cells", grid_cells)?;
+        self.flux.upload(gpu, 0, &narrow(f)).map_err(gpu_err)?;
+        if !self.frame.as_ref().is_some_and(|fr| fr.g0 == g0 && fr.g1 == g1) {
+            self.g0.upload(gpu, 0, &narrow(g0)).map_err(gpu_err)?;
+            self.g1.upload(gpu, 0, &narrow(g1)).map_err(gpu_err)?;
+            let grid = GridHash::new(mesh, &[g0, g1]);
+            let (lo, size, dims, start, grid_cells) = grid.parts();
+            let sb = storage(gpu, "fluid grid start", start)?;
+            let cb = storage(gpu, "fluid grid cells", grid_cells)?;
+            let bind = |x: &Buffer<u32>| x.binding().map(Resource::Storage).map_err(gpu_err);
+            let set = self
+                .pipeline
+                .bind(
+                    gpu,
+                    &[
+                        self.g0.binding().map(Resource::Storage).map_err(gpu_err)?,
+                        self.g1.binding().map(Resource::Storage).map_err(gpu_err)?,
+                        bind(&self.cells)?,
+                        bind(&self.faces)?,
+                        bind(&self.links)?,
+                        self.flux.binding().map(Resource::Storage).map_err(gpu_err)?,
+                        self.particles.binding().map(Resource::Storage).map_err(gpu_err)?,
+                        bind(&sb)?,
+                        bind(&cb)?,
+                        bind(&self.counts)?,
+                    ],
+                )
+                .map_err(gpu_err)?;
+            self.frame = Some(FrameGeometry {
+                g0: g0.to_vec(),
+                g1: g1.to_vec(),
+                grid: (lo, size, dims),
+                _grid_buffers: (sb, cb),
+                set,
+            });
+        }
         self.counts.upload(gpu, 0, &[0u32; 3]).map_err(gpu_err)?;
-        let b = |x: &Buffer<_>| x.binding().map(Resource::Storage);
-        let set = self
-            .pipeline
-            .bind(
-                gpu,
-                &[
-                    b(&g0b).map_err(gpu_err)?,
-                    b(&g1b).map_err(gpu_err)?,
-                    self.cells.binding().map(Resource::Storage).map_err(gpu_err)?,
-                    self.faces.binding().map(Resource::Storage).map_err(gpu_err)?,
-                    self.links.binding().map(Resource::Storage).map_err(gpu_err)?,
-                    b(&fb).map_err(gpu_err)?,
-                    self.particles.binding().map(Resource::Storage).map_err(gpu_err)?,
-                    sb.binding().map(Resource::Storage).map_err(gpu_err)?,
-                    cb.binding().map(Resource::Storage).map_err(gpu_err)?,
-                    self.counts.binding().map(Resource::Storage).map_err(gpu_err)?,
-                ],
-            )
-            .map_err(gpu_err)?;
+        let frame = self.frame.as_ref().expect("bound above");
+        let (lo, size, dims) = frame.grid;
+        let set = &frame.set;
         let push = Push {
             dim: self.dim as u32,
             count: self.count as u32,
@@ -197,7 +241,7 @@ impl GpuParticles {
         gpu.run(|cmd| {
             self.pipeline.record_dispatch(
                 cmd,
-                &set,
+                set,
                 bytemuck::bytes_of(&push),
                 [(self.count as u32).div_ceil(64), 1, 1],
             );

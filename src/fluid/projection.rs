@@ -16,10 +16,12 @@
 //! preconditioned with that factorisation, which removes the regularisation's error. The
 //! numerical factorisation is kept across frames: the next frame's system (the mesh has moved
 //! a little) is solved by GMRES preconditioned with the old factor, which typically converges
-//! in a few steps; only when it does not within [`GMRES_MAX`] steps is the system refactorised. C has one redundant row per connected
-//! domain (the divergences sum to the boundary flux); the regularisation handles it and the
-//! refinement leaves its component of λ alone. The constraints are consistent only if the
-//! boundary flux sums to zero, which [`Projection::project`] checks.
+//! in a few steps; only when it does not within [`GMRES_MAX`] steps is the system refactorised.
+//!
+//! C has one redundant row per connected domain (the divergences sum to the boundary flux):
+//! the exact system is singular but consistent when the boundary fluxes sum to zero, which
+//! [`Projection::project`] checks (refusing a net volume change) and then enforces to
+//! rounding; the regularised preconditioner and GMRES leave λ's free component alone.
 
 use crate::mesh::Topology;
 use crate::tensor::{Factorisation, SparseSymmetricSolver, SymmetricPattern};
@@ -59,7 +61,7 @@ pub struct Projection {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ProjectionReport {
     /// GMRES steps taken (each one solve with the factorisation).
-    pub refinements: usize,
+    pub gmres_steps: usize,
     /// Whether this frame refactorised (else the previous frame's factorisation served as
     /// the preconditioner).
     pub refactorised: bool,
@@ -198,7 +200,7 @@ impl Projection {
             refactorised = true;
             iterations = self.gmres(&b, &mut x);
         }
-        let Some(refinements) = iterations else {
+        let Some(gmres_steps) = iterations else {
             return Err(FluidError::Projection(format!(
                 "frame {frame}: GMRES preconditioned by a fresh LDLᵀ did not reach {GMRES_TOLERANCE:e}"
             )));
@@ -214,7 +216,7 @@ impl Projection {
         if x.iter().any(|v| !v.is_finite()) {
             return Err(FluidError::Projection(format!("frame {frame}: the flux is not finite")));
         }
-        Ok((x, ProjectionReport { refinements, relative_divergence, refactorised }))
+        Ok((x, ProjectionReport { gmres_steps, relative_divergence, refactorised }))
     }
 
     /// Factorises the regularised system `[K + εI, Cᵀ; C, −δI]` of the current values.
@@ -241,7 +243,6 @@ impl Projection {
     /// `None` if the residual did not fall below [`GMRES_TOLERANCE`] of `‖b‖` within
     /// [`GMRES_MAX`] steps.
     fn gmres(&self, b: &[f64], x: &mut [f64]) -> Option<usize> {
-        let n = b.len();
         let dot = |a: &[f64], c: &[f64]| a.iter().zip(c).map(|(p, q)| p * q).sum::<f64>();
         let b_norm = dot(b, b).sqrt().max(f64::MIN_POSITIVE);
         let mut steps = 0;
@@ -307,7 +308,6 @@ impl Projection {
                     *xj += yi * zj;
                 }
             }
-            let _ = n;
             if k_done == 0 {
                 break;
             }

@@ -331,7 +331,8 @@ impl FluidScene {
                     target[i] = t.centre[k] + s * (target[i] - t.centre[k]);
                 }
             }
-            deform.deform(&target, 0).map_err(|e| fail("scale", format!("scale = {s}: {e}")))?
+            let g = deform.deform(&target, 0).map_err(|e| fail("scale", format!("scale = {s}: {e}")))?;
+            meshed.mesh.with_g(g, None)?
         } else {
             meshed.mesh.clone()
         };
@@ -427,7 +428,7 @@ impl FluidScene {
             Motion::Static => Ok(self.mesh.g().to_vec()),
             Motion::Cavity { cavity, amounts, .. } => {
                 let a = Cavity::compression(*amounts, frame, self.frames);
-                Ok(cavity.geometry(a, frame)?.g().to_vec())
+                Ok(cavity.geometry(a, frame)?)
             }
         }
     }

@@ -24,10 +24,16 @@ use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
+use crate::mesh::{SimplexMesh, Topology};
 use crate::reduce::{ReduceError, SnapshotSource};
 use crate::tensor::Tensor;
 
 use super::FluidError;
+
+/// The header's format name.
+pub const FORMAT: &str = "galerkin-fluid-snapshots";
+/// The header's format version.
+pub const VERSION: u32 = 1;
 
 /// The quantities, in file order.
 pub const QUANTITIES: [&str; 5] = ["u", "p", "f", "g", "h"];
@@ -35,9 +41,9 @@ pub const QUANTITIES: [&str; 5] = ["u", "p", "f", "g", "h"];
 /// The header `snapshots.json`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct SnapshotMeta {
-    /// Always "galerkin-fluid-snapshots".
+    /// Always [`FORMAT`].
     pub format: String,
-    /// Format version (1).
+    /// Format version ([`VERSION`]).
     pub version: u32,
     /// Spatial dimension.
     pub dim: usize,
@@ -56,6 +62,21 @@ pub struct SnapshotMeta {
 }
 
 impl SnapshotMeta {
+    /// The header of a run on `mesh` (no frames written yet).
+    pub fn new(mesh: &SimplexMesh, topo: &Topology, frame_time: f64, periodic_axis: Option<usize>) -> Self {
+        Self {
+            format: FORMAT.into(),
+            version: VERSION,
+            dim: mesh.dim(),
+            cells: mesh.cell_count(),
+            faces: topo.face_count(),
+            vertices: mesh.vertex_count(),
+            frame_time,
+            frames: 0,
+            periodic_axis,
+        }
+    }
+
     /// Length of one frame of `quantity`.
     pub fn len(&self, quantity: &str) -> usize {
         match quantity {
@@ -160,7 +181,7 @@ impl SnapshotReader {
         let path = dir.join("snapshots.json");
         let text = std::fs::read_to_string(&path).map_err(|e| io(&path, e))?;
         let meta: SnapshotMeta = serde_json::from_str(&text).map_err(|e| io(&path, e))?;
-        if meta.format != "galerkin-fluid-snapshots" || meta.version != 1 {
+        if meta.format != FORMAT || meta.version != VERSION {
             return Err(io(
                 &path,
                 format!(

@@ -26,7 +26,7 @@ use std::time::Instant;
 use rayon::prelude::*;
 
 use crate::mesh::geometry::swept_volume;
-use crate::mesh::{SimplexMesh, Topology};
+use crate::mesh::{refuse_inverted, SimplexMesh, Topology};
 
 use super::operators::{divergence, CellOperators};
 use super::projection::{Projection, ProjectionReport};
@@ -208,8 +208,9 @@ impl FluidSolver {
     /// boundary): the divergence-free start of a simulation.
     pub fn initial_state(&mut self, g: Vec<f64>, u: &[f64]) -> Result<FluidState, FluidError> {
         self.check_len("velocity", u.len(), self.mesh.dim() * self.mesh.cell_count())?;
-        self.mesh.with_g(g.clone(), Some(0))?;
+        self.mesh.check_coordinates(&g)?;
         let ops = CellOperators::new(&self.mesh, &self.topo, &g);
+        refuse_inverted(&ops.volumes, Some(0))?;
         let zero = vec![0.0; self.topo.boundary_faces().len()];
         let (f, _) = self.projection.project(&self.topo, &ops, u, &zero, 0)?;
         let u = ops.flux_to_velocity(&self.topo, &f);
@@ -235,7 +236,10 @@ impl FluidSolver {
         frame: usize,
     ) -> Result<(FluidState, StepReport), FluidError> {
         self.check_len("geometry", g_next.len(), self.mesh.g().len())?;
-        self.mesh.with_g(g_next.to_vec(), Some(frame))?;
+        self.mesh.check_coordinates(g_next)?;
+        // The next geometry's operators (its volumes refuse an inverted frame before any work).
+        let ops_next = CellOperators::new(&self.mesh, &self.topo, g_next);
+        refuse_inverted(&ops_next.volumes, Some(frame))?;
         let h = self.induced_flux(&state.g, g_next);
         let t0 = Instant::now();
         let ops = CellOperators::new(&self.mesh, &self.topo, &state.g);
@@ -272,7 +276,6 @@ impl FluidSolver {
             )));
         }
         let t1 = Instant::now();
-        let ops_next = CellOperators::new(&self.mesh, &self.topo, g_next);
         let hb: Vec<f64> = self.topo.boundary_faces().iter().map(|&f| h[f as usize]).collect();
         let (f, projection) = self.projection.project(&self.topo, &ops_next, &u, &hb, frame)?;
         let u = ops_next.flux_to_velocity(&self.topo, &f);

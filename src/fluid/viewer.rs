@@ -90,7 +90,7 @@ impl FluidContent {
         self.frame += 1;
         let g = self.scene.geometry(self.frame)?;
         let (next, _) = self.solver.step(&self.state, &g, self.frame)?;
-        if let Some(p) = &self.particles {
+        if let Some(p) = &mut self.particles {
             p.advect(
                 gpu,
                 &self.scene.mesh,

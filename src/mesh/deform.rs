@@ -99,23 +99,19 @@ impl HarmonicDeformation {
         self.free.len()
     }
 
-    /// The deformed mesh for frame `frame`, with the prescribed vertices at their positions in
-    /// `target` (a full geometry vector; its free entries are ignored).
-    pub fn deform(&mut self, target: &[f64], frame: usize) -> Result<SimplexMesh, MeshError> {
-        let dim = self.base.dim();
-        let g0 = self.base.g();
-        if target.len() != g0.len() {
-            return Err(MeshError::Structure(format!(
-                "frame {frame}: target of {} coordinates for a mesh of {}",
-                target.len(),
-                g0.len()
-            )));
-        }
+    /// The deformed geometry vector for frame `frame`, with the prescribed vertices at their
+    /// positions in `target` (a full geometry vector; its free entries are ignored). A frame
+    /// that still has an inverted cell after the stiffening rounds is refused, naming it.
+    pub fn deform(&mut self, target: &[f64], frame: usize) -> Result<Vec<f64>, MeshError> {
+        self.base
+            .check_coordinates(target)
+            .map_err(|e| MeshError::Structure(format!("frame {frame}: {e}")))?;
         let mut weights = vec![1.0; self.base.cell_count()];
-        let mut last = None;
+        let mut g = Vec::new();
+        let mut vols = Vec::new();
         for _ in 0..STIFFEN_ROUNDS {
-            let g = self.solve(target, &weights, frame)?;
-            let vols = self.base.volumes_at(&g);
+            g = self.solve(target, &weights, frame)?;
+            vols = self.base.volumes_at(&g);
             let mut ok = true;
             for (c, (&v, &v0)) in vols.iter().zip(&self.base_volumes).enumerate() {
                 let ratio = v / v0;
@@ -124,14 +120,12 @@ impl HarmonicDeformation {
                     weights[c] *= (0.25 / ratio.max(1e-3)).powi(2).min(1e4);
                 }
             }
-            last = Some(g);
             if ok {
                 break;
             }
         }
-        let g = last.expect("at least one round");
-        let _ = dim;
-        self.base.with_g(g, Some(frame))
+        super::refuse_inverted(&vols, Some(frame))?;
+        Ok(g)
     }
 
     fn solve(&mut self, target: &[f64], weights: &[f64], frame: usize) -> Result<Vec<f64>, MeshError> {
@@ -202,7 +196,7 @@ mod tests {
         let mut h = HarmonicDeformation::new(&t.mesh, &prescribed).expect("prepare");
         // No boundary motion: no motion at all.
         let same = h.deform(t.mesh.g(), 0).expect("identity");
-        assert!(same.g().iter().zip(t.mesh.g()).all(|(a, b)| (a - b).abs() < 1e-12));
+        assert!(same.iter().zip(t.mesh.g()).all(|(a, b)| (a - b).abs() < 1e-12));
         for (frame, scale) in [0.5, 1.6].into_iter().enumerate() {
             let mut target = t.mesh.g().to_vec();
             let c = t.spec.centre;
@@ -212,7 +206,7 @@ mod tests {
                     target[i] = c[k] + scale * (target[i] - c[k]);
                 }
             }
-            let m = h.deform(&target, frame).expect("deformed");
+            let m = t.mesh.with_g(h.deform(&target, frame).expect("deformed"), None).expect("valid");
             let area: f64 = m.volumes().iter().sum();
             let obstacle = 3.0 * 3f64.sqrt() / 4.0 * (scale * t.spec.radius).powi(2);
             assert!((area - (t.spec.length * t.spec.height - obstacle)).abs() < 1e-12);

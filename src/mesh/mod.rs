@@ -143,6 +143,15 @@ impl SimplexMesh {
     /// The same topology at new vertex positions, refused if any cell is not positively
     /// oriented (naming `frame` and the cell) or a coordinate is not finite.
     pub fn with_g(&self, g: Vec<f64>, frame: Option<usize>) -> Result<Self, MeshError> {
+        self.check_coordinates(&g)?;
+        refuse_inverted(&self.volumes_at(&g), frame)?;
+        Ok(Self { dim: self.dim, g, cells: self.cells.clone() })
+    }
+
+    /// Refuses a geometry vector of the wrong length or with a coordinate that is not finite
+    /// (naming the vertex). Its cells' orientation is checked by [`refuse_inverted`] on their
+    /// volumes, which callers usually compute anyway.
+    pub fn check_coordinates(&self, g: &[f64]) -> Result<(), MeshError> {
         if g.len() != self.g.len() {
             return Err(MeshError::Structure(format!(
                 "geometry vector of length {} for a mesh with {} coordinates",
@@ -150,23 +159,15 @@ impl SimplexMesh {
                 self.g.len()
             )));
         }
-        if let Some(i) = g.iter().position(|x| !x.is_finite()) {
-            return Err(MeshError::NotFinite { vertex: i / self.dim, axis: i % self.dim });
-        }
-        let mesh = Self { dim: self.dim, g, cells: self.cells.clone() };
-        mesh.check_volumes(frame)?;
-        Ok(mesh)
-    }
-
-    /// Refuses the first cell whose volume is not positive (relative to the mean cell volume:
-    /// below 1e-12 of it counts as flat).
-    pub fn check_volumes(&self, frame: Option<usize>) -> Result<(), MeshError> {
-        let vols = self.volumes();
-        let mean = vols.iter().map(|v| v.abs()).sum::<f64>() / vols.len().max(1) as f64;
-        match vols.iter().position(|&v| v <= 1e-12 * mean) {
-            Some(cell) => Err(MeshError::Inverted { frame, cell, volume: vols[cell] }),
+        match g.iter().position(|x| !x.is_finite()) {
+            Some(i) => Err(MeshError::NotFinite { vertex: i / self.dim, axis: i % self.dim }),
             None => Ok(()),
         }
+    }
+
+    /// Refuses the first cell whose volume is not positive (see [`refuse_inverted`]).
+    pub fn check_volumes(&self, frame: Option<usize>) -> Result<(), MeshError> {
+        refuse_inverted(&self.volumes(), frame)
     }
 
     /// Axis-aligned bounds `(min, max)` of the vertices.
@@ -181,6 +182,16 @@ impl SimplexMesh {
             }
         }
         (lo, hi)
+    }
+}
+
+/// Refuses the first cell of `volumes` that is not positive (relative to the mean cell volume:
+/// below 1e-12 of it counts as flat), naming `frame` and the cell.
+pub fn refuse_inverted(volumes: &[f64], frame: Option<usize>) -> Result<(), MeshError> {
+    let mean = volumes.iter().map(|v| v.abs()).sum::<f64>() / volumes.len().max(1) as f64;
+    match volumes.iter().position(|&v| v <= 1e-12 * mean) {
+        Some(cell) => Err(MeshError::Inverted { frame, cell, volume: volumes[cell] }),
+        None => Ok(()),
     }
 }
 
