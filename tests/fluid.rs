@@ -310,7 +310,8 @@ fn snapshots_stream_back_by_frame_and_by_rows() {
 
 #[test]
 fn the_cavity_keeps_its_volume_and_every_training_run_stays_valid() {
-    use galerkin::fluid::cavity::{enclosed_volume, training_run, Cavity, TRAINING_RUNS};
+    use galerkin::fluid::cavity::{training_run, Cavity, TRAINING_RUNS};
+    use galerkin::mesh::volume::enclosed_volume;
     let mut scene = FluidScene::load(std::path::Path::new("scenes/fluid/cavity_small.toml")).expect("scene");
     let galerkin::fluid::scene::Motion::Cavity { cavity, .. } = &mut scene.motion else {
         panic!("a cavity scene");

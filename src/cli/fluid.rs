@@ -32,6 +32,23 @@ pub enum Action {
     /// are advected on the device. Keys: space plays/pauses, c colours cells by speed, r
     /// restarts, Esc quits, S saves a screenshot.
     View(ViewArgs),
+    /// Write the surface animation of a [bird] or [surface] scene as an OBJ sequence
+    /// (DIR/{stem}_0000.obj, …: one object per closed part, the same topology every frame),
+    /// for other tools or to edit and load back through a [surface] scene.
+    Surface(SurfaceArgs),
+}
+
+/// Arguments of `galerkin fluid surface`.
+#[derive(Args)]
+pub struct SurfaceArgs {
+    /// Scene file (TOML) with a [bird] or [surface] section, e.g. scenes/fluid/bird.toml.
+    pub scene: PathBuf,
+    /// Directory to write the OBJ files to (created).
+    #[arg(long, default_value = "out/bird-obj")]
+    pub out: PathBuf,
+    /// File name stem.
+    #[arg(long, default_value = "frame")]
+    pub stem: String,
 }
 
 /// Arguments of `galerkin fluid view`.
@@ -123,7 +140,24 @@ pub fn run(desc: &GpuDesc, action: &Action) -> Result<()> {
         Action::Simulate(args) => simulate(args),
         Action::Render(args) => render(desc, args),
         Action::View(args) => view(desc, args),
+        Action::Surface(args) => surface(args),
     }
+}
+
+fn surface(args: &SurfaceArgs) -> Result<()> {
+    let scene = FluidScene::load(&args.scene)?;
+    let Some(animation) = scene.animation() else {
+        bail!("{}: only [bird] and [surface] scenes have a surface animation", args.scene.display());
+    };
+    let files = animation.write_sequence(&args.out, &args.stem)?;
+    println!(
+        "fluid surface: {} frames of {} triangles ({} parts) → {}",
+        files.len(),
+        animation.triangles.len(),
+        animation.parts.len(),
+        args.out.join(format!("{}_*.obj", args.stem)).display()
+    );
+    Ok(())
 }
 
 #[cfg(feature = "viewer")]
@@ -324,74 +358,132 @@ const PAPER: [(&str, usize, f64, f64, f64); 2] =
     [("cavity", 88_671, 2.17, 18.4, 220.0), ("eagle", 300_217, 2.92, 18.9, 82.0)];
 const PAPER_PARTICLES_S: f64 = 0.308;
 
-/// `galerkin bench fluid`: per-stage times of the full-space step on the deforming cavity at
-/// sizes from 10³ to 3·10⁵ cells, next to Table 1, and particle advection (CPU and device).
+/// One size of the benchmark: per-stage medians and what the particle pass needs.
+struct BenchRow {
+    cells: usize,
+    td: f64,
+    ta: f64,
+    tp: f64,
+    mesh: SimplexMesh,
+    topo: Topology,
+    state: galerkin::fluid::FluidState,
+}
+
+/// Steps `frames` frames (from `first + 1`) of a moving mesh whose geometry `geometry`
+/// gives, printing one table row; `setup` started before the mesh was built.
+fn bench_row(
+    mesh: SimplexMesh,
+    topo: Topology,
+    frames: usize,
+    first: usize,
+    setup: Instant,
+    mut geometry: impl FnMut(usize) -> Result<Vec<f64>>,
+) -> Result<BenchRow> {
+    let params = galerkin::fluid::FluidParams { viscosity: 1e-3, forcing: [0.0; 3], frame_time: 0.02 };
+    let mut solver = FluidSolver::new(mesh.clone(), topo.clone(), params)?;
+    let g0 = geometry(first)?;
+    let mut state = solver.initial_state(g0, &vec![0.0; 3 * mesh.cell_count()])?;
+    let setup = setup.elapsed().as_secs_f64();
+    let (mut td, mut ta, mut tp) = (Vec::new(), Vec::new(), Vec::new());
+    let (mut substeps, mut refactor) = (0, 0);
+    for frame in first + 1..=first + frames {
+        let t = Instant::now();
+        let g = geometry(frame)?;
+        td.push(t.elapsed().as_secs_f64());
+        let (next, report) = solver.step(&state, &g, frame)?;
+        ta.push(report.advection_seconds);
+        tp.push(report.projection_seconds);
+        substeps = report.substeps;
+        refactor += usize::from(report.projection.refactorised);
+        state = next;
+    }
+    let median = galerkin::bench::median_f64;
+    let row = BenchRow {
+        cells: mesh.cell_count(),
+        td: median(&mut td),
+        ta: median(&mut ta),
+        tp: median(&mut tp),
+        mesh,
+        topo,
+        state,
+    };
+    println!(
+        "| {} | {} | {} | {setup:.2} | {:.4} | {:.4} ({substeps}) | {:.3} ({refactor}/{frames}) | {:.0} |",
+        row.cells,
+        row.topo.face_count(),
+        row.mesh.vertex_count(),
+        row.td,
+        row.ta,
+        row.tp,
+        solver.projection_factor_len() as f64 * 8.0 / 1e6
+    );
+    Ok(row)
+}
+
+/// `galerkin bench fluid`: per-stage times of the full-space step on the deforming cavity and
+/// on the flying bird at sizes from 10³ to 3·10⁵ cells, next to Table 1, and particle
+/// advection (CPU and device).
 pub fn bench(desc: &GpuDesc, args: &BenchArgs) -> Result<()> {
+    use galerkin::fluid::bird::BirdSpec;
     use galerkin::fluid::cavity::{training_run, Cavity, CavitySpec};
+    use galerkin::fluid::embedded::{Embedded, EmbeddedSpec};
     let spacings: &[f64] = if args.quick { &[0.3, 0.2, 0.14] } else { &[0.4, 0.2, 0.135, 0.09, 0.0605] };
+    let bird_spacings: &[f64] = if args.quick { &[0.3] } else { &[0.3, 0.2, 0.14, 0.1025] };
     let frames = args.frames.max(2);
     let gpu = Gpu::new(desc)?;
     println!("device: {} ({})", gpu.caps().device_name, gpu.caps().driver);
+    let header = || {
+        println!();
+        println!("| cells | faces | vertices | setup s | t_d s | t_a s (substeps) | t_p s (refactorised) | factor MB |");
+        println!("|---:|---:|---:|---:|---:|---:|---:|---:|");
+    };
     println!();
-    println!("| cells | faces | vertices | setup s | t_d s | t_a s (substeps) | t_p s (refactorised) | factor MB |");
-    println!("|---:|---:|---:|---:|---:|---:|---:|---:|");
+    println!("The deforming cavity, training run 0 (frames 1.., the first small cavity compressing):");
+    header();
     let mut rows = Vec::new();
     for &h in spacings {
         let spec = CavitySpec { spacing: h, tunnel_radius: 0.16f64.max(1.1 * h), ..CavitySpec::default() };
         let t0 = Instant::now();
         let mut cavity = Cavity::new(&spec)?;
-        let mesh = cavity.mesh.clone();
-        let topo = cavity.topology.clone();
-        let params = galerkin::fluid::FluidParams { viscosity: 1e-3, forcing: [0.0; 3], frame_time: 0.02 };
-        let mut solver = FluidSolver::new(mesh.clone(), topo.clone(), params)?;
-        let setup = t0.elapsed().as_secs_f64();
-        let mut state = solver.initial_state(mesh.g().to_vec(), &vec![0.0; 3 * mesh.cell_count()])?;
+        let (mesh, topo) = (cavity.mesh.clone(), cavity.topology.clone());
         let amounts = training_run(0).unwrap_or([0.3, 0.0, 0.0]);
-        let (mut td, mut ta, mut tp) = (Vec::new(), Vec::new(), Vec::new());
-        let mut substeps = 0;
-        let mut refactor = 0;
-        // Frames 1..: the compression is under way, so the mesh moves every frame.
-        for frame in 1..=frames {
-            let t = Instant::now();
-            let g = cavity.geometry(Cavity::compression(amounts, frame, 20), frame)?;
-            td.push(t.elapsed().as_secs_f64());
-            let (next, report) = solver.step(&state, &g, frame)?;
-            ta.push(report.advection_seconds);
-            tp.push(report.projection_seconds);
-            substeps = report.substeps;
-            refactor += usize::from(report.projection.refactorised);
-            state = next;
-        }
-        let row = (
-            mesh.cell_count(),
-            galerkin::bench::median_f64(&mut td),
-            galerkin::bench::median_f64(&mut ta),
-            galerkin::bench::median_f64(&mut tp),
-        );
-        println!(
-            "| {} | {} | {} | {setup:.2} | {:.4} | {:.4} ({substeps}) | {:.3} ({refactor}/{frames}) | {:.0} |",
-            mesh.cell_count(),
-            topo.face_count(),
-            mesh.vertex_count(),
-            row.1,
-            row.2,
-            row.3,
-            solver.projection_factor_len() as f64 * 8.0 / 1e6
-        );
-        rows.push((row, mesh, topo, state));
+        let geometry = |frame: usize| -> Result<Vec<f64>> {
+            Ok(cavity.geometry(Cavity::compression(amounts, frame, 20), frame)?)
+        };
+        rows.push(bench_row(mesh, topo, frames, 0, t0, geometry)?);
+    }
+    println!();
+    println!("The flying bird (box [-1.4, 1.4] × [-1.8, 1.8] × [-1.3, 1.3], frames 8.., wings beating):");
+    header();
+    let mut bird_rows = Vec::new();
+    let animation = BirdSpec::default().animation();
+    for &h in bird_spacings {
+        let spec = EmbeddedSpec { lo: [-1.4, -1.8, -1.3], hi: [1.4, 1.8, 1.3], spacing: h, base_frame: 0 };
+        let t0 = Instant::now();
+        let mut domain = Embedded::new(animation.clone(), &spec)?;
+        let (mesh, topo) = (domain.mesh.clone(), domain.topology.clone());
+        bird_rows.push(bench_row(mesh, topo, frames, 8, t0, |frame| Ok(domain.geometry(frame)?))?);
     }
     println!();
     println!("Against Table 1 (the paper's times over ours at the nearest size; goal ≥ 10×):");
     println!();
     println!("| paper row | paper cells | our cells | t_d ratio | t_a ratio | t_p ratio |");
     println!("|---|---:|---:|---:|---:|---:|");
-    for (name, cells, pd, pa, pp) in PAPER {
-        if let Some(((c, d, a, p), ..)) = rows.iter().min_by_key(|r| (r.0 .0 as i64 - cells as i64).abs()) {
-            println!("| {name} | {cells} | {c} | {:.0}× | {:.0}× | {:.0}× |", pd / d, pa / a, pp / p);
+    for ((name, cells, pd, pa, pp), ours) in PAPER.into_iter().zip([&rows, &bird_rows]) {
+        if let Some(r) = ours.iter().min_by_key(|r| (r.cells as i64 - cells as i64).abs()) {
+            let c = r.cells;
+            println!(
+                "| {name} | {cells} | {c} | {:.0}× | {:.0}× | {:.0}× |",
+                pd / r.td,
+                pa / r.ta,
+                pp / r.tp
+            );
         }
     }
     // Particles: 10,000 in the cavity nearest the paper's size, one frame of 10 substeps.
-    if let Some((_, mesh, topo, state)) = rows.iter().min_by_key(|r| (r.0 .0 as i64 - 88_671).abs()) {
+    if let Some(BenchRow { mesh, topo, state, .. }) =
+        rows.iter().min_by_key(|r| (r.cells as i64 - 88_671).abs())
+    {
         let seeds = seed_particles(mesh, 10_000);
         let mut cpu_times = Vec::new();
         let mut dev_times = Vec::new();
@@ -416,7 +508,7 @@ pub fn bench(desc: &GpuDesc, args: &BenchArgs) -> Result<()> {
             PAPER_PARTICLES_S / d
         );
     }
-    drop(rows);
+    drop((rows, bird_rows));
     crate::check_validation(gpu)
 }
 

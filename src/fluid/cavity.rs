@@ -21,6 +21,7 @@
 use crate::mesh::deform::HarmonicDeformation;
 use crate::mesh::sdf::{Capsule, Sdf, Sphere, Union};
 use crate::mesh::stuffing::stuff;
+use crate::mesh::volume::enclosed_volume;
 use crate::mesh::{MeshError, SimplexMesh, Topology};
 
 /// The cavity's shape.
@@ -223,20 +224,4 @@ impl Cavity {
     pub fn rest_volume(&self) -> f64 {
         self.rest_volume
     }
-}
-
-/// The volume enclosed by the boundary faces at geometry `g`: `(1/3) Σ_faces c_f · A_f n_f`
-/// (divergence theorem; equal to the sum of cell volumes for any interior).
-pub fn enclosed_volume(mesh: &SimplexMesh, topo: &Topology, g: &[f64]) -> f64 {
-    let d = mesh.dim();
-    let mut v = 0.0;
-    for &f in topo.boundary_faces() {
-        let [c, _] = topo.face_cells(f as usize);
-        let l = topo.face_local(f as usize)[0] as usize;
-        let p = mesh.cell_points_at(g, c as usize);
-        let n = crate::mesh::geometry::face_area_normal(d, &p, l);
-        let x = crate::mesh::geometry::face_centroid(&p, l);
-        v += (0..d).map(|k| x[k] * n[k]).sum::<f64>() / d as f64;
-    }
-    v
 }

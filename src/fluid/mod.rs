@@ -13,7 +13,9 @@
 // Numerical code indexes several arrays by the same cell, face or axis.
 #![allow(clippy::needless_range_loop)]
 
+pub mod bird;
 pub mod cavity;
+pub mod embedded;
 mod error;
 pub mod gpu;
 pub mod operators;

@@ -1,4 +1,5 @@
-//! Fluid scenes (TOML): the 2D periodic tunnel of seed 000 §7.1 and the 3D cavity of §7.2.
+//! Fluid scenes (TOML): the 2D periodic tunnel of seed 000 §7.1, the 3D cavity and the flying
+//! bird of §7.2, a user's OBJ animation in a box, and a user's Gmsh mesh.
 //! For the tunnel the seed gives no
 //! domain, forcing, viscosity or time step; ours, in `scenes/fluid/tunnel*.toml`:
 //!
@@ -28,6 +29,52 @@
 //! viscosity = 1e-3
 //! frame_time = 0.02
 //! frames = 60
+//! ```
+//!
+//! The flying bird of §7.2 (the paper's eagle; [`super::bird`], [`super::embedded`]) in
+//! `scenes/fluid/bird*.toml`: a procedural bird flapping and banking in a closed box of still
+//! air, the box minus the bird stuffed at the base frame (wings level), surface vertices
+//! riding on the bird's triangles, the lid absorbing the volume change, the interior
+//! harmonic; μ = 1e-3, Δt = 0.02. Every `[bird]` key is optional (defaults in
+//! [`super::bird::BirdSpec`]):
+//!
+//! ```toml
+//! [bird]
+//! span = 2.4
+//! flap_degrees = 25.0
+//! flaps = 4.0          # wingbeats over the animation
+//! bank_degrees = 12.0
+//! turn_degrees = 8.0
+//! frames = 266         # animation frames; flow.frames may be at most frames - 1
+//! [box]
+//! lo = [-1.4, -1.8, -1.3]
+//! hi = [1.4, 1.8, 1.3]
+//! spacing = 0.104      # lattice spacing of the stuffing (about 300,000 cells)
+//! [flow]
+//! initial_velocity = [0.0, 0.0, 0.0]
+//! viscosity = 1e-3
+//! frame_time = 0.02
+//! frames = 265
+//! ```
+//!
+//! A user's triangle-mesh animation instead of the bird: an OBJ sequence (one file per frame,
+//! sorted by name, each with the same objects and faces; every object a closed surface, the
+//! objects may overlap), the pattern relative to the scene file
+//! (`galerkin fluid surface SCENE --out DIR` writes a scene's animation in this form):
+//!
+//! ```toml
+//! [surface]
+//! obj_sequence = "flapper/frame_*.obj"
+//! base_frame = 0      # the frame the base mesh is built around
+//! [box]
+//! lo = [-2.0, -2.0, -2.0]
+//! hi = [2.0, 2.0, 2.0]
+//! spacing = 0.1
+//! [flow]
+//! initial_velocity = [0.0, 0.0, 0.0]
+//! viscosity = 1e-3
+//! frame_time = 0.02
+//! frames = 100
 //! ```
 //!
 //! A user's mesh (Gmsh MSH 4.1, ASCII or binary, triangles or tetrahedra; the path relative to
@@ -69,7 +116,10 @@ use std::path::Path;
 
 use serde::Deserialize;
 
+use super::bird::BirdSpec;
 use super::cavity::{training_run, Cavity, CavitySpec, TRAINING_RUNS};
+use super::embedded::{Embedded, EmbeddedSpec};
+use crate::mesh::animation::SurfaceAnimation;
 use crate::mesh::deform::HarmonicDeformation;
 use crate::mesh::gmsh::read_msh;
 use crate::mesh::tunnel::{tunnel, TunnelSpec};
@@ -84,6 +134,10 @@ struct SceneSpec {
     tunnel: Option<TunnelKeys>,
     cavity: Option<CavityKeys>,
     mesh: Option<MeshKeys>,
+    bird: Option<BirdKeys>,
+    surface: Option<SurfaceKeys>,
+    #[serde(rename = "box")]
+    domain_box: Option<BoxKeys>,
     #[serde(default)]
     obstacle: ObstacleKeys,
     flow: FlowKeys,
@@ -111,6 +165,37 @@ struct MeshKeys {
     file: String,
     #[serde(default)]
     periodic_axis: Option<usize>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct BirdKeys {
+    span: Option<f64>,
+    body_length: Option<f64>,
+    chord: Option<f64>,
+    thickness: Option<f64>,
+    flap_degrees: Option<f64>,
+    flaps: Option<f64>,
+    bank_degrees: Option<f64>,
+    turn_degrees: Option<f64>,
+    frames: Option<usize>,
+    rings: Option<usize>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SurfaceKeys {
+    obj_sequence: String,
+    #[serde(default)]
+    base_frame: usize,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct BoxKeys {
+    lo: [f64; 3],
+    hi: [f64; 3],
+    spacing: f64,
 }
 
 #[derive(Debug, Deserialize)]
@@ -167,6 +252,8 @@ pub enum Motion {
         /// The training run.
         run: usize,
     },
+    /// A box around an animated surface (the flying bird, or a user's OBJ sequence).
+    Embedded(Box<Embedded>),
 }
 
 /// A loaded fluid scene: the mesh at its simulation geometry, topology, parameters, the
@@ -239,7 +326,7 @@ impl FluidScene {
         };
         let dim = match &user_mesh {
             Some(m) => m.dim(),
-            None if spec.cavity.is_some() => 3,
+            None if spec.cavity.is_some() || spec.bird.is_some() || spec.surface.is_some() => 3,
             None => 2,
         };
         if spec.flow.initial_velocity.len() != dim {
@@ -257,9 +344,17 @@ impl FluidScene {
             FluidParams { viscosity: spec.flow.viscosity, forcing, frame_time: spec.flow.frame_time };
         let kinds = usize::from(spec.tunnel.is_some())
             + usize::from(spec.cavity.is_some())
-            + usize::from(user_mesh.is_some());
+            + usize::from(user_mesh.is_some())
+            + usize::from(spec.bird.is_some())
+            + usize::from(spec.surface.is_some());
         if kinds != 1 {
-            return Err(fail("flow", "a scene needs exactly one of [tunnel], [cavity] and [mesh]".into()));
+            return Err(fail(
+                "flow",
+                "a scene needs exactly one of [tunnel], [cavity], [mesh], [bird] and [surface]".into(),
+            ));
+        }
+        if spec.bird.is_some() || spec.surface.is_some() {
+            return Self::embedded(&spec, params, path, &fail);
         }
         if let (Some(mesh), Some(keys)) = (user_mesh, &spec.mesh) {
             if keys.periodic_axis.is_some_and(|a| a >= mesh.dim()) {
@@ -407,6 +502,95 @@ impl FluidScene {
         })
     }
 
+    fn embedded(spec: &SceneSpec, params: FluidParams, path: &Path, fail: &Fail) -> Result<Self, FluidError> {
+        let Some(b) = &spec.domain_box else {
+            return Err(fail("flow", "[bird] and [surface] scenes need a [box] (lo, hi, spacing)".into()));
+        };
+        require_positive(fail, &[("spacing", b.spacing)])?;
+        if (0..3).any(|k| !(b.lo[k].is_finite() && b.hi[k].is_finite() && b.lo[k] < b.hi[k])) {
+            return Err(fail("lo", "the box needs finite lo < hi on every axis".into()));
+        }
+        let (animation, base_frame, what) = if let Some(keys) = &spec.bird {
+            let d = BirdSpec::default();
+            let bird = BirdSpec {
+                span: keys.span.unwrap_or(d.span),
+                body_length: keys.body_length.unwrap_or(d.body_length),
+                chord: keys.chord.unwrap_or(d.chord),
+                thickness: keys.thickness.unwrap_or(d.thickness),
+                flap_degrees: keys.flap_degrees.unwrap_or(d.flap_degrees),
+                flaps: keys.flaps.unwrap_or(d.flaps),
+                bank_degrees: keys.bank_degrees.unwrap_or(d.bank_degrees),
+                turn_degrees: keys.turn_degrees.unwrap_or(d.turn_degrees),
+                frames: keys.frames.unwrap_or(d.frames),
+                rings: keys.rings.unwrap_or(d.rings),
+            };
+            require_positive(
+                fail,
+                &[
+                    ("span", bird.span),
+                    ("body_length", bird.body_length),
+                    ("chord", bird.chord),
+                    ("thickness", bird.thickness),
+                ],
+            )?;
+            if bird.span <= 0.2 * bird.body_length {
+                return Err(fail("span", "span must exceed a fifth of body_length".into()));
+            }
+            if bird.frames < 2 || bird.rings < 3 {
+                return Err(fail("frames", "a bird needs at least 2 frames and 3 rings".into()));
+            }
+            let what = format!("flying bird ({} frames, {} wingbeats)", bird.frames, bird.flaps);
+            (bird.animation(), 0, what)
+        } else {
+            let keys = spec.surface.as_ref().expect("one kind, checked by the caller");
+            let pattern = path.parent().unwrap_or(Path::new(".")).join(&keys.obj_sequence);
+            let files = SurfaceAnimation::sequence_files(&pattern)
+                .map_err(|e| fail("obj_sequence", e.to_string()))?;
+            let animation =
+                SurfaceAnimation::read_sequence(&files).map_err(|e| fail("obj_sequence", e.to_string()))?;
+            let what = format!("{} ({} frames)", keys.obj_sequence, files.len());
+            (animation, keys.base_frame, what)
+        };
+        let available = animation.frame_count() - 1;
+        if spec.flow.frames > available {
+            return Err(fail(
+                "frames",
+                format!(
+                    "frames = {}: the surface animation allows at most {available} steps",
+                    spec.flow.frames
+                ),
+            ));
+        }
+        let embedded_spec = EmbeddedSpec { lo: b.lo, hi: b.hi, spacing: b.spacing, base_frame };
+        let mut domain = Embedded::new(animation, &embedded_spec).map_err(|e| fail("box", e.to_string()))?;
+        let base = domain.mesh.clone();
+        let g0 = domain.geometry(0)?;
+        let mesh = base.with_g(g0, Some(0))?;
+        let topology = domain.topology.clone();
+        let initial_velocity =
+            (0..mesh.cell_count()).flat_map(|_| spec.flow.initial_velocity.clone()).collect();
+        Ok(Self {
+            description: format!("{what} in a box, {} surface vertices attached", domain.attached_count()),
+            base,
+            mesh,
+            topology,
+            params,
+            initial_velocity,
+            frames: spec.flow.frames,
+            obstacle_scale: 1.0,
+            periodic_axis: None,
+            motion: Motion::Embedded(Box::new(domain)),
+        })
+    }
+
+    /// The surface animation of a [bird] or [surface] scene.
+    pub fn animation(&self) -> Option<&SurfaceAnimation> {
+        match &self.motion {
+            Motion::Embedded(domain) => Some(&domain.animation),
+            _ => None,
+        }
+    }
+
     /// Chooses the cavity's training run (0 to 13); refused for other scenes.
     pub fn set_run(&mut self, run: usize) -> Result<(), FluidError> {
         let Motion::Cavity { amounts, run: current, .. } = &mut self.motion else {
@@ -430,6 +614,7 @@ impl FluidScene {
                 let a = Cavity::compression(*amounts, frame, self.frames);
                 Ok(cavity.geometry(a, frame)?)
             }
+            Motion::Embedded(domain) => Ok(domain.geometry(frame)?),
         }
     }
 }

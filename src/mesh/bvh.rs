@@ -190,39 +190,49 @@ impl Bvh {
     }
 }
 
-/// Distance from `p` to the triangle `t` (Ericson's closest-point regions).
+/// Distance from `p` to the triangle `t`.
 pub fn point_triangle_distance(p: DVec3, t: &[DVec3; 3]) -> f64 {
+    let w = closest_point_weights(p, t);
+    (p - (t[0] * w[0] + t[1] * w[1] + t[2] * w[2])).length()
+}
+
+/// The barycentric weights of the point of triangle `t` closest to `p` (Ericson's
+/// closest-point regions: a vertex, an edge or the interior).
+pub fn closest_point_weights(p: DVec3, t: &[DVec3; 3]) -> [f64; 3] {
     let (a, b, c) = (t[0], t[1], t[2]);
     let (ab, ac, ap) = (b - a, c - a, p - a);
     let (d1, d2) = (ab.dot(ap), ac.dot(ap));
     if d1 <= 0.0 && d2 <= 0.0 {
-        return ap.length();
+        return [1.0, 0.0, 0.0];
     }
     let bp = p - b;
     let (d3, d4) = (ab.dot(bp), ac.dot(bp));
     if d3 >= 0.0 && d4 <= d3 {
-        return bp.length();
+        return [0.0, 1.0, 0.0];
     }
     let vc = d1 * d4 - d3 * d2;
     if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
-        return (p - (a + ab * (d1 / (d1 - d3)))).length();
+        let v = d1 / (d1 - d3);
+        return [1.0 - v, v, 0.0];
     }
     let cp = p - c;
     let (d5, d6) = (ab.dot(cp), ac.dot(cp));
     if d6 >= 0.0 && d5 <= d6 {
-        return cp.length();
+        return [0.0, 0.0, 1.0];
     }
     let vb = d5 * d2 - d1 * d6;
     if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
-        return (p - (a + ac * (d2 / (d2 - d6)))).length();
+        let w = d2 / (d2 - d6);
+        return [1.0 - w, 0.0, w];
     }
     let va = d3 * d6 - d5 * d4;
     if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
-        return (p - (b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6))))).length();
+        let w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+        return [0.0, 1.0 - w, w];
     }
     let denom = 1.0 / (va + vb + vc);
     let (v, w) = (vb * denom, vc * denom);
-    (p - (a + ab * v + ac * w)).length()
+    [1.0 - v - w, v, w]
 }
 
 /// The part of the segment cut off at each end, relative to its length: rays start and end on

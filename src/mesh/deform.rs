@@ -1,17 +1,33 @@
 //! Harmonic (Laplacian) deformation of a mesh's interior from its boundary motion (seed 000
 //! §6.1): the displacement d of the free vertices solves `L_FF d_F = −L_FB d_B`, with L the
 //! cell-weighted graph Laplacian of the mesh edges. Its pattern and symbolic Cholesky
-//! factorisation are computed once and reused for every frame; cells that shrink get stiffer
-//! (their weight grows as `(vol₀ / vol)²`, clamped) and the solve is repeated, which is the
-//! seed's "increase the weights around inverted elements". A frame that still has an
-//! inverted cell is refused, naming the frame and the cell.
+//! factorisation are computed once and reused for every frame.
+//! Cells the solve squeezed below [`SMOOTH_BELOW`] of their base volume (or inverted) are
+//! untangled and smoothed with the prescribed vertices frozen ([`super::untangle`], the
+//! seed's modified Stellar without topology changes); if a cell is still inverted, the cells
+//! the solve squeezed get stiffer (their weight grows as `(vol₀ / vol)²`, clamped: the seed's
+//! "increase the weights around inverted elements") and the solve and smoothing repeat. The
+//! cheap repair comes first because a changed weight costs a numerical refactorisation, and
+//! the weights are kept for the following frames (stiffening only grows), so a periodic
+//! motion stops refactorising after its first period — at the price that a frame's interior
+//! depends on which frames were deformed before it. A frame that still has an inverted cell
+//! is refused, naming the frame and the cell.
 
 use crate::tensor::{Factorisation, SparseSymmetricSolver, SymmetricPattern};
 
 use super::{MeshError, SimplexMesh};
 
-/// Stiffening rounds per frame before an inverted cell is reported.
+/// Stiffening rounds per frame (each a harmonic solve and a smoothing).
 const STIFFEN_ROUNDS: usize = 8;
+
+/// Volume ratio below which a frame's free vertices are smoothed ([`super::untangle`]).
+pub const SMOOTH_BELOW: f64 = 0.2;
+
+/// The ratio the smoothing raises squeezed cells to.
+pub const SMOOTH_TARGET: f64 = 0.3;
+
+/// Smoothing sweeps per frame at most.
+const SMOOTH_SWEEPS: usize = 200;
 
 /// A base mesh prepared for harmonic deformation with a fixed set of prescribed vertices.
 #[derive(Debug)]
@@ -27,6 +43,11 @@ pub struct HarmonicDeformation {
     /// The cell weights of the current numerical factorisation (the uniform weights' factor
     /// is kept across frames: only stiffened frames refactorise).
     factored_weights: Option<Vec<f64>>,
+    smoother: super::untangle::Smoother,
+    factorisations: usize,
+    /// The cell weights, kept from frame to frame: a cell stiffened once stays stiff, so a
+    /// periodic motion stops refactorising after its first period.
+    weights: Vec<f64>,
 }
 
 impl HarmonicDeformation {
@@ -83,6 +104,7 @@ impl HarmonicDeformation {
         }
         let solver = SparseSymmetricSolver::new(pattern, Factorisation::Llt)
             .map_err(|e| MeshError::Solve(format!("harmonic deformation: {e}")))?;
+        let free_mask = free_index.iter().map(|&i| i != u32::MAX).collect();
         Ok(Self {
             base: base.clone(),
             base_volumes: base.volumes(),
@@ -91,12 +113,20 @@ impl HarmonicDeformation {
             solver,
             edge_slots,
             factored_weights: None,
+            smoother: super::untangle::Smoother::new(base, free_mask),
+            factorisations: 0,
+            weights: vec![1.0; base.cell_count()],
         })
     }
 
     /// Number of vertices that follow harmonically.
     pub fn free_count(&self) -> usize {
         self.free.len()
+    }
+
+    /// Numerical factorisations so far (the first, and one per stiffened solve).
+    pub fn factorisations(&self) -> usize {
+        self.factorisations
     }
 
     /// The deformed geometry vector for frame `frame`, with the prescribed vertices at their
@@ -106,25 +136,32 @@ impl HarmonicDeformation {
         self.base
             .check_coordinates(target)
             .map_err(|e| MeshError::Structure(format!("frame {frame}: {e}")))?;
-        let mut weights = vec![1.0; self.base.cell_count()];
+        let mut weights = self.weights.clone();
         let mut g = Vec::new();
         let mut vols = Vec::new();
         for _ in 0..STIFFEN_ROUNDS {
             g = self.solve(target, &weights, frame)?;
             vols = self.base.volumes_at(&g);
-            let mut ok = true;
-            for (c, (&v, &v0)) in vols.iter().zip(&self.base_volumes).enumerate() {
+            let harmonic_vols = vols.clone();
+            let worst =
+                vols.iter().zip(&self.base_volumes).map(|(v, v0)| v / v0).fold(f64::INFINITY, f64::min);
+            if worst < SMOOTH_BELOW {
+                self.smoother.improve(&self.base, &self.base_volumes, &mut g, SMOOTH_TARGET, SMOOTH_SWEEPS);
+                vols = self.base.volumes_at(&g);
+            }
+            if vols.iter().all(|&v| v > 0.0) {
+                break;
+            }
+            // Still tangled: stiffen the cells the harmonic solve squeezed, and solve again.
+            for (c, (&v, &v0)) in harmonic_vols.iter().zip(&self.base_volumes).enumerate() {
                 let ratio = v / v0;
                 if ratio < 0.25 {
-                    ok &= ratio > 0.0;
                     weights[c] *= (0.25 / ratio.max(1e-3)).powi(2).min(1e4);
                 }
             }
-            if ok {
-                break;
-            }
         }
         super::refuse_inverted(&vols, Some(frame))?;
+        self.weights = weights;
         Ok(g)
     }
 
@@ -171,11 +208,12 @@ impl HarmonicDeformation {
                 MeshError::Solve(format!("frame {frame}: {e} (a free vertex with no prescribed path?)"))
             })?;
             self.factored_weights = Some(weights.to_vec());
+            self.factorisations += 1;
         }
         let mut g = target.to_vec();
+        self.solver.solve_columns_in_place(&mut rhs, dim);
         for k in 0..dim {
-            let col = &mut rhs[k * nf..(k + 1) * nf];
-            self.solver.solve_in_place(col);
+            let col = &rhs[k * nf..(k + 1) * nf];
             for (i, &v) in self.free.iter().enumerate() {
                 g[dim * v as usize + k] = g0[dim * v as usize + k] + col[i];
             }

@@ -11,6 +11,7 @@
 // Numerical code indexes several arrays by the same cell, face or axis.
 #![allow(clippy::needless_range_loop)]
 
+pub mod animation;
 pub mod bvh;
 pub mod deform;
 mod error;
@@ -21,6 +22,7 @@ pub mod sdf;
 pub mod stuffing;
 mod topology;
 pub mod tunnel;
+pub mod untangle;
 pub mod volume;
 
 pub use error::MeshError;

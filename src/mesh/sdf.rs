@@ -180,7 +180,7 @@ impl ObjSurface {
             let pos = &m.mesh.positions;
             let corner = |i: u32| {
                 let i = 3 * i as usize;
-                [f64::from(pos[i]), f64::from(pos[i + 1]), f64::from(pos[i + 2])]
+                [pos[i], pos[i + 1], pos[i + 2]]
             };
             for f in m.mesh.indices.chunks_exact(3) {
                 triangles.push([corner(f[0]), corner(f[1]), corner(f[2])]);

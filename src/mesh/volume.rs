@@ -82,3 +82,19 @@ pub fn volume_tensor(mesh: &SimplexMesh) -> SparseTensor {
     }
     v
 }
+
+/// The volume enclosed by the boundary faces at geometry `g`: `(1/3) Σ_faces c_f · A_f n_f`
+/// (divergence theorem; equal to the sum of cell volumes for any interior).
+pub fn enclosed_volume(mesh: &super::SimplexMesh, topo: &super::Topology, g: &[f64]) -> f64 {
+    let d = mesh.dim();
+    let mut v = 0.0;
+    for &f in topo.boundary_faces() {
+        let [c, _] = topo.face_cells(f as usize);
+        let l = topo.face_local(f as usize)[0] as usize;
+        let p = mesh.cell_points_at(g, c as usize);
+        let n = super::geometry::face_area_normal(d, &p, l);
+        let x = super::geometry::face_centroid(&p, l);
+        v += (0..d).map(|k| x[k] * n[k]).sum::<f64>() / d as f64;
+    }
+    v
+}

@@ -110,12 +110,7 @@ fn read_obj(path: &Path) -> Result<Vec<tobj::Model>, RadiosityError> {
 fn positions(models: &[tobj::Model]) -> Vec<DVec3> {
     models
         .iter()
-        .flat_map(|m| {
-            m.mesh
-                .positions
-                .chunks_exact(3)
-                .map(|p| DVec3::new(f64::from(p[0]), f64::from(p[1]), f64::from(p[2])))
-        })
+        .flat_map(|m| m.mesh.positions.chunks_exact(3).map(|p| DVec3::new(p[0], p[1], p[2])))
         .collect()
 }
 

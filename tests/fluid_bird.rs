@@ -1,0 +1,131 @@
+//! The flying bird of seed 000 §7.2 (src/fluid/bird.rs, src/fluid/embedded.rs): a box of
+//! fluid around an animated closed surface, its mesh following the animation frame by frame.
+
+use std::path::Path;
+
+use galerkin::fluid::scene::FluidScene;
+use galerkin::fluid::FluidSolver;
+use galerkin::mesh::bvh::Bvh;
+use galerkin::mesh::volume::enclosed_volume;
+
+/// The small bird, coarser still (about 20,000 cells), over `frames` animation frames.
+fn scene_text(frames: usize, steps: usize) -> String {
+    format!(
+        "[bird]\nframes = {frames}\n[box]\nlo = [-1.4, -1.8, -1.3]\nhi = [1.4, 1.8, 1.3]\nspacing = 0.25\n\
+         [flow]\ninitial_velocity = [0.0, 0.0, 0.0]\nviscosity = 1e-3\nframe_time = 0.02\nframes = {steps}\n"
+    )
+}
+
+fn load(text: &str) -> FluidScene {
+    FluidScene::parse(text, Path::new("bird_test.toml")).expect("scene")
+}
+
+#[test]
+fn every_frame_of_the_bird_keeps_the_volume_and_the_surface_vertices_on_the_bird() {
+    let mut scene = load(&scene_text(266, 10));
+    let base = scene.base.clone();
+    let topo = scene.topology.clone();
+    let rest = enclosed_volume(&base, &topo, base.g());
+    let animation = scene.animation().expect("a bird").clone();
+    // Frame 0 is the base pose: the mesh is the stuffed one, to rounding.
+    let g0 = scene.geometry(0).expect("frame 0");
+    let worst0 = g0.iter().zip(base.g()).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+    assert!(worst0 < 1e-12, "frame 0 moved the base mesh by {worst0}");
+    // The mesh vertices on the bird: those within the stuffing's bisection tolerance of it.
+    let near = |frame: usize| {
+        let tris = (0..animation.triangles.len())
+            .map(|t| animation.triangle_at(frame, t).map(glam::DVec3::from_array))
+            .collect();
+        Bvh::new(tris)
+    };
+    let bvh0 = near(0);
+    let on_bird: Vec<usize> = (0..base.vertex_count())
+        .filter(|&v| {
+            let p = base.point(v);
+            bvh0.nearest(glam::DVec3::new(p[0], p[1], p[2])).is_some_and(|(d, _)| d < 1e-9)
+        })
+        .collect();
+    assert!(on_bird.len() > 50, "{} vertices on the bird", on_bird.len());
+    let (mut worst_volume, mut worst_surface) = (0.0f64, 0.0f64);
+    for frame in 0..animation.frame_count() {
+        // Refused (an error naming the frame and cell) if any cell inverts.
+        let g = scene.geometry(frame).unwrap_or_else(|e| panic!("frame {frame}: {e}"));
+        let volume = enclosed_volume(&base, &topo, &g);
+        worst_volume = worst_volume.max((volume - rest).abs() / rest);
+        let cells: f64 = base.volumes_at(&g).iter().sum();
+        assert!((cells - rest).abs() < 1e-10 * rest, "frame {frame}: cells hold {cells}, not {rest}");
+        if frame % 19 == 0 {
+            let bvh = near(frame);
+            for &v in &on_bird {
+                let p = glam::DVec3::new(g[3 * v], g[3 * v + 1], g[3 * v + 2]);
+                worst_surface = worst_surface.max(bvh.nearest(p).map_or(f64::INFINITY, |(d, _)| d));
+            }
+        }
+    }
+    // Volume: the lid's δ is exact up to rounding of sums over ~5,000 boundary faces.
+    assert!(worst_volume < 1e-12, "volume drift {worst_volume:e}");
+    // Surface: barycentric on the moved triangle plus the bisection offset (≤ 1e-9).
+    assert!(worst_surface < 1e-9, "a bird vertex left the bird by {worst_surface:e}");
+}
+
+#[test]
+fn the_bird_written_as_an_obj_sequence_loads_back_as_the_same_domain() {
+    let frames = 12;
+    let mut bird = load(&scene_text(frames, 3));
+    let dir = std::env::temp_dir().join(format!("galerkin-bird-obj-{}", std::process::id()));
+    bird.animation().expect("a bird").write_sequence(&dir, "bird").expect("written");
+    let text =
+        scene_text(frames, 3).replace("[bird]\nframes = 12\n", "[surface]\nobj_sequence = \"bird_*.obj\"\n");
+    assert!(text.contains("[surface]"));
+    let mut user = FluidScene::parse(&text, &dir.join("scene.toml")).expect("the OBJ sequence scene");
+    assert_eq!(user.base.cells(), bird.base.cells());
+    for frame in [0, 5, 11] {
+        let (a, b) = (bird.geometry(frame).expect("bird"), user.geometry(frame).expect("user"));
+        let worst = a.iter().zip(&b).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max);
+        // 17 significant digits in the files: the same doubles, the same stuffing.
+        assert!(worst < 1e-13, "frame {frame}: {worst:e}");
+    }
+    std::fs::remove_dir_all(&dir).expect("clean up");
+}
+
+#[test]
+fn the_flapping_bird_stirs_still_air_without_divergence() {
+    let mut scene = load(&scene_text(266, 3));
+    let (mesh, topo) = (scene.mesh.clone(), scene.topology.clone());
+    let mut solver = FluidSolver::new(mesh.clone(), topo.clone(), scene.params).expect("solver");
+    let mut state = solver.initial_state(mesh.g().to_vec(), &scene.initial_velocity).expect("state");
+    assert_eq!(solver.energy(&state), 0.0);
+    for frame in 1..=3 {
+        let g = scene.geometry(frame).expect("geometry");
+        let (next, report) = solver.step(&state, &g, frame).expect("step");
+        // The closed box keeps its volume: the induced fluxes through the walls sum to zero.
+        let net: f64 = topo.boundary_faces().iter().map(|&f| report.h[f as usize]).sum();
+        let scale: f64 = topo.boundary_faces().iter().map(|&f| report.h[f as usize].abs()).sum();
+        assert!(net.abs() < 1e-9 * scale, "frame {frame}: net wall flux {net} of {scale}");
+        assert!(report.projection.relative_divergence < 1e-9, "frame {frame}");
+        state = next;
+    }
+    // The wings moved the air: energy went from zero to a finite positive amount.
+    let e = solver.energy(&state);
+    assert!(e.is_finite() && e > 1e-6, "energy {e}");
+}
+
+#[test]
+fn bad_bird_scenes_are_refused_naming_the_key() {
+    let too_many = scene_text(10, 10);
+    let err =
+        FluidScene::parse(&too_many, Path::new("b.toml")).expect_err("10 steps of 10 frames").to_string();
+    assert!(err.contains("frames") && err.contains("at most 9"), "{err}");
+    let small_box = scene_text(10, 3).replace("hi = [1.4, 1.8, 1.3]", "hi = [1.4, 1.0, 1.3]");
+    let err = FluidScene::parse(&small_box, Path::new("b.toml")).expect_err("wing outside").to_string();
+    assert!(err.contains("frame 0") && err.contains("box"), "{err}");
+    let no_box = "[bird]\n[flow]\ninitial_velocity = [0.0, 0.0, 0.0]\nviscosity = 0.0\nframe_time = 0.02\nframes = 1\n";
+    let err = FluidScene::parse(no_box, Path::new("b.toml")).expect_err("no box").to_string();
+    assert!(err.contains("[box]"), "{err}");
+    let missing =
+        scene_text(10, 3).replace("[bird]\nframes = 10\n", "[surface]\nobj_sequence = \"nothing_*.obj\"\n");
+    let err =
+        FluidScene::parse(&missing, Path::new("/nonexistent/b.toml")).expect_err("no files").to_string();
+    // The error points at the `obj_sequence` line (line 2) and says what is missing.
+    assert!(err.contains("b.toml:2") && err.contains("No such file"), "{err}");
+}
