@@ -129,3 +129,46 @@ fn bad_bird_scenes_are_refused_naming_the_key() {
     // The error points at the `obj_sequence` line (line 2) and says what is missing.
     assert!(err.contains("b.toml:2") && err.contains("No such file"), "{err}");
 }
+
+#[test]
+fn the_cli_writes_a_scene_s_surface_animation_as_an_obj_sequence() {
+    let dir = std::env::temp_dir().join(format!("galerkin-bird-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("dir");
+    let scene = dir.join("bird.toml");
+    std::fs::write(&scene, scene_text(6, 2)).expect("scene");
+    let out_dir = dir.join("obj");
+    let run = |args: &[&std::ffi::OsStr]| {
+        std::process::Command::new(env!("CARGO_BIN_EXE_galerkin")).args(args).output().expect("run")
+    };
+    let out = run(&[
+        "fluid".as_ref(),
+        "surface".as_ref(),
+        scene.as_os_str(),
+        "--out".as_ref(),
+        out_dir.as_os_str(),
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let files = galerkin::mesh::animation::SurfaceAnimation::sequence_files(&out_dir.join("frame_*.obj"))
+        .expect("listed");
+    assert_eq!(files.len(), 6);
+    let back = galerkin::mesh::animation::SurfaceAnimation::read_sequence(&files).expect("read");
+    let bird = galerkin::fluid::bird::BirdSpec { frames: 6, ..Default::default() }.animation();
+    for k in 0..6 {
+        for t in 0..bird.triangles.len() {
+            assert_eq!(back.triangle_at(k, t), bird.triangle_at(k, t), "frame {k} triangle {t}");
+        }
+    }
+    // A scene without a surface animation is refused with a message, not a panic.
+    let tunnel = Path::new("scenes/fluid/tunnel_small.toml");
+    let out = run(&[
+        "fluid".as_ref(),
+        "surface".as_ref(),
+        tunnel.as_os_str(),
+        "--out".as_ref(),
+        out_dir.as_os_str(),
+    ]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("only [bird] and [surface] scenes"), "{stderr}");
+    std::fs::remove_dir_all(&dir).expect("clean up");
+}
