@@ -53,6 +53,31 @@ struct Attachment {
     offset: [f64; 3],
 }
 
+impl Attachment {
+    /// Attaches `vertex` at `p` to `triangle` with corners `corners`.
+    fn new(vertex: u32, triangle: u32, corners: &[[f64; 3]; 3], p: glam::DVec3) -> Self {
+        let weights = closest_point_weights(p, &corners.map(glam::DVec3::from_array));
+        let foot = foot_point(corners, weights);
+        let offset = triangle_frame(corners).map(|e| (p - foot).dot(e));
+        Self { vertex, triangle, weights, offset }
+    }
+
+    /// The vertex's position on its triangle with corners `corners` (the same triangle at
+    /// another frame).
+    fn position(&self, corners: &[[f64; 3]; 3]) -> glam::DVec3 {
+        let axes = triangle_frame(corners);
+        foot_point(corners, self.weights)
+            + axes[0] * self.offset[0]
+            + axes[1] * self.offset[1]
+            + axes[2] * self.offset[2]
+    }
+}
+
+/// The point of a triangle with barycentric `weights`.
+fn foot_point(corners: &[[f64; 3]; 3], weights: [f64; 3]) -> glam::DVec3 {
+    (0..3).map(|i| weights[i] * glam::DVec3::from_array(corners[i])).sum()
+}
+
 /// A triangle's orthonormal frame: the first edge's direction, the in-plane perpendicular
 /// and the unit normal (rigid motions of the triangle move it rigidly).
 fn triangle_frame(t: &[[f64; 3]; 3]) -> [glam::DVec3; 3] {
@@ -189,11 +214,7 @@ impl Embedded {
                 continue;
             }
             let Some(&(_, t)) = nearest.iter().find(|n| n.0 == to_surface) else { continue };
-            let corners = animation.triangle_at(base, t as usize);
-            let weights = closest_point_weights(q, &corners.map(glam::DVec3::from_array));
-            let foot: glam::DVec3 = (0..3).map(|i| weights[i] * glam::DVec3::from_array(corners[i])).sum();
-            let offset = triangle_frame(&corners).map(|e| (q - foot).dot(e));
-            attached.push(Attachment { vertex: v, triangle: t, weights, offset });
+            attached.push(Attachment::new(v, t, &animation.triangle_at(base, t as usize), q));
         }
         if attached.is_empty() {
             return Err(MeshError::Generation(format!(
@@ -252,10 +273,7 @@ impl Embedded {
         }
         let mut g = self.mesh.g().to_vec();
         for a in &self.attached {
-            let corners = self.animation.triangle_at(frame, a.triangle as usize);
-            let axes = triangle_frame(&corners);
-            let q: glam::DVec3 = (0..3).map(|i| a.weights[i] * glam::DVec3::from_array(corners[i])).sum();
-            let p = q + axes[0] * a.offset[0] + axes[1] * a.offset[1] + axes[2] * a.offset[2];
+            let p = a.position(&self.animation.triangle_at(frame, a.triangle as usize));
             g[3 * a.vertex as usize..3 * a.vertex as usize + 3].copy_from_slice(&p.to_array());
         }
         let volume = |g: &[f64]| enclosed_volume(&self.mesh, &self.topology, g);

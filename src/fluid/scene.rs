@@ -284,6 +284,21 @@ pub struct FluidScene {
 
 type Fail<'a> = Box<dyn Fn(&str, String) -> FluidError + 'a>;
 
+/// What each kind of scene builds; [`FluidScene::parse`] adds the `[flow]` keys.
+struct Built {
+    base: SimplexMesh,
+    mesh: SimplexMesh,
+    topology: Topology,
+    obstacle_scale: f64,
+    periodic_axis: Option<usize>,
+    motion: Motion,
+    description: String,
+}
+
+fn cavity_description(run: usize, amounts: [f64; 3]) -> String {
+    format!("deforming cavity, training run {run} (deepest compressions {amounts:?})")
+}
+
 /// Refuses the first key whose value is not positive and finite, naming its line.
 fn require_positive(fail: &Fail, keys: &[(&str, f64)]) -> Result<(), FluidError> {
     match keys.iter().find(|(_, v)| !(v.is_finite() && *v > 0.0)) {
@@ -303,14 +318,7 @@ impl FluidScene {
         let spec: SceneSpec = scene_file::parse(text, path)?;
         let fail: Fail =
             Box::new(|key: &str, message: String| scene_file::error_at(text, path, key, message).into());
-        let positive = |key: &str, v: f64| {
-            if v.is_finite() && v > 0.0 {
-                Ok(())
-            } else {
-                Err(fail(key, format!("{key} = {v}: must be positive")))
-            }
-        };
-        positive("frame_time", spec.flow.frame_time)?;
+        require_positive(&fail, &[("frame_time", spec.flow.frame_time)])?;
         if !(spec.flow.viscosity.is_finite() && spec.flow.viscosity >= 0.0) {
             return Err(fail("viscosity", format!("viscosity = {}: must be ≥ 0", spec.flow.viscosity)));
         }
@@ -353,10 +361,9 @@ impl FluidScene {
                 "a scene needs exactly one of [tunnel], [cavity], [mesh], [bird] and [surface]".into(),
             ));
         }
-        if spec.bird.is_some() || spec.surface.is_some() {
-            return Self::embedded(&spec, params, path, &fail);
-        }
-        if let (Some(mesh), Some(keys)) = (user_mesh, &spec.mesh) {
+        let built = if spec.bird.is_some() || spec.surface.is_some() {
+            Self::embedded(&spec, path, &fail)?
+        } else if let (Some(mesh), Some(keys)) = (user_mesh, &spec.mesh) {
             if keys.periodic_axis.is_some_and(|a| a >= mesh.dim()) {
                 return Err(fail(
                     "periodic_axis",
@@ -365,34 +372,39 @@ impl FluidScene {
             }
             let topology = Topology::new(&mesh, keys.periodic_axis.map(|axis| Periodic { axis }))
                 .map_err(|e| fail("file", e.to_string()))?;
-            let initial_velocity =
-                (0..mesh.cell_count()).flat_map(|_| spec.flow.initial_velocity.clone()).collect();
-            return Ok(Self {
+            Built {
                 base: mesh.clone(),
                 description: format!("{} ({}D, {} cells)", keys.file, mesh.dim(), mesh.cell_count()),
                 mesh,
                 topology,
-                params,
-                initial_velocity,
-                frames: spec.flow.frames,
                 obstacle_scale: 1.0,
                 periodic_axis: keys.periodic_axis,
                 motion: Motion::Static,
-            });
-        }
-        match (&spec.tunnel, &spec.cavity) {
-            (Some(t), _) => Self::tunnel(t, &spec, params, &fail),
-            (_, Some(c)) => Self::cavity(c, &spec, params, &fail),
-            (None, None) => unreachable!("one kind, checked above"),
-        }
+            }
+        } else {
+            match (&spec.tunnel, &spec.cavity) {
+                (Some(t), _) => Self::tunnel(t, &spec, &fail)?,
+                (_, Some(c)) => Self::cavity(c, &fail)?,
+                (None, None) => unreachable!("one kind, checked above"),
+            }
+        };
+        let initial_velocity =
+            (0..built.mesh.cell_count()).flat_map(|_| spec.flow.initial_velocity.iter().copied()).collect();
+        Ok(Self {
+            base: built.base,
+            mesh: built.mesh,
+            topology: built.topology,
+            params,
+            initial_velocity,
+            frames: spec.flow.frames,
+            obstacle_scale: built.obstacle_scale,
+            periodic_axis: built.periodic_axis,
+            motion: built.motion,
+            description: built.description,
+        })
     }
 
-    fn tunnel(
-        t: &TunnelKeys,
-        spec: &SceneSpec,
-        params: FluidParams,
-        fail: &Fail,
-    ) -> Result<Self, FluidError> {
+    fn tunnel(t: &TunnelKeys, spec: &SceneSpec, fail: &Fail) -> Result<Built, FluidError> {
         require_positive(
             fail,
             &[
@@ -432,15 +444,10 @@ impl FluidScene {
             meshed.mesh.clone()
         };
         let topology = Topology::new(&mesh, Some(Periodic { axis: 0 }))?;
-        let initial_velocity =
-            (0..mesh.cell_count()).flat_map(|_| spec.flow.initial_velocity.clone()).collect();
-        Ok(Self {
+        Ok(Built {
             base: meshed.mesh,
             mesh,
             topology,
-            params,
-            initial_velocity,
-            frames: spec.flow.frames,
             obstacle_scale: s,
             periodic_axis: Some(0),
             motion: Motion::Static,
@@ -448,12 +455,7 @@ impl FluidScene {
         })
     }
 
-    fn cavity(
-        c: &CavityKeys,
-        spec: &SceneSpec,
-        params: FluidParams,
-        fail: &Fail,
-    ) -> Result<Self, FluidError> {
+    fn cavity(c: &CavityKeys, fail: &Fail) -> Result<Built, FluidError> {
         require_positive(
             fail,
             &[
@@ -481,28 +483,18 @@ impl FluidScene {
             spacing: c.spacing,
         };
         let cavity = Cavity::new(&cavity_spec).map_err(|e| fail("cavity", e.to_string()))?;
-        let mesh = cavity.mesh.clone();
-        let topology = cavity.topology.clone();
-        let initial_velocity =
-            (0..mesh.cell_count()).flat_map(|_| spec.flow.initial_velocity.clone()).collect();
-        Ok(Self {
-            base: mesh.clone(),
-            mesh,
-            topology,
-            params,
-            initial_velocity,
-            frames: spec.flow.frames,
+        Ok(Built {
+            base: cavity.mesh.clone(),
+            mesh: cavity.mesh.clone(),
+            topology: cavity.topology.clone(),
             obstacle_scale: 1.0,
             periodic_axis: None,
+            description: cavity_description(c.run, amounts),
             motion: Motion::Cavity { cavity: Box::new(cavity), amounts, run: c.run },
-            description: format!(
-                "deforming cavity, training run {} (deepest compressions {amounts:?})",
-                c.run
-            ),
         })
     }
 
-    fn embedded(spec: &SceneSpec, params: FluidParams, path: &Path, fail: &Fail) -> Result<Self, FluidError> {
+    fn embedded(spec: &SceneSpec, path: &Path, fail: &Fail) -> Result<Built, FluidError> {
         let Some(b) = &spec.domain_box else {
             return Err(fail("flow", "[bird] and [surface] scenes need a [box] (lo, hi, spacing)".into()));
         };
@@ -566,17 +558,11 @@ impl FluidScene {
         let base = domain.mesh.clone();
         let g0 = domain.geometry(0)?;
         let mesh = base.with_g(g0, Some(0))?;
-        let topology = domain.topology.clone();
-        let initial_velocity =
-            (0..mesh.cell_count()).flat_map(|_| spec.flow.initial_velocity.clone()).collect();
-        Ok(Self {
+        Ok(Built {
             description: format!("{what} in a box, {} surface vertices attached", domain.attached_count()),
             base,
             mesh,
-            topology,
-            params,
-            initial_velocity,
-            frames: spec.flow.frames,
+            topology: domain.topology.clone(),
             obstacle_scale: 1.0,
             periodic_axis: None,
             motion: Motion::Embedded(Box::new(domain)),
@@ -600,13 +586,14 @@ impl FluidScene {
             FluidError::State(format!("run {run}: the training runs are 0 to {}", TRAINING_RUNS - 1))
         })?;
         *current = run;
-        self.description = format!("deforming cavity, training run {run} (deepest compressions {amounts:?})");
+        self.description = cavity_description(run, *amounts);
         Ok(())
     }
 
-    /// The geometry vector of frame `frame` (the tunnel: fixed; the cavity: its compressions
-    /// at that frame, volume renormalised, interior harmonic). An inverted frame is refused
-    /// naming it.
+    /// The geometry vector of frame `frame` (the tunnel and a user's mesh: fixed; the cavity:
+    /// its compressions at that frame, volume renormalised; the bird or a user's animation:
+    /// the surface at that frame, the lid keeping the volume; interiors harmonic). An
+    /// inverted frame is refused naming it.
     pub fn geometry(&mut self, frame: usize) -> Result<Vec<f64>, FluidError> {
         match &mut self.motion {
             Motion::Static => Ok(self.mesh.g().to_vec()),

@@ -138,28 +138,36 @@ impl HarmonicDeformation {
             .map_err(|e| MeshError::Structure(format!("frame {frame}: {e}")))?;
         let mut weights = self.weights.clone();
         let mut g = Vec::new();
-        let mut vols = Vec::new();
+        let mut ratios = Vec::new();
         for _ in 0..STIFFEN_ROUNDS {
             g = self.solve(target, &weights, frame)?;
-            vols = self.base.volumes_at(&g);
-            let harmonic_vols = vols.clone();
-            let worst =
-                vols.iter().zip(&self.base_volumes).map(|(v, v0)| v / v0).fold(f64::INFINITY, f64::min);
-            if worst < SMOOTH_BELOW {
-                self.smoother.improve(&self.base, &self.base_volumes, &mut g, SMOOTH_TARGET, SMOOTH_SWEEPS);
-                vols = self.base.volumes_at(&g);
+            ratios = self.base.volumes_at(&g).iter().zip(&self.base_volumes).map(|(v, v0)| v / v0).collect();
+            // The stiffening this solve's squeezed cells would get, should smoothing not do.
+            let stiffen: Vec<(usize, f64)> = ratios
+                .iter()
+                .enumerate()
+                .filter(|(_, &r)| r < 0.25)
+                .map(|(c, &r)| (c, (0.25 / r.max(1e-3)).powi(2).min(1e4)))
+                .collect();
+            if ratios.iter().any(|&r| r < SMOOTH_BELOW) {
+                self.smoother.improve(
+                    &self.base,
+                    &self.base_volumes,
+                    &mut g,
+                    &mut ratios,
+                    SMOOTH_TARGET,
+                    SMOOTH_SWEEPS,
+                );
             }
-            if vols.iter().all(|&v| v > 0.0) {
+            if ratios.iter().all(|&r| r > 0.0) {
                 break;
             }
             // Still tangled: stiffen the cells the harmonic solve squeezed, and solve again.
-            for (c, (&v, &v0)) in harmonic_vols.iter().zip(&self.base_volumes).enumerate() {
-                let ratio = v / v0;
-                if ratio < 0.25 {
-                    weights[c] *= (0.25 / ratio.max(1e-3)).powi(2).min(1e4);
-                }
+            for (c, factor) in stiffen {
+                weights[c] *= factor;
             }
         }
+        let vols: Vec<f64> = ratios.iter().zip(&self.base_volumes).map(|(r, v0)| r * v0).collect();
         super::refuse_inverted(&vols, Some(frame))?;
         self.weights = weights;
         Ok(g)
