@@ -4,8 +4,8 @@
 //! - [`operators`]: the volume, flux-to-momentum, advection, diffusion, divergence and
 //!   boundary tensors as the reduction core's sparse tensors, and their direct per-cell
 //!   evaluation (tested to agree);
-//! - [`projection`]: the pressure projection of Eq. 10 as a sparse quasi-definite LDLᵀ solve
-//!   with a reused symbolic factorisation;
+//! - [`projection`]: the pressure projection of Eq. 10, hybridised into one symmetric system
+//!   of face multipliers and solved by multigrid-preconditioned conjugate gradients;
 //! - [`solver`]: the time step (induced flux, RK4 advection–diffusion, projection, flux to
 //!   velocity), with the sign and −V̇u decisions documented there;
 //! - [`scene`] and [`snapshots`]: TOML scenes and the streaming snapshot format.

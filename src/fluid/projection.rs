@@ -2,125 +2,139 @@
 //! norm, `min ½‖u − V⁻¹(P⊗g)f‖²_V` subject to `div f = 0` and `D(f − h) = 0` (no flow
 //! through a moving wall relative to the wall).
 //!
-//! Its optimality conditions are the saddle-point system
+//! The objective is a sum over cells, `Σ_c ½ V_c |u_c − W_c f_c / V_c|²`, where `f_c` are the
+//! cell's d+1 outward face fluxes and the columns of `W_c` are its levers `x_face − x_c`
+//! (P's entries). Because the cell centroid is the mean of its face centroids, `W_c 1 = 0`:
+//! the only flux the cell's momentum cannot see is the uniform outflow, exactly what its
+//! divergence constraint `1ᵀ f_c = 0` forbids. So we *hybridise* (the classic treatment of
+//! mixed finite elements): every cell gets its own copy of its face fluxes, and continuity
+//! across a face (`f_c + f_c' = 0` outward) or the wall condition (`f_c = σ h`) is imposed
+//! with a multiplier μ per face (a face pressure). Per cell, given μ,
 //!
 //! ```text
-//! [ K  Cᵀ ] [f]   [Pᵀu]        K = PᵀV⁻¹P,  C = [div; D],  c = [0; D h]
-//! [ C  0  ] [λ] = [ c ]
+//! f_c = A_c (β_c − μ_c),   A_c = K_c⁺ = V_c W_cᵀ G_c⁻² W_c,   G_c = W_c W_cᵀ,   β_c = W_cᵀ u_c
 //! ```
 //!
-//! Plain Uzawa iterations do not converge here: K can be singular (a checkerboard flux mode
-//! on bipartite dual graphs). We factorise the quasi-definite regularisation
-//! `[K + εI, Cᵀ; C, −δI]` by sparse LDLᵀ — no pivoting needed, the symbolic factorisation
-//! is computed once and reused every frame — and solve the exact system by GMRES
-//! preconditioned with that factorisation, which removes the regularisation's error. The
-//! numerical factorisation is kept across frames: the next frame's system (the mesh has moved
-//! a little) is solved by GMRES preconditioned with the old factor, which typically converges
-//! in a few steps; only when it does not within [`GMRES_MAX`] steps is the system refactorised.
+//! (K_c = W_cᵀW_c / V_c; its pseudo-inverse maps into `1ᵀ f = 0`, so every cell's copy is
+//! exactly divergence-free), and the face equations become one symmetric positive
+//! semidefinite system in μ alone,
 //!
-//! C has one redundant row per connected domain (the divergences sum to the boundary flux):
-//! the exact system is singular but consistent when the boundary fluxes sum to zero, which
-//! [`Projection::project`] checks (refusing a net volume change) and then enforces to
-//! rounding; the regularised preconditioner and GMRES leave λ's free component alone.
+//! ```text
+//! M μ = r,   M = Σ_c E_cᵀ A_c E_c,   r_e = Σ_{c ∋ e} (A_c β_c)_e − [e on the wall] σ_e h_e,
+//! ```
+//!
+//! with kernel the constants (A_c 1 = 0): consistent exactly when the wall fluxes carry no net
+//! volume, which [`Projection::project`] checks (refusing a net volume change) and then
+//! enforces to rounding. This is algebraically the same minimiser as the saddle-point
+//! system `[K Cᵀ; C 0]` (K = PᵀV⁻¹P, C = [div; D]), but M is definite off the constants, is
+//! assembled per frame from d+1-square blocks, and has one unknown per face and a
+//! Laplacian-like pattern — so it is solved by conjugate gradients preconditioned with
+//! smoothed-aggregation multigrid ([`crate::tensor::amg`]), rebuilt each frame in a fraction
+//! of a second, warm-started from the previous frame's μ. A sparse Cholesky would have to be
+//! refactorised whenever the mesh moves far (every frame of the flying bird) at a cost
+//! growing much faster than the mesh.
+//!
+//! The flux through an interior face is the mean of its two cells' copies (they differ by
+//! the system's residual, so the divergence left in a cell is half its faces' residuals); a
+//! wall face carries exactly `h`.
 
 use crate::mesh::Topology;
-use crate::tensor::{Factorisation, SparseSymmetricSolver, SymmetricPattern};
+use crate::tensor::amg::{Amg, Kernel};
+use crate::tensor::CsrMatrix;
 
 use super::operators::{divergence, CellOperators};
 use super::FluidError;
 
-/// Relative size of the regularisation: ε = 1e-10 · mean diag K, δ = 1e-10 / mean diag K.
-const REGULARISATION: f64 = 1e-10;
-/// GMRES stops when the residual is below this fraction of the right-hand side (2-norm). The
-/// exact system's own rounding floor is about 3e-12 at 10⁵ cells (measured), so this leaves
-/// a margin; the divergence it leaves is far smaller (it is checked in the tests to 1e-10
-/// relative, measured 1e-14).
-pub const GMRES_TOLERANCE: f64 = 1e-10;
-/// GMRES restart length.
-pub const GMRES_RESTART: usize = 20;
-/// Most GMRES steps before the factorisation is refreshed.
-pub const GMRES_MAX: usize = 20;
+/// Conjugate gradients stop when the residual of the face system (a flux: twice the
+/// divergence left in the cells) is below this fraction of the 2-norm of the cells'
+/// unconstrained fluxes `A_c β_c` and the wall fluxes — not of the right-hand side, which
+/// vanishes to rounding when u is already divergence-free. The divergence it leaves is far
+/// below the tests' bound of 1e-10 relative.
+pub const CG_TOLERANCE: f64 = 1e-12;
+/// Most conjugate-gradient steps before the projection is reported as failed (the multigrid
+/// preconditioner needs tens).
+pub const CG_MAX: usize = 300;
 
-/// The projection's pattern, factorisation and assembly slots, fixed for a topology.
+/// The projection's face-system pattern, per-cell blocks and warm start, fixed for a topology.
 #[derive(Debug)]
 pub struct Projection {
     nf: usize,
     nc: usize,
-    /// Slots of K's entries, (d+1)² per cell (local faces l1 ≤ l2 only; others MAX).
-    k_slots: Vec<usize>,
-    diag_slots: Vec<usize>,
-    solver: SparseSymmetricSolver,
-    /// Exact-system values (constraint diagonal 0), and the regularised ones.
-    exact: Vec<f64>,
-    regularised: Vec<f64>,
-    /// Whether `solver` holds a factorisation (of some earlier frame's values).
-    factored: bool,
+    /// The face system M, values refilled every frame.
+    system: CsrMatrix,
+    /// Value slots of M for cell c's block entry (l1, l2): `slots[(c·(d+1) + l1)·(d+1) + l2]`.
+    slots: Vec<usize>,
+    /// Each cell's A_c, laid out as `slots`.
+    blocks: Vec<f64>,
+    /// The last frame's face multipliers μ: the next solve's first guess.
+    multipliers: Vec<f64>,
+    /// Entries of the last multigrid hierarchy.
+    hierarchy_len: usize,
 }
 
 /// How a projection went.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct ProjectionReport {
-    /// GMRES steps taken (each one solve with the factorisation).
-    pub gmres_steps: usize,
-    /// Whether this frame refactorised (else the previous frame's factorisation served as
-    /// the preconditioner).
-    pub refactorised: bool,
+    /// Conjugate-gradient steps taken (each one multigrid V-cycle).
+    pub cg_steps: usize,
+    /// Rows of the multigrid levels, finest (the faces) first.
+    pub levels: Vec<usize>,
     /// max |div f| / max over cells of Σ |f| through its faces.
     pub relative_divergence: f64,
 }
 
+/// `G⁻¹` of a symmetric positive definite d × d matrix (d = 2 or 3), row-major; `None` if it
+/// is singular (a degenerate cell).
+fn inverse_small(d: usize, g: &[f64; 9]) -> Option<[f64; 9]> {
+    let mut inv = [0.0; 9];
+    if d == 2 {
+        let det = g[0] * g[4] - g[1] * g[3];
+        if det.abs() <= 0.0 || !det.is_finite() {
+            return None;
+        }
+        inv[0] = g[4] / det;
+        inv[1] = -g[1] / det;
+        inv[3] = -g[3] / det;
+        inv[4] = g[0] / det;
+        return Some(inv);
+    }
+    let m = |r: usize, c: usize| g[3 * r + c];
+    let cof = |r: usize, c: usize| {
+        let (r1, r2) = ((r + 1) % 3, (r + 2) % 3);
+        let (c1, c2) = ((c + 1) % 3, (c + 2) % 3);
+        m(r1, c1) * m(r2, c2) - m(r1, c2) * m(r2, c1)
+    };
+    let det = m(0, 0) * cof(0, 0) + m(0, 1) * cof(0, 1) + m(0, 2) * cof(0, 2);
+    if det.abs() <= 0.0 || !det.is_finite() {
+        return None;
+    }
+    for r in 0..3 {
+        for c in 0..3 {
+            inv[3 * r + c] = cof(c, r) / det;
+        }
+    }
+    Some(inv)
+}
+
 impl Projection {
-    /// Prepares the pattern and symbolic factorisation for `topo`.
+    /// Prepares the face system's pattern for `topo`.
     pub fn new(topo: &Topology) -> Result<Self, FluidError> {
         let d = topo.dim();
         let (nf, nc) = (topo.face_count(), topo.cell_count());
-        let nb = topo.boundary_faces().len();
-        let n = nf + nc + nb;
-        let mut entries = Vec::new();
-        for c in 0..nc {
-            for l1 in 0..=d {
-                for l2 in l1..=d {
-                    entries.push((topo.cell_face(c, l1), topo.cell_face(c, l2)));
-                }
-                entries.push((topo.cell_face(c, l1), nf + c));
-            }
-        }
-        for (b, &f) in topo.boundary_faces().iter().enumerate() {
-            entries.push((f as usize, nf + nc + b));
-        }
-        let pattern = SymmetricPattern::new(n, entries);
-        let mut k_slots = Vec::with_capacity(nc * (d + 1) * (d + 1));
-        for c in 0..nc {
-            for l1 in 0..=d {
-                for l2 in 0..=d {
-                    k_slots.push(if l2 < l1 {
-                        usize::MAX
-                    } else {
-                        pattern.slot(topo.cell_face(c, l1), topo.cell_face(c, l2)).expect("K entry")
-                    });
-                }
-            }
-        }
-        let diag_slots: Vec<usize> = (0..n).map(|i| pattern.slot(i, i).expect("diagonal")).collect();
-        // The constant part: C's entries.
-        let mut exact = vec![0.0; pattern.nnz()];
-        for c in 0..nc {
-            for l in 0..=d {
-                exact[pattern.slot(topo.cell_face(c, l), nf + c).expect("div entry")] += topo.sign(c, l);
-            }
-        }
-        for (b, &f) in topo.boundary_faces().iter().enumerate() {
-            exact[pattern.slot(f as usize, nf + nc + b).expect("D entry")] = 1.0;
-        }
-        let regularised = exact.clone();
-        let solver = SparseSymmetricSolver::new(pattern, Factorisation::Ldlt)
-            .map_err(|e| FluidError::Projection(e.to_string()))?;
-        Ok(Self { nf, nc, k_slots, diag_slots, solver, exact, regularised, factored: false })
+        let entries = (0..nc).flat_map(|c| (0..=d).flat_map(move |l1| (0..=d).map(move |l2| (c, l1, l2))));
+        let pairs: Vec<(usize, usize)> =
+            entries.map(|(c, l1, l2)| (topo.cell_face(c, l1), topo.cell_face(c, l2))).collect();
+        let system = CsrMatrix::with_pattern(nf, nf, pairs.iter().copied());
+        let slots: Vec<usize> =
+            pairs.iter().map(|&(a, b)| system.slot(a, b).expect("M entry in its pattern")).collect();
+        let blocks = vec![0.0; slots.len()];
+        Ok(Self { nf, nc, system, slots, blocks, multipliers: vec![0.0; nf], hierarchy_len: 0 })
     }
 
-    /// Entries of the LDLᵀ factor (fill included): the projection's memory.
+    /// Entries (f64s) of the last multigrid hierarchy and the face system: the projection's
+    /// working memory besides the per-cell blocks.
     pub fn factor_len(&self) -> usize {
-        self.solver.factor_len()
+        self.hierarchy_len.max(self.system.nnz()) + self.blocks.len()
     }
 
     /// The flux minimising Eq. 10 for velocity `u` under geometry `ops`, with the boundary
@@ -137,42 +151,9 @@ impl Projection {
         let d = topo.dim();
         let (nf, nc) = (self.nf, self.nc);
         let nb = boundary_flux.len();
+        let n1 = d + 1;
         assert_eq!(nb, topo.boundary_faces().len(), "one flux per boundary face");
         // Consistency: the boundary fluxes must carry no net volume.
-        let mut net = 0.0;
-        let mut total = 0.0;
-        for (b, &f) in topo.boundary_faces().iter().enumerate() {
-            let [c, _] = topo.face_cells(f as usize);
-            let l = topo.face_local(f as usize)[0] as usize;
-            net += topo.sign(c as usize, l) * boundary_flux[b];
-            total += boundary_flux[b].abs();
-        }
-        if net.abs() > 1e-9 * total.max(f64::MIN_POSITIVE) && net.abs() > 1e-300 {
-            return Err(FluidError::VolumeChange { frame, net, relative: net / total });
-        }
-        // Assemble K = PᵀV⁻¹P.
-        for &s in &self.diag_slots[..nf] {
-            self.exact[s] = 0.0;
-        }
-        for s in self.k_slots.iter().filter(|&&s| s != usize::MAX) {
-            self.exact[*s] = 0.0;
-        }
-        for c in 0..nc {
-            let inv = 1.0 / ops.volumes[c];
-            for l1 in 0..=d {
-                for l2 in l1..=d {
-                    let s = self.k_slots[(c * (d + 1) + l1) * (d + 1) + l2];
-                    let dot: f64 = (0..d).map(|k| ops.lever(c, l1, k) * ops.lever(c, l2, k)).sum();
-                    self.exact[s] += dot * inv;
-                }
-            }
-        }
-        // Right-hand side [Pᵀu; 0; h_b].
-        let mut b = vec![0.0; nf + nc + nb];
-        b[..nf].copy_from_slice(&ops.momentum_to_flux_transpose(topo, u));
-        b[nf + nc..].copy_from_slice(boundary_flux);
-        // Remove the rounding-level net flux (checked small above) so that the singular
-        // system is exactly consistent: Σ_c div_c − Σ_b σ_b D_b = 0.
         let signs: Vec<f64> = topo
             .boundary_faces()
             .iter()
@@ -180,140 +161,116 @@ impl Projection {
                 topo.sign(topo.face_cells(f as usize)[0] as usize, topo.face_local(f as usize)[0] as usize)
             })
             .collect();
-        if nb > 0 {
-            for (bi, s) in b[nf + nc..].iter_mut().zip(&signs) {
-                *bi -= s * net / nb as f64;
+        let net: f64 = signs.iter().zip(boundary_flux).map(|(s, h)| s * h).sum();
+        let total: f64 = boundary_flux.iter().map(|h| h.abs()).sum();
+        if net.abs() > 1e-9 * total.max(f64::MIN_POSITIVE) && net.abs() > 1e-300 {
+            return Err(FluidError::VolumeChange { frame, net, relative: net / total });
+        }
+        // Remove the rounding-level net flux (checked small above) so that the singular
+        // system is exactly consistent.
+        let wall: Vec<f64> = if nb > 0 {
+            boundary_flux.iter().zip(&signs).map(|(h, s)| h - s * net / nb as f64).collect()
+        } else {
+            Vec::new()
+        };
+        // Per cell: A_c and its share of the right-hand side, A_c β_c.
+        self.system.values_mut().fill(0.0);
+        let mut rhs = vec![0.0; nf];
+        let mut scale2 = 0.0;
+        let mut w = [[0.0; 3]; 4];
+        for c in 0..nc {
+            for (l, wl) in w.iter_mut().enumerate().take(n1) {
+                let s = topo.sign(c, l);
+                for k in 0..d {
+                    wl[k] = s * ops.lever(c, l, k);
+                }
+            }
+            let mut g = [0.0; 9];
+            for wl in &w[..n1] {
+                for r in 0..d {
+                    for k in 0..d {
+                        g[3 * r + k] += wl[r] * wl[k];
+                    }
+                }
+            }
+            let Some(h) = inverse_small(d, &g) else {
+                return Err(FluidError::Projection(format!("frame {frame}: cell {c} is degenerate")));
+            };
+            let mut y = [[0.0; 3]; 4];
+            for (yl, wl) in y.iter_mut().zip(&w).take(n1) {
+                for r in 0..d {
+                    yl[r] = (0..d).map(|k| h[3 * r + k] * wl[k]).sum();
+                }
+            }
+            let beta: Vec<f64> = (0..n1).map(|l| (0..d).map(|k| w[l][k] * u[d * c + k]).sum()).collect();
+            let vc = ops.volumes[c];
+            for l1 in 0..n1 {
+                let mut a_beta = 0.0;
+                for l2 in 0..n1 {
+                    let i = (c * n1 + l1) * n1 + l2;
+                    let a = vc * (0..d).map(|k| y[l1][k] * y[l2][k]).sum::<f64>();
+                    self.blocks[i] = a;
+                    self.system.values_mut()[self.slots[i]] += a;
+                    a_beta += a * beta[l2];
+                }
+                rhs[topo.cell_face(c, l1)] += a_beta;
+                scale2 += a_beta * a_beta;
             }
         }
-        // The last frame's factorisation preconditions GMRES on this frame's exact system; it
-        // is refreshed when it no longer converges quickly (the mesh moved too far) or when
-        // there is none yet.
-        let mut refactorised = false;
-        if !self.factored {
-            self.refactorise(nf)?;
-            refactorised = true;
+        for ((&f, s), h) in topo.boundary_faces().iter().zip(&signs).zip(&wall) {
+            rhs[f as usize] -= s * h;
+            scale2 += h * h;
         }
-        let mut x = vec![0.0; b.len()];
-        let mut iterations = self.gmres(&b, &mut x);
-        if iterations.is_none() && !refactorised {
-            self.refactorise(nf)?;
-            refactorised = true;
-            iterations = self.gmres(&b, &mut x);
-        }
-        let Some(gmres_steps) = iterations else {
-            return Err(FluidError::Projection(format!(
-                "frame {frame}: GMRES preconditioned by a fresh LDLᵀ did not reach {GMRES_TOLERANCE:e}"
-            )));
+        // The right-hand side is orthogonal to the kernel up to rounding; make it exactly so.
+        let mean = rhs.iter().sum::<f64>() / nf.max(1) as f64;
+        rhs.iter_mut().for_each(|r| *r -= mean);
+        let target = CG_TOLERANCE * scale2.sqrt();
+        let amg = Amg::new(&self.system, &vec![1.0; nf], Kernel::Exact)
+            .map_err(|e| FluidError::Projection(format!("frame {frame}: {e}")))?;
+        self.hierarchy_len = amg.len();
+        let levels = amg.level_sizes();
+        let mut mu = std::mem::take(&mut self.multipliers);
+        let solved = amg.solve(&self.system, &rhs, &mut mu, target, CG_MAX);
+        let cg_steps = match solved {
+            Ok(steps) => steps,
+            Err(reached) => {
+                self.multipliers = vec![0.0; nf];
+                return Err(FluidError::Projection(format!(
+                    "frame {frame}: conjugate gradients reached a residual of {reached:e} in {CG_MAX} \
+                     steps, not {target:e} ({CG_TOLERANCE:e} of the flux scale)"
+                )));
+            }
         };
-        x.truncate(nf);
-        let div = divergence(topo, &x);
+        // Each cell's copy of its fluxes, turned into the face's global orientation; interior
+        // faces take the mean of their two copies, wall faces exactly h.
+        let mut flux = vec![0.0; nf];
+        for c in 0..nc {
+            for l1 in 0..n1 {
+                let mut f = 0.0;
+                for l2 in 0..n1 {
+                    let a = self.blocks[(c * n1 + l1) * n1 + l2];
+                    let face = topo.cell_face(c, l2);
+                    let beta_l2: f64 =
+                        (0..d).map(|k| topo.sign(c, l2) * ops.lever(c, l2, k) * u[d * c + k]).sum();
+                    f += a * (beta_l2 - mu[face]);
+                }
+                flux[topo.cell_face(c, l1)] += 0.5 * topo.sign(c, l1) * f;
+            }
+        }
+        for (&f, h) in topo.boundary_faces().iter().zip(&wall) {
+            flux[f as usize] = *h;
+        }
+        self.multipliers = mu;
+        let div = divergence(topo, &flux);
         let mut scale = 0.0f64;
         for c in 0..nc {
-            scale = scale.max((0..=d).map(|l| x[topo.cell_face(c, l)].abs()).sum());
+            scale = scale.max((0..=d).map(|l| flux[topo.cell_face(c, l)].abs()).sum());
         }
         let max_div = div.iter().fold(0.0f64, |m, v| m.max(v.abs()));
         let relative_divergence = if scale > 0.0 { max_div / scale } else { max_div };
-        if x.iter().any(|v| !v.is_finite()) {
+        if flux.iter().any(|v| !v.is_finite()) {
             return Err(FluidError::Projection(format!("frame {frame}: the flux is not finite")));
         }
-        Ok((x, ProjectionReport { gmres_steps, relative_divergence, refactorised }))
-    }
-
-    /// Factorises the regularised system `[K + εI, Cᵀ; C, −δI]` of the current values.
-    fn refactorise(&mut self, nf: usize) -> Result<(), FluidError> {
-        let mean_diag = self.diag_slots[..nf].iter().map(|&s| self.exact[s]).sum::<f64>() / nf.max(1) as f64;
-        let (eps, delta) = (REGULARISATION * mean_diag, REGULARISATION / mean_diag);
-        self.regularised.copy_from_slice(&self.exact);
-        for &s in &self.diag_slots[..nf] {
-            self.regularised[s] += eps;
-        }
-        for &s in &self.diag_slots[nf..] {
-            self.regularised[s] = -delta;
-        }
-        self.factored = false;
-        self.solver
-            .factorise("projection", &self.regularised)
-            .map_err(|e| FluidError::Projection(e.to_string()))?;
-        self.factored = true;
-        Ok(())
-    }
-
-    /// Right-preconditioned GMRES on the exact system from `x`, the factorisation as the
-    /// preconditioner, restarted every [`GMRES_RESTART`] steps; the number of steps, or
-    /// `None` if the residual did not fall below [`GMRES_TOLERANCE`] of `‖b‖` within
-    /// [`GMRES_MAX`] steps.
-    fn gmres(&self, b: &[f64], x: &mut [f64]) -> Option<usize> {
-        let dot = |a: &[f64], c: &[f64]| a.iter().zip(c).map(|(p, q)| p * q).sum::<f64>();
-        let b_norm = dot(b, b).sqrt().max(f64::MIN_POSITIVE);
-        let mut steps = 0;
-        while steps < GMRES_MAX {
-            let ax = self.solver.pattern().mul(&self.exact, x);
-            let r: Vec<f64> = b.iter().zip(&ax).map(|(p, q)| p - q).collect();
-            let beta = dot(&r, &r).sqrt();
-            if beta <= GMRES_TOLERANCE * b_norm {
-                return Some(steps);
-            }
-            let m = GMRES_RESTART;
-            let mut v: Vec<Vec<f64>> = vec![r.iter().map(|q| q / beta).collect()];
-            let mut z: Vec<Vec<f64>> = Vec::new();
-            let mut h = vec![vec![0.0; m]; m + 1];
-            let (mut cs, mut sn) = (vec![0.0; m], vec![0.0; m]);
-            let mut g = vec![0.0; m + 1];
-            g[0] = beta;
-            let mut k_done = 0;
-            for k in 0..m {
-                let mut zk = v[k].clone();
-                self.solver.solve_in_place(&mut zk);
-                let mut w = self.solver.pattern().mul(&self.exact, &zk);
-                z.push(zk);
-                for (i, vi) in v.iter().enumerate() {
-                    h[i][k] = dot(&w, vi);
-                    for (wj, vj) in w.iter_mut().zip(vi) {
-                        *wj -= h[i][k] * vj;
-                    }
-                }
-                h[k + 1][k] = dot(&w, &w).sqrt();
-                for i in 0..k {
-                    let t = cs[i] * h[i][k] + sn[i] * h[i + 1][k];
-                    h[i + 1][k] = -sn[i] * h[i][k] + cs[i] * h[i + 1][k];
-                    h[i][k] = t;
-                }
-                let rho = (h[k][k] * h[k][k] + h[k + 1][k] * h[k + 1][k]).sqrt();
-                if rho == 0.0 {
-                    k_done = k;
-                    break;
-                }
-                cs[k] = h[k][k] / rho;
-                sn[k] = h[k + 1][k] / rho;
-                h[k][k] = rho;
-                h[k + 1][k] = 0.0;
-                g[k + 1] = -sn[k] * g[k];
-                g[k] *= cs[k];
-                steps += 1;
-                k_done = k + 1;
-                let norm_w = dot(&w, &w).sqrt();
-                if g[k + 1].abs() <= 0.1 * GMRES_TOLERANCE * b_norm || norm_w == 0.0 || steps >= GMRES_MAX {
-                    break;
-                }
-                v.push(w.iter().map(|q| q / norm_w).collect());
-            }
-            // x += Z y with H y = g (upper triangular).
-            let mut y = vec![0.0; k_done];
-            for i in (0..k_done).rev() {
-                let s: f64 = (i + 1..k_done).map(|j| h[i][j] * y[j]).sum();
-                y[i] = (g[i] - s) / h[i][i];
-            }
-            for (yi, zi) in y.iter().zip(&z) {
-                for (xj, zj) in x.iter_mut().zip(zi) {
-                    *xj += yi * zj;
-                }
-            }
-            if k_done == 0 {
-                break;
-            }
-        }
-        let ax = self.solver.pattern().mul(&self.exact, x);
-        let r: Vec<f64> = b.iter().zip(&ax).map(|(p, q)| p - q).collect();
-        (dot(&r, &r).sqrt() <= GMRES_TOLERANCE * b_norm).then_some(steps)
+        Ok((flux, ProjectionReport { cg_steps, levels, relative_divergence }))
     }
 }

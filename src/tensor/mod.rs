@@ -9,6 +9,8 @@
 //! The operations here are written plainly: they are the test oracle for every fast path
 //! (premultiplication, GPU kernels) and the documentation of the maths.
 
+pub mod amg;
+mod csr;
 mod dense;
 mod error;
 pub mod gpu;
@@ -16,6 +18,7 @@ mod linalg;
 mod sparse;
 mod sparse_symmetric;
 
+pub use csr::CsrMatrix;
 pub use dense::{Scalar, Tensor};
 pub use error::TensorError;
 pub(crate) use linalg::{check_system, pivot_tolerance};
