@@ -68,8 +68,9 @@ pub struct Projection {
     blocks: Vec<f64>,
     /// The last frame's face multipliers μ: the next solve's first guess.
     multipliers: Vec<f64>,
-    /// Entries of the last multigrid hierarchy.
-    hierarchy_len: usize,
+    /// The last multigrid hierarchy and the values of M it was built for: reused while the
+    /// geometry stands still (a static mesh builds it once).
+    hierarchy: Option<(Vec<f64>, Amg)>,
 }
 
 /// How a projection went.
@@ -128,13 +129,14 @@ impl Projection {
         let slots: Vec<usize> =
             pairs.iter().map(|&(a, b)| system.slot(a, b).expect("M entry in its pattern")).collect();
         let blocks = vec![0.0; slots.len()];
-        Ok(Self { nf, nc, system, slots, blocks, multipliers: vec![0.0; nf], hierarchy_len: 0 })
+        Ok(Self { nf, nc, system, slots, blocks, multipliers: vec![0.0; nf], hierarchy: None })
     }
 
     /// Entries (f64s) of the last multigrid hierarchy and the face system: the projection's
     /// working memory besides the per-cell blocks.
     pub fn factor_len(&self) -> usize {
-        self.hierarchy_len.max(self.system.nnz()) + self.blocks.len()
+        let hierarchy = self.hierarchy.as_ref().map_or(0, |(v, amg)| v.len() + amg.len());
+        hierarchy + self.system.nnz() + self.blocks.len()
     }
 
     /// The flux minimising Eq. 10 for velocity `u` under geometry `ops`, with the boundary
@@ -225,9 +227,13 @@ impl Projection {
         let mean = rhs.iter().sum::<f64>() / nf.max(1) as f64;
         rhs.iter_mut().for_each(|r| *r -= mean);
         let target = CG_TOLERANCE * scale2.sqrt();
-        let amg = Amg::new(&self.system, &vec![1.0; nf], Kernel::Exact)
-            .map_err(|e| FluidError::Projection(format!("frame {frame}: {e}")))?;
-        self.hierarchy_len = amg.len();
+        if self.hierarchy.as_ref().is_none_or(|(values, _)| values.as_slice() != self.system.values()) {
+            self.hierarchy = None;
+            let amg = Amg::new(&self.system, &vec![1.0; nf], Kernel::Exact)
+                .map_err(|e| FluidError::Projection(format!("frame {frame}: {e}")))?;
+            self.hierarchy = Some((self.system.values().to_vec(), amg));
+        }
+        let (_, amg) = self.hierarchy.as_ref().expect("built above");
         let levels = amg.level_sizes();
         let mut mu = std::mem::take(&mut self.multipliers);
         let solved = amg.solve(&self.system, &rhs, &mut mu, target, CG_MAX);

@@ -27,6 +27,9 @@ use super::error::TensorError;
 
 /// The coarsest level is solved densely once it has at most this many rows.
 pub const COARSE_SIZE: usize = 400;
+/// Most rows of a coarsest level that stalled above [`COARSE_SIZE`] (its dense factor's
+/// memory grows as the square).
+const DENSE_MAX: usize = 4000;
 /// Most levels (the coarsening stops earlier when it stalls).
 const MAX_LEVELS: usize = 25;
 /// Strength of connection on the finest level; halved on each coarser one.
@@ -234,9 +237,13 @@ impl Amg {
                 });
             }
             let inv_diag: Vec<f64> = diag.iter().map(|d| 1.0 / d).collect();
-            let (agg, count) = aggregate(a, theta);
+            let (mut agg, mut count) = aggregate(a, theta);
             if count as f64 > 0.85 * a.rows() as f64 {
-                break;
+                // Too few strong connections to coarsen: every connection counts.
+                (agg, count) = aggregate(a, 0.0);
+                if count as f64 > 0.85 * a.rows() as f64 {
+                    break;
+                }
             }
             let mut norm2 = vec![0.0; count];
             for (i, &g) in agg.iter().enumerate() {
@@ -272,6 +279,14 @@ impl Amg {
         }
         let a = owned.as_ref().unwrap_or(fine);
         let n = a.rows();
+        if n > DENSE_MAX {
+            return Err(TensorError::Factorisation {
+                what: "multigrid setup".into(),
+                detail: format!(
+                    "coarsening stalled at {n} rows (a matrix with almost no off-diagonal entries)"
+                ),
+            });
+        }
         let mut dense = Mat::<f64>::zeros(n, n);
         for i in 0..n {
             let (cols, vals) = a.row(i);
@@ -447,6 +462,25 @@ mod tests {
         let ax = a.mul(&x);
         let res = ax.iter().zip(&b).map(|(p, q)| (p - q).powi(2)).sum::<f64>().sqrt();
         assert!(res <= 1e-9 * dot(&b, &b).sqrt(), "true residual {res:e}");
+    }
+
+    #[test]
+    fn a_matrix_that_cannot_coarsen_is_refused_rather_than_factorised_densely() {
+        // Diagonal: no connections to aggregate by. Small enough, the dense level solves it;
+        // too large, the setup says so instead of allocating n² entries.
+        let diag = |n: usize| {
+            CsrMatrix::from_triplets(n, n, &(0..n).map(|i| (i, i, 1.0 + i as f64)).collect::<Vec<_>>())
+        };
+        let small = diag(1000);
+        let amg = Amg::new(&small, &vec![1.0; 1000], Kernel::Near).expect("dense coarsest level");
+        let b = vec![1.0; 1000];
+        let mut x = vec![0.0; 1000];
+        assert_eq!(amg.solve(&small, &b, &mut x, 1e-12, 5), Ok(1));
+        assert!((x[9] - 0.1).abs() < 1e-14);
+        match Amg::new(&diag(DENSE_MAX + 1), &vec![1.0; DENSE_MAX + 1], Kernel::Near) {
+            Err(TensorError::Factorisation { detail, .. }) => assert!(detail.contains("stalled"), "{detail}"),
+            other => panic!("expected a stalled-coarsening error, got {:?}", other.map(|a| a.level_sizes())),
+        }
     }
 
     #[test]
