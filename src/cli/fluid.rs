@@ -204,7 +204,7 @@ fn simulate(args: &SimulateArgs) -> Result<()> {
         topo.face_count(),
         topo.boundary_faces().len(),
         mesh.vertex_count(),
-        solver.projection_factor_len()
+        solver.projection_memory_len()
     );
     let bar = crate::progress_bar(frames as u64, "simulating");
     let (mut td, mut ta, mut tp, mut worst_div) = (Vec::new(), Vec::new(), Vec::new(), 0.0f64);
@@ -415,7 +415,7 @@ fn bench_row(
         row.ta,
         row.tp,
         median(&mut cg_steps),
-        solver.projection_factor_len() as f64 * 8.0 / 1e6
+        solver.projection_memory_len() as f64 * 8.0 / 1e6
     );
     Ok(row)
 }

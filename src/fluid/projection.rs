@@ -132,10 +132,10 @@ impl Projection {
         Ok(Self { nf, nc, system, slots, blocks, multipliers: vec![0.0; nf], hierarchy: None })
     }
 
-    /// Entries (f64s) of the last multigrid hierarchy and the face system: the projection's
-    /// working memory besides the per-cell blocks.
-    pub fn factor_len(&self) -> usize {
-        let hierarchy = self.hierarchy.as_ref().map_or(0, |(v, amg)| v.len() + amg.len());
+    /// The projection's working memory in f64-sized entries: the face system, the per-cell
+    /// blocks, and the last multigrid hierarchy with the values it was built for.
+    pub fn memory_len(&self) -> usize {
+        let hierarchy = self.hierarchy.as_ref().map_or(0, |(v, amg)| v.len() + amg.entries());
         hierarchy + self.system.nnz() + self.blocks.len()
     }
 

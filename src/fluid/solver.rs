@@ -184,9 +184,9 @@ impl FluidSolver {
         &self.params
     }
 
-    /// Entries of the projection's factor.
-    pub fn projection_factor_len(&self) -> usize {
-        self.projection.factor_len()
+    /// The projection's working memory in f64-sized entries ([`Projection::memory_len`]).
+    pub fn projection_memory_len(&self) -> usize {
+        self.projection.memory_len()
     }
 
     /// The induced fluxes of the motion g0 → g1 over one frame (Eq. 11 integrated exactly):

@@ -65,7 +65,7 @@ pub struct Amg {
     coarse: faer::linalg::solvers::Llt<f64>,
     coarse_n: usize,
     fine_n: usize,
-    len: usize,
+    entries: usize,
 }
 
 impl std::fmt::Debug for Amg {
@@ -217,7 +217,7 @@ impl Amg {
         let fine_n = a.rows();
         let mut levels = Vec::new();
         let mut owned: Option<CsrMatrix> = None;
-        let mut len = 0;
+        let mut entries = 0;
         let mut b = near_null.to_vec();
         let mut theta = STRENGTH;
         loop {
@@ -271,7 +271,7 @@ impl Amg {
             }
             let r = p.transpose();
             let coarse = r.matmul(&a.matmul(&p));
-            len += a.nnz() + 2 * p.nnz();
+            entries += a.nnz() + 2 * p.nnz();
             levels.push(Level { a: owned.take(), inv_diag, p, r });
             owned = Some(coarse);
             b = b_coarse;
@@ -313,7 +313,7 @@ impl Amg {
             what: "multigrid coarsest level".into(),
             detail: format!("{n} rows: {e:?}"),
         })?;
-        Ok(Self { levels, coarse, coarse_n: n, fine_n, len: len + n * n })
+        Ok(Self { levels, coarse, coarse_n: n, fine_n, entries: entries + n * n })
     }
 
     /// Rows per level, finest first.
@@ -325,13 +325,8 @@ impl Amg {
 
     /// Stored entries of all level matrices and prolongations (the hierarchy's memory, in
     /// f64s, the dense coarsest factor included).
-    pub fn len(&self) -> usize {
-        self.len
-    }
-
-    /// Whether the hierarchy is empty (never: it has at least the coarsest level).
-    pub fn is_empty(&self) -> bool {
-        false
+    pub fn entries(&self) -> usize {
+        self.entries
     }
 
     /// One V-cycle on level `l` from a zero guess: an approximation of `A_l⁻¹ b`.

@@ -15,6 +15,21 @@ pub struct CsrMatrix {
     values: Vec<f64>,
 }
 
+/// Compressed storage of per-line index lists (rows of a CSR matrix, columns of a CSC one):
+/// each line sorted and deduplicated, then concatenated; the line starts and the indices.
+pub(crate) fn compress(lines: Vec<Vec<usize>>) -> (Vec<usize>, Vec<usize>) {
+    let mut start = Vec::with_capacity(lines.len() + 1);
+    let mut index = Vec::new();
+    start.push(0);
+    for mut line in lines {
+        line.sort_unstable();
+        line.dedup();
+        index.extend(line);
+        start.push(index.len());
+    }
+    (start, index)
+}
+
 /// Rows per parallel task of [`CsrMatrix::mul_into`].
 const ROWS_PER_TASK: usize = 4096;
 
@@ -27,15 +42,7 @@ impl CsrMatrix {
             assert!(r < rows && c < cols, "entry ({r}, {c}) outside {rows} × {cols}");
             per_row[r].push(c);
         }
-        let mut row_ptr = Vec::with_capacity(rows + 1);
-        let mut col_idx = Vec::new();
-        row_ptr.push(0);
-        for mut row in per_row {
-            row.sort_unstable();
-            row.dedup();
-            col_idx.extend(row);
-            row_ptr.push(col_idx.len());
-        }
+        let (row_ptr, col_idx) = compress(per_row);
         let values = vec![0.0; col_idx.len()];
         Self { rows, cols, row_ptr, col_idx, values }
     }

@@ -33,15 +33,7 @@ impl SymmetricPattern {
             let (r, c) = if r <= c { (r, c) } else { (c, r) };
             cols[c].push(r);
         }
-        let mut col_ptr = Vec::with_capacity(n + 1);
-        let mut row_idx = Vec::new();
-        col_ptr.push(0);
-        for mut col in cols {
-            col.sort_unstable();
-            col.dedup();
-            row_idx.extend(col);
-            col_ptr.push(row_idx.len());
-        }
+        let (col_ptr, row_idx) = super::csr::compress(cols);
         Self { n, col_ptr, row_idx }
     }
 
