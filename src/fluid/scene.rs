@@ -569,7 +569,7 @@ impl FluidScene {
         })
     }
 
-    /// The surface animation of a [bird] or [surface] scene.
+    /// The surface animation of a `[bird]` or `[surface]` scene.
     pub fn animation(&self) -> Option<&SurfaceAnimation> {
         match &self.motion {
             Motion::Embedded(domain) => Some(&domain.animation),

@@ -29,7 +29,7 @@ pub const SMOOTH_TARGET: f64 = 0.3;
 
 /// A frame whose smallest volume ratio after smoothing is at or below this (valid but nearly
 /// flat: costly for the fluid's stability bound and its projection) is stiffened and solved
-/// again like a tangled one; after [`STIFFEN_ROUNDS`] the best round is kept, and refused
+/// again like a tangled one; after the stiffening rounds (8) the best round is kept, and refused
 /// only if it has an inverted cell.
 pub const FLAT_RATIO: f64 = 1e-3;
 

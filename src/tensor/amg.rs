@@ -12,6 +12,9 @@
 //! coarse kernel vector onto it (`A T b_c = A b = 0`), so every level keeps a one-dimensional
 //! kernel per connected component; the coarsest solve adds `α b bᵀ / ‖b‖²` on each component
 //! and so returns the solution orthogonal to the kernel of a consistent right-hand side.
+//! Where too few connections are strong to coarsen, every connection counts; a matrix that
+//! still cannot coarsen (nearly diagonal) above a few thousand rows is refused rather than
+//! factorised densely.
 //!
 //! One V-cycle (a forward Gauss–Seidel sweep before the coarse correction, a backward one
 //! after: a symmetric preconditioner) preconditions each CG step.
