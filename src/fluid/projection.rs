@@ -67,6 +67,8 @@ pub struct Projection {
     slots: Vec<usize>,
     /// Each cell's A_c, laid out as `slots`.
     blocks: Vec<f64>,
+    /// Each cell's unconstrained outward fluxes A_c β_c, `(d+1)` per cell.
+    unconstrained: Vec<f64>,
     /// The last frame's face multipliers μ: the next solve's first guess.
     multipliers: Vec<f64>,
     /// The last multigrid hierarchy and the values of M it was built for: reused while the
@@ -130,14 +132,15 @@ impl Projection {
         let slots: Vec<usize> =
             pairs.iter().map(|&(a, b)| system.slot(a, b).expect("M entry in its pattern")).collect();
         let blocks = vec![0.0; slots.len()];
-        Ok(Self { nf, nc, system, slots, blocks, multipliers: vec![0.0; nf], hierarchy: None })
+        let unconstrained = vec![0.0; nc * (d + 1)];
+        Ok(Self { nf, nc, system, slots, blocks, unconstrained, multipliers: vec![0.0; nf], hierarchy: None })
     }
 
     /// The projection's working memory in f64-sized entries: the face system, the per-cell
     /// blocks, and the last multigrid hierarchy with the values it was built for.
     pub fn memory_len(&self) -> usize {
         let hierarchy = self.hierarchy.as_ref().map_or(0, |(v, amg)| v.len() + amg.entries());
-        hierarchy + self.system.nnz() + self.blocks.len()
+        hierarchy + self.system.nnz() + self.blocks.len() + self.unconstrained.len()
     }
 
     /// The flux minimising Eq. 10 for velocity `u` under geometry `ops`, with the boundary
@@ -156,27 +159,18 @@ impl Projection {
         let nb = boundary_flux.len();
         let n1 = d + 1;
         assert_eq!(nb, topo.boundary_faces().len(), "one flux per boundary face");
-        // Consistency: the boundary fluxes must carry no net volume.
-        let signs: Vec<f64> = topo
-            .boundary_faces()
-            .iter()
-            .map(|&f| {
-                topo.sign(topo.face_cells(f as usize)[0] as usize, topo.face_local(f as usize)[0] as usize)
-            })
-            .collect();
-        let net: f64 = signs.iter().zip(boundary_flux).map(|(s, h)| s * h).sum();
+        // Consistency: the boundary fluxes must carry no net volume. A wall face's only cell is
+        // its first, so its global orientation is already outward (σ = +1).
+        let net: f64 = boundary_flux.iter().sum();
         let total: f64 = boundary_flux.iter().map(|h| h.abs()).sum();
         if net.abs() > 1e-9 * total.max(f64::MIN_POSITIVE) && net.abs() > 1e-300 {
             return Err(FluidError::VolumeChange { frame, net, relative: net / total });
         }
         // Remove the rounding-level net flux (checked small above) so that the singular
         // system is exactly consistent.
-        let wall: Vec<f64> = if nb > 0 {
-            boundary_flux.iter().zip(&signs).map(|(h, s)| h - s * net / nb as f64).collect()
-        } else {
-            Vec::new()
-        };
-        // Per cell: A_c and its share of the right-hand side, A_c β_c.
+        let wall: Vec<f64> = boundary_flux.iter().map(|h| h - net / nb.max(1) as f64).collect();
+        // Per cell: A_c and its unconstrained fluxes A_c β_c, the cell's share of the right-hand
+        // side.
         self.system.values_mut().fill(0.0);
         let mut rhs = vec![0.0; nf];
         let mut scale2 = 0.0;
@@ -205,7 +199,10 @@ impl Projection {
                     yl[r] = (0..d).map(|k| h[3 * r + k] * wl[k]).sum();
                 }
             }
-            let beta: Vec<f64> = (0..n1).map(|l| (0..d).map(|k| w[l][k] * u[d * c + k]).sum()).collect();
+            let mut beta = [0.0; 4];
+            for (b, wl) in beta.iter_mut().zip(&w).take(n1) {
+                *b = (0..d).map(|k| wl[k] * u[d * c + k]).sum();
+            }
             let vc = ops.volumes[c];
             for l1 in 0..n1 {
                 let mut a_beta = 0.0;
@@ -216,12 +213,13 @@ impl Projection {
                     self.system.values_mut()[self.slots[i]] += a;
                     a_beta += a * beta[l2];
                 }
+                self.unconstrained[c * n1 + l1] = a_beta;
                 rhs[topo.cell_face(c, l1)] += a_beta;
                 scale2 += a_beta * a_beta;
             }
         }
-        for ((&f, s), h) in topo.boundary_faces().iter().zip(&signs).zip(&wall) {
-            rhs[f as usize] -= s * h;
+        for (&f, h) in topo.boundary_faces().iter().zip(&wall) {
+            rhs[f as usize] -= h;
             scale2 += h * h;
         }
         // The right-hand side is orthogonal to the kernel up to rounding; make it exactly so.
@@ -253,13 +251,9 @@ impl Projection {
         let mut flux = vec![0.0; nf];
         for c in 0..nc {
             for l1 in 0..n1 {
-                let mut f = 0.0;
+                let mut f = self.unconstrained[c * n1 + l1];
                 for l2 in 0..n1 {
-                    let a = self.blocks[(c * n1 + l1) * n1 + l2];
-                    let face = topo.cell_face(c, l2);
-                    let beta_l2: f64 =
-                        (0..d).map(|k| topo.sign(c, l2) * ops.lever(c, l2, k) * u[d * c + k]).sum();
-                    f += a * (beta_l2 - mu[face]);
+                    f -= self.blocks[(c * n1 + l1) * n1 + l2] * mu[topo.cell_face(c, l2)];
                 }
                 flux[topo.cell_face(c, l1)] += 0.5 * topo.sign(c, l1) * f;
             }
