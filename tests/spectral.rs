@@ -30,6 +30,10 @@ fn glsl_element_maths_match_their_rust_twins() {
         annulus(2, 2, 2, 5, NodeSet::Gauss).unwrap(),
         quad_grid(3, 2, 0.2, 8, NodeSet::Bernstein).unwrap(),
         quad_grid(3, 2, 0.2, 1, NodeSet::GaussLobatto).unwrap(),
+        // Isoparametric: one basis for field and geometry, coefficients as flat varyings
+        // (order 3) and from the buffer (order 5).
+        annulus(2, 3, 3, 3, NodeSet::GaussLobatto).unwrap(),
+        annulus(2, 3, 5, 5, NodeSet::Equispaced).unwrap(),
     ];
     for mesh in &cases {
         let points: Vec<[f32; 4]> =
@@ -110,6 +114,13 @@ fn glsl_element_maths_match_their_rust_twins() {
             }
             let value = mesh.value(0, 0, e, xi, eta);
             assert!((f64::from(o[0][0]) - value).abs() < 1e-4 * vmax, "{what}: value {} vs {value}", o[0][0]);
+            // The fragment stage's value-with-map: the same sums, possibly in another order.
+            assert!(
+                (f64::from(o[0][3]) - value).abs() < 1e-4 * vmax,
+                "{what}: combined {} vs {value}",
+                o[0][3]
+            );
+            assert!(o[2][3] < 1e-5, "{what}: combined map strays by {}", o[2][3]);
             // Newton from the centre recovers (ξ, η) of the f32-rounded point to ~1e-5.
             assert_eq!(o[2][2], 1.0, "{what}: Newton converged");
             let _ = x;
@@ -303,11 +314,14 @@ fn surfaces_show_the_field_within_half_a_pixel() {
     use galerkin::spectral::render::fit_camera;
     let gpu = common::gpu();
     let mesh = Arc::new(artery(22, 8, 3, 4, NodeSet::GaussLobatto).unwrap());
+    // Isoparametric (field and geometry of order 3): the fragment stage shares the 1D bases
+    // and takes the coefficients from flat varyings.
+    let iso = Arc::new(artery(22, 8, 3, 3, NodeSet::GaussLobatto).unwrap());
     let size = (256u32, 192u32);
     let camera = fit_camera(&mesh);
-    let farthest = |budget: f64| {
+    let farthest_on = |mesh: &Arc<galerkin::spectral::SpectralMesh>, budget: f64| {
         let view = SpectralView { overdraw: false, max_error_px: budget, ..SpectralView::default() };
-        let pixels = render_data(&gpu, &mesh, &view, size);
+        let pixels = render_data(&gpu, mesh, &view, size);
         let (mut covered, mut worst, mut worst_value) = (0, 0.0f64, 0.0f64);
         for py in 0..size.1 {
             for px in 0..size.0 {
@@ -321,22 +335,25 @@ fn surfaces_show_the_field_within_half_a_pixel() {
                 let (sx, sy) = camera.project(glam::DVec3::from(x), size.0, size.1);
                 let d = (sx - (f64::from(px) + 0.5)).hypot(sy - (f64::from(py) + 0.5));
                 worst = worst.max(d);
-                let bound = galerkin::spectral::reference::rounding_bound(&mesh, 0, 0, e, r);
+                let bound = galerkin::spectral::reference::rounding_bound(mesh, 0, 0, e, r);
                 worst_value =
                     worst_value.max((f64::from(t[0]) - mesh.value(0, 0, e, r[0], r[1])).abs() / bound);
             }
         }
         (covered, worst, worst_value)
     };
-    let (covered, worst, worst_value) = farthest(0.5);
-    eprintln!(
-        "budget 0.5 px: {covered} pixels, farthest {worst:.3} px, value error {worst_value:.3} of its bound"
-    );
-    assert!(covered > 3000, "{covered}");
-    // The bound, plus f32 slack: interpolated reference coordinates and the f32 view matrix
-    // move the point by ~1e-6 of the scene (≈ 1e-3 px here).
-    assert!(worst <= 0.5 + 0.01, "a pixel shows a surface point {worst} px away");
-    assert!(worst_value <= 1.0);
+    let farthest = |budget: f64| farthest_on(&mesh, budget);
+    for (name, m) in [("order 4 on order-3 geometry", &mesh), ("isoparametric order 3", &iso)] {
+        let (covered, worst, worst_value) = farthest_on(m, 0.5);
+        eprintln!(
+            "{name}, budget 0.5 px: {covered} pixels, farthest {worst:.3} px, value error {worst_value:.3} of its bound"
+        );
+        assert!(covered > 3000, "{covered}");
+        // The bound, plus f32 slack: interpolated reference coordinates and the f32 view
+        // matrix move the point by ~1e-6 of the scene (≈ 1e-3 px here).
+        assert!(worst <= 0.5 + 0.01, "{name}: a pixel shows a surface point {worst} px away");
+        assert!(worst_value <= 1.0, "{name}: value error {worst_value} of its bound");
+    }
     // The device's levels agree with their CPU twin, and nothing was skipped.
     let mut r = SpectralRenderer::new(&gpu, mesh.clone(), &Colormap::viridis()).unwrap();
     let target = RenderTarget::new(&gpu, "tess", size.0, size.1, ColorFormat::Rgba8).unwrap();

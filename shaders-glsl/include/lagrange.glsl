@@ -31,7 +31,10 @@ void spectral_basis_eval(uint kind, uint order, float nodes[SPECTRAL_MAX_NODES],
                 }
             }
             values[r] = x * values[r - 1u];
-            for (uint i = r - 1u; i >= 1u; --i) values[i] = (1.0 - x) * values[i] + x * values[i - 1u];
+            for (uint t = 1u; t < r; ++t) {
+                uint i = r - t;  // i = r - 1, ..., 1, counted upwards (see the suffix loop)
+                values[i] = (1.0 - x) * values[i] + x * values[i - 1u];
+            }
             values[0] *= 1.0 - x;
         }
         return;
@@ -49,7 +52,9 @@ void spectral_basis_eval(uint kind, uint order, float nodes[SPECTRAL_MAX_NODES],
     }
     suffix[m] = 1.0;
     dsuffix[m] = 0.0;
-    for (uint k = m; k-- > 0u;) {
+    // Counted upwards: a loop the drivers recognise and unroll (k = m - 1, ..., 0).
+    for (uint t = 0u; t < m; ++t) {
+        uint k = m - 1u - t;
         float d = x - nodes[k];
         dsuffix[k] = dsuffix[k + 1u] * d + suffix[k + 1u];
         suffix[k] = suffix[k + 1u] * d;

@@ -46,6 +46,8 @@ layout(constant_id = 26) const float SPECTRAL_FW11 = 0.0;
 layout(constant_id = 27) const float SPECTRAL_FW12 = 0.0;
 // Reference dimension: 2 (quadrilaterals) or 3 (hexahedra), id 56.
 layout(constant_id = 56) const uint SPECTRAL_DIM = 2u;
+// Field and geometry share one basis (isoparametric elements), id 57.
+layout(constant_id = 57) const bool SPECTRAL_SHARED_BASIS = false;
 layout(constant_id = 28) const uint SPECTRAL_GEOMETRY_KIND = 0u;
 layout(constant_id = 29) const uint SPECTRAL_GEOMETRY_ORDER = 1u;
 layout(constant_id = 30) const float SPECTRAL_GN0 = 0.0;
@@ -90,11 +92,10 @@ void spectral_geometry_eval(float x, bool want_derivatives, out float v[SPECTRAL
 // Newton steps of the per-fragment inverse map (NEWTON_ITERATIONS of mesh.rs).
 #define SPECTRAL_NEWTON_ITERATIONS 12
 
-// The geometry map x(xi, eta) of element e and its derivatives along xi and eta.
-vec3 spectral_map(uint e, vec2 r, out vec3 dxi, out vec3 deta) {
-    float a[SPECTRAL_MAX_NODES], da[SPECTRAL_MAX_NODES], b[SPECTRAL_MAX_NODES], db[SPECTRAL_MAX_NODES];
-    spectral_geometry_eval(r.x, true, a, da);
-    spectral_geometry_eval(r.y, true, b, db);
+// The geometry map of element e and its derivatives along xi and eta, from the geometry's 1D
+// bases a (with derivatives da) at xi and b (db) at eta.
+vec3 spectral_map_bases(uint e, float a[SPECTRAL_MAX_NODES], float da[SPECTRAL_MAX_NODES], float b[SPECTRAL_MAX_NODES],
+                        float db[SPECTRAL_MAX_NODES], out vec3 dxi, out vec3 deta) {
     const uint m = SPECTRAL_GEOMETRY_ORDER + 1u;
     uint base = e * m * m;
     vec3 x = vec3(0.0);
@@ -114,18 +115,36 @@ vec3 spectral_map(uint e, vec2 r, out vec3 dxi, out vec3 deta) {
     return x;
 }
 
+// The geometry map x(xi, eta) of element e and its derivatives along xi and eta.
+vec3 spectral_map(uint e, vec2 r, out vec3 dxi, out vec3 deta) {
+    float a[SPECTRAL_MAX_NODES], da[SPECTRAL_MAX_NODES], b[SPECTRAL_MAX_NODES], db[SPECTRAL_MAX_NODES];
+    spectral_geometry_eval(r.x, true, a, da);
+    spectral_geometry_eval(r.y, true, b, db);
+    return spectral_map_bases(e, a, da, b, db, dxi, deta);
+}
+
 // Whole vec4s of one element's coefficients.
 #define SPECTRAL_VALUES_PER_ELEMENT ((SPECTRAL_FIELD_ORDER + 1u) * (SPECTRAL_FIELD_ORDER + 1u) * (SPECTRAL_DIM == 3u ? SPECTRAL_FIELD_ORDER + 1u : 1u))
 #define SPECTRAL_VALUE_VEC4S ((SPECTRAL_VALUES_PER_ELEMENT + 3u) / 4u)
 
-// The field value of element e at reference point r: sum_ij l_i(xi) l_j(eta) F_ij, as the dot
-// product of the tensor weights with the coefficients, four at a time.
-float spectral_value(uint e, vec2 r) {
-    float a[SPECTRAL_MAX_NODES], b[SPECTRAL_MAX_NODES], unused[SPECTRAL_MAX_NODES];
-    spectral_field_eval(r.x, false, a, unused);
-    spectral_field_eval(r.y, false, b, unused);
+// Elements whose coefficients fit four vec4s (quadrilaterals up to order 3) can hand them from
+// the vertex stage to the fragment stage as flat varyings: on a CPU rasteriser a per-fragment
+// read of the coefficient buffer (a gather per vec4) costs more than the evaluation itself.
+#define SPECTRAL_FLAT_VEC4S 4u
+#define SPECTRAL_FLAT_VALUES (SPECTRAL_DIM == 2u && SPECTRAL_VALUE_VEC4S <= SPECTRAL_FLAT_VEC4S)
+
+// Element e's coefficients as the flat varyings carry them (zeros for larger elements, which
+// read the buffer instead).
+void spectral_flat_coefficients(uint e, out vec4 f[SPECTRAL_FLAT_VEC4S]) {
+    for (uint q = 0u; q < SPECTRAL_FLAT_VEC4S; ++q)
+        f[q] = SPECTRAL_FLAT_VALUES && q < SPECTRAL_VALUE_VEC4S ? spectral_values[e * SPECTRAL_VALUE_VEC4S + q] : vec4(0.0);
+}
+
+// sum_ij a_i b_j F_ij over element e's coefficients, taken from `given` when they travel as
+// flat varyings (SPECTRAL_FLAT_VALUES) and from the buffer otherwise; the tensor weights are
+// dotted with the coefficients four at a time.
+float spectral_tensor_sum(uint e, vec4 given[SPECTRAL_FLAT_VEC4S], float a[SPECTRAL_MAX_NODES], float b[SPECTRAL_MAX_NODES]) {
     const uint m = SPECTRAL_FIELD_ORDER + 1u;
-    uint base = e * SPECTRAL_VALUE_VEC4S;
     float v = 0.0;
     for (uint q = 0u; q < SPECTRAL_VALUE_VEC4S; ++q) {
         vec4 w;
@@ -133,9 +152,38 @@ float spectral_value(uint e, vec2 r) {
             uint k = 4u * q + c;
             w[c] = k < m * m ? a[k % m] * b[k / m] : 0.0;
         }
-        v += dot(w, spectral_values[base + q]);
+        vec4 f = SPECTRAL_FLAT_VALUES ? given[min(q, SPECTRAL_FLAT_VEC4S - 1u)] : spectral_values[e * SPECTRAL_VALUE_VEC4S + q];
+        v += dot(w, f);
     }
     return v;
+}
+
+// The field value of element e at reference point r, sum_ij l_i(xi) l_j(eta) F_ij, with the
+// coefficients `given` as spectral_flat_coefficients makes them.
+float spectral_value_given(uint e, vec2 r, vec4 given[SPECTRAL_FLAT_VEC4S]) {
+    float a[SPECTRAL_MAX_NODES], b[SPECTRAL_MAX_NODES], unused[SPECTRAL_MAX_NODES];
+    spectral_field_eval(r.x, false, a, unused);
+    spectral_field_eval(r.y, false, b, unused);
+    return spectral_tensor_sum(e, given, a, b);
+}
+
+// The field value of element e at reference point r.
+float spectral_value(uint e, vec2 r) {
+    vec4 given[SPECTRAL_FLAT_VEC4S];
+    spectral_flat_coefficients(e, given);
+    return spectral_value_given(e, r, given);
+}
+
+// The field value of element e at r (coefficients `given` as for spectral_value_given)
+// together with the geometry map and its derivatives there — what a lit surface fragment
+// needs. When field and geometry share one basis (isoparametric elements, the common case) the
+// 1D bases are evaluated once for both.
+float spectral_value_and_map(uint e, vec2 r, vec4 given[SPECTRAL_FLAT_VEC4S], out vec3 x, out vec3 dxi, out vec3 deta) {
+    float a[SPECTRAL_MAX_NODES], da[SPECTRAL_MAX_NODES], b[SPECTRAL_MAX_NODES], db[SPECTRAL_MAX_NODES];
+    spectral_geometry_eval(r.x, true, a, da);
+    spectral_geometry_eval(r.y, true, b, db);
+    x = spectral_map_bases(e, a, da, b, db, dxi, deta);
+    return SPECTRAL_SHARED_BASIS ? spectral_tensor_sum(e, given, a, b) : spectral_value_given(e, r, given);
 }
 
 // The field value of element e at r and its derivatives along xi and eta: (f, f_xi, f_eta).
@@ -152,6 +200,45 @@ vec3 spectral_value_gradient(uint e, vec2 r) {
             uint k = 4u * q + c;
             if (k < m * m) v += f[c] * vec3(a[k % m] * b[k / m], da[k % m] * b[k / m], a[k % m] * db[k / m]);
         }
+    }
+    return v;
+}
+
+// The field value of element e at r together with the geometry map and its derivatives there
+// (what a lit surface fragment needs): when the two bases are one, the 1D bases are evaluated
+// once for both.
+float spectral_value_and_map(uint e, vec2 r, out vec3 x, out vec3 dxi, out vec3 deta) {
+    if (!SPECTRAL_SHARED_BASIS) {
+        x = spectral_map(e, r, dxi, deta);
+        return spectral_value(e, r);
+    }
+    float a[SPECTRAL_MAX_NODES], da[SPECTRAL_MAX_NODES], b[SPECTRAL_MAX_NODES], db[SPECTRAL_MAX_NODES];
+    spectral_geometry_eval(r.x, true, a, da);
+    spectral_geometry_eval(r.y, true, b, db);
+    const uint m = SPECTRAL_GEOMETRY_ORDER + 1u;
+    uint points = e * m * m;
+    uint values = e * SPECTRAL_VALUE_VEC4S;
+    x = vec3(0.0);
+    dxi = vec3(0.0);
+    deta = vec3(0.0);
+    float v = 0.0;
+    for (uint q = 0u; q < SPECTRAL_VALUE_VEC4S; ++q) {
+        vec4 f = spectral_values[values + q];
+        for (uint c = 0u; c < 4u; ++c) {
+            uint k = 4u * q + c;
+            if (k < m * m) v += f[c] * a[k % m] * b[k / m];
+        }
+    }
+    for (uint j = 0u; j < m; ++j) {
+        vec3 row = vec3(0.0), drow = vec3(0.0);
+        for (uint i = 0u; i < m; ++i) {
+            vec3 p = spectral_points[points + j * m + i].xyz;
+            row += a[i] * p;
+            drow += da[i] * p;
+        }
+        x += b[j] * row;
+        dxi += b[j] * drow;
+        deta += db[j] * row;
     }
     return v;
 }

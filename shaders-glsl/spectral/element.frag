@@ -19,6 +19,7 @@ layout(location = 0) in vec2 in_reference;
 layout(location = 1) flat in uint element;
 layout(location = 2) in float vertex_value;
 layout(location = 3) in vec3 world;
+layout(location = 4) flat in vec4 coefficients[SPECTRAL_FLAT_VEC4S];
 layout(set = 0, binding = 2) uniform sampler1D colormap;
 layout(location = 0) out vec4 out_colour;
 
@@ -34,7 +35,19 @@ void main() {
               && all(greaterThanEqual(r, vec2(-tol))) && all(lessThanEqual(r, vec2(1.0 + tol)));
     }
     r = clamp(r, 0.0, 1.0);
-    float v = mode == SPECTRAL_MODE_PER_VERTEX ? vertex_value : spectral_value(element, r);
+    // A surface fragment is lit with the geometry's tangents, evaluated with the value (the
+    // data output takes the same path, so the tests check the code that draws the colours).
+    bool lit = surface && mode != SPECTRAL_MODE_EDGE_LINES;
+    vec3 x, dxi, deta;
+    float v;
+    if (mode == SPECTRAL_MODE_PER_VERTEX) {
+        v = vertex_value;
+        if (lit) x = spectral_map(element, r, dxi, deta);
+    } else if (lit) {
+        v = spectral_value_and_map(element, r, coefficients, x, dxi, deta);
+    } else {
+        v = spectral_value_given(element, r, coefficients);
+    }
     float t = ramp_coordinate(v, pc.range.x, pc.range.y, pc.flags.y != 0u);
     // Iso-lines: distance to the nearest level in pixels from the screen derivative of the
     // level coordinate (taken before any discard, while the whole quad is live).
@@ -54,9 +67,7 @@ void main() {
         float d = abs(levels - nearest) / width;
         colour = mix(colour, vec3(0.0), 0.8 * (1.0 - clamp(d - 0.5, 0.0, 1.0)));
     }
-    if (surface && mode != SPECTRAL_MODE_EDGE_LINES) {
-        vec3 dxi, deta;
-        spectral_map(element, r, dxi, deta);
+    if (lit) {
         float height = patches[element].curvature.y;
         if (height != 0.0) {
             // The height field's exact normal: the tangents lifted by scale * (f_xi, f_eta).

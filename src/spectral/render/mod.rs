@@ -65,7 +65,8 @@ pub const MAX_CUT_PLANES: usize = 8;
 /// The specialization constants of `spectral_element.glsl` for `mesh`'s two bases: per basis
 /// its kind (0 Lagrange, 1 Bernstein) and order, then its nodes and barycentric weights as f32
 /// bits, each padded to [`MAX_ORDER`] + 1; then the reference dimension. Compiled into the pipelines, the evaluation loops
-/// unroll and the nodes fold into the code instead of being read per fragment.
+/// unroll and the nodes fold into the code instead of being read per fragment. Last, whether the two
+/// bases are one.
 pub fn basis_specialization(mesh: &SpectralMesh) -> Vec<u32> {
     let mut v = Vec::with_capacity(4 * (MAX_ORDER + 2));
     for b in [&mesh.basis, &mesh.geometry] {
@@ -77,6 +78,9 @@ pub fn basis_specialization(mesh: &SpectralMesh) -> Vec<u32> {
     }
     // Id 56: the reference dimension.
     v.push(mesh.shape.dim());
+    // Id 57: field and geometry share one basis (isoparametric elements), so a fragment that
+    // needs both evaluates the 1D bases once.
+    v.push(u32::from(mesh.basis == mesh.geometry));
     v
 }
 
