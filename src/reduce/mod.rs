@@ -23,6 +23,7 @@ mod model;
 mod pca;
 mod premultiply;
 mod reduced;
+mod snapshot_basis;
 pub mod synthetic;
 
 pub use basis::{Bases, Basis};
@@ -34,6 +35,7 @@ pub use model::{FullTensor, Model, ReduceOptions, TensorDecl};
 pub use pca::{pca, pca_with, Pca, SnapshotFile, SnapshotFn, SnapshotSource, Truncation};
 pub use premultiply::{
     premultiply_dense, premultiply_sparse, premultiply_sparse_gpu, premultiply_sparse_with,
-    PremultiplyOptions, PremultiplyPlan, Unit,
+    premultiply_streamed, BasisRows, PremultiplyOptions, PremultiplyPlan, TensorChunks, Unit,
 };
 pub use reduced::ReducedModel;
+pub use snapshot_basis::{snapshot_grams, SnapshotBasis, SnapshotRows, Spectrum};

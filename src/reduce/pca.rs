@@ -157,7 +157,7 @@ pub struct Pca {
 }
 
 /// Rows per block when streaming.
-const BLOCK_ROWS: usize = 4096;
+pub(crate) const BLOCK_ROWS: usize = 4096;
 
 /// PCA of the snapshots in `source`, streaming blocks of rows (see the module docs), on the CPU.
 pub fn pca(name: &str, source: &mut impl SnapshotSource, truncation: Truncation) -> Result<Pca, ReduceError> {
@@ -205,6 +205,48 @@ pub fn pca_with(
     if let Some(d) = &device {
         gram = d.read()?;
     }
+    let modes = modes_from_gram(name, gram, k, truncation)?;
+    let (vs, m, sigma2, kept, total) =
+        (modes.coefficients, modes.columns, modes.sigma2, modes.kept, modes.total);
+    let mut b = vec![0.0; n * m];
+    for start in (0..n).step_by(BLOCK_ROWS) {
+        let end = (start + BLOCK_ROWS).min(n);
+        let block = source.rows(start..end)?;
+        let s = MatRef::from_row_major_slice(block.data(), end - start, k);
+        let out = MatMut::from_row_major_slice_mut(&mut b[start * m..end * m], end - start, m);
+        matmul(out, Accum::Replace, s, MatRef::from_row_major_slice(&vs, k, m), 1.0, Par::rayon(0));
+    }
+    // Small σ amplify rounding in S v / σ: re-orthonormalise (Gram–Schmidt twice).
+    let basis = Basis::orthonormalize(name, &Tensor::from_vec(&[n, m], b).expect("n×m"))?;
+    let energy = if total > 0.0 { kept / total } else { 1.0 };
+    Ok(Pca { basis, singular_values: sigma2.iter().map(|s| s.sqrt()).collect(), energy })
+}
+
+/// The modes a PCA keeps, from the Gram matrix of its snapshots (shared by [`pca_with`] and
+/// the snapshot-coefficient bases of [`super::snapshot_basis`]).
+pub(crate) struct Modes {
+    /// `k × columns` row-major: basis column `c` is `S · coefficients[:, c]` (centred: the mean
+    /// first, then `(I − 11ᵀ/k) vᵢ / σᵢ`), orthonormal up to rounding except for the mean.
+    pub coefficients: Vec<f64>,
+    /// Number of columns (modes, plus the mean when centred).
+    pub columns: usize,
+    /// σ² of every mode, descending.
+    pub sigma2: Vec<f64>,
+    /// Σσ² of the kept modes.
+    pub kept: f64,
+    /// Σσ² of all modes.
+    pub total: f64,
+}
+
+/// Eigendecomposes the `k × k` Gram matrix `gram` (`SᵀS`, uncentred) and truncates as
+/// `truncation` says.
+pub(crate) fn modes_from_gram(
+    name: &str,
+    mut gram: Vec<f64>,
+    k: usize,
+    truncation: Truncation,
+) -> Result<Modes, ReduceError> {
+    let bad = |detail: String| ReduceError::BadBasis { basis: name.to_string(), detail };
     if truncation.centred {
         // The Gram matrix of the centred snapshots S(I − 11ᵀ/k) is (I − 11ᵀ/k) G (I − 11ᵀ/k).
         let row_mean: Vec<f64> =
@@ -234,8 +276,8 @@ pub fn pca_with(
         m += 1;
     }
     let m = if truncation.centred { m } else { m.max(1) };
-    // Pass 2: the basis rows, B_b = S_b V_m Σ_m⁻¹ (centred: the mean S 1/k first, and the
-    // centred coefficients (I − 11ᵀ/k) vᵢ / σᵢ).
+    // The basis is B = S V_m Σ_m⁻¹ (centred: the mean S 1/k first, and the centred
+    // coefficients (I − 11ᵀ/k) vᵢ / σᵢ).
     let offset = usize::from(truncation.centred);
     let cols = m + offset;
     let mut vs = vec![0.0; k * cols];
@@ -252,19 +294,7 @@ pub fn pca_with(
             vs[r * cols + c + offset] = (vectors.data()[r * k + i] - centre) / s;
         }
     }
-    let m = cols;
-    let mut b = vec![0.0; n * m];
-    for start in (0..n).step_by(BLOCK_ROWS) {
-        let end = (start + BLOCK_ROWS).min(n);
-        let block = source.rows(start..end)?;
-        let s = MatRef::from_row_major_slice(block.data(), end - start, k);
-        let out = MatMut::from_row_major_slice_mut(&mut b[start * m..end * m], end - start, m);
-        matmul(out, Accum::Replace, s, MatRef::from_row_major_slice(&vs, k, m), 1.0, Par::rayon(0));
-    }
-    // Small σ amplify rounding in S v / σ: re-orthonormalise (Gram–Schmidt twice).
-    let basis = Basis::orthonormalize(name, &Tensor::from_vec(&[n, m], b).expect("n×m"))?;
-    let energy = if total > 0.0 { kept / total } else { 1.0 };
-    Ok(Pca { basis, singular_values: sigma2.iter().map(|s| s.sqrt()).collect(), energy })
+    Ok(Modes { coefficients: vs, columns: cols, sigma2, kept, total })
 }
 
 /// The Gram matrix accumulated on the device: `G (k × k) += S_bᵀ · S_b` per block of rows.

@@ -32,11 +32,13 @@ use crate::tensor::{SparseTensor, Tensor, TensorError};
 mod cpu;
 mod gpu;
 mod plan;
+mod stream;
 
 use cpu::{accumulate, Partial};
 pub use gpu::premultiply_sparse_gpu;
 use plan::plan;
 pub(crate) use plan::{unit_row, unit_size, Packing};
+pub use stream::{premultiply_streamed, BasisRows, TensorChunks};
 
 /// Options of a premultiplication.
 #[derive(Clone, Copy)]

@@ -1,0 +1,238 @@
+//! Streamed premultiplication: `Q̂ = Q ⊗₀ B₀ ⊗₁ B₁ …` (Eq. 2) for tensors too large to hold
+//! whole and bases too large to hold whole — the pair-space tensors of seed 000 §9 (Table 2 at
+//! 5,000 faces: 25 million pairs, up to 117 entries per pair, bases of 25 million rows).
+//!
+//! `Q̂` is linear in `Q`'s entries, so `Q` is taken a chunk of entries at a time
+//! ([`TensorChunks`]); each chunk only meets the basis rows its coordinates name, so only those
+//! rows are asked for ([`BasisRows`]: a stored [`Basis`] gathers them, a basis held as snapshot
+//! coefficients regenerates them). Each chunk becomes a small sparse tensor over its own
+//! distinct coordinates, premultiplied by [`premultiply_sparse_with`] — the same planned chain
+//! as a whole tensor — against the gathered rows, and the chunk results are summed.
+
+use std::collections::HashMap;
+
+use super::{premultiply_sparse_with, PremultiplyOptions};
+use crate::reduce::{Basis, ReduceError};
+use crate::tensor::{SparseTensor, Tensor};
+
+/// A basis that hands out rows on demand (`B[indices, :]`), for bases whose whole `n × m`
+/// matrix need not, or cannot, be held.
+pub trait BasisRows: Sync {
+    /// Full dimension `n`.
+    fn full_dim(&self) -> usize;
+    /// Reduced dimension `m`.
+    fn reduced_dim(&self) -> usize;
+    /// Rows `indices` (each `< n`) as an `indices.len() × m` row-major matrix.
+    fn rows(&self, indices: &[usize]) -> Result<Tensor, ReduceError>;
+}
+
+impl BasisRows for Basis {
+    fn full_dim(&self) -> usize {
+        Basis::full_dim(self)
+    }
+    fn reduced_dim(&self) -> usize {
+        Basis::reduced_dim(self)
+    }
+    fn rows(&self, indices: &[usize]) -> Result<Tensor, ReduceError> {
+        let m = Basis::reduced_dim(self);
+        let data = self.matrix().data();
+        let mut out = Vec::with_capacity(indices.len() * m);
+        for &i in indices {
+            out.extend_from_slice(&data[i * m..(i + 1) * m]);
+        }
+        Ok(Tensor::from_vec(&[indices.len(), m], out).expect("shape matches"))
+    }
+}
+
+/// A sparse tensor produced a chunk of entries at a time (every entry in exactly one chunk;
+/// each chunk a [`SparseTensor`] of the full shape, with the tensor's symmetric groups).
+pub trait TensorChunks: Send + Sync {
+    /// The full shape.
+    fn shape(&self) -> Vec<usize>;
+    /// Number of chunks.
+    fn chunks(&self) -> usize;
+    /// The entries of chunk `c`.
+    fn chunk(&self, c: usize) -> SparseTensor;
+
+    /// Every chunk in one tensor (for the full-space evaluation of small cases).
+    fn to_sparse(&self) -> SparseTensor {
+        let shape = self.shape();
+        let mut coords = Vec::new();
+        let mut values = Vec::new();
+        let mut groups = Vec::new();
+        for c in 0..self.chunks() {
+            let t = self.chunk(c);
+            coords.extend_from_slice(t.coords());
+            values.extend_from_slice(t.values());
+            groups = t.symmetric_groups().to_vec();
+        }
+        let mut out = SparseTensor::from_coords("chunked tensor", &shape, coords, values)
+            .expect("chunks hold valid entries");
+        for g in groups {
+            out = out.with_symmetric_axes(&g).expect("the chunks' own groups");
+        }
+        out
+    }
+}
+
+/// `Q̂` of a chunked tensor against bases given by rows (one per axis, in axis order), on the
+/// CPU. `progress` is called with (chunks done, chunks) after each chunk.
+pub fn premultiply_streamed(
+    name: &str,
+    q: &dyn TensorChunks,
+    bases: &[&dyn BasisRows],
+    options: PremultiplyOptions<'_>,
+) -> Result<Tensor, ReduceError> {
+    let shape = q.shape();
+    let context = || format!("premultiplying `{name}` in chunks");
+    if bases.len() != shape.len() {
+        return Err(ReduceError::BadBasis {
+            basis: name.to_string(),
+            detail: format!("{} bases for a tensor of order {}", bases.len(), shape.len()),
+        });
+    }
+    for (axis, (b, &n)) in bases.iter().zip(&shape).enumerate() {
+        if b.full_dim() != n {
+            return Err(ReduceError::BadBasis {
+                basis: name.to_string(),
+                detail: format!("axis {axis} has length {n}, its basis {} full dimensions", b.full_dim()),
+            });
+        }
+    }
+    let reduced: Vec<usize> = bases.iter().map(|b| b.reduced_dim()).collect();
+    let mut total = Tensor::zeros(&reduced);
+    let chunks = q.chunks();
+    let inner = PremultiplyOptions { progress: None, ..options };
+    for c in 0..chunks {
+        let part = q.chunk(c);
+        if part.nnz() > 0 {
+            let (local, rows) = localise(&part, bases)?;
+            let refs: Vec<&Tensor> = rows.iter().collect();
+            let (y, _) = premultiply_sparse_with(&local, &refs, inner)
+                .map_err(|source| ReduceError::Tensor { context: context(), source })?;
+            for (t, v) in total.data_mut().iter_mut().zip(y.data()) {
+                *t += v;
+            }
+        }
+        if let Some(p) = options.progress {
+            p((c + 1) as f64, chunks as f64);
+        }
+    }
+    Ok(total)
+}
+
+/// A chunk as a tensor over its own distinct coordinates (ascending per axis; one shared list
+/// per symmetric group, so sorted group indices stay sorted), with the matching basis rows.
+fn localise(
+    part: &SparseTensor,
+    bases: &[&dyn BasisRows],
+) -> Result<(SparseTensor, Vec<Tensor>), ReduceError> {
+    let order = part.order();
+    let groups = part.symmetric_groups().to_vec();
+    // Axes sharing one list: each symmetric group, then every other axis alone.
+    let mut sets: Vec<Vec<usize>> = groups.clone();
+    for a in 0..order {
+        if !groups.iter().any(|g| g.contains(&a)) {
+            sets.push(vec![a]);
+        }
+    }
+    let mut maps: Vec<HashMap<u32, u32>> = vec![HashMap::new(); order];
+    let mut lists: Vec<Vec<usize>> = vec![Vec::new(); order];
+    for set in &sets {
+        let mut distinct: Vec<u32> =
+            part.coords().chunks_exact(order).flat_map(|c| set.iter().map(move |&a| c[a])).collect();
+        distinct.sort_unstable();
+        distinct.dedup();
+        let map: HashMap<u32, u32> = distinct.iter().enumerate().map(|(l, &i)| (i, l as u32)).collect();
+        for &a in set {
+            maps[a] = map.clone();
+            lists[a] = distinct.iter().map(|&i| i as usize).collect();
+        }
+    }
+    let coords: Vec<u32> = part
+        .coords()
+        .chunks_exact(order)
+        .flat_map(|c| (0..order).map(|a| maps[a][&c[a]]).collect::<Vec<_>>())
+        .collect();
+    let shape: Vec<usize> = lists.iter().map(Vec::len).collect();
+    let mut local = SparseTensor::from_coords("chunk", &shape, coords, part.values().to_vec())
+        .map_err(|source| ReduceError::Tensor { context: "localising a chunk".into(), source })?;
+    for g in &groups {
+        local = local
+            .with_symmetric_axes(g)
+            .map_err(|source| ReduceError::Tensor { context: "localising a chunk".into(), source })?;
+    }
+    let rows = lists.iter().zip(bases).map(|(l, b)| b.rows(l)).collect::<Result<Vec<_>, _>>()?;
+    Ok((local, rows))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::reduce::premultiply_sparse;
+
+    struct Split(SparseTensor, usize);
+
+    impl TensorChunks for Split {
+        fn shape(&self) -> Vec<usize> {
+            self.0.shape().to_vec()
+        }
+        fn chunks(&self) -> usize {
+            self.1
+        }
+        fn chunk(&self, c: usize) -> SparseTensor {
+            let n = self.0.nnz();
+            let (lo, hi) = (c * n / self.1, (c + 1) * n / self.1);
+            let o = self.0.order();
+            let mut t = SparseTensor::from_coords(
+                "part",
+                self.0.shape(),
+                self.0.coords()[lo * o..hi * o].to_vec(),
+                self.0.values()[lo..hi].to_vec(),
+            )
+            .unwrap();
+            for g in self.0.symmetric_groups() {
+                t = t.with_symmetric_axes(g).unwrap();
+            }
+            t
+        }
+    }
+
+    fn basis(n: usize, m: usize, seed: u64) -> Basis {
+        let mut s = seed;
+        let data: Vec<f64> = (0..n * m)
+            .map(|_| {
+                s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+                (s >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+            })
+            .collect();
+        Basis::orthonormalize("random", &Tensor::from_vec(&[n, m], data).unwrap()).unwrap()
+    }
+
+    /// Chunked against whole, with a symmetric group, repeated coordinates across chunks and
+    /// an axis whose coordinates reach outside each chunk's range.
+    #[test]
+    fn chunks_sum_to_the_whole_premultiplication() {
+        let (n, g) = (40, 9);
+        let mut q = SparseTensor::new(&[n, g, g, n]).with_symmetric_axes(&[1, 2]).unwrap();
+        let mut s = 7u64;
+        for k in 0..400 {
+            s = s.wrapping_mul(6364136223846793005).wrapping_add(1);
+            let r = (s >> 33) as usize;
+            q.push(&[k % n, r % g, (r / g) % g, (r / 97) % n], ((r % 1000) as f64 - 500.0) / 250.0);
+        }
+        let (b0, b1, b3) = (basis(n, 5, 1), basis(g, 4, 2), basis(n, 3, 3));
+        let whole = premultiply_sparse(&q, &[b0.matrix(), b1.matrix(), b1.matrix(), b3.matrix()]).unwrap();
+        for chunks in [1, 3, 17] {
+            let streamed = premultiply_streamed(
+                "q",
+                &Split(q.clone(), chunks),
+                &[&b0, &b1, &b1, &b3],
+                PremultiplyOptions::default(),
+            )
+            .unwrap();
+            assert!(streamed.max_abs_diff(&whole) < 1e-12 * whole.max_abs(), "{chunks} chunks");
+        }
+        assert!(Split(q.clone(), 5).to_sparse().to_dense().max_abs_diff(&q.to_dense()) == 0.0);
+    }
+}
