@@ -26,15 +26,16 @@
 //! `r` stays `R ⊗ g ⊗ g`). Diagonal pairs (`i = j`) have no entries: `s`, `r`, `h` are 0 there
 //! and the core's diagonal inverse maps 0/0 to 0.
 //!
-//! Sizes: `S` has 18 entries per pair and `R` (stored symmetric in its geometry axes) up to 117, so the tensors here are for scenes
-//! of a few hundred faces (the tests, and the reduction's premultiplication, which streams
-//! pairs in chunks rather than building them whole).
+//! Sizes: `S` has 18 entries per pair and `R` (stored symmetric in its geometry axes) up to
+//! 117 — 2.9·10⁹ entries at 5,000 faces — so the pair tensors are never built whole: they are
+//! streamed, a few faces' rows of pairs at a time, and premultiplied chunk by chunk.
 
 use std::f64::consts::PI;
+use std::sync::Arc;
 
 use super::form_factor::NearField;
 use super::mesh::SceneMesh;
-use crate::reduce::{Expr, Model};
+use crate::reduce::{Expr, Model, StreamedTensor, TensorChunks};
 use crate::tensor::SparseTensor;
 
 /// `n = N ⊗₁ g ⊗₂ g`.
@@ -61,12 +62,13 @@ pub fn radiosity() -> Expr {
 }
 
 /// Table 2's tensors for `mesh`'s topology and albedo, as a model computing `output`
-/// ([`form_factors`] or [`radiosity`]); inputs `g`, `v` and `e`.
+/// ([`form_factors`] or [`radiosity`]); inputs `g`, `v` and `e`. The per-face tensors (`N`,
+/// `A`, `I`) are stored; the pair tensors (`S`, `R`, `H`, `C`, `D`, `P`, `E`) are streamed,
+/// generated a few faces' rows of pairs at a time ([`PairTensor`]), so the model of a
+/// 5,000-face scene is small until it is premultiplied.
 pub fn table2_model(mesh: &SceneMesh, near: NearField, output: Expr) -> Model {
     let n = mesh.len();
-    let nv = mesh.vertices.len();
-    let pairs = n * n;
-    let (n3, g3) = (3 * n, 3 * nv);
+    let (n3, g3) = (3 * n, 3 * mesh.vertices.len());
     let faces = &mesh.faces;
 
     let mut tn = SparseTensor::new(&[n3, g3, g3]);
@@ -80,96 +82,162 @@ pub fn table2_model(mesh: &SceneMesh, near: NearField, output: Expr) -> Model {
             }
         }
     }
-
-    let mut ts = SparseTensor::new(&[pairs, n3, g3]);
-    // R is symmetric in its two geometry axes: one entry per unordered pair of indices.
-    let mut tr = SparseTensor::new(&[pairs, g3, g3]).with_symmetric_axes(&[1, 2]).expect("two equal axes");
-    let mut th = SparseTensor::new(&[pairs, pairs, pairs]);
-    let mut tc = SparseTensor::new(&[pairs, pairs, pairs]);
-    let mut td = SparseTensor::new(&[pairs, pairs, pairs]);
-    let mut tp = SparseTensor::new(&[pairs, pairs, n]);
-    let near_c = 1.0 / (16.0 * PI);
-    for i in 0..n {
-        for j in 0..n {
-            let k = n * i + j;
-            tp.push(&[k, k, i], 1.0);
-            if i == j {
-                continue;
-            }
-            // c_j − c_i = Σ_v w_v g_v.
-            let mut w: Vec<(usize, f64)> = Vec::with_capacity(6);
-            for (face, sign) in [(j, 1.0 / 3.0), (i, -1.0 / 3.0)] {
-                for &v in &faces[face] {
-                    match w.iter_mut().find(|(u, _)| *u == v as usize) {
-                        Some(e) => e.1 += sign,
-                        None => w.push((v as usize, sign)),
-                    }
-                }
-            }
-            for a in 0..3 {
-                for &(v, wv) in &w {
-                    if wv != 0.0 {
-                        ts.push(&[k, 3 * i + a, 3 * v + a], wv);
-                        for &(u, wu) in &w {
-                            if wu != 0.0 && u >= v {
-                                tr.push(&[k, 3 * v + a, 3 * u + a], wv * wu);
-                            }
-                        }
-                    }
-                }
-                if near == NearField::Regularised {
-                    for face in [i, j] {
-                        let [v0, v1, v2] = faces[face].map(|v| v as usize);
-                        for (p, q) in [(v0, v1), (v1, v2), (v2, v0)] {
-                            tr.push(&[k, 3 * p + a, 3 * p + a], near_c);
-                            tr.push(&[k, 3 * q + a, 3 * q + a], near_c);
-                            tr.push(&[k, 3 * p + a, 3 * q + a], -near_c);
-                        }
-                    }
-                }
-            }
-            th.push(&[k, k, k], 1.0);
-            tc.push(&[k, k, n * j + i], 1.0 / (2.0 * PI));
-            td.push(&[k, k, k], 1.0);
-        }
-    }
-
     let mut ta = SparseTensor::new(&[n, n3, n3]);
     for i in 0..n {
         for a in 0..3 {
             ta.push(&[i, 3 * i + a, 3 * i + a], 1.0);
         }
     }
-    let mut te = SparseTensor::new(&[3 * n, 3 * n, pairs]);
     let mut ti = SparseTensor::new(&[3 * n, 3 * n]);
     for c in 0..3 {
         for i in 0..n {
             ti.push(&[c * n + i, c * n + i], 1.0);
-            let rho = mesh.albedo[i][c];
-            if rho != 0.0 {
-                for j in 0..n {
-                    if i != j {
-                        te.push(&[c * n + i, c * n + j, n * i + j], rho);
-                    }
-                }
-            }
         }
     }
-
+    let topology = Arc::new(PairTopology {
+        faces: faces.clone(),
+        albedo: mesh.albedo.clone(),
+        vertices: mesh.vertices.len(),
+        near,
+    });
+    let pair = |kind| StreamedTensor::new(Arc::new(PairTensor { kind, topology: topology.clone() }));
     Model::new(output)
         .with_tensor("N", &["n", "g", "g"], tn)
-        .with_tensor("S", &["sh", "n", "g"], ts)
-        .with_tensor("R", &["r", "g", "g"], tr)
-        .with_tensor("H", &["sh", "sh", "r"], th)
-        .with_tensor("C", &["c", "sh", "sh"], tc)
-        .with_tensor("D", &["dp", "c", "v"], td)
+        .with_tensor("S", &["sh", "n", "g"], pair(PairKind::S))
+        .with_tensor("R", &["r", "g", "g"], pair(PairKind::R))
+        .with_tensor("H", &["sh", "sh", "r"], pair(PairKind::H))
+        .with_tensor("C", &["c", "sh", "sh"], pair(PairKind::C))
+        .with_tensor("D", &["dp", "c", "v"], pair(PairKind::D))
         .with_tensor("A", &["a", "n", "n"], ta)
-        .with_tensor("P", &["dp", "dp", "a"], tp)
-        .with_tensor("E", &["b", "b", "dp"], te)
+        .with_tensor("P", &["dp", "dp", "a"], pair(PairKind::P))
+        .with_tensor("E", &["b", "b", "dp"], pair(PairKind::E))
         .with_tensor("I", &["b", "b"], ti)
         .with_input("g", "g")
         .with_input("v", "v")
         .with_input("e", "b")
+}
+
+/// What the pair tensors are made of: the scene's faces and albedo.
+struct PairTopology {
+    faces: Vec<[u32; 3]>,
+    albedo: Vec<[f64; 3]>,
+    vertices: usize,
+    near: NearField,
+}
+
+/// Which of Table 2's pair tensors.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum PairKind {
+    S,
+    R,
+    H,
+    C,
+    D,
+    P,
+    E,
+}
+
+/// Pairs per chunk a pair tensor aims for (a whole number of faces' rows, at least one).
+const PAIRS_PER_CHUNK: usize = 1 << 14;
+
+/// One of Table 2's pair tensors, a chunk of whole rows `i` of pairs `k = n·i + j` at a time.
+pub struct PairTensor {
+    kind: PairKind,
+    topology: Arc<PairTopology>,
+}
+
+impl PairTensor {
+    fn faces_per_chunk(&self) -> usize {
+        (PAIRS_PER_CHUNK / self.topology.faces.len().max(1)).max(1)
+    }
+}
+
+impl TensorChunks for PairTensor {
+    fn shape(&self) -> Vec<usize> {
+        let n = self.topology.faces.len();
+        let (pairs, n3, g3) = (n * n, 3 * n, 3 * self.topology.vertices);
+        match self.kind {
+            PairKind::S => vec![pairs, n3, g3],
+            PairKind::R => vec![pairs, g3, g3],
+            PairKind::H | PairKind::C | PairKind::D => vec![pairs; 3],
+            PairKind::P => vec![pairs, pairs, n],
+            PairKind::E => vec![n3, n3, pairs],
+        }
+    }
+
+    fn chunks(&self) -> usize {
+        self.topology.faces.len().div_ceil(self.faces_per_chunk())
+    }
+
+    fn chunk(&self, chunk: usize) -> SparseTensor {
+        let t = &self.topology;
+        let (faces, n) = (&t.faces, t.faces.len());
+        let rows = chunk * self.faces_per_chunk()..((chunk + 1) * self.faces_per_chunk()).min(n);
+        let mut out = SparseTensor::new(&self.shape());
+        if self.kind == PairKind::R {
+            // R is symmetric in its two geometry axes: one entry per unordered pair of indices.
+            out = out.with_symmetric_axes(&[1, 2]).expect("two equal axes");
+        }
+        let near_c = 1.0 / (16.0 * PI);
+        for i in rows {
+            for j in 0..n {
+                let k = n * i + j;
+                match self.kind {
+                    PairKind::P => out.push(&[k, k, i], 1.0),
+                    _ if i == j => {}
+                    PairKind::H | PairKind::D => out.push(&[k, k, k], 1.0),
+                    PairKind::C => out.push(&[k, k, n * j + i], 1.0 / (2.0 * PI)),
+                    PairKind::E => {
+                        for c in 0..3 {
+                            let rho = t.albedo[i][c];
+                            if rho != 0.0 {
+                                out.push(&[c * n + i, c * n + j, k], rho);
+                            }
+                        }
+                    }
+                    PairKind::S | PairKind::R => {
+                        // c_j − c_i = Σ_v w_v g_v.
+                        let mut w: Vec<(usize, f64)> = Vec::with_capacity(6);
+                        for (face, sign) in [(j, 1.0 / 3.0), (i, -1.0 / 3.0)] {
+                            for &v in &faces[face] {
+                                match w.iter_mut().find(|(u, _)| *u == v as usize) {
+                                    Some(e) => e.1 += sign,
+                                    None => w.push((v as usize, sign)),
+                                }
+                            }
+                        }
+                        for a in 0..3 {
+                            for &(v, wv) in &w {
+                                if wv == 0.0 {
+                                    continue;
+                                }
+                                if self.kind == PairKind::S {
+                                    out.push(&[k, 3 * i + a, 3 * v + a], wv);
+                                    continue;
+                                }
+                                for &(u, wu) in &w {
+                                    if wu != 0.0 && u >= v {
+                                        out.push(&[k, 3 * v + a, 3 * u + a], wv * wu);
+                                    }
+                                }
+                            }
+                            if self.kind == PairKind::R && t.near == NearField::Regularised {
+                                for face in [i, j] {
+                                    let [v0, v1, v2] = faces[face].map(|v| v as usize);
+                                    for (p, q) in [(v0, v1), (v1, v2), (v2, v0)] {
+                                        out.push(&[k, 3 * p + a, 3 * p + a], near_c);
+                                        out.push(&[k, 3 * q + a, 3 * q + a], near_c);
+                                        out.push(&[k, 3 * p + a, 3 * q + a], -near_c);
+                                    }
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        out
+    }
 }
 
 /// The emission stacked by channel (`e[c·n + i]`), the layout of [`radiosity`]'s `e` and `b`.

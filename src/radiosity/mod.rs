@@ -21,6 +21,7 @@ pub mod obj;
 pub mod reduced;
 pub mod render;
 pub mod scene;
+pub mod snapshots;
 pub mod solve;
 pub mod train;
 #[cfg(feature = "viewer")]

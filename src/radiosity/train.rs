@@ -1,9 +1,15 @@
 //! Training the reduced radiosity (seed 000 §8.2, §9): sample the design space, solve the full
-//! radiosity of every sample, PCA every intermediate quantity of Table 2 (streamed a block of
-//! rows at a time, the pair quantities regenerated from each sample's face geometry and
-//! visibility bits rather than stored), merge the bases that must agree (`B_s = B_h`,
-//! `B_d = B_p`, `B_e = B_b`), premultiply every tensor of [`super::chain`] with the core, and
-//! precompute the learned visibility's `B_gᵀ G` and `B_vᵀ V` (§8.3).
+//! radiosity of every sample, PCA every intermediate quantity of Table 2, merge the bases that
+//! must agree (`B_s = B_h`, `B_d = B_p`, `B_e = B_b`), premultiply every tensor of
+//! [`super::chain`] with the core, and precompute the learned visibility's `B_gᵀ G` and
+//! `B_vᵀ V` (§8.3).
+//!
+//! Nothing of size `n²` is ever held: the pair quantities are regenerated a block of pairs at a
+//! time from each sample's face geometry and visibility bits ([`super::snapshots`]); their PCA
+//! bases are kept as snapshot coefficients ([`crate::reduce::SnapshotBasis`]) — one pass over
+//! the pairs for the Gram matrices, one to orthonormalise and merge the modes — and the pair
+//! tensors are premultiplied chunk by chunk against basis rows regenerated on demand. The
+//! per-face quantities (`g`, `n`, `a`, `e`, `b`) use the stored PCA.
 //!
 //! The paper: 540 samples (the extremes of each axis and interior samples), 99.9 % of the
 //! energy of each quantity with at most 60 vectors, one 120-vector basis for `e` and `b`.
@@ -14,15 +20,19 @@ use rayon::prelude::*;
 
 use super::chain::{radiosity as radiosity_expr, stack_channels, table2_model};
 use super::error::RadiosityError;
-use super::form_factor::{form_factors, squared_distance, NearField};
+use super::form_factor::{form_factors, NearField};
 use super::lighting::emission;
 use super::mesh::{FaceGeometry, SceneMesh};
 use super::reduced::{ReducedRadiosity, SkyLight};
 use super::scene::{LightMode, Lights, SceneSpec};
+use super::snapshots::{pair_values, PairSnapshots, PAIR_QUANTITIES};
 use super::solve::{solve_jacobi, Rgb};
 use super::visibility::LearnedVisibility;
 use super::{JACOBI_MAX_SWEEPS, JACOBI_TOLERANCE};
-use crate::reduce::{pca, Bases, Basis, ReduceError, ReduceOptions, SnapshotFn, Truncation};
+use crate::reduce::{
+    basis_grams, pca, snapshot_grams, Bases, Basis, BasisRows, ReduceError, ReduceOptions, SnapshotBasis,
+    SnapshotFn, SnapshotRows, Truncation,
+};
 use crate::tensor::Tensor;
 
 /// A family of meshes of one topology over a box of design parameters.
@@ -268,50 +278,23 @@ impl Quantity {
     pub fn value(self, c: &Configuration, k: usize, near: NearField) -> f64 {
         let g = &c.geometry;
         let n = g.areas.len();
-        let pair = |k: usize| (k / n, k % n);
-        let h = |k: usize| {
-            let (i, j) = pair(k);
-            if i == j {
-                return 0.0;
-            }
-            let (s, _) = super::form_factor::scaled_cosines(g, i, j);
-            s / squared_distance(g, i, j, near)
-        };
-        let cf = |k: usize| {
-            let (i, j) = pair(k);
-            h(k) * h(n * j + i) / (2.0 * std::f64::consts::PI)
-        };
         match self {
             Quantity::G => c.g[k],
             Quantity::N => g.normals[k / 3][k % 3],
             Quantity::A => g.normals[k].length_squared(),
             Quantity::E => c.emission[k % n][k / n],
             Quantity::B => c.radiosity[k % n][k / n],
-            Quantity::S => {
-                let (i, j) = pair(k);
-                if i == j {
-                    0.0
-                } else {
-                    super::form_factor::scaled_cosines(g, i, j).0
-                }
-            }
-            Quantity::R => {
-                let (i, j) = pair(k);
-                if i == j {
-                    0.0
-                } else {
-                    squared_distance(g, i, j, near)
-                }
-            }
-            Quantity::H => h(k),
-            Quantity::C => cf(k),
-            Quantity::V => f64::from(u8::from(c.visible(k))),
-            Quantity::D => cf(k) * f64::from(u8::from(c.visible(k))),
-            Quantity::P => {
-                let (i, _) = pair(k);
-                cf(k) * f64::from(u8::from(c.visible(k))) / g.normals[i].length()
+            pair => {
+                let slot =
+                    PAIR_QUANTITIES.iter().position(|&q| q == pair).expect("the rest are pair quantities");
+                pair_values(c, k / n, k % n, near)[slot]
             }
         }
+    }
+
+    /// Whether it lives on pairs of faces (`n²` values).
+    pub fn is_pair(self) -> bool {
+        PAIR_QUANTITIES.contains(&self)
     }
 }
 
@@ -359,75 +342,114 @@ pub fn train(
     let vertices = first.g.len() / 3;
     let reduce_err = |e: ReduceError| RadiosityError::Solve(e.to_string());
     let mut report = TrainingReport { bases: Vec::new(), merged: Vec::new() };
-    let mut pcas: std::collections::BTreeMap<&str, Basis> = std::collections::BTreeMap::new();
+    let truncation = |q: Quantity| Truncation {
+        energy: options.energy,
+        max_modes: if matches!(q, Quantity::E | Quantity::B) {
+            options.radiosity_cap / 2
+        } else {
+            options.cap
+        },
+        centred: true,
+    };
+    // Pair quantities: one pass over blocks of pairs for every Gram matrix (and the cross
+    // terms of the two merges), the bases kept as snapshot coefficients.
+    let pairs = PairSnapshots::new(configurations, options.near);
+    let sources: Vec<_> =
+        PAIR_QUANTITIES.iter().map(|&q| pairs.quantity(q).expect("a pair quantity")).collect();
+    let refs: Vec<&dyn SnapshotRows> = sources.iter().map(|s| s as &dyn SnapshotRows).collect();
+    let slot = |q: Quantity| PAIR_QUANTITIES.iter().position(|&p| p == q).expect("a pair quantity");
+    let mut wanted: Vec<(usize, usize)> = (0..PAIR_QUANTITIES.len()).map(|i| (i, i)).collect();
+    wanted.push((slot(Quantity::S), slot(Quantity::H)));
+    wanted.push((slot(Quantity::D), slot(Quantity::P)));
+    let gram_progress = |done: f64, total: f64| progress("gram", done as u64, total as u64);
+    let grams = snapshot_grams(&refs, &wanted, Some(&gram_progress)).map_err(reduce_err)?;
+    let mut pair_bases: std::collections::BTreeMap<&str, SnapshotBasis<'_>> =
+        std::collections::BTreeMap::new();
+    let mut stored: std::collections::BTreeMap<&str, Basis> = std::collections::BTreeMap::new();
     for (qi, q) in Quantity::ALL.iter().enumerate() {
         progress("pca", qi as u64, Quantity::ALL.len() as u64);
-        let cap =
-            if matches!(q, Quantity::E | Quantity::B) { options.radiosity_cap / 2 } else { options.cap };
-        let mut source = SnapshotFn {
-            dim: q.dim(n, vertices),
-            count: configurations.len(),
-            rows: |rows: Range<usize>| snapshot_rows(*q, configurations, rows, options.near),
+        let (vectors, energy) = if q.is_pair() {
+            let i = slot(*q);
+            let (basis, spectrum) =
+                SnapshotBasis::pca(q.name(), refs[i], &grams[i], truncation(*q)).map_err(reduce_err)?;
+            let m = basis.reduced_dim();
+            pair_bases.insert(q.name(), basis);
+            (m, spectrum.energy)
+        } else {
+            let mut source = SnapshotFn {
+                dim: q.dim(n, vertices),
+                count: configurations.len(),
+                rows: |rows: Range<usize>| snapshot_rows(*q, configurations, rows, options.near),
+            };
+            let p = pca(q.name(), &mut source, truncation(*q)).map_err(reduce_err)?;
+            let m = p.basis.reduced_dim();
+            stored.insert(q.name(), p.basis);
+            (m, p.energy)
         };
-        let result =
-            pca(q.name(), &mut source, Truncation { energy: options.energy, max_modes: cap, centred: true });
-        let basis = match result {
-            Ok(p) => {
-                report.bases.push((
-                    q.name().to_string(),
-                    q.dim(n, vertices),
-                    p.basis.reduced_dim(),
-                    p.energy,
-                ));
-                p.basis
-            }
-            Err(e) => return Err(reduce_err(e)),
-        };
-        pcas.insert(q.name(), basis);
+        report.bases.push((q.name().to_string(), q.dim(n, vertices), vectors, energy));
     }
     progress("pca", Quantity::ALL.len() as u64, Quantity::ALL.len() as u64);
-    let merge = |name: &str, a: &str, b: &str| Basis::merge(name, &pcas[a], &pcas[b]).map_err(reduce_err);
+    // A second pass: the Gram matrices of the modes themselves, to orthonormalise and merge
+    // them to rounding.
+    let order: Vec<&str> = PAIR_QUANTITIES.iter().map(|q| q.name()).collect();
+    let rows: Vec<&dyn BasisRows> = order.iter().map(|q| &pair_bases[q] as &dyn BasisRows).collect();
+    let own_progress = |done: f64, total: f64| progress("orthonormalise", done as u64, total as u64);
+    let own = basis_grams(&rows, &wanted, Some(&own_progress)).map_err(reduce_err)?;
+    let merge_pairs = |name: &str, a: Quantity, b: Quantity, cross: &Tensor| {
+        let (a, b) = (slot(a), slot(b));
+        SnapshotBasis::merge(name, (&pair_bases[order[a]], &own[a]), (&pair_bases[order[b]], &own[b]), cross)
+            .map_err(reduce_err)
+    };
+    let sh = merge_pairs("sh", Quantity::S, Quantity::H, &own[PAIR_QUANTITIES.len()])?;
+    let dp = merge_pairs("dp", Quantity::D, Quantity::P, &own[PAIR_QUANTITIES.len() + 1])?;
+    let mut finished: std::collections::BTreeMap<&str, SnapshotBasis<'_>> = std::collections::BTreeMap::new();
+    for name in ["r", "c", "v"] {
+        let i = order.iter().position(|q| *q == name).expect("a pair quantity");
+        let basis =
+            pair_bases.remove(name).expect("made above").orthonormalized(&own[i]).map_err(reduce_err)?;
+        finished.insert(name, basis);
+    }
     let mut bases = Bases::new();
-    for name in ["g", "n", "r", "c", "v", "a"] {
-        bases.insert(name.to_string(), pcas[name].clone());
+    for name in ["g", "n", "a"] {
+        bases.insert(name.to_string(), stored[name].clone());
     }
-    bases.insert("sh".into(), merge("sh", "s", "h")?);
-    bases.insert("dp".into(), merge("dp", "d", "p")?);
-    bases.insert("b".into(), merge("b", "e", "b")?);
-    for name in ["sh", "dp", "b"] {
-        report.merged.push((name.to_string(), bases[name].reduced_dim()));
+    bases.insert("b".into(), Basis::merge("b", &stored["e"], &stored["b"]).map_err(reduce_err)?);
+    let mut row_bases: std::collections::BTreeMap<String, &dyn BasisRows> = std::collections::BTreeMap::new();
+    row_bases.insert("sh".into(), &sh);
+    row_bases.insert("dp".into(), &dp);
+    for name in ["r", "c", "v"] {
+        row_bases.insert(name.into(), &finished[name]);
     }
-    // Premultiply Table 2's tensors (topology and albedo: any configuration's mesh).
+    report.merged.push(("sh".into(), sh.reduced_dim()));
+    report.merged.push(("dp".into(), dp.reduced_dim()));
+    report.merged.push(("b".into(), bases["b"].reduced_dim()));
+    // Premultiply Table 2's tensors (topology and albedo: any configuration's mesh); the pair
+    // tensors chunk by chunk against basis rows regenerated from the snapshots.
     let mesh = space.mesh(&first.params)?;
     let model = table2_model(&mesh, options.near, radiosity_expr());
     let premultiply_progress = |done: f64, total: f64| progress("premultiply", done as u64, total as u64);
     let mut reduced = model
-        .reduce_with(
+        .reduce_with_rows(
             &bases,
+            &row_bases,
             &ReduceOptions { progress: Some(&premultiply_progress), ..ReduceOptions::default() },
         )
         .map_err(reduce_err)?;
     // The visibility is always given reduced (Eq. 17): its n²-row basis stays out of the model.
     reduced.forget_input_basis("v").map_err(reduce_err)?;
-    // The learned visibility: B_gᵀ G and B_vᵀ V.
+    // The learned visibility: B_gᵀ G, and B_vᵀ V from the visibility's Gram matrix.
     let t = configurations.len();
-    let (bg, bv) = (&bases["g"], &bases["v"]);
+    let bg = &bases["g"];
     let mut gt = vec![0.0; bg.reduced_dim() * t];
-    let mut vt = vec![0.0; bv.reduced_dim() * t];
     for (c, conf) in configurations.iter().enumerate() {
         for (i, x) in bg.project(&conf.g).into_iter().enumerate() {
             gt[i * t + c] = x;
         }
-        let v: Vec<f64> = (0..n * n).map(|k| f64::from(u8::from(conf.visible(k)))).collect();
-        for (i, x) in bv.project(&v).into_iter().enumerate() {
-            vt[i * t + c] = x;
-        }
     }
-    let learned = LearnedVisibility::new(
-        Tensor::from_vec(&[bg.reduced_dim(), t], gt).expect("shape matches"),
-        Tensor::from_vec(&[bv.reduced_dim(), t], vt).expect("shape matches"),
-    )
-    .map_err(|e| RadiosityError::Solve(e.to_string()))?;
+    let vt = finished["v"].project_snapshots(&grams[slot(Quantity::V)]).map_err(reduce_err)?;
+    let learned =
+        LearnedVisibility::new(Tensor::from_vec(&[bg.reduced_dim(), t], gt).expect("shape matches"), vt)
+            .map_err(|e| RadiosityError::Solve(e.to_string()))?;
     let emission_hat = bases["b"].project(&stack_channels(&first.emission));
     // Sky lighting: the face–opening visibility of every configuration, for the run time's
     // direct light.

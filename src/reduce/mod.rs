@@ -31,11 +31,11 @@ pub use error::ReduceError;
 pub use expr::Expr;
 pub use file::{FORMAT, VERSION};
 pub use gpu_eval::{Backend, GpuReducedModel};
-pub use model::{FullTensor, Model, ReduceOptions, TensorDecl};
+pub use model::{FullTensor, Model, ReduceOptions, StreamedTensor, TensorDecl};
 pub use pca::{pca, pca_with, Pca, SnapshotFile, SnapshotFn, SnapshotSource, Truncation};
 pub use premultiply::{
     premultiply_dense, premultiply_sparse, premultiply_sparse_gpu, premultiply_sparse_with,
     premultiply_streamed, BasisRows, PremultiplyOptions, PremultiplyPlan, TensorChunks, Unit,
 };
 pub use reduced::ReducedModel;
-pub use snapshot_basis::{snapshot_grams, SnapshotBasis, SnapshotRows, Spectrum};
+pub use snapshot_basis::{basis_grams, snapshot_grams, SnapshotBasis, SnapshotRows, Spectrum};

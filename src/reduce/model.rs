@@ -2,14 +2,16 @@
 //! inputs, and the composition [`Expr`] that computes the output.
 
 use std::collections::BTreeMap;
+use std::sync::{Arc, OnceLock};
 
-use super::basis::Bases;
+use super::basis::{Bases, Basis};
 use super::error::ReduceError;
 use super::eval::{evaluate, signature, Operands, Value};
 use super::expr::Expr;
 use super::gpu_eval::Backend;
 use super::premultiply::{
-    premultiply_dense, premultiply_sparse_gpu, premultiply_sparse_with, PremultiplyOptions,
+    premultiply_dense, premultiply_sparse_gpu, premultiply_sparse_with, premultiply_streamed, BasisRows,
+    PremultiplyOptions, TensorChunks,
 };
 use super::reduced::{ReducedModel, ReducedTensor};
 use crate::gpu::Gpu;
@@ -26,13 +28,16 @@ pub struct ReduceOptions<'a> {
     pub progress: Option<&'a (dyn Fn(f64, f64) + Sync)>,
 }
 
-/// A full-space tensor: dense (small) or sparse (what real models have).
+/// A full-space tensor: dense (small) or sparse (what real models have), or streamed (too
+/// large to hold: produced a chunk of entries at a time and premultiplied chunk by chunk).
 #[derive(Clone, Debug, PartialEq)]
 pub enum FullTensor {
     /// Dense.
     Dense(Tensor),
     /// Coordinate list.
     Sparse(SparseTensor),
+    /// Chunks of a coordinate list, generated on demand.
+    Streamed(StreamedTensor),
 }
 
 impl FullTensor {
@@ -41,7 +46,54 @@ impl FullTensor {
         match self {
             Self::Dense(t) => t.shape(),
             Self::Sparse(s) => s.shape(),
+            Self::Streamed(s) => &s.shape,
         }
+    }
+}
+
+/// A sparse tensor given by its chunks ([`TensorChunks`]). The reduction premultiplies it a
+/// chunk at a time ([`premultiply_streamed`]); a full-space evaluation (for models small
+/// enough to check in the full space) gathers the chunks once into one coordinate list.
+#[derive(Clone)]
+pub struct StreamedTensor {
+    shape: Vec<usize>,
+    chunks: Arc<dyn TensorChunks>,
+    whole: Arc<OnceLock<SparseTensor>>,
+}
+
+impl StreamedTensor {
+    /// Wraps `chunks`.
+    pub fn new(chunks: Arc<dyn TensorChunks>) -> Self {
+        Self { shape: chunks.shape(), chunks, whole: Arc::new(OnceLock::new()) }
+    }
+
+    /// The chunks.
+    pub fn chunks(&self) -> &dyn TensorChunks {
+        self.chunks.as_ref()
+    }
+
+    /// Every chunk in one coordinate list, gathered on first use.
+    pub fn whole(&self) -> &SparseTensor {
+        self.whole.get_or_init(|| self.chunks.to_sparse())
+    }
+}
+
+impl std::fmt::Debug for StreamedTensor {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "StreamedTensor {{ shape: {:?}, chunks: {} }}", self.shape, self.chunks.chunks())
+    }
+}
+
+/// Streamed tensors are equal when they are the same generator.
+impl PartialEq for StreamedTensor {
+    fn eq(&self, other: &Self) -> bool {
+        Arc::ptr_eq(&self.chunks, &other.chunks)
+    }
+}
+
+impl From<StreamedTensor> for FullTensor {
+    fn from(s: StreamedTensor) -> Self {
+        Self::Streamed(s)
     }
 }
 
@@ -181,54 +233,87 @@ impl Model {
         bases: &Bases,
         options: &ReduceOptions<'_>,
     ) -> Result<ReducedModel, ReduceError> {
+        self.reduce_with_rows(bases, &BTreeMap::new(), options)
+    }
+
+    /// [`Model::reduce_with`] where some bases are given only by rows on demand (`row_bases`,
+    /// e.g. [`super::SnapshotBasis`] for bases larger than memory): they may only carry axes
+    /// of streamed tensors, which are premultiplied chunk by chunk on the CPU; and they are not
+    /// kept in the reduced model, so an input in such a basis must be given reduced.
+    pub fn reduce_with_rows(
+        &self,
+        bases: &Bases,
+        row_bases: &BTreeMap<String, &dyn BasisRows>,
+        options: &ReduceOptions<'_>,
+    ) -> Result<ReducedModel, ReduceError> {
         let output_axes = self.check()?;
         let mut reduced = BTreeMap::new();
         for (name, t) in &self.tensors {
-            let mats = t
-                .axes
-                .iter()
-                .zip(t.data.shape())
-                .enumerate()
-                .map(|(axis, (b, &n))| {
-                    let basis = bases.get(b).ok_or_else(|| ReduceError::UnknownBasis {
+            let lookup = |axis: usize, b: &String, n: usize| -> Result<&dyn BasisRows, ReduceError> {
+                let found: Option<&dyn BasisRows> = match (bases.get(b), row_bases.get(b)) {
+                    (Some(stored), _) => Some(stored),
+                    (None, Some(rows)) => Some(*rows),
+                    (None, None) => None,
+                };
+                let basis = found.ok_or_else(|| ReduceError::UnknownBasis {
+                    basis: b.clone(),
+                    needed_by: format!("tensor `{name}` axis {axis}"),
+                })?;
+                if basis.full_dim() != n {
+                    return Err(ReduceError::AxisLength {
+                        tensor: name.clone(),
+                        axis,
                         basis: b.clone(),
-                        needed_by: format!("tensor `{name}` axis {axis}"),
-                    })?;
-                    if basis.full_dim() != n {
-                        return Err(ReduceError::AxisLength {
-                            tensor: name.clone(),
-                            axis,
-                            basis: b.clone(),
-                            detail: format!(
-                                "length {n}, but the basis has {} full dimensions",
-                                basis.full_dim()
-                            ),
-                        });
-                    }
-                    Ok(basis.matrix())
-                })
-                .collect::<Result<Vec<&Tensor>, ReduceError>>()?;
+                        detail: format!("length {n}, but the basis has {} full dimensions", basis.full_dim()),
+                    });
+                }
+                Ok(basis)
+            };
             let context = || format!("premultiplying `{name}`");
             let pm = PremultiplyOptions { progress: options.progress, ..PremultiplyOptions::default() };
-            let data = match (&t.data, options.backend.uses_gpu(options.gpu), options.gpu) {
-                (FullTensor::Dense(d), _, _) => premultiply_dense(d, &mats)
-                    .map_err(|source| ReduceError::Tensor { context: context(), source })?,
-                (FullTensor::Sparse(s), true, Some(gpu)) => premultiply_sparse_gpu(gpu, s, &mats, pm)?.0,
-                (FullTensor::Sparse(s), _, _) => {
-                    premultiply_sparse_with(s, &mats, pm)
-                        .map_err(|source| ReduceError::Tensor { context: context(), source })?
-                        .0
+            let axes = t.axes.iter().zip(t.data.shape()).enumerate();
+            let data = if let FullTensor::Streamed(st) = &t.data {
+                let rows = axes.map(|(axis, (b, &n))| lookup(axis, b, n)).collect::<Result<Vec<_>, _>>()?;
+                premultiply_streamed(name, st.chunks(), &rows, pm)?
+            } else {
+                let mats = axes
+                    .map(|(axis, (b, &n))| {
+                        lookup(axis, b, n)?;
+                        bases.get(b).map(Basis::matrix).ok_or_else(|| ReduceError::BadBasis {
+                            basis: b.clone(),
+                            detail: format!(
+                                "given by rows only, but tensor `{name}` (axis {axis}) is not streamed"
+                            ),
+                        })
+                    })
+                    .collect::<Result<Vec<&Tensor>, ReduceError>>()?;
+                match (&t.data, options.backend.uses_gpu(options.gpu), options.gpu) {
+                    (FullTensor::Dense(d), _, _) => premultiply_dense(d, &mats)
+                        .map_err(|source| ReduceError::Tensor { context: context(), source })?,
+                    (FullTensor::Sparse(s), true, Some(gpu)) => premultiply_sparse_gpu(gpu, s, &mats, pm)?.0,
+                    (FullTensor::Sparse(s), _, _) => {
+                        premultiply_sparse_with(s, &mats, pm)
+                            .map_err(|source| ReduceError::Tensor { context: context(), source })?
+                            .0
+                    }
+                    (FullTensor::Streamed(_), _, _) => unreachable!("handled above"),
                 }
             };
             reduced.insert(name.clone(), ReducedTensor { axes: t.axes.clone(), data });
         }
         for (input, b) in &self.inputs {
-            if !bases.contains_key(b) {
+            if !bases.contains_key(b) && !row_bases.contains_key(b) {
                 return Err(ReduceError::UnknownBasis {
                     basis: b.clone(),
                     needed_by: format!("input `{input}`"),
                 });
             }
+        }
+        if let Some(b) = output_axes.iter().find(|b| !bases.contains_key(*b)) {
+            return Err(ReduceError::BadBasis {
+                basis: b.clone(),
+                detail: "carries the output, which is lifted with it: it must be a stored basis".into(),
+            });
         }
         let used: Vec<&String> = output_axes.iter().chain(self.inputs.values()).collect();
         let kept =
@@ -256,6 +341,7 @@ impl Operands for FullOperands<'_> {
         match &self.model.tensors[name].data {
             FullTensor::Dense(t) => t.contract_axes(args),
             FullTensor::Sparse(s) => s.contract_axes(name, args),
+            FullTensor::Streamed(s) => s.whole().contract_axes(name, args),
         }
     }
 
@@ -263,6 +349,7 @@ impl Operands for FullOperands<'_> {
         match &self.model.tensors[name].data {
             FullTensor::Dense(t) => t.clone(),
             FullTensor::Sparse(s) => s.to_dense(),
+            FullTensor::Streamed(s) => s.whole().to_dense(),
         }
     }
 
@@ -270,6 +357,7 @@ impl Operands for FullOperands<'_> {
         match &self.model.tensors[name].data {
             FullTensor::Dense(t) => Value::Dense(t.clone()),
             FullTensor::Sparse(s) => Value::Sparse(s.clone()),
+            FullTensor::Streamed(s) => Value::Sparse(s.whole().clone()),
         }
     }
 
@@ -280,6 +368,9 @@ impl Operands for FullOperands<'_> {
     ) -> Option<Result<SparseTensor, TensorError>> {
         match &self.model.tensors[name].data {
             FullTensor::Sparse(s) if s.order() >= args.len() + 2 => Some(s.contract_axes_sparse(name, args)),
+            FullTensor::Streamed(s) if s.shape.len() >= args.len() + 2 => {
+                Some(s.whole().contract_axes_sparse(name, args))
+            }
             _ => None,
         }
     }

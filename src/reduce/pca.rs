@@ -205,7 +205,7 @@ pub fn pca_with(
     if let Some(d) = &device {
         gram = d.read()?;
     }
-    let modes = modes_from_gram(name, gram, k, truncation)?;
+    let modes = modes_from_gram(name, gram, k, truncation, 0.0)?;
     let (vs, m, sigma2, kept, total) =
         (modes.coefficients, modes.columns, modes.sigma2, modes.kept, modes.total);
     let mut b = vec![0.0; n * m];
@@ -239,12 +239,14 @@ pub(crate) struct Modes {
 }
 
 /// Eigendecomposes the `k × k` Gram matrix `gram` (`SᵀS`, uncentred) and truncates as
-/// `truncation` says.
+/// `truncation` says, never keeping a mode whose σ² is below `floor_ratio` (at least `k ε`) of
+/// the largest.
 pub(crate) fn modes_from_gram(
     name: &str,
     mut gram: Vec<f64>,
     k: usize,
     truncation: Truncation,
+    floor_ratio: f64,
 ) -> Result<Modes, ReduceError> {
     let bad = |detail: String| ReduceError::BadBasis { basis: name.to_string(), detail };
     if truncation.centred {
@@ -267,7 +269,7 @@ pub(crate) fn modes_from_gram(
     if total <= 0.0 && !truncation.centred {
         return Err(bad("every snapshot is zero".into()));
     }
-    let floor = sigma2[0] * (k as f64) * f64::EPSILON;
+    let floor = sigma2[0] * floor_ratio.max(k as f64 * f64::EPSILON);
     let max_modes = truncation.max_modes - usize::from(truncation.centred);
     let mut m = 0;
     let mut kept = 0.0;
