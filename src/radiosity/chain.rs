@@ -169,6 +169,28 @@ impl TensorChunks for PairTensor {
         self.topology.faces.len().div_ceil(self.faces_per_chunk())
     }
 
+    /// Pair axes name the chunk's whole rows of pairs (`C`'s last axis: their transposes), so
+    /// every pair tensor asks the pair bases for the same rows and the snapshots of a block of
+    /// pairs are made once for all of them.
+    fn chunk_rows(&self, chunk: usize, axis: usize) -> Option<Vec<usize>> {
+        let n = self.topology.faces.len();
+        let rows = chunk * self.faces_per_chunk()..((chunk + 1) * self.faces_per_chunk()).min(n);
+        let pair_axis = match self.kind {
+            PairKind::S | PairKind::R => axis == 0,
+            PairKind::H | PairKind::D => true,
+            PairKind::C => axis <= 1,
+            PairKind::P => axis <= 1,
+            PairKind::E => axis == 2,
+        };
+        if pair_axis {
+            Some((n * rows.start..n * rows.end).collect())
+        } else if self.kind == PairKind::C && axis == 2 {
+            Some((0..n).flat_map(|j| rows.clone().map(move |i| n * j + i)).collect())
+        } else {
+            None
+        }
+    }
+
     fn chunk(&self, chunk: usize) -> SparseTensor {
         let t = &self.topology;
         let (faces, n) = (&t.faces, t.faces.len());

@@ -35,7 +35,8 @@ pub fn pair_values(conf: &Configuration, i: usize, j: usize, near: NearField) ->
     let c = h * h_back / (2.0 * PI);
     let v = f64::from(u8::from(conf.visible(n * i + j)));
     let d = c * v;
-    [s, r, h, c, v, d, d / g.normals[i].length()]
+    // |nᵢ| = 2Aᵢ exactly (the areas are half the normals' lengths).
+    [s, r, h, c, v, d, d / (2.0 * g.areas[i])]
 }
 
 /// Blocks of pairs kept after they are made (the premultiplication asks for a block's rows
@@ -54,13 +55,22 @@ pub struct PairSnapshots<'a> {
     near: NearField,
     faces: usize,
     cache: Mutex<VecDeque<(Vec<usize>, Block)>>,
+    /// Buffers of evicted blocks, reused: blocks are 100 MB and more, and returning them to
+    /// the system each time costs page faults and TLB shootdowns on every core.
+    spare: Mutex<Vec<Vec<f64>>>,
 }
 
 impl<'a> PairSnapshots<'a> {
     /// The snapshots of `configurations` (solved, one topology) with near-field `near`.
     pub fn new(configurations: &'a [Configuration], near: NearField) -> Self {
         let faces = configurations.first().map_or(0, |c| c.geometry.areas.len());
-        Self { configurations, near, faces, cache: Mutex::new(VecDeque::new()) }
+        Self {
+            configurations,
+            near,
+            faces,
+            cache: Mutex::new(VecDeque::new()),
+            spare: Mutex::new(Vec::new()),
+        }
     }
 
     /// The snapshot source of quantity `q` (one of [`PAIR_QUANTITIES`]).
@@ -82,7 +92,16 @@ impl<'a> PairSnapshots<'a> {
                 detail: format!("pair {k} of {} faces", n),
             });
         }
-        let mut out: Vec<Vec<f64>> = vec![vec![0.0; indices.len() * t]; 7];
+        let mut out: Vec<Vec<f64>> = {
+            let mut spare = self.spare.lock().expect("no panics while locked");
+            (0..7)
+                .map(|_| {
+                    let mut v = spare.pop().unwrap_or_default();
+                    v.resize(indices.len() * t, 0.0);
+                    v
+                })
+                .collect()
+        };
         let [o0, o1, o2, o3, o4, o5, o6] = &mut out[..] else { unreachable!("seven quantities") };
         let width = TILE * t;
         (
@@ -114,7 +133,15 @@ impl<'a> PairSnapshots<'a> {
         );
         let mut cache = self.cache.lock().expect("no panics while locked");
         if cache.len() == CACHED_BLOCKS {
-            cache.pop_front();
+            if let Some((_, old)) = cache.pop_front() {
+                // Recycled if nobody holds it any more.
+                if let Ok(tensors) = Arc::try_unwrap(old) {
+                    let mut spare = self.spare.lock().expect("no panics while locked");
+                    spare.extend(
+                        tensors.into_iter().filter_map(|t| Arc::try_unwrap(t).ok()).map(Tensor::into_data),
+                    );
+                }
+            }
         }
         cache.push_back((indices.to_vec(), block.clone()));
         Ok(block)

@@ -358,11 +358,9 @@ pub fn train(
         PAIR_QUANTITIES.iter().map(|&q| pairs.quantity(q).expect("a pair quantity")).collect();
     let refs: Vec<&dyn SnapshotRows> = sources.iter().map(|s| s as &dyn SnapshotRows).collect();
     let slot = |q: Quantity| PAIR_QUANTITIES.iter().position(|&p| p == q).expect("a pair quantity");
-    let mut wanted: Vec<(usize, usize)> = (0..PAIR_QUANTITIES.len()).map(|i| (i, i)).collect();
-    wanted.push((slot(Quantity::S), slot(Quantity::H)));
-    wanted.push((slot(Quantity::D), slot(Quantity::P)));
+    let diagonal: Vec<(usize, usize)> = (0..PAIR_QUANTITIES.len()).map(|i| (i, i)).collect();
     let gram_progress = |done: f64, total: f64| progress("gram", done as u64, total as u64);
-    let grams = snapshot_grams(&refs, &wanted, Some(&gram_progress)).map_err(reduce_err)?;
+    let grams = snapshot_grams(&refs, &diagonal, Some(&gram_progress)).map_err(reduce_err)?;
     let mut pair_bases: std::collections::BTreeMap<&str, SnapshotBasis<'_>> =
         std::collections::BTreeMap::new();
     let mut stored: std::collections::BTreeMap<&str, Basis> = std::collections::BTreeMap::new();
@@ -394,6 +392,9 @@ pub fn train(
     let order: Vec<&str> = PAIR_QUANTITIES.iter().map(|q| q.name()).collect();
     let rows: Vec<&dyn BasisRows> = order.iter().map(|q| &pair_bases[q] as &dyn BasisRows).collect();
     let own_progress = |done: f64, total: f64| progress("orthonormalise", done as u64, total as u64);
+    let mut wanted = diagonal.clone();
+    wanted.push((slot(Quantity::S), slot(Quantity::H)));
+    wanted.push((slot(Quantity::D), slot(Quantity::P)));
     let own = basis_grams(&rows, &wanted, Some(&own_progress)).map_err(reduce_err)?;
     let merge_pairs = |name: &str, a: Quantity, b: Quantity, cross: &Tensor| {
         let (a, b) = (slot(a), slot(b));

@@ -10,8 +10,8 @@ use super::eval::{evaluate, signature, Operands, Value};
 use super::expr::Expr;
 use super::gpu_eval::Backend;
 use super::premultiply::{
-    premultiply_dense, premultiply_sparse_gpu, premultiply_sparse_with, premultiply_streamed, BasisRows,
-    PremultiplyOptions, TensorChunks,
+    premultiply_dense, premultiply_sparse_gpu, premultiply_sparse_with, premultiply_streamed_together,
+    BasisRows, PremultiplyOptions, TensorChunks,
 };
 use super::reduced::{ReducedModel, ReducedTensor};
 use crate::gpu::Gpu;
@@ -248,6 +248,7 @@ impl Model {
     ) -> Result<ReducedModel, ReduceError> {
         let output_axes = self.check()?;
         let mut reduced = BTreeMap::new();
+        let mut streamed: Vec<(&str, &dyn TensorChunks, Vec<&dyn BasisRows>)> = Vec::new();
         for (name, t) in &self.tensors {
             let lookup = |axis: usize, b: &String, n: usize| -> Result<&dyn BasisRows, ReduceError> {
                 let found: Option<&dyn BasisRows> = match (bases.get(b), row_bases.get(b)) {
@@ -273,8 +274,10 @@ impl Model {
             let pm = PremultiplyOptions { progress: options.progress, ..PremultiplyOptions::default() };
             let axes = t.axes.iter().zip(t.data.shape()).enumerate();
             let data = if let FullTensor::Streamed(st) = &t.data {
+                // Premultiplied below, all streamed tensors together.
                 let rows = axes.map(|(axis, (b, &n))| lookup(axis, b, n)).collect::<Result<Vec<_>, _>>()?;
-                premultiply_streamed(name, st.chunks(), &rows, pm)?
+                streamed.push((name.as_str(), st.chunks(), rows));
+                continue;
             } else {
                 let mats = axes
                     .map(|(axis, (b, &n))| {
@@ -300,6 +303,14 @@ impl Model {
                 }
             };
             reduced.insert(name.clone(), ReducedTensor { axes: t.axes.clone(), data });
+        }
+        // In lockstep, so that bases regenerating rows make each block once for all of them.
+        let pm = PremultiplyOptions { progress: options.progress, ..PremultiplyOptions::default() };
+        let together: Vec<(&str, &dyn TensorChunks, &[&dyn BasisRows])> =
+            streamed.iter().map(|(n, q, rows)| (*n, *q, rows.as_slice())).collect();
+        for ((name, _, _), data) in streamed.iter().zip(premultiply_streamed_together(&together, pm)?) {
+            let axes = self.tensors[*name].axes.clone();
+            reduced.insert(name.to_string(), ReducedTensor { axes, data });
         }
         for (input, b) in &self.inputs {
             if !bases.contains_key(b) && !row_bases.contains_key(b) {

@@ -15,6 +15,7 @@
 use std::sync::Arc;
 
 use faer::linalg::matmul::matmul;
+use faer::linalg::matmul::triangular::{self, BlockStructure};
 use faer::{Accum, MatMut, MatRef, Par};
 
 use super::error::ReduceError;
@@ -103,17 +104,36 @@ fn gram_pass(
             let sb = blocks[b].as_ref().expect("generated above");
             let sa = MatRef::from_row_major_slice(sa.data(), end - start, ka);
             let sb = MatRef::from_row_major_slice(sb.data(), end - start, kb);
-            matmul(
-                MatMut::from_row_major_slice_mut(g, ka, kb),
-                Accum::Add,
-                sa.transpose(),
-                sb,
-                1.0,
-                Par::rayon(0),
-            );
+            let dst = MatMut::from_row_major_slice_mut(g, ka, kb);
+            if a == b {
+                // Symmetric: the lower triangle only (half the work), mirrored at the end.
+                triangular::matmul(
+                    dst,
+                    BlockStructure::TriangularLower,
+                    Accum::Add,
+                    sa.transpose(),
+                    BlockStructure::Rectangular,
+                    sb,
+                    BlockStructure::Rectangular,
+                    1.0,
+                    Par::rayon(0),
+                );
+            } else {
+                matmul(dst, Accum::Add, sa.transpose(), sb, 1.0, Par::rayon(0));
+            }
         }
         if let Some(p) = progress {
             p(end as f64, n as f64);
+        }
+    }
+    for (g, &(a, b)) in grams.iter_mut().zip(pairs) {
+        if a == b {
+            let k = counts[a];
+            for i in 0..k {
+                for j in i + 1..k {
+                    g[i * k + j] = g[j * k + i];
+                }
+            }
         }
     }
     Ok(pairs

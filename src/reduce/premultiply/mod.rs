@@ -38,7 +38,7 @@ use cpu::{accumulate, Partial};
 pub use gpu::premultiply_sparse_gpu;
 use plan::plan;
 pub(crate) use plan::{unit_row, unit_size, Packing};
-pub use stream::{premultiply_streamed, BasisRows, TensorChunks};
+pub use stream::{premultiply_streamed, premultiply_streamed_together, BasisRows, TensorChunks};
 
 /// Options of a premultiplication.
 #[derive(Clone, Copy)]

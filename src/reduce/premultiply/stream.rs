@@ -54,6 +54,14 @@ pub trait TensorChunks: Send + Sync {
     /// The entries of chunk `c`.
     fn chunk(&self, c: usize) -> SparseTensor;
 
+    /// The rows chunk `c` touches on `axis`, ascending (a superset of its coordinates there),
+    /// if the tensor names them — so that tensors chunked alike ask their bases for identical
+    /// row sets (which bases that regenerate rows can make once); otherwise the chunk's
+    /// distinct coordinates are used.
+    fn chunk_rows(&self, _c: usize, _axis: usize) -> Option<Vec<usize>> {
+        None
+    }
+
     /// Every chunk in one tensor (for the full-space evaluation of small cases).
     fn to_sparse(&self) -> SparseTensor {
         let shape = self.shape();
@@ -83,33 +91,53 @@ pub fn premultiply_streamed(
     bases: &[&dyn BasisRows],
     options: PremultiplyOptions<'_>,
 ) -> Result<Tensor, ReduceError> {
-    let shape = q.shape();
-    let context = || format!("premultiplying `{name}` in chunks");
-    if bases.len() != shape.len() {
-        return Err(ReduceError::BadBasis {
-            basis: name.to_string(),
-            detail: format!("{} bases for a tensor of order {}", bases.len(), shape.len()),
-        });
-    }
-    for (axis, (b, &n)) in bases.iter().zip(&shape).enumerate() {
-        if b.full_dim() != n {
+    let mut out = premultiply_streamed_together(&[(name, q, bases)], options)?;
+    Ok(out.pop().expect("one tensor"))
+}
+
+/// Several chunked tensors premultiplied in lockstep — chunk `c` of every tensor before chunk
+/// `c + 1` of any — so that bases regenerating rows for a chunk (and keeping the last few
+/// blocks) make them once for all the tensors. `progress`: (chunks done, chunks).
+pub fn premultiply_streamed_together(
+    tensors: &[(&str, &dyn TensorChunks, &[&dyn BasisRows])],
+    options: PremultiplyOptions<'_>,
+) -> Result<Vec<Tensor>, ReduceError> {
+    let mut totals = Vec::with_capacity(tensors.len());
+    for &(name, q, bases) in tensors {
+        let shape = q.shape();
+        if bases.len() != shape.len() {
             return Err(ReduceError::BadBasis {
                 basis: name.to_string(),
-                detail: format!("axis {axis} has length {n}, its basis {} full dimensions", b.full_dim()),
+                detail: format!("{} bases for a tensor of order {}", bases.len(), shape.len()),
             });
         }
+        for (axis, (b, &n)) in bases.iter().zip(&shape).enumerate() {
+            if b.full_dim() != n {
+                return Err(ReduceError::BadBasis {
+                    basis: name.to_string(),
+                    detail: format!("axis {axis} has length {n}, its basis {} full dimensions", b.full_dim()),
+                });
+            }
+        }
+        totals.push(Tensor::zeros(&bases.iter().map(|b| b.reduced_dim()).collect::<Vec<_>>()));
     }
-    let reduced: Vec<usize> = bases.iter().map(|b| b.reduced_dim()).collect();
-    let mut total = Tensor::zeros(&reduced);
-    let chunks = q.chunks();
+    let chunks = tensors.iter().map(|t| t.1.chunks()).max().unwrap_or(0);
     let inner = PremultiplyOptions { progress: None, ..options };
     for c in 0..chunks {
-        let part = q.chunk(c);
-        if part.nnz() > 0 {
-            let (local, rows) = localise(&part, bases)?;
+        for (&(name, q, bases), total) in tensors.iter().zip(&mut totals) {
+            if c >= q.chunks() {
+                continue;
+            }
+            let part = q.chunk(c);
+            if part.nnz() == 0 {
+                continue;
+            }
+            let declared: Vec<Option<Vec<usize>>> = (0..part.order()).map(|a| q.chunk_rows(c, a)).collect();
+            let (local, rows) = localise(&part, &declared, bases)?;
             let refs: Vec<&Tensor> = rows.iter().collect();
-            let (y, _) = premultiply_sparse_with(&local, &refs, inner)
-                .map_err(|source| ReduceError::Tensor { context: context(), source })?;
+            let (y, _) = premultiply_sparse_with(&local, &refs, inner).map_err(|source| {
+                ReduceError::Tensor { context: format!("premultiplying `{name}` in chunks"), source }
+            })?;
             for (t, v) in total.data_mut().iter_mut().zip(y.data()) {
                 *t += v;
             }
@@ -118,13 +146,15 @@ pub fn premultiply_streamed(
             p((c + 1) as f64, chunks as f64);
         }
     }
-    Ok(total)
+    Ok(totals)
 }
 
-/// A chunk as a tensor over its own distinct coordinates (ascending per axis; one shared list
-/// per symmetric group, so sorted group indices stay sorted), with the matching basis rows.
+/// A chunk as a tensor over its own rows per axis — the declared ones, else its distinct
+/// coordinates (ascending; one shared list per symmetric group, so sorted group indices stay
+/// sorted) — with the matching basis rows.
 fn localise(
     part: &SparseTensor,
+    declared: &[Option<Vec<usize>>],
     bases: &[&dyn BasisRows],
 ) -> Result<(SparseTensor, Vec<Tensor>), ReduceError> {
     let order = part.order();
@@ -139,28 +169,45 @@ fn localise(
     let mut maps: Vec<HashMap<u32, u32>> = vec![HashMap::new(); order];
     let mut lists: Vec<Vec<usize>> = vec![Vec::new(); order];
     for set in &sets {
-        let mut distinct: Vec<u32> =
-            part.coords().chunks_exact(order).flat_map(|c| set.iter().map(move |&a| c[a])).collect();
-        distinct.sort_unstable();
-        distinct.dedup();
+        let distinct: Vec<u32> = match (set.as_slice(), declared[set[0]].as_ref()) {
+            ([_], Some(rows)) => rows.iter().map(|&i| i as u32).collect(),
+            _ => {
+                let mut d: Vec<u32> =
+                    part.coords().chunks_exact(order).flat_map(|c| set.iter().map(move |&a| c[a])).collect();
+                d.sort_unstable();
+                d.dedup();
+                d
+            }
+        };
         let map: HashMap<u32, u32> = distinct.iter().enumerate().map(|(l, &i)| (i, l as u32)).collect();
         for &a in set {
             maps[a] = map.clone();
             lists[a] = distinct.iter().map(|&i| i as usize).collect();
         }
     }
-    let coords: Vec<u32> = part
-        .coords()
-        .chunks_exact(order)
-        .flat_map(|c| (0..order).map(|a| maps[a][&c[a]]).collect::<Vec<_>>())
-        .collect();
+    let mut coords = Vec::with_capacity(part.coords().len());
+    for c in part.coords().chunks_exact(order) {
+        for a in 0..order {
+            let Some(&l) = maps[a].get(&c[a]) else {
+                return Err(ReduceError::BadBasis {
+                    basis: "chunk".into(),
+                    detail: format!(
+                        "coordinate {} on axis {a} is not among the rows the chunk declared",
+                        c[a]
+                    ),
+                });
+            };
+            coords.push(l);
+        }
+    }
     let shape: Vec<usize> = lists.iter().map(Vec::len).collect();
+    let context = || "localising a chunk".to_string();
     let mut local = SparseTensor::from_coords("chunk", &shape, coords, part.values().to_vec())
-        .map_err(|source| ReduceError::Tensor { context: "localising a chunk".into(), source })?;
+        .map_err(|source| ReduceError::Tensor { context: context(), source })?;
     for g in &groups {
         local = local
             .with_symmetric_axes(g)
-            .map_err(|source| ReduceError::Tensor { context: "localising a chunk".into(), source })?;
+            .map_err(|source| ReduceError::Tensor { context: context(), source })?;
     }
     let rows = lists.iter().zip(bases).map(|(l, b)| b.rows(l)).collect::<Result<Vec<_>, _>>()?;
     Ok((local, rows))
