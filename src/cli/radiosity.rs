@@ -349,7 +349,12 @@ fn train(args: &TrainArgs) -> Result<()> {
     let bars = std::sync::Mutex::new(std::collections::BTreeMap::<String, indicatif::ProgressBar>::new());
     let (model, report) = train_model(spec, &configurations, &options, &|stage, done, total| {
         let mut bars = bars.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
-        let label = if stage == "pca" { "PCA of Table 2's quantities" } else { "premultiplying tensors" };
+        let label = match stage {
+            "gram" => "Gram matrices of the pair quantities (pairs)",
+            "pca" => "PCA of Table 2's quantities",
+            "orthonormalise" => "orthonormalising the pair bases (pairs)",
+            _ => "premultiplying tensors (chunks of pairs)",
+        };
         let bar = bars.entry(stage.to_string()).or_insert_with(|| crate::progress_bar(total, label));
         bar.set_length(total);
         bar.set_position(done);

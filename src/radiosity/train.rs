@@ -351,8 +351,8 @@ pub fn train(
         },
         centred: true,
     };
-    // Pair quantities: one pass over blocks of pairs for every Gram matrix (and the cross
-    // terms of the two merges), the bases kept as snapshot coefficients.
+    // Pair quantities: one pass over blocks of pairs for their Gram matrices; the bases are
+    // kept as snapshot coefficients.
     let pairs = PairSnapshots::new(configurations, options.near);
     let sources: Vec<_> =
         PAIR_QUANTITIES.iter().map(|&q| pairs.quantity(q).expect("a pair quantity")).collect();
@@ -360,7 +360,9 @@ pub fn train(
     let slot = |q: Quantity| PAIR_QUANTITIES.iter().position(|&p| p == q).expect("a pair quantity");
     let diagonal: Vec<(usize, usize)> = (0..PAIR_QUANTITIES.len()).map(|i| (i, i)).collect();
     let gram_progress = |done: f64, total: f64| progress("gram", done as u64, total as u64);
+    let clock = std::time::Instant::now();
     let grams = snapshot_grams(&refs, &diagonal, Some(&gram_progress)).map_err(reduce_err)?;
+    tracing::info!(seconds = clock.elapsed().as_secs_f64(), "training: Gram matrices of the pair quantities");
     let mut pair_bases: std::collections::BTreeMap<&str, SnapshotBasis<'_>> =
         std::collections::BTreeMap::new();
     let mut stored: std::collections::BTreeMap<&str, Basis> = std::collections::BTreeMap::new();
@@ -395,7 +397,9 @@ pub fn train(
     let mut wanted = diagonal.clone();
     wanted.push((slot(Quantity::S), slot(Quantity::H)));
     wanted.push((slot(Quantity::D), slot(Quantity::P)));
+    let clock = std::time::Instant::now();
     let own = basis_grams(&rows, &wanted, Some(&own_progress)).map_err(reduce_err)?;
+    tracing::info!(seconds = clock.elapsed().as_secs_f64(), "training: Gram matrices of the pair modes");
     let merge_pairs = |name: &str, a: Quantity, b: Quantity, cross: &Tensor| {
         let (a, b) = (slot(a), slot(b));
         SnapshotBasis::merge(name, (&pair_bases[order[a]], &own[a]), (&pair_bases[order[b]], &own[b]), cross)
@@ -429,6 +433,7 @@ pub fn train(
     let mesh = space.mesh(&first.params)?;
     let model = table2_model(&mesh, options.near, radiosity_expr());
     let premultiply_progress = |done: f64, total: f64| progress("premultiply", done as u64, total as u64);
+    let clock = std::time::Instant::now();
     let mut reduced = model
         .reduce_with_rows(
             &bases,
@@ -436,6 +441,7 @@ pub fn train(
             &ReduceOptions { progress: Some(&premultiply_progress), ..ReduceOptions::default() },
         )
         .map_err(reduce_err)?;
+    tracing::info!(seconds = clock.elapsed().as_secs_f64(), "training: premultiplication");
     // The visibility is always given reduced (Eq. 17): its n²-row basis stays out of the model.
     reduced.forget_input_basis("v").map_err(reduce_err)?;
     // The learned visibility: B_gᵀ G, and B_vᵀ V from the visibility's Gram matrix.

@@ -10,6 +10,7 @@
 //! as a whole tensor — against the gathered rows, and the chunk results are summed.
 
 use std::collections::HashMap;
+use std::sync::Arc;
 
 use super::{premultiply_sparse_with, PremultiplyOptions};
 use crate::reduce::{Basis, ReduceError};
@@ -123,30 +124,62 @@ pub fn premultiply_streamed_together(
     }
     let chunks = tensors.iter().map(|t| t.1.chunks()).max().unwrap_or(0);
     let inner = PremultiplyOptions { progress: None, ..options };
+    // Seconds per tensor: generating chunks, gathering rows, premultiplying.
+    let mut seconds = vec![[0.0f64; 3]; tensors.len()];
     for c in 0..chunks {
-        for (&(name, q, bases), total) in tensors.iter().zip(&mut totals) {
+        let mut memo = RowMemo::default();
+        for ((&(name, q, bases), total), time) in tensors.iter().zip(&mut totals).zip(&mut seconds) {
             if c >= q.chunks() {
                 continue;
             }
+            let clock = std::time::Instant::now();
             let part = q.chunk(c);
+            time[0] += clock.elapsed().as_secs_f64();
             if part.nnz() == 0 {
                 continue;
             }
             let declared: Vec<Option<Vec<usize>>> = (0..part.order()).map(|a| q.chunk_rows(c, a)).collect();
-            let (local, rows) = localise(&part, &declared, bases)?;
-            let refs: Vec<&Tensor> = rows.iter().collect();
+            let clock = std::time::Instant::now();
+            let (local, rows) = localise(&part, &declared, bases, &mut memo)?;
+            time[1] += clock.elapsed().as_secs_f64();
+            let clock = std::time::Instant::now();
+            let refs: Vec<&Tensor> = rows.iter().map(|r| r.as_ref()).collect();
             let (y, _) = premultiply_sparse_with(&local, &refs, inner).map_err(|source| {
                 ReduceError::Tensor { context: format!("premultiplying `{name}` in chunks"), source }
             })?;
             for (t, v) in total.data_mut().iter_mut().zip(y.data()) {
                 *t += v;
             }
+            time[2] += clock.elapsed().as_secs_f64();
         }
         if let Some(p) = options.progress {
             p((c + 1) as f64, chunks as f64);
         }
     }
+    for ((name, ..), [generate, rows, multiply]) in tensors.iter().zip(&seconds) {
+        tracing::debug!(tensor = name, generate, rows, multiply, "streamed premultiplication (seconds)");
+    }
     Ok(totals)
+}
+
+/// Basis rows already gathered for the current chunk, by basis and row list: tensors chunked
+/// alike ask for the same rows of a basis (the pair bases' whole rows of pairs), which is
+/// computed once per chunk.
+#[derive(Default)]
+struct RowMemo {
+    rows: Vec<(usize, Vec<usize>, Arc<Tensor>)>,
+}
+
+impl RowMemo {
+    fn rows(&mut self, basis: &dyn BasisRows, list: &[usize]) -> Result<Arc<Tensor>, ReduceError> {
+        let id = basis as *const dyn BasisRows as *const () as usize;
+        if let Some((_, _, t)) = self.rows.iter().find(|(b, l, _)| *b == id && l == list) {
+            return Ok(t.clone());
+        }
+        let t = Arc::new(basis.rows(list)?);
+        self.rows.push((id, list.to_vec(), t.clone()));
+        Ok(t)
+    }
 }
 
 /// A chunk as a tensor over its own rows per axis — the declared ones, else its distinct
@@ -156,7 +189,8 @@ fn localise(
     part: &SparseTensor,
     declared: &[Option<Vec<usize>>],
     bases: &[&dyn BasisRows],
-) -> Result<(SparseTensor, Vec<Tensor>), ReduceError> {
+    memo: &mut RowMemo,
+) -> Result<(SparseTensor, Vec<Arc<Tensor>>), ReduceError> {
     let order = part.order();
     let groups = part.symmetric_groups().to_vec();
     // Axes sharing one list: each symmetric group, then every other axis alone.
@@ -209,7 +243,7 @@ fn localise(
             .with_symmetric_axes(g)
             .map_err(|source| ReduceError::Tensor { context: context(), source })?;
     }
-    let rows = lists.iter().zip(bases).map(|(l, b)| b.rows(l)).collect::<Result<Vec<_>, _>>()?;
+    let rows = lists.iter().zip(bases).map(|(l, b)| memo.rows(*b, l)).collect::<Result<Vec<_>, _>>()?;
     Ok((local, rows))
 }
 
