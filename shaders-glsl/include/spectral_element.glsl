@@ -204,45 +204,6 @@ vec3 spectral_value_gradient(uint e, vec2 r) {
     return v;
 }
 
-// The field value of element e at r together with the geometry map and its derivatives there
-// (what a lit surface fragment needs): when the two bases are one, the 1D bases are evaluated
-// once for both.
-float spectral_value_and_map(uint e, vec2 r, out vec3 x, out vec3 dxi, out vec3 deta) {
-    if (!SPECTRAL_SHARED_BASIS) {
-        x = spectral_map(e, r, dxi, deta);
-        return spectral_value(e, r);
-    }
-    float a[SPECTRAL_MAX_NODES], da[SPECTRAL_MAX_NODES], b[SPECTRAL_MAX_NODES], db[SPECTRAL_MAX_NODES];
-    spectral_geometry_eval(r.x, true, a, da);
-    spectral_geometry_eval(r.y, true, b, db);
-    const uint m = SPECTRAL_GEOMETRY_ORDER + 1u;
-    uint points = e * m * m;
-    uint values = e * SPECTRAL_VALUE_VEC4S;
-    x = vec3(0.0);
-    dxi = vec3(0.0);
-    deta = vec3(0.0);
-    float v = 0.0;
-    for (uint q = 0u; q < SPECTRAL_VALUE_VEC4S; ++q) {
-        vec4 f = spectral_values[values + q];
-        for (uint c = 0u; c < 4u; ++c) {
-            uint k = 4u * q + c;
-            if (k < m * m) v += f[c] * a[k % m] * b[k / m];
-        }
-    }
-    for (uint j = 0u; j < m; ++j) {
-        vec3 row = vec3(0.0), drow = vec3(0.0);
-        for (uint i = 0u; i < m; ++i) {
-            vec3 p = spectral_points[points + j * m + i].xyz;
-            row += a[i] * p;
-            drow += da[i] * p;
-        }
-        x += b[j] * row;
-        dxi += b[j] * drow;
-        deta += db[j] * row;
-    }
-    return v;
-}
-
 // Newton's method for the reference point of planar element e that maps to p, from r; returns
 // false if it diverged. Stops when the step is below 1e-6 (a few f32 ulps of [0, 1]).
 bool spectral_inverse_map(uint e, vec2 p, inout vec2 r) {
