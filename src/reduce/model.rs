@@ -52,8 +52,8 @@ impl FullTensor {
 }
 
 /// A sparse tensor given by its chunks ([`TensorChunks`]). The reduction premultiplies it a
-/// chunk at a time ([`super::premultiply_streamed_together`]); a full-space evaluation (for models small
-/// enough to check in the full space) gathers the chunks once into one coordinate list.
+/// chunk at a time ([`premultiply_streamed_together`]); a full-space evaluation (for models
+/// small enough to check in the full space) gathers the chunks once into one coordinate list.
 #[derive(Clone)]
 pub struct StreamedTensor {
     shape: Vec<usize>,
