@@ -150,6 +150,12 @@ impl PairTensor {
     fn faces_per_chunk(&self) -> usize {
         (PAIRS_PER_CHUNK / self.topology.faces.len().max(1)).max(1)
     }
+
+    /// The faces `i` whose rows of pairs chunk `chunk` holds.
+    fn face_rows(&self, chunk: usize) -> std::ops::Range<usize> {
+        let per = self.faces_per_chunk();
+        chunk * per..((chunk + 1) * per).min(self.topology.faces.len())
+    }
 }
 
 impl TensorChunks for PairTensor {
@@ -174,7 +180,7 @@ impl TensorChunks for PairTensor {
     /// pairs are made once for all of them.
     fn chunk_rows(&self, chunk: usize, axis: usize) -> Option<Vec<usize>> {
         let n = self.topology.faces.len();
-        let rows = chunk * self.faces_per_chunk()..((chunk + 1) * self.faces_per_chunk()).min(n);
+        let rows = self.face_rows(chunk);
         let pair_axis = match self.kind {
             PairKind::S | PairKind::R => axis == 0,
             PairKind::H | PairKind::D => true,
@@ -194,7 +200,7 @@ impl TensorChunks for PairTensor {
     fn chunk(&self, chunk: usize) -> SparseTensor {
         let t = &self.topology;
         let (faces, n) = (&t.faces, t.faces.len());
-        let rows = chunk * self.faces_per_chunk()..((chunk + 1) * self.faces_per_chunk()).min(n);
+        let rows = self.face_rows(chunk);
         let mut out = SparseTensor::new(&self.shape());
         if self.kind == PairKind::R {
             // R is symmetric in its two geometry axes: one entry per unordered pair of indices.
