@@ -9,6 +9,7 @@ use anyhow::{bail, Context, Result};
 
 mod cli {
     pub mod fluid;
+    pub mod full_frames;
     pub mod radiosity;
     pub mod spacetime;
     pub mod spectral;

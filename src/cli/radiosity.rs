@@ -16,6 +16,8 @@ use galerkin::radiosity::train::{
 use galerkin::radiosity::{full_radiosity, LightMode, SceneSpec, PARAMETERS};
 use galerkin::render::{write_exr_channels, write_png_rgba8};
 
+use super::full_frames::{FullFrame, FullFramesFile};
+
 /// `galerkin radiosity` subcommands.
 #[derive(Subcommand)]
 pub enum Action {
@@ -104,6 +106,15 @@ pub struct CompareArgs {
     /// Override the scene's lighting (must match the model's).
     #[arg(long, value_parser = ["area", "sky"])]
     pub lights: Option<String>,
+    /// Keep the full radiosity of every frame in DIR and reuse it on later runs with the same
+    /// scene file, lighting and frames (the full solution does not depend on the model): such a
+    /// run solves only --timed-full frames per sequence again, for the speed ratio measured in
+    /// the same run and to check the kept frames against.
+    #[arg(long, value_name = "DIR")]
+    pub full_frames: Option<PathBuf>,
+    /// With kept full frames: how many full frames per sequence are solved again.
+    #[arg(long, default_value_t = 8, value_parser = clap::value_parser!(u64).range(1..))]
+    pub timed_full: u64,
 }
 
 /// What a picture or window shows: the configuration and how it is looked at.
@@ -405,6 +416,11 @@ fn sequence(ranges: &[[f64; 2]], which: usize, f: usize, frames: usize) -> Vec<f
         .collect()
 }
 
+/// How far a kept full frame may be from a fresh solve of the same frame (relative, area
+/// weighted): the solve is deterministic (each face's sums in a fixed order), so anything above
+/// rounding means the file is stale.
+const KEPT_FRAME_TOLERANCE: f64 = 1e-9;
+
 fn compare(args: &CompareArgs) -> Result<()> {
     let scene = AnyScene::load(&args.scene, args.lights.as_deref())?;
     let spec = scene.space();
@@ -423,37 +439,95 @@ fn compare(args: &CompareArgs) -> Result<()> {
     let mut series: Vec<Vec<f64>> = Vec::new();
     let (mut full_times, mut reduced_times) = (Vec::new(), Vec::new());
     let mut parts = [0.0f64; 4];
+    let lighting = format!("{:?}", spec.lights().mode);
     for (which, &frames) in args.frames.iter().enumerate() {
-        let bar = crate::progress_bar(frames as u64, &format!("sequence {} (full and reduced)", which + 1));
+        let params: Vec<Vec<f64>> = (0..frames).map(|f| sequence(&ranges, which % 2, f, frames)).collect();
+        let file = match &args.full_frames {
+            Some(dir) => Some(FullFramesFile::new(dir, &args.scene, &lighting, which, frames)?),
+            None => None,
+        };
+        let kept = file.as_ref().and_then(|file| match file.load(model.faces(), &params) {
+            Ok(kept) => Some(kept),
+            Err(why) => {
+                if file.path().exists() {
+                    eprintln!("{}: {why}; solving every full frame again", file.path().display());
+                }
+                None
+            }
+        });
+        // With kept frames, every stride-th frame is solved again (timed, and checked).
+        let stride = match kept {
+            Some(_) => (frames / args.timed_full as usize).max(1),
+            None => 1,
+        };
+        let label = match (&kept, &file) {
+            (Some(_), Some(file)) => {
+                format!("sequence {} (reduced; full frames from {})", which + 1, file.path().display())
+            }
+            _ => format!("sequence {} (full and reduced)", which + 1),
+        };
+        let bar = crate::progress_bar(frames as u64, &label);
         let mut errors = Vec::with_capacity(frames);
-        for f in 0..frames {
-            let p = sequence(&ranges, which % 2, f, frames);
+        let mut solved = Vec::new();
+        for (f, p) in params.iter().enumerate() {
+            let fresh = if f % stride == 0 {
+                let t = Instant::now();
+                let full = galerkin::radiosity::full_radiosity_of(spec.mesh(p)?, spec.lights())?;
+                let seconds = t.elapsed().as_secs_f64();
+                full_times.push(seconds);
+                let frame = FullFrame {
+                    params: p.clone(),
+                    seconds,
+                    radiosity: full.radiosity,
+                    areas: full.geometry.areas,
+                };
+                if let Some(kept) = &kept {
+                    // Solved again, the kept frame must be what the solver gives now.
+                    let d = relative_error(&kept[f].radiosity, &frame.radiosity, &frame.areas);
+                    if d > KEPT_FRAME_TOLERANCE {
+                        bail!(
+                            "{}: frame {f} differs from a fresh full solve by {d:.2e} (relative); delete the file",
+                            file.as_ref().map_or(PathBuf::new(), |file| file.path().to_path_buf()).display()
+                        );
+                    }
+                }
+                Some(frame)
+            } else {
+                None
+            };
+            let reference = match (&fresh, &kept) {
+                (Some(frame), _) => frame,
+                (None, Some(kept)) => &kept[f],
+                (None, None) => unreachable!("every frame is solved when none are kept"),
+            };
             let t = Instant::now();
-            let full = galerkin::radiosity::full_radiosity_of(spec.mesh(&p)?, spec.lights())?;
-            let full_s = t.elapsed().as_secs_f64();
-            let t = Instant::now();
-            let mesh = spec.mesh(&p)?;
+            let mesh = spec.mesh(p)?;
             let (b, times) = model.evaluate(&mesh)?;
             let reduced_s = t.elapsed().as_secs_f64();
             parts[0] += times.project;
             parts[1] += times.visibility + times.direct;
             parts[2] += times.chain;
             parts[3] += times.lift;
-            let e = relative_error(&b, &full.radiosity, &full.geometry.areas);
+            let e = relative_error(&b, &reference.radiosity, &reference.areas);
             errors.push(e);
-            full_times.push(full_s);
             reduced_times.push(reduced_s);
             let values: Vec<String> = p.iter().map(|v| v.to_string()).collect();
+            let full_ms = fresh.as_ref().map_or(String::new(), |frame| format!("{:.3}", frame.seconds * 1e3));
             rows.push(format!(
-                "{},{f},{},{e:.6},{:.3},{:.4}",
+                "{},{f},{},{e:.6},{full_ms},{:.4}",
                 which + 1,
                 values.join(","),
-                full_s * 1e3,
                 reduced_s * 1e3
             ));
+            if kept.is_none() {
+                solved.extend(fresh);
+            }
             bar.inc(1);
         }
         bar.finish();
+        if let (None, Some(file)) = (&kept, &file) {
+            file.save(model.faces(), &solved)?;
+        }
         series.push(errors);
     }
     let csv = args.out.join("compare.csv");
@@ -464,6 +538,7 @@ fn compare(args: &CompareArgs) -> Result<()> {
         v.sort_by(f64::total_cmp);
         v[v.len() / 2]
     };
+    let full_count = full_times.len();
     let (full_med, reduced_med) = (median(&mut full_times), median(&mut reduced_times));
     let all: Vec<f64> = series.iter().flatten().copied().collect();
     let total: f64 = parts.iter().sum();
@@ -474,11 +549,12 @@ fn compare(args: &CompareArgs) -> Result<()> {
         println!("| {} | {} | {:.2} % | {:.2} % |", which + 1, e.len(), 100.0 * mean, 100.0 * worst);
     }
     println!(
-        "all frames: mean {:.2} %, worst {:.2} %; median frame: full {:.1} ms ({:.2} FPS), reduced {:.3} ms ({:.0} FPS, mesh build and lift included): {:.0}× faster",
+        "all frames: mean {:.2} %, worst {:.2} %; median frame: full {:.1} ms ({:.2} FPS, {} frames solved in this run), reduced {:.3} ms ({:.0} FPS, mesh build and lift included): {:.0}× faster",
         100.0 * all.iter().sum::<f64>() / all.len().max(1) as f64,
         100.0 * all.iter().fold(0.0f64, |m, v| m.max(*v)),
         full_med * 1e3,
         1.0 / full_med,
+        full_count,
         reduced_med * 1e3,
         1.0 / reduced_med,
         full_med / reduced_med
