@@ -2,14 +2,16 @@
 //! DIR`). The full solution of a frame depends on the scene file, its lighting and the frame's
 //! parameters only — not on the reduced model — so a later comparison of another model of the
 //! same scene reuses them and solves only a few full frames again, for the speed ratio measured
-//! in the same run and to check the kept ones.
+//! in the same run and to check the kept ones. A sequence stopped part way keeps the frames
+//! solved so far (the file is rewritten every [`SAVE_EVERY`] frames), and the next run goes on
+//! from there.
 //!
 //! One file per sequence, `DIR/sequence-<k>-<frames>.bin`: the magic `GLKFULL1`, a key (a hash of
 //! the scene file's bytes, the lighting and the galerkin version), the face count, the parameter
-//! count and the frame count (u64 LE each), then per frame its parameters, the seconds its solve
-//! took, the radiosity (R, G, B per face) and the face areas, all f64 LE. Written to a temporary
-//! name first; a file that does not match (another scene, version or sequence, or truncated) is
-//! ignored and rewritten.
+//! count and the number of frames kept (the sequence's first ones; u64 LE each), then per frame
+//! its parameters, the seconds its solve took, the radiosity (R, G, B per face) and the face
+//! areas, all f64 LE. Written to a temporary name first; a file that does not match (another
+//! scene, version or sequence, or truncated) is ignored and rewritten.
 
 use std::path::{Path, PathBuf};
 
@@ -17,6 +19,9 @@ use anyhow::{Context, Result};
 use galerkin::radiosity::Rgb;
 
 const MAGIC: &[u8; 8] = b"GLKFULL1";
+
+/// How often (in newly solved frames) a sequence's file is rewritten while it runs.
+pub const SAVE_EVERY: usize = 50;
 
 /// One frame's full solution as `radiosity compare` uses it.
 #[derive(Debug)]
@@ -55,8 +60,9 @@ impl FullFramesFile {
         &self.path
     }
 
-    /// The kept frames if the file exists and matches the scene, the face count and every
-    /// frame's parameters (`params[f]`); `Err` says why it does not (the caller recomputes).
+    /// The kept frames — the first frames of the sequence whose parameters are `params`, all
+    /// of them or fewer — if the file exists and matches the scene, the face count and every
+    /// kept frame's parameters; `Err` says why it does not (the caller recomputes).
     pub fn load(&self, faces: usize, params: &[Vec<f64>]) -> std::result::Result<Vec<FullFrame>, String> {
         let bytes = std::fs::read(&self.path).map_err(|e| e.to_string())?;
         let mut at = 0usize;
@@ -73,7 +79,7 @@ impl FullFramesFile {
             *h = u64::from_le_bytes(take(8)?.try_into().expect("8 bytes"));
         }
         let k = params.first().map_or(0, Vec::len);
-        if header != [self.key, faces as u64, k as u64, params.len() as u64] {
+        if header[..3] != [self.key, faces as u64, k as u64] || header[3] > params.len() as u64 {
             return Err("made for another scene, lighting, version or sequence".into());
         }
         let mut f64s = |n: usize| -> std::result::Result<Vec<f64>, String> {
@@ -82,8 +88,9 @@ impl FullFramesFile {
                 .map(|c| f64::from_le_bytes(c.try_into().expect("8 bytes")))
                 .collect())
         };
+        let kept = header[3] as usize;
         let mut frames = Vec::with_capacity(params.len());
-        for (f, expected) in params.iter().enumerate() {
+        for (f, expected) in params[..kept].iter().enumerate() {
             let p = f64s(k)?;
             if p.iter().zip(expected).any(|(a, b)| a.to_bits() != b.to_bits()) {
                 return Err(format!("frame {f} has other parameters"));
@@ -97,8 +104,8 @@ impl FullFramesFile {
         Ok(frames)
     }
 
-    /// Writes `frames` (all of one sequence, each with `faces` faces) to the file, through a
-    /// temporary name so that a reader never sees half a file.
+    /// Writes `frames` (the first frames of one sequence, each with `faces` faces) to the file,
+    /// through a temporary name so that a reader never sees half a file.
     pub fn save(&self, faces: usize, frames: &[FullFrame]) -> Result<()> {
         let k = frames.first().map_or(0, |f| f.params.len());
         let mut out = Vec::with_capacity(40 + frames.len() * 8 * (k + 1 + 4 * faces));
@@ -149,6 +156,10 @@ mod tests {
             })
             .collect();
         assert!(file.load(2, &params).is_err(), "nothing saved yet");
+        // A sequence stopped after its first frame: that frame comes back, and the run goes on.
+        file.save(2, &frames[..1]).unwrap();
+        assert_eq!(file.load(2, &params).unwrap().len(), 1);
+        assert!(file.load(2, &params[..0]).is_err(), "more frames kept than the sequence has");
         file.save(2, &frames).unwrap();
         let back = file.load(2, &params).unwrap();
         assert_eq!(back.len(), 2);

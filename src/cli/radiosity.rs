@@ -16,7 +16,7 @@ use galerkin::radiosity::train::{
 use galerkin::radiosity::{full_radiosity, LightMode, SceneSpec, PARAMETERS};
 use galerkin::render::{write_exr_channels, write_png_rgba8};
 
-use super::full_frames::{FullFrame, FullFramesFile};
+use super::full_frames::{FullFrame, FullFramesFile, SAVE_EVERY};
 
 /// `galerkin radiosity` subcommands.
 #[derive(Subcommand)]
@@ -109,7 +109,8 @@ pub struct CompareArgs {
     /// Keep the full radiosity of every frame in DIR and reuse it on later runs with the same
     /// scene file, lighting and frames (the full solution does not depend on the model): such a
     /// run solves only --timed-full frames per sequence again, for the speed ratio measured in
-    /// the same run and to check the kept frames against.
+    /// the same run and to check the kept frames against. A run stopped part way keeps what it
+    /// solved (saved every 50 frames); the next goes on from there.
     #[arg(long, value_name = "DIR")]
     pub full_frames: Option<PathBuf>,
     /// With kept full frames: how many full frames per sequence are solved again.
@@ -440,37 +441,42 @@ fn compare(args: &CompareArgs) -> Result<()> {
     let (mut full_times, mut reduced_times) = (Vec::new(), Vec::new());
     let mut parts = [0.0f64; 4];
     let lighting = format!("{:?}", spec.lights().mode);
+    let csv = args.out.join("compare.csv");
     for (which, &frames) in args.frames.iter().enumerate() {
         let params: Vec<Vec<f64>> = (0..frames).map(|f| sequence(&ranges, which % 2, f, frames)).collect();
         let file = match &args.full_frames {
             Some(dir) => Some(FullFramesFile::new(dir, &args.scene, &lighting, which, frames)?),
             None => None,
         };
-        let kept = file.as_ref().and_then(|file| match file.load(model.faces(), &params) {
-            Ok(kept) => Some(kept),
-            Err(why) => {
-                if file.path().exists() {
-                    eprintln!("{}: {why}; solving every full frame again", file.path().display());
+        let mut kept = match &file {
+            Some(file) => match file.load(model.faces(), &params) {
+                Ok(kept) => kept,
+                Err(why) => {
+                    if file.path().exists() {
+                        eprintln!("{}: {why}; solving every full frame again", file.path().display());
+                    }
+                    Vec::new()
                 }
-                None
-            }
-        });
-        // With kept frames, every stride-th frame is solved again (timed, and checked).
-        let stride = match kept {
-            Some(_) => (frames / args.timed_full as usize).max(1),
-            None => 1,
+            },
+            None => Vec::new(),
         };
-        let label = match (&kept, &file) {
-            (Some(_), Some(file)) => {
-                format!("sequence {} (reduced; full frames from {})", which + 1, file.path().display())
-            }
+        // Kept frames are read back, and every stride-th of them solved again (timed, and
+        // checked); the others are solved, timed, and kept.
+        let reused = kept.len();
+        let stride = (frames / args.timed_full as usize).max(1);
+        let label = match &file {
+            Some(file) if reused > 0 => format!(
+                "sequence {} (reduced; {reused} full frames from {})",
+                which + 1,
+                file.path().display()
+            ),
             _ => format!("sequence {} (full and reduced)", which + 1),
         };
         let bar = crate::progress_bar(frames as u64, &label);
         let mut errors = Vec::with_capacity(frames);
-        let mut solved = Vec::new();
         for (f, p) in params.iter().enumerate() {
-            let fresh = if f % stride == 0 {
+            let from_file = f < reused;
+            let fresh = if !from_file || f % stride == 0 {
                 let t = Instant::now();
                 let full = galerkin::radiosity::full_radiosity_of(spec.mesh(p)?, spec.lights())?;
                 let seconds = t.elapsed().as_secs_f64();
@@ -481,7 +487,7 @@ fn compare(args: &CompareArgs) -> Result<()> {
                     radiosity: full.radiosity,
                     areas: full.geometry.areas,
                 };
-                if let Some(kept) = &kept {
+                if from_file {
                     // Solved again, the kept frame must be what the solver gives now.
                     let d = relative_error(&kept[f].radiosity, &frame.radiosity, &frame.areas);
                     if d > KEPT_FRAME_TOLERANCE {
@@ -495,11 +501,6 @@ fn compare(args: &CompareArgs) -> Result<()> {
             } else {
                 None
             };
-            let reference = match (&fresh, &kept) {
-                (Some(frame), _) => frame,
-                (None, Some(kept)) => &kept[f],
-                (None, None) => unreachable!("every frame is solved when none are kept"),
-            };
             let t = Instant::now();
             let mesh = spec.mesh(p)?;
             let (b, times) = model.evaluate(&mesh)?;
@@ -508,30 +509,44 @@ fn compare(args: &CompareArgs) -> Result<()> {
             parts[1] += times.visibility + times.direct;
             parts[2] += times.chain;
             parts[3] += times.lift;
+            let full_ms = fresh.as_ref().map_or(String::new(), |frame| format!("{:.3}", frame.seconds * 1e3));
+            let reference = match (&fresh, from_file) {
+                (_, true) => &kept[f],
+                (Some(frame), false) => frame,
+                (None, false) => unreachable!("a frame not kept is solved"),
+            };
             let e = relative_error(&b, &reference.radiosity, &reference.areas);
             errors.push(e);
             reduced_times.push(reduced_s);
             let values: Vec<String> = p.iter().map(|v| v.to_string()).collect();
-            let full_ms = fresh.as_ref().map_or(String::new(), |frame| format!("{:.3}", frame.seconds * 1e3));
             rows.push(format!(
                 "{},{f},{},{e:.6},{full_ms},{:.4}",
                 which + 1,
                 values.join(","),
                 reduced_s * 1e3
             ));
-            if kept.is_none() {
-                solved.extend(fresh);
+            if let (false, Some(frame), Some(file)) = (from_file, fresh, &file) {
+                kept.push(frame);
+                if (kept.len() - reused) % SAVE_EVERY == 0 || kept.len() == frames {
+                    file.save(model.faces(), &kept)?;
+                }
             }
             bar.inc(1);
         }
         bar.finish();
-        if let (None, Some(file)) = (&kept, &file) {
-            file.save(model.faces(), &solved)?;
-        }
+        // Each sequence's summary and rows as soon as it is done: a long comparison stopped
+        // in the second sequence still leaves the first.
+        let mean = errors.iter().sum::<f64>() / errors.len().max(1) as f64;
+        let worst = errors.iter().fold(0.0f64, |m, v| m.max(*v));
+        eprintln!(
+            "sequence {}: {frames} frames, mean {:.2} %, worst {:.2} %",
+            which + 1,
+            100.0 * mean,
+            100.0 * worst
+        );
+        std::fs::write(&csv, rows.join("\n") + "\n").with_context(|| format!("writing {}", csv.display()))?;
         series.push(errors);
     }
-    let csv = args.out.join("compare.csv");
-    std::fs::write(&csv, rows.join("\n") + "\n").with_context(|| format!("writing {}", csv.display()))?;
     let plot = args.out.join("compare.png");
     write_error_plot(&plot, &series)?;
     let median = |v: &mut Vec<f64>| {
