@@ -117,16 +117,7 @@ pub fn symmetric_eigen(what: &str, q: &Tensor) -> Result<(Vec<f64>, Tensor), Ten
 pub fn spd_power(what: &str, q: &Tensor, p: f64) -> Result<Tensor, TensorError> {
     let n = square(what, q)?;
     let (values, u) = symmetric_eigen(what, q)?;
-    let top = values.iter().fold(0f64, |m, v| m.max(v.abs()));
-    let floor = n as f64 * f64::EPSILON * top;
-    let mut powered = Vec::with_capacity(n);
-    for &l in &values {
-        if l < -floor || (p < 0.0 && l <= floor) {
-            let kind = if p < 0.0 { "definite" } else { "semidefinite" };
-            return Err(TensorError::NotSpd { what: what.into(), kind, eigenvalue: l });
-        }
-        powered.push(if l <= floor { 0.0 } else { l.powf(p) });
-    }
+    let powered = eigenvalue_powers(what, &values, p)?;
     let mut out = Tensor::zeros(&[n, n]);
     for i in 0..n {
         for j in 0..n {
@@ -135,6 +126,26 @@ pub fn spd_power(what: &str, q: &Tensor, p: f64) -> Result<Tensor, TensorError> 
         }
     }
     Ok(out)
+}
+
+/// `λᵢ^p` for the eigenvalues of a symmetric matrix that must be positive semidefinite
+/// (definite when `p < 0`): eigenvalues down to `-n·ε·max|λ|` count as zero (their power is 0);
+/// anything more negative, or a zero one when `p < 0`, is [`TensorError::NotSpd`]. The rule of
+/// [`spd_power`] and [`spd_power_apply`].
+fn eigenvalue_powers(what: &str, values: &[f64], p: f64) -> Result<Vec<f64>, TensorError> {
+    let top = values.iter().fold(0f64, |m, v| m.max(v.abs()));
+    let floor = values.len() as f64 * f64::EPSILON * top;
+    values
+        .iter()
+        .map(|&l| {
+            if l < -floor || (p < 0.0 && l <= floor) {
+                let kind = if p < 0.0 { "definite" } else { "semidefinite" };
+                Err(TensorError::NotSpd { what: what.into(), kind, eigenvalue: l })
+            } else {
+                Ok(if l <= floor { 0.0 } else { l.powf(p) })
+            }
+        })
+        .collect()
 }
 
 /// `Q^p x` for a symmetric positive (semi)definite `q` without forming `Q^p` or its
@@ -189,7 +200,7 @@ pub fn spd_power_apply(what: &str, q: &Tensor, p: f64, x: &[f64]) -> Result<Vec<
             stack,
         );
     }
-    let mut rotations = Vec::with_capacity(4 * n * n);
+    let mut rotations = Vec::with_capacity(n * n);
     tridiagonal_ql(what, &mut d, &mut e, &mut rotations)?;
     // c = Zᵀ y: the rotations in the order QL applied them to Z's columns, here to yᵀ.
     let mut c: Vec<f64> = (0..n).map(|i| y[(i, 0)]).collect();
@@ -198,14 +209,8 @@ pub fn spd_power_apply(what: &str, q: &Tensor, p: f64, x: &[f64]) -> Result<Vec<
         c[i] = cos * a - sin * b;
         c[i + 1] = sin * a + cos * b;
     }
-    let top = d.iter().fold(0f64, |m, v| m.max(v.abs()));
-    let floor = n as f64 * f64::EPSILON * top;
-    for (ck, &l) in c.iter_mut().zip(&d) {
-        if l < -floor || (p < 0.0 && l <= floor) {
-            let kind = if p < 0.0 { "definite" } else { "semidefinite" };
-            return Err(TensorError::NotSpd { what: what.into(), kind, eigenvalue: l });
-        }
-        *ck *= if l <= floor { 0.0 } else { l.powf(p) };
+    for (ck, lp) in c.iter_mut().zip(eigenvalue_powers(what, &d, p)?) {
+        *ck *= lp;
     }
     // Z (Λ^p c): the transposed rotations in reverse order.
     for &(i, cos, sin) in rotations.iter().rev() {
