@@ -389,3 +389,27 @@ fn symmetric_axes_are_contracted_packed_and_match_the_dense_reference() {
     let (done, total) = *last.lock().unwrap();
     assert!(total > 0.0 && (done - total).abs() < 1e-6 * total, "{done} of {total}");
 }
+
+/// Table 2's `P[k, k, i]` (pairs `k = n·i + j`): its two pair axes contracted first cost
+/// `n²·m·(1 + m)`, its face axis first `n²·m²·m_a` and more — the plan takes the cheap order, and
+/// the streamed finishing stage it chooses gives the dense reference's result.
+#[test]
+fn the_plan_contracts_units_in_their_cheapest_order() {
+    let n = 12;
+    let mut q = SparseTensor::new(&[n * n, n * n, n]);
+    for i in 0..n {
+        for j in 0..n {
+            q.push(&[n * i + j, n * i + j, i], 1.0 + (i * n + j) as f64 / 100.0);
+        }
+    }
+    let (m, ma) = (6, 3);
+    let (bp, ba) = (random_basis(n * n, m, 201), random_basis(n, ma, 202));
+    let mats = [bp.matrix(), bp.matrix(), ba.matrix()];
+    let (got, plan) = premultiply_sparse_with(&q, &mats, PremultiplyOptions::default()).unwrap();
+    let want = common::dense_reference(&q.to_dense(), &mats);
+    assert!(got.max_abs_diff(&want) < 1e-12 * want.max_abs(), "diff {}", got.max_abs_diff(&want));
+    let cheapest = ((n * n) * m * (1 + m) + n * m * m * ma) as f64;
+    assert!((plan.total_flops() - cheapest).abs() < 1e-9 * cheapest, "{plan:?}, cheapest {cheapest}");
+    assert_eq!(plan.stages.len(), 1, "one streamed finishing stage: {plan:?}");
+    assert_eq!(plan.stages[0][0], Unit::Axis(2), "the face axis contracted last: {plan:?}");
+}

@@ -162,10 +162,15 @@ impl SparseTensor {
             self.coords.push(i as u32);
         }
         for g in &self.symmetric {
+            // Groups have at most 6 axes: sorted on the stack (a pair tensor pushes millions).
             let c = &mut self.coords[start..];
-            let mut v: Vec<u32> = g.iter().map(|&a| c[a]).collect();
+            let mut v = [0u32; 6];
+            for (x, &a) in v.iter_mut().zip(g) {
+                *x = c[a];
+            }
+            let v = &mut v[..g.len()];
             v.sort_unstable();
-            for (&a, x) in g.iter().zip(v) {
+            for (&a, &x) in g.iter().zip(v.iter()) {
                 c[a] = x;
             }
         }

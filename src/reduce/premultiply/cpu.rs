@@ -46,6 +46,37 @@ pub(crate) fn accumulate(
     }
 }
 
+/// Value buffers kept between stages and between the chunks of a streamed premultiplication: a
+/// fresh allocation of a hundred MB or more costs a page fault (and, on a VM, a TLB shootdown)
+/// per 4 KiB page, which made a fifth of the 4,974-face radiosity training's time system time.
+#[derive(Default)]
+pub(crate) struct Buffers(Vec<Vec<f64>>);
+
+impl Buffers {
+    /// At most this many buffers are kept.
+    const KEPT: usize = 4;
+
+    /// An empty buffer, the largest kept one if any.
+    pub fn take(&mut self) -> Vec<f64> {
+        let largest = (0..self.0.len()).max_by_key(|&i| self.0[i].capacity());
+        let mut v = largest.map(|i| self.0.swap_remove(i)).unwrap_or_default();
+        v.clear();
+        v
+    }
+
+    /// Keeps `v` for a later [`Buffers::take`] (dropping the smallest beyond [`Buffers::KEPT`]).
+    pub fn give(&mut self, v: Vec<f64>) {
+        if v.capacity() == 0 {
+            return;
+        }
+        self.0.push(v);
+        if self.0.len() > Self::KEPT {
+            let smallest = (0..self.0.len()).min_by_key(|&i| self.0[i].capacity()).expect("not empty");
+            self.0.swap_remove(smallest);
+        }
+    }
+}
+
 /// A sparse intermediate: entries keyed by their coordinates on `sparse_axes`, each holding a
 /// dense block over the units contracted so far (`dense`, outermost first).
 pub(crate) struct Partial {
@@ -73,25 +104,14 @@ impl Partial {
     /// each group's blocks, summed where they share the unit's coordinates, are multiplied by
     /// the unit's rows (a small GEMM per group; one large parallel GEMM when a single group
     /// holds everything).
+    /// Its output is written into a buffer from `buffers`, and its input's values go back there.
     fn contract_unit(
         self,
         unit: &Unit,
         bases: &[&Tensor],
         packings: &HashMap<Vec<usize>, Packing>,
         progress: &(dyn Fn(f64) + Sync),
-    ) -> Partial {
-        self.contract_unit_into(unit, bases, packings, progress, Vec::new())
-    }
-
-    /// [`Partial::contract_unit`] writing into `recycled` (its pages already touched: large
-    /// fresh allocations cost a page fault and, on a VM, a TLB shootdown per 4 KiB page).
-    fn contract_unit_into(
-        self,
-        unit: &Unit,
-        bases: &[&Tensor],
-        packings: &HashMap<Vec<usize>, Packing>,
-        progress: &(dyn Fn(f64) + Sync),
-        recycled: Vec<f64>,
+        buffers: &mut Buffers,
     ) -> Partial {
         let s = self.sparse_axes.len();
         let (unit_pos, key_pos) = unit_and_key_positions(&self.sparse_axes, unit);
@@ -113,8 +133,7 @@ impl Partial {
         let done = AtomicUsize::new(0);
         let total = idx.len().max(1);
         let groups = starts.len() - 1;
-        let mut values = recycled;
-        values.clear();
+        let mut values = buffers.take();
         values.resize(groups * size * block, 0.0);
         values.par_chunks_mut(size * block).zip(starts.par_windows(2)).for_each(|(out, w)| {
             let (i, j) = (w[0], w[1]);
@@ -152,6 +171,7 @@ impl Partial {
         let coords: Vec<u32> = starts[..groups].iter().flat_map(|&i| key(idx[i])).collect();
         let mut dense = vec![unit.clone()];
         dense.extend(self.dense);
+        buffers.give(self.values);
         Partial {
             sparse_axes: key_pos.iter().map(|&i| self.sparse_axes[i]).collect(),
             coords,
@@ -165,16 +185,18 @@ impl Partial {
     /// the first unit's coordinates: for a chunk of them, the other units are contracted
     /// (recursively) into `W` (chunk × rest), then `out += B_firstᵀ[chunk] · W` — a GEMM with
     /// the first unit's size by the rest's, so no Khatri–Rao product is ever materialised and
-    /// intermediates stay within a chunk.
+    /// intermediates stay within a chunk (in buffers from `buffers`, which get this partial's
+    /// values back).
     pub fn finish(
         self,
         units: &[Unit],
         bases: &[&Tensor],
         packings: &HashMap<Vec<usize>, Packing>,
         progress: &(dyn Fn(f64) + Sync),
+        buffers: &mut Buffers,
     ) -> Partial {
         if units.len() == 1 {
-            return self.contract_unit(&units[0], bases, packings, progress);
+            return self.contract_unit(&units[0], bases, packings, progress, buffers);
         }
         let (first, rest) = (&units[0], &units[1..]);
         let s = self.sparse_axes.len();
@@ -189,7 +211,6 @@ impl Partial {
         let mut out = vec![0.0; size * w_block];
         let total = idx.len().max(1);
         let mut row = Vec::new();
-        let mut recycled: Vec<f64> = Vec::new();
         let mut rows_m: Vec<f64> = Vec::new();
         for range in chunks_of_groups(&idx, first_of, per_chunk) {
             let (i, j) = (range.start, range.end);
@@ -201,10 +222,13 @@ impl Partial {
                     .collect(),
                 dense: Vec::new(),
                 block: self.block,
-                values: idx[i..j]
-                    .iter()
-                    .flat_map(|&e| self.values[e * self.block..(e + 1) * self.block].iter().copied())
-                    .collect(),
+                values: {
+                    let mut v = buffers.take();
+                    for &e in &idx[i..j] {
+                        v.extend_from_slice(&self.values[e * self.block..(e + 1) * self.block]);
+                    }
+                    v
+                },
             };
             let t0 = std::time::Instant::now();
             let (base, span) = (i, j - i);
@@ -212,7 +236,7 @@ impl Partial {
             // Innermost first, so W's block is laid out as [rest…, previous dense].
             let mut w = chunk;
             for u in rest.iter().rev() {
-                w = w.contract_unit_into(u, bases, packings, &sub_progress, std::mem::take(&mut recycled));
+                w = w.contract_unit(u, bases, packings, &sub_progress, buffers);
             }
             let t1 = t0.elapsed();
             // W's entries are keyed by the first unit's coordinates only.
@@ -235,8 +259,9 @@ impl Partial {
                 total = t0.elapsed().as_secs_f64(),
                 "finish chunk"
             );
-            recycled = w.values;
+            buffers.give(w.values);
         }
+        buffers.give(self.values);
         let mut dense = units.to_vec();
         dense.extend(self.dense);
         Partial { sparse_axes: Vec::new(), coords: Vec::new(), dense, block: size * w_block, values: out }

@@ -19,9 +19,11 @@
 //! with sorted indices `(i₁, i₂, i₃)` the packed row is `S[c] = Σ_π Π_l B[π(i)_l, c_l]` over the
 //! distinct permutations `π` — the entry stands for all of them.
 //!
-//! Each plan step is chosen from: every single unit, or finishing all units now; the cost of a
-//! step counts its multiply–adds plus the finishing GEMM after it, and a step whose
-//! intermediate would exceed the memory budget is not taken. Entry counts of every stage are
+//! Each plan step is chosen from: every single unit, or finishing all units now (streamed, in
+//! the units' cheapest order); the cost of a step counts its multiply–adds plus those of the
+//! units after it in their cheapest order (exhaustive: a unit's stage leaves one entry per
+//! distinct coordinate on the units still to come), and a step whose intermediate would exceed
+//! the memory budget is not taken. Entry counts of every stage are
 //! known before any arithmetic (they are distinct projections of the input's coordinates), so
 //! progress is reported against the plan's total.
 
@@ -34,11 +36,12 @@ mod gpu;
 mod plan;
 mod stream;
 
+pub(crate) use cpu::Buffers;
 use cpu::{accumulate, Partial};
 pub use gpu::premultiply_sparse_gpu;
 use plan::plan;
 pub(crate) use plan::{unit_row, unit_size, Packing};
-pub use stream::{premultiply_streamed, premultiply_streamed_together, BasisRows, TensorChunks};
+pub use stream::{premultiply_streamed, premultiply_streamed_together, AxisRows, BasisRows, TensorChunks};
 
 /// Options of a premultiplication.
 #[derive(Clone, Copy)]
@@ -207,6 +210,17 @@ pub fn premultiply_sparse_with(
     bases: &[&Tensor],
     options: PremultiplyOptions<'_>,
 ) -> Result<(Tensor, PremultiplyPlan), TensorError> {
+    premultiply_sparse_in(q, bases, options, &mut Buffers::default())
+}
+
+/// [`premultiply_sparse_with`] with its intermediates in `buffers` (kept by a caller that
+/// premultiplies many chunks).
+pub(crate) fn premultiply_sparse_in(
+    q: &SparseTensor,
+    bases: &[&Tensor],
+    options: PremultiplyOptions<'_>,
+    buffers: &mut Buffers,
+) -> Result<(Tensor, PremultiplyPlan), TensorError> {
     let setup = Setup::new(q, bases, options.memory_budget)?;
     if q.nnz() == 0 {
         return Ok((Tensor::zeros(&setup.reduced_shape), setup.plan));
@@ -218,7 +232,11 @@ pub fn premultiply_sparse_with(
         coords: q.coords().to_vec(),
         dense: Vec::new(),
         block: 1,
-        values: q.values().to_vec(),
+        values: {
+            let mut v = buffers.take();
+            v.extend_from_slice(q.values());
+            v
+        },
     };
     for (stage, flops) in setup.plan.stages.iter().zip(&setup.plan.flops) {
         let report = |f: f64| {
@@ -227,7 +245,7 @@ pub fn premultiply_sparse_with(
             }
         };
         let t = std::time::Instant::now();
-        part = part.finish(stage, bases, &setup.packings, &report);
+        part = part.finish(stage, bases, &setup.packings, &report, buffers);
         tracing::debug!(
             ?stage,
             entries = part.entries(),
@@ -237,6 +255,7 @@ pub fn premultiply_sparse_with(
         done += flops;
     }
     let out = setup.expand(&part.dense, bases, &part.values);
+    buffers.give(part.values);
     Ok((out, setup.plan))
 }
 

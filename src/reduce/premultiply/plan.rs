@@ -113,7 +113,42 @@ fn distinct_on(q: &SparseTensor, axes: &[usize]) -> usize {
     set.len()
 }
 
-/// Plans the stages (see the module docs).
+/// The cheapest order to contract the units `rem` one after another, starting from `entries`
+/// entries of `block` values: (multiply–adds, order). Contracting unit `u` costs its entries ×
+/// block × `sizes[u]` and leaves one entry per distinct coordinate on the units still to come
+/// (`distinct`), so the order matters: `P[k, k, i]` of Table 2 costs `n·m²` per face row by
+/// its two pair axes first and `n²·m²·m_a` by its face axis first. Exhaustive: a tensor has
+/// few units (at most 5! orders).
+fn best_order(
+    rem: &[usize],
+    entries: f64,
+    block: f64,
+    sizes: &[usize],
+    distinct: &mut dyn FnMut(&[usize]) -> usize,
+) -> (f64, Vec<usize>) {
+    if let [u] = rem {
+        return (entries * block * sizes[*u] as f64, vec![*u]);
+    }
+    let mut best = (f64::INFINITY, Vec::new());
+    for (k, &u) in rem.iter().enumerate() {
+        let mut rest = rem.to_vec();
+        rest.remove(k);
+        let s = sizes[u] as f64;
+        let d = distinct(&rest) as f64;
+        let (tail, order) = best_order(&rest, d, block * s, sizes, distinct);
+        let cost = entries * block * s + tail;
+        if cost < best.0 {
+            best = (cost, std::iter::once(u).chain(order).collect());
+        }
+    }
+    best
+}
+
+/// Plans the stages (see the module docs). Each step is a single unit (an intermediate
+/// materialised whole) or finishing every remaining unit in one streamed stage; either way the
+/// units after it are costed in their best order ([`best_order`]), so finishing is chosen
+/// whenever its final block fits the budget, and a finishing stage lists its units in the
+/// order [`Partial::finish`](super::cpu::Partial::finish) contracts them last-to-first.
 pub(crate) fn plan(q: &SparseTensor, units: &[Unit], sizes: &[usize], budget: u64) -> PremultiplyPlan {
     let mut remaining: Vec<usize> = (0..units.len()).collect();
     let mut cache: HashMap<Vec<usize>, usize> = HashMap::new();
@@ -128,26 +163,29 @@ pub(crate) fn plan(q: &SparseTensor, units: &[Unit], sizes: &[usize], budget: u6
     let budget_values = (budget / 8) as f64;
     while !remaining.is_empty() {
         let all: f64 = remaining.iter().map(|&u| sizes[u] as f64).product();
-        let finish_cost = entries as f64 * block as f64 * all;
+        let (finish_cost, chain) = best_order(&remaining, entries as f64, block as f64, sizes, &mut distinct);
+        // The finishing stage's first unit is contracted last.
+        let finish: Vec<usize> = chain.into_iter().rev().collect();
         let mut best: (bool, f64, Vec<usize>, usize) =
-            (block as f64 * all <= budget_values, finish_cost, remaining.clone(), 1);
+            (block as f64 * all <= budget_values, finish_cost, finish, 1);
         if remaining.len() > 1 {
             for (k, &u) in remaining.iter().enumerate() {
                 let mut rest = remaining.clone();
                 rest.remove(k);
                 let d = distinct(&rest);
                 let s = sizes[u] as f64;
-                let rest_all: f64 = rest.iter().map(|&v| sizes[v] as f64).product();
-                let cost = entries as f64 * block as f64 * s + d as f64 * block as f64 * s * rest_all;
+                let (tail, _) = best_order(&rest, d as f64, block as f64 * s, sizes, &mut distinct);
+                let cost = entries as f64 * block as f64 * s + tail;
                 let fits = d as f64 * block as f64 * s <= budget_values;
                 if (fits, -cost) > (best.0, -best.1) {
                     best = (fits, cost, vec![u], d);
                 }
             }
         }
-        let (_, _, chosen, d) = best;
+        let (_, cost, chosen, d) = best;
         let s: f64 = chosen.iter().map(|&u| sizes[u] as f64).product();
-        plan.flops.push(entries as f64 * block as f64 * s);
+        let finishing = chosen.len() == remaining.len();
+        plan.flops.push(if finishing { cost } else { entries as f64 * block as f64 * s });
         plan.stages.push(chosen.iter().map(|&u| units[u].clone()).collect());
         remaining.retain(|u| !chosen.contains(u));
         entries = if remaining.is_empty() { 1 } else { d };
@@ -158,9 +196,40 @@ pub(crate) fn plan(q: &SparseTensor, units: &[Unit], sizes: &[usize], budget: u6
 }
 
 /// Entry order sorted by the coordinates at positions `key_pos`, then those at `unit_pos`
-/// (`coords` is entry-major with `s` coordinates per entry).
+/// (`coords` is entry-major with `s` coordinates per entry). The coordinates and the entry's
+/// index are packed into one integer key where they fit in 128 bits (always, for a chunk's
+/// local coordinates): sorting plain integers is several times faster than comparing
+/// coordinate lists.
 pub(crate) fn sorted_entries(coords: &[u32], s: usize, key_pos: &[usize], unit_pos: &[usize]) -> Vec<usize> {
     let n = coords.len().checked_div(s).unwrap_or(0);
+    let positions: Vec<usize> = key_pos.iter().chain(unit_pos).copied().collect();
+    let bits = |v: u64| (u64::BITS - v.leading_zeros()) as usize;
+    let mut widths = vec![0usize; positions.len()];
+    for e in coords.chunks_exact(s.max(1)) {
+        for (w, &p) in widths.iter_mut().zip(&positions) {
+            *w = (*w).max(bits(u64::from(e[p])));
+        }
+    }
+    let index_bits = bits(n as u64);
+    let total: usize = widths.iter().sum::<usize>() + index_bits;
+    let pack = |e: usize| {
+        let mut k = 0u128;
+        for (w, &p) in widths.iter().zip(&positions) {
+            k = (k << w) | u128::from(coords[e * s + p]);
+        }
+        (k << index_bits) | e as u128
+    };
+    let mask = (1u128 << index_bits) - 1;
+    if total <= 64 {
+        let mut keys: Vec<u64> = (0..n).into_par_iter().map(|e| pack(e) as u64).collect();
+        keys.par_sort_unstable();
+        return keys.into_par_iter().map(|k| (u128::from(k) & mask) as usize).collect();
+    }
+    if total <= 128 {
+        let mut keys: Vec<u128> = (0..n).into_par_iter().map(pack).collect();
+        keys.par_sort_unstable();
+        return keys.into_par_iter().map(|k| (k & mask) as usize).collect();
+    }
     let mut idx: Vec<usize> = (0..n).collect();
     idx.par_sort_unstable_by(|&a, &b| {
         let ka = key_pos.iter().map(|&i| coords[a * s + i]);
