@@ -313,3 +313,44 @@ fn the_table2_chain_reproduces_the_direct_form_factors_and_radiosity() {
         }
     }
 }
+
+/// `R` of Table 2 premultiplied from its structure (three rank-one terms per pair and the
+/// near-field edges, `PairTensor::premultiply_r`) equals its 117 entries per pair premultiplied
+/// by the generic sparse chain, over several chunks of pairs, both near-field treatments: f64,
+/// the same products summed in another order, so 10⁻¹² of the largest entry.
+#[test]
+fn r_premultiplied_from_its_structure_equals_its_entries_premultiplied() {
+    use galerkin::radiosity::chain::{form_factors as chain_ff, table2_model};
+    use galerkin::reduce::{premultiply_sparse, premultiply_streamed, Basis, FullTensor, PremultiplyOptions};
+    use galerkin::tensor::Tensor;
+    let mesh = unit_box(4);
+    let g: Vec<f64> = mesh
+        .vertices
+        .iter()
+        .flat_map(|v| [v.x + 0.05 * (3.0 * v.y).sin(), v.y + 0.04 * (2.0 * v.z).cos() * v.x, v.z])
+        .collect();
+    let mesh = mesh.with_g(&g).unwrap();
+    let basis = |n: usize, m: usize, seed: u64| {
+        let mut s = seed;
+        let data: Vec<f64> = (0..n * m)
+            .map(|_| {
+                s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+                (s >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+            })
+            .collect();
+        Basis::orthonormalize("random", &Tensor::from_vec(&[n, m], data).unwrap()).unwrap()
+    };
+    for near in [NearField::Regularised, NearField::Eq15] {
+        let model = table2_model(&mesh, near, chain_ff());
+        let FullTensor::Streamed(r) = &model.tensors()["R"].data else { panic!("R is streamed") };
+        assert!(r.chunks().chunks() >= 3, "{} chunks", r.chunks().chunks());
+        let shape = r.chunks().shape();
+        let (br, bg) = (basis(shape[0], 4, 1), basis(shape[1], 3, 2));
+        let fast =
+            premultiply_streamed("R", r.chunks(), &[&br, &bg, &bg], PremultiplyOptions::default()).unwrap();
+        let entries = premultiply_sparse(r.whole(), &[br.matrix(), bg.matrix(), bg.matrix()]).unwrap();
+        let diff = fast.max_abs_diff(&entries);
+        assert!(entries.max_abs() > 0.0);
+        assert!(diff <= 1e-12 * entries.max_abs(), "{near:?}: {diff:.2e} of {:.2e}", entries.max_abs());
+    }
+}

@@ -35,8 +35,12 @@ use std::sync::Arc;
 
 use super::form_factor::NearField;
 use super::mesh::SceneMesh;
-use crate::reduce::{Expr, Model, StreamedTensor, TensorChunks};
-use crate::tensor::SparseTensor;
+use faer::linalg::matmul::matmul;
+use faer::{Accum, MatMut, MatRef, Par};
+use rayon::prelude::*;
+
+use crate::reduce::{AxisRows, Expr, Model, ReduceError, StreamedTensor, TensorChunks};
+use crate::tensor::{SparseTensor, Tensor};
 
 /// `n = N ⊗₁ g ⊗₂ g`.
 pub fn normals() -> Expr {
@@ -197,6 +201,15 @@ impl TensorChunks for PairTensor {
         }
     }
 
+    /// `R` from its structure ([`PairTensor::premultiply_r`]); the others through their entries.
+    fn premultiply_chunk(
+        &self,
+        chunk: usize,
+        rows: &mut AxisRows<'_>,
+    ) -> Option<Result<Tensor, ReduceError>> {
+        (self.kind == PairKind::R).then(|| self.premultiply_r(chunk, rows))
+    }
+
     fn chunk(&self, chunk: usize) -> SparseTensor {
         let t = &self.topology;
         let (faces, n) = (&t.faces, t.faces.len());
@@ -265,6 +278,100 @@ impl TensorChunks for PairTensor {
             }
         }
         out
+    }
+}
+
+impl PairTensor {
+    /// Chunk `chunk` of `R̂ = R ⊗₀ B_r ⊗₁ B_g ⊗₂ B_g` from the structure of `R`'s entries rather
+    /// than the entries: row `k = (i, j)` of `R` is the quadratic form of
+    /// `r_k = Σ_a (c_{j,a} − c_{i,a})²` (+ the near-field term `Σ_{f ∈ {i, j}} Σ_edges
+    /// |g_p − g_q|² / 16π`), so with `δ_{k,a} = C[j, a] − C[i, a]` from the centroid rows
+    /// `C[f, a] = ⅓ Σ_{v ∈ f} B_g[3v + a, :]` and the per-face near-field matrices
+    /// `L_f = Σ_{edges pq} Σ_a e eᵀ`, `e = B_g[3p + a, :] − B_g[3q + a, :]`:
+    /// `R̂ = Σ_k B_r[k, :] ⊗ (Σ_a δ_{k,a} δ_{k,a}ᵀ + (L_i + L_j) / 16π)` — one GEMM over the
+    /// chunk's pairs, against 117 entries per pair through the generic premultiplication.
+    fn premultiply_r(&self, chunk: usize, rows: &mut AxisRows<'_>) -> Result<Tensor, ReduceError> {
+        let t = &self.topology;
+        let (faces, n) = (&t.faces, t.faces.len());
+        let face_rows = self.face_rows(chunk);
+        let pairs: Vec<usize> = (n * face_rows.start..n * face_rows.end).collect();
+        let br = rows(0, &pairs)?;
+        let everything: Vec<usize> = (0..3 * t.vertices).collect();
+        let bg = rows(1, &everything)?;
+        let (mr, mg) = (br.shape()[1], bg.shape()[1]);
+        let g = bg.data();
+        let row = |v: u32, a: usize| &g[(3 * v as usize + a) * mg..(3 * v as usize + a + 1) * mg];
+        let mut centroids = vec![0.0; n * 3 * mg];
+        for (f, face) in faces.iter().enumerate() {
+            for a in 0..3 {
+                let out = &mut centroids[(3 * f + a) * mg..(3 * f + a + 1) * mg];
+                for &v in face {
+                    for (o, x) in out.iter_mut().zip(row(v, a)) {
+                        *o += x / 3.0;
+                    }
+                }
+            }
+        }
+        let mg2 = mg * mg;
+        let near: Option<Vec<f64>> = (t.near == NearField::Regularised).then(|| {
+            let mut l = vec![0.0; n * mg2];
+            let mut e = vec![0.0; mg];
+            for (f, face) in faces.iter().enumerate() {
+                let lf = &mut l[f * mg2..(f + 1) * mg2];
+                let [v0, v1, v2] = *face;
+                for (p, q) in [(v0, v1), (v1, v2), (v2, v0)] {
+                    for a in 0..3 {
+                        for ((x, gp), gq) in e.iter_mut().zip(row(p, a)).zip(row(q, a)) {
+                            *x = gp - gq;
+                        }
+                        for (b, &eb) in e.iter().enumerate() {
+                            for (o, &ec) in lf[b * mg..(b + 1) * mg].iter_mut().zip(&e) {
+                                *o += eb * ec;
+                            }
+                        }
+                    }
+                }
+            }
+            l
+        });
+        let near_c = 1.0 / (16.0 * PI);
+        // Q: one m_g × m_g block per pair of the chunk (zero on the diagonal i = j).
+        let mut q = vec![0.0; pairs.len() * mg2];
+        q.par_chunks_mut(mg2).zip(&pairs).for_each(|(qk, &k)| {
+            let (i, j) = (k / n, k % n);
+            if i == j {
+                return;
+            }
+            let mut delta = vec![0.0; mg];
+            for a in 0..3 {
+                let (ci, cj) = (&centroids[(3 * i + a) * mg..], &centroids[(3 * j + a) * mg..]);
+                for (c, d) in delta.iter_mut().enumerate() {
+                    *d = cj[c] - ci[c];
+                }
+                for (b, &db) in delta.iter().enumerate() {
+                    for (o, &dc) in qk[b * mg..(b + 1) * mg].iter_mut().zip(&delta) {
+                        *o += db * dc;
+                    }
+                }
+            }
+            if let Some(l) = &near {
+                for ((o, li), lj) in
+                    qk.iter_mut().zip(&l[i * mg2..(i + 1) * mg2]).zip(&l[j * mg2..(j + 1) * mg2])
+                {
+                    *o += near_c * (li + lj);
+                }
+            }
+        });
+        let mut out = vec![0.0; mr * mg2];
+        matmul(
+            MatMut::from_row_major_slice_mut(&mut out, mr, mg2),
+            Accum::Replace,
+            MatRef::from_row_major_slice(br.data(), pairs.len(), mr).transpose(),
+            MatRef::from_row_major_slice(&q, pairs.len(), mg2),
+            1.0,
+            Par::rayon(0),
+        );
+        Ok(Tensor::from_vec(&[mr, mg, mg], out).expect("shape matches"))
     }
 }
 

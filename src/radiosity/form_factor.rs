@@ -52,20 +52,35 @@ pub enum NearField {
     Eq15,
 }
 
+impl NearField {
+    /// The squared distance `r_ij` of Table 2 from `d = cⱼ − cᵢ` and the two faces' sums of
+    /// squared edge lengths.
+    #[inline]
+    pub fn squared_distance(self, d: DVec3, edge_squares_i: f64, edge_squares_j: f64) -> f64 {
+        let r = d.length_squared();
+        match self {
+            NearField::Regularised => r + (edge_squares_i + edge_squares_j) / (16.0 * std::f64::consts::PI),
+            NearField::Eq15 => r,
+        }
+    }
+}
+
+/// The scaled cosines `s_ij = nᵢ·d` and `s_ji = −nⱼ·d` of Table 2 from `d = cⱼ − cᵢ` and the
+/// two faces' normals.
+#[inline]
+pub fn scaled_cosines_of(d: DVec3, normal_i: DVec3, normal_j: DVec3) -> (f64, f64) {
+    (normal_i.dot(d), -normal_j.dot(d))
+}
+
 /// The scaled cosines `s_ij = nᵢ·(cⱼ − cᵢ)` and `s_ji = nⱼ·(cᵢ − cⱼ)` of Table 2 (the
 /// squared distance is [`squared_distance`]).
 pub fn scaled_cosines(g: &FaceGeometry, i: usize, j: usize) -> (f64, f64) {
-    let d = g.centroids[j] - g.centroids[i];
-    (g.normals[i].dot(d), -g.normals[j].dot(d))
+    scaled_cosines_of(g.centroids[j] - g.centroids[i], g.normals[i], g.normals[j])
 }
 
 /// The squared distance `r_ij` of Table 2 under `near`.
 pub fn squared_distance(g: &FaceGeometry, i: usize, j: usize, near: NearField) -> f64 {
-    let d = (g.centroids[j] - g.centroids[i]).length_squared();
-    match near {
-        NearField::Regularised => d + (g.edge_squares[i] + g.edge_squares[j]) / (16.0 * std::f64::consts::PI),
-        NearField::Eq15 => d,
-    }
+    near.squared_distance(g.centroids[j] - g.centroids[i], g.edge_squares[i], g.edge_squares[j])
 }
 
 /// Whether faces `i ≠ j` face each other (the part of `Vis(i, j)` that needs no ray).
