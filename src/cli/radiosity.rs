@@ -116,6 +116,10 @@ pub struct CompareArgs {
     /// With kept full frames: how many full frames per sequence are solved again.
     #[arg(long, default_value_t = 8, value_parser = clap::value_parser!(u64).range(1..))]
     pub timed_full: u64,
+    /// Only solve and keep the full frames in --full-frames DIR (resuming), without a model:
+    /// they depend on the scene alone, so they can be made before or while a model trains.
+    #[arg(long, requires = "full_frames")]
+    pub full_only: bool,
 }
 
 /// What a picture or window shows: the configuration and how it is looked at.
@@ -425,6 +429,9 @@ const KEPT_FRAME_TOLERANCE: f64 = 1e-9;
 fn compare(args: &CompareArgs) -> Result<()> {
     let scene = AnyScene::load(&args.scene, args.lights.as_deref())?;
     let spec = scene.space();
+    if args.full_only {
+        return keep_full_frames(args, &scene);
+    }
     let model = ReducedRadiosity::load(&args.model)?;
     if model.light_mode() != spec.lights().mode {
         bail!(
@@ -582,6 +589,47 @@ fn compare(args: &CompareArgs) -> Result<()> {
         100.0 * parts[3] / total
     );
     println!("→ {} and {}", csv.display(), plot.display());
+    Ok(())
+}
+
+/// `compare --full-only`: solve every frame of both sequences not yet kept in the
+/// `--full-frames` directory and keep it (saved every [`SAVE_EVERY`] frames), without a model.
+fn keep_full_frames(args: &CompareArgs, scene: &AnyScene) -> Result<()> {
+    let spec = scene.space();
+    let dir = args.full_frames.as_ref().context("--full-only needs --full-frames DIR")?;
+    let lighting = format!("{:?}", spec.lights().mode);
+    let ranges = spec.ranges();
+    for (which, &frames) in args.frames.iter().enumerate() {
+        let params: Vec<Vec<f64>> = (0..frames).map(|f| sequence(&ranges, which % 2, f, frames)).collect();
+        let Some(first) = params.first() else { continue };
+        let faces = spec.mesh(first)?.len();
+        let file = FullFramesFile::new(dir, &args.scene, &lighting, which, frames)?;
+        let mut kept = file.load(faces, &params).unwrap_or_else(|why| {
+            if file.path().exists() {
+                eprintln!("{}: {why}; solving every full frame again", file.path().display());
+            }
+            Vec::new()
+        });
+        let bar = crate::progress_bar(frames as u64, &format!("sequence {} (full frames)", which + 1));
+        bar.set_position(kept.len() as u64);
+        let reused = kept.len();
+        for p in &params[reused..] {
+            let t = Instant::now();
+            let full = galerkin::radiosity::full_radiosity_of(spec.mesh(p)?, spec.lights())?;
+            kept.push(FullFrame {
+                params: p.clone(),
+                seconds: t.elapsed().as_secs_f64(),
+                radiosity: full.radiosity,
+                areas: full.geometry.areas,
+            });
+            if (kept.len() - reused) % SAVE_EVERY == 0 || kept.len() == frames {
+                file.save(faces, &kept)?;
+            }
+            bar.inc(1);
+        }
+        bar.finish();
+        eprintln!("sequence {}: {frames} full frames kept in {}", which + 1, file.path().display());
+    }
     Ok(())
 }
 
