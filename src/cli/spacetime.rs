@@ -339,6 +339,10 @@ pub struct BenchArgs {
     /// `booster`); the out-of-core file is always `pulses`.
     #[arg(long, default_value = "pulses")]
     pub scenario: String,
+    /// Only these data-set sizes (comma-separated element counts), no out-of-core run: for
+    /// A/B runs at one size, e.g. `--elements 5000000 --frames 21`.
+    #[arg(long, value_delimiter = ',', value_name = "N")]
+    pub elements: Vec<usize>,
 }
 
 /// The data set `scenario` of about `elements` elements in `dir`, generated if missing.
@@ -359,7 +363,14 @@ pub fn bench(desc: &GpuDesc, args: &BenchArgs) -> Result<()> {
     if args.frames == 0 {
         bail!("--frames must be positive");
     }
-    let sizes: &[usize] = if args.quick { &[100_000, 1_000_000] } else { &[100_000, 1_000_000, 5_000_000] };
+    let sizes: &[usize] = match (args.elements.as_slice(), args.quick) {
+        ([], true) => &[100_000, 1_000_000],
+        ([], false) => &[100_000, 1_000_000, 5_000_000],
+        (chosen, _) => chosen,
+    };
+    if let Some(&n) = sizes.iter().find(|&&n| n < 1000) {
+        bail!("--elements {n}: data sets start at 1000 elements");
+    }
     let gpu = Gpu::new(desc)?;
     println!("device: {} ({})", gpu.caps().device_name, gpu.caps().driver);
     let colormap = Colormap::viridis();
@@ -414,7 +425,7 @@ pub fn bench(desc: &GpuDesc, args: &BenchArgs) -> Result<()> {
     }
     drop(r);
     crate::check_validation(gpu)?;
-    if !args.quick && args.scenario == "pulses" {
+    if !args.quick && args.elements.is_empty() && args.scenario == "pulses" {
         let path = bench_data(&args.data_dir, "pulses", 20_000_000)?;
         println!("\nOut of core: the first frame of {} in a fresh process:", path.display());
         let exe = std::env::current_exe().context("finding this executable")?;
