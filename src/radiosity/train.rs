@@ -178,39 +178,57 @@ impl Configuration {
     }
 }
 
-/// Solves the full radiosity of every configuration (visibility, form factors, Jacobi).
+/// Solves the full radiosity of every configuration (visibility, form factors, Jacobi), two
+/// configurations at a time: one solve has single-threaded stretches (the mesh, the visibility
+/// bits, parts of the Jacobi sweeps) that left a core idle a third of the time. `progress` is
+/// called with the number solved so far.
 pub fn solve_configurations(
     space: &dyn DesignSpace,
     params: &[Vec<f64>],
     near: NearField,
     progress: &(dyn Fn(usize) + Sync),
 ) -> Result<Vec<Configuration>, RadiosityError> {
-    let mut out = Vec::with_capacity(params.len());
-    for (t, p) in params.iter().enumerate() {
-        let mesh = space.mesh(p)?;
-        let geometry = mesh.geometry();
-        let f = form_factors(&mesh, near);
-        let e = emission(&mesh, &geometry, space.lights(), &f);
-        let (b, _) = solve_jacobi(&f, &mesh.albedo, &e, JACOBI_TOLERANCE, JACOBI_MAX_SWEEPS)?;
-        // Vis(i, j) = 1 exactly where F_ij > 0 (visible pairs face each other: both scaled
-        // cosines are positive).
-        let mut bits = vec![0u64; f.values.len().div_ceil(64)];
-        for (k, v) in f.values.iter().enumerate() {
+    let solved = std::sync::atomic::AtomicUsize::new(0);
+    params
+        .par_iter()
+        .with_max_len(1)
+        .map(|p| {
+            let configuration = solve_configuration(space, p, near)?;
+            progress(solved.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1);
+            Ok(configuration)
+        })
+        .collect()
+}
+
+/// The full radiosity of the configuration at `p`, with what training keeps of it.
+fn solve_configuration(
+    space: &dyn DesignSpace,
+    p: &[f64],
+    near: NearField,
+) -> Result<Configuration, RadiosityError> {
+    let mesh = space.mesh(p)?;
+    let geometry = mesh.geometry();
+    let f = form_factors(&mesh, near);
+    let e = emission(&mesh, &geometry, space.lights(), &f);
+    let (b, _) = solve_jacobi(&f, &mesh.albedo, &e, JACOBI_TOLERANCE, JACOBI_MAX_SWEEPS)?;
+    // Vis(i, j) = 1 exactly where F_ij > 0 (visible pairs face each other: both scaled
+    // cosines are positive).
+    let mut bits = vec![0u64; f.values.len().div_ceil(64)];
+    bits.par_iter_mut().zip(f.values.par_chunks(64)).for_each(|(word, values)| {
+        for (bit, v) in values.iter().enumerate() {
             if *v > 0.0 {
-                bits[k / 64] |= 1 << (k % 64);
+                *word |= 1 << bit;
             }
         }
-        out.push(Configuration {
-            params: p.clone(),
-            g: mesh.g(),
-            geometry,
-            visibility: bits,
-            emission: e,
-            radiosity: b,
-        });
-        progress(t + 1);
-    }
-    Ok(out)
+    });
+    Ok(Configuration {
+        params: p.to_vec(),
+        g: mesh.g(),
+        geometry,
+        visibility: bits,
+        emission: e,
+        radiosity: b,
+    })
 }
 
 /// The intermediate quantities of Table 2 whose snapshots are analysed.

@@ -117,8 +117,9 @@ fn distinct_on(q: &SparseTensor, axes: &[usize]) -> usize {
 /// entries of `block` values: (multiply–adds, order). Contracting unit `u` costs its entries ×
 /// block × `sizes[u]` and leaves one entry per distinct coordinate on the units still to come
 /// (`distinct`), so the order matters: `P[k, k, i]` of Table 2 costs `n·m²` per face row by
-/// its two pair axes first and `n²·m²·m_a` by its face axis first. Exhaustive: a tensor has
-/// few units (at most 5! orders).
+/// its two pair axes first and `n²·m²·m_a` by its face axis first. Exhaustive over the `u!`
+/// orders of `u` units (the distinct counts are cached per set of axes): the tensors here have
+/// at most five units.
 fn best_order(
     rem: &[usize],
     entries: f64,

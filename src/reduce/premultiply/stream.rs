@@ -214,31 +214,30 @@ impl RowMemo {
     }
 }
 
-/// Position of a coordinate in a chunk's ascending row list: a table over the list's span
-/// when that is not much longer than the list (a block of whole rows of pairs, a few faces'
-/// vertices), else a binary search (the transposed pairs, spread over all `n²`).
+/// Position of a coordinate in a chunk's row list: a table over the list's span when that is
+/// not much longer than the list (a block of whole rows of pairs, a few faces' vertices), else a
+/// binary search (the transposed pairs, spread over all `n²`).
 enum LocalIndex {
     Table { first: u32, slots: Vec<u32> },
-    Sorted(Vec<u32>),
+    Sorted(Vec<(u32, u32)>),
 }
 
 impl LocalIndex {
     const EMPTY: u32 = u32::MAX;
 
-    /// The index of `rows` (ascending, distinct).
+    /// The index of `rows` (distinct; ascending as declared, but any order works).
     fn new(rows: &[u32]) -> Self {
-        match (rows.first(), rows.last()) {
-            (Some(&first), Some(&last))
-                if last >= first && ((last - first) as usize) < 4 * rows.len() + (1 << 16) =>
-            {
-                let mut slots = vec![Self::EMPTY; (last - first) as usize + 1];
-                for (l, &i) in rows.iter().enumerate() {
-                    slots[(i - first) as usize] = l as u32;
-                }
-                LocalIndex::Table { first, slots }
+        let (first, last) = rows.iter().fold((u32::MAX, 0), |(lo, hi), &i| (lo.min(i), hi.max(i)));
+        if !rows.is_empty() && ((last - first) as usize) < 4 * rows.len() + (1 << 16) {
+            let mut slots = vec![Self::EMPTY; (last - first) as usize + 1];
+            for (l, &i) in rows.iter().enumerate() {
+                slots[(i - first) as usize] = l as u32;
             }
-            _ => LocalIndex::Sorted(rows.to_vec()),
+            return LocalIndex::Table { first, slots };
         }
+        let mut sorted: Vec<(u32, u32)> = rows.iter().enumerate().map(|(l, &i)| (i, l as u32)).collect();
+        sorted.sort_unstable();
+        LocalIndex::Sorted(sorted)
     }
 
     /// The position of coordinate `i`, if it is one of the rows.
@@ -248,7 +247,7 @@ impl LocalIndex {
                 let l = *slots.get(i.checked_sub(*first)? as usize)?;
                 (l != Self::EMPTY).then_some(l)
             }
-            LocalIndex::Sorted(rows) => rows.binary_search(&i).ok().map(|l| l as u32),
+            LocalIndex::Sorted(rows) => rows.binary_search_by_key(&i, |&(v, _)| v).ok().map(|k| rows[k].1),
         }
     }
 }
@@ -350,6 +349,25 @@ mod tests {
             }
             t
         }
+    }
+
+    /// Both kinds of chunk index find every row's position, in any order, and nothing else.
+    #[test]
+    fn local_indices_find_the_rows_and_only_them() {
+        let near: Vec<u32> = vec![70, 12, 13, 40, 11];
+        let spread: Vec<u32> = vec![5_000_000, 3, 900_000, 1 << 30, 77];
+        for rows in [near, spread] {
+            let index = LocalIndex::new(&rows);
+            let table = matches!(index, LocalIndex::Table { .. });
+            assert_eq!(table, rows[0] == 70, "a table only for a short span");
+            for (l, &i) in rows.iter().enumerate() {
+                assert_eq!(index.get(i), Some(l as u32));
+            }
+            for missing in [0, 2, 14, 69, 71, 4_999_999, u32::MAX] {
+                assert_eq!(index.get(missing), None, "{missing}");
+            }
+        }
+        assert_eq!(LocalIndex::new(&[]).get(0), None);
     }
 
     fn basis(n: usize, m: usize, seed: u64) -> Basis {
