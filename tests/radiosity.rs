@@ -4,6 +4,8 @@
 
 use std::path::Path;
 
+mod common;
+
 use galerkin::radiosity::bvh::segment_triangle;
 use galerkin::radiosity::form_factor::{bvh_of, facing, form_factors, patch_form_factor, visible, NearField};
 use galerkin::radiosity::solve::{solve_direct, solve_jacobi};
@@ -331,13 +333,7 @@ fn r_premultiplied_from_its_structure_equals_its_entries_premultiplied() {
         .collect();
     let mesh = mesh.with_g(&g).unwrap();
     let basis = |n: usize, m: usize, seed: u64| {
-        let mut s = seed;
-        let data: Vec<f64> = (0..n * m)
-            .map(|_| {
-                s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-                (s >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-            })
-            .collect();
+        let data = common::random_f32(n * m, seed).into_iter().map(f64::from).collect();
         Basis::orthonormalize("random", &Tensor::from_vec(&[n, m], data).unwrap()).unwrap()
     };
     for near in [NearField::Regularised, NearField::Eq15] {
