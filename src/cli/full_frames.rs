@@ -16,6 +16,7 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
+use galerkin::radiosity::train::DesignSpace;
 use galerkin::radiosity::Rgb;
 
 const MAGIC: &[u8; 8] = b"GLKFULL1";
@@ -34,6 +35,26 @@ pub struct FullFrame {
     pub radiosity: Vec<Rgb>,
     /// Face areas (the error's weights).
     pub areas: Vec<f64>,
+}
+
+impl FullFrame {
+    /// Solves the full radiosity at `params` in `space` (mesh build included), timed.
+    pub fn solve(space: &dyn DesignSpace, params: &[f64]) -> Result<Self> {
+        let t = std::time::Instant::now();
+        let full = galerkin::radiosity::full_radiosity_of(space.mesh(params)?, space.lights())?;
+        Ok(Self {
+            params: params.to_vec(),
+            seconds: t.elapsed().as_secs_f64(),
+            radiosity: full.radiosity,
+            areas: full.geometry.areas,
+        })
+    }
+}
+
+/// Whether a sequence's file is rewritten after this frame: every [`SAVE_EVERY`] newly solved
+/// frames, and when the sequence is complete.
+pub fn save_due(newly_solved: usize, kept: usize, frames: usize) -> bool {
+    newly_solved.is_multiple_of(SAVE_EVERY) || kept == frames
 }
 
 /// Where one sequence's full frames are kept, and what they must match.
@@ -58,6 +79,17 @@ impl FullFramesFile {
     /// The file's path.
     pub fn path(&self) -> &Path {
         &self.path
+    }
+
+    /// The kept frames ([`Self::load`]), or none — saying why when a file was there but did not
+    /// match.
+    pub fn load_or_none(&self, faces: usize, params: &[Vec<f64>]) -> Vec<FullFrame> {
+        self.load(faces, params).unwrap_or_else(|why| {
+            if self.path.exists() {
+                eprintln!("{}: {why}; solving every full frame again", self.path.display());
+            }
+            Vec::new()
+        })
     }
 
     /// The kept frames — the first frames of the sequence whose parameters are `params`, all

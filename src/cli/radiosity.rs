@@ -16,7 +16,7 @@ use galerkin::radiosity::train::{
 use galerkin::radiosity::{full_radiosity, LightMode, SceneSpec, PARAMETERS};
 use galerkin::render::{write_exr_channels, write_png_rgba8};
 
-use super::full_frames::{FullFrame, FullFramesFile, SAVE_EVERY};
+use super::full_frames::{save_due, FullFrame, FullFramesFile};
 
 /// `galerkin radiosity` subcommands.
 #[derive(Subcommand)]
@@ -455,18 +455,7 @@ fn compare(args: &CompareArgs) -> Result<()> {
             Some(dir) => Some(FullFramesFile::new(dir, &args.scene, &lighting, which, frames)?),
             None => None,
         };
-        let mut kept = match &file {
-            Some(file) => match file.load(model.faces(), &params) {
-                Ok(kept) => kept,
-                Err(why) => {
-                    if file.path().exists() {
-                        eprintln!("{}: {why}; solving every full frame again", file.path().display());
-                    }
-                    Vec::new()
-                }
-            },
-            None => Vec::new(),
-        };
+        let mut kept = file.as_ref().map_or_else(Vec::new, |file| file.load_or_none(model.faces(), &params));
         // Kept frames are read back, and every stride-th of them solved again (timed, and
         // checked); the others are solved, timed, and kept.
         let reused = kept.len();
@@ -484,16 +473,8 @@ fn compare(args: &CompareArgs) -> Result<()> {
         for (f, p) in params.iter().enumerate() {
             let from_file = f < reused;
             let fresh = if !from_file || f % stride == 0 {
-                let t = Instant::now();
-                let full = galerkin::radiosity::full_radiosity_of(spec.mesh(p)?, spec.lights())?;
-                let seconds = t.elapsed().as_secs_f64();
-                full_times.push(seconds);
-                let frame = FullFrame {
-                    params: p.clone(),
-                    seconds,
-                    radiosity: full.radiosity,
-                    areas: full.geometry.areas,
-                };
+                let frame = FullFrame::solve(spec, p)?;
+                full_times.push(frame.seconds);
                 if from_file {
                     // Solved again, the kept frame must be what the solver gives now.
                     let d = relative_error(&kept[f].radiosity, &frame.radiosity, &frame.areas);
@@ -534,7 +515,7 @@ fn compare(args: &CompareArgs) -> Result<()> {
             ));
             if let (false, Some(frame), Some(file)) = (from_file, fresh, &file) {
                 kept.push(frame);
-                if (kept.len() - reused) % SAVE_EVERY == 0 || kept.len() == frames {
+                if save_due(kept.len() - reused, kept.len(), frames) {
                     file.save(model.faces(), &kept)?;
                 }
             }
@@ -593,7 +574,7 @@ fn compare(args: &CompareArgs) -> Result<()> {
 }
 
 /// `compare --full-only`: solve every frame of both sequences not yet kept in the
-/// `--full-frames` directory and keep it (saved every [`SAVE_EVERY`] frames), without a model.
+/// `--full-frames` directory and keep it (saved as [`save_due`] says), without a model.
 fn keep_full_frames(args: &CompareArgs, scene: &AnyScene) -> Result<()> {
     let spec = scene.space();
     let dir = args.full_frames.as_ref().context("--full-only needs --full-frames DIR")?;
@@ -604,25 +585,13 @@ fn keep_full_frames(args: &CompareArgs, scene: &AnyScene) -> Result<()> {
         let Some(first) = params.first() else { continue };
         let faces = spec.mesh(first)?.len();
         let file = FullFramesFile::new(dir, &args.scene, &lighting, which, frames)?;
-        let mut kept = file.load(faces, &params).unwrap_or_else(|why| {
-            if file.path().exists() {
-                eprintln!("{}: {why}; solving every full frame again", file.path().display());
-            }
-            Vec::new()
-        });
+        let mut kept = file.load_or_none(faces, &params);
         let bar = crate::progress_bar(frames as u64, &format!("sequence {} (full frames)", which + 1));
         bar.set_position(kept.len() as u64);
         let reused = kept.len();
         for p in &params[reused..] {
-            let t = Instant::now();
-            let full = galerkin::radiosity::full_radiosity_of(spec.mesh(p)?, spec.lights())?;
-            kept.push(FullFrame {
-                params: p.clone(),
-                seconds: t.elapsed().as_secs_f64(),
-                radiosity: full.radiosity,
-                areas: full.geometry.areas,
-            });
-            if (kept.len() - reused) % SAVE_EVERY == 0 || kept.len() == frames {
+            kept.push(FullFrame::solve(spec, p)?);
+            if save_due(kept.len() - reused, kept.len(), frames) {
                 file.save(faces, &kept)?;
             }
             bar.inc(1);

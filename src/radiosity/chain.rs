@@ -337,31 +337,33 @@ impl PairTensor {
         let near_c = 1.0 / (16.0 * PI);
         // Q: one m_g × m_g block per pair of the chunk (zero on the diagonal i = j).
         let mut q = vec![0.0; pairs.len() * mg2];
-        q.par_chunks_mut(mg2).zip(&pairs).for_each(|(qk, &k)| {
-            let (i, j) = (k / n, k % n);
-            if i == j {
-                return;
-            }
-            let mut delta = vec![0.0; mg];
-            for a in 0..3 {
-                let (ci, cj) = (&centroids[(3 * i + a) * mg..], &centroids[(3 * j + a) * mg..]);
-                for (c, d) in delta.iter_mut().enumerate() {
-                    *d = cj[c] - ci[c];
+        q.par_chunks_mut(mg2).zip(&pairs).for_each_init(
+            || vec![0.0; mg],
+            |delta, (qk, &k)| {
+                let (i, j) = (k / n, k % n);
+                if i == j {
+                    return;
                 }
-                for (b, &db) in delta.iter().enumerate() {
-                    for (o, &dc) in qk[b * mg..(b + 1) * mg].iter_mut().zip(&delta) {
-                        *o += db * dc;
+                for a in 0..3 {
+                    let (ci, cj) = (&centroids[(3 * i + a) * mg..], &centroids[(3 * j + a) * mg..]);
+                    for (c, d) in delta.iter_mut().enumerate() {
+                        *d = cj[c] - ci[c];
+                    }
+                    for (b, &db) in delta.iter().enumerate() {
+                        for (o, &dc) in qk[b * mg..(b + 1) * mg].iter_mut().zip(delta.iter()) {
+                            *o += db * dc;
+                        }
                     }
                 }
-            }
-            if let Some(l) = &near {
-                for ((o, li), lj) in
-                    qk.iter_mut().zip(&l[i * mg2..(i + 1) * mg2]).zip(&l[j * mg2..(j + 1) * mg2])
-                {
-                    *o += near_c * (li + lj);
+                if let Some(l) = &near {
+                    for ((o, li), lj) in
+                        qk.iter_mut().zip(&l[i * mg2..(i + 1) * mg2]).zip(&l[j * mg2..(j + 1) * mg2])
+                    {
+                        *o += near_c * (li + lj);
+                    }
                 }
-            }
-        });
+            },
+        );
         let mut out = vec![0.0; mr * mg2];
         matmul(
             MatMut::from_row_major_slice_mut(&mut out, mr, mg2),

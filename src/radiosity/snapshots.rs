@@ -187,10 +187,8 @@ impl<'a> PairSnapshots<'a> {
                         edge_squares: f[6 * t + c],
                         area: f[7 * t + c],
                     };
-                    let (word, bit) = (k / 64, k % 64);
                     for (c, conf) in self.configurations.iter().enumerate() {
-                        let visible = conf.visibility[word] >> bit & 1 == 1;
-                        let values = pair_formula(face(fi, c), face(fj, c), visible, self.near);
+                        let values = pair_formula(face(fi, c), face(fj, c), conf.visible(k), self.near);
                         for (o, v) in outs.iter_mut().zip(values) {
                             o[row * t + c] = v;
                         }

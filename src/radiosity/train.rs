@@ -178,10 +178,10 @@ impl Configuration {
     }
 }
 
-/// Solves the full radiosity of every configuration (visibility, form factors, Jacobi), two
-/// configurations at a time: one solve has single-threaded stretches (the mesh, the visibility
-/// bits, parts of the Jacobi sweeps) that left a core idle a third of the time. `progress` is
-/// called with the number solved so far.
+/// Solves the full radiosity of every configuration (visibility, form factors, Jacobi), the
+/// configurations themselves in parallel (about one per core): one solve alone has
+/// single-threaded stretches (the mesh, parts of the Jacobi sweeps) that left a core idle a
+/// third of the time. `progress` is called with the number solved so far.
 pub fn solve_configurations(
     space: &dyn DesignSpace,
     params: &[Vec<f64>],
