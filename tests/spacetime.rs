@@ -291,6 +291,32 @@ fn colour_output_and_per_vertex_mode() {
     assert!(differ > 0);
 }
 
+/// The benchmarks' cost floor draws the same pixels as the shaded image, in one colour.
+#[test]
+fn unshaded_mode_covers_the_shaded_pixels_in_one_colour() {
+    let gpu = common::gpu();
+    let m = mesh();
+    let mut r = SpacetimeRenderer::from_mesh(&gpu, &m, &Colormap::viridis()).unwrap();
+    let t = 0.5 * m.time_range().1;
+    let target = RenderTarget::new(&gpu, "colour", 200, 150, ColorFormat::Rgba8).unwrap();
+    let view = SpacetimeView { edges: false, ..SpacetimeView::looking_at(r.data().summary(), t) };
+    let Pixels::Rgba8(shaded) = r.render(&target, &view).unwrap() else { panic!("rgba8") };
+    let Pixels::Rgba8(floor) = r.render(&target, &SpacetimeView { unshaded: true, ..view }).unwrap() else {
+        panic!("rgba8")
+    };
+    let bg = galerkin::render::BACKGROUND.map(|v| (v * 255.0).round() as u8);
+    let covered = |p: &[u8]| p[..3] != bg[..3];
+    let mut drawn = 0;
+    for (s, f) in shaded.chunks_exact(4).zip(floor.chunks_exact(4)) {
+        assert_eq!(covered(s), covered(f), "coverage differs: shaded {s:?}, unshaded {f:?}");
+        if covered(f) {
+            assert_eq!(f, [255, 255, 255, 255]);
+            drawn += 1;
+        }
+    }
+    assert!(drawn > 200 * 150 / 4, "{drawn} pixels drawn");
+}
+
 #[test]
 fn bad_meshes_are_refused_naming_the_element() {
     let mat = Material { lambda: 1.0, mu: 1.0, density: 1.0 };

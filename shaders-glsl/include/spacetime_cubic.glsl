@@ -118,16 +118,25 @@ SpacetimeSliceCubic spacetime_restrict(SpacetimeElement el, float t) {
     vec3 w = el.extent_mu.xyz;
     s.frame = vec4(el.centre_lambda.xy, 1.0 / w.x, 1.0 / w.y);
     s.material = vec4(el.centre_lambda.w, el.extent_mu.w, 0.0, 0.0);
-    float qt = (t - el.centre_lambda.z) / w.z;
-    vec4 pt = vec4(1.0, qt, qt * qt, qt * qt * qt);
-    for (int k = 0; k < 10; ++k) s.a[k] = vec2(0.0);
-    for (int k = 0; k < 6; ++k) s.b[k] = vec2(0.0);
-    for (int k = 0; k < 20; ++k) {
-        ivec3 e = SPACETIME_MONOMIALS[k];
-        int i = (e.x + e.y) * (e.x + e.y + 1) / 2 + e.y;
-        s.a[i] += el.c[k] * spacetime_power(pt, e.z);
-        if (e.z >= 1) s.b[i] += el.c[k] * (float(e.z) * spacetime_power(pt, e.z - 1) / w.z);
-    }
+    float q = (t - el.centre_lambda.z) / w.z, qq = q * q, iw = 1.0 / w.z;
+    // SPACETIME_MONOMIALS grouped by their (x, y) part, written out: a loop over the table
+    // indexes local arrays by run-time values, which llvmpipe turns into memory traffic.
+    s.a[0] = el.c[0] + el.c[3] * q + el.c[9] * qq + el.c[19] * (qq * q);
+    s.a[1] = el.c[1] + el.c[6] * q + el.c[15] * qq;
+    s.a[2] = el.c[2] + el.c[8] * q + el.c[18] * qq;
+    s.a[3] = el.c[4] + el.c[12] * q;
+    s.a[4] = el.c[5] + el.c[14] * q;
+    s.a[5] = el.c[7] + el.c[17] * q;
+    s.a[6] = el.c[10];
+    s.a[7] = el.c[11];
+    s.a[8] = el.c[13];
+    s.a[9] = el.c[16];
+    s.b[0] = (el.c[3] + 2.0 * q * el.c[9] + 3.0 * qq * el.c[19]) * iw;
+    s.b[1] = (el.c[6] + 2.0 * q * el.c[15]) * iw;
+    s.b[2] = (el.c[8] + 2.0 * q * el.c[18]) * iw;
+    s.b[3] = el.c[12] * iw;
+    s.b[4] = el.c[14] * iw;
+    s.b[5] = el.c[17] * iw;
     return s;
 }
 

@@ -18,6 +18,11 @@ layout(set = 0, binding = 1) uniform sampler1D colormap;
 layout(location = 0) out vec4 out_colour;
 
 void main() {
+    if (pc.flags.x == 2u) {
+        // Unshaded (SpacetimeView::unshaded): the draw's cost floor, nothing evaluated.
+        out_colour = vec4(1.0);
+        return;
+    }
     SpacetimeFields f = spacetime_evaluate_slice(cubics[el_index], world.xy);
     // The height field's normal (at the height scale) is reported whether or not the surface
     // is displaced; lighting uses it only when it is (else the slice is flat).

@@ -414,6 +414,14 @@ pub fn bench(desc: &GpuDesc, args: &BenchArgs) -> Result<()> {
     let no_edges = SpacetimeView { edges: false, ..view };
     let rep = measure_frames(&gpu, &mut r, &no_edges, (1280, 720), times, args.frames, 2)?;
     println!("(the same without edge overdraw: {:.1} ms per frame, draw {:.1} ms)", rep.wall_ms, rep.draw_ms);
+    // The floor: the same triangles with nothing evaluated per pixel and no edges — what the
+    // slicing and the rasteriser cost by themselves, before any shading.
+    let floor = SpacetimeView { unshaded: true, ..no_edges };
+    let rep = measure_frames(&gpu, &mut r, &floor, (1280, 720), times, args.frames, 2)?;
+    println!(
+        "(the floor — one constant colour per pixel, nothing evaluated, no edges: {:.1} ms per frame, slice {:.2} ms, subdivide {:.2} ms, draw {:.1} ms)",
+        rep.wall_ms, rep.slice_ms, rep.subdivide_ms, rep.draw_ms
+    );
     println!("\nGrowth with pixels ({n} elements):\n\n{header}");
     for size in [(320, 180), (640, 360), (1280, 720), (1920, 1080)] {
         let rep = if size == (1280, 720) {

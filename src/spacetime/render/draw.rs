@@ -178,7 +178,11 @@ impl SpacetimeRenderer {
             light_scale: [LIGHT[0] as f32, LIGHT[1] as f32, LIGHT[2] as f32, height_scale as f32],
             ramp: [u_max as f32, self.colormap.texels() as f32, 0.0, 0.0],
             flags: [
-                u32::from(target.format() == ColorFormat::Rgba32F),
+                match (target.format(), view.unshaded) {
+                    (ColorFormat::Rgba32F, _) => 1,
+                    (_, true) => 2,
+                    (_, false) => 0,
+                },
                 u32::from(view.height),
                 u32::from(view.per_vertex),
                 0,

@@ -99,6 +99,10 @@ pub struct SpacetimeView {
     pub u_max: Option<f64>,
     /// Colour from U at the vertices, interpolated (the seed's Fig. 5a baseline).
     pub per_vertex: bool,
+    /// Every covered pixel in one constant colour, nothing evaluated per pixel: the cost floor
+    /// of the draw (the rasteriser's own time for these primitives), for benchmarks. A colour
+    /// target only; ignored by data (RGBA32F) targets.
+    pub unshaded: bool,
     /// The camera.
     pub camera: Camera,
 }
@@ -116,6 +120,7 @@ impl SpacetimeView {
             subdivide: None,
             u_max: None,
             per_vertex: false,
+            unshaded: false,
             camera: Camera {
                 eye: [centre[0], centre[1] - 1.3 * size, 1.1 * size],
                 target: [centre[0], centre[1], 0.0],
