@@ -1,65 +1,14 @@
 //! A user's scene from OBJ files with a named deformation target: loaded, blended, solved,
 //! trained and evaluated reduced; bad files refused naming the file.
 
-use std::path::{Path, PathBuf};
+mod common;
 
 use galerkin::radiosity::obj::ObjScene;
 use galerkin::radiosity::reduced::relative_error;
 use galerkin::radiosity::train::{sample_parameters, solve_configurations, train, DesignSpace, TrainOptions};
 use galerkin::radiosity::{full_radiosity_of, FaceKind};
 
-/// A closed unit box lit inwards, as three objects (floor, walls, window), its x scaled by `sx`.
-fn box_obj(sx: f64) -> String {
-    let mut out = String::new();
-    // Sides as (object, corners counter-clockwise seen from inside).
-    let sides: [(&str, [[f64; 3]; 4]); 6] = [
-        ("floor", [[0., 0., 0.], [1., 0., 0.], [1., 1., 0.], [0., 1., 0.]]),
-        ("walls", [[0., 0., 1.], [0., 1., 1.], [1., 1., 1.], [1., 0., 1.]]),
-        ("walls", [[0., 1., 0.], [1., 1., 0.], [1., 1., 1.], [0., 1., 1.]]),
-        ("walls", [[0., 0., 0.], [0., 1., 0.], [0., 1., 1.], [0., 0., 1.]]),
-        ("walls", [[1., 0., 0.], [1., 0., 1.], [1., 1., 1.], [1., 1., 0.]]),
-        ("window", [[0., 0., 0.], [0., 0., 1.], [1., 0., 1.], [1., 0., 0.]]),
-    ];
-    let mut v = 0;
-    for name in ["floor", "walls", "window"] {
-        out += &format!("o {name}\n");
-        for (_, c) in sides.iter().filter(|(n, _)| *n == name) {
-            for p in c {
-                out += &format!("v {} {} {}\n", p[0] * sx, p[1], p[2]);
-            }
-            out += &format!("f {} {} {}\nf {} {} {}\n", v + 1, v + 2, v + 3, v + 1, v + 3, v + 4);
-            v += 4;
-        }
-    }
-    out
-}
-
-const SCENE: &str = r#"
-base = "box.obj"
-[[targets]]
-name = "stretch"
-file = "box_wide.obj"
-range = [0.0, 1.0]
-default = 0.0
-[materials]
-default = [0.7, 0.7, 0.7]
-by_object = { floor = [0.4, 0.3, 0.2] }
-[openings]
-windows = ["window"]
-[lights]
-mode = "area"
-window_exitance = [10.0, 10.0, 10.0]
-sky_zenith = [4.0, 4.0, 4.0]
-ground_albedo = 0.2
-"#;
-
-fn write_scene(dir: &Path, scene: &str, wide: &str) -> PathBuf {
-    std::fs::create_dir_all(dir).unwrap();
-    std::fs::write(dir.join("box.obj"), box_obj(1.0)).unwrap();
-    std::fs::write(dir.join("box_wide.obj"), wide).unwrap();
-    std::fs::write(dir.join("scene.toml"), scene).unwrap();
-    dir.join("scene.toml")
-}
+use common::obj_box::{box_obj, write_scene, SCENE};
 
 #[test]
 fn an_obj_scene_with_a_deformation_target_trains_and_reduces() {
@@ -109,5 +58,45 @@ fn bad_obj_scenes_name_the_file() {
     std::fs::remove_file(dir.join("box.obj")).unwrap();
     let e = ObjScene::load(&dir.join("scene.toml")).unwrap_err().to_string();
     assert!(e.contains("box.obj"), "{e}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// An OBJ scene is one of the scene kinds the CLI and the viewer take: its parameters by name,
+/// and in the viewer chosen by number and moved by brackets (the two rooms' letter keys do
+/// nothing there).
+#[cfg(feature = "viewer")]
+#[test]
+fn the_viewer_moves_an_obj_scenes_parameter_by_number_and_brackets() {
+    use galerkin::radiosity::any_scene::AnyScene;
+    use galerkin::radiosity::render::{Shading, Viewpoint};
+    use galerkin::radiosity::viewer::{RadiosityContent, ViewSettings};
+    use galerkin::render::viewer::ViewerContent;
+    let dir = std::env::temp_dir().join(format!("galerkin-obj-viewer-{}", std::process::id()));
+    let scene = AnyScene::load(&write_scene(&dir, SCENE, &box_obj(1.5)), None).unwrap();
+    assert_eq!(scene.names(), ["stretch"]);
+    let e = scene.parameters_from(&[("width".into(), 1.0)]).unwrap_err().to_string();
+    assert!(e.contains("width") && e.contains("stretch"), "{e}");
+    assert!(scene.parameters_from(&[("stretch".into(), 2.0)]).is_err(), "outside its range [0, 1]");
+    let params = scene.parameters_from(&[("stretch".into(), 0.5)]).unwrap();
+    let settings = ViewSettings {
+        params,
+        view: Viewpoint::Living,
+        shading: Shading::Flat,
+        exposure: 1.0,
+        size: (64, 64),
+        playing: false,
+    };
+    let mut content = RadiosityContent::new(scene, None, settings).unwrap();
+    assert!(content.title().contains("[stretch 0.50]"), "{}", content.title());
+    assert!(content.key("]"));
+    assert!(content.title().contains("[stretch 0.55]"), "{}", content.title());
+    assert!(!content.key("W"), "the two rooms' window key moves nothing here");
+    assert!(content.key("2"), "a key the viewer takes");
+    assert!(content.title().contains("[stretch"), "no second parameter to choose");
+    for _ in 0..12 {
+        content.key("[");
+    }
+    assert!(content.title().contains("[stretch 0.00]"), "{}", content.title());
+    assert!(!content.key("["), "clamped at the range's end");
     std::fs::remove_dir_all(&dir).unwrap();
 }

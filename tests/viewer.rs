@@ -3,6 +3,8 @@
 //! and exit 0 with validation on; the screenshot's pixels are checked against the CPU reference.
 #![cfg(feature = "viewer")]
 
+mod common;
+
 use std::io::{BufRead, BufReader};
 use std::path::Path;
 use std::process::{Child, Command, Stdio};
@@ -210,6 +212,36 @@ fn the_radiosity_viewer_sweeps_the_parameters() {
     let drawn = rgba.chunks_exact(4).filter(|p| p[..3] != background[..3]).count();
     // From inside the living room every pixel sees a wall, the floor or the ceiling.
     assert!(drawn as f64 > 0.99 * f64::from(w * h), "only {drawn} of {} pixels drawn", w * h);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A user's OBJ scene in the radiosity viewer: its deformation target sweeps, the camera is
+/// fitted outside its bounds, the box fills part of the window.
+#[test]
+fn the_radiosity_viewer_shows_an_obj_scene() {
+    let x = Xvfb::start();
+    let dir = std::env::temp_dir().join(format!("galerkin-viewer-obj-{}", std::process::id()));
+    let scene = common::obj_box::write_scene(&dir, common::obj_box::SCENE, &common::obj_box::box_obj(1.5));
+    let shot = dir.join("shot.png");
+    let out = Command::new(env!("CARGO_BIN_EXE_galerkin"))
+        .args(["--validation", "radiosity", "view"])
+        .arg(&scene)
+        .args(["--play", "--frames", "4", "--size", "320x200", "--screenshot"])
+        .arg(&shot)
+        .env("DISPLAY", &x.display)
+        .env_remove("WAYLAND_DISPLAY")
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "galerkin radiosity view failed: {}", String::from_utf8_lossy(&out.stderr));
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(stdout.contains("full mode") && stdout.contains("at stretch="), "{stdout}");
+    let (w, h, rgba) = read_png_rgba8(&shot).unwrap();
+    assert_eq!((w, h), (320, 200));
+    let background = galerkin::render::BACKGROUND.map(|v| (v * 255.0).round() as u8);
+    let drawn = rgba.chunks_exact(4).filter(|p| p[..3] != background[..3]).count();
+    // Seen from outside: the box covers part of the window, not all of it.
+    let share = drawn as f64 / f64::from(w * h);
+    assert!((0.05..0.95).contains(&share), "{drawn} of {} pixels drawn", w * h);
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

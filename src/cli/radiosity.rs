@@ -6,6 +6,7 @@ use std::time::Instant;
 use anyhow::{bail, Context, Result};
 use clap::{Args, Subcommand};
 use galerkin::gpu::{Gpu, GpuDesc};
+use galerkin::radiosity::any_scene::AnyScene;
 use galerkin::radiosity::reduced::{relative_error, ReducedRadiosity};
 use galerkin::radiosity::render::{
     camera_for, default_exposure, display_radiance, draw_picture, scene_vertices, Shading, Viewpoint,
@@ -13,7 +14,7 @@ use galerkin::radiosity::render::{
 use galerkin::radiosity::train::{
     sample_parameters, solve_configurations, train as train_model, TrainOptions,
 };
-use galerkin::radiosity::{full_radiosity, LightMode, SceneSpec, PARAMETERS};
+use galerkin::radiosity::{full_radiosity, LightMode, SceneSpec};
 use galerkin::render::{write_exr_channels, write_png_rgba8};
 
 use super::full_frames::{save_due, FullFrame, FullFramesFile};
@@ -25,10 +26,11 @@ pub enum Action {
     /// factors of Eq. 15, visibility by ray casting) or, with --model, reduced — and draw it
     /// to PNG or EXR (EXR: the raw radiance R, G, B and the face index beside the colour).
     Render(RenderArgs),
-    /// Open the scene in a window: keys change the design parameters (w/W window, k/K
+    /// Open the scene (the two rooms or an OBJ scene) in a window: keys change the design
+    /// parameters (1–9 choose one, [/] lower/raise it; in the two rooms also w/W window, k/K
     /// skylight, d/D door, t/T tilt), f switches reduced/full (with --model), m flat/smooth
     /// shading, e/E exposure, space sweeps the parameters; the title shows the mode, the
-    /// solve's time and the frame rate.
+    /// parameters, the solve's time and the frame rate.
     View(ViewArgs),
     /// Train the reduced radiosity of a scene (seed 000 §8.2–8.3, §9): sample the design
     /// space, solve every sample in full, PCA every quantity of Table 2, premultiply, learn
@@ -125,12 +127,13 @@ pub struct CompareArgs {
 /// What a picture or window shows: the configuration and how it is looked at.
 #[derive(Args)]
 pub struct Look {
-    /// Design parameters as NAME=VALUE, comma-separated or repeated: window_width,
-    /// skylight_size, door_width (metres), ceiling_tilt (degrees). Unset ones take the scene's
-    /// defaults; values outside the scene's ranges are refused.
+    /// Design parameters as NAME=VALUE, comma-separated or repeated: the two rooms' are
+    /// window_width, skylight_size, door_width (metres), ceiling_tilt (degrees); an OBJ scene's
+    /// are its deformation targets' names. Unset ones take the scene's defaults; values outside
+    /// the scene's ranges are refused.
     #[arg(long = "params", value_name = "NAME=VALUE", value_delimiter = ',', value_parser = parse_param)]
     pub params: Vec<(String, f64)>,
-    /// Viewpoint.
+    /// Viewpoint in the two rooms (an OBJ scene is seen from outside its bounds).
     #[arg(long, value_enum, default_value_t = Viewpoint::Living)]
     pub view: Viewpoint,
     /// Flat (each face's radiosity) or smooth (averaged to the vertices) shading.
@@ -189,7 +192,7 @@ fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
     if ext != "png" && ext != "exr" {
         bail!("{}: unknown image format {ext:?}: expected .png or .exr", args.out.display());
     }
-    let scene = AnyScene::load(&args.scene, args.lights.as_deref())?;
+    let scene = AnyScene::load(&args.scene, light_mode(args.lights.as_deref()))?;
     let p = scene.parameters_from(&args.look.params).with_context(|| format!("{}", args.scene.display()))?;
     let space = scene.space();
     let lights = space.lights().clone();
@@ -225,13 +228,7 @@ fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
     }
     let gpu = Gpu::new(desc)?;
     let vertices = scene_vertices(&mesh, &geometry, &radiance, args.look.shading);
-    let camera = match &scene {
-        AnyScene::Rooms(spec) => camera_for(spec, args.look.view),
-        AnyScene::Obj(_) => {
-            let (lo, hi) = mesh.bounds();
-            galerkin::render::camera_for_box(lo.to_array(), hi.to_array())
-        }
-    };
+    let camera = scene.camera(&p, args.look.view)?;
     let picture = draw_picture(&gpu, &vertices, &camera, exposure, args.look.size)?;
     let (w, h) = args.look.size;
     if ext == "png" {
@@ -266,83 +263,13 @@ fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
     crate::check_validation(gpu)
 }
 
-/// Whether a scene file describes an OBJ scene (a `base = "….obj"` key) rather than the
-/// generated two rooms.
-fn is_obj_scene(text: &str) -> bool {
-    text.lines().any(|l| l.trim_start().starts_with("base") && l.contains('='))
-}
-
-/// The scene with its lighting overridden by `--lights`.
-fn load_scene(path: &std::path::Path, lights: Option<&str>) -> Result<SceneSpec> {
-    if std::fs::read_to_string(path).is_ok_and(|t| is_obj_scene(&t)) {
-        bail!("{}: the viewer shows the generated two-room scene only (its keys and viewpoints are the two rooms'); render, train and compare take OBJ scenes", path.display());
-    }
-    let mut spec = SceneSpec::load(path)?;
-    match lights {
-        Some("sky") => spec.lights.mode = LightMode::Sky,
-        Some(_) => spec.lights.mode = LightMode::Area,
-        None => {}
-    }
-    Ok(spec)
-}
-
-/// A scene to train or compare: the generated two rooms, or a user's OBJ scene with
-/// deformation targets (a scene file with `base = "…obj"`).
-enum AnyScene {
-    Rooms(Box<SceneSpec>),
-    Obj(Box<galerkin::radiosity::obj::ObjScene>),
-}
-
-impl AnyScene {
-    fn load(path: &std::path::Path, lights: Option<&str>) -> Result<Self> {
-        let text = std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
-        if !is_obj_scene(&text) {
-            return Ok(AnyScene::Rooms(Box::new(load_scene(path, lights)?)));
-        }
-        let mut scene = galerkin::radiosity::obj::ObjScene::load(path)?;
-        match lights {
-            Some("sky") => scene.set_light_mode(LightMode::Sky),
-            Some(_) => scene.set_light_mode(LightMode::Area),
-            None => {}
-        }
-        Ok(AnyScene::Obj(Box::new(scene)))
-    }
-
-    fn space(&self) -> &dyn galerkin::radiosity::train::DesignSpace {
-        match self {
-            AnyScene::Rooms(s) => s.as_ref(),
-            AnyScene::Obj(s) => s.as_ref(),
-        }
-    }
-
-    /// Parameters from `name=value` pairs over the defaults; unknown names are refused.
-    fn parameters_from(&self, pairs: &[(String, f64)]) -> Result<Vec<f64>> {
-        if let AnyScene::Rooms(spec) = self {
-            return Ok(spec.parameters_from(pairs)?.to_vec());
-        }
-        let names = self.names();
-        let space = self.space();
-        let mut p = space.defaults();
-        for (name, v) in pairs {
-            let Some(a) = names.iter().position(|n| n == name) else {
-                bail!("parameter {name}: unknown (the scene has {})", names.join(", "));
-            };
-            p[a] = *v;
-        }
-        space.mesh(&p)?;
-        Ok(p)
-    }
-
-    fn names(&self) -> Vec<String> {
-        match self {
-            AnyScene::Rooms(_) => PARAMETERS.iter().map(|s| s.to_string()).collect(),
-            AnyScene::Obj(s) => s.names().iter().map(|s| s.to_string()).collect(),
-        }
-    }
+/// The `--lights` choice as a light mode (`None`: the scene file's own).
+fn light_mode(lights: Option<&str>) -> Option<LightMode> {
+    lights.map(|l| if l == "sky" { LightMode::Sky } else { LightMode::Area })
 }
 
 fn train(args: &TrainArgs) -> Result<()> {
-    let scene = AnyScene::load(&args.scene, args.lights.as_deref())?;
+    let scene = AnyScene::load(&args.scene, light_mode(args.lights.as_deref()))?;
     let spec = scene.space();
     if !(args.energy > 0.0 && args.energy <= 1.0) || args.cap == 0 || args.samples < 2 {
         bail!("--energy must be in (0, 1], --cap at least 1, --samples at least 2");
@@ -427,7 +354,7 @@ fn sequence(ranges: &[[f64; 2]], which: usize, f: usize, frames: usize) -> Vec<f
 const KEPT_FRAME_TOLERANCE: f64 = 1e-9;
 
 fn compare(args: &CompareArgs) -> Result<()> {
-    let scene = AnyScene::load(&args.scene, args.lights.as_deref())?;
+    let scene = AnyScene::load(&args.scene, light_mode(args.lights.as_deref()))?;
     let spec = scene.space();
     if args.full_only {
         return keep_full_frames(args, &scene);
@@ -797,19 +724,23 @@ pub fn demo(gpu: &Gpu, size: (u32, u32), out: &std::path::Path) -> Result<()> {
 fn view(desc: &GpuDesc, args: &ViewArgs) -> Result<()> {
     use galerkin::radiosity::viewer::{RadiosityContent, ViewSettings};
     use galerkin::render::viewer::{run, ViewOptions};
-    let spec = load_scene(&args.scene, None)?;
-    let p = spec.parameters_from(&args.look.params).with_context(|| format!("{}", args.scene.display()))?;
     let model = args.model.as_deref().map(ReducedRadiosity::load).transpose()?;
-    let mut spec = spec;
-    if let Some(m) = &model {
-        spec.lights.mode = m.light_mode();
+    // A model fixes the lighting it was trained with.
+    let scene = AnyScene::load(&args.scene, model.as_ref().map(ReducedRadiosity::light_mode))?;
+    let p = scene.parameters_from(&args.look.params).with_context(|| format!("{}", args.scene.display()))?;
+    let mesh = scene.space().mesh(&p)?;
+    if let (Some(m), Some(dir)) = (&model, &args.model) {
+        if mesh.len() != m.faces() {
+            bail!("{}: the model has {} faces, the scene {}", dir.display(), m.faces(), mesh.len());
+        }
     }
     let exposure = match args.look.exposure {
         Some(e) if e.is_finite() && e > 0.0 => e,
         Some(e) => bail!("--exposure must be positive, got {e}"),
         None => {
-            let s = full_radiosity(&spec, &p)?;
-            let radiance = display_radiance(&s.mesh, &s.geometry, &spec.lights, &s.radiosity);
+            let lights = scene.space().lights().clone();
+            let s = galerkin::radiosity::full_radiosity_of(mesh, &lights)?;
+            let radiance = display_radiance(&s.mesh, &s.geometry, &lights, &s.radiosity);
             default_exposure(&s.mesh, &s.geometry, &radiance)
         }
     };
@@ -821,7 +752,7 @@ fn view(desc: &GpuDesc, args: &ViewArgs) -> Result<()> {
         size: args.look.size,
         playing: args.play,
     };
-    let content = RadiosityContent::new(spec, model, settings);
+    let content = RadiosityContent::new(scene, model, settings)?;
     let options = ViewOptions { frames: args.frames, screenshot: args.screenshot.clone(), resize_to: None };
     run(desc.clone(), Box::new(content), options)
 }

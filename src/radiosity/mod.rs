@@ -9,6 +9,7 @@
 //! drawn by a graphics pipeline ([`render`]). The same radiosity as Table 2's chain of
 //! tensor operations, for the reduction core, is [`chain`].
 
+pub mod any_scene;
 pub mod architecture;
 pub use crate::mesh::bvh;
 pub mod chain;

@@ -1,32 +1,31 @@
-//! The radiosity scene in the interactive viewer (feature `viewer`): seed 000 §9's lighting
-//! design made interactive. Keys: `w`/`W` narrower/wider windows, `k`/`K` smaller/larger
-//! skylight, `d`/`D` narrower/wider door, `t`/`T` less/more ceiling tilt (each a twentieth of
-//! its range), `f` switches between the reduced model and the full radiosity (with a model),
-//! `m` flat/smooth shading, `e`/`E` darker/brighter exposure, space plays and pauses a sweep
-//! through the parameters. The title shows the mode, the parameters, the solve's time and the
-//! frame rate.
+//! A radiosity scene in the interactive viewer (feature `viewer`): seed 000 §9's lighting
+//! design made interactive, for the two rooms and for OBJ scenes. Keys, in any scene: `1`–`9`
+//! choose a design parameter, `[`/`]` lower/raise it (a twentieth of its range); in the two
+//! rooms also `w`/`W` narrower/wider windows, `k`/`K` smaller/larger skylight, `d`/`D`
+//! narrower/wider door, `t`/`T` less/more ceiling tilt. `f` switches between the reduced model
+//! and the full radiosity (with a model), `m` flat/smooth shading, `e`/`E` darker/brighter
+//! exposure, space plays and pauses a sweep through the parameters. The title shows the mode,
+//! the parameters (the chosen one in brackets), the solve's time and the frame rate.
 
 use std::time::Instant;
 
 use anyhow::Result;
 use ash::vk;
 
+use super::any_scene::AnyScene;
 use super::reduced::ReducedRadiosity;
-use super::render::{
-    camera_for, display_radiance, scene_vertices, Output, SceneRenderer, Shading, Viewpoint,
-};
-use super::scene::{Parameters, SceneSpec, PARAMETERS};
-use super::{architecture, full_radiosity_of, SceneMesh};
+use super::render::{display_radiance, scene_vertices, Output, SceneRenderer, Shading, Viewpoint};
+use super::{full_radiosity_of, SceneMesh};
 use crate::gpu::Gpu;
 use crate::render::viewer::ViewerContent;
 use crate::render::{Camera, RenderTarget};
 
 /// How the viewer starts.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub struct ViewSettings {
-    /// Design parameters.
-    pub params: Parameters,
-    /// Viewpoint.
+    /// Design parameters, in the scene's order.
+    pub params: Vec<f64>,
+    /// Viewpoint (the two rooms; an OBJ scene is seen from outside its bounds).
     pub view: Viewpoint,
     /// Shading.
     pub shading: Shading,
@@ -40,13 +39,16 @@ pub struct ViewSettings {
 
 /// The viewer's radiosity content.
 pub struct RadiosityContent {
-    spec: SceneSpec,
+    scene: AnyScene,
+    names: Vec<String>,
     model: Option<ReducedRadiosity>,
-    params: Parameters,
+    params: Vec<f64>,
+    /// The parameter `[` and `]` move.
+    chosen: usize,
+    camera: Camera,
     reduced: bool,
     shading: Shading,
     exposure: f64,
-    view: Viewpoint,
     size: (u32, u32),
     renderer: Option<SceneRenderer>,
     dirty: bool,
@@ -59,18 +61,26 @@ pub struct RadiosityContent {
 }
 
 impl RadiosityContent {
-    /// Shows `spec` as `settings` say, reduced when `model` is given.
-    pub fn new(spec: SceneSpec, model: Option<ReducedRadiosity>, settings: ViewSettings) -> Self {
+    /// Shows `scene` as `settings` say, reduced when `model` is given; fails if the
+    /// parameters are not the scene's (their number, their ranges).
+    pub fn new(
+        scene: AnyScene,
+        model: Option<ReducedRadiosity>,
+        settings: ViewSettings,
+    ) -> Result<Self, super::RadiosityError> {
         let reduced = model.is_some();
         let ViewSettings { params, view, shading, exposure, size, playing } = settings;
-        Self {
-            spec,
+        let camera = scene.camera(&params, view)?;
+        Ok(Self {
+            names: scene.names(),
+            scene,
             model,
             params,
+            chosen: 0,
+            camera,
             reduced,
             shading,
             exposure,
-            view,
             size,
             renderer: None,
             dirty: true,
@@ -80,13 +90,13 @@ impl RadiosityContent {
             fps: 0.0,
             frames: 0,
             mesh_faces: 0,
-        }
+        })
     }
 
     /// Solves the current configuration (reduced or full) and uploads its vertices.
     fn solve(&mut self) -> Result<()> {
         let start = Instant::now();
-        let mesh: SceneMesh = architecture::build(&self.spec, &self.params)?;
+        let mesh: SceneMesh = self.scene.space().mesh(&self.params)?;
         let (mesh, geometry, b) = match (&self.model, self.reduced) {
             (Some(model), true) => {
                 let (b, _) = model.evaluate(&mesh)?;
@@ -94,12 +104,12 @@ impl RadiosityContent {
                 (mesh, geometry, b)
             }
             _ => {
-                let s = full_radiosity_of(mesh, &self.spec.lights)?;
+                let s = full_radiosity_of(mesh, self.scene.space().lights())?;
                 (s.mesh, s.geometry, s.radiosity)
             }
         };
         self.solve_ms = start.elapsed().as_secs_f64() * 1e3;
-        let radiance = display_radiance(&mesh, &geometry, &self.spec.lights, &b);
+        let radiance = display_radiance(&mesh, &geometry, self.scene.space().lights(), &b);
         let vertices = scene_vertices(&mesh, &geometry, &radiance, self.shading);
         self.mesh_faces = mesh.len();
         if let Some(r) = &mut self.renderer {
@@ -109,7 +119,7 @@ impl RadiosityContent {
     }
 
     fn nudge(&mut self, axis: usize, steps: f64) -> bool {
-        let [lo, hi] = self.spec.ranges()[axis];
+        let Some(&[lo, hi]) = self.scene.space().ranges().get(axis) else { return false };
         let v = (self.params[axis] + steps * (hi - lo) / 20.0).clamp(lo, hi);
         let changed = v != self.params[axis];
         self.params[axis] = v;
@@ -119,8 +129,9 @@ impl RadiosityContent {
 
 impl ViewerContent for RadiosityContent {
     fn title(&self) -> String {
-        let p: Vec<String> =
-            PARAMETERS.iter().zip(&self.params).map(|(n, v)| format!("{n} {v:.2}")).collect();
+        let p: Vec<String> = (self.names.iter().zip(&self.params).enumerate())
+            .map(|(a, (n, v))| if a == self.chosen { format!("[{n} {v:.2}]") } else { format!("{n} {v:.2}") })
+            .collect();
         format!(
             "galerkin radiosity — {} ({:.1} ms) — {} — {:.0} FPS",
             if self.reduced { "reduced" } else { "full" },
@@ -135,11 +146,11 @@ impl ViewerContent for RadiosityContent {
     }
 
     fn camera(&self) -> Camera {
-        camera_for(&self.spec, self.view)
+        self.camera
     }
 
     fn start(&mut self, gpu: &Gpu, target: &RenderTarget) -> Result<()> {
-        let faces = architecture::build(&self.spec, &self.params)?.len();
+        let faces = self.scene.space().mesh(&self.params)?.len();
         self.renderer = Some(SceneRenderer::new(gpu, target.render_pass(), Output::Colour, faces)?);
         self.dirty = true;
         Ok(())
@@ -152,7 +163,7 @@ impl ViewerContent for RadiosityContent {
         if self.playing && self.frames > 0 {
             // One sweep through the box every 20 s.
             self.clock += seconds.min(0.1);
-            let ranges = self.spec.ranges();
+            let ranges = self.scene.space().ranges();
             let t = self.clock / 20.0;
             for (a, range) in ranges.iter().enumerate() {
                 let u = 0.5 + 0.47 * (2.0 * std::f64::consts::PI * (a as f64 + 1.0) * t + a as f64).sin();
@@ -175,15 +186,25 @@ impl ViewerContent for RadiosityContent {
     }
 
     fn key(&mut self, key: &str) -> bool {
+        let rooms = matches!(self.scene, AnyScene::Rooms(_));
         let changed = match key {
-            "w" => self.nudge(0, -1.0),
-            "W" => self.nudge(0, 1.0),
-            "k" => self.nudge(1, -1.0),
-            "K" => self.nudge(1, 1.0),
-            "d" => self.nudge(2, -1.0),
-            "D" => self.nudge(2, 1.0),
-            "t" => self.nudge(3, -1.0),
-            "T" => self.nudge(3, 1.0),
+            "[" => self.nudge(self.chosen, -1.0),
+            "]" => self.nudge(self.chosen, 1.0),
+            digit if digit.len() == 1 && ("1"..="9").contains(&digit) => {
+                let a = usize::from(digit.as_bytes()[0] - b'1');
+                if a < self.params.len() {
+                    self.chosen = a;
+                }
+                return true;
+            }
+            "w" if rooms => self.nudge(0, -1.0),
+            "W" if rooms => self.nudge(0, 1.0),
+            "k" if rooms => self.nudge(1, -1.0),
+            "K" if rooms => self.nudge(1, 1.0),
+            "d" if rooms => self.nudge(2, -1.0),
+            "D" if rooms => self.nudge(2, 1.0),
+            "t" if rooms => self.nudge(3, -1.0),
+            "T" if rooms => self.nudge(3, 1.0),
             "f" if self.model.is_some() => {
                 self.reduced = !self.reduced;
                 true
@@ -212,7 +233,7 @@ impl ViewerContent for RadiosityContent {
 
     fn summary(&self) -> Option<String> {
         let p: Vec<String> =
-            PARAMETERS.iter().zip(&self.params).map(|(n, v)| format!("{n}={v:.3}")).collect();
+            self.names.iter().zip(&self.params).map(|(n, v)| format!("{n}={v:.3}")).collect();
         Some(format!(
             "radiosity: {} faces, {} mode, last solve {:.1} ms, at {}",
             self.mesh_faces,

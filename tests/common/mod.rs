@@ -3,6 +3,8 @@
 //! leaked-object reports made when the device and instance are destroyed at the end.
 #![allow(dead_code)]
 
+pub mod obj_box;
+
 use std::ops::Deref;
 use std::sync::Arc;
 
