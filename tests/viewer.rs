@@ -186,32 +186,37 @@ fn the_spectral_viewer_shows_cut_planes() {
     assert!(drawn > 0.025, "only {drawn} of the pixels drawn");
 }
 
+/// Runs `galerkin radiosity view SCENE` sweeping the parameters for 4 frames at 320×200 and
+/// returns its summary line and the share of the screenshot's pixels drawn (not background).
+fn run_radiosity_viewer(x: &Xvfb, scene: &Path, shot: &Path) -> (String, f64) {
+    let out = Command::new(env!("CARGO_BIN_EXE_galerkin"))
+        .args(["--validation", "radiosity", "view"])
+        .arg(scene)
+        .args(["--play", "--frames", "4", "--size", "320x200", "--screenshot"])
+        .arg(shot)
+        .env("DISPLAY", &x.display)
+        .env_remove("WAYLAND_DISPLAY")
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "galerkin radiosity view failed: {}", String::from_utf8_lossy(&out.stderr));
+    let (w, h, rgba) = read_png_rgba8(shot).unwrap();
+    assert_eq!((w, h), (320, 200));
+    let background = galerkin::render::BACKGROUND.map(|v| (v * 255.0).round() as u8);
+    let drawn = rgba.chunks_exact(4).filter(|p| p[..3] != background[..3]).count();
+    (String::from_utf8_lossy(&out.stdout).into_owned(), drawn as f64 / f64::from(w * h))
+}
+
 /// The radiosity viewer solves while the parameters sweep (full radiosity: no trained model
 /// needed) and fills the window with the room.
 #[test]
 fn the_radiosity_viewer_sweeps_the_parameters() {
     let x = Xvfb::start();
     let dir = std::env::temp_dir().join(format!("galerkin-viewer-radiosity-{}", std::process::id()));
-    let shot = dir.join("shot.png");
     let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/radiosity/two_rooms_small.toml");
-    let out = Command::new(env!("CARGO_BIN_EXE_galerkin"))
-        .args(["--validation", "radiosity", "view"])
-        .arg(&scene)
-        .args(["--play", "--frames", "4", "--size", "320x200", "--screenshot"])
-        .arg(&shot)
-        .env("DISPLAY", &x.display)
-        .env_remove("WAYLAND_DISPLAY")
-        .output()
-        .unwrap();
-    assert!(out.status.success(), "galerkin radiosity view failed: {}", String::from_utf8_lossy(&out.stderr));
-    let stdout = String::from_utf8_lossy(&out.stdout);
+    let (stdout, drawn) = run_radiosity_viewer(&x, &scene, &dir.join("shot.png"));
     assert!(stdout.contains("radiosity: 496 faces, full mode"), "{stdout}");
-    let (w, h, rgba) = read_png_rgba8(&shot).unwrap();
-    assert_eq!((w, h), (320, 200));
-    let background = galerkin::render::BACKGROUND.map(|v| (v * 255.0).round() as u8);
-    let drawn = rgba.chunks_exact(4).filter(|p| p[..3] != background[..3]).count();
     // From inside the living room every pixel sees a wall, the floor or the ceiling.
-    assert!(drawn as f64 > 0.99 * f64::from(w * h), "only {drawn} of {} pixels drawn", w * h);
+    assert!(drawn > 0.99, "only {drawn} of the pixels drawn");
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
@@ -222,26 +227,10 @@ fn the_radiosity_viewer_shows_an_obj_scene() {
     let x = Xvfb::start();
     let dir = std::env::temp_dir().join(format!("galerkin-viewer-obj-{}", std::process::id()));
     let scene = common::obj_box::write_scene(&dir, common::obj_box::SCENE, &common::obj_box::box_obj(1.5));
-    let shot = dir.join("shot.png");
-    let out = Command::new(env!("CARGO_BIN_EXE_galerkin"))
-        .args(["--validation", "radiosity", "view"])
-        .arg(&scene)
-        .args(["--play", "--frames", "4", "--size", "320x200", "--screenshot"])
-        .arg(&shot)
-        .env("DISPLAY", &x.display)
-        .env_remove("WAYLAND_DISPLAY")
-        .output()
-        .unwrap();
-    assert!(out.status.success(), "galerkin radiosity view failed: {}", String::from_utf8_lossy(&out.stderr));
-    let stdout = String::from_utf8_lossy(&out.stdout);
+    let (stdout, drawn) = run_radiosity_viewer(&x, &scene, &dir.join("shot.png"));
     assert!(stdout.contains("full mode") && stdout.contains("at stretch="), "{stdout}");
-    let (w, h, rgba) = read_png_rgba8(&shot).unwrap();
-    assert_eq!((w, h), (320, 200));
-    let background = galerkin::render::BACKGROUND.map(|v| (v * 255.0).round() as u8);
-    let drawn = rgba.chunks_exact(4).filter(|p| p[..3] != background[..3]).count();
     // Seen from outside: the box covers part of the window, not all of it.
-    let share = drawn as f64 / f64::from(w * h);
-    assert!((0.05..0.95).contains(&share), "{drawn} of {} pixels drawn", w * h);
+    assert!((0.05..0.95).contains(&drawn), "{drawn} of the pixels drawn");
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
