@@ -212,9 +212,7 @@ fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
                     model.light_mode()
                 );
             }
-            if mesh.len() != model.faces() {
-                bail!("{}: the model has {} faces, the scene {}", dir.display(), model.faces(), mesh.len());
-            }
+            check_model_faces(dir, &model, mesh.len())?;
             let (b, _) = model.evaluate(&mesh)?;
             let geometry = mesh.geometry();
             (mesh, geometry, b, "reduced model loaded and evaluated in".to_string())
@@ -228,7 +226,7 @@ fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
     }
     let gpu = Gpu::new(desc)?;
     let vertices = scene_vertices(&mesh, &geometry, &radiance, args.look.shading);
-    let camera = scene.camera(&p, args.look.view)?;
+    let camera = scene.camera(&mesh, args.look.view);
     let picture = draw_picture(&gpu, &vertices, &camera, exposure, args.look.size)?;
     let (w, h) = args.look.size;
     if ext == "png" {
@@ -261,6 +259,14 @@ fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
     );
     drop(picture);
     crate::check_validation(gpu)
+}
+
+/// Refuses a model trained on a scene with another number of faces, naming its directory.
+fn check_model_faces(dir: &std::path::Path, model: &ReducedRadiosity, faces: usize) -> Result<()> {
+    if faces != model.faces() {
+        bail!("{}: the model has {} faces, the scene {faces}", dir.display(), model.faces());
+    }
+    Ok(())
 }
 
 /// The `--lights` choice as a light mode (`None`: the scene file's own).
@@ -730,9 +736,7 @@ fn view(desc: &GpuDesc, args: &ViewArgs) -> Result<()> {
     let p = scene.parameters_from(&args.look.params).with_context(|| format!("{}", args.scene.display()))?;
     let mesh = scene.space().mesh(&p)?;
     if let (Some(m), Some(dir)) = (&model, &args.model) {
-        if mesh.len() != m.faces() {
-            bail!("{}: the model has {} faces, the scene {}", dir.display(), m.faces(), mesh.len());
-        }
+        check_model_faces(dir, m, mesh.len())?;
     }
     let exposure = match args.look.exposure {
         Some(e) if e.is_finite() && e > 0.0 => e,

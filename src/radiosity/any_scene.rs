@@ -9,7 +9,7 @@ use super::obj::ObjScene;
 use super::render::{camera_for, Viewpoint};
 use super::scene::{LightMode, SceneSpec, PARAMETERS};
 use super::train::DesignSpace;
-use super::RadiosityError;
+use super::{RadiosityError, SceneMesh};
 use crate::render::{camera_for_box, Camera};
 
 /// A scene of either kind.
@@ -83,14 +83,14 @@ impl AnyScene {
         Ok(p)
     }
 
-    /// A camera for the configuration `p`: the two rooms' `view`, or (an OBJ scene has no named
-    /// viewpoints) one that shows the mesh's bounding box from outside.
-    pub fn camera(&self, p: &[f64], view: Viewpoint) -> Result<Camera, RadiosityError> {
+    /// A camera for `mesh` (the scene at some parameters): the two rooms' `view`, or (an OBJ
+    /// scene has no named viewpoints) one that shows the mesh's bounding box from outside.
+    pub fn camera(&self, mesh: &SceneMesh, view: Viewpoint) -> Camera {
         match self {
-            AnyScene::Rooms(spec) => Ok(camera_for(spec, view)),
-            AnyScene::Obj(s) => {
-                let (lo, hi) = s.mesh(p)?.bounds();
-                Ok(camera_for_box(lo.to_array(), hi.to_array()))
+            AnyScene::Rooms(spec) => camera_for(spec, view),
+            AnyScene::Obj(_) => {
+                let (lo, hi) = mesh.bounds();
+                camera_for_box(lo.to_array(), hi.to_array())
             }
         }
     }

@@ -70,7 +70,8 @@ impl RadiosityContent {
     ) -> Result<Self, super::RadiosityError> {
         let reduced = model.is_some();
         let ViewSettings { params, view, shading, exposure, size, playing } = settings;
-        let camera = scene.camera(&params, view)?;
+        let mesh = scene.space().mesh(&params)?;
+        let camera = scene.camera(&mesh, view);
         Ok(Self {
             names: scene.names(),
             scene,
@@ -89,7 +90,7 @@ impl RadiosityContent {
             solve_ms: 0.0,
             fps: 0.0,
             frames: 0,
-            mesh_faces: 0,
+            mesh_faces: mesh.len(),
         })
     }
 
@@ -150,8 +151,8 @@ impl ViewerContent for RadiosityContent {
     }
 
     fn start(&mut self, gpu: &Gpu, target: &RenderTarget) -> Result<()> {
-        let faces = self.scene.space().mesh(&self.params)?.len();
-        self.renderer = Some(SceneRenderer::new(gpu, target.render_pass(), Output::Colour, faces)?);
+        // The topology is fixed: every configuration has the faces counted in `new`.
+        self.renderer = Some(SceneRenderer::new(gpu, target.render_pass(), Output::Colour, self.mesh_faces)?);
         self.dirty = true;
         Ok(())
     }
