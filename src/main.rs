@@ -9,6 +9,7 @@ use anyhow::{bail, Context, Result};
 
 mod cli {
     pub mod fluid;
+    pub mod fluid_reduced;
     pub mod full_frames;
     pub mod radiosity;
     pub mod spacetime;

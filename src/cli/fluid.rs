@@ -8,8 +8,9 @@ use clap::{Args, Subcommand};
 use galerkin::fluid::gpu::GpuParticles;
 use galerkin::fluid::particles::{advect_particles, seed_particles};
 use galerkin::fluid::render::{cell_speeds, draw_picture, DrawStyle, Projection, View2d};
+use galerkin::fluid::run::simulate_run;
 use galerkin::fluid::scene::FluidScene;
-use galerkin::fluid::snapshots::{SnapshotMeta, SnapshotReader, SnapshotWriter};
+use galerkin::fluid::snapshots::SnapshotReader;
 use galerkin::fluid::FluidSolver;
 use galerkin::gpu::{Gpu, GpuDesc};
 use galerkin::mesh::{Periodic, SimplexMesh, Topology};
@@ -36,6 +37,14 @@ pub enum Action {
     /// (DIR/{stem}_0000.obj, …: one object per closed part, the same topology every frame),
     /// for other tools or to edit and load back through a [surface] scene.
     Surface(SurfaceArgs),
+    /// Train a reduced model (seed 000 §6) on full runs of one mesh: bases B_f, B_u = B_p,
+    /// B_g, B_h by PCA of the snapshots and B_d by constraint reduction, then the reduced
+    /// tensors of §6.2 premultiplied; writes one safetensors file.
+    Train(crate::cli::fluid_reduced::TrainArgs),
+    /// Run a reduced model (Fig. 2 right: matrix-exponential advection, constrained reduced
+    /// projection) and write its frames lifted to the full space as a snapshot directory, which
+    /// `galerkin fluid render` draws.
+    Reduced(crate::cli::fluid_reduced::ReducedArgs),
 }
 
 /// Arguments of `galerkin fluid surface`.
@@ -141,6 +150,8 @@ pub fn run(desc: &GpuDesc, action: &Action) -> Result<()> {
         Action::Render(args) => render(desc, args),
         Action::View(args) => view(desc, args),
         Action::Surface(args) => surface(args),
+        Action::Train(args) => crate::cli::fluid_reduced::train(args),
+        Action::Reduced(args) => crate::cli::fluid_reduced::reduced(args),
     }
 }
 
@@ -181,59 +192,38 @@ fn simulate(args: &SimulateArgs) -> Result<()> {
         scene.set_run(run)?;
     }
     let frames = args.frames.unwrap_or(scene.frames);
-    let mesh = scene.mesh.clone();
-    let topo = scene.topology.clone();
-    let t_setup = Instant::now();
-    let mut solver = FluidSolver::new(mesh.clone(), topo.clone(), scene.params)?;
-    let mut state = solver.initial_state(mesh.g().to_vec(), &scene.initial_velocity)?;
-    let setup_s = t_setup.elapsed().as_secs_f64();
-    let d = mesh.dim();
-    let meta = SnapshotMeta::new(&mesh, &topo, scene.params.frame_time, scene.periodic_axis);
-    let mut writer = SnapshotWriter::create(&args.out, meta, mesh.cells(), args.force)?;
-    let momenta = |state: &galerkin::fluid::FluidState| -> Vec<f64> {
-        let vols = mesh.volumes_at(&state.g);
-        state.u.iter().enumerate().map(|(i, u)| vols[i / d] * u).collect()
-    };
-    writer.push(&state.u, &momenta(&state), &state.f, &state.g, &vec![0.0; topo.face_count()])?;
+    let (mesh, topo) = (&scene.mesh, &scene.topology);
     println!(
-        "fluid: {} ({}) — {}D, {} cells, {} faces ({} on the boundary), {} vertices; projection memory {} entries; setup {setup_s:.2} s",
+        "fluid: {} ({}) — {}D, {} cells, {} faces ({} on the boundary), {} vertices",
         args.scene.display(),
         scene.description,
-        d,
+        mesh.dim(),
         mesh.cell_count(),
         topo.face_count(),
         topo.boundary_faces().len(),
         mesh.vertex_count(),
-        solver.projection_memory_len()
     );
     let bar = crate::progress_bar(frames as u64, "simulating");
-    let (mut td, mut ta, mut tp, mut worst_div) = (Vec::new(), Vec::new(), Vec::new(), 0.0f64);
-    let mut substeps = 0;
-    let mut cg_steps = 0;
-    let e0 = solver.energy(&state);
-    for frame in 1..=frames {
-        let t0 = Instant::now();
-        let g = scene.geometry(frame)?;
-        td.push(t0.elapsed().as_secs_f64());
-        let (next, report) = solver.step(&state, &g, frame)?;
-        writer.push(&next.u, &momenta(&next), &next.f, &next.g, &report.h)?;
-        ta.push(report.advection_seconds);
-        tp.push(report.projection_seconds);
-        worst_div = worst_div.max(report.projection.relative_divergence);
-        substeps = report.substeps;
-        cg_steps += report.projection.cg_steps;
-        state = next;
-        bar.set_message(format!("energy {:.4}", solver.energy(&state)));
+    let summary = simulate_run(&mut scene, frames, &args.out, args.force, &mut |_, solver, state, _| {
+        bar.set_message(format!("energy {:.4}", solver.energy(state)));
         bar.inc(1);
-    }
+    })?;
     bar.finish_and_clear();
+    let stage = |i: usize| {
+        let mut v: Vec<f64> = summary.stage_seconds.iter().map(|s| s[i]).collect();
+        galerkin::bench::median_f64(&mut v)
+    };
     println!(
-        "{frames} frames: t_d {:.4} s (deformation), t_a {:.4} s (advection + diffusion, {substeps} RK4 substeps), t_p {:.4} s (projection: {:.1} multigrid-preconditioned CG steps per frame) per frame (medians); energy {e0:.5} → {:.5}; worst relative divergence {worst_div:.1e} → {}",
-        galerkin::bench::median_f64(&mut td),
-        galerkin::bench::median_f64(&mut ta),
-        galerkin::bench::median_f64(&mut tp),
-        cg_steps as f64 / frames.max(1) as f64,
-        solver.energy(&state),
+        "{frames} frames (setup {:.2} s): t_d {:.4} s (deformation), t_a {:.4} s (advection + diffusion, {} RK4 substeps), t_p {:.4} s (projection: {:.1} multigrid-preconditioned CG steps per frame) per frame (medians); energy {:.5} → {:.5}; worst relative divergence {:.1e} → {}",
+        summary.setup_seconds,
+        stage(0),
+        stage(1),
+        summary.substeps,
+        stage(2),
+        summary.cg_steps as f64 / frames.max(1) as f64,
+        summary.energy.0,
+        summary.energy.1,
+        summary.worst_divergence,
         args.out.display()
     );
     Ok(())

@@ -8,7 +8,10 @@
 //!   of face multipliers and solved by multigrid-preconditioned conjugate gradients;
 //! - [`solver`]: the time step (induced flux, RK4 advection–diffusion, projection, flux to
 //!   velocity), with the sign and −V̇u decisions documented there;
-//! - [`scene`] and [`snapshots`]: TOML scenes and the streaming snapshot format.
+//! - [`scene`] and [`snapshots`]: TOML scenes and the streaming snapshot format; [`run`]: a
+//!   simulation written as a snapshot directory;
+//! - [`reduced`]: the reduced fluid of §6 (bases, reduced tensors, the reduced step, the
+//!   Fig. 5 error study).
 
 // Numerical code indexes several arrays by the same cell, face or axis.
 #![allow(clippy::needless_range_loop)]
@@ -21,7 +24,9 @@ pub mod gpu;
 pub mod operators;
 pub mod particles;
 pub mod projection;
+pub mod reduced;
 pub mod render;
+pub mod run;
 pub mod scene;
 pub mod snapshots;
 pub mod solver;

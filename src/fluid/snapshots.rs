@@ -6,8 +6,8 @@
 //!
 //! - `snapshots.json`: `{"format": "galerkin-fluid-snapshots", "version": 1, "dim": d,
 //!   "cells": n_c, "faces": n_f, "vertices": n_v, "frame_time": Δt, "frames": k,
-//!   "periodic_axis": a | null, "quantities": {"u": len, "p": len, "f": len, "g": len,
-//!   "h": len}}`, rewritten after every frame, so an interrupted run is a valid shorter one;
+//!   "periodic_axis": a | null, "viscosity": μ, "forcing": [e₀, e₁, e₂]}` (the last two
+//!   optional), rewritten after every frame, so an interrupted run is a valid shorter one;
 //! - `mesh.json`: the topology, `{"dim": d, "cells": [v₀, v₁, …]}` (d + 1 indices per cell);
 //! - one file per quantity, `u.f64 p.f64 f.f64 g.f64 h.f64`: little-endian f64, one frame
 //!   after another (frame k of quantity q starts at byte `8·k·len_q`). u and p have d
@@ -59,6 +59,12 @@ pub struct SnapshotMeta {
     pub frames: usize,
     /// The periodic axis, if any.
     pub periodic_axis: Option<usize>,
+    /// The run's viscosity μ (absent in headers written before it was recorded).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub viscosity: Option<f64>,
+    /// The run's body acceleration e (absent in older headers).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub forcing: Option<[f64; 3]>,
 }
 
 impl SnapshotMeta {
@@ -74,7 +80,17 @@ impl SnapshotMeta {
             frame_time,
             frames: 0,
             periodic_axis,
+            viscosity: None,
+            forcing: None,
         }
+    }
+
+    /// This header with the run's physical parameters recorded (what a reduced model trained
+    /// on the run needs to take the same step).
+    pub fn with_params(mut self, params: &super::FluidParams) -> Self {
+        self.viscosity = Some(params.viscosity);
+        self.forcing = Some(params.forcing);
+        self
     }
 
     /// Length of one frame of `quantity`.

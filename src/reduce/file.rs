@@ -4,6 +4,9 @@
 //! format name and version, the composition (JSON, and in paper notation for people), each
 //! tensor's axis bases, the inputs and the output's axes. Loading checks the version and that
 //! every shape agrees with the metadata, and says what is wrong with which file.
+//!
+//! A capability built on the core (the reduced fluid) may store [`ModelExtras`] beside the
+//! model: metadata strings as `extra/<key>` and f64 arrays as `data/<name>`.
 
 use std::collections::{BTreeMap, HashMap};
 use std::path::Path;
@@ -21,6 +24,15 @@ pub const FORMAT: &str = "galerkin-reduced-model";
 /// The version this build writes and the newest it reads.
 pub const VERSION: u32 = 1;
 
+/// What a capability stores beside a reduced model (see the module docs).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ModelExtras {
+    /// Metadata strings (stored as `extra/<key>`).
+    pub metadata: BTreeMap<String, String>,
+    /// f64 arrays (stored as `data/<name>`).
+    pub arrays: BTreeMap<String, Tensor>,
+}
+
 fn f64_bytes(t: &Tensor) -> Vec<u8> {
     t.data().iter().flat_map(|v| v.to_le_bytes()).collect()
 }
@@ -28,6 +40,11 @@ fn f64_bytes(t: &Tensor) -> Vec<u8> {
 impl ReducedModel {
     /// Writes the model to `path` (a temporary file beside it, then renamed: never half-written).
     pub fn save(&self, path: &Path) -> Result<(), ReduceError> {
+        self.save_with(path, &ModelExtras::default())
+    }
+
+    /// [`ReducedModel::save`] with `extras` beside the model.
+    pub fn save_with(&self, path: &Path, extras: &ModelExtras) -> Result<(), ReduceError> {
         let fail = |detail: String| ReduceError::File { path: path.to_path_buf(), detail };
         let json = |v: &dyn erased::Json| v.json().map_err(|e| fail(e.to_string()));
         let mut meta = HashMap::new();
@@ -39,6 +56,9 @@ impl ReducedModel {
         meta.insert("output_axes".to_string(), json(&self.output_axes)?);
         let axes: BTreeMap<&String, &Vec<String>> = self.tensors.iter().map(|(n, t)| (n, &t.axes)).collect();
         meta.insert("tensor_axes".to_string(), json(&axes)?);
+        for (k, v) in &extras.metadata {
+            meta.insert(format!("extra/{k}"), v.clone());
+        }
 
         let mut bytes: Vec<(String, Vec<u8>, Vec<usize>)> = Vec::new();
         for (name, t) in &self.tensors {
@@ -46,6 +66,9 @@ impl ReducedModel {
         }
         for (name, b) in &self.bases {
             bytes.push((format!("basis/{name}"), f64_bytes(b.matrix()), b.matrix().shape().to_vec()));
+        }
+        for (name, t) in &extras.arrays {
+            bytes.push((format!("data/{name}"), f64_bytes(t), t.shape().to_vec()));
         }
         let views = bytes
             .iter()
@@ -67,6 +90,11 @@ impl ReducedModel {
 
     /// Reads a model written by [`ReducedModel::save`] (this version or older).
     pub fn load(path: &Path) -> Result<ReducedModel, ReduceError> {
+        Ok(Self::load_with(path)?.0)
+    }
+
+    /// [`ReducedModel::load`], also returning the [`ModelExtras`] stored beside the model.
+    pub fn load_with(path: &Path) -> Result<(ReducedModel, ModelExtras), ReduceError> {
         let fail = |detail: String| ReduceError::File { path: path.to_path_buf(), detail };
         let buffer = std::fs::read(path).map_err(|e| fail(e.to_string()))?;
         let (_, header) = SafeTensors::read_metadata(&buffer)
@@ -152,7 +180,16 @@ impl ReducedModel {
         }
         let model = ReducedModel::new(tensors, inputs, output, output_axes, bases);
         model.check().map_err(|e| fail(format!("the composition does not fit the tensors: {e}")))?;
-        Ok(model)
+        let mut extras = ModelExtras::default();
+        for (k, v) in &meta {
+            if let Some(key) = k.strip_prefix("extra/") {
+                extras.metadata.insert(key.to_string(), v.clone());
+            }
+        }
+        for (name, _) in file.tensors().iter().filter(|(n, _)| n.starts_with("data/")) {
+            extras.arrays.insert(name.trim_start_matches("data/").to_string(), read(name)?);
+        }
+        Ok((model, extras))
     }
 }
 

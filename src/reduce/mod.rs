@@ -29,7 +29,7 @@ pub mod synthetic;
 pub use basis::{Bases, Basis};
 pub use error::ReduceError;
 pub use expr::Expr;
-pub use file::{FORMAT, VERSION};
+pub use file::{ModelExtras, FORMAT, VERSION};
 pub use gpu_eval::{Backend, GpuReducedModel};
 pub use model::{FullTensor, Model, ReduceOptions, StreamedTensor, TensorDecl};
 pub use pca::{pca, pca_with, Pca, SnapshotFile, SnapshotFn, SnapshotSource, Truncation};

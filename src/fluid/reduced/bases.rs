@@ -1,0 +1,329 @@
+//! The reduced fluid's bases (seed 000 §6.1, §6.3–6.4), each from the training set's
+//! snapshots by the core's streaming PCA:
+//!
+//! - `B_f` from the fluxes: divergence-free by construction (§6.3: every snapshot is), checked
+//!   after truncation and orthonormalisation;
+//! - `B_u = B_p` from the velocities and the momenta, each reduced, then **interleaved**
+//!   (u₁, p₁, u₂, p₂, …), re-orthonormalised and cut at `m_u` columns, so both quantities'
+//!   leading modes are kept whatever the cap (§6.1: "we concatenate these bases and
+//!   re-orthonormalize"). The inner product is the **Euclidean** one: the same basis must be
+//!   orthonormal on both axes of `V̂ = B_pᵀ V B_u` for §4's inverse rule and §A.2's energy
+//!   argument, and `V(g)`'s own inner product changes with the geometry;
+//! - `B_g` from the geometry sequence, **centred**: the mean geometry is its first column, so
+//!   `g ≈ B_g ĝ` carries the mean exactly. Every training frame's projected geometry must keep
+//!   every cell's volume positive (the volume tensor is degree d in g), or the model is refused
+//!   naming the run, frame and cell;
+//! - `B_h` from the induced fluxes (absent when no training run moves its mesh);
+//! - `B_d` by constraint reduction (§6.4, Wicke, Stanton & Treuille 2009): an orthonormal basis
+//!   of the range of the boundary rows of `[D B_f, D B_h]`, so that `B_dᵀ D(B_f f̂ − B_h ĥ) = 0`
+//!   holds **iff** `D(B_f f̂ − B_h ĥ) = 0` (the residual lies in that range). Directions with
+//!   singular value below [`CONSTRAINT_RANK_TOLERANCE`] are rounding and dropped; the rank is
+//!   logged. Absent when the rank is zero (no boundary flux in any snapshot: the tunnel).
+
+use crate::fluid::operators::divergence;
+use crate::fluid::FluidError;
+use crate::mesh::{SimplexMesh, Topology};
+use crate::reduce::{pca, Basis, Pca, ReduceError, SnapshotSource, Truncation};
+use crate::tensor::Tensor;
+
+use super::training::TrainingSet;
+
+/// Singular values of `D [B_f, B_h]` at or below this count as zero (its columns have unit
+/// norm, so this is an absolute scale: the snapshots' boundary fluxes are exact to ~1e-12).
+pub const CONSTRAINT_RANK_TOLERANCE: f64 = 1e-9;
+
+/// Largest relative divergence `‖div B_f‖_F / ‖B_f‖_F` a flux basis may keep.
+pub const DIVERGENCE_TOLERANCE: f64 = 1e-10;
+
+/// How many modes each basis may keep: the fewest whose σ² reach `energy` of the total, at
+/// most the cap (`None`: the number of snapshots).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BasisSizes {
+    /// Captured-energy threshold, 0 < energy ≤ 1.
+    pub energy: f64,
+    /// Cap of `B_f`.
+    pub m_f: Option<usize>,
+    /// Cap of the merged `B_u = B_p`.
+    pub m_u: Option<usize>,
+    /// Cap of `B_g` (the mean included).
+    pub m_g: Option<usize>,
+    /// Cap of `B_h`.
+    pub m_h: Option<usize>,
+}
+
+impl Default for BasisSizes {
+    fn default() -> Self {
+        Self { energy: 0.9999, m_f: None, m_u: None, m_g: None, m_h: None }
+    }
+}
+
+/// One basis's size and the energy fraction it captures.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct BasisReport {
+    /// Basis name (`f`, `u`, `g`, `h`, `d`).
+    pub name: String,
+    /// Full dimension.
+    pub full: usize,
+    /// Columns kept.
+    pub columns: usize,
+    /// Fraction of Σσ² captured (for `u` the smaller of the velocity's and momentum's; for
+    /// `d` 1).
+    pub energy: f64,
+    /// What else is worth knowing (divergence, constraint rank, geometry error).
+    pub note: String,
+}
+
+/// The bases of a reduced fluid model.
+#[derive(Clone, Debug)]
+pub struct FluidBases {
+    /// Flux basis `B_f` (faces × m_f).
+    pub f: Basis,
+    /// Velocity and momentum basis `B_u = B_p` (d·cells × m_u).
+    pub u: Basis,
+    /// Geometry basis `B_g` (d·vertices × m_g), the mean first.
+    pub g: Basis,
+    /// Induced-flux basis `B_h` (faces × m_h), if any run moves its mesh.
+    pub h: Option<Basis>,
+    /// Boundary-flux basis `B_d` (boundary faces × rank), if any snapshot has boundary flux.
+    pub d: Option<Basis>,
+    /// Sizes and energies.
+    pub reports: Vec<BasisReport>,
+}
+
+fn truncation(sizes: &BasisSizes, cap: Option<usize>, centred: bool) -> Truncation {
+    Truncation { energy: sizes.energy, max_modes: cap.unwrap_or(usize::MAX), centred }
+}
+
+fn reduce_err(e: ReduceError) -> FluidError {
+    FluidError::State(e.to_string())
+}
+
+fn check_cap(name: &str, cap: Option<usize>, snapshots: usize) -> Result<(), FluidError> {
+    match cap {
+        Some(0) => Err(FluidError::State(format!("basis {name}: a size of 0 keeps nothing"))),
+        Some(m) if m > snapshots => Err(FluidError::State(format!(
+            "basis {name}: {m} columns asked, but the training set has only {snapshots} snapshots"
+        ))),
+        _ => Ok(()),
+    }
+}
+
+impl FluidBases {
+    /// Builds every basis from `set` (see the module docs); `stage(name)` is called as each
+    /// basis starts.
+    pub fn build(
+        set: &TrainingSet,
+        sizes: &BasisSizes,
+        stage: &mut dyn FnMut(&str),
+    ) -> Result<Self, FluidError> {
+        if !(sizes.energy > 0.0 && sizes.energy <= 1.0) {
+            return Err(FluidError::State(format!("energy {}: must be in (0, 1]", sizes.energy)));
+        }
+        let k: usize = set.frames().iter().sum();
+        for (name, cap) in [("f", sizes.m_f), ("u", sizes.m_u), ("g", sizes.m_g), ("h", sizes.m_h)] {
+            check_cap(name, cap, k)?;
+        }
+        let mut reports = Vec::new();
+        let (mesh, topo) = (set.mesh(), set.topology());
+
+        stage("f");
+        let pf = pca("f", &mut set.source("f")?, truncation(sizes, sizes.m_f, false)).map_err(reduce_err)?;
+        let div = relative_divergence(topo, &pf.basis);
+        if div > DIVERGENCE_TOLERANCE {
+            return Err(FluidError::State(format!(
+                "basis f: ‖div B_f‖ is {div:.1e} of ‖B_f‖ (> {DIVERGENCE_TOLERANCE:e}): the flux snapshots are not divergence-free"
+            )));
+        }
+        reports.push(report("f", &pf, format!("‖div B_f‖/‖B_f‖ = {div:.1e}")));
+
+        stage("u");
+        let pu = pca("u", &mut set.source("u")?, truncation(sizes, sizes.m_u, false)).map_err(reduce_err)?;
+        let pp = pca("p", &mut set.source("p")?, truncation(sizes, sizes.m_u, false)).map_err(reduce_err)?;
+        let u = interleave_merge("u", &pu.basis, &pp.basis, sizes.m_u)?;
+        reports.push(BasisReport {
+            name: "u".into(),
+            full: u.full_dim(),
+            columns: u.reduced_dim(),
+            energy: pu.energy.min(pp.energy),
+            note: format!(
+                "B_u = B_p: {} velocity and {} momentum modes (energy {:.6} and {:.6}) interleaved",
+                pu.basis.reduced_dim(),
+                pp.basis.reduced_dim(),
+                pu.energy,
+                pp.energy
+            ),
+        });
+
+        stage("g");
+        let pg = pca("g", &mut set.source("g")?, truncation(sizes, sizes.m_g, true)).map_err(reduce_err)?;
+        let geometry_error = check_projected_volumes(set, mesh, &pg.basis)?;
+        reports.push(report(
+            "g",
+            &pg,
+            format!("mean first; worst projected-geometry error {geometry_error:.1e} relative"),
+        ));
+
+        stage("h");
+        let h = if any_nonzero(&mut set.source("h")?)? {
+            let ph =
+                pca("h", &mut set.source("h")?, truncation(sizes, sizes.m_h, false)).map_err(reduce_err)?;
+            reports.push(report("h", &ph, String::new()));
+            Some(ph.basis)
+        } else {
+            reports.push(BasisReport {
+                name: "h".into(),
+                full: topo.face_count(),
+                columns: 0,
+                energy: 1.0,
+                note: "no run moves its mesh: no induced flux".into(),
+            });
+            None
+        };
+
+        stage("d");
+        let d = constraint_basis(topo, &pf.basis, h.as_ref())?;
+        reports.push(BasisReport {
+            name: "d".into(),
+            full: topo.boundary_faces().len(),
+            columns: d.as_ref().map_or(0, Basis::reduced_dim),
+            energy: 1.0,
+            note: format!(
+                "rank of D[B_f, B_h] (singular values > {CONSTRAINT_RANK_TOLERANCE:e}) of {} columns",
+                pf.basis.reduced_dim() + h.as_ref().map_or(0, Basis::reduced_dim)
+            ),
+        });
+        for r in &reports {
+            tracing::info!(basis = %r.name, full = r.full, columns = r.columns, energy = r.energy, note = %r.note, "basis");
+        }
+        Ok(Self { f: pf.basis, u, g: pg.basis, h, d, reports })
+    }
+}
+
+fn report(name: &str, p: &Pca, note: String) -> BasisReport {
+    BasisReport {
+        name: name.into(),
+        full: p.basis.full_dim(),
+        columns: p.basis.reduced_dim(),
+        energy: p.energy,
+        note,
+    }
+}
+
+/// `‖div B‖_F / ‖B‖_F` of a flux basis.
+pub fn relative_divergence(topo: &Topology, b: &Basis) -> f64 {
+    let (n, m) = (b.full_dim(), b.reduced_dim());
+    let data = b.matrix().data();
+    let mut num = 0.0;
+    let mut col = vec![0.0; n];
+    for j in 0..m {
+        for i in 0..n {
+            col[i] = data[i * m + j];
+        }
+        num += divergence(topo, &col).iter().map(|x| x * x).sum::<f64>();
+    }
+    let den: f64 = data.iter().map(|x| x * x).sum();
+    (num / den.max(f64::MIN_POSITIVE)).sqrt()
+}
+
+/// Columns of `a` and `b` interleaved (a₁, b₁, a₂, b₂, …), orthonormalised, at most `cap`.
+fn interleave_merge(name: &str, a: &Basis, b: &Basis, cap: Option<usize>) -> Result<Basis, FluidError> {
+    let (n, ma, mb) = (a.full_dim(), a.reduced_dim(), b.reduced_dim());
+    let order: Vec<(bool, usize)> = (0..ma.max(mb))
+        .flat_map(|j| [(true, j), (false, j)])
+        .filter(|&(first, j)| if first { j < ma } else { j < mb })
+        .collect();
+    let k = order.len();
+    let mut data = vec![0.0; n * k];
+    for (c, &(first, j)) in order.iter().enumerate() {
+        let (src, m) = if first { (a.matrix().data(), ma) } else { (b.matrix().data(), mb) };
+        for i in 0..n {
+            data[i * k + c] = src[i * m + j];
+        }
+    }
+    let merged =
+        Basis::orthonormalize(name, &Tensor::from_vec(&[n, k], data).expect("n×k")).map_err(reduce_err)?;
+    let m = merged.reduced_dim().min(cap.unwrap_or(usize::MAX));
+    if m == merged.reduced_dim() {
+        return Ok(merged);
+    }
+    let src = merged.matrix().data();
+    let mm = merged.reduced_dim();
+    let cut: Vec<f64> = (0..n).flat_map(|i| src[i * mm..i * mm + m].iter().copied()).collect();
+    Basis::new(name, Tensor::from_vec(&[n, m], cut).expect("n×m"), 1e-10).map_err(reduce_err)
+}
+
+/// Refuses a geometry basis under which a training frame's projected geometry `B_g B_gᵀ g`
+/// has a cell of non-positive volume; returns the worst relative geometry error.
+fn check_projected_volumes(set: &TrainingSet, mesh: &SimplexMesh, bg: &Basis) -> Result<f64, FluidError> {
+    let mut worst: f64 = 0.0;
+    for (run, path) in set.runs().iter().zip(set.paths()) {
+        for frame in 0..run.meta().frames {
+            let g = run.frame("g", frame)?;
+            let projected = bg.lift(&bg.project(&g));
+            let err = g.iter().zip(&projected).map(|(a, b)| (a - b).powi(2)).sum::<f64>().sqrt()
+                / g.iter().map(|a| a * a).sum::<f64>().sqrt().max(f64::MIN_POSITIVE);
+            worst = worst.max(err);
+            let vols = mesh.volumes_at(&projected);
+            if let Some((c, v)) = vols.iter().enumerate().find(|(_, v)| !(**v > 0.0)) {
+                return Err(FluidError::State(format!(
+                    "basis g: {} frame {frame}: the projected geometry gives cell {c} volume {v:.3e} (the true volume is {:.3e}); keep more geometry modes (--m-g) or a higher --energy",
+                    path.display(),
+                    mesh.volumes_at(&g)[c]
+                )));
+            }
+        }
+    }
+    Ok(worst)
+}
+
+fn any_nonzero(source: &mut impl SnapshotSource) -> Result<bool, FluidError> {
+    let n = source.dim();
+    let mut start = 0;
+    while start < n {
+        let end = (start + 4096).min(n);
+        let block = source.rows(start..end).map_err(reduce_err)?;
+        if block.data().iter().any(|v| *v != 0.0) {
+            return Ok(true);
+        }
+        start = end;
+    }
+    Ok(false)
+}
+
+/// `B_d`: an orthonormal basis of the range of `D [B_f, B_h]` (see the module docs).
+pub fn constraint_basis(
+    topo: &Topology,
+    bf: &Basis,
+    bh: Option<&Basis>,
+) -> Result<Option<Basis>, FluidError> {
+    let boundary = topo.boundary_faces();
+    let nb = boundary.len();
+    if nb == 0 {
+        return Ok(None);
+    }
+    let mf = bf.reduced_dim();
+    let mh = bh.map_or(0, Basis::reduced_dim);
+    let k = mf + mh;
+    let mut m = vec![0.0; nb * k];
+    for (row, &face) in boundary.iter().enumerate() {
+        let f = face as usize;
+        m[row * k..row * k + mf].copy_from_slice(&bf.matrix().data()[f * mf..(f + 1) * mf]);
+        if let Some(h) = bh {
+            m[row * k + mf..(row + 1) * k].copy_from_slice(&h.matrix().data()[f * mh..(f + 1) * mh]);
+        }
+    }
+    // The left singular vectors of M whose singular values are not rounding.
+    let mat = faer::Mat::from_fn(nb, k, |i, j| m[i * k + j]);
+    let svd =
+        mat.thin_svd().map_err(|e| FluidError::State(format!("constraint reduction: SVD failed: {e:?}")))?;
+    let s = svd.S().column_vector();
+    let r = (0..s.nrows()).filter(|&i| s[i] > CONSTRAINT_RANK_TOLERANCE).count();
+    if r == 0 {
+        return Ok(None);
+    }
+    let u = svd.U();
+    let cols: Vec<f64> = (0..nb).flat_map(|i| (0..r).map(move |j| u[(i, j)])).collect();
+    let basis =
+        Basis::orthonormalize("d", &Tensor::from_vec(&[nb, r], cols).expect("n_b×r")).map_err(reduce_err)?;
+    Ok(Some(basis))
+}

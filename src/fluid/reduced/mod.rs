@@ -1,0 +1,26 @@
+//! Reduced fluids (seed 000 §6, Fig. 2 right): the full solver's step Galerkin-projected onto
+//! bases learned from its own snapshots, so a frame costs a few hundred dimensions' work.
+//!
+//! - [`training`]: a training set, the snapshot directories of full runs on one mesh;
+//! - [`bases`]: `B_f`, `B_u = B_p`, `B_g`, `B_h` by streamed PCA, `B_d` by constraint reduction;
+//! - [`model`]: §6.2's reduced tensors premultiplied by the core, and the model file;
+//! - [`run`]: a reduced run under a motion, lifted to a snapshot directory;
+//! - [`step`]: the reduced step (flux combination, matrix exponential, constrained
+//!   projection, conversion to velocity).
+//!
+//! The model is the projection of exactly the step [`crate::fluid::solver`] takes — its
+//! dissipative Laplacian, the minus sign of advection, the −V̇u term and the induced flux
+//! integrated over the frame — not of the equations as printed; [`model`] and [`step`] say
+//! where the two differ.
+
+pub mod bases;
+pub mod model;
+pub mod run;
+pub mod step;
+pub mod training;
+
+pub use bases::{BasisReport, BasisSizes, FluidBases};
+pub use model::{MeshFingerprint, ReducedFluidModel, Trajectory};
+pub use run::{run_reduced, write_lifted, ReducedMotion, ReducedRun};
+pub use step::{Exponential, FluxCombination, ReducedFluid, ReducedState, ReducedStepReport};
+pub use training::TrainingSet;

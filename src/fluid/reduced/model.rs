@@ -1,0 +1,447 @@
+//! The reduced fluid model (seed 000 §6.2's table) and its file.
+//!
+//! The full-space tensors are exactly those the full solver evaluates ([`crate::fluid::operators`]),
+//! declared in one core [`Model`] whose axes carry the basis names `u` (= p), `f`, `g`, `h`, `d`,
+//! and premultiplied by the core:
+//!
+//! | tensor | full space | reduced |
+//! |---|---|---|
+//! | `A`  | advection (Eq. 6) `[u, u, f]` | `Â = B_pᵀ A ⊗₁ B_u ⊗₂ B_f` |
+//! | `Ah` | advection **plus the −V̇u term** `[u, u, h]` | `Â_h = B_pᵀ (A + W) ⊗₁ B_u ⊗₂ B_h` |
+//! | `L`  | graph Laplacian Δ (Eq. 9, dissipative sign) | `Δ̂ = B_uᵀ Δ B_u` |
+//! | `P`  | flux to momentum `[u, f, g]` | `P̂ = B_pᵀ P ⊗₁ B_f ⊗₂ B_g` |
+//! | `V`  | volume (Eq. 7) `[u, u, g, …, g]`, the g axes one symmetric group | `V̂ = B_pᵀ V ⊗₁ B_u ⊗₂…₍d+1₎ B_g` |
+//! | `D`  | boundary selector `[d, f]` | `D̂ = B_dᵀ D B_f` |
+//! | `Dh` | boundary selector `[d, h]` | `D̂_h = B_dᵀ D B_h` |
+//!
+//! `W[(c,k),(c,k),face] = σ` is `(W ⊗₂ h) u = (div h) u = V̇u`: the full solver's rate is
+//! `V⁻¹[(A⊗(f − h))u − V̇u + μΔu]` (see [`crate::fluid::solver`]), so the h-axis tensor of
+//! the reduced model is `A + W`, not `A` alone as §6.2 prints it. The core model's output is
+//! the conversion to velocity `û = V̂(ĝ)⁻¹ (P̂ ⊗₂ ĝ) f̂` (Fig. 2, right, last line), which the
+//! reduced step's fast path is tested against.
+//!
+//! The file is the core's safetensors model ([`ReducedModel::save_with`]) with, beside it, the
+//! fluid's metadata (format, dimension, viscosity, frame time, the mesh fingerprint, the
+//! training runs and thresholds, each basis's size and captured energy) and the training
+//! trajectories `data/run<k>/g` and `data/run<k>/h` (frames × m: the reduced geometry and
+//! induced flux of every training frame, for `--motion replay:K`) and `data/run<k>/u0`,
+//! `data/run<k>/f0` (each run's reduced initial state).
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use serde::{Deserialize, Serialize};
+
+use crate::fluid::operators::{
+    advection_tensor, boundary_selector_tensor, flux_to_momentum_tensor, laplacian_tensor, volume_tensor,
+};
+use crate::fluid::FluidError;
+use crate::mesh::{SimplexMesh, Topology};
+use crate::reduce::{Bases, Basis, Expr, Model, ModelExtras, ReducedModel};
+use crate::tensor::{SparseTensor, Tensor};
+
+use super::bases::{BasisReport, BasisSizes, FluidBases};
+use super::training::TrainingSet;
+
+/// The `extra/format` value of a reduced fluid model.
+pub const FLUID_FORMAT: &str = "galerkin-reduced-fluid";
+/// The reduced fluid format version this build writes and reads.
+pub const FLUID_VERSION: u32 = 1;
+
+/// A mesh's identity: dimension, counts, periodic axis and a 64-bit FNV-1a hash of its cells.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct MeshFingerprint {
+    /// Spatial dimension.
+    pub dim: usize,
+    /// Cells.
+    pub cells: usize,
+    /// Faces.
+    pub faces: usize,
+    /// Vertices.
+    pub vertices: usize,
+    /// Boundary faces.
+    pub boundary_faces: usize,
+    /// The periodic axis.
+    pub periodic_axis: Option<usize>,
+    /// FNV-1a of the cells' vertex indices (hex).
+    pub cells_hash: String,
+}
+
+impl MeshFingerprint {
+    /// The fingerprint of a mesh's topology.
+    pub fn of(mesh: &SimplexMesh, topo: &Topology, periodic_axis: Option<usize>) -> Self {
+        let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+        for &v in mesh.cells() {
+            for b in v.to_le_bytes() {
+                h ^= u64::from(b);
+                h = h.wrapping_mul(0x0000_0100_0000_01b3);
+            }
+        }
+        Self {
+            dim: mesh.dim(),
+            cells: mesh.cell_count(),
+            faces: topo.face_count(),
+            vertices: mesh.vertex_count(),
+            boundary_faces: topo.boundary_faces().len(),
+            periodic_axis,
+            cells_hash: format!("{h:016x}"),
+        }
+    }
+}
+
+/// Where a model came from.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Provenance {
+    /// The training runs' directories and frame counts.
+    pub runs: Vec<(String, usize)>,
+    /// The basis-size request.
+    pub energy: f64,
+    /// The caps asked for (`f`, `u`, `g`, `h`).
+    pub caps: [Option<usize>; 4],
+    /// Each basis's size and captured energy.
+    pub bases: Vec<BasisReport>,
+    /// The mesh the model was trained on.
+    pub mesh: MeshFingerprint,
+}
+
+/// A reduced fluid model: the core's reduced tensors and bases, the physical parameters, the
+/// provenance and the training trajectories.
+#[derive(Clone, Debug)]
+pub struct ReducedFluidModel {
+    /// The core model (tensors `A Ah L P V D Dh`, bases `u f g h d`).
+    pub core: ReducedModel,
+    /// Spatial dimension.
+    pub dim: usize,
+    /// Viscosity μ.
+    pub viscosity: f64,
+    /// Time between frames.
+    pub frame_time: f64,
+    /// Where it came from.
+    pub provenance: Provenance,
+    /// Per training run: reduced geometry and induced flux per frame (frames × m_g, frames × m_h),
+    /// reduced initial velocity and flux.
+    pub trajectories: Vec<Trajectory>,
+    /// The mesh's cells (d + 1 vertex indices each), to write lifted snapshots.
+    pub cells: Vec<u32>,
+}
+
+/// One training run's reduced motion and initial state.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Trajectory {
+    /// ĝ per frame (frames × m_g).
+    pub g: Tensor,
+    /// ĥ per frame (frames × m_h; m_h = 0 without B_h).
+    pub h: Tensor,
+    /// û of frame 0.
+    pub u0: Vec<f64>,
+    /// f̂ of frame 0.
+    pub f0: Vec<f64>,
+}
+
+/// The core model of the fluid's tensors on `mesh` (see the module docs); `with_h` and
+/// `with_d` say whether the induced-flux and boundary tensors are declared.
+pub fn full_model(mesh: &SimplexMesh, topo: &Topology, with_h: bool, with_d: bool) -> Model {
+    let d = mesh.dim();
+    let g = Expr::input("g");
+    let mut v = Expr::tensor("V");
+    for axis in 2..2 + d {
+        v = v.times(axis, g.clone());
+    }
+    let p = Expr::tensor("P").times(1, Expr::input("f")).times(2, g.clone());
+    let output = v.inverse().times(1, p);
+    let mut v_axes = vec!["u", "u"];
+    v_axes.extend(std::iter::repeat_n("g", d));
+    let mut model = Model::new(output)
+        .with_input("f", "f")
+        .with_input("g", "g")
+        .with_tensor("A", &["u", "u", "f"], advection_tensor(topo))
+        .with_tensor("L", &["u", "u"], laplacian_tensor(topo))
+        .with_tensor("P", &["u", "f", "g"], flux_to_momentum_tensor(mesh, topo))
+        .with_tensor("V", &v_axes, volume_tensor(mesh));
+    if with_h {
+        model = model.with_tensor("Ah", &["u", "u", "h"], advection_with_volume_change(topo));
+    }
+    if with_d {
+        model = model.with_tensor("D", &["d", "f"], boundary_selector_tensor(topo));
+        if with_h {
+            model = model.with_tensor("Dh", &["d", "h"], boundary_selector_tensor(topo));
+        }
+    }
+    model
+}
+
+/// `A + W`: advection by a flux plus the volume change it implies, `(W ⊗₂ h) u = (div h) u`
+/// (the −V̇u term of [`crate::fluid::solver`], with V̇ = div h).
+pub fn advection_with_volume_change(topo: &Topology) -> SparseTensor {
+    let d = topo.dim();
+    let mut t = advection_tensor(topo);
+    for c in 0..topo.cell_count() {
+        for l in 0..=d {
+            let (face, sigma) = (topo.cell_face(c, l), topo.sign(c, l));
+            for k in 0..d {
+                t.push(&[d * c + k, d * c + k, face], sigma);
+            }
+        }
+    }
+    t
+}
+
+fn core_err(e: crate::reduce::ReduceError) -> FluidError {
+    FluidError::State(e.to_string())
+}
+
+impl ReducedFluidModel {
+    /// Trains a model on `set` with `bases` (built by [`FluidBases::build`]): premultiplies every
+    /// tensor and projects every training run's motion. `stage(name)` is called per stage.
+    pub fn train(
+        set: &TrainingSet,
+        bases: FluidBases,
+        sizes: &BasisSizes,
+        stage: &mut dyn FnMut(&str),
+    ) -> Result<Self, FluidError> {
+        let (mesh, topo) = (set.mesh(), set.topology());
+        let params = set.params();
+        if params.forcing.iter().any(|&e| e != 0.0) {
+            return Err(FluidError::State(format!(
+                "the training runs have body forcing {:?}: the reduced model has no forcing term yet",
+                params.forcing
+            )));
+        }
+        stage("premultiply");
+        let model = full_model(mesh, topo, bases.h.is_some(), bases.d.is_some());
+        let mut core_bases = Bases::new();
+        core_bases.insert("u".into(), bases.u.clone());
+        core_bases.insert("f".into(), bases.f.clone());
+        core_bases.insert("g".into(), bases.g.clone());
+        if let Some(h) = &bases.h {
+            core_bases.insert("h".into(), h.clone());
+        }
+        if let Some(d) = &bases.d {
+            core_bases.insert("d".into(), d.clone());
+        }
+        let mut core = model.reduce(&core_bases).map_err(core_err)?;
+        // The core keeps the bases of inputs and outputs; the step needs B_h and B_d too.
+        core.bases.extend(core_bases.into_iter().filter(|(k, _)| k == "h" || k == "d"));
+        stage("trajectories");
+        let mut trajectories = Vec::new();
+        for run in set.runs() {
+            trajectories.push(project_run(run, &bases)?);
+        }
+        let provenance = Provenance {
+            runs: set.paths().iter().zip(set.frames()).map(|(p, k)| (p.display().to_string(), k)).collect(),
+            energy: sizes.energy,
+            caps: [sizes.m_f, sizes.m_u, sizes.m_g, sizes.m_h],
+            bases: bases.reports.clone(),
+            mesh: MeshFingerprint::of(mesh, topo, set.meta().periodic_axis),
+        };
+        Ok(Self {
+            core,
+            dim: mesh.dim(),
+            viscosity: params.viscosity,
+            frame_time: params.frame_time,
+            provenance,
+            trajectories,
+            cells: mesh.cells().to_vec(),
+        })
+    }
+
+    /// A basis of the model (`u f g h d`).
+    pub fn basis(&self, name: &str) -> Option<&Basis> {
+        self.core.basis(name)
+    }
+
+    /// A reduced tensor of the model (`A Ah L P V D Dh`).
+    pub fn tensor(&self, name: &str) -> Option<&Tensor> {
+        self.core.tensor(name)
+    }
+
+    /// Reduced dimension of a basis (0 for an absent one).
+    pub fn dim_of(&self, name: &str) -> usize {
+        self.basis(name).map_or(0, Basis::reduced_dim)
+    }
+
+    /// Refuses a mesh other than the one the model was trained on, naming both.
+    pub fn check_mesh(&self, fingerprint: &MeshFingerprint) -> Result<(), FluidError> {
+        if *fingerprint == self.provenance.mesh {
+            Ok(())
+        } else {
+            Err(FluidError::State(format!(
+                "the model was trained on mesh {:?}, this one is {:?}",
+                self.provenance.mesh, fingerprint
+            )))
+        }
+    }
+
+    /// Writes the model (see the module docs; never half-written).
+    pub fn save(&self, path: &Path) -> Result<(), FluidError> {
+        let mut extras = ModelExtras::default();
+        let json = |v: &dyn erased_json::Json| v.json().map_err(|e| FluidError::State(e.to_string()));
+        extras.metadata.insert("format".into(), FLUID_FORMAT.into());
+        extras.metadata.insert("version".into(), FLUID_VERSION.to_string());
+        extras.metadata.insert("dim".into(), self.dim.to_string());
+        extras.metadata.insert("viscosity".into(), json(&self.viscosity)?);
+        extras.metadata.insert("frame_time".into(), json(&self.frame_time)?);
+        extras.metadata.insert("provenance".into(), json(&self.provenance)?);
+        extras
+            .arrays
+            .insert("cells".into(), Tensor::vector(self.cells.iter().map(|&c| f64::from(c)).collect()));
+        for (k, t) in self.trajectories.iter().enumerate() {
+            extras.arrays.insert(format!("run{k}/g"), t.g.clone());
+            extras.arrays.insert(format!("run{k}/h"), t.h.clone());
+            extras.arrays.insert(format!("run{k}/u0"), Tensor::vector(t.u0.clone()));
+            extras.arrays.insert(format!("run{k}/f0"), Tensor::vector(t.f0.clone()));
+        }
+        self.core.save_with(path, &extras).map_err(core_err)
+    }
+
+    /// Reads a model written by [`ReducedFluidModel::save`], checking its format, version and
+    /// every tensor's shape.
+    pub fn load(path: &Path) -> Result<Self, FluidError> {
+        let fail = |m: String| FluidError::File { path: path.to_path_buf(), message: m };
+        let (core, extras) = ReducedModel::load_with(path).map_err(core_err)?;
+        let get = |k: &str| {
+            extras.metadata.get(k).ok_or_else(|| fail(format!("not a reduced fluid model (no `{k}`)")))
+        };
+        if get("format")? != FLUID_FORMAT {
+            return Err(fail(format!("format `{}` is not a reduced fluid model", get("format")?)));
+        }
+        let version: u32 = get("version")?.parse().map_err(|_| fail("bad version".into()))?;
+        if version != FLUID_VERSION {
+            return Err(fail(format!(
+                "reduced fluid format version {version}; this build reads {FLUID_VERSION}"
+            )));
+        }
+        let parse = |k: &str| -> Result<serde_json::Value, FluidError> {
+            serde_json::from_str(get(k)?).map_err(|e| fail(format!("metadata `{k}`: {e}")))
+        };
+        let dim: usize = get("dim")?.parse().map_err(|_| fail("bad dim".into()))?;
+        if !(dim == 2 || dim == 3) {
+            return Err(fail(format!("dimension {dim}")));
+        }
+        let viscosity: f64 = serde_json::from_value(parse("viscosity")?).map_err(|e| fail(e.to_string()))?;
+        let frame_time: f64 =
+            serde_json::from_value(parse("frame_time")?).map_err(|e| fail(e.to_string()))?;
+        let provenance: Provenance =
+            serde_json::from_value(parse("provenance")?).map_err(|e| fail(format!("provenance: {e}")))?;
+        let mut trajectories = Vec::new();
+        for k in 0..provenance.runs.len() {
+            let array = |q: &str| {
+                extras
+                    .arrays
+                    .get(&format!("run{k}/{q}"))
+                    .cloned()
+                    .ok_or_else(|| fail(format!("no trajectory run{k}/{q}")))
+            };
+            let t = Trajectory {
+                g: array("g")?,
+                h: array("h")?,
+                u0: array("u0")?.into_data(),
+                f0: array("f0")?.into_data(),
+            };
+            trajectories.push(t);
+        }
+        let raw = extras.arrays.get("cells").ok_or_else(|| fail("no `data/cells`".into()))?;
+        let want = provenance.mesh.cells * (dim + 1);
+        if raw.len() != want {
+            return Err(fail(format!(
+                "`data/cells` has {} entries, {} cells need {want}",
+                raw.len(),
+                provenance.mesh.cells
+            )));
+        }
+        let nv = provenance.mesh.vertices as f64;
+        if let Some(i) = raw.data().iter().position(|&c| !(c >= 0.0 && c < nv && c.fract() == 0.0)) {
+            return Err(fail(format!("`data/cells` entry {i} is not a vertex index below {nv}")));
+        }
+        let cells = raw.data().iter().map(|&c| c as u32).collect();
+        let model = Self { core, dim, viscosity, frame_time, provenance, trajectories, cells };
+        model.check_shapes().map_err(|e| fail(e.to_string()))?;
+        Ok(model)
+    }
+
+    /// Checks that every tensor has the shape its bases give.
+    fn check_shapes(&self) -> Result<(), FluidError> {
+        let (mu, mf, mg, mh, md) =
+            (self.dim_of("u"), self.dim_of("f"), self.dim_of("g"), self.dim_of("h"), self.dim_of("d"));
+        if mu == 0 || mf == 0 || mg == 0 {
+            return Err(FluidError::State("the model lacks one of the bases u, f, g".into()));
+        }
+        let mut want: BTreeMap<&str, Vec<usize>> = BTreeMap::new();
+        want.insert("A", vec![mu, mu, mf]);
+        want.insert("L", vec![mu, mu]);
+        want.insert("P", vec![mu, mf, mg]);
+        let mut v = vec![mu, mu];
+        v.extend(std::iter::repeat_n(mg, self.dim));
+        want.insert("V", v);
+        if mh > 0 {
+            want.insert("Ah", vec![mu, mu, mh]);
+        }
+        if md > 0 {
+            want.insert("D", vec![md, mf]);
+            if mh > 0 {
+                want.insert("Dh", vec![md, mh]);
+            }
+        }
+        for (name, shape) in want {
+            match self.tensor(name) {
+                Some(t) if t.shape() == shape.as_slice() => {}
+                Some(t) => {
+                    return Err(FluidError::State(format!(
+                        "tensor {name} has shape {:?}, its bases give {shape:?}",
+                        t.shape()
+                    )))
+                }
+                None => return Err(FluidError::State(format!("tensor {name} is missing"))),
+            }
+        }
+        for (k, t) in self.trajectories.iter().enumerate() {
+            if t.g.order() != 2
+                || t.g.shape()[1] != mg
+                || t.h.order() != 2
+                || t.h.shape()[1] != mh
+                || t.g.shape()[0] != t.h.shape()[0]
+                || t.u0.len() != mu
+                || t.f0.len() != mf
+            {
+                return Err(FluidError::State(format!("trajectory of run {k} does not fit the bases")));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// A run's reduced motion (ĝ, ĥ per frame) and initial state.
+fn project_run(
+    run: &crate::fluid::snapshots::SnapshotReader,
+    bases: &FluidBases,
+) -> Result<Trajectory, FluidError> {
+    let frames = run.meta().frames;
+    let mg = bases.g.reduced_dim();
+    let mh = bases.h.as_ref().map_or(0, Basis::reduced_dim);
+    let mut g = Vec::with_capacity(frames * mg);
+    let mut h = Vec::with_capacity(frames * mh);
+    for k in 0..frames {
+        g.extend(bases.g.project(&run.frame("g", k)?));
+        if let Some(bh) = &bases.h {
+            h.extend(bh.project(&run.frame("h", k)?));
+        }
+    }
+    Ok(Trajectory {
+        g: Tensor::from_vec(&[frames, mg], g).expect("frames × m_g"),
+        h: Tensor::from_vec(&[frames, mh], h).expect("frames × m_h"),
+        u0: bases.u.project(&run.frame("u", 0)?),
+        f0: bases.f.project(&run.frame("f", 0)?),
+    })
+}
+
+/// `serde_json::to_string` behind a trait object.
+mod erased_json {
+    pub trait Json {
+        fn json(&self) -> serde_json::Result<String>;
+    }
+    impl<T: serde::Serialize> Json for T {
+        fn json(&self) -> serde_json::Result<String> {
+            serde_json::to_string(self)
+        }
+    }
+}

@@ -1,0 +1,123 @@
+//! A reduced run: the reduced step driven by a motion, and its frames lifted to the full space
+//! as a snapshot directory (so `galerkin fluid render` and the viewer show it).
+//!
+//! Motions: [`ReducedMotion::Replay`] replays training run K's reduced geometry and induced
+//! flux (§6.2: "we store values of ĥ along deformation trajectories that we will use at
+//! runtime and replay these trajectories"); its frame t → t + 1 uses `ĝ_{t+1}` and `ĥ_{t+1}`
+//! of that run (a snapshot's h is the flux of the motion that ends at its frame).
+
+use std::path::Path;
+
+use crate::fluid::snapshots::{SnapshotMeta, SnapshotWriter};
+use crate::fluid::FluidError;
+use crate::mesh::{SimplexMesh, Topology};
+use crate::reduce::Basis;
+
+use super::model::ReducedFluidModel;
+use super::step::{ReducedFluid, ReducedState, ReducedStepReport};
+
+/// Where a reduced run's motion comes from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ReducedMotion {
+    /// Training run K's reduced geometry and induced flux, frame by frame.
+    Replay(usize),
+}
+
+impl std::str::FromStr for ReducedMotion {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s.split_once(':') {
+            Some(("replay", k)) => {
+                k.trim().parse().map(ReducedMotion::Replay).map_err(|e| format!("replay:{k}: {e}"))
+            }
+            _ => Err(format!("{s}: expected replay:K (K a training run, from 0)")),
+        }
+    }
+}
+
+/// A reduced run's frames: the initial state, then one per step, with each step's ĥ and report.
+#[derive(Clone, Debug)]
+pub struct ReducedRun {
+    /// States, frame 0 first.
+    pub states: Vec<ReducedState>,
+    /// ĥ of each frame (zero for frame 0).
+    pub h: Vec<Vec<f64>>,
+    /// Each step's report.
+    pub reports: Vec<ReducedStepReport>,
+}
+
+/// Runs `frames` reduced steps of `model` under `motion` from the motion's initial state;
+/// `on_frame(k)` is called after each.
+pub fn run_reduced(
+    model: &ReducedFluidModel,
+    fluid: &ReducedFluid,
+    motion: ReducedMotion,
+    frames: usize,
+    on_frame: &mut dyn FnMut(usize),
+) -> Result<ReducedRun, FluidError> {
+    let ReducedMotion::Replay(k) = motion;
+    let traj = model.trajectories.get(k).ok_or_else(|| {
+        FluidError::State(format!(
+            "replay:{k}: the model has training runs 0 to {}",
+            model.trajectories.len().saturating_sub(1)
+        ))
+    })?;
+    let available = traj.g.shape()[0].saturating_sub(1);
+    if frames > available {
+        return Err(FluidError::State(format!(
+            "replay:{k}: {frames} frames asked, training run {k} has a motion of {available}"
+        )));
+    }
+    let (mg, mh) = (traj.g.shape()[1], traj.h.shape()[1]);
+    let row = |t: &crate::tensor::Tensor, m: usize, i: usize| t.data()[i * m..(i + 1) * m].to_vec();
+    let mut state = ReducedState { u: traj.u0.clone(), f: traj.f0.clone(), g: row(&traj.g, mg, 0) };
+    let mut run = ReducedRun { states: vec![state.clone()], h: vec![vec![0.0; mh]], reports: Vec::new() };
+    for t in 0..frames {
+        let (g1, h1) = (row(&traj.g, mg, t + 1), row(&traj.h, mh, t + 1));
+        let (next, report) = fluid.step(&state, &g1, &h1).map_err(|e| match e {
+            FluidError::State(m) => FluidError::State(format!("reduced frame {}: {m}", t + 1)),
+            other => other,
+        })?;
+        state = next;
+        run.states.push(state.clone());
+        run.h.push(h1);
+        run.reports.push(report);
+        on_frame(t + 1);
+    }
+    Ok(run)
+}
+
+/// Writes a reduced run lifted to the full space (`u = B_u û`, `f = B_f f̂`, `g = B_g ĝ`,
+/// `h = B_h ĥ`, `p = V(g) u`) as a snapshot directory.
+pub fn write_lifted(
+    model: &ReducedFluidModel,
+    run: &ReducedRun,
+    dir: &Path,
+    overwrite: bool,
+) -> Result<(), FluidError> {
+    let basis =
+        |n: &str| model.basis(n).ok_or_else(|| FluidError::State(format!("the model has no basis {n}")));
+    let (bu, bf, bg) = (basis("u")?, basis("f")?, basis("g")?);
+    let bh: Option<&Basis> = model.basis("h");
+    let g0 = bg.lift(&run.states[0].g);
+    let mesh = SimplexMesh::new(model.dim, g0, model.cells.clone())?;
+    let fp = &model.provenance.mesh;
+    let topo = Topology::new(&mesh, fp.periodic_axis.map(|axis| crate::mesh::Periodic { axis }))?;
+    let mut meta = SnapshotMeta::new(&mesh, &topo, model.frame_time, fp.periodic_axis);
+    meta.viscosity = Some(model.viscosity);
+    meta.forcing = Some([0.0; 3]);
+    let mut writer = SnapshotWriter::create(dir, meta, mesh.cells(), overwrite)?;
+    let d = model.dim;
+    for (s, h) in run.states.iter().zip(&run.h) {
+        let g = bg.lift(&s.g);
+        let u = bu.lift(&s.u);
+        let vols = mesh.volumes_at(&g);
+        let p: Vec<f64> = u.iter().enumerate().map(|(i, v)| vols[i / d] * v).collect();
+        let h = match bh {
+            Some(b) => b.lift(h),
+            None => vec![0.0; topo.face_count()],
+        };
+        writer.push(&u, &p, &bf.lift(&s.f), &g, &h)?;
+    }
+    Ok(())
+}

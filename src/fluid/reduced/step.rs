@@ -1,0 +1,534 @@
+//! The reduced time step (seed 000 Fig. 2, right), the Galerkin projection of exactly the step
+//! [`crate::fluid::solver`] takes:
+//!
+//! 1. **flux combination** — [`FluxCombination::Separate`] (the default, §6.4 and our full
+//!    solver): the rate's operator is `K̂ = Â ⊗₂ f̂ − Â_h ⊗₂ ĥ + μΔ̂`, where `Â_h` carries the
+//!    solver's −V̇u term; [`FluxCombination::ProjectedOntoFlux`] (Fig. 2 as printed):
+//!    `f̂' = f̂ − B_fᵀB_h ĥ`, `K̂ = Â ⊗₂ f̂' + μΔ̂` with no −V̇u term — `B_fᵀB_h` keeps only the
+//!    divergence-free part of the induced flux, which is why Fig. 2 needs no −V̇u term and is
+//!    energy-neutral on a moving mesh, at the price of dropping the flux the mesh motion
+//!    pushes through the faces;
+//! 2. **advection and diffusion by the matrix exponential**: `û' = exp[Δt V̂⁻¹(ĝ_t) K̂] û_t`,
+//!    computed as `û' = L⁻ᵀ exp(Δt L⁻¹K̂L⁻ᵀ) Lᵀû` with `V̂(ĝ_t) = LLᵀ` (Cholesky), so the
+//!    energy `E = ½ûᵀV̂û = ½‖Lᵀû‖²` is the Euclidean norm of what the exponential acts on:
+//!    when the symmetric part of K̂ is negative semidefinite (a static mesh, or Fig. 2's
+//!    combination: `Â ⊗₂ f̂` is skew because `B_u = B_p` and `div B_f = 0`, `Δ̂ ≤ 0`) the
+//!    update never increases E for any Δt (§A.1–A.2), for the Krylov approximation as well
+//!    (see [`crate::tensor::expm_krylov`]). With the separate induced flux the symmetric part
+//!    is `B_uᵀ(−½ diag(div h) + μΔ)B_u`, exactly the full solver's frozen-volume rate;
+//! 3. **reduced projection (Eq. 12)** at ĝ_{t+1}: minimise `½‖û' − V̂⁻¹(P̂ ⊗₂ ĝ)f̂‖²_V̂` subject
+//!    to the reduced boundary constraint `D̂ f̂ = D̂_h ĥ` (B_d from constraint reduction, so it
+//!    holds iff the full one does): `f̂ = f̂_c + Z y` with `f̂_c = D̂⁺ D̂_h ĥ` and `Z` the null
+//!    space of `D̂` (both from one SVD of `D̂` when the model is loaded), then the SPD normal
+//!    equations `Zᵀ(P̂ᵀV̂⁻¹P̂)Z y = Zᵀ(P̂ᵀû' − P̂ᵀV̂⁻¹P̂ f̂_c)` by Cholesky. With ĥ = 0 the result
+//!    is the V̂-orthogonal projection of û' onto a subspace, so it never increases E;
+//! 4. **conversion to velocity**: `û_{t+1} = V̂⁻¹(ĝ_{t+1})(P̂ ⊗₂ ĝ_{t+1}) f̂_{t+1}`.
+
+use std::time::Instant;
+
+use faer::linalg::matmul::matmul;
+use faer::linalg::triangular_solve::{solve_lower_triangular_in_place, solve_upper_triangular_in_place};
+use faer::{Accum, Mat, MatRef, Par};
+
+use crate::fluid::FluidError;
+use crate::tensor::{distinct_permutations, expm_krylov, Tensor};
+
+use super::model::ReducedFluidModel;
+
+/// How the induced flux enters advection (see the module docs).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum FluxCombination {
+    /// `Â ⊗ f̂ − Â_h ⊗ ĥ` with the solver's −V̇u term (§6.4; the default).
+    #[default]
+    Separate,
+    /// `Â ⊗ (f̂ − B_fᵀB_h ĥ)` (Fig. 2 as printed).
+    ProjectedOntoFlux,
+}
+
+/// How the exponential is applied.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Exponential {
+    /// Arnoldi `exp(A)v` to this relative tolerance (the default, 1e-12).
+    Krylov(f64),
+    /// Scaling and squaring with Padé 13 on the whole matrix.
+    Pade,
+}
+
+impl Default for Exponential {
+    fn default() -> Self {
+        Exponential::Krylov(1e-12)
+    }
+}
+
+/// The reduced state: velocity, flux and geometry coordinates.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ReducedState {
+    /// û (m_u).
+    pub u: Vec<f64>,
+    /// f̂ (m_f).
+    pub f: Vec<f64>,
+    /// ĝ (m_g).
+    pub g: Vec<f64>,
+}
+
+/// Seconds per stage of one reduced step, and the exponential's work.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ReducedStepReport {
+    /// Assembling K̂ (the contractions of Â, Â_h, Δ̂).
+    pub assemble_seconds: f64,
+    /// Contracting V̂ with ĝ (both geometries) and factorising.
+    pub volume_seconds: f64,
+    /// The exponential.
+    pub exponential_seconds: f64,
+    /// The projection and the conversion to velocity.
+    pub projection_seconds: f64,
+    /// Matrix–vector products of the Krylov exponential.
+    pub krylov_products: usize,
+    /// `‖D̂ f̂ − D̂_h ĥ‖` after the projection (0 without constraints).
+    pub constraint_residual: f64,
+}
+
+impl ReducedStepReport {
+    /// All stages' seconds.
+    pub fn total_seconds(&self) -> f64 {
+        self.assemble_seconds + self.volume_seconds + self.exponential_seconds + self.projection_seconds
+    }
+}
+
+/// The reduced boundary constraint prepared from one SVD of `D̂`.
+#[derive(Clone, Debug)]
+struct Constraint {
+    /// `D̂⁺` (m_f × m_d).
+    pinv: Mat<f64>,
+    /// Null space of `D̂` (m_f × (m_f − rank)).
+    null: Mat<f64>,
+    /// `D̂` (m_d × m_f).
+    d: Mat<f64>,
+    /// `D̂_h` (m_d × m_h), if the model has B_h.
+    dh: Option<Mat<f64>>,
+}
+
+/// The reduced fluid at run time: the model's tensors laid out for the step.
+#[derive(Clone, Debug)]
+pub struct ReducedFluid {
+    dim: usize,
+    mu: usize,
+    mf: usize,
+    mg: usize,
+    mh: usize,
+    viscosity: f64,
+    frame_time: f64,
+    /// Â as (m_u·m_u) × m_f, row-major.
+    a: Vec<f64>,
+    /// Â_h as (m_u·m_u) × m_h.
+    ah: Vec<f64>,
+    /// Δ̂ (m_u·m_u).
+    lap: Vec<f64>,
+    /// P̂ as (m_u·m_f) × m_g.
+    p: Vec<f64>,
+    /// V̂'s distinct geometry monomials: (m_u·m_u) × monomials, multiplicities folded in.
+    v: Vec<f64>,
+    /// The monomials' geometry indices.
+    monomials: Vec<Vec<usize>>,
+    /// B_fᵀ B_h (m_f × m_h) for [`FluxCombination::ProjectedOntoFlux`].
+    bf_bh: Option<Mat<f64>>,
+    constraint: Option<Constraint>,
+    /// How the induced flux enters.
+    pub combination: FluxCombination,
+    /// How the exponential is applied.
+    pub exponential: Exponential,
+}
+
+/// Singular values of `D̂` at or below this (relative to the largest, at least 1) are zero.
+const CONSTRAINT_SVD_TOLERANCE: f64 = 1e-10;
+
+fn state_err(m: String) -> FluidError {
+    FluidError::State(m)
+}
+
+impl ReducedFluid {
+    /// Lays out `model`'s tensors for the step.
+    pub fn new(model: &ReducedFluidModel) -> Result<Self, FluidError> {
+        let (mu, mf, mg, mh, md) =
+            (model.dim_of("u"), model.dim_of("f"), model.dim_of("g"), model.dim_of("h"), model.dim_of("d"));
+        let t = |n: &str| model.tensor(n).ok_or_else(|| state_err(format!("the model has no tensor {n}")));
+        let dim = model.dim;
+        // V̂[p, u, a, b(, c)] summed over the distinct sorted geometry index tuples.
+        let vt = t("V")?;
+        let monomials = sorted_tuples(mg, dim);
+        let nm = monomials.len();
+        let mut v = vec![0.0; mu * mu * nm];
+        let stride: Vec<usize> = (0..dim).map(|k| mg.pow((dim - 1 - k) as u32)).collect();
+        let cube = mg.pow(dim as u32);
+        for (m, idx) in monomials.iter().enumerate() {
+            let sorted: Vec<u32> = idx.iter().map(|&i| i as u32).collect();
+            let perms = distinct_permutations(&sorted);
+            let offset: usize = idx.iter().zip(&stride).map(|(i, s)| i * s).sum();
+            let mult = perms.len() as f64;
+            for pu in 0..mu * mu {
+                v[pu * nm + m] = mult * vt.data()[pu * cube + offset];
+            }
+        }
+        let bf_bh = match (model.basis("f"), model.basis("h")) {
+            (Some(bf), Some(bh)) => Some(transpose_times(bf.matrix(), bh.matrix())),
+            _ => None,
+        };
+        let constraint = if md > 0 {
+            let d = row_major(t("D")?, md, mf);
+            let dh = if mh > 0 { Some(row_major(t("Dh")?, md, mh)) } else { None };
+            Some(prepare_constraint(d, dh)?)
+        } else {
+            None
+        };
+        Ok(Self {
+            dim,
+            mu,
+            mf,
+            mg,
+            mh,
+            viscosity: model.viscosity,
+            frame_time: model.frame_time,
+            a: t("A")?.data().to_vec(),
+            ah: if mh > 0 { t("Ah")?.data().to_vec() } else { Vec::new() },
+            lap: t("L")?.data().to_vec(),
+            p: t("P")?.data().to_vec(),
+            v,
+            monomials,
+            bf_bh,
+            constraint,
+            combination: FluxCombination::default(),
+            exponential: Exponential::default(),
+        })
+    }
+
+    /// Reduced dimensions (m_u, m_f, m_g, m_h).
+    pub fn dims(&self) -> (usize, usize, usize, usize) {
+        (self.mu, self.mf, self.mg, self.mh)
+    }
+
+    /// The model's frame time.
+    pub fn frame_time(&self) -> f64 {
+        self.frame_time
+    }
+
+    /// The spatial dimension.
+    pub fn dim(&self) -> usize {
+        self.dim
+    }
+
+    /// `V̂(ĝ)` (m_u × m_u).
+    pub fn volume_matrix(&self, g: &[f64]) -> Mat<f64> {
+        let nm = self.monomials.len();
+        let w: Vec<f64> = self.monomials.iter().map(|idx| idx.iter().map(|&i| g[i]).product()).collect();
+        let flat = matvec(&self.v, self.mu * self.mu, nm, &w);
+        Mat::from_fn(self.mu, self.mu, |i, j| 0.5 * (flat[i * self.mu + j] + flat[j * self.mu + i]))
+    }
+
+    /// `P̂ ⊗₂ ĝ` (m_u × m_f).
+    pub fn flux_to_momentum(&self, g: &[f64]) -> Mat<f64> {
+        let flat = matvec(&self.p, self.mu * self.mf, self.mg, g);
+        Mat::from_fn(self.mu, self.mf, |i, j| flat[i * self.mf + j])
+    }
+
+    /// `K̂` of the advection–diffusion rate `V̂⁻¹K̂` (see the module docs).
+    pub fn rate_operator(&self, f: &[f64], h: &[f64]) -> Mat<f64> {
+        let n = self.mu * self.mu;
+        let mut flat = match (self.combination, &self.bf_bh) {
+            (FluxCombination::ProjectedOntoFlux, Some(bfbh)) if self.mh > 0 => {
+                let mut fp = f.to_vec();
+                for i in 0..self.mf {
+                    fp[i] -= (0..self.mh).map(|j| bfbh[(i, j)] * h[j]).sum::<f64>();
+                }
+                matvec(&self.a, n, self.mf, &fp)
+            }
+            _ => {
+                let mut k = matvec(&self.a, n, self.mf, f);
+                if self.mh > 0 {
+                    let kh = matvec(&self.ah, n, self.mh, h);
+                    k.iter_mut().zip(kh).for_each(|(a, b)| *a -= b);
+                }
+                k
+            }
+        };
+        flat.iter_mut().zip(&self.lap).for_each(|(k, l)| *k += self.viscosity * l);
+        Mat::from_fn(self.mu, self.mu, |i, j| flat[i * self.mu + j])
+    }
+
+    /// The energy `½ ûᵀ V̂(ĝ) û`.
+    pub fn energy(&self, u: &[f64], g: &[f64]) -> f64 {
+        let v = self.volume_matrix(g);
+        0.5 * (0..self.mu).map(|i| u[i] * (0..self.mu).map(|j| v[(i, j)] * u[j]).sum::<f64>()).sum::<f64>()
+    }
+
+    /// Checks the lengths of a state and a motion.
+    fn check(&self, s: &ReducedState, g_next: &[f64], h: &[f64]) -> Result<(), FluidError> {
+        for (what, got, want) in [
+            ("û", s.u.len(), self.mu),
+            ("f̂", s.f.len(), self.mf),
+            ("ĝ_t", s.g.len(), self.mg),
+            ("ĝ_{t+1}", g_next.len(), self.mg),
+            ("ĥ", h.len(), self.mh),
+        ] {
+            if got != want {
+                return Err(state_err(format!(
+                    "reduced step: {what} has {got} entries, the model needs {want}"
+                )));
+            }
+        }
+        if s.u.iter().chain(&s.f).chain(&s.g).chain(g_next).chain(h).any(|v| !v.is_finite()) {
+            return Err(state_err("reduced step: the state or motion is not finite".into()));
+        }
+        Ok(())
+    }
+
+    /// Advection and diffusion over `dt` from `u` at geometry `g` (stage 2 of the module docs).
+    pub fn advect(
+        &self,
+        u: &[f64],
+        f: &[f64],
+        g: &[f64],
+        h: &[f64],
+        dt: f64,
+        report: &mut ReducedStepReport,
+    ) -> Result<Vec<f64>, FluidError> {
+        let t0 = Instant::now();
+        let k = self.rate_operator(f, h);
+        report.assemble_seconds += t0.elapsed().as_secs_f64();
+        let t1 = Instant::now();
+        let l = cholesky(&self.volume_matrix(g), "V̂(ĝ_t)")?;
+        report.volume_seconds += t1.elapsed().as_secs_f64();
+        let t2 = Instant::now();
+        // w = Lᵀ u.
+        let mut w = vec![0.0; self.mu];
+        for i in 0..self.mu {
+            w[i] = (i..self.mu).map(|j| l[(j, i)] * u[j]).sum();
+        }
+        let w1 = match self.exponential {
+            Exponential::Krylov(tol) => {
+                let mut x = Mat::<f64>::zeros(self.mu, 1);
+                let mut apply = |v: &[f64], y: &mut [f64]| {
+                    // y = L⁻¹ K L⁻ᵀ v.
+                    for i in 0..self.mu {
+                        x[(i, 0)] = v[i];
+                    }
+                    solve_upper_triangular_in_place(l.transpose(), x.as_mut(), Par::Seq);
+                    let kx = &k * &x;
+                    let mut kx = kx;
+                    solve_lower_triangular_in_place(l.as_ref(), kx.as_mut(), Par::Seq);
+                    for i in 0..self.mu {
+                        y[i] = kx[(i, 0)];
+                    }
+                };
+                let (w1, kr) = expm_krylov("reduced advection", &mut apply, &w, dt, tol)
+                    .map_err(|e| state_err(e.to_string()))?;
+                report.krylov_products += kr.products;
+                w1
+            }
+            Exponential::Pade => {
+                // M = L⁻¹ K L⁻ᵀ.
+                let mut m = k.clone();
+                solve_lower_triangular_in_place(l.as_ref(), m.as_mut(), Par::Seq);
+                let mut mt = m.transpose().to_owned();
+                solve_lower_triangular_in_place(l.as_ref(), mt.as_mut(), Par::Seq);
+                let m = mt.transpose().to_owned() * faer::Scale(dt);
+                let e = crate::tensor::expm_faer("reduced advection", &m)
+                    .map_err(|e| state_err(e.to_string()))?;
+                (0..self.mu).map(|i| (0..self.mu).map(|j| e[(i, j)] * w[j]).sum()).collect()
+            }
+        };
+        // u' = L⁻ᵀ w'.
+        let mut x = Mat::from_fn(self.mu, 1, |i, _| w1[i]);
+        solve_upper_triangular_in_place(l.transpose(), x.as_mut(), Par::Seq);
+        report.exponential_seconds += t2.elapsed().as_secs_f64();
+        let u1: Vec<f64> = (0..self.mu).map(|i| x[(i, 0)]).collect();
+        if u1.iter().any(|v| !v.is_finite()) {
+            return Err(state_err("reduced advection: the velocity is not finite".into()));
+        }
+        Ok(u1)
+    }
+
+    /// The reduced projection (Eq. 12) of `u` at geometry `g` with induced flux `h`, and the
+    /// conversion to velocity (stages 3–4): returns (û, f̂).
+    pub fn project(
+        &self,
+        u: &[f64],
+        g: &[f64],
+        h: &[f64],
+        report: &mut ReducedStepReport,
+    ) -> Result<(Vec<f64>, Vec<f64>), FluidError> {
+        let t1 = Instant::now();
+        let l = cholesky(&self.volume_matrix(g), "V̂(ĝ_{t+1})")?;
+        report.volume_seconds += t1.elapsed().as_secs_f64();
+        let t = Instant::now();
+        let p = self.flux_to_momentum(g);
+        // Y = L⁻¹ P, so Pᵀ V̂⁻¹ P = YᵀY.
+        let mut y = p.clone();
+        solve_lower_triangular_in_place(l.as_ref(), y.as_mut(), Par::Seq);
+        let mut n = Mat::<f64>::zeros(self.mf, self.mf);
+        matmul(n.as_mut(), Accum::Replace, y.transpose(), y.as_ref(), 1.0, Par::Seq);
+        let uc = Mat::from_fn(self.mu, 1, |i, _| u[i]);
+        let rhs = p.transpose() * &uc;
+        let f = match &self.constraint {
+            None => {
+                let c = cholesky(&n, "the reduced projection PᵀV̂⁻¹P (basis f)")?;
+                cholesky_solve(&c, &rhs)
+            }
+            Some(con) => {
+                let target = match &con.dh {
+                    Some(dh) if self.mh > 0 => dh * Mat::from_fn(self.mh, 1, |i, _| h[i]),
+                    _ => Mat::zeros(con.d.nrows(), 1),
+                };
+                let fc = &con.pinv * &target;
+                let nz = con.null.transpose() * &n * &con.null;
+                let bz = con.null.transpose() * (&rhs - &n * &fc);
+                let f = if con.null.ncols() > 0 {
+                    let c = cholesky(&nz, "the reduced projection Zᵀ PᵀV̂⁻¹P Z (basis f, constrained)")?;
+                    &fc + &con.null * cholesky_solve(&c, &bz)
+                } else {
+                    fc
+                };
+                let r = &con.d * &f - &target;
+                report.constraint_residual = (0..r.nrows()).map(|i| r[(i, 0)].powi(2)).sum::<f64>().sqrt();
+                f
+            }
+        };
+        // û = L⁻ᵀ (Y f).
+        let mut x = &y * &f;
+        solve_upper_triangular_in_place(l.transpose(), x.as_mut(), Par::Seq);
+        report.projection_seconds += t.elapsed().as_secs_f64();
+        let u1: Vec<f64> = (0..self.mu).map(|i| x[(i, 0)]).collect();
+        let f1: Vec<f64> = (0..self.mf).map(|i| f[(i, 0)]).collect();
+        if u1.iter().chain(&f1).any(|v| !v.is_finite()) {
+            return Err(state_err("reduced projection: the result is not finite".into()));
+        }
+        Ok((u1, f1))
+    }
+
+    /// One reduced frame from `s` (at ĝ_t) to ĝ_{t+1} = `g_next` with reduced induced flux `h`
+    /// (Fig. 2 right).
+    pub fn step(
+        &self,
+        s: &ReducedState,
+        g_next: &[f64],
+        h: &[f64],
+    ) -> Result<(ReducedState, ReducedStepReport), FluidError> {
+        self.check(s, g_next, h)?;
+        let mut report = ReducedStepReport::default();
+        let u1 = self.advect(&s.u, &s.f, &s.g, h, self.frame_time, &mut report)?;
+        let (u, f) = self.project(&u1, g_next, h, &mut report)?;
+        Ok((ReducedState { u, f, g: g_next.to_vec() }, report))
+    }
+
+    /// The reduced velocity of a flux: `V̂⁻¹(ĝ)(P̂ ⊗₂ ĝ) f̂`.
+    pub fn flux_to_velocity(&self, f: &[f64], g: &[f64]) -> Result<Vec<f64>, FluidError> {
+        let l = cholesky(&self.volume_matrix(g), "V̂(ĝ)")?;
+        let p = self.flux_to_momentum(g);
+        let mut x = &p * Mat::from_fn(self.mf, 1, |i, _| f[i]);
+        solve_lower_triangular_in_place(l.as_ref(), x.as_mut(), Par::Seq);
+        solve_upper_triangular_in_place(l.transpose(), x.as_mut(), Par::Seq);
+        Ok((0..self.mu).map(|i| x[(i, 0)]).collect())
+    }
+
+    /// The energy-norm projection of a full velocity (§7.1 footnote 2, with the reduced
+    /// volume matrix): `r = V̂(ĝ)⁻¹ B_uᵀ p` for the momentum `p = V(g) u`.
+    pub fn project_velocity(&self, momentum_reduced: &[f64], g: &[f64]) -> Result<Vec<f64>, FluidError> {
+        let l = cholesky(&self.volume_matrix(g), "V̂(ĝ)")?;
+        let mut x = Mat::from_fn(self.mu, 1, |i, _| momentum_reduced[i]);
+        solve_lower_triangular_in_place(l.as_ref(), x.as_mut(), Par::Seq);
+        solve_upper_triangular_in_place(l.transpose(), x.as_mut(), Par::Seq);
+        Ok((0..self.mu).map(|i| x[(i, 0)]).collect())
+    }
+}
+
+/// Sorted index tuples `i₁ ≤ … ≤ i_d` over `0..m`.
+fn sorted_tuples(m: usize, d: usize) -> Vec<Vec<usize>> {
+    let mut out = vec![vec![]];
+    for _ in 0..d {
+        let mut next = Vec::new();
+        for t in out {
+            let start = t.last().copied().unwrap_or(0);
+            for i in start..m {
+                let mut u = t.clone();
+                u.push(i);
+                next.push(u);
+            }
+        }
+        out = next;
+    }
+    out
+}
+
+/// `y = M x` for row-major `M` (rows × cols).
+fn matvec(m: &[f64], rows: usize, cols: usize, x: &[f64]) -> Vec<f64> {
+    let mut y = Mat::<f64>::zeros(rows, 1);
+    let mr = MatRef::from_row_major_slice(m, rows, cols);
+    let xr = MatRef::from_column_major_slice(x, cols, 1);
+    matmul(y.as_mut(), Accum::Replace, mr, xr, 1.0, Par::Seq);
+    (0..rows).map(|i| y[(i, 0)]).collect()
+}
+
+fn row_major(t: &Tensor, r: usize, c: usize) -> Mat<f64> {
+    Mat::from_fn(r, c, |i, j| t.data()[i * c + j])
+}
+
+/// `AᵀB` of two row-major matrices with the same rows.
+fn transpose_times(a: &Tensor, b: &Tensor) -> Mat<f64> {
+    let (n, ma, mb) = (a.shape()[0], a.shape()[1], b.shape()[1]);
+    let mut out = Mat::<f64>::zeros(ma, mb);
+    matmul(
+        out.as_mut(),
+        Accum::Replace,
+        MatRef::from_row_major_slice(a.data(), n, ma).transpose(),
+        MatRef::from_row_major_slice(b.data(), n, mb),
+        1.0,
+        Par::rayon(0),
+    );
+    out
+}
+
+fn prepare_constraint(d: Mat<f64>, dh: Option<Mat<f64>>) -> Result<Constraint, FluidError> {
+    let (md, mf) = (d.nrows(), d.ncols());
+    let svd = d.svd().map_err(|e| state_err(format!("SVD of D̂ failed: {e:?}")))?;
+    let s = svd.S().column_vector();
+    let smax = (0..s.nrows()).map(|i| s[i]).fold(1.0f64, f64::max);
+    let rank = (0..s.nrows()).filter(|&i| s[i] > CONSTRAINT_SVD_TOLERANCE * smax).count();
+    let (u, v) = (svd.U(), svd.V());
+    let pinv = Mat::from_fn(mf, md, |i, j| (0..rank).map(|k| v[(i, k)] * u[(j, k)] / s[k]).sum());
+    let null = Mat::from_fn(mf, mf - rank, |i, j| v[(i, rank + j)]);
+    Ok(Constraint { pinv, null, d, dh })
+}
+
+/// Lower Cholesky factor of an SPD matrix, sequentially; refuses one that is not positive
+/// definite, naming it.
+fn cholesky(a: &Mat<f64>, what: &str) -> Result<Mat<f64>, FluidError> {
+    let n = a.nrows();
+    let mut l = Mat::<f64>::zeros(n, n);
+    for j in 0..n {
+        let mut d = a[(j, j)];
+        for k in 0..j {
+            d -= l[(j, k)] * l[(j, k)];
+        }
+        if !(d > 0.0) || !d.is_finite() {
+            return Err(state_err(format!(
+                "{what} is not positive definite (pivot {j} of {n} is {d:.3e}): the reduced geometry or basis is degenerate"
+            )));
+        }
+        let d = d.sqrt();
+        l[(j, j)] = d;
+        for i in j + 1..n {
+            let mut s = a[(i, j)];
+            for k in 0..j {
+                s -= l[(i, k)] * l[(j, k)];
+            }
+            l[(i, j)] = s / d;
+        }
+    }
+    Ok(l)
+}
+
+fn cholesky_solve(l: &Mat<f64>, b: &Mat<f64>) -> Mat<f64> {
+    let mut x = b.clone();
+    solve_lower_triangular_in_place(l.as_ref(), x.as_mut(), Par::Seq);
+    solve_upper_triangular_in_place(l.transpose(), x.as_mut(), Par::Seq);
+    x
+}
