@@ -37,7 +37,7 @@ pub fn momentum(solver: &FluidSolver, state: &FluidState) -> Vec<f64> {
 
 /// Simulates `frames` frames of `scene` in the full space and writes every frame (the initial
 /// state first) to the snapshot directory `out` (refused if it holds snapshots, unless
-/// `overwrite`). `on_frame(frame, state, report)` is called after each frame is written.
+/// `overwrite`). `on_frame(frame, solver, state, report)` is called after each frame is written.
 pub fn simulate_run(
     scene: &mut FluidScene,
     frames: usize,
@@ -45,20 +45,53 @@ pub fn simulate_run(
     overwrite: bool,
     on_frame: &mut dyn FnMut(usize, &FluidSolver, &FluidState, &StepReport),
 ) -> Result<RunSummary, FluidError> {
-    let mesh = scene.mesh.clone();
-    let topo = scene.topology.clone();
+    let setup = RunSetup {
+        mesh: scene.mesh.clone(),
+        topology: scene.topology.clone(),
+        params: scene.params,
+        initial_velocity: scene.initial_velocity.clone(),
+        periodic_axis: scene.periodic_axis,
+    };
+    simulate_with(&setup, frames, &mut |k| scene.geometry(k), out, overwrite, on_frame)
+}
+
+/// What a run starts from: the mesh at frame 0, its topology, parameters and initial velocity.
+#[derive(Clone, Debug)]
+pub struct RunSetup {
+    /// The mesh at frame 0.
+    pub mesh: crate::mesh::SimplexMesh,
+    /// Its topology.
+    pub topology: crate::mesh::Topology,
+    /// Solver parameters.
+    pub params: super::FluidParams,
+    /// Initial velocity (projected to be divergence-free first).
+    pub initial_velocity: Vec<f64>,
+    /// The periodic axis, recorded in the header.
+    pub periodic_axis: Option<usize>,
+}
+
+/// [`simulate_run`] for any motion: `geometry(frame)` gives the geometry vector of each frame.
+pub fn simulate_with(
+    setup: &RunSetup,
+    frames: usize,
+    geometry: &mut dyn FnMut(usize) -> Result<Vec<f64>, FluidError>,
+    out: &Path,
+    overwrite: bool,
+    on_frame: &mut dyn FnMut(usize, &FluidSolver, &FluidState, &StepReport),
+) -> Result<RunSummary, FluidError> {
+    let (mesh, topo) = (&setup.mesh, &setup.topology);
     let t_setup = Instant::now();
-    let mut solver = FluidSolver::new(mesh.clone(), topo.clone(), scene.params)?;
-    let mut state = solver.initial_state(mesh.g().to_vec(), &scene.initial_velocity)?;
+    let mut solver = FluidSolver::new(mesh.clone(), topo.clone(), setup.params)?;
+    let mut state = solver.initial_state(mesh.g().to_vec(), &setup.initial_velocity)?;
     let mut summary = RunSummary { setup_seconds: t_setup.elapsed().as_secs_f64(), ..RunSummary::default() };
-    let meta = SnapshotMeta::new(&mesh, &topo, scene.params.frame_time, scene.periodic_axis)
-        .with_params(&scene.params);
+    let meta = SnapshotMeta::new(mesh, topo, setup.params.frame_time, setup.periodic_axis)
+        .with_params(&setup.params);
     let mut writer = SnapshotWriter::create(out, meta, mesh.cells(), overwrite)?;
     writer.push(&state.u, &momentum(&solver, &state), &state.f, &state.g, &vec![0.0; topo.face_count()])?;
     let e0 = solver.energy(&state);
     for frame in 1..=frames {
         let t0 = Instant::now();
-        let g = scene.geometry(frame)?;
+        let g = geometry(frame)?;
         let td = t0.elapsed().as_secs_f64();
         let (next, report) = solver.step(&state, &g, frame)?;
         writer.push(&next.u, &momentum(&solver, &next), &next.f, &next.g, &report.h)?;

@@ -91,8 +91,64 @@ pub fn expm(what: &str, a: &Tensor) -> Result<Tensor, TensorError> {
     Tensor::from_vec(&[n, n], data)
 }
 
-/// [`expm`] on a faer matrix (finite and square: the caller checks).
+/// [`expm`] on a faer matrix (finite and square: the caller checks). The matrix is balanced
+/// first (a diagonal similarity by powers of two, Parlett & Reinsch 1969, as LAPACK's gebal):
+/// `e^A = D e^{D⁻¹AD} D⁻¹` exactly, and a badly scaled A no longer inflates ‖A‖₁ into
+/// needless squarings, whose rounding grows with their number (Higham 2005 §6, overscaling).
 pub fn expm_faer(what: &str, a: &Mat<f64>) -> Result<Mat<f64>, TensorError> {
+    let (b, d) = balance(a);
+    let mut e = expm_balanced(what, &b)?;
+    let n = a.nrows();
+    for i in 0..n {
+        for j in 0..n {
+            e[(i, j)] *= d[i] / d[j];
+        }
+    }
+    Ok(e)
+}
+
+/// `(D⁻¹AD, diag D)` with D a power of two per row, balancing off-diagonal row and column norms.
+fn balance(a: &Mat<f64>) -> (Mat<f64>, Vec<f64>) {
+    let n = a.nrows();
+    let mut b = a.clone();
+    let mut d = vec![1.0f64; n];
+    for _sweep in 0..100 {
+        let mut converged = true;
+        for i in 0..n {
+            let c: f64 = (0..n).filter(|&j| j != i).map(|j| b[(j, i)].abs()).sum();
+            let r: f64 = (0..n).filter(|&j| j != i).map(|j| b[(i, j)].abs()).sum();
+            if c == 0.0 || r == 0.0 {
+                continue;
+            }
+            let (mut cc, mut rr, mut f) = (c, r, 1.0f64);
+            let s = c + r;
+            while cc < rr / 2.0 {
+                cc *= 2.0;
+                rr /= 2.0;
+                f *= 2.0;
+            }
+            while cc >= rr * 2.0 {
+                cc /= 2.0;
+                rr *= 2.0;
+                f /= 2.0;
+            }
+            if (cc + rr) < 0.95 * s {
+                converged = false;
+                d[i] *= f;
+                for j in 0..n {
+                    b[(i, j)] /= f;
+                    b[(j, i)] *= f;
+                }
+            }
+        }
+        if converged {
+            break;
+        }
+    }
+    (b, d)
+}
+
+fn expm_balanced(what: &str, a: &Mat<f64>) -> Result<Mat<f64>, TensorError> {
     let n = a.nrows();
     let eye = Mat::<f64>::identity(n, n);
     let norm = norm1(a);

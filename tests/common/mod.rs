@@ -4,6 +4,7 @@
 #![allow(dead_code)]
 
 pub mod obj_box;
+pub mod wavy;
 
 use std::ops::Deref;
 use std::sync::Arc;
