@@ -121,6 +121,11 @@ enum BenchWhat {
     /// and projection on the deforming cavity from 10³ to 3·10⁵ cells next to the paper's,
     /// and particle advection (10,000 particles) on the CPU and the device.
     Fluid(cli::fluid::BenchArgs),
+    /// The reduced fluid (seed 000 §6): the reduced step at Table 1's cavity basis sizes
+    /// (m_f 64, m_u 128, m_g 5, m_h 16) on synthetic bases of the cavity mesh, stage by stage
+    /// with the Krylov and Padé exponentials; and 10⁶ reduced steps of a small tunnel model
+    /// watching the energy (trained first into out/bench-fluid-reduced/).
+    FluidReduced(cli::fluid_reduced::BenchArgs),
     /// The reduction core: premultiplication of the fluid volume tensor at the paper's cavity
     /// size (88,671 cells, m = 128, m_g = 5) next to faer's GEMM of its final stage, reduced
     /// evaluation per call and per batch, and premultiplication time against cells and m.
@@ -179,6 +184,7 @@ fn run(cli: Cli) -> Result<()> {
         Command::Bench { what: BenchWhat::Spectral(args) } => cli::spectral::bench(&desc, &args),
         Command::Bench { what: BenchWhat::Radiosity(args) } => cli::radiosity::bench(&desc, &args),
         Command::Bench { what: BenchWhat::Fluid(args) } => cli::fluid::bench(&desc, &args),
+        Command::Bench { what: BenchWhat::FluidReduced(args) } => cli::fluid_reduced::bench(&args),
     }
 }
 

@@ -5,6 +5,7 @@
 //! queries (kernel only); overheads and transfers with the wall clock. Medians throughout.
 
 pub mod cpu;
+pub mod fluid_reduced;
 pub mod kernels;
 pub mod reduce;
 pub mod spacetime;

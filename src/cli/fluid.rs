@@ -45,6 +45,10 @@ pub enum Action {
     /// projection) and write its frames lifted to the full space as a snapshot directory, which
     /// `galerkin fluid render` draws.
     Reduced(crate::cli::fluid_reduced::ReducedArgs),
+    /// The one-step error study of seed 000 §7.1 (Fig. 5 d, e): train on RUNS at the largest
+    /// basis size, then for every size step the test run's projected frames once in the full
+    /// and once in the reduced space; writes CSV and labelled PNG plots.
+    ErrorStudy(crate::cli::fluid_reduced::StudyArgs),
 }
 
 /// Arguments of `galerkin fluid surface`.
@@ -152,6 +156,7 @@ pub fn run(desc: &GpuDesc, action: &Action) -> Result<()> {
         Action::Surface(args) => surface(args),
         Action::Train(args) => crate::cli::fluid_reduced::train(args),
         Action::Reduced(args) => crate::cli::fluid_reduced::reduced(args),
+        Action::ErrorStudy(args) => crate::cli::fluid_reduced::error_study(args),
     }
 }
 

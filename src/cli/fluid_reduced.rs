@@ -4,7 +4,7 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use anyhow::Result;
+use anyhow::{Context, Result};
 use clap::Args;
 use galerkin::fluid::reduced::{
     run_reduced, write_lifted, BasisSizes, FluidBases, ReducedFluid, ReducedFluidModel, ReducedMotion,
@@ -58,6 +58,94 @@ pub struct ReducedArgs {
     pub force: bool,
 }
 
+/// Arguments of `galerkin fluid error-study`.
+#[derive(Args)]
+pub struct StudyArgs {
+    /// Training runs (snapshot directories), e.g. the small- and large-obstacle tunnels.
+    #[arg(required = true)]
+    pub runs: Vec<PathBuf>,
+    /// The test run (not trained on), e.g. the medium-obstacle tunnel.
+    #[arg(long)]
+    pub test: PathBuf,
+    /// Basis sizes m (m_u = m_f = m), comma-separated.
+    #[arg(long, value_delimiter = ',', default_value = "8,16,32,64,128")]
+    pub sizes: Vec<usize>,
+    /// Frames of the test run to step from (at most its last but one).
+    #[arg(long, default_value_t = 1000)]
+    pub frames: usize,
+    /// Study every STRIDE-th frame (the full step from each frame dominates the time).
+    #[arg(long, default_value_t = 1)]
+    pub stride: usize,
+    /// The ground truth's RK4 substeps, as a multiple of what its stability needs (the bound
+    /// keeps RK4 stable, not accurate; the reduced step's exponential is exact).
+    #[arg(long, default_value_t = 4)]
+    pub refine: usize,
+    /// Directory for errors.csv, summary.csv, fig5d.png and fig5e.png.
+    #[arg(long, default_value = "out/fluid-error-study")]
+    pub out: PathBuf,
+}
+
+pub fn error_study(args: &StudyArgs) -> Result<()> {
+    use galerkin::fluid::reduced::plot::{plot_by_size, plot_over_time};
+    use galerkin::fluid::snapshots::SnapshotReader;
+    let start = Instant::now();
+    let largest = args.sizes.iter().copied().max().unwrap_or(0);
+    let set = TrainingSet::open(&args.runs)?;
+    let sizes = BasisSizes { energy: 1.0, m_f: Some(largest), m_u: Some(largest), m_g: None, m_h: None };
+    let bar = crate::progress_bar(7, "training the largest basis");
+    let mut stage = |_: &str| bar.inc(1);
+    let bases = FluidBases::build(&set, &sizes, &mut stage)?;
+    let model = ReducedFluidModel::train(&set, bases, &sizes, &mut stage)?;
+    bar.finish_and_clear();
+    println!(
+        "fluid error-study: trained m_u {}, m_f {}, m_g {} on {} runs in {:.1} s",
+        model.dim_of("u"),
+        model.dim_of("f"),
+        model.dim_of("g"),
+        args.runs.len(),
+        start.elapsed().as_secs_f64()
+    );
+    let test = SnapshotReader::open(&args.test)?;
+    let bar = crate::progress_bar(1, "one-step errors");
+    let study = galerkin::fluid::reduced::one_step_errors(
+        &model,
+        &test,
+        &args.sizes,
+        args.frames,
+        args.stride,
+        args.refine,
+        &mut |done, total| {
+            bar.set_length(total as u64);
+            bar.set_position(done as u64);
+        },
+    )?;
+    bar.finish_and_clear();
+    std::fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
+    std::fs::write(args.out.join("errors.csv"), study.csv())?;
+    std::fs::write(args.out.join("summary.csv"), study.summary_csv())?;
+    plot_over_time(&study, &args.out.join("fig5d.png"))?;
+    plot_by_size(&study, &args.out.join("fig5e.png"))?;
+    println!("  m_u  m_f  mean one-step error  reduced step  full step");
+    for s in &study.sizes {
+        println!(
+            "{:>5} {:>4}  {:>19.3e}  {:>9.3} ms  {:>7.1} ms",
+            s.m_u,
+            s.m_f,
+            s.mean(),
+            1e3 * s.reduced_seconds,
+            1e3 * s.full_seconds
+        );
+    }
+    println!(
+        "time-averaged error {} with basis size; test geometry in span(B_g) to {:.1e}; {:.1} s → {}",
+        if study.monotone() { "falls monotonically" } else { "does NOT fall monotonically" },
+        study.geometry_error,
+        start.elapsed().as_secs_f64(),
+        args.out.display()
+    );
+    Ok(())
+}
+
 pub fn train(args: &TrainArgs) -> Result<()> {
     let start = Instant::now();
     let set = TrainingSet::open(&args.runs)?;
@@ -109,5 +197,89 @@ pub fn reduced(args: &ReducedArgs) -> Result<()> {
     );
     write_lifted(&model, &run, &args.out, args.force)?;
     println!("lifted to the full space → {}", args.out.display());
+    Ok(())
+}
+
+/// Arguments of `galerkin bench fluid-reduced`.
+#[derive(Args)]
+pub struct BenchArgs {
+    /// The small cavity mesh (8,959 cells) and 10⁴ energy steps: a minute instead of several.
+    #[arg(long)]
+    pub quick: bool,
+    /// Reduced steps timed per exponential.
+    #[arg(long, default_value_t = 200)]
+    pub steps: usize,
+    /// Reduced steps of the energy run (default 10⁶; 10⁴ with --quick).
+    #[arg(long)]
+    pub energy_steps: Option<usize>,
+    /// Basis sizes m_u,m_f,m_g,m_h of the cavity step (Table 1's cavity: 128,64,5; m_h ours).
+    #[arg(long, value_delimiter = ',', default_value = "128,64,5,16")]
+    pub sizes: Vec<usize>,
+}
+
+pub fn bench(args: &BenchArgs) -> Result<()> {
+    use galerkin::bench::fluid_reduced::{cavity_step, energy_run};
+    let [mu, mf, mg, mh] = args.sizes[..] else {
+        anyhow::bail!("--sizes needs four numbers m_u,m_f,m_g,m_h");
+    };
+    let scene = if args.quick { "scenes/fluid/cavity_small.toml" } else { "scenes/fluid/cavity.toml" };
+    let start = Instant::now();
+    let b = cavity_step(std::path::Path::new(scene), (mu, mf, mg, mh), args.steps, &mut |s| {
+        eprintln!("[{:6.1} s] {s}", start.elapsed().as_secs_f64())
+    })?;
+    println!(
+        "reduced step on {scene} ({} cells, synthetic bases; premultiplied in {:.1} s, model {:.1} MB):",
+        b.cells,
+        b.premultiply_seconds,
+        b.model_bytes as f64 / 1e6
+    );
+    println!(
+        "  exponential  m_u  m_f  m_g  m_h  m_d   K̂ (ms)  V̂ (ms)  exp (ms)  proj (ms)  step (ms)  products"
+    );
+    for t in &b.timings {
+        let (a, f, g, h, d) = t.dims;
+        println!(
+            "  {:<11} {a:>4} {f:>4} {g:>4} {h:>4} {d:>4}  {:>7.3}  {:>6.3}  {:>8.3}  {:>9.3}  {:>9.3}  {:>8}",
+            t.exponential,
+            1e3 * t.stages[0],
+            1e3 * t.stages[1],
+            1e3 * t.stages[2],
+            1e3 * t.stages[3],
+            1e3 * t.total,
+            t.products
+        );
+    }
+    // The energy run: a small tunnel model trained here.
+    let dir = std::path::Path::new("out/bench-fluid-reduced");
+    let mut runs = Vec::new();
+    for scale in [0.6, 1.4] {
+        let text = std::fs::read_to_string("scenes/fluid/tunnel_small.toml")?
+            .replace("scale = 1.0", &format!("scale = {scale}"));
+        let mut scene = galerkin::fluid::scene::FluidScene::parse(
+            &text,
+            std::path::Path::new("scenes/fluid/tunnel_small.toml"),
+        )?;
+        let out = dir.join(format!("tunnel-small-{scale}"));
+        galerkin::fluid::run::simulate_run(&mut scene, 100, &out, true, &mut |_, _, _, _| {})?;
+        runs.push(out);
+    }
+    let set = TrainingSet::open(&runs)?;
+    let sizes = BasisSizes::default();
+    let bases = FluidBases::build(&set, &sizes, &mut |_| {})?;
+    let model = ReducedFluidModel::train(&set, bases, &sizes, &mut |_| {})?;
+    let steps = args.energy_steps.unwrap_or(if args.quick { 10_000 } else { 1_000_000 });
+    let bar = crate::progress_bar(steps as u64, "reduced steps (energy)");
+    let e = energy_run(&model, steps, &mut |k| bar.set_position(k as u64))?;
+    bar.finish_and_clear();
+    println!(
+        "energy over {} reduced steps of the small tunnel (m_u {}, m_f {}, static geometry): start {:.9}, maximum {:.9}, final {:.9}; {:.4} ms per step",
+        e.steps,
+        model.dim_of("u"),
+        model.dim_of("f"),
+        e.initial,
+        e.maximum,
+        e.last,
+        1e3 * e.step_seconds
+    );
     Ok(())
 }

@@ -38,6 +38,55 @@ impl ReducedModel {
         Self { tensors, inputs, output, output_axes, bases }
     }
 
+    /// The model with the bases named in `dims` cut to their first `dims[name]` columns and
+    /// every tensor axis in those bases cut alike. Premultiplication is linear in each basis
+    /// column, so for nested bases (PCA modes, in order) this *is* the model reduced with the
+    /// smaller bases — no premultiplication again (§7.1's study of basis sizes).
+    pub fn truncated(&self, dims: &BTreeMap<String, usize>) -> Result<ReducedModel, ReduceError> {
+        let mut out = self.clone();
+        for (name, &m) in dims {
+            let b = self.bases.get(name).ok_or_else(|| ReduceError::UnknownBasis {
+                basis: name.clone(),
+                needed_by: "truncation".into(),
+            })?;
+            if m == 0 || m > b.reduced_dim() {
+                return Err(ReduceError::BadBasis {
+                    basis: name.clone(),
+                    detail: format!("cannot cut {} columns to {m}", b.reduced_dim()),
+                });
+            }
+            let cut = b.matrix().leading(&[b.full_dim(), m]).map_err(|source| ReduceError::Tensor {
+                context: format!("cutting basis `{name}`"),
+                source,
+            })?;
+            out.bases.insert(name.clone(), Basis::new(name, cut, 1e-9)?);
+        }
+        for (name, t) in out.tensors.iter_mut() {
+            let lens: Vec<usize> =
+                t.axes.iter().zip(t.data.shape()).map(|(b, &n)| dims.get(b).copied().unwrap_or(n)).collect();
+            t.data = t.data.leading(&lens).map_err(|source| ReduceError::Tensor {
+                context: format!("cutting tensor `{name}`"),
+                source,
+            })?;
+        }
+        Ok(out)
+    }
+
+    /// Inserts (or replaces) a reduced tensor: for a capability whose tensor is not a block of
+    /// a larger one after [`ReducedModel::truncated`] (a basis built from other bases).
+    pub(crate) fn insert_tensor(&mut self, name: &str, axes: &[&str], data: Tensor) {
+        let axes = axes.iter().map(|s| s.to_string()).collect();
+        self.tensors.insert(name.to_string(), ReducedTensor { axes, data });
+    }
+
+    /// Removes a reduced tensor and its basis, if present.
+    pub(crate) fn remove(&mut self, tensor: &str, basis: Option<&str>) {
+        self.tensors.remove(tensor);
+        if let Some(b) = basis {
+            self.bases.remove(b);
+        }
+    }
+
     /// The reduced tensor `Q̂` called `name`.
     pub fn tensor(&self, name: &str) -> Option<&Tensor> {
         self.tensors.get(name).map(|t| &t.data)

@@ -315,6 +315,42 @@ impl<T: Scalar> Tensor<T> {
     pub fn scale(&self, s: T) -> Tensor<T> {
         Tensor { shape: self.shape.clone(), data: self.data.iter().map(|&v| v * s).collect() }
     }
+
+    /// The leading block `[0..lens[0], 0..lens[1], …]` (each `lens[k]` at most the axis
+    /// length): a reduced tensor of nested bases cut to their first columns.
+    pub fn leading(&self, lens: &[usize]) -> Result<Tensor<T>, TensorError> {
+        if lens.len() != self.order() {
+            return Err(TensorError::NoSuchAxis {
+                what: "leading block".into(),
+                axis: lens.len(),
+                order: self.order(),
+            });
+        }
+        for (axis, (&l, &n)) in lens.iter().zip(&self.shape).enumerate() {
+            if l > n {
+                return Err(TensorError::Shape { what: "leading block".into(), axis, expected: n, found: l });
+            }
+        }
+        let total: usize = lens.iter().product();
+        let mut data = Vec::with_capacity(total);
+        let mut index = vec![0usize; lens.len()];
+        let stride = strides(&self.shape);
+        if total > 0 {
+            'outer: loop {
+                let offset = index.iter().zip(&stride).map(|(i, s)| i * s).sum::<usize>();
+                data.push(self.data[offset]);
+                for k in (0..lens.len()).rev() {
+                    index[k] += 1;
+                    if index[k] < lens[k] {
+                        continue 'outer;
+                    }
+                    index[k] = 0;
+                }
+                break;
+            }
+        }
+        Ok(Tensor { shape: lens.to_vec(), data })
+    }
 }
 
 #[cfg(test)]

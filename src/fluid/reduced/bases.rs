@@ -335,17 +335,10 @@ fn any_nonzero(source: &mut impl SnapshotSource) -> Result<bool, FluidError> {
     Ok(false)
 }
 
-/// `B_d`: an orthonormal basis of the range of `D [B_f, B_h]` (see the module docs).
-pub fn constraint_basis(
-    topo: &Topology,
-    bf: &Basis,
-    bh: Option<&Basis>,
-) -> Result<Option<Basis>, FluidError> {
+/// The boundary rows of `[B_f, B_h]`, `D [B_f, B_h]`: (row-major n_b × k values, n_b, k).
+pub fn boundary_rows(topo: &Topology, bf: &Basis, bh: Option<&Basis>) -> (Vec<f64>, usize, usize) {
     let boundary = topo.boundary_faces();
     let nb = boundary.len();
-    if nb == 0 {
-        return Ok(None);
-    }
     let mf = bf.reduced_dim();
     let mh = bh.map_or(0, Basis::reduced_dim);
     let k = mf + mh;
@@ -356,6 +349,19 @@ pub fn constraint_basis(
         if let Some(h) = bh {
             m[row * k + mf..(row + 1) * k].copy_from_slice(&h.matrix().data()[f * mh..(f + 1) * mh]);
         }
+    }
+    (m, nb, k)
+}
+
+/// `B_d`: an orthonormal basis of the range of `D [B_f, B_h]` (see the module docs).
+pub fn constraint_basis(
+    topo: &Topology,
+    bf: &Basis,
+    bh: Option<&Basis>,
+) -> Result<Option<Basis>, FluidError> {
+    let (m, nb, k) = boundary_rows(topo, bf, bh);
+    if nb == 0 {
+        return Ok(None);
     }
     // The left singular vectors of M whose singular values are not rounding.
     let mat = faer::Mat::from_fn(nb, k, |i, j| m[i * k + j]);

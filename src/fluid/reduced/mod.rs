@@ -1,6 +1,7 @@
 //! Reduced fluids (seed 000 §6, Fig. 2 right): the full solver's step Galerkin-projected onto
 //! bases learned from its own snapshots, so a frame costs a few hundred dimensions' work.
 //!
+//! - [`study`] and [`plot`]: §7.1's one-step error study and its Fig. 5 plots;
 //! - [`training`]: a training set, the snapshot directories of full runs on one mesh;
 //! - [`bases`]: `B_f`, `B_u = B_p`, `B_g`, `B_h` by streamed PCA, `B_d` by constraint reduction;
 //! - [`model`]: §6.2's reduced tensors premultiplied by the core, and the model file;
@@ -15,12 +16,15 @@
 
 pub mod bases;
 pub mod model;
+pub mod plot;
 pub mod run;
 pub mod step;
+pub mod study;
 pub mod training;
 
 pub use bases::{BasisReport, BasisSizes, FluidBases};
-pub use model::{MeshFingerprint, ReducedFluidModel, Trajectory};
+pub use model::{MeshFingerprint, MeshOf, ReducedFluidModel, Trajectory};
 pub use run::{run_reduced, write_lifted, ReducedMotion, ReducedRun};
 pub use step::{Exponential, FluxCombination, ReducedFluid, ReducedState, ReducedStepReport};
+pub use study::{one_step_errors, ErrorStudy, SizeErrors};
 pub use training::TrainingSet;

@@ -104,6 +104,17 @@ pub struct Provenance {
     pub mesh: MeshFingerprint,
 }
 
+/// A mesh with its topology and periodic axis, as [`ReducedFluidModel::from_bases`] takes it.
+#[derive(Clone, Copy, Debug)]
+pub struct MeshOf<'a> {
+    /// The mesh (its cells and a reference geometry).
+    pub mesh: &'a SimplexMesh,
+    /// Its topology.
+    pub topology: &'a Topology,
+    /// The periodic axis.
+    pub periodic_axis: Option<usize>,
+}
+
 /// A reduced fluid model: the core's reduced tensors and bases, the physical parameters, the
 /// provenance and the training trajectories.
 #[derive(Clone, Debug)]
@@ -199,15 +210,36 @@ impl ReducedFluidModel {
         sizes: &BasisSizes,
         stage: &mut dyn FnMut(&str),
     ) -> Result<Self, FluidError> {
-        let (mesh, topo) = (set.mesh(), set.topology());
-        let params = set.params();
+        stage("trajectories");
+        let mut trajectories = Vec::new();
+        for run in set.runs() {
+            trajectories.push(project_run(run, &bases)?);
+        }
+        let runs = set.paths().iter().zip(set.frames()).map(|(p, k)| (p.display().to_string(), k)).collect();
+        stage("premultiply");
+        let mesh =
+            MeshOf { mesh: set.mesh(), topology: set.topology(), periodic_axis: set.meta().periodic_axis };
+        Self::from_bases(mesh, set.params(), bases, sizes, runs, trajectories)
+    }
+
+    /// Premultiplies the fluid's tensors on `mesh` by `bases` (the work of [`Self::train`]
+    /// once the bases and trajectories are known; benchmarks give synthetic bases).
+    pub fn from_bases(
+        mesh: MeshOf<'_>,
+        params: &crate::fluid::FluidParams,
+        bases: FluidBases,
+        sizes: &BasisSizes,
+        runs: Vec<(String, usize)>,
+        trajectories: Vec<Trajectory>,
+    ) -> Result<Self, FluidError> {
+        let (topo, periodic_axis) = (mesh.topology, mesh.periodic_axis);
+        let mesh = mesh.mesh;
         if params.forcing.iter().any(|&e| e != 0.0) {
             return Err(FluidError::State(format!(
                 "the training runs have body forcing {:?}: the reduced model has no forcing term yet",
                 params.forcing
             )));
         }
-        stage("premultiply");
         let model = full_model(mesh, topo, bases.h.is_some(), bases.d.is_some());
         let mut core_bases = Bases::new();
         core_bases.insert("u".into(), bases.u.clone());
@@ -222,19 +254,14 @@ impl ReducedFluidModel {
         let mut core = model.reduce(&core_bases).map_err(core_err)?;
         // The core keeps the bases of inputs and outputs; the step needs B_h and B_d too.
         core.bases.extend(core_bases.into_iter().filter(|(k, _)| k == "h" || k == "d"));
-        stage("trajectories");
-        let mut trajectories = Vec::new();
-        for run in set.runs() {
-            trajectories.push(project_run(run, &bases)?);
-        }
         let provenance = Provenance {
-            runs: set.paths().iter().zip(set.frames()).map(|(p, k)| (p.display().to_string(), k)).collect(),
+            runs,
             energy: sizes.energy,
             caps: [sizes.m_f, sizes.m_u, sizes.m_g, sizes.m_h],
             bases: bases.reports.clone(),
-            mesh: MeshFingerprint::of(mesh, topo, set.meta().periodic_axis),
+            mesh: MeshFingerprint::of(mesh, topo, periodic_axis),
         };
-        Ok(Self {
+        let out = Self {
             core,
             dim: mesh.dim(),
             viscosity: params.viscosity,
@@ -242,7 +269,17 @@ impl ReducedFluidModel {
             provenance,
             trajectories,
             cells: mesh.cells().to_vec(),
-        })
+        };
+        out.check_shapes()?;
+        Ok(out)
+    }
+
+    /// Bytes of the reduced tensors and bases (f64), the model's memory at run time.
+    pub fn bytes(&self) -> usize {
+        let tensors: usize = self.core.tensors().map(|(_, _, t)| t.len()).sum();
+        let bases: usize =
+            ["u", "f", "g", "h", "d"].iter().filter_map(|b| self.basis(b)).map(|b| b.matrix().len()).sum();
+        8 * (tensors + bases)
     }
 
     /// A basis of the model (`u f g h d`).
@@ -258,6 +295,89 @@ impl ReducedFluidModel {
     /// Reduced dimension of a basis (0 for an absent one).
     pub fn dim_of(&self, name: &str) -> usize {
         self.basis(name).map_or(0, Basis::reduced_dim)
+    }
+
+    /// The model with `B_u`, `B_f` (and `B_h`) cut to their first `m_u`, `m_f` (`m_h`)
+    /// columns: every tensor is the leading block of this one's (the bases are nested PCA
+    /// modes), except `B_d`, which is built again from the cut bases by constraint reduction,
+    /// with `D̂` and `D̂_h`. `topo` is the model's mesh topology.
+    pub fn truncated(
+        &self,
+        m_u: usize,
+        m_f: usize,
+        m_h: Option<usize>,
+        topo: &Topology,
+    ) -> Result<Self, FluidError> {
+        let fp = &self.provenance.mesh;
+        if (topo.dim(), topo.cell_count(), topo.face_count(), topo.boundary_faces().len())
+            != (fp.dim, fp.cells, fp.faces, fp.boundary_faces)
+        {
+            return Err(FluidError::State(format!(
+                "the topology given does not fit the model's mesh {fp:?}"
+            )));
+        }
+        let mut dims = BTreeMap::new();
+        dims.insert("u".to_string(), m_u);
+        dims.insert("f".to_string(), m_f);
+        let mh = m_h.unwrap_or(self.dim_of("h")).min(self.dim_of("h"));
+        if self.dim_of("h") > 0 {
+            dims.insert("h".to_string(), mh.max(1));
+        }
+        let mut core = self.core.truncated(&dims).map_err(core_err)?;
+        let (bf, bh) = (core.basis("f").cloned(), core.basis("h").cloned());
+        let bf = bf.ok_or_else(|| FluidError::State("the model has no basis f".into()))?;
+        core.remove("D", Some("d"));
+        core.remove("Dh", None);
+        if let Some(bd) = super::bases::constraint_basis(topo, &bf, bh.as_ref())? {
+            let (rows, nb, k) = super::bases::boundary_rows(topo, &bf, bh.as_ref());
+            let md = bd.reduced_dim();
+            let block = |from: usize, to: usize| {
+                let w = to - from;
+                let mut out = vec![0.0; md * w];
+                for i in 0..md {
+                    for j in 0..w {
+                        out[i * w + j] =
+                            (0..nb).map(|r| bd.matrix().data()[r * md + i] * rows[r * k + from + j]).sum();
+                    }
+                }
+                Tensor::from_vec(&[md, w], out).expect("m_d × m")
+            };
+            let mf = bf.reduced_dim();
+            core.insert_tensor("D", &["d", "f"], block(0, mf));
+            if bh.is_some() {
+                core.insert_tensor("Dh", &["d", "h"], block(mf, k));
+            }
+            core.bases.insert("d".into(), bd);
+        }
+        let mut out = self.clone();
+        out.core = core;
+        let mh = out.dim_of("h");
+        for t in &mut out.trajectories {
+            t.h = t.h.leading(&[t.h.shape()[0], mh]).map_err(|e| FluidError::State(e.to_string()))?;
+            t.u0.truncate(m_u);
+            t.f0.truncate(m_f);
+        }
+        let cut: Vec<usize> = out.provenance.bases.iter().map(|r| out.dim_of(&r.name)).collect();
+        for (r, m) in out.provenance.bases.iter_mut().zip(cut) {
+            if m != r.columns {
+                r.note = format!("cut from {} columns; {}", r.columns, r.note);
+                r.columns = m;
+            }
+        }
+        out.check_shapes()?;
+        Ok(out)
+    }
+
+    /// The model's mesh at the first training run's first reduced geometry (lifted), and its
+    /// topology.
+    pub fn mesh_and_topology(&self) -> Result<(SimplexMesh, Topology), FluidError> {
+        let bg = self.basis("g").ok_or_else(|| FluidError::State("the model has no basis g".into()))?;
+        let g0 = self.trajectories.first().map(|t| t.g.data()[..bg.reduced_dim()].to_vec());
+        let g0 = g0.ok_or_else(|| FluidError::State("the model has no training trajectory".into()))?;
+        let mesh = SimplexMesh::new(self.dim, bg.lift(&g0), self.cells.clone())?;
+        let axis = self.provenance.mesh.periodic_axis;
+        let topo = Topology::new(&mesh, axis.map(|axis| crate::mesh::Periodic { axis }))?;
+        Ok((mesh, topo))
     }
 
     /// Refuses a mesh other than the one the model was trained on, naming both.

@@ -10,7 +10,7 @@ use std::path::Path;
 
 use crate::fluid::snapshots::{SnapshotMeta, SnapshotWriter};
 use crate::fluid::FluidError;
-use crate::mesh::{SimplexMesh, Topology};
+use crate::mesh::SimplexMesh;
 use crate::reduce::Basis;
 
 use super::model::ReducedFluidModel;
@@ -99,10 +99,9 @@ pub fn write_lifted(
         |n: &str| model.basis(n).ok_or_else(|| FluidError::State(format!("the model has no basis {n}")));
     let (bu, bf, bg) = (basis("u")?, basis("f")?, basis("g")?);
     let bh: Option<&Basis> = model.basis("h");
-    let g0 = bg.lift(&run.states[0].g);
-    let mesh = SimplexMesh::new(model.dim, g0, model.cells.clone())?;
+    let (_, topo) = model.mesh_and_topology()?;
+    let mesh = SimplexMesh::new(model.dim, bg.lift(&run.states[0].g), model.cells.clone())?;
     let fp = &model.provenance.mesh;
-    let topo = Topology::new(&mesh, fp.periodic_axis.map(|axis| crate::mesh::Periodic { axis }))?;
     let mut meta = SnapshotMeta::new(&mesh, &topo, model.frame_time, fp.periodic_axis);
     meta.viscosity = Some(model.viscosity);
     meta.forcing = Some([0.0; 3]);

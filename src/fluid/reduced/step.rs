@@ -137,6 +137,19 @@ pub struct ReducedFluid {
     pub combination: FluxCombination,
     /// How the exponential is applied.
     pub exponential: Exponential,
+    /// The last Cholesky factor of V̂(ĝ) and its ĝ: a step's end geometry is the next step's
+    /// start.
+    factor: FactorCache,
+}
+
+/// One cached factor (a clone starts empty).
+#[derive(Debug, Default)]
+struct FactorCache(std::sync::Mutex<Option<(Vec<f64>, Mat<f64>)>>);
+
+impl Clone for FactorCache {
+    fn clone(&self) -> Self {
+        Self::default()
+    }
 }
 
 /// Singular values of `D̂` at or below this (relative to the largest, at least 1) are zero.
@@ -198,6 +211,7 @@ impl ReducedFluid {
             constraint,
             combination: FluxCombination::default(),
             exponential: Exponential::default(),
+            factor: FactorCache::default(),
         })
     }
 
@@ -222,6 +236,22 @@ impl ReducedFluid {
         let w: Vec<f64> = self.monomials.iter().map(|idx| idx.iter().map(|&i| g[i]).product()).collect();
         let flat = matvec(&self.v, self.mu * self.mu, nm, &w);
         Mat::from_fn(self.mu, self.mu, |i, j| 0.5 * (flat[i * self.mu + j] + flat[j * self.mu + i]))
+    }
+
+    /// The Cholesky factor of `V̂(ĝ)`, from the cache when ĝ is the last one factorised.
+    fn volume_factor(&self, g: &[f64], what: &str) -> Result<Mat<f64>, FluidError> {
+        if let Ok(cache) = self.factor.0.lock() {
+            if let Some((cg, l)) = cache.as_ref() {
+                if cg.as_slice() == g {
+                    return Ok(l.clone());
+                }
+            }
+        }
+        let l = cholesky(&self.volume_matrix(g), what)?;
+        if let Ok(mut cache) = self.factor.0.lock() {
+            *cache = Some((g.to_vec(), l.clone()));
+        }
+        Ok(l)
     }
 
     /// `P̂ ⊗₂ ĝ` (m_u × m_f).
@@ -295,7 +325,7 @@ impl ReducedFluid {
         let k = self.rate_operator(f, h);
         report.assemble_seconds += t0.elapsed().as_secs_f64();
         let t1 = Instant::now();
-        let l = cholesky(&self.volume_matrix(g), "V̂(ĝ_t)")?;
+        let l = self.volume_factor(g, "V̂(ĝ_t)")?;
         report.volume_seconds += t1.elapsed().as_secs_f64();
         let t2 = Instant::now();
         // w = Lᵀ u.
@@ -357,7 +387,7 @@ impl ReducedFluid {
         report: &mut ReducedStepReport,
     ) -> Result<(Vec<f64>, Vec<f64>), FluidError> {
         let t1 = Instant::now();
-        let l = cholesky(&self.volume_matrix(g), "V̂(ĝ_{t+1})")?;
+        let l = self.volume_factor(g, "V̂(ĝ_{t+1})")?;
         report.volume_seconds += t1.elapsed().as_secs_f64();
         let t = Instant::now();
         let p = self.flux_to_momentum(g);
@@ -498,29 +528,30 @@ fn prepare_constraint(d: Mat<f64>, dh: Option<Mat<f64>>) -> Result<Constraint, F
     Ok(Constraint { pinv, null, d, dh })
 }
 
-/// Lower Cholesky factor of an SPD matrix, sequentially; refuses one that is not positive
-/// definite, naming it.
+/// Lower Cholesky factor of an SPD matrix (faer's blocked factorisation, one thread: these
+/// matrices are a few hundred rows); refuses one that is not positive definite, naming it.
 fn cholesky(a: &Mat<f64>, what: &str) -> Result<Mat<f64>, FluidError> {
+    use faer::dyn_stack::{MemBuffer, MemStack};
+    use faer::linalg::cholesky::llt::factor::{cholesky_in_place, cholesky_in_place_scratch};
     let n = a.nrows();
-    let mut l = Mat::<f64>::zeros(n, n);
+    let mut l = a.clone();
+    let mut mem = MemBuffer::new(cholesky_in_place_scratch::<f64>(n, Par::Seq, Default::default()));
+    let refused = |detail: String| {
+        state_err(format!(
+            "{what} is not positive definite ({detail}): the reduced geometry or basis is degenerate"
+        ))
+    };
+    if (0..n).any(|i| !a[(i, i)].is_finite()) {
+        return Err(refused("a diagonal entry is not finite".into()));
+    }
+    cholesky_in_place(l.as_mut(), Default::default(), Par::Seq, MemStack::new(&mut mem), Default::default())
+        .map_err(|e| refused(format!("{e:?}")))?;
     for j in 0..n {
-        let mut d = a[(j, j)];
-        for k in 0..j {
-            d -= l[(j, k)] * l[(j, k)];
+        if !(l[(j, j)] > 0.0 && l[(j, j)].is_finite()) {
+            return Err(refused(format!("pivot {j} of {n} is {:.3e}", l[(j, j)])));
         }
-        if !(d > 0.0) || !d.is_finite() {
-            return Err(state_err(format!(
-                "{what} is not positive definite (pivot {j} of {n} is {d:.3e}): the reduced geometry or basis is degenerate"
-            )));
-        }
-        let d = d.sqrt();
-        l[(j, j)] = d;
-        for i in j + 1..n {
-            let mut s = a[(i, j)];
-            for k in 0..j {
-                s -= l[(i, k)] * l[(j, k)];
-            }
-            l[(i, j)] = s / d;
+        for i in 0..j {
+            l[(i, j)] = 0.0;
         }
     }
     Ok(l)

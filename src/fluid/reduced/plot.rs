@@ -1,0 +1,174 @@
+//! Fig. 5 (d) and (e) of seed 000 as labelled PNG plots (axes, units, legend), drawn by the
+//! `plotters` crate into a pixel buffer and written by our PNG writer. Text uses the DejaVu
+//! Sans TrueType font from the system (Debian's fonts-dejavu-core).
+
+use std::path::Path;
+use std::sync::OnceLock;
+
+use plotters::prelude::*;
+use plotters::style::{register_font, FontStyle};
+
+use crate::fluid::FluidError;
+
+use super::study::ErrorStudy;
+
+/// Where the plots' font is read from.
+pub const FONT_PATHS: [&str; 2] =
+    ["/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf", "/usr/share/fonts/dejavu/DejaVuSans.ttf"];
+
+static FONT: OnceLock<Result<(), String>> = OnceLock::new();
+
+fn font() -> Result<(), FluidError> {
+    FONT.get_or_init(|| {
+        for p in FONT_PATHS {
+            if let Ok(bytes) = std::fs::read(p) {
+                let bytes: &'static [u8] = Box::leak(bytes.into_boxed_slice());
+                return register_font("sans-serif", FontStyle::Normal, bytes)
+                    .map_err(|_| format!("{p}: not a usable TrueType font"));
+            }
+        }
+        Err(format!("no plot font: install fonts-dejavu-core (looked for {})", FONT_PATHS.join(", ")))
+    })
+    .clone()
+    .map_err(FluidError::State)
+}
+
+fn plot_err(path: &Path, e: impl std::fmt::Display) -> FluidError {
+    FluidError::File { path: path.to_path_buf(), message: format!("plot: {e}") }
+}
+
+/// Colours of the sizes' series, cycled.
+const SERIES: [RGBColor; 8] = [
+    RGBColor(31, 119, 180),
+    RGBColor(255, 127, 14),
+    RGBColor(44, 160, 44),
+    RGBColor(214, 39, 40),
+    RGBColor(148, 103, 189),
+    RGBColor(140, 86, 75),
+    RGBColor(227, 119, 194),
+    RGBColor(23, 190, 207),
+];
+
+fn log_range(values: impl Iterator<Item = f64>) -> (f64, f64) {
+    let (mut lo, mut hi) = (f64::INFINITY, 0.0f64);
+    for v in values.filter(|v| *v > 0.0 && v.is_finite()) {
+        lo = lo.min(v);
+        hi = hi.max(v);
+    }
+    if !(lo.is_finite() && hi > 0.0) {
+        return (1e-12, 1.0);
+    }
+    (10f64.powf(lo.log10().floor()), 10f64.powf(hi.log10().ceil().max(lo.log10().floor() + 1.0)))
+}
+
+fn save(path: &Path, w: u32, h: u32, rgb: &[u8]) -> Result<(), FluidError> {
+    let rgba: Vec<u8> = rgb.chunks_exact(3).flat_map(|p| [p[0], p[1], p[2], 255]).collect();
+    crate::render::write_png_rgba8(path, w, h, &rgba).map_err(|e| plot_err(path, e))
+}
+
+/// Fig. 5 (d): the one-step error of every basis size over simulated time (log scale).
+pub fn plot_over_time(study: &ErrorStudy, path: &Path) -> Result<(), FluidError> {
+    font()?;
+    let (w, h) = (1200u32, 700u32);
+    let mut buf = vec![0u8; 3 * (w * h) as usize];
+    {
+        let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| plot_err(path, e))?;
+        let t_end = study.sizes.iter().flat_map(|s| s.frames.last()).copied().max().unwrap_or(1) as f64
+            * study.frame_time;
+        let (lo, hi) = log_range(study.sizes.iter().flat_map(|s| s.errors.iter().copied()));
+        let mut chart = ChartBuilder::on(&root)
+            .caption("One-step error over the test run (seed 000 Fig. 5 d)", ("sans-serif", 28))
+            .margin(20)
+            .x_label_area_size(50)
+            .y_label_area_size(90)
+            .build_cartesian_2d(0.0..t_end.max(study.frame_time), (lo..hi).log_scale())
+            .map_err(|e| plot_err(path, e))?;
+        chart
+            .configure_mesh()
+            .x_desc("simulated time (s)")
+            .y_desc("one-step error E(u_ground − u_test) / E(u_ground)")
+            .label_style(("sans-serif", 18))
+            .axis_desc_style(("sans-serif", 20))
+            .y_label_formatter(&|v| format!("{v:.0e}"))
+            .draw()
+            .map_err(|e| plot_err(path, e))?;
+        for (k, s) in study.sizes.iter().enumerate() {
+            let colour = SERIES[k % SERIES.len()];
+            let points: Vec<(f64, f64)> = s
+                .frames
+                .iter()
+                .zip(&s.errors)
+                .filter(|(_, e)| **e > 0.0)
+                .map(|(f, e)| (*f as f64 * study.frame_time, *e))
+                .collect();
+            chart
+                .draw_series(LineSeries::new(points, colour.stroke_width(2)))
+                .map_err(|e| plot_err(path, e))?
+                .label(format!("m = {}", s.m_u))
+                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 24, y)], colour.stroke_width(3)));
+        }
+        chart
+            .configure_series_labels()
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK)
+            .label_font(("sans-serif", 18))
+            .position(SeriesLabelPosition::UpperRight)
+            .draw()
+            .map_err(|e| plot_err(path, e))?;
+        root.present().map_err(|e| plot_err(path, e))?;
+    }
+    save(path, w, h, &buf)
+}
+
+/// Fig. 5 (e): the time-integrated (mean) one-step error against the basis size (log–log).
+pub fn plot_by_size(study: &ErrorStudy, path: &Path) -> Result<(), FluidError> {
+    font()?;
+    let (w, h) = (900u32, 650u32);
+    let mut buf = vec![0u8; 3 * (w * h) as usize];
+    {
+        let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| plot_err(path, e))?;
+        let points: Vec<(f64, f64)> =
+            study.sizes.iter().map(|s| (s.m_u as f64, s.mean())).filter(|(_, e)| *e > 0.0).collect();
+        let (lo, hi) = log_range(points.iter().map(|p| p.1));
+        let (mlo, mhi) = log_range(points.iter().map(|p| p.0));
+        let mut chart = ChartBuilder::on(&root)
+            .caption("Time-integrated one-step error (seed 000 Fig. 5 e)", ("sans-serif", 26))
+            .margin(20)
+            .margin_right(45)
+            .x_label_area_size(50)
+            .y_label_area_size(90)
+            .build_cartesian_2d((mlo..mhi).log_scale(), (lo..hi).log_scale())
+            .map_err(|e| plot_err(path, e))?;
+        chart
+            .configure_mesh()
+            .x_desc("basis size m (m_u = m_f)")
+            .y_desc("mean one-step error")
+            .label_style(("sans-serif", 18))
+            .axis_desc_style(("sans-serif", 20))
+            .x_label_formatter(&|v| format!("{v:.0}"))
+            .y_label_formatter(&|v| format!("{v:.0e}"))
+            .draw()
+            .map_err(|e| plot_err(path, e))?;
+        let colour = SERIES[0];
+        chart
+            .draw_series(LineSeries::new(points.clone(), colour.stroke_width(2)))
+            .map_err(|e| plot_err(path, e))?
+            .label("reduced model on the test run (not trained on)")
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 24, y)], colour.stroke_width(3)));
+        chart
+            .draw_series(points.iter().map(|p| Circle::new(*p, 5, colour.filled())))
+            .map_err(|e| plot_err(path, e))?;
+        chart
+            .configure_series_labels()
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK)
+            .label_font(("sans-serif", 18))
+            .position(SeriesLabelPosition::UpperRight)
+            .draw()
+            .map_err(|e| plot_err(path, e))?;
+        root.present().map_err(|e| plot_err(path, e))?;
+    }
+    save(path, w, h, &buf)
+}
