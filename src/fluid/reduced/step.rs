@@ -86,12 +86,19 @@ pub struct ReducedStepReport {
     pub krylov_products: usize,
     /// `‖D̂ f̂ − D̂_h ĥ‖` after the projection (0 without constraints).
     pub constraint_residual: f64,
+    /// Wall seconds of the whole step ([`ReducedFluid::step`]; the stage times above are each
+    /// stage's own, and two of them run at once).
+    pub seconds: f64,
 }
 
 impl ReducedStepReport {
-    /// All stages' seconds.
+    /// The step's wall seconds (the stages' sum when they were timed one by one).
     pub fn total_seconds(&self) -> f64 {
-        self.assemble_seconds + self.volume_seconds + self.exponential_seconds + self.projection_seconds
+        if self.seconds > 0.0 {
+            self.seconds
+        } else {
+            self.assemble_seconds + self.volume_seconds + self.exponential_seconds + self.projection_seconds
+        }
     }
 }
 
@@ -118,15 +125,20 @@ pub struct ReducedFluid {
     mh: usize,
     viscosity: f64,
     frame_time: f64,
-    /// Â as (m_u·m_u) × m_f, row-major.
+    /// Â, row-major: when every `Â[:, :, j]` is skew (B_f divergence-free, B_u = B_p: §A.2)
+    /// only its strict upper triangle, `m_u(m_u−1)/2 × m_f` (half the memory traffic of the
+    /// step's largest contraction); otherwise all of it, `(m_u·m_u) × m_f`.
     a: Vec<f64>,
+    /// Whether `a` holds the skew upper triangle.
+    a_skew: bool,
     /// Â_h as (m_u·m_u) × m_h.
     ah: Vec<f64>,
     /// Δ̂ (m_u·m_u).
     lap: Vec<f64>,
     /// P̂ as (m_u·m_f) × m_g.
     p: Vec<f64>,
-    /// V̂'s distinct geometry monomials: (m_u·m_u) × monomials, multiplicities folded in.
+    /// V̂'s upper triangle (p ≤ u: V̂ is symmetric) against its distinct geometry monomials,
+    /// `m_u(m_u+1)/2 × monomials`, multiplicities folded in.
     v: Vec<f64>,
     /// The monomials' geometry indices.
     monomials: Vec<Vec<usize>>,
@@ -152,6 +164,10 @@ impl Clone for FactorCache {
     }
 }
 
+/// `Â` counts as skew when `max|Â[p,u,j] + Â[u,p,j]|` is at most this fraction of `max|Â|`
+/// (a divergence-free B_f makes it skew to rounding, ~1e-14).
+const SKEW_TOLERANCE: f64 = 1e-10;
+
 /// Singular values of `D̂` at or below this (relative to the largest, at least 1) are zero.
 const CONSTRAINT_SVD_TOLERANCE: f64 = 1e-10;
 
@@ -170,18 +186,48 @@ impl ReducedFluid {
         let vt = t("V")?;
         let monomials = sorted_tuples(mg, dim);
         let nm = monomials.len();
-        let mut v = vec![0.0; mu * mu * nm];
+        let upper = mu * (mu + 1) / 2;
+        let mut v = vec![0.0; upper * nm];
         let stride: Vec<usize> = (0..dim).map(|k| mg.pow((dim - 1 - k) as u32)).collect();
         let cube = mg.pow(dim as u32);
         for (m, idx) in monomials.iter().enumerate() {
             let sorted: Vec<u32> = idx.iter().map(|&i| i as u32).collect();
-            let perms = distinct_permutations(&sorted);
+            let mult = distinct_permutations(&sorted).len() as f64;
             let offset: usize = idx.iter().zip(&stride).map(|(i, s)| i * s).sum();
-            let mult = perms.len() as f64;
-            for pu in 0..mu * mu {
-                v[pu * nm + m] = mult * vt.data()[pu * cube + offset];
+            let mut row = 0;
+            for p in 0..mu {
+                for u in p..mu {
+                    let (a, b) = (vt.data()[(p * mu + u) * cube + offset], vt.data()[(u * mu + p) * cube + offset]);
+                    v[row * nm + m] = mult * 0.5 * (a + b);
+                    row += 1;
+                }
             }
         }
+        // Â's slices are skew when its flux basis is divergence-free (uᵀ(A⊗f)u = −½Σ|u|² div f).
+        let at = t("A")?.data();
+        let scale = at.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+        let mut skew_err = 0.0f64;
+        for p in 0..mu {
+            for u in p..mu {
+                for j in 0..mf {
+                    skew_err = skew_err.max((at[(p * mu + u) * mf + j] + at[(u * mu + p) * mf + j]).abs());
+                }
+            }
+        }
+        let a_skew = skew_err <= SKEW_TOLERANCE * scale.max(f64::MIN_POSITIVE);
+        let a = if a_skew {
+            let mut packed = Vec::with_capacity(mu * (mu - 1) / 2 * mf);
+            for p in 0..mu {
+                for u in p + 1..mu {
+                    for j in 0..mf {
+                        packed.push(0.5 * (at[(p * mu + u) * mf + j] - at[(u * mu + p) * mf + j]));
+                    }
+                }
+            }
+            packed
+        } else {
+            at.to_vec()
+        };
         let bf_bh = match (model.basis("f"), model.basis("h")) {
             (Some(bf), Some(bh)) => Some(transpose_times(bf.matrix(), bh.matrix())),
             _ => None,
@@ -201,7 +247,8 @@ impl ReducedFluid {
             mh,
             viscosity: model.viscosity,
             frame_time: model.frame_time,
-            a: t("A")?.data().to_vec(),
+            a,
+            a_skew,
             ah: if mh > 0 { t("Ah")?.data().to_vec() } else { Vec::new() },
             lap: t("L")?.data().to_vec(),
             p: t("P")?.data().to_vec(),
@@ -234,8 +281,18 @@ impl ReducedFluid {
     pub fn volume_matrix(&self, g: &[f64]) -> Mat<f64> {
         let nm = self.monomials.len();
         let w: Vec<f64> = self.monomials.iter().map(|idx| idx.iter().map(|&i| g[i]).product()).collect();
-        let flat = matvec(&self.v, self.mu * self.mu, nm, &w);
-        Mat::from_fn(self.mu, self.mu, |i, j| 0.5 * (flat[i * self.mu + j] + flat[j * self.mu + i]))
+        let mu = self.mu;
+        let packed = matvec(&self.v, mu * (mu + 1) / 2, nm, &w);
+        let mut out = Mat::<f64>::zeros(mu, mu);
+        let mut row = 0;
+        for p in 0..mu {
+            for u in p..mu {
+                out[(p, u)] = packed[row];
+                out[(u, p)] = packed[row];
+                row += 1;
+            }
+        }
+        out
     }
 
     /// The Cholesky factor of `V̂(ĝ)`, from the cache when ĝ is the last one factorised.
@@ -262,26 +319,45 @@ impl ReducedFluid {
 
     /// `K̂` of the advection–diffusion rate `V̂⁻¹K̂` (see the module docs).
     pub fn rate_operator(&self, f: &[f64], h: &[f64]) -> Mat<f64> {
-        let n = self.mu * self.mu;
-        let mut flat = match (self.combination, &self.bf_bh) {
+        let mu = self.mu;
+        let fp = match (self.combination, &self.bf_bh) {
             (FluxCombination::ProjectedOntoFlux, Some(bfbh)) if self.mh > 0 => {
                 let mut fp = f.to_vec();
                 for i in 0..self.mf {
                     fp[i] -= (0..self.mh).map(|j| bfbh[(i, j)] * h[j]).sum::<f64>();
                 }
-                matvec(&self.a, n, self.mf, &fp)
+                fp
             }
-            _ => {
-                let mut k = matvec(&self.a, n, self.mf, f);
-                if self.mh > 0 {
-                    let kh = matvec(&self.ah, n, self.mh, h);
-                    k.iter_mut().zip(kh).for_each(|(a, b)| *a -= b);
-                }
-                k
-            }
+            _ => f.to_vec(),
         };
-        flat.iter_mut().zip(&self.lap).for_each(|(k, l)| *k += self.viscosity * l);
-        Mat::from_fn(self.mu, self.mu, |i, j| flat[i * self.mu + j])
+        let mut k = Mat::from_fn(mu, mu, |i, j| self.viscosity * self.lap[i * mu + j]);
+        if self.a_skew {
+            let packed = matvec(&self.a, mu * (mu - 1) / 2, self.mf, &fp);
+            let mut row = 0;
+            for p in 0..mu {
+                for u in p + 1..mu {
+                    k[(p, u)] += packed[row];
+                    k[(u, p)] -= packed[row];
+                    row += 1;
+                }
+            }
+        } else {
+            let flat = matvec(&self.a, mu * mu, self.mf, &fp);
+            for p in 0..mu {
+                for u in 0..mu {
+                    k[(p, u)] += flat[p * mu + u];
+                }
+            }
+        }
+        if self.mh > 0 && self.combination == FluxCombination::Separate {
+            let kh = matvec(&self.ah, mu * mu, self.mh, h);
+            for p in 0..mu {
+                for u in 0..mu {
+                    k[(p, u)] -= kh[p * mu + u];
+                }
+            }
+        }
+        k
     }
 
     /// The energy `½ ûᵀ V̂(ĝ) û`.
@@ -333,21 +409,19 @@ impl ReducedFluid {
         for i in 0..self.mu {
             w[i] = (i..self.mu).map(|j| l[(j, i)] * u[j]).sum();
         }
+        // M = L⁻¹ K L⁻ᵀ, formed once (two triangular solves with m_u right-hand sides) so that
+        // each Krylov product is one m_u × m_u matrix–vector product.
+        let mut m = k;
+        solve_lower_triangular_in_place(l.as_ref(), m.as_mut(), Par::Seq);
+        let mut mt = m.transpose().to_owned();
+        solve_lower_triangular_in_place(l.as_ref(), mt.as_mut(), Par::Seq);
+        let m = mt.transpose().to_owned();
         let w1 = match self.exponential {
             Exponential::Krylov(tol) => {
-                let mut x = Mat::<f64>::zeros(self.mu, 1);
                 let mut apply = |v: &[f64], y: &mut [f64]| {
-                    // y = L⁻¹ K L⁻ᵀ v.
-                    for i in 0..self.mu {
-                        x[(i, 0)] = v[i];
-                    }
-                    solve_upper_triangular_in_place(l.transpose(), x.as_mut(), Par::Seq);
-                    let kx = &k * &x;
-                    let mut kx = kx;
-                    solve_lower_triangular_in_place(l.as_ref(), kx.as_mut(), Par::Seq);
-                    for i in 0..self.mu {
-                        y[i] = kx[(i, 0)];
-                    }
+                    let mut out = faer::MatMut::from_column_major_slice_mut(y, self.mu, 1);
+                    let x = MatRef::from_column_major_slice(v, self.mu, 1);
+                    matmul(out.as_mut(), Accum::Replace, m.as_ref(), x, 1.0, Par::Seq);
                 };
                 let (w1, kr) = expm_krylov("reduced advection", &mut apply, &w, dt, tol)
                     .map_err(|e| state_err(e.to_string()))?;
@@ -355,13 +429,7 @@ impl ReducedFluid {
                 w1
             }
             Exponential::Pade => {
-                // M = L⁻¹ K L⁻ᵀ.
-                let mut m = k.clone();
-                solve_lower_triangular_in_place(l.as_ref(), m.as_mut(), Par::Seq);
-                let mut mt = m.transpose().to_owned();
-                solve_lower_triangular_in_place(l.as_ref(), mt.as_mut(), Par::Seq);
-                let m = mt.transpose().to_owned() * faer::Scale(dt);
-                let e = crate::tensor::expm_faer("reduced advection", &m)
+                let e = crate::tensor::expm_faer("reduced advection", &(m * faer::Scale(dt)))
                     .map_err(|e| state_err(e.to_string()))?;
                 (0..self.mu).map(|i| (0..self.mu).map(|j| e[(i, j)] * w[j]).sum()).collect()
             }
@@ -443,9 +511,25 @@ impl ReducedFluid {
         h: &[f64],
     ) -> Result<(ReducedState, ReducedStepReport), FluidError> {
         self.check(s, g_next, h)?;
+        let start = Instant::now();
         let mut report = ReducedStepReport::default();
-        let u1 = self.advect(&s.u, &s.f, &s.g, h, self.frame_time, &mut report)?;
+        // V̂(ĝ_{t+1}) is contracted and factorised on the other core while advection runs.
+        let (u1, next) = rayon::join(
+            || self.advect(&s.u, &s.f, &s.g, h, self.frame_time, &mut report),
+            || {
+                let t = Instant::now();
+                let l = cholesky(&self.volume_matrix(g_next), "V̂(ĝ_{t+1})");
+                (l, t.elapsed().as_secs_f64())
+            },
+        );
+        let u1 = u1?;
+        let (l1, seconds) = next;
+        report.volume_seconds += seconds;
+        if let Ok(mut cache) = self.factor.0.lock() {
+            *cache = Some((g_next.to_vec(), l1?));
+        }
         let (u, f) = self.project(&u1, g_next, h, &mut report)?;
+        report.seconds = start.elapsed().as_secs_f64();
         Ok((ReducedState { u, f, g: g_next.to_vec() }, report))
     }
 
