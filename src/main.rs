@@ -409,6 +409,7 @@ fn demo(desc: &GpuDesc, scene_path: &Path, out: &Path) -> Result<()> {
     cli::spectral::demo(&gpu, (w, h), out)?;
     cli::radiosity::demo(&gpu, (w, h), out)?;
     cli::fluid::demo(&gpu, (w, h), out)?;
+    cli::fluid_reduced::demo(&gpu, (w, h), out)?;
     check_validation(gpu)
 }
 

@@ -68,8 +68,10 @@ pub struct CavityBench {
     pub cells: usize,
     /// Seconds to premultiply the synthetic model.
     pub premultiply_seconds: f64,
-    /// Bytes of the reduced model.
+    /// Bytes of the reduced model with its bases.
     pub model_bytes: usize,
+    /// Bytes of the reduced tensors alone.
+    pub tensor_bytes: usize,
     /// Per exponential.
     pub timings: Vec<StepTiming>,
 }
@@ -165,7 +167,13 @@ pub fn cavity_step(
             products: med(&mut prods) as usize,
         });
     }
-    Ok(CavityBench { cells: mesh.cell_count(), premultiply_seconds, model_bytes: model.bytes(), timings })
+    Ok(CavityBench {
+        cells: mesh.cell_count(),
+        premultiply_seconds,
+        model_bytes: model.bytes(),
+        tensor_bytes: model.tensor_bytes(),
+        timings,
+    })
 }
 
 /// The energy over a long reduced run.

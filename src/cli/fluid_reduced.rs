@@ -228,9 +228,10 @@ pub fn bench(args: &BenchArgs) -> Result<()> {
         eprintln!("[{:6.1} s] {s}", start.elapsed().as_secs_f64())
     })?;
     println!(
-        "reduced step on {scene} ({} cells, synthetic bases; premultiplied in {:.1} s, model {:.1} MB):",
+        "reduced step on {scene} ({} cells, synthetic bases; premultiplied in {:.1} s; reduced tensors {:.1} MB, with the bases {:.1} MB):",
         b.cells,
         b.premultiply_seconds,
+        b.tensor_bytes as f64 / 1e6,
         b.model_bytes as f64 / 1e6
     );
     println!(
@@ -280,6 +281,77 @@ pub fn bench(args: &BenchArgs) -> Result<()> {
         e.maximum,
         e.last,
         1e3 * e.step_seconds
+    );
+    Ok(())
+}
+
+/// The reduced tunnel in `galerkin demo`: two small full runs (obstacle scales 0.6 and 1.4)
+/// trained into a model, training run 0 replayed in the reduced space and compared with its
+/// full run, the last reduced frame lifted and drawn by speed.
+pub fn demo(gpu: &galerkin::gpu::Gpu, (w, h): (u32, u32), out: &std::path::Path) -> Result<()> {
+    use galerkin::fluid::render::{cell_speeds, draw_picture, DrawStyle, Projection, View2d};
+    use galerkin::fluid::scene::FluidScene;
+    use galerkin::render::{write_png_rgba8, Colormap};
+    let dir = out.join("demo-fluid-reduced");
+    let frames = 60;
+    let mut runs = Vec::new();
+    let mut full_seconds = Vec::new();
+    for scale in [0.6, 1.4] {
+        let text = include_str!("../../scenes/fluid/tunnel_small.toml")
+            .replace("scale = 1.0", &format!("scale = {scale}"));
+        let mut scene = FluidScene::parse(&text, std::path::Path::new("scenes/fluid/tunnel_small.toml"))?;
+        let run = dir.join(format!("tunnel-{scale}"));
+        let summary =
+            galerkin::fluid::run::simulate_run(&mut scene, frames, &run, true, &mut |_, _, _, _| {})?;
+        full_seconds.extend(summary.stage_seconds.iter().map(|s| s[0] + s[1] + s[2]));
+        runs.push(run);
+    }
+    let set = TrainingSet::open(&runs)?;
+    let sizes = BasisSizes::default();
+    let bases = FluidBases::build(&set, &sizes, &mut |_| {})?;
+    let model = ReducedFluidModel::train(&set, bases, &sizes, &mut |_| {})?;
+    let fluid = ReducedFluid::new(&model)?;
+    let run = run_reduced(&model, &fluid, ReducedMotion::Replay(0), frames, &mut |_| {})?;
+    let bu = model.basis("u").context("the model has no velocity basis")?;
+    let truth = set.runs()[0].frame("u", frames)?;
+    let last = &run.states[frames];
+    let lifted = bu.lift(&last.u);
+    let err = (lifted.iter().zip(&truth).map(|(a, b)| (a - b).powi(2)).sum::<f64>()
+        / truth.iter().map(|b| b * b).sum::<f64>())
+    .sqrt();
+    let mut reduced_seconds: Vec<f64> = run.reports.iter().map(|r| r.total_seconds()).collect();
+    let (rs, fs) =
+        (galerkin::bench::median_f64(&mut reduced_seconds), galerkin::bench::median_f64(&mut full_seconds));
+    // Draw the lifted last frame by speed.
+    let (mesh, topo) = model.mesh_and_topology()?;
+    let g = model.basis("g").context("the model has no geometry basis")?.lift(&last.g);
+    let f = model.basis("f").context("the model has no flux basis")?.lift(&last.f);
+    let speeds = cell_speeds(&mesh, &topo, &g, &f);
+    let top = speeds.iter().fold(0.0f64, |m, v| m.max(*v)).max(1e-12);
+    let style = DrawStyle {
+        colormap: Colormap::by_name("viridis")?,
+        range: (0.0, top),
+        log: false,
+        colour_cells: true,
+        sprite_px: 1.5,
+    };
+    let (lo, hi) = mesh.bounds();
+    let view = View2d::fit([lo[0], lo[1]], [hi[0], hi[1]], (w, h), 0.02);
+    let picture =
+        draw_picture(gpu, (&mesh, &topo), &g, &speeds, None, &style, &Projection::Plane(view), (w, h))?;
+    let path = out.join("fluid-reduced.png");
+    write_png_rgba8(&path, w, h, &picture.rgba)?;
+    println!(
+        "fluid reduced: tunnel of {} triangles in m_u {}, m_f {}, m_g {} dimensions; {frames} replayed frames at {:.3} ms a step against {:.1} ms full ({:.0}×), velocity {:.1e} from the full run at frame {frames} → {}",
+        mesh.cell_count(),
+        model.dim_of("u"),
+        model.dim_of("f"),
+        model.dim_of("g"),
+        1e3 * rs,
+        1e3 * fs,
+        fs / rs,
+        err,
+        path.display()
     );
     Ok(())
 }

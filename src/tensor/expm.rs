@@ -226,6 +226,8 @@ pub struct KrylovReport {
 
 /// Largest Krylov space [`expm_krylov`] builds per time step.
 pub const KRYLOV_MAX_DIM: usize = 40;
+/// [`expm_krylov`] checks whether its Krylov space is large enough every this many dimensions.
+pub const KRYLOV_CHECK_EVERY: usize = 4;
 /// Cap on [`expm_krylov`]'s time steps (each at least `t / KRYLOV_MAX_STEPS`).
 pub const KRYLOV_MAX_STEPS: usize = 10_000;
 
@@ -292,6 +294,17 @@ pub fn expm_krylov(
                 break;
             }
             basis.push(y.iter().map(|x| x / norm).collect());
+            // Stop growing the space once this step's error estimate already passes
+            // (checked every few dimensions: each check exponentiates the k × k Hessenberg).
+            if k % KRYLOV_CHECK_EVERY == 0 && k < kmax {
+                let tau_try = tau.min(t - done);
+                let hk = Mat::from_fn(k, k, |i, j| tau_try * h[(i, j)]);
+                let e = expm_faer(what, &hk)?;
+                let err = beta * tau_try * h[(k, k - 1)] * e[(k - 1, 0)].abs();
+                if err <= tol * beta0 * tau_try / t {
+                    break;
+                }
+            }
         }
         // Shrink τ until the error estimate passes (an invariant subspace is exact).
         let remaining = t - done;

@@ -274,12 +274,17 @@ impl ReducedFluidModel {
         Ok(out)
     }
 
-    /// Bytes of the reduced tensors and bases (f64), the model's memory at run time.
+    /// Bytes of the reduced tensors and bases (f64): the file's size, about.
     pub fn bytes(&self) -> usize {
-        let tensors: usize = self.core.tensors().map(|(_, _, t)| t.len()).sum();
         let bases: usize =
             ["u", "f", "g", "h", "d"].iter().filter_map(|b| self.basis(b)).map(|b| b.matrix().len()).sum();
-        8 * (tensors + bases)
+        self.tensor_bytes() + 8 * bases
+    }
+
+    /// Bytes of the reduced tensors alone (f64): what the reduced step reads; the bases are
+    /// needed only to lift a state to the full space.
+    pub fn tensor_bytes(&self) -> usize {
+        8 * self.core.tensors().map(|(_, _, t)| t.len()).sum::<usize>()
     }
 
     /// A basis of the model (`u f g h d`).

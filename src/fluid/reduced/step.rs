@@ -197,7 +197,8 @@ impl ReducedFluid {
             let mut row = 0;
             for p in 0..mu {
                 for u in p..mu {
-                    let (a, b) = (vt.data()[(p * mu + u) * cube + offset], vt.data()[(u * mu + p) * cube + offset]);
+                    let (a, b) =
+                        (vt.data()[(p * mu + u) * cube + offset], vt.data()[(u * mu + p) * cube + offset]);
                     v[row * nm + m] = mult * 0.5 * (a + b);
                     row += 1;
                 }

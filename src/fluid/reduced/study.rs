@@ -37,6 +37,8 @@ pub struct SizeErrors {
     pub reduced_seconds: f64,
     /// Median full step time (seconds).
     pub full_seconds: f64,
+    /// Bytes of the size's reduced tensors.
+    pub tensor_bytes: usize,
 }
 
 impl SizeErrors {
@@ -79,15 +81,16 @@ impl ErrorStudy {
 
     /// The time-integrated errors as CSV: `m_u,m_f,mean_one_step_error,reduced_ms,full_ms`.
     pub fn summary_csv(&self) -> String {
-        let mut out = String::from("m_u,m_f,mean_one_step_error,reduced_step_ms,full_step_ms\n");
+        let mut out = String::from("m_u,m_f,mean_one_step_error,reduced_step_ms,full_step_ms,tensor_mb\n");
         for s in &self.sizes {
             out += &format!(
-                "{},{},{:.9e},{:.4},{:.2}\n",
+                "{},{},{:.9e},{:.4},{:.2},{:.2}\n",
                 s.m_u,
                 s.m_f,
                 s.mean(),
                 1e3 * s.reduced_seconds,
-                1e3 * s.full_seconds
+                1e3 * s.full_seconds,
+                s.tensor_bytes as f64 / 1e6
             );
         }
         out
@@ -204,6 +207,7 @@ pub fn one_step_errors(
             errors,
             reduced_seconds: median(&mut tr),
             full_seconds: median(&mut tf),
+            tensor_bytes: cut.tensor_bytes(),
         });
     }
     Ok(ErrorStudy { sizes: out, geometry_error, frame_time: model.frame_time })
