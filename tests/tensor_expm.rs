@@ -6,6 +6,7 @@
 //! `n·ε·e^{‖A‖}` — we allow 1e-12 relative to the largest entry; the badly scaled case
 //! (entries from 1e-6 to 1e3) is compared relative to each entry's scale, 1e-9. Krylov is run
 //! at tolerance 1e-12 and compared to 1e-10 of ‖v‖.
+#![allow(clippy::needless_range_loop)]
 
 use galerkin::tensor::{expm, expm_krylov, Tensor};
 use nalgebra::DMatrix;

@@ -52,6 +52,7 @@ const PADE13: [f64; 14] = [
     1.0,
 ];
 /// θ_m of Higham 2005 Table 2.3: the largest ‖A‖₁ for which degree m needs no scaling.
+#[allow(clippy::excessive_precision)] // Higham's table, digit for digit.
 const THETA: [(usize, f64); 5] = [
     (3, 1.495585217958292e-2),
     (5, 2.539398330063230e-1),

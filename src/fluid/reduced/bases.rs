@@ -309,7 +309,11 @@ fn check_projected_volumes(set: &TrainingSet, mesh: &SimplexMesh, bg: &Basis) ->
                 / g.iter().map(|a| a * a).sum::<f64>().sqrt().max(f64::MIN_POSITIVE);
             worst = worst.max(err);
             let vols = mesh.volumes_at(&projected);
-            if let Some((c, v)) = vols.iter().enumerate().find(|(_, v)| !(**v > 0.0)) {
+            if let Some((c, v)) = vols
+                .iter()
+                .enumerate()
+                .find(|(_, v)| v.partial_cmp(&&0.0) != Some(std::cmp::Ordering::Greater))
+            {
                 return Err(FluidError::State(format!(
                     "basis g: {} frame {frame}: the projected geometry gives cell {c} volume {v:.3e} (the true volume is {:.3e}); keep more geometry modes (--m-g) or a higher --energy",
                     path.display(),
