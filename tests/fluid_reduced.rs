@@ -367,6 +367,36 @@ fn bad_training_input_is_refused_naming_the_run_frame_or_basis() {
     let set = TrainingSet::open(std::slice::from_ref(&tunnel)).unwrap();
     let err = FluidBases::build(&set, &BasisSizes::default(), &mut |_| {}).unwrap_err().to_string();
     assert!(err.contains("tunnel-1") && err.contains("frame 3") && err.contains("row 2"), "{err}");
+    // A geometry basis under which a training frame's cells collapse: every other frame of a
+    // copy of a run turned half a turn about the channel's centre (volumes kept), so the mean
+    // geometry — all a one-column B_g holds — is the centre point.
+    let turned = dir.path().join("turned");
+    std::fs::create_dir_all(&turned).unwrap();
+    for q in ["u", "p", "f", "h"] {
+        std::fs::copy(wavy[0].join(format!("{q}.f64")), turned.join(format!("{q}.f64"))).unwrap();
+    }
+    std::fs::copy(wavy[0].join("mesh.json"), turned.join("mesh.json")).unwrap();
+    // 30 of the 31 frames, so that as many are turned as not and the mean is the centre point.
+    let header = std::fs::read_to_string(wavy[0].join("snapshots.json")).unwrap();
+    assert!(header.contains("\"frames\": 31"), "{header}");
+    std::fs::write(turned.join("snapshots.json"), header.replace("\"frames\": 31", "\"frames\": 30"))
+        .unwrap();
+    let g_bytes = std::fs::read(wavy[0].join("g.f64")).unwrap();
+    let mut g: Vec<f64> =
+        g_bytes.chunks_exact(8).map(|b| f64::from_le_bytes(b.try_into().unwrap())).collect();
+    let frame_len = g.len() / 31;
+    for k in (1..31).step_by(2) {
+        for x in g[k * frame_len..(k + 1) * frame_len].chunks_exact_mut(2) {
+            x[0] = 2.0 - x[0];
+            x[1] = 1.0 - x[1];
+        }
+    }
+    std::fs::write(turned.join("g.f64"), g.iter().flat_map(|v| v.to_le_bytes()).collect::<Vec<u8>>())
+        .unwrap();
+    let set = TrainingSet::open(std::slice::from_ref(&turned)).unwrap();
+    let sizes = BasisSizes { m_g: Some(1), ..BasisSizes::default() };
+    let err = FluidBases::build(&set, &sizes, &mut |_| {}).unwrap_err().to_string();
+    assert!(err.contains("basis g") && err.contains("turned frame 0") && err.contains("cell 0"), "{err}");
     // A reduced state of the wrong length.
     let (_, model) = train(&wavy, BasisSizes::default());
     let fluid = ReducedFluid::new(&model).unwrap();
