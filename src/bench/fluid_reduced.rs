@@ -19,18 +19,7 @@ use crate::fluid::FluidError;
 use crate::reduce::Basis;
 use crate::tensor::Tensor;
 
-/// Deterministic pseudo-random values in [-0.5, 0.5).
-fn random(n: usize, seed: u64) -> Vec<f64> {
-    let mut s = seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1;
-    (0..n)
-        .map(|_| {
-            s ^= s << 13;
-            s ^= s >> 7;
-            s ^= s << 17;
-            (s >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        })
-        .collect()
-}
+use super::reduce::random;
 
 /// An orthonormal basis of `m` random columns (QR by faer).
 fn random_basis(name: &str, n: usize, m: usize, seed: u64) -> Result<Basis, FluidError> {

@@ -18,8 +18,8 @@ use crate::reduce::synthetic::{volume_tensor, TetGrid};
 use crate::reduce::{premultiply_sparse_with, Bases, Basis, Expr, Model, PremultiplyOptions, ReduceError};
 use crate::tensor::{SparseTensor, Tensor};
 
-/// Deterministic pseudo-random values in [-0.5, 0.5).
-fn random(n: usize, seed: u64) -> Vec<f64> {
+/// Deterministic pseudo-random values in [-0.5, 0.5) (xorshift; the benchmarks' inputs).
+pub(crate) fn random(n: usize, seed: u64) -> Vec<f64> {
     let mut s = seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1;
     (0..n)
         .map(|_| {

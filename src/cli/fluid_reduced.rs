@@ -125,15 +125,17 @@ pub fn error_study(args: &StudyArgs) -> Result<()> {
     std::fs::write(args.out.join("summary.csv"), study.summary_csv())?;
     plot_over_time(&study, &args.out.join("fig5d.png"))?;
     plot_by_size(&study, &args.out.join("fig5e.png"))?;
-    println!("  m_u  m_f  mean one-step error  reduced step  full step");
+    println!("  m_u  m_f  mean one-step error  reduced step  full step  speedup  reduced tensors");
     for s in &study.sizes {
         println!(
-            "{:>5} {:>4}  {:>19.3e}  {:>9.3} ms  {:>7.1} ms",
+            "{:>5} {:>4}  {:>19.3e}  {:>9.3} ms  {:>7.1} ms  {:>6.0}×  {:>8.2} MB",
             s.m_u,
             s.m_f,
             s.mean(),
             1e3 * s.reduced_seconds,
-            1e3 * s.full_seconds
+            1e3 * s.full_seconds,
+            s.full_seconds / s.reduced_seconds,
+            s.tensor_bytes as f64 / 1e6
         );
     }
     println!(

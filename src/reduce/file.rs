@@ -194,7 +194,8 @@ impl ReducedModel {
 }
 
 /// `serde_json::to_string` behind a trait object, so one closure serves every type.
-mod erased {
+pub(crate) mod erased {
+    /// A value that can be written as JSON, as a trait object.
     pub trait Json {
         fn json(&self) -> serde_json::Result<String>;
     }

@@ -29,6 +29,7 @@ pub mod synthetic;
 pub use basis::{Bases, Basis};
 pub use error::ReduceError;
 pub use expr::Expr;
+pub(crate) use file::erased;
 pub use file::{ModelExtras, FORMAT, VERSION};
 pub use gpu_eval::{Backend, GpuReducedModel};
 pub use model::{FullTensor, Model, ReduceOptions, StreamedTensor, TensorDecl};

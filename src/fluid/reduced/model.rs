@@ -400,7 +400,8 @@ impl ReducedFluidModel {
     /// Writes the model (see the module docs; never half-written).
     pub fn save(&self, path: &Path) -> Result<(), FluidError> {
         let mut extras = ModelExtras::default();
-        let json = |v: &dyn erased_json::Json| v.json().map_err(|e| FluidError::State(e.to_string()));
+        let json =
+            |v: &dyn crate::reduce::erased::Json| v.json().map_err(|e| FluidError::State(e.to_string()));
         extras.metadata.insert("format".into(), FLUID_FORMAT.into());
         extras.metadata.insert("version".into(), FLUID_VERSION.to_string());
         extras.metadata.insert("dim".into(), self.dim.to_string());
@@ -557,16 +558,4 @@ fn project_run(
         u0: bases.u.project(&run.frame("u", 0)?),
         f0: bases.f.project(&run.frame("f", 0)?),
     })
-}
-
-/// `serde_json::to_string` behind a trait object.
-mod erased_json {
-    pub trait Json {
-        fn json(&self) -> serde_json::Result<String>;
-    }
-    impl<T: serde::Serialize> Json for T {
-        fn json(&self) -> serde_json::Result<String> {
-            serde_json::to_string(self)
-        }
-    }
 }

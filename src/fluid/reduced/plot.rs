@@ -61,6 +61,25 @@ fn log_range(values: impl Iterator<Item = f64>) -> (f64, f64) {
     (10f64.powf(lo.log10().floor()), 10f64.powf(hi.log10().ceil().max(lo.log10().floor() + 1.0)))
 }
 
+/// The legend, in one style for both plots.
+fn draw_legend<'a, X, Y>(
+    chart: &mut ChartContext<'a, BitMapBackend<'a>, Cartesian2d<X, Y>>,
+    path: &Path,
+) -> Result<(), FluidError>
+where
+    X: plotters::coord::ranged1d::Ranged,
+    Y: plotters::coord::ranged1d::Ranged,
+{
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .label_font(("sans-serif", 18))
+        .position(SeriesLabelPosition::UpperRight)
+        .draw()
+        .map_err(|e| plot_err(path, e))
+}
+
 fn save(path: &Path, w: u32, h: u32, rgb: &[u8]) -> Result<(), FluidError> {
     let rgba: Vec<u8> = rgb.chunks_exact(3).flat_map(|p| [p[0], p[1], p[2], 255]).collect();
     crate::render::write_png_rgba8(path, w, h, &rgba).map_err(|e| plot_err(path, e))
@@ -108,14 +127,7 @@ pub fn plot_over_time(study: &ErrorStudy, path: &Path) -> Result<(), FluidError>
                 .label(format!("m = {}", s.m_u))
                 .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 24, y)], colour.stroke_width(3)));
         }
-        chart
-            .configure_series_labels()
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .label_font(("sans-serif", 18))
-            .position(SeriesLabelPosition::UpperRight)
-            .draw()
-            .map_err(|e| plot_err(path, e))?;
+        draw_legend(&mut chart, path)?;
         root.present().map_err(|e| plot_err(path, e))?;
     }
     save(path, w, h, &buf)
@@ -160,14 +172,7 @@ pub fn plot_by_size(study: &ErrorStudy, path: &Path) -> Result<(), FluidError> {
         chart
             .draw_series(points.iter().map(|p| Circle::new(*p, 5, colour.filled())))
             .map_err(|e| plot_err(path, e))?;
-        chart
-            .configure_series_labels()
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .label_font(("sans-serif", 18))
-            .position(SeriesLabelPosition::UpperRight)
-            .draw()
-            .map_err(|e| plot_err(path, e))?;
+        draw_legend(&mut chart, path)?;
         root.present().map_err(|e| plot_err(path, e))?;
     }
     save(path, w, h, &buf)

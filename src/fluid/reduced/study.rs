@@ -97,14 +97,6 @@ impl ErrorStudy {
     }
 }
 
-fn median(v: &mut [f64]) -> f64 {
-    if v.is_empty() {
-        return f64::NAN;
-    }
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
-}
-
 /// Runs the study of `model` on the test run `test` for basis sizes `sizes` (m_u = m_f = m,
 /// each at most the model's), over frames `0, stride, 2·stride, …` below `frames` (at most the
 /// run's last but one), the full steps taking `refinement` times the RK4 substeps their
@@ -205,8 +197,8 @@ pub fn one_step_errors(
             m_f: fluid.dims().1,
             frames: studied.clone(),
             errors,
-            reduced_seconds: median(&mut tr),
-            full_seconds: median(&mut tf),
+            reduced_seconds: crate::bench::median_f64(&mut tr),
+            full_seconds: crate::bench::median_f64(&mut tf),
             tensor_bytes: cut.tensor_bytes(),
         });
     }
