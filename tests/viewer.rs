@@ -262,3 +262,60 @@ fn the_fluid_viewer_plays_the_tunnel() {
     assert!(drawn as f64 > 0.6 * f64::from(w * h), "only {drawn} of {} pixels drawn", w * h);
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// The fluid viewer plays a reduced model (trained here on two small tunnel runs), its state
+/// lifted for the cells and the device particles, and stops at the frame asked for.
+#[test]
+fn the_fluid_viewer_plays_a_reduced_model() {
+    let x = Xvfb::start();
+    let dir = std::env::temp_dir().join(format!("galerkin-viewer-reduced-{}", std::process::id()));
+    let bin = env!("CARGO_BIN_EXE_galerkin");
+    let mut runs = Vec::new();
+    for scale in ["0.6", "1.4"] {
+        let text = std::fs::read_to_string(
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/fluid/tunnel_small.toml"),
+        )
+        .unwrap()
+        .replace("scale = 1.0", &format!("scale = {scale}"));
+        std::fs::create_dir_all(&dir).unwrap();
+        let scene = dir.join(format!("tunnel-{scale}.toml"));
+        std::fs::write(&scene, text).unwrap();
+        let run = dir.join(format!("run-{scale}"));
+        let out = Command::new(bin)
+            .args(["fluid", "simulate"])
+            .arg(&scene)
+            .args(["--frames", "12", "--force", "--out"])
+            .arg(&run)
+            .output()
+            .unwrap();
+        assert!(out.status.success(), "simulate: {}", String::from_utf8_lossy(&out.stderr));
+        runs.push(run);
+    }
+    let model = dir.join("model.safetensors");
+    let out =
+        Command::new(bin).args(["fluid", "train"]).args(&runs).arg("--out").arg(&model).output().unwrap();
+    assert!(out.status.success(), "train: {}", String::from_utf8_lossy(&out.stderr));
+    let shot = dir.join("shot.png");
+    let out = Command::new(bin)
+        .args(["--validation", "fluid", "view", "--model"])
+        .arg(&model)
+        .args(["--motion", "replay:1", "--play", "--frames", "5", "--size", "360x120", "--particles", "1000"])
+        .arg("--screenshot")
+        .arg(&shot)
+        .env("DISPLAY", &x.display)
+        .env_remove("WAYLAND_DISPLAY")
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "galerkin fluid view --model failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(stdout.contains("1000 particles, stopped at frame"), "{stdout}");
+    let (w, h, rgba) = read_png_rgba8(&shot).unwrap();
+    let background = galerkin::render::BACKGROUND.map(|v| (v * 255.0).round() as u8);
+    let drawn = rgba.chunks_exact(4).filter(|p| p[..3] != background[..3]).count();
+    assert!(drawn as f64 > 0.6 * f64::from(w * h), "only {drawn} of {} pixels drawn", w * h);
+    std::fs::remove_dir_all(&dir).unwrap();
+}

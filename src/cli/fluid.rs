@@ -67,8 +67,15 @@ pub struct SurfaceArgs {
 /// Arguments of `galerkin fluid view`.
 #[derive(Args)]
 pub struct ViewArgs {
-    /// Scene file (TOML), 2D, e.g. scenes/fluid/tunnel_small.toml.
-    pub scene: PathBuf,
+    /// Scene file (TOML), 2D, e.g. scenes/fluid/tunnel_small.toml (or --model instead).
+    #[arg(required_unless_present = "model")]
+    pub scene: Option<PathBuf>,
+    /// Play a reduced model (written by `galerkin fluid train`) instead of a scene.
+    #[arg(long, conflicts_with = "scene")]
+    pub model: Option<PathBuf>,
+    /// With --model: the motion, replay:K for training run K.
+    #[arg(long, default_value = "replay:0")]
+    pub motion: galerkin::fluid::reduced::ReducedMotion,
     /// Marker particles.
     #[arg(long, default_value_t = 8000)]
     pub particles: usize,
@@ -180,8 +187,16 @@ fn surface(args: &SurfaceArgs) -> Result<()> {
 fn view(desc: &GpuDesc, args: &ViewArgs) -> Result<()> {
     use galerkin::fluid::viewer::FluidContent;
     use galerkin::render::viewer::{run, ViewOptions};
-    let scene = FluidScene::load(&args.scene)?;
-    let content = FluidContent::new(scene, args.particles, args.size, args.play)?;
+    let content = match (&args.scene, &args.model) {
+        (_, Some(model)) => {
+            let model = galerkin::fluid::reduced::ReducedFluidModel::load(model)?;
+            FluidContent::reduced(model, args.motion, args.particles, args.size, args.play)?
+        }
+        (Some(scene), None) => {
+            FluidContent::new(FluidScene::load(scene)?, args.particles, args.size, args.play)?
+        }
+        (None, None) => bail!("give a scene file or --model"),
+    };
     let options = ViewOptions { frames: args.frames, screenshot: args.screenshot.clone(), resize_to: None };
     run(desc.clone(), Box::new(content), options)
 }

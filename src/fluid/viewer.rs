@@ -1,6 +1,7 @@
 //! A 2D fluid scene in the interactive viewer (feature `viewer`): the simulation runs one
-//! frame per displayed frame (full space, seed 000 §5), the particles are advected on the
-//! device (§6.5) and drawn over the cells. Keys: space plays and pauses, `c` colours the
+//! frame per displayed frame — the full solver (seed 000 §5) on a scene, or a reduced model
+//! (§6) replaying a training run's motion, its state lifted for drawing — the particles are
+//! advected on the device (§6.5) and drawn over the cells. Keys: space plays and pauses, `c` colours the
 //! cells by speed (particles white) or not (particles coloured), `r` restarts. The title
 //! shows the frame, the step's time and the frame rate.
 
@@ -11,17 +12,30 @@ use ash::vk;
 
 use super::gpu::GpuParticles;
 use super::particles::seed_particles;
+use super::reduced::{ReducedFluid, ReducedFluidModel, ReducedMotion, ReducedState};
 use super::render::{cell_speeds, cell_vertices, DrawStyle, FluidRenderer, Output, Projection, View2d};
 use super::scene::FluidScene;
 use super::{FluidSolver, FluidState};
 use crate::gpu::{DescriptorSet, Gpu};
+use crate::mesh::{SimplexMesh, Topology};
 use crate::render::viewer::ViewerContent;
 use crate::render::{Camera, Colormap, RenderTarget};
 
+/// What steps the viewer's fluid.
+enum Source {
+    /// The full solver on a scene.
+    Full { scene: Box<FluidScene>, solver: Box<FluidSolver> },
+    /// A reduced model replaying training run `run`'s motion.
+    Reduced { model: Box<ReducedFluidModel>, fluid: Box<ReducedFluid>, run: usize, state: ReducedState },
+}
+
 /// The viewer's fluid content.
 pub struct FluidContent {
-    scene: FluidScene,
-    solver: FluidSolver,
+    source: Source,
+    mesh: SimplexMesh,
+    topology: Topology,
+    frame_time: f64,
+    description: String,
     state: FluidState,
     initial: FluidState,
     particle_count: usize,
@@ -46,8 +60,58 @@ impl FluidContent {
         }
         let mut solver = FluidSolver::new(scene.mesh.clone(), scene.topology.clone(), scene.params)?;
         let state = solver.initial_state(scene.mesh.g().to_vec(), &scene.initial_velocity)?;
-        let top =
-            cell_speeds(&scene.mesh, &scene.topology, &state.g, &state.f).into_iter().fold(0.0f64, f64::max);
+        let (mesh, topology) = (scene.mesh.clone(), scene.topology.clone());
+        let (frame_time, description) = (scene.params.frame_time, scene.description.clone());
+        let source = Source::Full { scene: Box::new(scene), solver: Box::new(solver) };
+        Self::with_source(source, (mesh, topology), frame_time, description, state, particles, size, playing)
+    }
+
+    /// Plays a reduced model (2D) under `motion` with `particles` markers.
+    pub fn reduced(
+        model: ReducedFluidModel,
+        motion: ReducedMotion,
+        particles: usize,
+        size: (u32, u32),
+        playing: bool,
+    ) -> Result<Self> {
+        if model.dim != 2 {
+            bail!("the fluid viewer shows 2D models so far ({}D given)", model.dim);
+        }
+        let ReducedMotion::Replay(run) = motion;
+        let traj = model.trajectories.get(run).ok_or_else(|| {
+            anyhow::anyhow!(
+                "replay:{run}: the model has training runs 0 to {}",
+                model.trajectories.len().saturating_sub(1)
+            )
+        })?;
+        let mg = traj.g.shape()[1];
+        let reduced =
+            ReducedState { u: traj.u0.clone(), f: traj.f0.clone(), g: traj.g.data()[..mg].to_vec() };
+        let fluid = ReducedFluid::new(&model)?;
+        let (mesh, topology) = model.mesh_and_topology()?;
+        let state = lift(&model, &reduced)?;
+        let description = format!(
+            "reduced model (m_u {}, m_f {}), replaying run {run}",
+            model.dim_of("u"),
+            model.dim_of("f")
+        );
+        let frame_time = model.frame_time;
+        let source = Source::Reduced { model: Box::new(model), fluid: Box::new(fluid), run, state: reduced };
+        Self::with_source(source, (mesh, topology), frame_time, description, state, particles, size, playing)
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn with_source(
+        source: Source,
+        (mesh, topology): (SimplexMesh, Topology),
+        frame_time: f64,
+        description: String,
+        state: FluidState,
+        particles: usize,
+        size: (u32, u32),
+        playing: bool,
+    ) -> Result<Self> {
+        let top = cell_speeds(&mesh, &topology, &state.g, &state.f).into_iter().fold(0.0f64, f64::max);
         let style = DrawStyle {
             colormap: Colormap::viridis(),
             range: (0.0, (1.5 * top).max(1e-9)),
@@ -56,8 +120,11 @@ impl FluidContent {
             sprite_px: 1.5,
         };
         Ok(Self {
-            scene,
-            solver,
+            source,
+            mesh,
+            topology,
+            frame_time,
+            description,
             initial: state.clone(),
             state,
             particle_count: particles,
@@ -76,7 +143,7 @@ impl FluidContent {
     }
 
     fn upload_cells(&mut self) {
-        let (mesh, topo) = (&self.scene.mesh, &self.scene.topology);
+        let (mesh, topo) = (&self.mesh, &self.topology);
         let speeds = cell_speeds(mesh, topo, &self.state.g, &self.state.f);
         let vertices = cell_vertices(mesh, &self.state.g, &speeds);
         if let Some(r) = &mut self.renderer {
@@ -87,19 +154,28 @@ impl FluidContent {
     fn step(&mut self) -> Result<()> {
         let gpu = self.gpu.as_ref().expect("started");
         let start = Instant::now();
+        let next = match &mut self.source {
+            Source::Full { scene, solver } => {
+                let g = scene.geometry(self.frame + 1)?;
+                solver.step(&self.state, &g, self.frame + 1)?.0
+            }
+            Source::Reduced { model, fluid, run, state } => {
+                let traj = &model.trajectories[*run];
+                let (mg, mh) = (traj.g.shape()[1], traj.h.shape()[1]);
+                let t = self.frame + 1;
+                if t >= traj.g.shape()[0] {
+                    // The replayed motion has ended.
+                    self.playing = false;
+                    return Ok(());
+                }
+                let (g1, h1) = (&traj.g.data()[t * mg..(t + 1) * mg], &traj.h.data()[t * mh..(t + 1) * mh]);
+                *state = fluid.step(state, g1, h1)?.0;
+                lift(model, state)?
+            }
+        };
         self.frame += 1;
-        let g = self.scene.geometry(self.frame)?;
-        let (next, _) = self.solver.step(&self.state, &g, self.frame)?;
         if let Some(p) = &mut self.particles {
-            p.advect(
-                gpu,
-                &self.scene.mesh,
-                &self.state.g,
-                &next.g,
-                &next.f,
-                self.scene.params.frame_time,
-                10,
-            )?;
+            p.advect(gpu, &self.mesh, &self.state.g, &next.g, &next.f, self.frame_time, 10)?;
         }
         self.state = next;
         self.step_ms = start.elapsed().as_secs_f64() * 1e3;
@@ -110,8 +186,8 @@ impl FluidContent {
 impl ViewerContent for FluidContent {
     fn title(&self) -> String {
         format!(
-            "galerkin fluid — {} — frame {} (step {:.1} ms) — {:.0} FPS{}",
-            self.scene.description,
+            "galerkin fluid — {} — frame {} (step {:.2} ms) — {:.0} FPS{}",
+            self.description,
             self.frame,
             self.step_ms,
             self.fps,
@@ -128,9 +204,9 @@ impl ViewerContent for FluidContent {
     }
 
     fn start(&mut self, gpu: &Gpu, target: &RenderTarget) -> Result<()> {
-        let mesh = &self.scene.mesh;
+        let mesh = &self.mesh;
         let seeds = seed_particles(mesh, self.particle_count);
-        let particles = GpuParticles::new(gpu, mesh, &self.scene.topology, &seeds)?;
+        let particles = GpuParticles::new(gpu, mesh, &self.topology, &seeds)?;
         let renderer = FluidRenderer::new(
             gpu,
             target.render_pass(),
@@ -162,7 +238,7 @@ impl ViewerContent for FluidContent {
     }
 
     fn record(&mut self, cmd: vk::CommandBuffer, target: &RenderTarget, _: &Camera) -> Result<()> {
-        let (lo, hi) = self.scene.mesh.bounds();
+        let (lo, hi) = self.mesh.bounds();
         let extent = target.extent();
         let view = View2d::fit([lo[0], lo[1]], [hi[0], hi[1]], (extent.width, extent.height), 0.02);
         if let (Some(r), Some(p)) = (&self.renderer, &self.particles) {
@@ -185,7 +261,16 @@ impl ViewerContent for FluidContent {
             "r" => {
                 self.state = self.initial.clone();
                 self.frame = 0;
-                let seeds = seed_particles(&self.scene.mesh, self.particle_count);
+                if let Source::Reduced { model, run, state, .. } = &mut self.source {
+                    let traj = &model.trajectories[*run];
+                    let mg = traj.g.shape()[1];
+                    *state = ReducedState {
+                        u: traj.u0.clone(),
+                        f: traj.f0.clone(),
+                        g: traj.g.data()[..mg].to_vec(),
+                    };
+                }
+                let seeds = seed_particles(&self.mesh, self.particle_count);
                 if let (Some(p), Some(gpu)) = (&mut self.particles, &self.gpu) {
                     if p.upload(gpu, &seeds).is_err() {
                         return false;
@@ -201,10 +286,16 @@ impl ViewerContent for FluidContent {
     fn summary(&self) -> Option<String> {
         Some(format!(
             "fluid: {} cells, {} particles, stopped at frame {} (last step {:.1} ms)",
-            self.scene.mesh.cell_count(),
+            self.mesh.cell_count(),
             self.particle_count,
             self.frame,
             self.step_ms
         ))
     }
+}
+
+/// A reduced state lifted to the full space: `g = B_g ĝ`, `u = B_u û`, `f = B_f f̂`.
+fn lift(model: &ReducedFluidModel, s: &ReducedState) -> Result<FluidState> {
+    let basis = |n: &str| model.basis(n).ok_or_else(|| anyhow::anyhow!("the model has no basis {n}"));
+    Ok(FluidState { g: basis("g")?.lift(&s.g), u: basis("u")?.lift(&s.u), f: basis("f")?.lift(&s.f) })
 }
