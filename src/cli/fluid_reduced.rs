@@ -161,7 +161,7 @@ pub fn train(args: &TrainArgs) -> Result<()> {
     );
     let sizes =
         BasisSizes { energy: args.energy, m_f: args.m_f, m_u: args.m_u, m_g: args.m_g, m_h: args.m_h };
-    let stages = ["f", "u", "g", "h", "d", "premultiply", "trajectories"];
+    let stages = ["f", "u", "g", "h", "d", "trajectories", "premultiply"];
     let bar = crate::progress_bar(stages.len() as u64, "training");
     let mut stage = |name: &str| {
         bar.set_message(format!("{name} ({:.0} s)", start.elapsed().as_secs_f64()));
