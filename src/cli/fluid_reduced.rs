@@ -47,7 +47,9 @@ pub struct ReducedArgs {
     #[arg(long)]
     pub frames: Option<usize>,
     /// The motion: replay:K replays training run K's reduced geometry and induced flux
-    /// (runs numbered from 0 in the order given to `train`), starting from its initial state.
+    /// (runs numbered from 0 in the order given to `train`), starting from its initial state;
+    /// computed:K follows run K's geometry but computes the induced flux from each pair of
+    /// frames through the reduced induced-flux tensor.
     #[arg(long, default_value = "replay:0")]
     pub motion: ReducedMotion,
     /// Snapshot directory to write, lifted to the full space (for `fluid render`).
@@ -181,7 +183,7 @@ pub fn train(args: &TrainArgs) -> Result<()> {
 pub fn reduced(args: &ReducedArgs) -> Result<()> {
     let model = ReducedFluidModel::load(&args.model)?;
     let fluid = ReducedFluid::new(&model)?;
-    let ReducedMotion::Replay(k) = args.motion;
+    let k = args.motion.run();
     let available = model.trajectories.get(k).map_or(0, |t| t.g.shape()[0].saturating_sub(1));
     let frames = args.frames.unwrap_or(available);
     let bar = crate::progress_bar(frames as u64, "reduced steps");

@@ -77,7 +77,10 @@ impl FluidContent {
         if model.dim != 2 {
             bail!("the fluid viewer shows 2D models so far ({}D given)", model.dim);
         }
-        let ReducedMotion::Replay(run) = motion;
+        if let ReducedMotion::Computed(_) = motion {
+            bail!("the viewer replays training motions (replay:K) so far");
+        }
+        let run = motion.run();
         let traj = model.trajectories.get(run).ok_or_else(|| {
             anyhow::anyhow!(
                 "replay:{run}: the model has training runs 0 to {}",

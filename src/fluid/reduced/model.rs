@@ -13,6 +13,7 @@
 //! | `V`  | volume (Eq. 7) `[u, u, g, …, g]`, the g axes one symmetric group | `V̂ = B_pᵀ V ⊗₁ B_u ⊗₂…₍d+1₎ B_g` |
 //! | `D`  | boundary selector `[d, f]` | `D̂ = B_dᵀ D B_f` |
 //! | `Dh` | boundary selector `[d, h]` | `D̂_h = B_dᵀ D B_h` |
+//! | `H`  | induced flux `[h, γ, …, γ]` ([`super::induced`]) | `Ĥ = B_hᵀ H ⊗ B_γ ⋯ ⊗ B_γ`, `B_γ = diag(B_g, B_g)` |
 //!
 //! `W[(c,k),(c,k),face] = σ` is `(W ⊗₂ h) u = (div h) u = V̇u`: the full solver's rate is
 //! `V⁻¹[(A⊗(f − h))u − V̇u + μΔu]` (see [`crate::fluid::solver`]), so the h-axis tensor of
@@ -151,7 +152,7 @@ pub struct Trajectory {
 
 /// The core model of the fluid's tensors on `mesh` (see the module docs); `with_h` and
 /// `with_d` say whether the induced-flux and boundary tensors are declared.
-pub fn full_model(mesh: &SimplexMesh, topo: &Topology, with_h: bool, with_d: bool) -> Model {
+pub fn full_model(mesh: &SimplexMesh, topo: &Topology, with_h: bool, with_d: bool, frame_time: f64) -> Model {
     let d = mesh.dim();
     let g = Expr::input("g");
     let mut v = Expr::tensor("V");
@@ -171,6 +172,9 @@ pub fn full_model(mesh: &SimplexMesh, topo: &Topology, with_h: bool, with_d: boo
         .with_tensor("V", &v_axes, volume_tensor(mesh));
     if with_h {
         model = model.with_tensor("Ah", &["u", "u", "h"], advection_with_volume_change(topo));
+        let mut h_axes = vec!["h"];
+        h_axes.extend(std::iter::repeat_n("gg", d));
+        model = model.with_tensor("H", &h_axes, super::induced::induced_flux_tensor(mesh, topo, frame_time));
     }
     if with_d {
         model = model.with_tensor("D", &["d", "f"], boundary_selector_tensor(topo));
@@ -195,6 +199,20 @@ pub fn advection_with_volume_change(topo: &Topology) -> SparseTensor {
         }
     }
     t
+}
+
+/// `B_γ = diag(B_g, B_g)`, the basis of the stacked geometry `[g_t; g_{t+1}]`.
+fn stacked(bg: &Basis) -> Result<Basis, FluidError> {
+    let (n, m) = (bg.full_dim(), bg.reduced_dim());
+    let mut data = vec![0.0; 4 * n * m];
+    for i in 0..n {
+        for j in 0..m {
+            let v = bg.matrix().data()[i * m + j];
+            data[i * 2 * m + j] = v;
+            data[(n + i) * 2 * m + m + j] = v;
+        }
+    }
+    Basis::new("gg", Tensor::from_vec(&[2 * n, 2 * m], data).expect("2n × 2m"), 1e-9).map_err(core_err)
 }
 
 fn core_err(e: crate::reduce::ReduceError) -> FluidError {
@@ -240,13 +258,14 @@ impl ReducedFluidModel {
                 params.forcing
             )));
         }
-        let model = full_model(mesh, topo, bases.h.is_some(), bases.d.is_some());
+        let model = full_model(mesh, topo, bases.h.is_some(), bases.d.is_some(), params.frame_time);
         let mut core_bases = Bases::new();
         core_bases.insert("u".into(), bases.u.clone());
         core_bases.insert("f".into(), bases.f.clone());
         core_bases.insert("g".into(), bases.g.clone());
         if let Some(h) = &bases.h {
             core_bases.insert("h".into(), h.clone());
+            core_bases.insert("gg".into(), stacked(&bases.g)?);
         }
         if let Some(d) = &bases.d {
             core_bases.insert("d".into(), d.clone());
@@ -501,6 +520,9 @@ impl ReducedFluidModel {
         want.insert("V", v);
         if mh > 0 {
             want.insert("Ah", vec![mu, mu, mh]);
+            let mut hs = vec![mh];
+            hs.extend(std::iter::repeat_n(2 * mg, self.dim));
+            want.insert("H", hs);
         }
         if md > 0 {
             want.insert("D", vec![md, mf]);

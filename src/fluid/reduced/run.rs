@@ -21,6 +21,19 @@ use super::step::{ReducedFluid, ReducedState, ReducedStepReport};
 pub enum ReducedMotion {
     /// Training run K's reduced geometry and induced flux, frame by frame.
     Replay(usize),
+    /// Training run K's reduced geometry, the induced flux computed from each pair of frames
+    /// by the reduced induced-flux tensor ([`super::induced`]) — what a motion never simulated
+    /// would use.
+    Computed(usize),
+}
+
+impl ReducedMotion {
+    /// The training run whose geometry the motion follows.
+    pub fn run(self) -> usize {
+        match self {
+            ReducedMotion::Replay(k) | ReducedMotion::Computed(k) => k,
+        }
+    }
 }
 
 impl std::str::FromStr for ReducedMotion {
@@ -30,7 +43,10 @@ impl std::str::FromStr for ReducedMotion {
             Some(("replay", k)) => {
                 k.trim().parse().map(ReducedMotion::Replay).map_err(|e| format!("replay:{k}: {e}"))
             }
-            _ => Err(format!("{s}: expected replay:K (K a training run, from 0)")),
+            Some(("computed", k)) => {
+                k.trim().parse().map(ReducedMotion::Computed).map_err(|e| format!("computed:{k}: {e}"))
+            }
+            _ => Err(format!("{s}: expected replay:K or computed:K (K a training run, from 0)")),
         }
     }
 }
@@ -55,7 +71,7 @@ pub fn run_reduced(
     frames: usize,
     on_frame: &mut dyn FnMut(usize),
 ) -> Result<ReducedRun, FluidError> {
-    let ReducedMotion::Replay(k) = motion;
+    let k = motion.run();
     let traj = model.trajectories.get(k).ok_or_else(|| {
         FluidError::State(format!(
             "replay:{k}: the model has training runs 0 to {}",
@@ -73,7 +89,16 @@ pub fn run_reduced(
     let mut state = ReducedState { u: traj.u0.clone(), f: traj.f0.clone(), g: row(&traj.g, mg, 0) };
     let mut run = ReducedRun { states: vec![state.clone()], h: vec![vec![0.0; mh]], reports: Vec::new() };
     for t in 0..frames {
-        let (g1, h1) = (row(&traj.g, mg, t + 1), row(&traj.h, mh, t + 1));
+        let g1 = row(&traj.g, mg, t + 1);
+        let h1 = match motion {
+            ReducedMotion::Replay(_) => row(&traj.h, mh, t + 1),
+            ReducedMotion::Computed(_) if mh == 0 => Vec::new(),
+            ReducedMotion::Computed(_) => fluid.induced_flux(&state.g, &g1).ok_or_else(|| {
+                FluidError::State(
+                    "computed motion: the model has no induced-flux tensor H (retrain it)".into(),
+                )
+            })?,
+        };
         let (next, report) = fluid.step(&state, &g1, &h1).map_err(|e| match e {
             FluidError::State(m) => FluidError::State(format!("reduced frame {}: {m}", t + 1)),
             other => other,

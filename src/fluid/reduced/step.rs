@@ -33,6 +33,7 @@ use faer::{Accum, Mat, MatRef, Par};
 use crate::fluid::FluidError;
 use crate::tensor::{distinct_permutations, expm_krylov, Tensor};
 
+use super::induced::sorted_tuples;
 use super::model::ReducedFluidModel;
 
 /// How the induced flux enters advection (see the module docs).
@@ -142,6 +143,11 @@ pub struct ReducedFluid {
     v: Vec<f64>,
     /// The monomials' geometry indices.
     monomials: Vec<Vec<usize>>,
+    /// Ĥ against the distinct monomials of γ̂ = [ĝ_t; ĝ_{t+1}]: m_h × monomials, multiplicities
+    /// folded in ([`super::induced`]); empty without B_h.
+    induced: Vec<f64>,
+    /// The monomials' γ̂ indices.
+    induced_monomials: Vec<Vec<usize>>,
     /// B_fᵀ B_h (m_f × m_h) for [`FluxCombination::ProjectedOntoFlux`].
     bf_bh: Option<Mat<f64>>,
     constraint: Option<Constraint>,
@@ -229,6 +235,25 @@ impl ReducedFluid {
         } else {
             at.to_vec()
         };
+        let (induced, induced_monomials) = match model.tensor("H") {
+            Some(ht) if mh > 0 => {
+                let mono = sorted_tuples(2 * mg, dim);
+                let n2 = 2 * mg;
+                let cube2 = n2.pow(dim as u32);
+                let stride2: Vec<usize> = (0..dim).map(|k| n2.pow((dim - 1 - k) as u32)).collect();
+                let mut packed = vec![0.0; mh * mono.len()];
+                for (m, idx) in mono.iter().enumerate() {
+                    let sorted: Vec<u32> = idx.iter().map(|&i| i as u32).collect();
+                    let mult = distinct_permutations(&sorted).len() as f64;
+                    let offset: usize = idx.iter().zip(&stride2).map(|(i, s)| i * s).sum();
+                    for r in 0..mh {
+                        packed[r * mono.len() + m] = mult * ht.data()[r * cube2 + offset];
+                    }
+                }
+                (packed, mono)
+            }
+            _ => (Vec::new(), Vec::new()),
+        };
         let bf_bh = match (model.basis("f"), model.basis("h")) {
             (Some(bf), Some(bh)) => Some(transpose_times(bf.matrix(), bh.matrix())),
             _ => None,
@@ -255,6 +280,8 @@ impl ReducedFluid {
             p: t("P")?.data().to_vec(),
             v,
             monomials,
+            induced,
+            induced_monomials,
             bf_bh,
             constraint,
             combination: FluxCombination::default(),
@@ -310,6 +337,18 @@ impl ReducedFluid {
             *cache = Some((g.to_vec(), l.clone()));
         }
         Ok(l)
+    }
+
+    /// `ĥ = Ĥ ⊗ γ̂ ⋯ ⊗ γ̂` with `γ̂ = [ĝ_t; ĝ_{t+1}]`: the reduced induced flux of the motion
+    /// ĝ_t → ĝ_{t+1} ([`super::induced`]); `None` when the model has no induced-flux tensor.
+    pub fn induced_flux(&self, g0: &[f64], g1: &[f64]) -> Option<Vec<f64>> {
+        if self.induced_monomials.is_empty() || g0.len() != self.mg || g1.len() != self.mg {
+            return None;
+        }
+        let gamma: Vec<f64> = g0.iter().chain(g1).copied().collect();
+        let w: Vec<f64> =
+            self.induced_monomials.iter().map(|idx| idx.iter().map(|&i| gamma[i]).product()).collect();
+        Some(matvec(&self.induced, self.mh, w.len(), &w))
     }
 
     /// `P̂ ⊗₂ ĝ` (m_u × m_f).
@@ -553,24 +592,6 @@ impl ReducedFluid {
         solve_upper_triangular_in_place(l.transpose(), x.as_mut(), Par::Seq);
         Ok((0..self.mu).map(|i| x[(i, 0)]).collect())
     }
-}
-
-/// Sorted index tuples `i₁ ≤ … ≤ i_d` over `0..m`.
-fn sorted_tuples(m: usize, d: usize) -> Vec<Vec<usize>> {
-    let mut out = vec![vec![]];
-    for _ in 0..d {
-        let mut next = Vec::new();
-        for t in out {
-            let start = t.last().copied().unwrap_or(0);
-            for i in start..m {
-                let mut u = t.clone();
-                u.push(i);
-                next.push(u);
-            }
-        }
-        out = next;
-    }
-    out
 }
 
 /// [`matvec`] with the rows split in two halves run by rayon (the step's largest
