@@ -113,6 +113,7 @@ pub fn cavity_step(
     let model = ReducedFluidModel::from_bases(
         MeshOf { mesh, topology: topo, periodic_axis: None },
         &scene.params,
+        false,
         bases,
         &BasisSizes::default(),
         vec![],

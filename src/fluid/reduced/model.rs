@@ -152,7 +152,15 @@ pub struct Trajectory {
 
 /// The core model of the fluid's tensors on `mesh` (see the module docs); `with_h` and
 /// `with_d` say whether the induced-flux and boundary tensors are declared.
-pub fn full_model(mesh: &SimplexMesh, topo: &Topology, with_h: bool, with_d: bool, frame_time: f64) -> Model {
+/// `frame_time` scales the induced-flux tensor `H`, declared only when `with_h` and `frame_time`
+/// is given.
+pub fn full_model(
+    mesh: &SimplexMesh,
+    topo: &Topology,
+    with_h: bool,
+    with_d: bool,
+    frame_time: Option<f64>,
+) -> Model {
     let d = mesh.dim();
     let g = Expr::input("g");
     let mut v = Expr::tensor("V");
@@ -172,9 +180,11 @@ pub fn full_model(mesh: &SimplexMesh, topo: &Topology, with_h: bool, with_d: boo
         .with_tensor("V", &v_axes, volume_tensor(mesh));
     if with_h {
         model = model.with_tensor("Ah", &["u", "u", "h"], advection_with_volume_change(topo));
-        let mut h_axes = vec!["h"];
-        h_axes.extend(std::iter::repeat_n("gg", d));
-        model = model.with_tensor("H", &h_axes, super::induced::induced_flux_tensor(mesh, topo, frame_time));
+        if let Some(dt) = frame_time {
+            let mut h_axes = vec!["h"];
+            h_axes.extend(std::iter::repeat_n("gg", d));
+            model = model.with_tensor("H", &h_axes, super::induced::induced_flux_tensor(mesh, topo, dt));
+        }
     }
     if with_d {
         model = model.with_tensor("D", &["d", "f"], boundary_selector_tensor(topo));
@@ -237,14 +247,16 @@ impl ReducedFluidModel {
         stage("premultiply");
         let mesh =
             MeshOf { mesh: set.mesh(), topology: set.topology(), periodic_axis: set.meta().periodic_axis };
-        Self::from_bases(mesh, set.params(), bases, sizes, runs, trajectories)
+        Self::from_bases(mesh, set.params(), true, bases, sizes, runs, trajectories)
     }
 
     /// Premultiplies the fluid's tensors on `mesh` by `bases` (the work of [`Self::train`]
-    /// once the bases and trajectories are known; benchmarks give synthetic bases).
+    /// once the bases and trajectories are known; benchmarks give synthetic bases), the
+    /// induced-flux tensor only if `induced` (the step does not read it; driven motions do).
     pub fn from_bases(
         mesh: MeshOf<'_>,
         params: &crate::fluid::FluidParams,
+        induced: bool,
         bases: FluidBases,
         sizes: &BasisSizes,
         runs: Vec<(String, usize)>,
@@ -258,14 +270,22 @@ impl ReducedFluidModel {
                 params.forcing
             )));
         }
-        let model = full_model(mesh, topo, bases.h.is_some(), bases.d.is_some(), params.frame_time);
+        let model = full_model(
+            mesh,
+            topo,
+            bases.h.is_some(),
+            bases.d.is_some(),
+            induced.then_some(params.frame_time),
+        );
         let mut core_bases = Bases::new();
         core_bases.insert("u".into(), bases.u.clone());
         core_bases.insert("f".into(), bases.f.clone());
         core_bases.insert("g".into(), bases.g.clone());
         if let Some(h) = &bases.h {
             core_bases.insert("h".into(), h.clone());
-            core_bases.insert("gg".into(), stacked(&bases.g)?);
+            if induced {
+                core_bases.insert("gg".into(), stacked(&bases.g)?);
+            }
         }
         if let Some(d) = &bases.d {
             core_bases.insert("d".into(), d.clone());
@@ -520,9 +540,16 @@ impl ReducedFluidModel {
         want.insert("V", v);
         if mh > 0 {
             want.insert("Ah", vec![mu, mu, mh]);
+        }
+        if let Some(t) = self.tensor("H") {
             let mut hs = vec![mh];
             hs.extend(std::iter::repeat_n(2 * mg, self.dim));
-            want.insert("H", hs);
+            if t.shape() != hs.as_slice() {
+                return Err(FluidError::State(format!(
+                    "tensor H has shape {:?}, its bases give {hs:?}",
+                    t.shape()
+                )));
+            }
         }
         if md > 0 {
             want.insert("D", vec![md, mf]);

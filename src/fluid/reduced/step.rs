@@ -682,3 +682,43 @@ fn cholesky_solve(l: &Mat<f64>, b: &Mat<f64>) -> Mat<f64> {
     solve_upper_triangular_in_place(l.transpose(), x.as_mut(), Par::Seq);
     x
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A flux basis whose two columns carry the same momentum makes the reduced projection's
+    /// normal matrix singular: refused naming the flux basis, not solved into NaN.
+    #[test]
+    fn a_singular_reduced_projection_is_refused_naming_the_flux_basis() {
+        // m_u = 2, m_f = 2, m_g = 1 (2D): V̂(ĝ) = ĝ² I, P̂ ⊗ ĝ = ĝ [[1, 1], [0, 0]].
+        let (mu, mf, mg) = (2, 2, 1);
+        let monomials = sorted_tuples(mg, 2);
+        let fluid = ReducedFluid {
+            dim: 2,
+            mu,
+            mf,
+            mg,
+            mh: 0,
+            viscosity: 0.0,
+            frame_time: 0.1,
+            a: vec![0.0; mu * (mu - 1) / 2 * mf],
+            a_skew: true,
+            ah: Vec::new(),
+            lap: vec![0.0; mu * mu],
+            p: vec![1.0, 1.0, 0.0, 0.0],
+            v: vec![1.0, 0.0, 1.0],
+            monomials,
+            induced: Vec::new(),
+            induced_monomials: Vec::new(),
+            bf_bh: None,
+            constraint: None,
+            combination: FluxCombination::Separate,
+            exponential: Exponential::default(),
+            factor: FactorCache::default(),
+        };
+        let state = ReducedState { u: vec![1.0, 0.5], f: vec![0.0, 0.0], g: vec![1.0] };
+        let err = fluid.step(&state, &[1.0], &[]).unwrap_err().to_string();
+        assert!(err.contains("reduced projection") && err.contains("basis f"), "{err}");
+    }
+}
