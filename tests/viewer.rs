@@ -65,6 +65,12 @@ fn run_viewer(x: &Xvfb, name: &str, frames: u32, extra: &[&str]) -> (u32, u32, V
 }
 
 /// Checks a screenshot against the CPU reference of the demo scene at its own size.
+/// Pixels of an RGBA8 screenshot that are not the viewer's background.
+fn drawn_pixels(rgba: &[u8]) -> usize {
+    let background = galerkin::render::BACKGROUND.map(|v| (v * 255.0).round() as u8);
+    rgba.chunks_exact(4).filter(|p| p[..3] != background[..3]).count()
+}
+
 fn check_screenshot(w: u32, h: u32, rgba: &[u8]) {
     let scene_path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/demo.toml");
     let scene = DemoScene::load(&scene_path).unwrap();
@@ -128,8 +134,7 @@ fn the_spacetime_viewer_animates_t() {
     assert!(times[2] > times[1], "t did not advance: {line}");
     let (w, h, rgba) = read_png_rgba8(&shot).unwrap();
     assert_eq!((w, h), (320, 200));
-    let background = galerkin::render::BACKGROUND.map(|v| (v * 255.0).round() as u8);
-    let drawn = rgba.chunks_exact(4).filter(|p| p[..3] != background[..3]).count();
+    let drawn = drawn_pixels(&rgba);
     assert!(drawn > (w * h / 10) as usize, "only {drawn} pixels drawn");
     std::fs::remove_dir_all(&dir).unwrap();
 }
@@ -155,8 +160,7 @@ fn run_spectral_viewer(x: &Xvfb, name: &str, args: &[&str], frames: u32) -> (Str
     );
     let (w, h, rgba) = read_png_rgba8(&shot).unwrap();
     assert_eq!((w, h), (320, 200));
-    let background = galerkin::render::BACKGROUND.map(|v| (v * 255.0).round() as u8);
-    let drawn = rgba.chunks_exact(4).filter(|p| p[..3] != background[..3]).count();
+    let drawn = drawn_pixels(&rgba);
     std::fs::remove_dir_all(&dir).unwrap();
     (String::from_utf8_lossy(&out.stdout).to_string(), drawn as f64 / f64::from(w * h))
 }
@@ -201,8 +205,7 @@ fn run_radiosity_viewer(x: &Xvfb, scene: &Path, shot: &Path) -> (String, f64) {
     assert!(out.status.success(), "galerkin radiosity view failed: {}", String::from_utf8_lossy(&out.stderr));
     let (w, h, rgba) = read_png_rgba8(shot).unwrap();
     assert_eq!((w, h), (320, 200));
-    let background = galerkin::render::BACKGROUND.map(|v| (v * 255.0).round() as u8);
-    let drawn = rgba.chunks_exact(4).filter(|p| p[..3] != background[..3]).count();
+    let drawn = drawn_pixels(&rgba);
     (String::from_utf8_lossy(&out.stdout).into_owned(), drawn as f64 / f64::from(w * h))
 }
 
@@ -256,8 +259,7 @@ fn the_fluid_viewer_plays_the_tunnel() {
     assert!(stdout.contains("2000 particles, stopped at frame"), "{stdout}");
     let (w, h, rgba) = read_png_rgba8(&shot).unwrap();
     assert_eq!((w, h), (360, 120));
-    let background = galerkin::render::BACKGROUND.map(|v| (v * 255.0).round() as u8);
-    let drawn = rgba.chunks_exact(4).filter(|p| p[..3] != background[..3]).count();
+    let drawn = drawn_pixels(&rgba);
     // The tunnel (aspect 4:1 in a 3:1 window) covers most of the window, minus the obstacle.
     assert!(drawn as f64 > 0.6 * f64::from(w * h), "only {drawn} of {} pixels drawn", w * h);
     std::fs::remove_dir_all(&dir).unwrap();
@@ -314,8 +316,7 @@ fn the_fluid_viewer_plays_a_reduced_model() {
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(stdout.contains("1000 particles, stopped at frame"), "{stdout}");
     let (w, h, rgba) = read_png_rgba8(&shot).unwrap();
-    let background = galerkin::render::BACKGROUND.map(|v| (v * 255.0).round() as u8);
-    let drawn = rgba.chunks_exact(4).filter(|p| p[..3] != background[..3]).count();
+    let drawn = drawn_pixels(&rgba);
     assert!(drawn as f64 > 0.6 * f64::from(w * h), "only {drawn} of {} pixels drawn", w * h);
     std::fs::remove_dir_all(&dir).unwrap();
 }
