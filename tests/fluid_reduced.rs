@@ -14,11 +14,11 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use galerkin::fluid::operators::{add_laplacian, advect, divergence, CellOperators};
+use galerkin::fluid::reduced::example::small_tunnel;
 use galerkin::fluid::reduced::{
     bases::relative_divergence, run_reduced, BasisSizes, Exponential, FluidBases, FluxCombination,
     ReducedFluid, ReducedFluidModel, ReducedMotion, ReducedState, ReducedStepReport, TrainingSet,
 };
-use galerkin::fluid::scene::FluidScene;
 use galerkin::fluid::FluidSolver;
 use galerkin::mesh::{SimplexMesh, Topology};
 use galerkin::reduce::Basis;
@@ -45,9 +45,7 @@ fn rel_diff(a: &[f64], b: &[f64]) -> f64 {
 
 /// The small tunnel at an obstacle scale, simulated for `frames` frames into `dir`.
 fn tunnel_run(dir: &Path, scale: f64, frames: usize) -> PathBuf {
-    let text = std::fs::read_to_string("scenes/fluid/tunnel_small.toml").expect("scene");
-    let text = text.replace("scale = 1.0", &format!("scale = {scale}"));
-    let mut scene = FluidScene::parse(&text, Path::new("scenes/fluid/tunnel_small.toml")).expect("scene");
+    let mut scene = small_tunnel(scale).expect("scene");
     let out = dir.join(format!("tunnel-{scale}"));
     galerkin::fluid::run::simulate_run(&mut scene, frames, &out, true, &mut |_, _, _, _| {}).expect("run");
     out
@@ -69,8 +67,7 @@ fn wavy_runs(dir: &Path, dim: usize) -> Vec<PathBuf> {
 
 fn train(runs: &[PathBuf], sizes: BasisSizes) -> (TrainingSet, ReducedFluidModel) {
     let set = TrainingSet::open(runs).expect("training set");
-    let bases = FluidBases::build(&set, &sizes, &mut |_| {}).expect("bases");
-    let model = ReducedFluidModel::train(&set, bases, &sizes, &mut |_| {}).expect("model");
+    let model = ReducedFluidModel::fit(&set, &sizes, &mut |_| {}).expect("model");
     (set, model)
 }
 

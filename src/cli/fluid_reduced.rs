@@ -6,9 +6,9 @@ use std::time::Instant;
 
 use anyhow::{Context, Result};
 use clap::Args;
+use galerkin::fluid::reduced::example::small_tunnel_runs;
 use galerkin::fluid::reduced::{
-    run_reduced, write_lifted, BasisSizes, FluidBases, ReducedFluid, ReducedFluidModel, ReducedMotion,
-    TrainingSet,
+    run_reduced, write_lifted, BasisSizes, ReducedFluid, ReducedFluidModel, ReducedMotion, TrainingSet,
 };
 
 /// Arguments of `galerkin fluid train`.
@@ -95,9 +95,7 @@ pub fn error_study(args: &StudyArgs) -> Result<()> {
     let set = TrainingSet::open(&args.runs)?;
     let sizes = BasisSizes { energy: 1.0, m_f: Some(largest), m_u: Some(largest), m_g: None, m_h: None };
     let bar = crate::progress_bar(7, "training the largest basis");
-    let mut stage = |_: &str| bar.inc(1);
-    let bases = FluidBases::build(&set, &sizes, &mut stage)?;
-    let model = ReducedFluidModel::train(&set, bases, &sizes, &mut stage)?;
+    let model = ReducedFluidModel::fit(&set, &sizes, &mut |_| bar.inc(1))?;
     bar.finish_and_clear();
     println!(
         "fluid error-study: trained m_u {}, m_f {}, m_g {} on {} runs in {:.1} s",
@@ -169,8 +167,7 @@ pub fn train(args: &TrainArgs) -> Result<()> {
         bar.set_message(format!("{name} ({:.0} s)", start.elapsed().as_secs_f64()));
         bar.set_position(stages.iter().position(|s| *s == name).unwrap_or(0) as u64);
     };
-    let bases = FluidBases::build(&set, &sizes, &mut stage)?;
-    let model = ReducedFluidModel::train(&set, bases, &sizes, &mut stage)?;
+    let model = ReducedFluidModel::fit(&set, &sizes, &mut stage)?;
     bar.finish_and_clear();
     model.save(&args.out)?;
     for r in &model.provenance.bases {
@@ -255,23 +252,8 @@ pub fn bench(args: &BenchArgs) -> Result<()> {
         );
     }
     // The energy run: a small tunnel model trained here.
-    let dir = std::path::Path::new("out/bench-fluid-reduced");
-    let mut runs = Vec::new();
-    for scale in [0.6, 1.4] {
-        let text = std::fs::read_to_string("scenes/fluid/tunnel_small.toml")?
-            .replace("scale = 1.0", &format!("scale = {scale}"));
-        let mut scene = galerkin::fluid::scene::FluidScene::parse(
-            &text,
-            std::path::Path::new("scenes/fluid/tunnel_small.toml"),
-        )?;
-        let out = dir.join(format!("tunnel-small-{scale}"));
-        galerkin::fluid::run::simulate_run(&mut scene, 100, &out, true, &mut |_, _, _, _| {})?;
-        runs.push(out);
-    }
-    let set = TrainingSet::open(&runs)?;
-    let sizes = BasisSizes::default();
-    let bases = FluidBases::build(&set, &sizes, &mut |_| {})?;
-    let model = ReducedFluidModel::train(&set, bases, &sizes, &mut |_| {})?;
+    let (runs, _) = small_tunnel_runs(std::path::Path::new("out/bench-fluid-reduced"), 100)?;
+    let model = ReducedFluidModel::fit(&TrainingSet::open(&runs)?, &BasisSizes::default(), &mut |_| {})?;
     let steps = args.energy_steps.unwrap_or(if args.quick { 10_000 } else { 1_000_000 });
     let bar = crate::progress_bar(steps as u64, "reduced steps (energy)");
     let e = energy_run(&model, steps, &mut |k| bar.set_position(k as u64))?;
@@ -294,26 +276,13 @@ pub fn bench(args: &BenchArgs) -> Result<()> {
 /// full run, the last reduced frame lifted and drawn by speed.
 pub fn demo(gpu: &galerkin::gpu::Gpu, (w, h): (u32, u32), out: &std::path::Path) -> Result<()> {
     use galerkin::fluid::render::{cell_speeds, draw_picture, DrawStyle, Projection, View2d};
-    use galerkin::fluid::scene::FluidScene;
     use galerkin::render::{write_png_rgba8, Colormap};
-    let dir = out.join("demo-fluid-reduced");
     let frames = 60;
-    let mut runs = Vec::new();
-    let mut full_seconds = Vec::new();
-    for scale in [0.6, 1.4] {
-        let text = include_str!("../../scenes/fluid/tunnel_small.toml")
-            .replace("scale = 1.0", &format!("scale = {scale}"));
-        let mut scene = FluidScene::parse(&text, std::path::Path::new("scenes/fluid/tunnel_small.toml"))?;
-        let run = dir.join(format!("tunnel-{scale}"));
-        let summary =
-            galerkin::fluid::run::simulate_run(&mut scene, frames, &run, true, &mut |_, _, _, _| {})?;
-        full_seconds.extend(summary.stage_seconds.iter().map(|s| s[0] + s[1] + s[2]));
-        runs.push(run);
-    }
+    let (runs, summaries) = small_tunnel_runs(&out.join("demo-fluid-reduced"), frames)?;
+    let mut full_seconds: Vec<f64> =
+        summaries.iter().flat_map(|s| s.stage_seconds.iter().map(|t| t[0] + t[1] + t[2])).collect();
     let set = TrainingSet::open(&runs)?;
-    let sizes = BasisSizes::default();
-    let bases = FluidBases::build(&set, &sizes, &mut |_| {})?;
-    let model = ReducedFluidModel::train(&set, bases, &sizes, &mut |_| {})?;
+    let model = ReducedFluidModel::fit(&set, &BasisSizes::default(), &mut |_| {})?;
     let fluid = ReducedFluid::new(&model)?;
     let run = run_reduced(&model, &fluid, ReducedMotion::Replay(0), frames, &mut |_| {})?;
     let bu = model.basis("u").context("the model has no velocity basis")?;

@@ -4,6 +4,7 @@
 //! - [`study`] and [`plot`]: §7.1's one-step error study and its Fig. 5 plots;
 //! - [`training`]: a training set, the snapshot directories of full runs on one mesh;
 //! - [`bases`]: `B_f`, `B_u = B_p`, `B_g`, `B_h` by streamed PCA, `B_d` by constraint reduction;
+//! - [`example`]: the small tunnel's training runs, for the demo, benchmarks and tests;
 //! - [`induced`]: the induced flux as a tensor in the stacked geometry, for driven motions;
 //! - [`model`]: §6.2's reduced tensors premultiplied by the core, and the model file;
 //! - [`run`]: a reduced run under a motion, lifted to a snapshot directory;
@@ -16,6 +17,7 @@
 //! where the two differ.
 
 pub mod bases;
+pub mod example;
 pub mod induced;
 pub mod model;
 pub mod plot;

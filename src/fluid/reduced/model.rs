@@ -230,6 +230,17 @@ fn core_err(e: crate::reduce::ReduceError) -> FluidError {
 }
 
 impl ReducedFluidModel {
+    /// Builds the bases of `set` ([`FluidBases::build`]) and trains the model on them
+    /// ([`Self::train`]); `stage(name)` is called as each stage starts.
+    pub fn fit(
+        set: &TrainingSet,
+        sizes: &BasisSizes,
+        stage: &mut dyn FnMut(&str),
+    ) -> Result<Self, FluidError> {
+        let bases = FluidBases::build(set, sizes, stage)?;
+        Self::train(set, bases, sizes, stage)
+    }
+
     /// Trains a model on `set` with `bases` (built by [`FluidBases::build`]): premultiplies every
     /// tensor and projects every training run's motion. `stage(name)` is called per stage.
     pub fn train(

@@ -188,26 +188,15 @@ impl ReducedFluid {
             (model.dim_of("u"), model.dim_of("f"), model.dim_of("g"), model.dim_of("h"), model.dim_of("d"));
         let t = |n: &str| model.tensor(n).ok_or_else(|| state_err(format!("the model has no tensor {n}")));
         let dim = model.dim;
-        // V̂[p, u, a, b(, c)] summed over the distinct sorted geometry index tuples.
-        let vt = t("V")?;
-        let monomials = sorted_tuples(mg, dim);
+        // V̂[p, u, a, b(, c)] over the distinct sorted geometry monomials, its upper triangle
+        // in (p, u) (V̂ is symmetric; the two halves averaged).
+        let (full_v, monomials) = fold_symmetric(t("V")?.data(), mu * mu, mg, dim);
         let nm = monomials.len();
-        let upper = mu * (mu + 1) / 2;
-        let mut v = vec![0.0; upper * nm];
-        let stride: Vec<usize> = (0..dim).map(|k| mg.pow((dim - 1 - k) as u32)).collect();
-        let cube = mg.pow(dim as u32);
-        for (m, idx) in monomials.iter().enumerate() {
-            let sorted: Vec<u32> = idx.iter().map(|&i| i as u32).collect();
-            let mult = distinct_permutations(&sorted).len() as f64;
-            let offset: usize = idx.iter().zip(&stride).map(|(i, s)| i * s).sum();
-            let mut row = 0;
-            for p in 0..mu {
-                for u in p..mu {
-                    let (a, b) =
-                        (vt.data()[(p * mu + u) * cube + offset], vt.data()[(u * mu + p) * cube + offset]);
-                    v[row * nm + m] = mult * 0.5 * (a + b);
-                    row += 1;
-                }
+        let mut v = Vec::with_capacity(mu * (mu + 1) / 2 * nm);
+        for p in 0..mu {
+            for u in p..mu {
+                let (a, b) = (&full_v[(p * mu + u) * nm..][..nm], &full_v[(u * mu + p) * nm..][..nm]);
+                v.extend(a.iter().zip(b).map(|(x, y)| 0.5 * (x + y)));
             }
         }
         // Â's slices are skew when its flux basis is divergence-free (uᵀ(A⊗f)u = −½Σ|u|² div f).
@@ -236,22 +225,7 @@ impl ReducedFluid {
             at.to_vec()
         };
         let (induced, induced_monomials) = match model.tensor("H") {
-            Some(ht) if mh > 0 => {
-                let mono = sorted_tuples(2 * mg, dim);
-                let n2 = 2 * mg;
-                let cube2 = n2.pow(dim as u32);
-                let stride2: Vec<usize> = (0..dim).map(|k| n2.pow((dim - 1 - k) as u32)).collect();
-                let mut packed = vec![0.0; mh * mono.len()];
-                for (m, idx) in mono.iter().enumerate() {
-                    let sorted: Vec<u32> = idx.iter().map(|&i| i as u32).collect();
-                    let mult = distinct_permutations(&sorted).len() as f64;
-                    let offset: usize = idx.iter().zip(&stride2).map(|(i, s)| i * s).sum();
-                    for r in 0..mh {
-                        packed[r * mono.len() + m] = mult * ht.data()[r * cube2 + offset];
-                    }
-                }
-                (packed, mono)
-            }
+            Some(ht) if mh > 0 => fold_symmetric(ht.data(), mh, 2 * mg, dim),
             _ => (Vec::new(), Vec::new()),
         };
         let bf_bh = match (model.basis("f"), model.basis("h")) {
@@ -575,7 +549,7 @@ impl ReducedFluid {
 
     /// The reduced velocity of a flux: `V̂⁻¹(ĝ)(P̂ ⊗₂ ĝ) f̂`.
     pub fn flux_to_velocity(&self, f: &[f64], g: &[f64]) -> Result<Vec<f64>, FluidError> {
-        let l = cholesky(&self.volume_matrix(g), "V̂(ĝ)")?;
+        let l = self.volume_factor(g, "V̂(ĝ)")?;
         let p = self.flux_to_momentum(g);
         let mut x = &p * Mat::from_fn(self.mf, 1, |i, _| f[i]);
         solve_lower_triangular_in_place(l.as_ref(), x.as_mut(), Par::Seq);
@@ -586,12 +560,33 @@ impl ReducedFluid {
     /// The energy-norm projection of a full velocity (§7.1 footnote 2, with the reduced
     /// volume matrix): `r = V̂(ĝ)⁻¹ B_uᵀ p` for the momentum `p = V(g) u`.
     pub fn project_velocity(&self, momentum_reduced: &[f64], g: &[f64]) -> Result<Vec<f64>, FluidError> {
-        let l = cholesky(&self.volume_matrix(g), "V̂(ĝ)")?;
+        let l = self.volume_factor(g, "V̂(ĝ)")?;
         let mut x = Mat::from_fn(self.mu, 1, |i, _| momentum_reduced[i]);
         solve_lower_triangular_in_place(l.as_ref(), x.as_mut(), Par::Seq);
         solve_upper_triangular_in_place(l.transpose(), x.as_mut(), Par::Seq);
         Ok((0..self.mu).map(|i| x[(i, 0)]).collect())
     }
+}
+
+/// A tensor whose last `d` axes (length `m` each) are symmetric, as `rows × monomials`: one
+/// column per sorted index tuple `i₁ ≤ … ≤ i_d`, its entry times the tuple's number of distinct
+/// permutations, so that contracting with `Π x_{i_k}` per column equals the full contraction
+/// with `x` on every symmetric axis. Returns the values and the tuples.
+fn fold_symmetric(data: &[f64], rows: usize, m: usize, d: usize) -> (Vec<f64>, Vec<Vec<usize>>) {
+    let tuples = sorted_tuples(m, d);
+    let nm = tuples.len();
+    let block = m.pow(d as u32);
+    let stride: Vec<usize> = (0..d).map(|k| m.pow((d - 1 - k) as u32)).collect();
+    let mut out = vec![0.0; rows * nm];
+    for (c, idx) in tuples.iter().enumerate() {
+        let sorted: Vec<u32> = idx.iter().map(|&i| i as u32).collect();
+        let mult = distinct_permutations(&sorted).len() as f64;
+        let offset: usize = idx.iter().zip(&stride).map(|(i, s)| i * s).sum();
+        for r in 0..rows {
+            out[r * nm + c] = mult * data[r * block + offset];
+        }
+    }
+    (out, tuples)
 }
 
 /// [`matvec`] with the rows split in two halves run by rayon (the step's largest
