@@ -31,9 +31,10 @@ use faer::linalg::triangular_solve::{solve_lower_triangular_in_place, solve_uppe
 use faer::{Accum, Mat, MatRef, Par};
 
 use crate::fluid::FluidError;
-use crate::tensor::{distinct_permutations, expm_krylov, Tensor};
+use crate::tensor::expm_krylov;
 
-use super::induced::sorted_tuples;
+pub use super::dense::AdvectionStorage;
+use super::dense::{cholesky, cholesky_solve, fold_symmetric, matvec, row_major, transpose_times, RowMajor};
 use super::model::ReducedFluidModel;
 
 /// How the induced flux enters advection (see the module docs).
@@ -129,11 +130,11 @@ pub struct ReducedFluid {
     /// Â, row-major: when every `Â[:, :, j]` is skew (B_f divergence-free, B_u = B_p: §A.2)
     /// only its strict upper triangle, `m_u(m_u−1)/2 × m_f` (half the memory traffic of the
     /// step's largest contraction); otherwise all of it, `(m_u·m_u) × m_f`.
-    a: Vec<f64>,
+    a: RowMajor,
     /// Whether `a` holds the skew upper triangle.
     a_skew: bool,
     /// Â_h as (m_u·m_u) × m_h.
-    ah: Vec<f64>,
+    ah: RowMajor,
     /// Δ̂ (m_u·m_u).
     lap: Vec<f64>,
     /// P̂ as (m_u·m_f) × m_g.
@@ -247,9 +248,9 @@ impl ReducedFluid {
             mh,
             viscosity: model.viscosity,
             frame_time: model.frame_time,
-            a,
+            a: RowMajor::F64(a),
             a_skew,
-            ah: if mh > 0 { t("Ah")?.data().to_vec() } else { Vec::new() },
+            ah: RowMajor::F64(if mh > 0 { t("Ah")?.data().to_vec() } else { Vec::new() }),
             lap: t("L")?.data().to_vec(),
             p: t("P")?.data().to_vec(),
             v,
@@ -262,6 +263,18 @@ impl ReducedFluid {
             exponential: Exponential::default(),
             factor: FactorCache::default(),
         })
+    }
+
+    /// Stores `Â` and `Â_h` in `storage`'s precision for every later step (see
+    /// [`AdvectionStorage`]; converting back from f32 does not restore the dropped digits).
+    pub fn set_advection_storage(&mut self, storage: AdvectionStorage) {
+        self.a = std::mem::replace(&mut self.a, RowMajor::F64(Vec::new())).stored(storage);
+        self.ah = std::mem::replace(&mut self.ah, RowMajor::F64(Vec::new())).stored(storage);
+    }
+
+    /// The precision `Â` and `Â_h` are stored in.
+    pub fn advection_storage(&self) -> AdvectionStorage {
+        self.a.storage()
     }
 
     /// Reduced dimensions (m_u, m_f, m_g, m_h).
@@ -346,7 +359,7 @@ impl ReducedFluid {
         };
         let mut k = Mat::from_fn(mu, mu, |i, j| self.viscosity * self.lap[i * mu + j]);
         if self.a_skew {
-            let packed = matvec_split(&self.a, mu * (mu - 1) / 2, self.mf, &fp);
+            let packed = self.a.matvec_split(mu * (mu - 1) / 2, self.mf, &fp);
             let mut row = 0;
             for p in 0..mu {
                 for u in p + 1..mu {
@@ -356,7 +369,7 @@ impl ReducedFluid {
                 }
             }
         } else {
-            let flat = matvec_split(&self.a, mu * mu, self.mf, &fp);
+            let flat = self.a.matvec_split(mu * mu, self.mf, &fp);
             for p in 0..mu {
                 for u in 0..mu {
                     k[(p, u)] += flat[p * mu + u];
@@ -364,7 +377,7 @@ impl ReducedFluid {
             }
         }
         if self.mh > 0 && self.combination == FluxCombination::Separate {
-            let kh = matvec_split(&self.ah, mu * mu, self.mh, h);
+            let kh = self.ah.matvec_split(mu * mu, self.mh, h);
             for p in 0..mu {
                 for u in 0..mu {
                     k[(p, u)] -= kh[p * mu + u];
@@ -568,68 +581,6 @@ impl ReducedFluid {
     }
 }
 
-/// A tensor whose last `d` axes (length `m` each) are symmetric, as `rows × monomials`: one
-/// column per sorted index tuple `i₁ ≤ … ≤ i_d`, its entry times the tuple's number of distinct
-/// permutations, so that contracting with `Π x_{i_k}` per column equals the full contraction
-/// with `x` on every symmetric axis. Returns the values and the tuples.
-fn fold_symmetric(data: &[f64], rows: usize, m: usize, d: usize) -> (Vec<f64>, Vec<Vec<usize>>) {
-    let tuples = sorted_tuples(m, d);
-    let nm = tuples.len();
-    let block = m.pow(d as u32);
-    let stride: Vec<usize> = (0..d).map(|k| m.pow((d - 1 - k) as u32)).collect();
-    let mut out = vec![0.0; rows * nm];
-    for (c, idx) in tuples.iter().enumerate() {
-        let sorted: Vec<u32> = idx.iter().map(|&i| i as u32).collect();
-        let mult = distinct_permutations(&sorted).len() as f64;
-        let offset: usize = idx.iter().zip(&stride).map(|(i, s)| i * s).sum();
-        for r in 0..rows {
-            out[r * nm + c] = mult * data[r * block + offset];
-        }
-    }
-    (out, tuples)
-}
-
-/// [`matvec`] with the rows split in two halves run by rayon (the step's largest
-/// contraction, `Â ⊗₂ f̂`, is memory-bound: two cores read it twice as fast).
-fn matvec_split(m: &[f64], rows: usize, cols: usize, x: &[f64]) -> Vec<f64> {
-    if rows < 1024 {
-        return matvec(m, rows, cols, x);
-    }
-    let half = rows / 2;
-    let (a, b) = m.split_at(half * cols);
-    let (mut top, bottom) = rayon::join(|| matvec(a, half, cols, x), || matvec(b, rows - half, cols, x));
-    top.extend(bottom);
-    top
-}
-
-/// `y = M x` for row-major `M` (rows × cols).
-fn matvec(m: &[f64], rows: usize, cols: usize, x: &[f64]) -> Vec<f64> {
-    let mut y = Mat::<f64>::zeros(rows, 1);
-    let mr = MatRef::from_row_major_slice(m, rows, cols);
-    let xr = MatRef::from_column_major_slice(x, cols, 1);
-    matmul(y.as_mut(), Accum::Replace, mr, xr, 1.0, Par::Seq);
-    (0..rows).map(|i| y[(i, 0)]).collect()
-}
-
-fn row_major(t: &Tensor, r: usize, c: usize) -> Mat<f64> {
-    Mat::from_fn(r, c, |i, j| t.data()[i * c + j])
-}
-
-/// `AᵀB` of two row-major matrices with the same rows.
-fn transpose_times(a: &Tensor, b: &Tensor) -> Mat<f64> {
-    let (n, ma, mb) = (a.shape()[0], a.shape()[1], b.shape()[1]);
-    let mut out = Mat::<f64>::zeros(ma, mb);
-    matmul(
-        out.as_mut(),
-        Accum::Replace,
-        MatRef::from_row_major_slice(a.data(), n, ma).transpose(),
-        MatRef::from_row_major_slice(b.data(), n, mb),
-        1.0,
-        Par::rayon(0),
-    );
-    out
-}
-
 fn prepare_constraint(d: Mat<f64>, dh: Option<Mat<f64>>) -> Result<Constraint, FluidError> {
     let (md, mf) = (d.nrows(), d.ncols());
     let svd = d.svd().map_err(|e| state_err(format!("SVD of D̂ failed: {e:?}")))?;
@@ -642,44 +593,9 @@ fn prepare_constraint(d: Mat<f64>, dh: Option<Mat<f64>>) -> Result<Constraint, F
     Ok(Constraint { pinv, null, d, dh })
 }
 
-/// Lower Cholesky factor of an SPD matrix (faer's blocked factorisation, one thread: these
-/// matrices are a few hundred rows); refuses one that is not positive definite, naming it.
-fn cholesky(a: &Mat<f64>, what: &str) -> Result<Mat<f64>, FluidError> {
-    use faer::dyn_stack::{MemBuffer, MemStack};
-    use faer::linalg::cholesky::llt::factor::{cholesky_in_place, cholesky_in_place_scratch};
-    let n = a.nrows();
-    let mut l = a.clone();
-    let mut mem = MemBuffer::new(cholesky_in_place_scratch::<f64>(n, Par::Seq, Default::default()));
-    let refused = |detail: String| {
-        state_err(format!(
-            "{what} is not positive definite ({detail}): the reduced geometry or basis is degenerate"
-        ))
-    };
-    if (0..n).any(|i| !a[(i, i)].is_finite()) {
-        return Err(refused("a diagonal entry is not finite".into()));
-    }
-    cholesky_in_place(l.as_mut(), Default::default(), Par::Seq, MemStack::new(&mut mem), Default::default())
-        .map_err(|e| refused(format!("{e:?}")))?;
-    for j in 0..n {
-        if !(l[(j, j)] > 0.0 && l[(j, j)].is_finite()) {
-            return Err(refused(format!("pivot {j} of {n} is {:.3e}", l[(j, j)])));
-        }
-        for i in 0..j {
-            l[(i, j)] = 0.0;
-        }
-    }
-    Ok(l)
-}
-
-fn cholesky_solve(l: &Mat<f64>, b: &Mat<f64>) -> Mat<f64> {
-    let mut x = b.clone();
-    solve_lower_triangular_in_place(l.as_ref(), x.as_mut(), Par::Seq);
-    solve_upper_triangular_in_place(l.transpose(), x.as_mut(), Par::Seq);
-    x
-}
-
 #[cfg(test)]
 mod tests {
+    use super::super::induced::sorted_tuples;
     use super::*;
 
     /// A flux basis whose two columns carry the same momentum makes the reduced projection's
@@ -697,9 +613,9 @@ mod tests {
             mh: 0,
             viscosity: 0.0,
             frame_time: 0.1,
-            a: vec![0.0; mu * (mu - 1) / 2 * mf],
+            a: RowMajor::F64(vec![0.0; mu * (mu - 1) / 2 * mf]),
             a_skew: true,
-            ah: Vec::new(),
+            ah: RowMajor::F64(Vec::new()),
             lap: vec![0.0; mu * mu],
             p: vec![1.0, 1.0, 0.0, 0.0],
             v: vec![1.0, 0.0, 1.0],
