@@ -16,7 +16,7 @@ use ash::vk;
 use galerkin::demo::axpy::{axpy_error_ratio, Axpy};
 use galerkin::demo::field::{check_colours, FieldOutput, FieldPass, Ramp};
 use galerkin::demo::polynomial::BivariateCubic;
-use galerkin::gpu::{Buffer, Gpu, GpuDesc, RawDevice};
+use galerkin::gpu::{Buffer, Gpu, GpuDesc, RawDevice, Recorder};
 use galerkin::render::{Camera, ColorFormat, Colormap, RenderTarget};
 
 const W: u32 = 200;
@@ -244,10 +244,14 @@ pub fn run_host(require_validation: bool) -> Result<HostReport, String> {
         device
             .begin_command_buffer(cmd, &vk::CommandBufferBeginInfo::default())
             .map_err(|e| e.to_string())?;
-        axpy.record(&gpu, cmd, &axpy_set, a);
-        target.record_begin(cmd, [0.0, 0.0, 0.0, 1.0]);
-        field.record(cmd, target.extent(), &camera);
-        target.record_end(cmd);
+        // The one unsafe step: galerkin records into the host's command buffer; the host keeps
+        // the returned Recording until its fence shows the buffer completed.
+        let mut rec = Recorder::from_host(&gpu, cmd);
+        axpy.record(&gpu, &mut rec, &axpy_set, a);
+        target.record_begin(&mut rec, [0.0, 0.0, 0.0, 1.0]);
+        field.record(&mut rec, target.extent(), &camera);
+        target.record_end(&mut rec);
+        let recording = rec.finish();
         // galerkin leaves the image in TRANSFER_SRC_OPTIMAL, its writes made visible to transfers.
         let region = vk::BufferImageCopy {
             image_subresource: vk::ImageSubresourceLayers {
@@ -283,6 +287,8 @@ pub fn run_host(require_validation: bool) -> Result<HostReport, String> {
             .queue_submit(queue, &[vk::SubmitInfo::default().command_buffers(&cmds)], fence)
             .map_err(|e| e.to_string())?;
         device.wait_for_fences(&[fence], true, u64::MAX).map_err(|e| e.to_string())?;
+        // The work completed: galerkin may release what it recorded.
+        drop(recording);
 
         // The host reads its own image back and checks every pixel against the CPU reference.
         let mapped = device

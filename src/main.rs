@@ -277,12 +277,12 @@ fn demo(desc: &GpuDesc, scene_path: &Path, out: &Path) -> Result<()> {
     let binding = axpy.bind(&gpu, &xb, &yb)?;
     let mut profiler = Profiler::new(&gpu, 1).ok();
     let t = Instant::now();
-    gpu.run(|cmd| match profiler.as_mut() {
+    gpu.run(|rec| match profiler.as_mut() {
         Some(p) => {
-            p.record_reset(cmd);
-            p.scope(cmd, "axpy", || axpy.record(&gpu, cmd, &binding, a as f32));
+            p.record_reset(rec);
+            p.scope(rec, "axpy", |rec| axpy.record(&gpu, rec, &binding, a as f32));
         }
-        None => axpy.record(&gpu, cmd, &binding, a as f32),
+        None => axpy.record(&gpu, rec, &binding, a as f32),
     })?;
     let wall = t.elapsed();
     let kernel_ms = profiler.as_ref().and_then(|p| p.results().ok()).and_then(|r| r.first().map(|s| s.1));
@@ -314,7 +314,7 @@ fn demo(desc: &GpuDesc, scene_path: &Path, out: &Path) -> Result<()> {
         FieldOutput::Value,
     )?;
     let Pixels::Rgba32F(v) =
-        values.render(&gpu, [0.0; 4], |cmd| pass.record(cmd, values.extent(), &scene.camera))?
+        values.render(&gpu, [0.0; 4], |rec| pass.record(rec, values.extent(), &scene.camera))?
     else {
         bail!("float target returned bytes");
     };
@@ -347,7 +347,7 @@ fn demo(desc: &GpuDesc, scene_path: &Path, out: &Path) -> Result<()> {
     )?;
     let background = galerkin::render::BACKGROUND;
     let Pixels::Rgba8(c) =
-        colours.render(&gpu, background, |cmd| pass.record(cmd, colours.extent(), &scene.camera))?
+        colours.render(&gpu, background, |rec| pass.record(rec, colours.extent(), &scene.camera))?
     else {
         bail!("RGBA8 target returned floats");
     };

@@ -17,7 +17,7 @@ fn sgemm_matches_a_cpu_f64_product_at_odd_sizes() {
         let bb = Buffer::from_slice(&gpu, "B", &b, usage).unwrap();
         let cb = Buffer::<f32>::new(&gpu, "C", u64::from(m * n), usage, MemoryKind::GpuOnly).unwrap();
         let gemm = SgemmKernel::new(&gpu, &ab, &bb, &cb, m, n, k).unwrap();
-        gpu.run(|cmd| gemm.record(cmd)).unwrap();
+        gpu.run(|rec| gemm.record(rec)).unwrap();
         let c = cb.download(&gpu).unwrap();
         for i in 0..m as usize {
             for j in 0..n as usize {
@@ -47,7 +47,7 @@ fn triad_and_fma_compute_their_references() {
     let bb = Buffer::from_slice(&gpu, "b", &b, usage).unwrap();
     let cb = Buffer::from_slice(&gpu, "c", &c, usage).unwrap();
     let triad = TriadKernel::new(&gpu, &ab, &bb, &cb).unwrap();
-    gpu.run(|cmd| triad.record(&gpu, cmd, 0.5)).unwrap();
+    gpu.run(|rec| triad.record(&gpu, rec, 0.5)).unwrap();
     let got = ab.download(&gpu).unwrap();
     for i in 0..n {
         // b + 0.5c: the product is exact, one rounding in the sum.
@@ -57,7 +57,7 @@ fn triad_and_fma_compute_their_references() {
 
     let fma = FmaKernel::new(&gpu, 2).unwrap();
     let (iters, a, bb) = (100, 0.999f32, 1e-3f32);
-    gpu.run(|cmd| fma.record(cmd, iters, a, bb)).unwrap();
+    gpu.run(|rec| fma.record(rec, iters, a, bb)).unwrap();
     let sink = fma.sink.download(&gpu).unwrap();
     for (i, &s) in sink.iter().enumerate() {
         let want = FmaKernel::reference(i as u32, iters, a, bb);
@@ -73,10 +73,10 @@ fn timestamp_scopes_measure_work() {
     let empty = EmptyKernel::new(&gpu).unwrap();
     let fma = FmaKernel::new(&gpu, 64).unwrap();
     let mut profiler = Profiler::new(&gpu, 2).unwrap();
-    gpu.run(|cmd| {
-        profiler.record_reset(cmd);
-        profiler.scope(cmd, "empty", || empty.record(cmd));
-        profiler.scope(cmd, "fma", || fma.record(cmd, 2000, 0.9, 0.1));
+    gpu.run(|rec| {
+        profiler.record_reset(rec);
+        profiler.scope(rec, "empty", |rec| empty.record(rec));
+        profiler.scope(rec, "fma", |rec| fma.record(rec, 2000, 0.9, 0.1));
     })
     .unwrap();
     let r = profiler.results().unwrap();

@@ -16,7 +16,7 @@ fn check_axpy(gpu: &galerkin::gpu::Gpu, n: usize, a: f32, expect_chunks: Option<
     if let Some(c) = expect_chunks {
         assert_eq!(binding.chunk_count(), c, "chunks for {n} floats");
     }
-    gpu.run(|cmd| axpy.record(gpu, cmd, &binding, a)).unwrap();
+    gpu.run(|rec| axpy.record(gpu, rec, &binding, a)).unwrap();
     let out = yb.download(gpu).unwrap();
     // Tolerance: the device's fma(a, x, y) in f32 is within two roundings of the exact value
     // (one if fused); `axpy_error_ratio` divides each error by that bound.

@@ -25,7 +25,7 @@ fn render_values(gpu: &galerkin::gpu::Gpu, camera: &Camera, p: &BivariateCubic, 
     let target = RenderTarget::new(gpu, "field values", W, H, ColorFormat::Rgba32F).unwrap();
     let pass =
         FieldPass::new(gpu, target.render_pass(), p, 8, &Colormap::grey(), ramp, FieldOutput::Value).unwrap();
-    match target.render(gpu, [0.0; 4], |cmd| pass.record(cmd, target.extent(), camera)).unwrap() {
+    match target.render(gpu, [0.0; 4], |rec| pass.record(rec, target.extent(), camera)).unwrap() {
         Pixels::Rgba32F(px) => px,
         Pixels::Rgba8(_) => panic!("a float target reads back floats"),
     }
@@ -69,7 +69,7 @@ fn field_colours_match_the_cpu_reference_at_every_covered_pixel() {
             FieldPass::new(&gpu, target.render_pass(), &p, 8, &colormap, ramp, FieldOutput::Colour).unwrap();
         let clear = [0.25, 0.25, 0.25, 1.0];
         let Pixels::Rgba8(px) =
-            target.render(&gpu, clear, |cmd| pass.record(cmd, target.extent(), &camera)).unwrap()
+            target.render(&gpu, clear, |rec| pass.record(rec, target.extent(), &camera)).unwrap()
         else {
             panic!("an RGBA8 target reads back bytes")
         };

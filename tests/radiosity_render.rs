@@ -35,18 +35,18 @@ fn pixels_show_the_face_their_ray_meets_with_its_radiance() {
         let camera = camera_for(&spec, view);
         for shading in [Shading::Flat, Shading::Smooth] {
             let vertices = scene_vertices(&s.mesh, &s.geometry, &radiance, shading);
-            raw_pass.update(&vertices);
-            colour_pass.update(&vertices);
+            raw_pass.update(&vertices).expect("no draw in flight");
+            colour_pass.update(&vertices).expect("no draw in flight");
             let Pixels::Rgba32F(out) = raw
-                .render(&gpu, [0.0, 0.0, 0.0, -1.0], |cmd| {
-                    raw_pass.record(cmd, raw.extent(), &camera, exposure)
+                .render(&gpu, [0.0, 0.0, 0.0, -1.0], |rec| {
+                    raw_pass.record(rec, raw.extent(), &camera, exposure)
                 })
                 .unwrap()
             else {
                 panic!("float target")
             };
             let Pixels::Rgba8(rgb) = colour
-                .render(&gpu, BACKGROUND, |cmd| colour_pass.record(cmd, colour.extent(), &camera, exposure))
+                .render(&gpu, BACKGROUND, |rec| colour_pass.record(rec, colour.extent(), &camera, exposure))
                 .unwrap()
             else {
                 panic!("8-bit target")

@@ -16,9 +16,8 @@ fn the_canary_catches_a_misuse() {
     let log = gpu.validation_log().unwrap();
     // An access mask that the given stage cannot perform is invalid usage (and harmless to
     // the driver: a barrier is only a barrier).
-    gpu.run(|cmd| {
-        gpu.memory_barrier(
-            cmd,
+    gpu.run(|rec| {
+        rec.memory_barrier(
             (vk::PipelineStageFlags::TRANSFER, vk::AccessFlags::SHADER_WRITE),
             (vk::PipelineStageFlags::COMPUTE_SHADER, vk::AccessFlags::SHADER_READ),
         )
@@ -37,13 +36,13 @@ fn synchronization_validation_catches_a_missing_barrier() {
             .unwrap();
     let b = Buffer::<u32>::new(&gpu, "copy", 1024, vk::BufferUsageFlags::STORAGE_BUFFER, MemoryKind::GpuOnly)
         .unwrap();
-    gpu.run(|cmd| {
-        a.record_fill(cmd, 1);
+    gpu.run(|rec| {
+        rec.fill_buffer(&a, 1);
         // Read-after-write with no barrier between the fill and the copy: a hazard that only
         // synchronization validation reports.
         let region = vk::BufferCopy { src_offset: 0, dst_offset: 0, size: a.size_bytes() };
         // SAFETY: valid buffers; the missing barrier is the point of the test.
-        unsafe { gpu.device().cmd_copy_buffer(cmd, a.raw(), b.raw(), &[region]) };
+        unsafe { gpu.device().cmd_copy_buffer(rec.raw(), a.raw(), b.raw(), &[region]) };
     })
     .unwrap();
     drop((a, b, gpu));
@@ -74,7 +73,7 @@ fn resources_dropped_while_recorded_live_until_the_fence() {
     let keep =
         Buffer::<u32>::new(&gpu, "kept", 1024, vk::BufferUsageFlags::STORAGE_BUFFER, MemoryKind::GpuOnly)
             .unwrap();
-    gpu.run(|cmd| {
+    gpu.run(|rec| {
         // Used by the command buffer, then dropped before submission: destruction must wait.
         let temp = Buffer::<u32>::new(
             &gpu,
@@ -84,8 +83,8 @@ fn resources_dropped_while_recorded_live_until_the_fence() {
             MemoryKind::GpuOnly,
         )
         .unwrap();
-        temp.record_fill(cmd, 7);
-        keep.record_fill(cmd, 42);
+        rec.fill_buffer(&temp, 7);
+        rec.fill_buffer(&keep, 42);
     })
     .unwrap();
     assert!(keep.download(&gpu).unwrap().iter().all(|&v| v == 42));
@@ -101,11 +100,11 @@ fn asynchronous_submission_keeps_dropped_resources_alive() {
         Buffer::<u32>::from_slice(&gpu, "src", &vec![5u32; 1 << 20], vk::BufferUsageFlags::STORAGE_BUFFER)
             .unwrap();
     let (submission, ()) = gpu
-        .submit(|cmd| {
+        .submit(|rec| {
             let region = vk::BufferCopy { src_offset: 0, dst_offset: 0, size: src.size_bytes() };
             // SAFETY: both buffers are alive at recording; `src` is dropped below while the
             // copy may still run, which deferred destruction must make safe.
-            unsafe { gpu.device().cmd_copy_buffer(cmd, src.raw(), out.raw(), &[region]) };
+            unsafe { gpu.device().cmd_copy_buffer(rec.raw(), src.raw(), out.raw(), &[region]) };
         })
         .unwrap();
     drop(src);
@@ -129,7 +128,7 @@ fn many_threads_share_one_gpu() {
                         MemoryKind::GpuOnly,
                     )
                     .unwrap();
-                    gpu.run(|cmd| b.record_fill(cmd, t * 100 + k)).unwrap();
+                    gpu.run(|rec| rec.fill_buffer(&b, t * 100 + k)).unwrap();
                     assert!(b.download(gpu).unwrap().iter().all(|&v| v == t * 100 + k));
                 }
             });

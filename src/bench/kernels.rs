@@ -7,11 +7,11 @@ use bytemuck::{Pod, Zeroable};
 
 use crate::gpu::{
     shaders, BindingKind, Buffer, ComputePipeline, ComputePipelineDesc, DescriptorSet, Gpu, GpuResult,
-    Resource,
+    Recorder, Resource,
 };
 use crate::tensor::gpu::{Gemm, GemmBinding, GemmShape};
 
-fn storage(b: &Buffer<f32>) -> GpuResult<Resource> {
+fn storage(b: &Buffer<f32>) -> GpuResult<Resource<'_>> {
     Ok(Resource::Storage(b.binding()?))
 }
 
@@ -48,8 +48,8 @@ impl EmptyKernel {
     }
 
     /// Records one 1×1×1 dispatch.
-    pub fn record(&self, cmd: vk::CommandBuffer) {
-        self.pipeline.record_dispatch(cmd, &self.set, &[], [1, 1, 1]);
+    pub fn record(&self, rec: &mut Recorder<'_>) {
+        self.pipeline.record_dispatch(rec, &self.set, &[], [1, 1, 1]);
     }
 }
 
@@ -100,10 +100,10 @@ impl FmaKernel {
     }
 
     /// Records the kernel: `iterations` rounds of `v ← v·a + b` on each of 8 chains.
-    pub fn record(&self, cmd: vk::CommandBuffer, iterations: u32, a: f32, b: f32) {
+    pub fn record(&self, rec: &mut Recorder<'_>, iterations: u32, a: f32, b: f32) {
         let push = FmaPush { iterations, a, b };
         self.pipeline.record_dispatch(
-            cmd,
+            rec,
             &self.set,
             bytemuck::bytes_of(&push),
             [self.invocations / FMA_LOCAL_SIZE, 1, 1],
@@ -167,10 +167,10 @@ impl TriadKernel {
     }
 
     /// Records one sweep.
-    pub fn record(&self, gpu: &Gpu, cmd: vk::CommandBuffer, s: f32) {
+    pub fn record(&self, gpu: &Gpu, rec: &mut Recorder<'_>, s: f32) {
         let push = TriadPush { s, n4: self.n4 };
         let groups = gpu.caps().groups_1d(u64::from(self.n4), 256);
-        self.pipeline.record_dispatch(cmd, &self.set, bytemuck::bytes_of(&push), [groups, 1, 1]);
+        self.pipeline.record_dispatch(rec, &self.set, bytemuck::bytes_of(&push), [groups, 1, 1]);
     }
 
     /// Bytes read and written by one sweep.
@@ -202,8 +202,8 @@ impl SgemmKernel {
     }
 
     /// Records the product.
-    pub fn record(&self, cmd: vk::CommandBuffer) {
-        self.gemm.record(cmd, &self.binding, false);
+    pub fn record(&self, rec: &mut Recorder<'_>) {
+        self.gemm.record(rec, &self.binding, false);
     }
 
     /// Floating-point operations of one product.

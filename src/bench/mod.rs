@@ -127,10 +127,10 @@ pub fn run(gpu: &Gpu, config: &BenchConfig, mut progress: impl FnMut(&str)) -> G
 
     progress("dispatch overhead");
     let empty = EmptyKernel::new(gpu)?;
-    gpu.run(|cmd| empty.record(cmd))?; // warm-up
+    gpu.run(|rec| empty.record(rec))?; // warm-up
     let mut t = Vec::with_capacity(config.dispatches);
     for _ in 0..config.dispatches {
-        let (dt, r) = time(|| gpu.run(|cmd| empty.record(cmd)));
+        let (dt, r) = time(|| gpu.run(|rec| empty.record(rec)));
         r?;
         t.push(dt);
     }
@@ -195,9 +195,9 @@ pub fn run(gpu: &Gpu, config: &BenchConfig, mut progress: impl FnMut(&str)) -> G
     let (a, b) = (0.999_9f32, 1e-4f32);
     let mut g = Vec::new();
     for _ in 0..reps {
-        gpu.run(|cmd| {
-            profiler.record_reset(cmd);
-            profiler.scope(cmd, "fma", || fma.record(cmd, config.fma_iterations, a, b));
+        gpu.run(|rec| {
+            profiler.record_reset(rec);
+            profiler.scope(rec, "fma", |rec| fma.record(rec, config.fma_iterations, a, b));
         })?;
         g.push(fma.flops(config.fma_iterations) / (profiler.results()?[0].1 * 1e-3) / 1e9);
     }
@@ -238,9 +238,9 @@ pub fn run(gpu: &Gpu, config: &BenchConfig, mut progress: impl FnMut(&str)) -> G
     let s = 0.5f32;
     let mut g = Vec::new();
     for _ in 0..reps {
-        gpu.run(|cmd| {
-            profiler.record_reset(cmd);
-            profiler.scope(cmd, "triad", || triad.record(gpu, cmd, s));
+        gpu.run(|rec| {
+            profiler.record_reset(rec);
+            profiler.scope(rec, "triad", |rec| triad.record(gpu, rec, s));
         })?;
         g.push(triad.bytes() / (profiler.results()?[0].1 * 1e-3) / 1e9);
     }
@@ -310,9 +310,9 @@ pub fn sgemm_ceiling(gpu: &Gpu, n: u32, reps: usize) -> GpuResult<(f64, Vec<f32>
     let mut profiler = Profiler::new(gpu, 1)?;
     let mut g = Vec::new();
     for _ in 0..reps.max(1) {
-        gpu.run(|cmd| {
-            profiler.record_reset(cmd);
-            profiler.scope(cmd, "sgemm", || gemm.record(cmd));
+        gpu.run(|rec| {
+            profiler.record_reset(rec);
+            profiler.scope(rec, "sgemm", |rec| gemm.record(rec));
         })?;
         g.push(gemm.flops() / (profiler.results()?[0].1 * 1e-3) / 1e9);
     }

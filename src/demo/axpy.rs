@@ -1,12 +1,11 @@
 //! `y ← a·x + y` on the device: the first compute pass. Arrays larger than one storage binding
 //! (128 MiB on lavapipe) are walked chunk by chunk, one descriptor set per chunk.
 
-use ash::vk;
 use bytemuck::{Pod, Zeroable};
 
 use crate::gpu::{
     shaders, BindingKind, Buffer, Chunk, ComputePipeline, ComputePipelineDesc, DescriptorSet, Gpu, GpuResult,
-    Resource,
+    Recorder, Resource,
 };
 
 /// Workgroup size of `axpy.comp`.
@@ -71,12 +70,12 @@ impl Axpy {
     }
 
     /// Records `y ← a·x + y` over every chunk.
-    pub fn record(&self, gpu: &Gpu, cmd: vk::CommandBuffer, binding: &AxpyBinding, a: f32) {
+    pub fn record(&self, gpu: &Gpu, rec: &mut Recorder<'_>, binding: &AxpyBinding, a: f32) {
         for (chunk, set) in &binding.chunks {
             let n = u32::try_from(chunk.len).expect("a binding chunk holds fewer than 2^32 floats");
             let push = Push { a, n };
             let groups = gpu.caps().groups_1d(chunk.len, LOCAL_SIZE);
-            self.pipeline.record_dispatch(cmd, set, bytemuck::bytes_of(&push), [groups, 1, 1]);
+            self.pipeline.record_dispatch(rec, set, bytemuck::bytes_of(&push), [groups, 1, 1]);
         }
     }
 }

@@ -12,7 +12,7 @@ use glam::DVec2;
 use super::polynomial::BivariateCubic;
 use crate::gpu::{
     shaders, BindingKind, Buffer, DescriptorSet, Gpu, GpuResult, GraphicsPipeline, GraphicsPipelineDesc,
-    RenderPass, Resource,
+    Recorder, RenderPass, Resource,
 };
 use crate::render::{ramp_coordinate, Camera, Colormap, ColormapTexture};
 
@@ -119,30 +119,20 @@ impl FieldPass {
         desc.vertex_attributes = &[(0, vk::Format::R32G32B32_SFLOAT, 0)];
         desc.specialization = &spec;
         let pipeline = GraphicsPipeline::new(gpu, &desc)?;
-        let set = pipeline.bind(
-            gpu,
-            &[
-                Resource::Uniform(crate::gpu::BufferBinding {
-                    buffer: uniform.raw(),
-                    offset: 0,
-                    range: uniform.size_bytes(),
-                }),
-                texture.resource(),
-            ],
-        )?;
+        let set = pipeline.bind(gpu, &[Resource::Uniform(uniform.whole()), texture.resource()])?;
         Ok(Self { pipeline, set, vertices, _uniform: uniform, _colormap: texture })
     }
 
     /// Records the draw (inside the target's render pass).
-    pub fn record(&self, cmd: vk::CommandBuffer, extent: vk::Extent2D, camera: &Camera) {
+    pub fn record(&self, rec: &mut Recorder<'_>, extent: vk::Extent2D, camera: &Camera) {
         let aspect = f64::from(extent.width) / f64::from(extent.height);
         let m = camera.view_proj_f32(aspect).to_cols_array();
         self.pipeline.record_draw(
-            cmd,
+            rec,
             extent,
             &self.set,
             bytemuck::bytes_of(&m),
-            Some(self.vertices.raw()),
+            Some(self.vertices.whole()),
             self.vertices.len() as u32,
         );
     }

@@ -198,7 +198,9 @@ impl GpuParticles {
             let (lo, size, dims, start, grid_cells) = grid.parts();
             let sb = storage(gpu, "fluid grid start", start)?;
             let cb = storage(gpu, "fluid grid cells", grid_cells)?;
-            let bind = |x: &Buffer<u32>| x.binding().map(Resource::Storage).map_err(gpu_err);
+            fn bind(x: &Buffer<u32>) -> Result<Resource<'_>, FluidError> {
+                x.binding().map(Resource::Storage).map_err(gpu_err)
+            }
             let set = self
                 .pipeline
                 .bind(
@@ -238,9 +240,9 @@ impl GpuParticles {
             grid_size: [size[0] as f32, size[1] as f32, size[2] as f32, 0.0],
             grid_dims: [dims[0] as u32, dims[1] as u32, dims[2] as u32, 0],
         };
-        gpu.run(|cmd| {
+        gpu.run(|rec| {
             self.pipeline.record_dispatch(
-                cmd,
+                rec,
                 set,
                 bytemuck::bytes_of(&push),
                 [(self.count as u32).div_ceil(64), 1, 1],

@@ -17,7 +17,7 @@ use super::operators::CellOperators;
 use super::FluidError;
 use crate::gpu::{
     shaders, BindingKind, Buffer, DescriptorSet, Gpu, GraphicsPipeline, GraphicsPipelineDesc, MemoryKind,
-    RenderPass, Resource,
+    Recorder, RenderPass, Resource,
 };
 use crate::mesh::{SimplexMesh, Topology};
 use crate::render::{ColorFormat, Colormap, ColormapTexture, Pixels, RenderTarget, BACKGROUND};
@@ -283,17 +283,17 @@ impl FluidRenderer {
     }
 
     /// Replaces the cells and their speeds (no draw of the previous ones may be in flight).
-    pub fn update(&mut self, vertices: &[CellVertex], speeds: &[f64]) {
-        if let Some(dst) = self.vertices.mapped_mut() {
-            let n = vertices.len().min(dst.len());
-            dst[..n].copy_from_slice(&vertices[..n]);
-            self.count = n as u32;
+    /// An error if a recorded draw of the previous ones is not yet known to be finished.
+    pub fn update(&mut self, vertices: &[CellVertex], speeds: &[f64]) -> Result<(), FluidError> {
+        let dst = self.vertices.mapped_mut().map_err(gpu_err)?;
+        let n = vertices.len().min(dst.len());
+        dst[..n].copy_from_slice(&vertices[..n]);
+        self.count = n as u32;
+        let dst = self.speeds.mapped_mut().map_err(gpu_err)?;
+        for (d, s) in dst.iter_mut().zip(speeds) {
+            *d = *s as f32;
         }
-        if let Some(dst) = self.speeds.mapped_mut() {
-            for (d, s) in dst.iter_mut().zip(speeds) {
-                *d = *s as f32;
-            }
-        }
+        Ok(())
     }
 
     /// The sprite pipeline's resources for `particles` (bind once per particle buffer).
@@ -314,7 +314,7 @@ impl FluidRenderer {
     /// [`surface_vertices`]), then the particles (inside the target's render pass).
     pub fn record(
         &self,
-        cmd: vk::CommandBuffer,
+        rec: &mut Recorder<'_>,
         extent: vk::Extent2D,
         projection: &Projection,
         style: &DrawStyle,
@@ -338,17 +338,17 @@ impl FluidRenderer {
         };
         let pipeline = if surface { &self.surface } else { &self.cells };
         pipeline.record_draw(
-            cmd,
+            rec,
             extent,
             &self.cell_set,
             bytemuck::bytes_of(&push),
-            Some(self.vertices.raw()),
+            Some(self.vertices.whole()),
             self.count,
         );
         if let Some((set, count)) = particles {
             if style.sprite_px > 0.0 && count > 0 {
                 self.sprites.record_draw(
-                    cmd,
+                    rec,
                     extent,
                     set,
                     bytemuck::bytes_of(&push),
@@ -410,12 +410,12 @@ pub fn draw_picture(
             vertices.len() / 3,
             speeds.len(),
         )?;
-        r.update(&vertices, speeds);
+        r.update(&vertices, speeds)?;
         let set = particles.map(|p| r.particle_set(gpu, p)).transpose()?;
         let pset = set.as_ref().zip(particles.map(GpuParticles::count));
         out.push(
             target
-                .render(gpu, clear, |cmd| r.record(cmd, target.extent(), projection, style, pset))
+                .render(gpu, clear, |rec| r.record(rec, target.extent(), projection, style, pset))
                 .map_err(gpu_err)?,
         );
     }

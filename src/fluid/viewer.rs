@@ -8,7 +8,6 @@
 use std::time::Instant;
 
 use anyhow::{bail, Result};
-use ash::vk;
 
 use super::gpu::GpuParticles;
 use super::particles::seed_particles;
@@ -16,7 +15,7 @@ use super::reduced::{ReducedFluid, ReducedFluidModel, ReducedMotion, ReducedStat
 use super::render::{cell_speeds, cell_vertices, DrawStyle, FluidRenderer, Output, Projection, View2d};
 use super::scene::FluidScene;
 use super::{FluidSolver, FluidState};
-use crate::gpu::{DescriptorSet, Gpu};
+use crate::gpu::{DescriptorSet, Gpu, Recorder};
 use crate::mesh::{SimplexMesh, Topology};
 use crate::render::viewer::ViewerContent;
 use crate::render::{Camera, Colormap, RenderTarget};
@@ -145,13 +144,14 @@ impl FluidContent {
         })
     }
 
-    fn upload_cells(&mut self) {
+    fn upload_cells(&mut self) -> Result<()> {
         let (mesh, topo) = (&self.mesh, &self.topology);
         let speeds = cell_speeds(mesh, topo, &self.state.g, &self.state.f);
         let vertices = cell_vertices(mesh, &self.state.g, &speeds);
         if let Some(r) = &mut self.renderer {
-            r.update(&vertices, &speeds);
+            r.update(&vertices, &speeds)?;
         }
+        Ok(())
     }
 
     fn step(&mut self) -> Result<()> {
@@ -235,19 +235,19 @@ impl ViewerContent for FluidContent {
             self.dirty = true;
         }
         if std::mem::take(&mut self.dirty) {
-            self.upload_cells();
+            self.upload_cells()?;
         }
         Ok(self.playing)
     }
 
-    fn record(&mut self, cmd: vk::CommandBuffer, target: &RenderTarget, _: &Camera) -> Result<()> {
+    fn record(&mut self, rec: &mut Recorder<'_>, target: &RenderTarget, _: &Camera) -> Result<()> {
         let (lo, hi) = self.mesh.bounds();
         let extent = target.extent();
         let view = View2d::fit([lo[0], lo[1]], [hi[0], hi[1]], (extent.width, extent.height), 0.02);
         if let (Some(r), Some(p)) = (&self.renderer, &self.particles) {
             let projection = Projection::Plane(view);
             r.record(
-                cmd,
+                rec,
                 extent,
                 &projection,
                 &self.style,

@@ -5,28 +5,52 @@
 //! see [`Buffer::binding_chunks`].
 
 use std::marker::PhantomData;
+use std::ptr::NonNull;
 use std::sync::Arc;
 
 use ash::vk;
 use bytemuck::Pod;
-use gpu_allocator::vulkan::Allocation;
 
 use super::context::{DeviceShared, Gpu};
 use super::error::{vk_error, GpuError, GpuResult, VkContext};
+use super::lifetime::{Lifetime, Tracked};
 use super::memory::MemoryKind;
 
 /// Bytes per staging chunk for uploads and downloads (two are in flight at once).
 pub const STAGING_CHUNK_BYTES: u64 = 32 << 20;
 
-/// A byte range of a buffer as one descriptor binds it.
-#[derive(Copy, Clone, Debug, PartialEq, Eq)]
-pub struct BufferBinding {
-    /// The buffer.
-    pub buffer: vk::Buffer,
+/// A byte range of a buffer as one descriptor (or a vertex or indirect binding) binds it. It
+/// borrows the buffer, so the buffer cannot be dropped while a binding of it exists; a
+/// [`crate::gpu::DescriptorSet`] made from it keeps the buffer alive itself.
+///
+/// ```compile_fail
+/// # use galerkin::gpu::{vk, Buffer, Gpu, GpuDesc, MemoryKind, Resource};
+/// # fn f(gpu: &Gpu, pipeline: &galerkin::gpu::ComputePipeline) -> galerkin::gpu::GpuResult<()> {
+/// let buffer = Buffer::<f32>::new(gpu, "x", 4, vk::BufferUsageFlags::STORAGE_BUFFER, MemoryKind::GpuOnly)?;
+/// let binding = buffer.binding()?;
+/// drop(buffer); // error[E0505]: cannot move out of `buffer` because it is borrowed
+/// let set = pipeline.bind(gpu, &[Resource::Storage(binding)])?;
+/// # Ok(()) }
+/// ```
+#[derive(Copy, Clone, Debug)]
+pub struct BufferBinding<'a> {
+    life: &'a Arc<Lifetime>,
+    buffer: vk::Buffer,
     /// Offset in bytes (a multiple of `minStorageBufferOffsetAlignment`).
     pub offset: u64,
     /// Length in bytes (at most [`Gpu::max_binding_bytes`] for storage bindings).
     pub range: u64,
+}
+
+impl BufferBinding<'_> {
+    /// The buffer's handle.
+    pub fn raw(&self) -> vk::Buffer {
+        self.buffer
+    }
+
+    pub(crate) fn lifetime(&self) -> &Arc<Lifetime> {
+        self.life
+    }
 }
 
 /// One chunk of an array bound as its own descriptor: elements `first .. first + len`.
@@ -38,16 +62,32 @@ pub struct Chunk {
     pub len: u64,
 }
 
-/// A typed buffer of `len` elements of `T`.
+/// A typed buffer of `len` elements of `T`. Its memory is freed when the buffer and every
+/// recording and descriptor set that use it are gone (see [`crate::gpu::Recorder`]).
 pub struct Buffer<T: Pod> {
+    // `life` first: fields drop in order, and the lifetime must end while the device is alive.
+    life: Arc<Lifetime>,
     shared: Arc<DeviceShared>,
     raw: vk::Buffer,
-    allocation: Option<Allocation>,
+    /// The start of host-visible memory (mapped for the allocation's whole life).
+    mapped: Option<NonNull<u8>>,
     len: u64,
     bytes: u64,
     kind: MemoryKind,
     name: String,
     _t: PhantomData<T>,
+}
+
+// SAFETY: the mapped pointer is only dereferenced through `&self`/`&mut self` accessors that
+// check no pending GPU work uses the memory; everything else is handles and plain data.
+unsafe impl<T: Pod> Send for Buffer<T> {}
+// SAFETY: as above; shared access only reads.
+unsafe impl<T: Pod> Sync for Buffer<T> {}
+
+impl<T: Pod> Tracked for Buffer<T> {
+    fn lifetime(&self) -> &Arc<Lifetime> {
+        &self.life
+    }
 }
 
 impl<T: Pod> std::fmt::Debug for Buffer<T> {
@@ -115,16 +155,14 @@ impl<T: Pod> Buffer<T> {
             return Err(vk_error("vkBindBufferMemory", e));
         }
         shared.set_name(raw, name);
-        Ok(Self {
-            shared,
-            raw,
-            allocation: Some(allocation),
-            len,
-            bytes,
-            kind,
-            name: name.to_string(),
-            _t: PhantomData,
-        })
+        let mapped = allocation.mapped_ptr().map(|p| p.cast::<u8>());
+        let life = Lifetime::new(&shared, name, move |dev| {
+            // SAFETY: the last reference is gone: no recording or set uses the buffer, and
+            // the retirement waited for the engine's in-flight work.
+            unsafe { dev.raw.destroy_buffer(raw, None) };
+            dev.free(allocation);
+        });
+        Ok(Self { shared, life, raw, mapped, len, bytes, kind, name: name.to_string(), _t: PhantomData })
     }
 
     /// A device-local buffer holding a copy of `data` (an empty slice gets one unwritten
@@ -168,23 +206,48 @@ impl<T: Pod> Buffer<T> {
         self.kind
     }
 
-    /// The mapped bytes of a host-visible buffer (`CpuToGpu`/`GpuToCpu`), `None` otherwise.
+    /// The mapped elements of a host-visible buffer (`CpuToGpu`/`GpuToCpu`); `None` if its
+    /// memory is not host-visible or recorded GPU work not yet known to be finished uses it.
     pub fn mapped(&self) -> Option<&[T]> {
-        let bytes = self.allocation.as_ref()?.mapped_slice()?;
-        Some(bytemuck::cast_slice(&bytes[..self.bytes as usize]))
+        let p = self.mapped?;
+        if self.life.pending() > 0 {
+            return None;
+        }
+        // SAFETY: the mapping covers the allocation (at least `bytes`), lives as long as the
+        // buffer, is aligned for `T` (allocations are at least 16-byte aligned; `T: Pod`), and
+        // no pending GPU work writes it.
+        Some(unsafe { std::slice::from_raw_parts(p.as_ptr().cast::<T>(), self.len as usize) })
     }
 
-    /// Mutable mapped elements of a host-visible buffer. The caller must not write while the
-    /// device may be reading the buffer.
-    pub fn mapped_mut(&mut self) -> Option<&mut [T]> {
-        let n = self.bytes as usize;
-        let bytes = self.allocation.as_mut()?.mapped_slice_mut()?;
-        Some(bytemuck::cast_slice_mut(&mut bytes[..n]))
+    /// Mutable mapped elements of a host-visible buffer. An error if the memory is not
+    /// host-visible, or if recorded GPU work not yet known to be finished may read it (wait
+    /// for the submission, or drop the host's [`crate::gpu::Recording`], first).
+    pub fn mapped_mut(&mut self) -> GpuResult<&mut [T]> {
+        let not = |reason| GpuError::NotMappable { name: self.name.clone(), reason };
+        let p = self.mapped.ok_or_else(|| not("its memory is not host-visible"))?;
+        if self.life.pending() > 0 {
+            return Err(not("recorded GPU work that may use it has not been seen to finish"));
+        }
+        // SAFETY: as in `mapped`, and `&mut self` excludes other host access.
+        Ok(unsafe { std::slice::from_raw_parts_mut(p.as_ptr().cast::<T>(), self.len as usize) })
+    }
+
+    /// True if `gpu` is the device this buffer was made on.
+    pub fn is_on(&self, gpu: &Gpu) -> bool {
+        Arc::ptr_eq(&self.shared, &gpu.shared)
+    }
+
+    fn check_device(&self, gpu: &Gpu) -> GpuResult<()> {
+        if self.is_on(gpu) {
+            Ok(())
+        } else {
+            Err(GpuError::WrongDevice { name: self.name.clone() })
+        }
     }
 
     /// The whole buffer as one binding; an error if it exceeds one storage binding
     /// (use [`Buffer::binding_chunks`] for large arrays).
-    pub fn binding(&self) -> GpuResult<BufferBinding> {
+    pub fn binding(&self) -> GpuResult<BufferBinding<'_>> {
         let limit = self.shared.max_binding_bytes;
         if self.bytes > limit {
             return Err(GpuError::OverLimit {
@@ -195,11 +258,17 @@ impl<T: Pod> Buffer<T> {
                 unit: "bytes",
             });
         }
-        Ok(BufferBinding { buffer: self.raw, offset: 0, range: self.bytes.max(4) })
+        Ok(self.whole())
+    }
+
+    /// The whole buffer as a vertex, indirect or uniform binding (no storage-range check; a
+    /// descriptor set still refuses a storage range over the limit).
+    pub fn whole(&self) -> BufferBinding<'_> {
+        BufferBinding { life: &self.life, buffer: self.raw, offset: 0, range: self.bytes.max(4) }
     }
 
     /// Elements `chunk.first .. chunk.first + chunk.len` as a binding.
-    pub fn binding_range(&self, chunk: Chunk) -> BufferBinding {
+    pub fn binding_range(&self, chunk: Chunk) -> BufferBinding<'_> {
         let elem = std::mem::size_of::<T>() as u64;
         assert!(
             chunk.first + chunk.len <= self.len,
@@ -207,7 +276,12 @@ impl<T: Pod> Buffer<T> {
             self.name,
             self.len
         );
-        BufferBinding { buffer: self.raw, offset: chunk.first * elem, range: (chunk.len * elem).max(4) }
+        BufferBinding {
+            life: &self.life,
+            buffer: self.raw,
+            offset: chunk.first * elem,
+            range: (chunk.len * elem).max(4),
+        }
     }
 
     /// Splits the buffer into chunks of at most [`Gpu::max_binding_bytes`] each, starting on
@@ -225,6 +299,7 @@ impl<T: Pod> Buffer<T> {
     /// Copies `data` into elements `first ..` through staging buffers (for device-local
     /// buffers), two chunks in flight; writes host-visible buffers directly. Waits until done.
     pub fn upload(&self, gpu: &Gpu, first: u64, data: &[T]) -> GpuResult<()> {
+        self.check_device(gpu)?;
         let elem = std::mem::size_of::<T>() as u64;
         assert!(
             first + data.len() as u64 <= self.len,
@@ -248,13 +323,16 @@ impl<T: Pod> Buffer<T> {
                 s.wait()?;
             }
             let stage = &mut staging[k];
-            stage.mapped_mut().expect("CpuToGpu memory is mapped")[..part.len()].copy_from_slice(part);
+            stage.mapped_mut()?[..part.len()].copy_from_slice(part);
             let dst_offset = first * elem + (i as u64) * chunk;
             let region = vk::BufferCopy { src_offset: 0, dst_offset, size: part.len() as u64 };
-            let (src_buf, dst_buf) = (stage.raw, self.raw);
-            let (s, ()) = gpu.submit(|cmd| {
-                // SAFETY: both buffers are alive until the submission completes (waited below).
-                unsafe { gpu.device().cmd_copy_buffer(cmd, src_buf, dst_buf, &[region]) };
+            let stage = &staging[k];
+            let (s, ()) = gpu.submit(|rec| {
+                rec.keep(stage);
+                rec.keep(self);
+                // SAFETY: recording on this device; both buffers are kept alive by the
+                // recording and the region lies inside each.
+                unsafe { rec.device().cmd_copy_buffer(rec.raw(), stage.raw, self.raw, &[region]) };
             })?;
             in_flight[k] = Some(s);
         }
@@ -282,6 +360,7 @@ impl<T: Pod> Buffer<T> {
 
     /// Reads elements `first .. first + out.len()` into `out` (reusing the caller's memory).
     pub fn download_into(&self, gpu: &Gpu, first: u64, out: &mut [T]) -> GpuResult<()> {
+        self.check_device(gpu)?;
         let elem = std::mem::size_of::<T>() as u64;
         let range = Chunk { first, len: out.len() as u64 };
         assert!(range.first + range.len <= self.len, "download {range:?} outside `{}`", self.name);
@@ -305,7 +384,11 @@ impl<T: Pod> Buffer<T> {
                 s.wait()?;
                 let part = parts[i].take().expect("each part is read once");
                 let len = part.len();
-                part.copy_from_slice(&staging[k].mapped().expect("GpuToCpu memory is mapped")[..len]);
+                let mapped = staging[k].mapped().ok_or_else(|| GpuError::NotMappable {
+                    name: staging[k].name.clone(),
+                    reason: "download staging is not host-visible",
+                })?;
+                part.copy_from_slice(&mapped[..len]);
             }
             Ok(())
         };
@@ -315,10 +398,13 @@ impl<T: Pod> Buffer<T> {
             let size = parts[i].as_ref().map_or(0, |p| p.len()) as u64;
             let region =
                 vk::BufferCopy { src_offset: range.first * elem + (i as u64) * chunk, dst_offset: 0, size };
-            let (src_buf, dst_buf) = (self.raw, staging[k].raw);
-            let (s, ()) = gpu.submit(|cmd| {
-                // SAFETY: both buffers outlive the submission (drained below).
-                unsafe { gpu.device().cmd_copy_buffer(cmd, src_buf, dst_buf, &[region]) };
+            let stage = &staging[k];
+            let (s, ()) = gpu.submit(|rec| {
+                rec.keep(self);
+                rec.keep(stage);
+                // SAFETY: recording on this device; both buffers are kept alive by the
+                // recording and the region lies inside each.
+                unsafe { rec.device().cmd_copy_buffer(rec.raw(), self.raw, stage.raw, &[region]) };
             })?;
             in_flight[k] = Some((s, i));
         }
@@ -329,25 +415,6 @@ impl<T: Pod> Buffer<T> {
             pool.give_back(b);
         }
         Ok(())
-    }
-
-    /// Records `vkCmdFillBuffer` of the whole buffer with the 32-bit pattern `word`.
-    pub fn record_fill(&self, cmd: vk::CommandBuffer, word: u32) {
-        // SAFETY: `cmd` is recording on this device; the whole-size fill is always valid.
-        unsafe { self.shared.raw.cmd_fill_buffer(cmd, self.raw, 0, vk::WHOLE_SIZE, word) };
-    }
-}
-
-impl<T: Pod> Drop for Buffer<T> {
-    fn drop(&mut self) {
-        let raw = self.raw;
-        if let Some(allocation) = self.allocation.take() {
-            self.shared.retire(move |dev| {
-                // SAFETY: no engine work in flight uses the buffer any more (retire's contract).
-                unsafe { dev.raw.destroy_buffer(raw, None) };
-                dev.free(allocation);
-            });
-        }
     }
 }
 

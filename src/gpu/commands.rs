@@ -1,15 +1,19 @@
 //! Submitting work and retiring resources.
 //!
-//! Passes record into a `vk::CommandBuffer` they are handed and never submit. [`Gpu::run`]
-//! is the convenience that records, submits to the engine's queue with its own fence, and
-//! waits on that fence only (never `vkDeviceWaitIdle`, which would also wait on a host's work).
-//! [`Gpu::submit`] returns a [`Submission`] to wait on later.
+//! Passes record through a [`Recorder`] they are handed and never submit. [`Gpu::run`] is the
+//! convenience that records, submits to the engine's queue with its own fence, and waits on
+//! that fence only (never `vkDeviceWaitIdle`, which would also wait on a host's work).
+//! [`Gpu::submit`] returns a [`Submission`] to wait on later; it holds every object the
+//! recording used (see [`super::lifetime`]) until its fence is seen signalled.
 //!
-//! Deferred destruction: every engine submission gets a serial that is "in flight" from the
-//! moment its recording begins until its fence is seen signalled. A resource dropped while any
-//! serial is in flight is not destroyed at once: its destructor is queued with the newest serial
-//! and runs when no serial at or below it is in flight. A resource dropped while nothing is in
-//! flight is destroyed immediately.
+//! Deferred destruction: every engine submission also gets a serial that is "in flight" from
+//! the moment its recording begins until its fence is seen signalled. A resource whose last
+//! reference goes while any serial is in flight is not destroyed at once: its destructor is
+//! queued with the newest serial and runs when no serial at or below it is in flight.
+//!
+//! A submission that times out is not forgotten: dropping it hands its fence, serial and
+//! objects to the device, which polls the fence at every later submission and retires them
+//! when it signals (or at teardown).
 
 use std::collections::BTreeSet;
 use std::sync::Arc;
@@ -19,6 +23,8 @@ use ash::vk;
 
 use super::context::{DeviceShared, Gpu};
 use super::error::{vk_error, GpuError, GpuResult, VkContext};
+use super::lifetime::Use;
+use super::recorder::Recorder;
 
 /// One submission's command pool (its own, so recording on several threads needs no lock),
 /// its one command buffer and its fence.
@@ -85,6 +91,10 @@ pub(crate) struct Tracker {
     retired: Vec<(u64, Retirement)>,
     /// Reusable slots, each with an unsignalled fence and a reset pool.
     pub(crate) free: Vec<Slot>,
+    /// Timed-out submissions: their slot, serial and objects, until their fence signals.
+    pub(crate) abandoned: Vec<(Slot, u64, Vec<Use>)>,
+    /// Objects of host recordings dropped without [`Recorder::finish`], kept until teardown.
+    pub(crate) orphans: Vec<Use>,
 }
 
 impl Tracker {
@@ -115,6 +125,61 @@ impl DeviceShared {
         }
     }
 
+    /// Keeps a host recording's objects until the device goes.
+    pub(crate) fn orphan(&self, uses: Vec<Use>) {
+        let mut t = self.tracker.lock().unwrap_or_else(|p| p.into_inner());
+        t.orphans.extend(uses);
+    }
+
+    /// Retires every timed-out submission whose fence has signalled since.
+    fn poll_abandoned(&self) {
+        let done: Vec<(Slot, u64, Vec<Use>)> = {
+            let mut t = self.tracker.lock().unwrap_or_else(|p| p.into_inner());
+            if t.abandoned.is_empty() {
+                return;
+            }
+            let (done, waiting): (Vec<_>, Vec<_>) = t
+                .abandoned
+                .drain(..)
+                // SAFETY: the fence belongs to this device and was submitted.
+                .partition(|(slot, _, _)| unsafe { self.raw.get_fence_status(slot.fence) }.unwrap_or(true));
+            t.abandoned = waiting;
+            done
+        };
+        for (slot, serial, uses) in done {
+            // SAFETY: the fence is signalled (or the device is lost): the queue no longer uses it.
+            let fence_reset = unsafe { self.raw.reset_fences(&[slot.fence]) }.is_ok();
+            let reuse = (fence_reset && slot.reset(self)).then_some(slot);
+            if reuse.is_none() {
+                slot.destroy(self);
+            }
+            drop(uses);
+            self.finish(serial, reuse);
+        }
+    }
+
+    /// At teardown: waits (up to the fence timeout each) for timed-out submissions and returns
+    /// their slots and objects; a fence that never signals leaves its slot undestroyed.
+    pub(crate) fn drain_abandoned(&mut self) -> (Vec<Slot>, Vec<Use>) {
+        let nanos = u64::try_from(self.fence_timeout.as_nanos()).unwrap_or(u64::MAX);
+        let abandoned = self.tracker.get_mut().map(|t| std::mem::take(&mut t.abandoned)).unwrap_or_default();
+        let (mut slots, mut released) = (Vec::new(), Vec::new());
+        for (slot, _, uses) in abandoned {
+            // SAFETY: the fence belongs to this device.
+            match unsafe { self.raw.wait_for_fences(&[slot.fence], true, nanos) } {
+                Ok(()) | Err(vk::Result::ERROR_DEVICE_LOST) => {
+                    slots.push(slot);
+                    released.extend(uses);
+                }
+                Err(e) => {
+                    tracing::error!("a timed-out submission is still running at teardown ({e}); leaking it");
+                    std::mem::forget(uses);
+                }
+            }
+        }
+        (slots, released)
+    }
+
     fn finish(&self, serial: u64, reuse: Option<Slot>) {
         let ready = {
             let mut t = self.tracker.lock().unwrap_or_else(|p| p.into_inner());
@@ -132,16 +197,29 @@ impl DeviceShared {
 /// Work submitted with [`Gpu::submit`]. Waiting (or dropping) it waits on its own fence.
 #[must_use = "a submission is waited on when dropped; call wait() to see its errors"]
 pub struct Submission {
+    /// Every object the recording used, released when the fence is seen signalled (first:
+    /// fields drop in order, and these must go while the device is alive).
+    uses: Vec<Use>,
     shared: Arc<DeviceShared>,
     slot: Slot,
     serial: u64,
     done: bool,
+    /// A wait already timed out: dropping it abandons it rather than waiting again.
+    timed_out: bool,
 }
 
 impl Submission {
     /// Waits until the work has finished. Device loss and timeouts are errors, not panics.
     pub fn wait(mut self) -> GpuResult<()> {
-        self.wait_inner()
+        let timeout = self.shared.fence_timeout;
+        self.wait_inner(timeout)
+    }
+
+    /// Waits at most `timeout` (instead of [`crate::gpu::GpuDesc::fence_timeout`]). On a
+    /// timeout the work is handed to the device, which retires it once its fence signals
+    /// (see [`Gpu::pending_submissions`]).
+    pub fn wait_for(mut self, timeout: Duration) -> GpuResult<()> {
+        self.wait_inner(timeout)
     }
 
     /// True if the work has finished (does not block).
@@ -150,11 +228,10 @@ impl Submission {
         self.done || unsafe { self.shared.raw.get_fence_status(self.slot.fence) }.unwrap_or(false)
     }
 
-    fn wait_inner(&mut self) -> GpuResult<()> {
+    fn wait_inner(&mut self, timeout: Duration) -> GpuResult<()> {
         if self.done {
             return Ok(());
         }
-        let timeout = self.shared.fence_timeout;
         let nanos = u64::try_from(timeout.as_nanos()).unwrap_or(u64::MAX);
         // SAFETY: the fence was submitted with this work and is owned by the engine.
         let r = unsafe { self.shared.raw.wait_for_fences(&[self.slot.fence], true, nanos) };
@@ -167,15 +244,18 @@ impl Submission {
                 if reuse.is_none() {
                     self.slot.destroy(&self.shared);
                 }
+                self.uses.clear();
                 self.shared.finish(self.serial, reuse);
                 Ok(())
             }
             Err(vk::Result::TIMEOUT) => {
+                self.timed_out = true;
                 Err(GpuError::Timeout { during: "Gpu::run", seconds: timeout.as_secs_f64() })
             }
             Err(e) => {
                 // Device lost: nothing will signal again. Retire the serial so drops proceed.
                 self.done = true;
+                self.uses.clear();
                 self.shared.finish(self.serial, None);
                 Err(vk_error("vkWaitForFences (Gpu::run)", e))
             }
@@ -185,11 +265,17 @@ impl Submission {
 
 impl Drop for Submission {
     fn drop(&mut self) {
-        if !self.done {
-            if let Err(e) = self.wait_inner() {
-                // A timed-out submission is leaked rather than destroyed while possibly running.
+        if !self.done && !self.timed_out {
+            let timeout = self.shared.fence_timeout;
+            if let Err(e) = self.wait_inner(timeout) {
                 tracing::error!("dropping an unfinished submission: {e}");
             }
+        }
+        if !self.done {
+            // Timed out: the device polls its fence from now on and retires its serial and
+            // objects when it signals, rather than destroying anything still running.
+            let mut t = self.shared.tracker.lock().unwrap_or_else(|p| p.into_inner());
+            t.abandoned.push((self.slot, self.serial, std::mem::take(&mut self.uses)));
         }
     }
 }
@@ -197,14 +283,14 @@ impl Drop for Submission {
 impl Gpu {
     /// Records `record` into a fresh command buffer, submits it to the engine's queue and waits
     /// for it. Returns what `record` returned.
-    pub fn run<R>(&self, record: impl FnOnce(vk::CommandBuffer) -> R) -> GpuResult<R> {
+    pub fn run<R>(&self, record: impl FnOnce(&mut Recorder<'_>) -> R) -> GpuResult<R> {
         let (submission, r) = self.submit(record)?;
         submission.wait()?;
         Ok(r)
     }
 
     /// Records and submits without waiting; wait on the returned [`Submission`].
-    pub fn submit<R>(&self, record: impl FnOnce(vk::CommandBuffer) -> R) -> GpuResult<(Submission, R)> {
+    pub fn submit<R>(&self, record: impl FnOnce(&mut Recorder<'_>) -> R) -> GpuResult<(Submission, R)> {
         self.submit_with_semaphores(&[], &[], record)
     }
 
@@ -215,9 +301,10 @@ impl Gpu {
         &self,
         wait: &[(vk::Semaphore, vk::PipelineStageFlags)],
         signal: &[vk::Semaphore],
-        record: impl FnOnce(vk::CommandBuffer) -> R,
+        record: impl FnOnce(&mut Recorder<'_>) -> R,
     ) -> GpuResult<(Submission, R)> {
         let shared = &self.shared;
+        shared.poll_abandoned();
         let (slot, serial) = {
             let mut t = shared.tracker.lock().unwrap_or_else(|p| p.into_inner());
             let serial = t.next_serial;
@@ -256,7 +343,9 @@ impl Gpu {
         let begin = vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
         // SAFETY: `cmd` is in the initial state (fresh or reset).
         unsafe { shared.raw.begin_command_buffer(cmd, &begin) }.vk("vkBeginCommandBuffer")?;
-        let r = record(cmd);
+        let mut recorder = Recorder::engine(self, cmd);
+        let r = record(&mut recorder);
+        let uses = recorder.into_uses();
         // SAFETY: `cmd` is recording.
         unsafe { shared.raw.end_command_buffer(cmd) }.vk("vkEndCommandBuffer")?;
         let cmds = [cmd];
@@ -273,42 +362,20 @@ impl Gpu {
             unsafe { shared.raw.queue_submit(*queue, &[submit], fence) }.vk("vkQueueSubmit")?;
         }
         pending.armed = false;
-        Ok((Submission { shared: shared.clone(), slot, serial, done: false }, r))
+        Ok((Submission { shared: shared.clone(), slot, serial, done: false, timed_out: false, uses }, r))
     }
 
-    /// Records a global memory barrier (the common case between passes: one pass writes a
-    /// buffer, the next reads it).
-    pub fn memory_barrier(
-        &self,
-        cmd: vk::CommandBuffer,
-        src: (vk::PipelineStageFlags, vk::AccessFlags),
-        dst: (vk::PipelineStageFlags, vk::AccessFlags),
-    ) {
-        let barrier = vk::MemoryBarrier::default().src_access_mask(src.1).dst_access_mask(dst.1);
-        // SAFETY: `cmd` is recording on this device (caller's contract for passes).
-        unsafe {
-            self.shared.raw.cmd_pipeline_barrier(
-                cmd,
-                src.0,
-                dst.0,
-                vk::DependencyFlags::empty(),
-                &[barrier],
-                &[],
-                &[],
-            )
-        };
+    /// Engine submissions not yet seen finished (including timed-out ones the device is still
+    /// polling): resources dropped meanwhile wait for them.
+    pub fn pending_submissions(&self) -> usize {
+        let t = self.shared.tracker.lock().unwrap_or_else(|p| p.into_inner());
+        t.in_flight.len()
     }
 
-    /// Compute shader writes → compute shader reads and writes.
-    pub fn compute_to_compute_barrier(&self, cmd: vk::CommandBuffer) {
-        self.memory_barrier(
-            cmd,
-            (vk::PipelineStageFlags::COMPUTE_SHADER, vk::AccessFlags::SHADER_WRITE),
-            (
-                vk::PipelineStageFlags::COMPUTE_SHADER,
-                vk::AccessFlags::SHADER_READ | vk::AccessFlags::SHADER_WRITE,
-            ),
-        );
+    /// Retires timed-out submissions that have finished since (every submission does this
+    /// too); for a host loop that submits nothing through the engine for a while.
+    pub fn poll(&self) {
+        self.shared.poll_abandoned();
     }
 
     /// The default timeout of [`Gpu::run`].

@@ -128,10 +128,27 @@ impl DeviceShared {
 
 impl Drop for DeviceShared {
     fn drop(&mut self) {
-        // Every Submission holds an Arc to this, so none is in flight; run what is left retired.
-        let leftovers = self.tracker.get_mut().map(|t| t.take_all()).unwrap_or_default();
-        for f in leftovers {
-            f(self);
+        // Every Submission holds an Arc to this, so none is in flight except timed-out ones
+        // (waited for here). Release their objects and those of orphaned host recordings, then
+        // run what is left retired.
+        let (abandoned_slots, uses) = self.drain_abandoned();
+        drop(uses);
+        drop(self.tracker.get_mut().map(|t| std::mem::take(&mut t.orphans)));
+        // Destructors may release further objects (a set the resources it bound), whose
+        // destructors, unable to reach this device any more, queue for it: run until none is
+        // left (bounded: every object is destroyed once).
+        loop {
+            let mut leftovers = self.tracker.get_mut().map(|t| t.take_all()).unwrap_or_default();
+            leftovers.extend(super::lifetime::take_teardown(self as *const Self));
+            if leftovers.is_empty() {
+                break;
+            }
+            for f in leftovers {
+                f(self);
+            }
+        }
+        for slot in abandoned_slots {
+            slot.destroy(self);
         }
         // SAFETY: teardown in dependency order; no work is in flight (see above), every resource
         // made on this device has been dropped (they hold this Arc), and the engine destroys only

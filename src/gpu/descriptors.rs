@@ -1,7 +1,9 @@
 //! Descriptor set layouts and descriptor sets. A pipeline declares its bindings as a list of
 //! [`BindingKind`]s (binding `i` is entry `i`, all in set 0); a [`DescriptorSet`] binds concrete
 //! resources to them once and is reused every time the pass is recorded (resources stay
-//! resident). Each set has its own small pool, so sets come and go independently.
+//! resident). Each set has its own small pool, so sets come and go independently, and keeps
+//! every resource it binds alive until the set itself is destroyed (after the last recording
+//! that uses it has finished).
 
 use std::sync::Arc;
 
@@ -10,6 +12,8 @@ use ash::vk;
 use super::buffer::BufferBinding;
 use super::context::{DeviceShared, Gpu};
 use super::error::{vk_error, GpuError, GpuResult, VkContext};
+use super::image::{Image, Sampler};
+use super::lifetime::{Lifetime, Tracked};
 
 /// The kind of one binding.
 #[derive(Copy, Clone, Debug, PartialEq, Eq, Hash)]
@@ -32,23 +36,23 @@ impl BindingKind {
     }
 }
 
-/// A concrete resource for one binding.
-#[derive(Copy, Clone, Debug)]
-pub enum Resource {
+/// A concrete resource for one binding (borrowing it: see [`BufferBinding`]).
+#[derive(Copy, Clone)]
+pub enum Resource<'a> {
     /// A storage-buffer range.
-    Storage(BufferBinding),
+    Storage(BufferBinding<'a>),
     /// A uniform-buffer range.
-    Uniform(BufferBinding),
-    /// An image view in `SHADER_READ_ONLY_OPTIMAL` with its sampler.
+    Uniform(BufferBinding<'a>),
+    /// An image, read in `SHADER_READ_ONLY_OPTIMAL` through its view, with a sampler.
     Texture {
-        /// The view.
-        view: vk::ImageView,
+        /// The image.
+        image: &'a Image,
         /// The sampler.
-        sampler: vk::Sampler,
+        sampler: &'a Sampler,
     },
 }
 
-impl Resource {
+impl Resource<'_> {
     fn kind(&self) -> BindingKind {
         match self {
             Self::Storage(_) => BindingKind::StorageBuffer,
@@ -56,13 +60,28 @@ impl Resource {
             Self::Texture { .. } => BindingKind::Texture,
         }
     }
+
+    /// The lifetimes a set binding this must keep.
+    fn lifetimes(&self) -> Vec<Arc<Lifetime>> {
+        match self {
+            Self::Storage(b) | Self::Uniform(b) => vec![b.lifetime().clone()],
+            Self::Texture { image, sampler } => vec![image.lifetime().clone(), sampler.lifetime().clone()],
+        }
+    }
 }
 
 /// A set layout: binding `i` has kind `kinds[i]`, visible to `stages`.
 pub struct DescriptorSetLayout {
-    shared: Arc<DeviceShared>,
+    life: Arc<Lifetime>,
+    pub(crate) shared: Arc<DeviceShared>,
     pub(crate) raw: vk::DescriptorSetLayout,
     kinds: Vec<BindingKind>,
+}
+
+impl Tracked for DescriptorSetLayout {
+    fn lifetime(&self) -> &Arc<Lifetime> {
+        &self.life
+    }
 }
 
 impl DescriptorSetLayout {
@@ -83,7 +102,11 @@ impl DescriptorSetLayout {
         // SAFETY: valid create info on this device.
         let raw = unsafe { gpu.device().create_descriptor_set_layout(&info, None) }
             .vk("vkCreateDescriptorSetLayout")?;
-        Ok(Self { shared: gpu.shared.clone(), raw, kinds: kinds.to_vec() })
+        let life = Lifetime::new(&gpu.shared, "a descriptor set layout", move |dev| {
+            // SAFETY: no pipeline layout, set or recording uses it any more.
+            unsafe { dev.raw.destroy_descriptor_set_layout(raw, None) }
+        });
+        Ok(Self { life, shared: gpu.shared.clone(), raw, kinds: kinds.to_vec() })
     }
 
     /// The binding kinds, in binding order.
@@ -92,21 +115,17 @@ impl DescriptorSetLayout {
     }
 }
 
-impl Drop for DescriptorSetLayout {
-    fn drop(&mut self) {
-        let raw = self.raw;
-        self.shared.retire(move |dev| {
-            // SAFETY: nothing in flight uses the layout.
-            unsafe { dev.raw.destroy_descriptor_set_layout(raw, None) }
-        });
-    }
+/// Resources bound to a layout, in a pool of its own; it keeps them alive.
+pub struct DescriptorSet {
+    life: Arc<Lifetime>,
+    _device: Arc<DeviceShared>,
+    pub(crate) raw: vk::DescriptorSet,
 }
 
-/// Resources bound to a layout, in a pool of its own.
-pub struct DescriptorSet {
-    shared: Arc<DeviceShared>,
-    pool: vk::DescriptorPool,
-    pub(crate) raw: vk::DescriptorSet,
+impl Tracked for DescriptorSet {
+    fn lifetime(&self) -> &Arc<Lifetime> {
+        &self.life
+    }
 }
 
 impl DescriptorSet {
@@ -114,6 +133,15 @@ impl DescriptorSet {
     /// larger than [`Gpu::max_binding_bytes`] is an error; a kind mismatch is a bug and panics.
     pub fn new(gpu: &Gpu, layout: &DescriptorSetLayout, resources: &[Resource]) -> GpuResult<Self> {
         assert_eq!(resources.len(), layout.kinds.len(), "descriptor set needs one resource per binding");
+        let mut held: Vec<Arc<Lifetime>> = resources.iter().flat_map(Resource::lifetimes).collect();
+        if let Some(other) = held.iter().find(|l| !l.is_on(&gpu.shared)) {
+            return Err(GpuError::WrongDevice { name: other.name().to_string() });
+        }
+        if !Arc::ptr_eq(&layout.shared, &gpu.shared) {
+            return Err(GpuError::WrongDevice { name: "a descriptor set layout".into() });
+        }
+        // Commands that use the set may access its layout: it lives as long as the set.
+        held.push(layout.life.clone());
         for (i, (r, k)) in resources.iter().zip(&layout.kinds).enumerate() {
             assert_eq!(r.kind(), *k, "binding {i}: resource kind does not match the layout");
             if let Resource::Storage(b) = r {
@@ -154,7 +182,7 @@ impl DescriptorSet {
             .iter()
             .map(|r| match r {
                 Resource::Storage(b) | Resource::Uniform(b) => {
-                    [vk::DescriptorBufferInfo { buffer: b.buffer, offset: b.offset, range: b.range }]
+                    [vk::DescriptorBufferInfo { buffer: b.raw(), offset: b.offset, range: b.range }]
                 }
                 Resource::Texture { .. } => [vk::DescriptorBufferInfo::default()],
             })
@@ -162,9 +190,9 @@ impl DescriptorSet {
         let image_infos: Vec<[vk::DescriptorImageInfo; 1]> = resources
             .iter()
             .map(|r| match r {
-                Resource::Texture { view, sampler } => [vk::DescriptorImageInfo {
-                    sampler: *sampler,
-                    image_view: *view,
+                Resource::Texture { image, sampler } => [vk::DescriptorImageInfo {
+                    sampler: sampler.raw(),
+                    image_view: image.view(),
                     image_layout: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
                 }],
                 _ => [vk::DescriptorImageInfo::default()],
@@ -186,21 +214,17 @@ impl DescriptorSet {
             .collect();
         // SAFETY: every write targets a binding of matching type; the infos outlive the call.
         unsafe { gpu.device().update_descriptor_sets(&writes, &[]) };
-        Ok(Self { shared: gpu.shared.clone(), pool, raw })
+        let life = Lifetime::new(&gpu.shared, "a descriptor set", move |dev| {
+            // SAFETY: no recording uses the set any more; destroying the pool frees it. The
+            // resources it bound (`held`) are released after it.
+            unsafe { dev.raw.destroy_descriptor_pool(pool, None) };
+            drop(held);
+        });
+        Ok(Self { _device: gpu.shared.clone(), life, raw })
     }
 
     /// The Vulkan handle.
     pub fn raw(&self) -> vk::DescriptorSet {
         self.raw
-    }
-}
-
-impl Drop for DescriptorSet {
-    fn drop(&mut self) {
-        let pool = self.pool;
-        self.shared.retire(move |dev| {
-            // SAFETY: nothing in flight uses the set; destroying the pool frees it.
-            unsafe { dev.raw.destroy_descriptor_pool(pool, None) }
-        });
     }
 }

@@ -71,6 +71,21 @@ pub enum GpuError {
         /// Unit of both numbers.
         unit: &'static str,
     },
+    /// An object made on one device was used with another [`crate::gpu::Gpu`].
+    #[error("`{name}` belongs to another Vulkan device than the one it was used with")]
+    WrongDevice {
+        /// The object's name.
+        name: String,
+    },
+    /// Host access to a buffer's memory that is not host-visible, or that recorded GPU work
+    /// not yet known to be finished may still use.
+    #[error("cannot map `{name}` from the host: {reason}")]
+    NotMappable {
+        /// The buffer's name.
+        name: String,
+        /// Why.
+        reason: &'static str,
+    },
     /// The device lacks a feature or extension the request needs.
     #[error("the device does not support {0}")]
     Unsupported(String),

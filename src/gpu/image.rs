@@ -4,12 +4,13 @@
 use std::sync::Arc;
 
 use ash::vk;
-use gpu_allocator::vulkan::Allocation;
 
 use super::buffer::Buffer;
 use super::context::{DeviceShared, Gpu};
 use super::error::{vk_error, GpuError, GpuResult, VkContext};
+use super::lifetime::{Lifetime, Tracked};
 use super::memory::MemoryKind;
+use super::recorder::Recorder;
 
 /// What image to make.
 #[derive(Copy, Clone, Debug, PartialEq, Eq, Hash)]
@@ -83,12 +84,19 @@ pub fn texel_bytes(format: vk::Format) -> Option<u64> {
 
 /// An image with one mip level, one layer, and a view of all of it.
 pub struct Image {
-    shared: Arc<DeviceShared>,
+    // `life` first: fields drop in order, and the lifetime must end while the device is alive.
+    life: Arc<Lifetime>,
+    _device: Arc<DeviceShared>,
     raw: vk::Image,
     view: vk::ImageView,
-    allocation: Option<Allocation>,
     desc: ImageDesc,
     name: String,
+}
+
+impl Tracked for Image {
+    fn lifetime(&self) -> &Arc<Lifetime> {
+        &self.life
+    }
 }
 
 impl Image {
@@ -162,7 +170,15 @@ impl Image {
             }
         };
         shared.set_name(raw, name);
-        Ok(Self { shared, raw, view, allocation: Some(allocation), desc, name: name.to_string() })
+        let life = Lifetime::new(&shared, name, move |dev| {
+            // SAFETY: the last reference is gone: no recording or set uses the image.
+            unsafe {
+                dev.raw.destroy_image_view(view, None);
+                dev.raw.destroy_image(raw, None);
+            }
+            dev.free(allocation);
+        });
+        Ok(Self { _device: shared, life, raw, view, desc, name: name.to_string() })
     }
 
     /// The Vulkan image.
@@ -188,11 +204,13 @@ impl Image {
     /// Records a layout transition with a full barrier between the given stages.
     pub fn record_transition(
         &self,
-        cmd: vk::CommandBuffer,
+        rec: &mut Recorder<'_>,
         from: (vk::ImageLayout, vk::PipelineStageFlags, vk::AccessFlags),
         to: (vk::ImageLayout, vk::PipelineStageFlags, vk::AccessFlags),
     ) {
-        record_image_barrier(&self.shared.raw, cmd, self.raw, self.desc.aspect(), from, to);
+        rec.keep(self);
+        // SAFETY: recording on this device; the image is live and kept by the recording.
+        unsafe { record_image_barrier(rec, self.raw, self.desc.aspect(), from, to) };
     }
 
     /// Uploads tightly packed texels and leaves the image in `SHADER_READ_ONLY_OPTIMAL`,
@@ -209,10 +227,10 @@ impl Image {
             MemoryKind::CpuToGpu,
         )?;
         let mut staging = staging;
-        staging.mapped_mut().expect("CpuToGpu memory is mapped").copy_from_slice(texels);
-        gpu.run(|cmd| {
+        staging.mapped_mut()?.copy_from_slice(texels);
+        gpu.run(|rec| {
             self.record_transition(
-                cmd,
+                rec,
                 (vk::ImageLayout::UNDEFINED, vk::PipelineStageFlags::TOP_OF_PIPE, vk::AccessFlags::empty()),
                 (
                     vk::ImageLayout::TRANSFER_DST_OPTIMAL,
@@ -221,10 +239,12 @@ impl Image {
                 ),
             );
             let region = self.copy_region();
-            // SAFETY: staging holds exactly the image's texels; the image is in TRANSFER_DST.
+            rec.keep(&staging);
+            // SAFETY: staging holds exactly the image's texels and is kept by the recording;
+            // the image is in TRANSFER_DST.
             unsafe {
-                gpu.device().cmd_copy_buffer_to_image(
-                    cmd,
+                rec.device().cmd_copy_buffer_to_image(
+                    rec.raw(),
                     staging.raw(),
                     self.raw,
                     vk::ImageLayout::TRANSFER_DST_OPTIMAL,
@@ -232,7 +252,7 @@ impl Image {
                 )
             };
             self.record_transition(
-                cmd,
+                rec,
                 (
                     vk::ImageLayout::TRANSFER_DST_OPTIMAL,
                     vk::PipelineStageFlags::TRANSFER,
@@ -247,16 +267,24 @@ impl Image {
         })
     }
 
-    /// Records a copy of the whole image (which must be in `TRANSFER_SRC_OPTIMAL`) into `dst`.
-    pub fn record_copy_to_buffer(&self, cmd: vk::CommandBuffer, dst: vk::Buffer) {
+    /// Records a copy of the whole image (which must be in `TRANSFER_SRC_OPTIMAL`) into `dst`,
+    /// tightly packed. Panics if `dst` is smaller than the image's texels.
+    pub fn record_copy_to_buffer<T: bytemuck::Pod>(&self, rec: &mut Recorder<'_>, dst: &Buffer<T>) {
+        let needed = texel_bytes(self.desc.format)
+            .map_or(0, |b| b * u64::from(self.desc.width) * u64::from(self.desc.height));
+        assert!(dst.size_bytes() >= needed, "`{}` cannot hold image `{}`", dst.name(), self.name);
+        rec.keep(self);
+        rec.keep(dst);
         let region = self.copy_region();
-        // SAFETY: `cmd` records on this device; caller guarantees the layout and `dst` size.
+        // SAFETY: recording on this device; both objects are kept by the recording, the
+        // image's layout is the caller's documented precondition (a validation error, not
+        // memory unsafety, if wrong) and `dst` holds the texels (checked above).
         unsafe {
-            self.shared.raw.cmd_copy_image_to_buffer(
-                cmd,
+            rec.device().cmd_copy_image_to_buffer(
+                rec.raw(),
                 self.raw,
                 vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                dst,
+                dst.raw(),
                 &[region],
             )
         };
@@ -280,22 +308,6 @@ impl Image {
     }
 }
 
-impl Drop for Image {
-    fn drop(&mut self) {
-        let (raw, view) = (self.raw, self.view);
-        if let Some(allocation) = self.allocation.take() {
-            self.shared.retire(move |dev| {
-                // SAFETY: no engine work in flight uses the image any more.
-                unsafe {
-                    dev.raw.destroy_image_view(view, None);
-                    dev.raw.destroy_image(raw, None);
-                }
-                dev.free(allocation);
-            });
-        }
-    }
-}
-
 /// The whole single-level, single-layer subresource.
 pub(crate) fn subresource(aspect: vk::ImageAspectFlags) -> vk::ImageSubresourceRange {
     vk::ImageSubresourceRange {
@@ -309,9 +321,12 @@ pub(crate) fn subresource(aspect: vk::ImageAspectFlags) -> vk::ImageSubresourceR
 
 /// Records an image memory barrier with a layout transition (also used on images the engine
 /// does not own, such as a host's or a swapchain's).
-pub fn record_image_barrier(
-    device: &ash::Device,
-    cmd: vk::CommandBuffer,
+///
+/// # Safety
+/// `image` is a live image of the recorder's device with `aspect`, one mip level and one
+/// layer, and stays alive until the recording's work has finished.
+pub unsafe fn record_image_barrier(
+    rec: &mut Recorder<'_>,
     image: vk::Image,
     aspect: vk::ImageAspectFlags,
     from: (vk::ImageLayout, vk::PipelineStageFlags, vk::AccessFlags),
@@ -326,16 +341,31 @@ pub fn record_image_barrier(
         .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
         .image(image)
         .subresource_range(subresource(aspect));
-    // SAFETY: `cmd` is recording on `device`; `image` is a live image of it.
+    // SAFETY: recording on this device; `image` per this function's contract.
     unsafe {
-        device.cmd_pipeline_barrier(cmd, from.1, to.1, vk::DependencyFlags::empty(), &[], &[], &[barrier])
+        rec.device().cmd_pipeline_barrier(
+            rec.raw(),
+            from.1,
+            to.1,
+            vk::DependencyFlags::empty(),
+            &[],
+            &[],
+            &[barrier],
+        )
     };
 }
 
 /// A sampler.
 pub struct Sampler {
-    shared: Arc<DeviceShared>,
+    life: Arc<Lifetime>,
+    _device: Arc<DeviceShared>,
     raw: vk::Sampler,
+}
+
+impl Tracked for Sampler {
+    fn lifetime(&self) -> &Arc<Lifetime> {
+        &self.life
+    }
 }
 
 impl Sampler {
@@ -353,21 +383,15 @@ impl Sampler {
             .max_lod(0.0);
         // SAFETY: valid create info on this device.
         let raw = unsafe { gpu.device().create_sampler(&info, None) }.vk("vkCreateSampler")?;
-        Ok(Self { shared: gpu.shared.clone(), raw })
+        let life = Lifetime::new(&gpu.shared, "a sampler", move |dev| {
+            // SAFETY: no recording or set uses it any more.
+            unsafe { dev.raw.destroy_sampler(raw, None) }
+        });
+        Ok(Self { _device: gpu.shared.clone(), life, raw })
     }
 
     /// The Vulkan handle.
     pub fn raw(&self) -> vk::Sampler {
         self.raw
-    }
-}
-
-impl Drop for Sampler {
-    fn drop(&mut self) {
-        let raw = self.raw;
-        self.shared.retire(move |dev| {
-            // SAFETY: no engine work in flight uses it.
-            unsafe { dev.raw.destroy_sampler(raw, None) }
-        });
     }
 }

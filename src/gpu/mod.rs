@@ -6,10 +6,13 @@
 //! Conventions (see `DESIGN.md`):
 //! - The Vulkan handle field is `raw`; shared device state lives in one `Arc<DeviceShared>`
 //!   that every resource holds, so the device outlives its resources.
-//! - Passes record into a `vk::CommandBuffer` they are handed; [`Gpu::run`] submits and waits
-//!   on its own fence, never `vkDeviceWaitIdle`.
-//! - Every object frees itself on `Drop`; objects possibly still used by in-flight engine work
-//!   are destroyed after that work's fence signals.
+//! - Passes record through a [`Recorder`] they are handed — over the engine's command buffer
+//!   ([`Gpu::run`], which submits and waits on its own fence, never `vkDeviceWaitIdle`) or a
+//!   host's ([`Recorder::from_host`]) — and never submit.
+//! - Every object frees itself when it and every recording and descriptor set that use it are
+//!   gone ([`Lifetime`]): a recording keeps what it recorded until its work is known to be
+//!   finished, so no safe code can destroy an object the device may still use.
+//! - Objects remember their device; using one with another [`Gpu`] is an error or a panic.
 //! - Device limits are read once ([`Capabilities`]) and respected: arrays larger than one
 //!   storage binding (128 MiB on lavapipe) are bound in chunks ([`Buffer::binding_chunks`]).
 
@@ -22,9 +25,11 @@ mod descriptors;
 mod error;
 mod image;
 mod instance;
+mod lifetime;
 mod memory;
 mod pipeline;
 mod query;
+mod recorder;
 mod renderpass;
 pub mod shaders;
 mod staging;
@@ -40,12 +45,14 @@ pub use debug::ValidationLog;
 pub use descriptors::{BindingKind, DescriptorSet, DescriptorSetLayout, Resource};
 pub use error::{GpuError, GpuResult};
 pub use image::{record_image_barrier, texel_bytes, Image, ImageDesc, Sampler};
+pub use lifetime::{Lifetime, Tracked};
 pub use memory::MemoryKind;
 pub use pipeline::{
     spirv_local_size, ComputePipeline, ComputePipelineDesc, GraphicsPipeline, GraphicsPipelineDesc,
     VertexAttribute,
 };
 pub use query::Profiler;
-pub use renderpass::{ForeignView, Framebuffer, RenderPass};
+pub use recorder::{Recorder, Recording};
+pub use renderpass::{Attachment, ForeignView, Framebuffer, RenderPass};
 #[cfg(feature = "viewer")]
 pub use swapchain::{surface_extensions, Surface, Swapchain};

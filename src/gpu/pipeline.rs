@@ -6,9 +6,12 @@ use std::sync::Arc;
 
 use ash::vk;
 
+use super::buffer::BufferBinding;
 use super::context::{DeviceShared, Gpu};
 use super::descriptors::{BindingKind, DescriptorSet, DescriptorSetLayout, Resource};
 use super::error::{vk_error, GpuError, GpuResult, VkContext};
+use super::lifetime::{Lifetime, Tracked};
+use super::recorder::Recorder;
 
 /// A shader module, destroyed as soon as the pipeline using it exists.
 struct ShaderModule<'a> {
@@ -49,7 +52,8 @@ fn specialization<'a>(
 /// A pipeline layout: one descriptor set (bindings in order) and one push-constant range
 /// visible to `stages`.
 struct PipelineLayout {
-    shared: Arc<DeviceShared>,
+    life: Arc<Lifetime>,
+    _device: Arc<DeviceShared>,
     raw: vk::PipelineLayout,
     set: DescriptorSetLayout,
     push_bytes: u32,
@@ -82,23 +86,21 @@ impl PipelineLayout {
         }
         // SAFETY: valid create info on this device.
         let raw = unsafe { gpu.device().create_pipeline_layout(&info, None) }.vk("vkCreatePipelineLayout")?;
-        Ok(Self { shared: gpu.shared.clone(), raw, set, push_bytes, stages })
-    }
-}
-
-impl Drop for PipelineLayout {
-    fn drop(&mut self) {
-        let raw = self.raw;
-        self.shared.retire(move |dev| {
-            // SAFETY: nothing in flight uses the layout.
-            unsafe { dev.raw.destroy_pipeline_layout(raw, None) }
+        let set_life = set.lifetime().clone();
+        let life = Lifetime::new(&gpu.shared, name, move |dev| {
+            // SAFETY: no pipeline or recording uses the layout any more; its set layout is
+            // released after it.
+            unsafe { dev.raw.destroy_pipeline_layout(raw, None) };
+            drop(set_life);
         });
+        Ok(Self { life, _device: gpu.shared.clone(), raw, set, push_bytes, stages })
     }
 }
 
 /// What compute and graphics pipelines share: the pipeline, its layout, and the rule that a
 /// recording binds the pipeline, its one descriptor set and exactly the declared push bytes.
 struct PipelineCore {
+    life: Arc<Lifetime>,
     raw: vk::Pipeline,
     layout: PipelineLayout,
     bind_point: vk::PipelineBindPoint,
@@ -114,19 +116,28 @@ impl PipelineCore {
         name: &str,
     ) -> Self {
         gpu.shared.set_name(raw, name);
-        Self { raw, layout, bind_point, name: name.to_string() }
+        let layout_life = layout.life.clone();
+        let life = Lifetime::new(&gpu.shared, name, move |dev| {
+            // SAFETY: no recording uses the pipeline any more; its layout is released after it.
+            unsafe { dev.raw.destroy_pipeline(raw, None) };
+            drop(layout_life);
+        });
+        Self { life, raw, layout, bind_point, name: name.to_string() }
     }
 
     fn bind(&self, gpu: &Gpu, resources: &[Resource]) -> GpuResult<DescriptorSet> {
         DescriptorSet::new(gpu, &self.layout.set, resources)
     }
 
-    /// Records the pipeline, `set` and `push` (exactly the declared size).
-    fn record_bind(&self, cmd: vk::CommandBuffer, set: &DescriptorSet, push: &[u8]) {
+    /// Records the pipeline, `set` and `push` (exactly the declared size), keeping both alive.
+    fn record_bind(&self, rec: &mut Recorder<'_>, set: &DescriptorSet, push: &[u8]) {
         let l = &self.layout;
         assert_eq!(push.len() as u32, l.push_bytes, "push constants of `{}`", self.name);
-        let d = &l.shared.raw;
-        // SAFETY: `cmd` is recording on this device; the set matches this pipeline's layout.
+        rec.keep_lifetime(&self.life);
+        rec.keep(set);
+        let (d, cmd) = (rec.device(), rec.raw());
+        // SAFETY: recording on this device (checked by `keep`); the set matches this pipeline's
+        // layout (made by its `bind`) and both are kept alive by the recording.
         unsafe {
             d.cmd_bind_pipeline(cmd, self.bind_point, self.raw);
             d.cmd_bind_descriptor_sets(cmd, self.bind_point, l.raw, 0, &[set.raw], &[]);
@@ -134,20 +145,6 @@ impl PipelineCore {
                 d.cmd_push_constants(cmd, l.raw, l.stages, 0, push);
             }
         }
-    }
-
-    fn device(&self) -> &ash::Device {
-        &self.layout.shared.raw
-    }
-}
-
-impl Drop for PipelineCore {
-    fn drop(&mut self) {
-        let raw = self.raw;
-        self.layout.shared.retire(move |dev| {
-            // SAFETY: nothing in flight uses the pipeline.
-            unsafe { dev.raw.destroy_pipeline(raw, None) }
-        });
     }
 }
 
@@ -193,6 +190,12 @@ pub struct ComputePipeline {
     core: PipelineCore,
 }
 
+impl Tracked for ComputePipeline {
+    fn lifetime(&self) -> &Arc<Lifetime> {
+        &self.core.life
+    }
+}
+
 impl ComputePipeline {
     /// Builds the pipeline, after checking its workgroup (size read from the SPIR-V, shared
     /// memory from the description) fits the device.
@@ -230,14 +233,14 @@ impl ComputePipeline {
     /// `groups` workgroups.
     pub fn record_dispatch(
         &self,
-        cmd: vk::CommandBuffer,
+        rec: &mut Recorder<'_>,
         set: &DescriptorSet,
         push: &[u8],
         groups: [u32; 3],
     ) {
-        self.core.record_bind(cmd, set, push);
-        // SAFETY: `cmd` is recording with this pipeline bound.
-        unsafe { self.core.device().cmd_dispatch(cmd, groups[0], groups[1], groups[2]) };
+        self.core.record_bind(rec, set, push);
+        // SAFETY: recording with this pipeline bound.
+        unsafe { rec.device().cmd_dispatch(rec.raw(), groups[0], groups[1], groups[2]) };
     }
 }
 
@@ -316,6 +319,12 @@ impl<'a> GraphicsPipelineDesc<'a> {
 /// A graphics pipeline with its layout.
 pub struct GraphicsPipeline {
     core: PipelineCore,
+}
+
+impl Tracked for GraphicsPipeline {
+    fn lifetime(&self) -> &Arc<Lifetime> {
+        &self.core.life
+    }
 }
 
 impl GraphicsPipeline {
@@ -471,46 +480,49 @@ impl GraphicsPipeline {
     /// set the viewport and scissor to `extent`, push `push`, and draw `vertex_count` vertices.
     pub fn record_draw(
         &self,
-        cmd: vk::CommandBuffer,
+        rec: &mut Recorder<'_>,
         extent: vk::Extent2D,
         set: &DescriptorSet,
         push: &[u8],
-        vertices: Option<vk::Buffer>,
+        vertices: Option<BufferBinding<'_>>,
         vertex_count: u32,
     ) {
-        self.record_state(cmd, extent, set, push, vertices);
-        // SAFETY: `cmd` is recording inside a render pass compatible with this pipeline.
-        unsafe { self.core.device().cmd_draw(cmd, vertex_count, 1, 0, 0) };
+        self.record_state(rec, extent, set, push, vertices);
+        // SAFETY: recording inside a render pass (the caller's documented state) with this
+        // pipeline and its resources bound and kept alive.
+        unsafe { rec.device().cmd_draw(rec.raw(), vertex_count, 1, 0, 0) };
     }
 
-    /// Like [`GraphicsPipeline::record_draw`], with the draw's parameters read by the device from
-    /// the `VkDrawIndirectCommand` at byte `offset` of buffer `indirect` (written by an earlier pass, whose
-    /// writes a barrier has made visible to `DRAW_INDIRECT`).
+    /// Like [`GraphicsPipeline::record_draw`], with the draw's parameters read by the device
+    /// from the `VkDrawIndirectCommand` at the start of `indirect` (written by an earlier pass,
+    /// whose writes a barrier has made visible to `DRAW_INDIRECT`). Panics if `indirect` is
+    /// shorter than one command (16 bytes).
     pub fn record_draw_indirect(
         &self,
-        cmd: vk::CommandBuffer,
+        rec: &mut Recorder<'_>,
         extent: vk::Extent2D,
         set: &DescriptorSet,
         push: &[u8],
-        vertices: Option<vk::Buffer>,
-        (indirect, offset): (vk::Buffer, u64),
+        vertices: Option<BufferBinding<'_>>,
+        indirect: BufferBinding<'_>,
     ) {
-        self.record_state(cmd, extent, set, push, vertices);
-        // SAFETY: `cmd` is recording inside a render pass compatible with this pipeline;
-        // `indirect` holds a draw command at `offset` (the caller's contract).
-        unsafe { self.core.device().cmd_draw_indirect(cmd, indirect, offset, 1, 16) };
+        assert!(indirect.range >= 16, "an indirect draw reads 16 bytes");
+        self.record_state(rec, extent, set, push, vertices);
+        let buffer = rec.bound(&indirect);
+        // SAFETY: recording inside a render pass with this pipeline bound; `indirect` is kept
+        // alive and holds at least one draw command at its offset.
+        unsafe { rec.device().cmd_draw_indirect(rec.raw(), buffer, indirect.offset, 1, 16) };
     }
 
     fn record_state(
         &self,
-        cmd: vk::CommandBuffer,
+        rec: &mut Recorder<'_>,
         extent: vk::Extent2D,
         set: &DescriptorSet,
         push: &[u8],
-        vertices: Option<vk::Buffer>,
+        vertices: Option<BufferBinding<'_>>,
     ) {
-        self.core.record_bind(cmd, set, push);
-        let d = self.core.device();
+        self.core.record_bind(rec, set, push);
         let viewport = vk::Viewport {
             x: 0.0,
             y: 0.0,
@@ -520,12 +532,14 @@ impl GraphicsPipeline {
             max_depth: 1.0,
         };
         let scissor = vk::Rect2D { offset: vk::Offset2D::default(), extent };
-        // SAFETY: `cmd` is recording inside a render pass compatible with this pipeline.
+        let vertex_buffer = vertices.map(|v| (rec.bound(&v), v.offset));
+        let (d, cmd) = (rec.device(), rec.raw());
+        // SAFETY: recording with this pipeline bound; the vertex buffer is kept alive.
         unsafe {
             d.cmd_set_viewport(cmd, 0, &[viewport]);
             d.cmd_set_scissor(cmd, 0, &[scissor]);
-            if let Some(v) = vertices {
-                d.cmd_bind_vertex_buffers(cmd, 0, &[v], &[0]);
+            if let Some((v, offset)) = vertex_buffer {
+                d.cmd_bind_vertex_buffers(cmd, 0, &[v], &[offset]);
             }
         }
     }

@@ -1,4 +1,4 @@
-//! Timestamp-query profiling scopes: `profiler.scope(cmd, "name", || record...)` brackets the
+//! Timestamp-query profiling scopes: `profiler.scope(rec, "name", |rec| record...)` brackets the
 //! commands with two timestamps; after the submission has finished, [`Profiler::results`]
 //! gives each scope's GPU time. Benchmarks use these to separate kernel time from the cost of
 //! submitting and waiting.
@@ -9,9 +9,12 @@ use ash::vk;
 
 use super::context::{DeviceShared, Gpu};
 use super::error::{GpuError, GpuResult, VkContext};
+use super::lifetime::{Lifetime, Tracked};
+use super::recorder::Recorder;
 
 /// A pool of timestamp pairs, one pair per scope.
 pub struct Profiler {
+    life: Arc<Lifetime>,
     shared: Arc<DeviceShared>,
     pool: vk::QueryPool,
     capacity: u32,
@@ -32,27 +35,55 @@ impl Profiler {
             .query_count(2 * scopes.max(1));
         // SAFETY: valid create info on this device.
         let pool = unsafe { gpu.device().create_query_pool(&info, None) }.vk("vkCreateQueryPool")?;
-        Ok(Self { shared: gpu.shared.clone(), pool, capacity: scopes.max(1), names: Vec::new(), period_ns })
+        let life = Lifetime::new(&gpu.shared, "a timestamp query pool", move |dev| {
+            // SAFETY: no recording writes the pool any more.
+            unsafe { dev.raw.destroy_query_pool(pool, None) }
+        });
+        Ok(Self {
+            life,
+            shared: gpu.shared.clone(),
+            pool,
+            capacity: scopes.max(1),
+            names: Vec::new(),
+            period_ns,
+        })
     }
 
     /// Records the reset of every query; call at the start of each recording that uses scopes.
-    pub fn record_reset(&mut self, cmd: vk::CommandBuffer) {
+    pub fn record_reset(&mut self, rec: &mut Recorder<'_>) {
         self.names.clear();
-        // SAFETY: `cmd` is recording on this device, outside a render pass.
-        unsafe { self.shared.raw.cmd_reset_query_pool(cmd, self.pool, 0, 2 * self.capacity) };
+        rec.keep(&*self);
+        // SAFETY: recording on this device (checked by `keep`), outside a render pass; the pool
+        // is kept alive.
+        unsafe { rec.device().cmd_reset_query_pool(rec.raw(), self.pool, 0, 2 * self.capacity) };
     }
 
     /// Records `record` between two timestamps named `name`. Panics past the capacity.
-    pub fn scope<R>(&mut self, cmd: vk::CommandBuffer, name: &str, record: impl FnOnce() -> R) -> R {
+    pub fn scope<'g, R>(
+        &mut self,
+        rec: &mut Recorder<'g>,
+        name: &str,
+        record: impl FnOnce(&mut Recorder<'g>) -> R,
+    ) -> R {
         let i = self.names.len() as u32;
         assert!(i < self.capacity, "profiler holds {} scopes", self.capacity);
         self.names.push(name.to_string());
-        let d = &self.shared.raw;
-        // SAFETY: `cmd` is recording; the queries were reset in this recording.
-        unsafe { d.cmd_write_timestamp(cmd, vk::PipelineStageFlags::TOP_OF_PIPE, self.pool, 2 * i) };
-        let r = record();
+        rec.keep(&*self);
+        // SAFETY: recording on this device; the queries were reset in this recording and the
+        // pool is kept alive.
+        unsafe {
+            rec.device().cmd_write_timestamp(rec.raw(), vk::PipelineStageFlags::TOP_OF_PIPE, self.pool, 2 * i)
+        };
+        let r = record(rec);
         // SAFETY: as above.
-        unsafe { d.cmd_write_timestamp(cmd, vk::PipelineStageFlags::BOTTOM_OF_PIPE, self.pool, 2 * i + 1) };
+        unsafe {
+            rec.device().cmd_write_timestamp(
+                rec.raw(),
+                vk::PipelineStageFlags::BOTTOM_OF_PIPE,
+                self.pool,
+                2 * i + 1,
+            )
+        };
         r
     }
 
@@ -85,12 +116,8 @@ impl Profiler {
     }
 }
 
-impl Drop for Profiler {
-    fn drop(&mut self) {
-        let pool = self.pool;
-        self.shared.retire(move |dev| {
-            // SAFETY: nothing in flight writes the pool.
-            unsafe { dev.raw.destroy_query_pool(pool, None) }
-        });
+impl Tracked for Profiler {
+    fn lifetime(&self) -> &Arc<Lifetime> {
+        &self.life
     }
 }

@@ -9,12 +9,16 @@ use std::sync::Arc;
 use ash::vk;
 
 use super::context::{DeviceShared, Gpu};
-use super::error::{GpuResult, VkContext};
+use super::error::{GpuError, GpuResult, VkContext};
+use super::image::Image;
+use super::lifetime::{Lifetime, Tracked};
+use super::recorder::Recorder;
 
 /// A single-subpass render pass: colour (cleared, stored, ends in `TRANSFER_SRC_OPTIMAL`) and
 /// an optional depth attachment (cleared, not stored).
 pub struct RenderPass {
-    shared: Arc<DeviceShared>,
+    life: Arc<Lifetime>,
+    _device: Arc<DeviceShared>,
     raw: vk::RenderPass,
     color_format: vk::Format,
     depth_format: Option<vk::Format>,
@@ -94,7 +98,11 @@ impl RenderPass {
             .dependencies(&dependencies);
         // SAFETY: valid create info on this device.
         let raw = unsafe { gpu.device().create_render_pass(&info, None) }.vk("vkCreateRenderPass")?;
-        Ok(Self { shared: gpu.shared.clone(), raw, color_format, depth_format })
+        let life = Lifetime::new(&gpu.shared, "a render pass", move |dev| {
+            // SAFETY: no framebuffer or recording uses it any more.
+            unsafe { dev.raw.destroy_render_pass(raw, None) }
+        });
+        Ok(Self { life, _device: gpu.shared.clone(), raw, color_format, depth_format })
     }
 
     /// The Vulkan handle (pipelines are built against it).
@@ -112,8 +120,13 @@ impl RenderPass {
         self.depth_format
     }
 
-    /// Records `vkCmdBeginRenderPass` on `framebuffer` clearing colour to `clear` and depth to 1.
-    pub fn record_begin(&self, cmd: vk::CommandBuffer, framebuffer: &Framebuffer, clear: [f32; 4]) {
+    /// Records `vkCmdBeginRenderPass` on `framebuffer` clearing colour to `clear` and depth to
+    /// 1 (outside a render pass; the pass and framebuffer are kept alive). Panics if the
+    /// framebuffer was made for another render pass.
+    pub fn record_begin(&self, rec: &mut Recorder<'_>, framebuffer: &Framebuffer, clear: [f32; 4]) {
+        assert!(framebuffer.pass == self.raw, "the framebuffer was made for another render pass");
+        rec.keep(self);
+        rec.keep(framebuffer);
         let clears = [
             vk::ClearValue { color: vk::ClearColorValue { float32: clear } },
             vk::ClearValue { depth_stencil: vk::ClearDepthStencilValue { depth: 1.0, stencil: 0 } },
@@ -124,51 +137,90 @@ impl RenderPass {
             .framebuffer(framebuffer.raw)
             .render_area(vk::Rect2D { offset: vk::Offset2D::default(), extent: framebuffer.extent })
             .clear_values(&clears[..n]);
-        // SAFETY: `cmd` is recording outside a render pass; the framebuffer matches this pass.
-        unsafe { self.shared.raw.cmd_begin_render_pass(cmd, &info, vk::SubpassContents::INLINE) };
+        // SAFETY: recording on this device; the framebuffer matches this pass (checked) and
+        // both are kept alive.
+        unsafe { rec.device().cmd_begin_render_pass(rec.raw(), &info, vk::SubpassContents::INLINE) };
     }
 
     /// Records `vkCmdEndRenderPass`.
-    pub fn record_end(&self, cmd: vk::CommandBuffer) {
-        // SAFETY: `cmd` is inside this render pass.
-        unsafe { self.shared.raw.cmd_end_render_pass(cmd) };
+    pub fn record_end(&self, rec: &mut Recorder<'_>) {
+        // SAFETY: recording on this device, inside this render pass (the caller's documented
+        // state; a validation error, not memory unsafety, otherwise).
+        unsafe { rec.device().cmd_end_render_pass(rec.raw()) };
     }
 }
 
-impl Drop for RenderPass {
-    fn drop(&mut self) {
-        let raw = self.raw;
-        self.shared.retire(move |dev| {
-            // SAFETY: nothing in flight uses it.
-            unsafe { dev.raw.destroy_render_pass(raw, None) }
-        });
+impl Tracked for RenderPass {
+    fn lifetime(&self) -> &Arc<Lifetime> {
+        &self.life
     }
 }
 
-/// A framebuffer of attachment views for a [`RenderPass`].
+/// An image view a framebuffer can hold: an engine [`Image`] or a [`ForeignView`].
+pub trait Attachment: Tracked {
+    /// The view.
+    fn view(&self) -> vk::ImageView;
+}
+
+impl Attachment for Image {
+    fn view(&self) -> vk::ImageView {
+        Image::view(self)
+    }
+}
+
+impl Attachment for ForeignView {
+    fn view(&self) -> vk::ImageView {
+        self.raw
+    }
+}
+
+/// A framebuffer of attachment views for a [`RenderPass`]; it keeps its attachments alive.
 pub struct Framebuffer {
-    shared: Arc<DeviceShared>,
+    life: Arc<Lifetime>,
+    _device: Arc<DeviceShared>,
     raw: vk::Framebuffer,
+    pass: vk::RenderPass,
     extent: vk::Extent2D,
 }
 
+impl Tracked for Framebuffer {
+    fn lifetime(&self) -> &Arc<Lifetime> {
+        &self.life
+    }
+}
+
 impl Framebuffer {
-    /// Creates a framebuffer; `views` are the colour view then the depth view (if the pass has one).
+    /// Creates a framebuffer; `attachments` are the colour view then the depth view (if the
+    /// pass has one), each at least `extent`.
     pub fn new(
         gpu: &Gpu,
         pass: &RenderPass,
-        views: &[vk::ImageView],
+        attachments: &[&dyn Attachment],
         extent: vk::Extent2D,
     ) -> GpuResult<Self> {
+        let mut held: Vec<Arc<Lifetime>> = attachments.iter().map(|a| a.lifetime().clone()).collect();
+        held.push(pass.life.clone());
+        if let Some(other) = held.iter().find(|l| !l.is_on(&gpu.shared)) {
+            return Err(GpuError::WrongDevice { name: other.name().to_string() });
+        }
+        let expected = 1 + usize::from(pass.depth_format.is_some());
+        assert_eq!(attachments.len(), expected, "the render pass has {expected} attachments");
+        let views: Vec<vk::ImageView> = attachments.iter().map(|a| a.view()).collect();
         let info = vk::FramebufferCreateInfo::default()
             .render_pass(pass.raw)
-            .attachments(views)
+            .attachments(&views)
             .width(extent.width)
             .height(extent.height)
             .layers(1);
-        // SAFETY: views are live and match the pass's attachments (caller's contract).
+        // SAFETY: the views are live engine objects of this device (kept by the framebuffer)
+        // and as many as the pass's attachments.
         let raw = unsafe { gpu.device().create_framebuffer(&info, None) }.vk("vkCreateFramebuffer")?;
-        Ok(Self { shared: gpu.shared.clone(), raw, extent })
+        let life = Lifetime::new(&gpu.shared, "a framebuffer", move |dev| {
+            // SAFETY: no recording uses it any more; its attachments are released after it.
+            unsafe { dev.raw.destroy_framebuffer(raw, None) };
+            drop(held);
+        });
+        Ok(Self { life, _device: gpu.shared.clone(), raw, pass: pass.raw, extent })
     }
 
     /// Its size.
@@ -177,20 +229,17 @@ impl Framebuffer {
     }
 }
 
-impl Drop for Framebuffer {
-    fn drop(&mut self) {
-        let raw = self.raw;
-        self.shared.retire(move |dev| {
-            // SAFETY: nothing in flight uses it.
-            unsafe { dev.raw.destroy_framebuffer(raw, None) }
-        });
-    }
-}
-
 /// An image view the engine makes of an image it does not own (a host's image, a swapchain's).
 pub struct ForeignView {
-    shared: Arc<DeviceShared>,
+    life: Arc<Lifetime>,
+    _device: Arc<DeviceShared>,
     raw: vk::ImageView,
+}
+
+impl Tracked for ForeignView {
+    fn lifetime(&self) -> &Arc<Lifetime> {
+        &self.life
+    }
 }
 
 impl ForeignView {
@@ -198,7 +247,7 @@ impl ForeignView {
     ///
     /// # Safety
     /// `image` is a live 2D image of this device with `format`, one mip level and one layer,
-    /// and it outlives the view.
+    /// and it outlives the view and every recording that uses the view.
     pub unsafe fn new(gpu: &Gpu, image: vk::Image, format: vk::Format) -> GpuResult<Self> {
         let info = vk::ImageViewCreateInfo::default()
             .image(image)
@@ -207,21 +256,15 @@ impl ForeignView {
             .subresource_range(super::image::subresource(vk::ImageAspectFlags::COLOR));
         // SAFETY: the caller guarantees `image` per this function's contract.
         let raw = unsafe { gpu.device().create_image_view(&info, None) }.vk("vkCreateImageView")?;
-        Ok(Self { shared: gpu.shared.clone(), raw })
+        let life = Lifetime::new(&gpu.shared, "a view of a foreign image", move |dev| {
+            // SAFETY: no framebuffer or recording uses it; the image belongs to someone else.
+            unsafe { dev.raw.destroy_image_view(raw, None) }
+        });
+        Ok(Self { life, _device: gpu.shared.clone(), raw })
     }
 
     /// The view.
     pub fn raw(&self) -> vk::ImageView {
         self.raw
-    }
-}
-
-impl Drop for ForeignView {
-    fn drop(&mut self) {
-        let raw = self.raw;
-        self.shared.retire(move |dev| {
-            // SAFETY: nothing in flight uses it; the image itself belongs to someone else.
-            unsafe { dev.raw.destroy_image_view(raw, None) }
-        });
     }
 }

@@ -183,11 +183,11 @@ impl GpuRadiosity {
                 )
             })
             .collect::<Result<_, _>>()?;
-        gpu.run(|cmd| {
+        gpu.run(|rec| {
             for (&(row0, count), set) in blocks.iter().zip(&sets) {
                 let push = Push { n: n as u32, row0, rows: count, extra: bvh.nodes.len() as u32 };
                 let groups = [(n as u32).div_ceil(8), count.div_ceil(8), 1];
-                pipeline.record_dispatch(cmd, set, bytemuck::bytes_of(&push), groups);
+                pipeline.record_dispatch(rec, set, bytemuck::bytes_of(&push), groups);
             }
         })?;
         Ok(DeviceFormFactors { n, rows, blocks })
@@ -240,18 +240,18 @@ impl GpuRadiosity {
         const BATCH: usize = 8;
         let mut sweeps = 0;
         while sweeps < max_sweeps {
-            gpu.run(|cmd| {
+            gpu.run(|rec| {
                 for k in 0..BATCH {
                     for (&(row0, count), pair) in f.blocks.iter().zip(&sets) {
                         let push = Push { n: n as u32, row0, rows: count, extra: 0 };
                         self.jacobi.record_dispatch(
-                            cmd,
+                            rec,
                             &pair[(sweeps + k) % 2],
                             bytemuck::bytes_of(&push),
                             [count.div_ceil(64), 1, 1],
                         );
                     }
-                    gpu.compute_to_compute_barrier(cmd);
+                    rec.compute_to_compute_barrier();
                 }
             })?;
             sweeps += BATCH;

@@ -21,7 +21,7 @@ use super::scene::{LightMode, Lights, SceneSpec};
 use super::solve::Rgb;
 use crate::gpu::{
     shaders, Buffer, DescriptorSet, Gpu, GpuResult, GraphicsPipeline, GraphicsPipelineDesc, MemoryKind,
-    RenderPass,
+    Recorder, RenderPass,
 };
 use crate::render::Camera;
 
@@ -171,27 +171,28 @@ impl SceneRenderer {
 
     /// Replaces the vertex stream (at most `3 · faces` vertices; the rest is dropped). The
     /// caller must not have a draw of the previous stream in flight.
-    pub fn update(&mut self, vertices: &[SceneVertex]) {
-        if let Some(dst) = self.vertices.mapped_mut() {
-            let n = vertices.len().min(dst.len());
-            dst[..n].copy_from_slice(&vertices[..n]);
-            self.count = n as u32;
-        }
+    /// An error if a recorded draw of the previous stream is not yet known to be finished.
+    pub fn update(&mut self, vertices: &[SceneVertex]) -> GpuResult<()> {
+        let dst = self.vertices.mapped_mut()?;
+        let n = vertices.len().min(dst.len());
+        dst[..n].copy_from_slice(&vertices[..n]);
+        self.count = n as u32;
+        Ok(())
     }
 
     /// Records the draw (inside the target's render pass).
-    pub fn record(&self, cmd: vk::CommandBuffer, extent: vk::Extent2D, camera: &Camera, exposure: f64) {
+    pub fn record(&self, rec: &mut Recorder<'_>, extent: vk::Extent2D, camera: &Camera, exposure: f64) {
         let aspect = f64::from(extent.width) / f64::from(extent.height.max(1));
         let push = Push {
             view_proj: camera.view_proj_f32(aspect).to_cols_array(),
             tone: [exposure as f32, 0.0, 0.0, 0.0],
         };
         self.pipeline.record_draw(
-            cmd,
+            rec,
             extent,
             &self.set,
             bytemuck::bytes_of(&push),
-            Some(self.vertices.raw()),
+            Some(self.vertices.whole()),
             self.count,
         );
     }
@@ -259,16 +260,16 @@ pub fn draw_picture(
     let raw = RenderTarget::new(gpu, "radiosity raw", width, height, ColorFormat::Rgba32F)?;
     let mut colour_pass = SceneRenderer::new(gpu, colour.render_pass(), Output::Colour, faces)?;
     let mut raw_pass = SceneRenderer::new(gpu, raw.render_pass(), Output::Raw, faces)?;
-    colour_pass.update(vertices);
-    raw_pass.update(vertices);
+    colour_pass.update(vertices)?;
+    raw_pass.update(vertices)?;
     let rgba = match colour
-        .render(gpu, BACKGROUND, |cmd| colour_pass.record(cmd, colour.extent(), camera, exposure))?
+        .render(gpu, BACKGROUND, |rec| colour_pass.record(rec, colour.extent(), camera, exposure))?
     {
         Pixels::Rgba8(v) => v,
         Pixels::Rgba32F(_) => unreachable!("an RGBA8 target reads back bytes"),
     };
     let raw = match raw
-        .render(gpu, [0.0, 0.0, 0.0, -1.0], |cmd| raw_pass.record(cmd, raw.extent(), camera, exposure))?
+        .render(gpu, [0.0, 0.0, 0.0, -1.0], |rec| raw_pass.record(rec, raw.extent(), camera, exposure))?
     {
         Pixels::Rgba32F(v) => v,
         Pixels::Rgba8(_) => unreachable!("a float target reads back floats"),

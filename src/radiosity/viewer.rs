@@ -10,13 +10,12 @@
 use std::time::Instant;
 
 use anyhow::Result;
-use ash::vk;
 
 use super::any_scene::AnyScene;
 use super::reduced::ReducedRadiosity;
 use super::render::{display_radiance, scene_vertices, Output, SceneRenderer, Shading, Viewpoint};
 use super::{full_radiosity_of, SceneMesh};
-use crate::gpu::Gpu;
+use crate::gpu::{Gpu, Recorder};
 use crate::render::viewer::ViewerContent;
 use crate::render::{Camera, RenderTarget};
 
@@ -114,7 +113,7 @@ impl RadiosityContent {
         let vertices = scene_vertices(&mesh, &geometry, &radiance, self.shading);
         self.mesh_faces = mesh.len();
         if let Some(r) = &mut self.renderer {
-            r.update(&vertices);
+            r.update(&vertices)?;
         }
         Ok(())
     }
@@ -179,9 +178,9 @@ impl ViewerContent for RadiosityContent {
         Ok(self.playing)
     }
 
-    fn record(&mut self, cmd: vk::CommandBuffer, target: &RenderTarget, camera: &Camera) -> Result<()> {
+    fn record(&mut self, rec: &mut Recorder<'_>, target: &RenderTarget, camera: &Camera) -> Result<()> {
         if let Some(r) = &self.renderer {
-            r.record(cmd, target.extent(), camera, self.exposure);
+            r.record(rec, target.extent(), camera, self.exposure);
         }
         Ok(())
     }

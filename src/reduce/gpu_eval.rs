@@ -20,7 +20,7 @@ use ash::vk;
 use super::error::ReduceError;
 use super::eval::{evaluate, Operands};
 use super::reduced::ReducedModel;
-use crate::gpu::{Buffer, BufferBinding, Gpu, GpuError, MemoryKind};
+use crate::gpu::{Buffer, Gpu, GpuError, MemoryKind};
 use crate::tensor::gpu::{BatchedSolve, Gemm, GemmShape};
 use crate::tensor::{Tensor, TensorError};
 
@@ -191,11 +191,7 @@ impl GpuReducedModel {
                     MemoryKind::GpuOnly,
                 )
                 .map_err(gpu_err("allocating results"))?;
-                let whole = |b: &Buffer<f32>| BufferBinding {
-                    buffer: b.raw(),
-                    offset: 0,
-                    range: b.size_bytes().max(4),
-                };
+                let whole = |b| Buffer::<f32>::whole(b);
                 let binding = self
                     .gemm
                     .bind(
@@ -210,7 +206,7 @@ impl GpuReducedModel {
                 results.push((*start, *cols, c));
             }
             self.gpu
-                .run(|cmd| bindings.iter().for_each(|b| self.gemm.record(cmd, b, false)))
+                .run(|rec| bindings.iter().for_each(|b| self.gemm.record(rec, b, false)))
                 .map_err(gpu_err("contracting on the device"))?;
             for (start, cols, c) in &results {
                 let vals = c.download(&self.gpu).map_err(gpu_err("reading results"))?;
@@ -272,8 +268,7 @@ impl GpuReducedModel {
                 MemoryKind::GpuOnly,
             )
             .map_err(gpu_err("allocating results"))?;
-            let whole =
-                |x: &Buffer<f32>| BufferBinding { buffer: x.raw(), offset: 0, range: x.size_bytes().max(4) };
+            let whole = |x| Buffer::<f32>::whole(x);
             let binding = self
                 .gemm
                 .bind(
@@ -284,7 +279,7 @@ impl GpuReducedModel {
                     GemmShape { m: rows as u32, n: batch as u32, k: m as u32 },
                 )
                 .map_err(gpu_err("binding"))?;
-            self.gpu.run(|cmd| self.gemm.record(cmd, &binding, false)).map_err(gpu_err("lifting"))?;
+            self.gpu.run(|rec| self.gemm.record(rec, &binding, false)).map_err(gpu_err("lifting"))?;
             let vals = c.download(&self.gpu).map_err(gpu_err("reading results"))?;
             for i in 0..rows {
                 for (k, y) in out.iter_mut().enumerate() {

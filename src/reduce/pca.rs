@@ -20,7 +20,7 @@ use ash::vk;
 use super::basis::Basis;
 use super::error::ReduceError;
 use super::gpu_eval::Backend;
-use crate::gpu::{Buffer, BufferBinding, Gpu, MemoryKind};
+use crate::gpu::{Buffer, Gpu, MemoryKind};
 use crate::tensor::gpu::{Gemm, GemmShape};
 use crate::tensor::{symmetric_eigen, Tensor};
 
@@ -337,11 +337,10 @@ impl<'a> DeviceGram<'a> {
         let usage = vk::BufferUsageFlags::STORAGE_BUFFER;
         let a = Buffer::from_slice(self.gpu, "snapshot block transposed", &st, usage).map_err(err)?;
         let b = Buffer::from_slice(self.gpu, "snapshot block", &s, usage).map_err(err)?;
-        let whole =
-            |x: &Buffer<f32>| BufferBinding { buffer: x.raw(), offset: 0, range: x.size_bytes().max(4) };
+        let whole = |x| Buffer::<f32>::whole(x);
         let shape = GemmShape { m: k as u32, n: k as u32, k: rows as u32 };
         let binding = self.gemm.bind(self.gpu, whole(&a), whole(&b), whole(&self.g), shape).map_err(err)?;
-        self.gpu.run(|cmd| self.gemm.record(cmd, &binding, !first)).map_err(err)
+        self.gpu.run(|rec| self.gemm.record(rec, &binding, !first)).map_err(err)
     }
 
     fn read(&self) -> Result<Vec<f64>, ReduceError> {

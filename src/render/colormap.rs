@@ -137,8 +137,8 @@ pub struct ColormapTexture {
 
 impl ColormapTexture {
     /// The texture binding for a descriptor set.
-    pub fn resource(&self) -> Resource {
-        Resource::Texture { view: self.image.view(), sampler: self.sampler.raw() }
+    pub fn resource(&self) -> Resource<'_> {
+        Resource::Texture { image: &self.image, sampler: &self.sampler }
     }
 
     /// Number of texels (shaders need it for [`ramp_texcoord`]).

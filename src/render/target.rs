@@ -4,7 +4,8 @@
 use ash::vk;
 
 use crate::gpu::{
-    Buffer, ForeignView, Framebuffer, Gpu, GpuResult, Image, ImageDesc, MemoryKind, RenderPass,
+    Attachment, Buffer, ForeignView, Framebuffer, Gpu, GpuResult, Image, ImageDesc, MemoryKind, Recorder,
+    RenderPass,
 };
 
 /// Colour formats of a render target.
@@ -44,7 +45,7 @@ pub enum Pixels {
 
 enum ColorAttachment {
     Owned(Image),
-    Foreign { image: vk::Image, _view: ForeignView },
+    Foreign { image: vk::Image, view: ForeignView },
 }
 
 /// Where a pass draws: colour (+ depth) attachments with their render pass and framebuffer.
@@ -65,8 +66,7 @@ impl RenderTarget {
     pub fn new(gpu: &Gpu, name: &str, width: u32, height: u32, format: ColorFormat) -> GpuResult<Self> {
         let desc = ImageDesc::color_target(width, height, format.vk());
         let color = Image::new(gpu, &format!("{name} colour"), desc)?;
-        let view = color.view();
-        Self::around(gpu, name, ColorAttachment::Owned(color), view, format, width, height)
+        Self::around(gpu, name, ColorAttachment::Owned(color), format, width, height)
     }
 
     /// A target drawing into a host's colour image (the engine adds its own depth attachment,
@@ -87,9 +87,8 @@ impl RenderTarget {
     ) -> GpuResult<Self> {
         // SAFETY: forwarded from this function's contract.
         let view = unsafe { ForeignView::new(gpu, image, format.vk()) }?;
-        let raw_view = view.raw();
-        let color = ColorAttachment::Foreign { image, _view: view };
-        Self::around(gpu, name, color, raw_view, format, width, height)
+        let color = ColorAttachment::Foreign { image, view };
+        Self::around(gpu, name, color, format, width, height)
     }
 
     /// The depth attachment, render pass and framebuffer around a colour attachment.
@@ -97,7 +96,6 @@ impl RenderTarget {
         gpu: &Gpu,
         name: &str,
         color: ColorAttachment,
-        color_view: vk::ImageView,
         format: ColorFormat,
         width: u32,
         height: u32,
@@ -106,7 +104,11 @@ impl RenderTarget {
         let depth = Image::new(gpu, &format!("{name} depth"), desc)?;
         let pass = RenderPass::new(gpu, format.vk(), Some(DEPTH_FORMAT))?;
         let extent = vk::Extent2D { width, height };
-        let framebuffer = Framebuffer::new(gpu, &pass, &[color_view, depth.view()], extent)?;
+        let color_view: &dyn Attachment = match &color {
+            ColorAttachment::Owned(image) => image,
+            ColorAttachment::Foreign { view, .. } => view,
+        };
+        let framebuffer = Framebuffer::new(gpu, &pass, &[color_view, &depth], extent)?;
         Ok(Self { color, _depth: depth, framebuffer, pass, format, extent })
     }
 
@@ -138,42 +140,68 @@ impl RenderTarget {
         }
     }
 
+    /// Keeps every object of the target alive until `rec`'s work has finished (for passes
+    /// that record its colour image directly).
+    pub fn keep(&self, rec: &mut Recorder<'_>) {
+        match &self.color {
+            ColorAttachment::Owned(image) => rec.keep(image),
+            ColorAttachment::Foreign { view, .. } => rec.keep(view),
+        }
+        rec.keep(&self._depth);
+        rec.keep(&self.framebuffer);
+        rec.keep(&self.pass);
+    }
+
     /// Records the start of the render pass, clearing colour to `clear` and depth to 1.
-    pub fn record_begin(&self, cmd: vk::CommandBuffer, clear: [f32; 4]) {
-        self.pass.record_begin(cmd, &self.framebuffer, clear);
+    pub fn record_begin(&self, rec: &mut Recorder<'_>, clear: [f32; 4]) {
+        self.pass.record_begin(rec, &self.framebuffer, clear);
     }
 
     /// Records the end of the render pass.
-    pub fn record_end(&self, cmd: vk::CommandBuffer) {
-        self.pass.record_end(cmd);
+    pub fn record_end(&self, rec: &mut Recorder<'_>) {
+        self.pass.record_end(rec);
     }
 
-    /// Records a copy of the colour image (after a pass) into `dst`, tightly packed.
-    pub fn record_readback(&self, gpu: &Gpu, cmd: vk::CommandBuffer, dst: vk::Buffer) {
-        let region = vk::BufferImageCopy {
-            buffer_offset: 0,
-            buffer_row_length: 0,
-            buffer_image_height: 0,
-            image_subresource: vk::ImageSubresourceLayers {
-                aspect_mask: vk::ImageAspectFlags::COLOR,
-                mip_level: 0,
-                base_array_layer: 0,
-                layer_count: 1,
-            },
-            image_offset: vk::Offset3D::default(),
-            image_extent: vk::Extent3D { width: self.extent.width, height: self.extent.height, depth: 1 },
-        };
-        // SAFETY: the colour image is in TRANSFER_SRC_OPTIMAL after the pass; `dst` is large
-        // enough (caller's contract, checked by `readback`).
-        unsafe {
-            gpu.device().cmd_copy_image_to_buffer(
-                cmd,
-                self.color_image(),
-                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                dst,
-                &[region],
-            )
-        };
+    /// Records a copy of the colour image (after a pass) into `dst`, tightly packed. Panics
+    /// if `dst` is smaller than [`RenderTarget::readback_bytes`].
+    pub fn record_readback<T: bytemuck::Pod>(&self, rec: &mut Recorder<'_>, dst: &Buffer<T>) {
+        assert!(dst.size_bytes() >= self.readback_bytes(), "`{}` cannot hold the target", dst.name());
+        match &self.color {
+            ColorAttachment::Owned(image) => image.record_copy_to_buffer(rec, dst),
+            ColorAttachment::Foreign { image, view } => {
+                rec.keep(view);
+                rec.keep(dst);
+                let region = vk::BufferImageCopy {
+                    buffer_offset: 0,
+                    buffer_row_length: 0,
+                    buffer_image_height: 0,
+                    image_subresource: vk::ImageSubresourceLayers {
+                        aspect_mask: vk::ImageAspectFlags::COLOR,
+                        mip_level: 0,
+                        base_array_layer: 0,
+                        layer_count: 1,
+                    },
+                    image_offset: vk::Offset3D::default(),
+                    image_extent: vk::Extent3D {
+                        width: self.extent.width,
+                        height: self.extent.height,
+                        depth: 1,
+                    },
+                };
+                // SAFETY: the host's image is live for the target's life and its recordings
+                // (`from_host_image`'s contract), in TRANSFER_SRC_OPTIMAL after the pass; `dst`
+                // is kept alive and large enough (checked above).
+                unsafe {
+                    rec.device().cmd_copy_image_to_buffer(
+                        rec.raw(),
+                        *image,
+                        vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                        dst.raw(),
+                        &[region],
+                    )
+                };
+            }
+        }
     }
 
     /// Bytes of one full readback.
@@ -192,7 +220,7 @@ impl RenderTarget {
         &self,
         gpu: &Gpu,
         clear: [f32; 4],
-        draw: impl FnOnce(vk::CommandBuffer),
+        draw: impl FnOnce(&mut Recorder<'_>),
     ) -> GpuResult<Pixels> {
         self.render_inner(gpu, Some((clear, Box::new(draw))))
     }
@@ -201,7 +229,7 @@ impl RenderTarget {
     fn render_inner(
         &self,
         gpu: &Gpu,
-        draw: Option<([f32; 4], Box<dyn FnOnce(vk::CommandBuffer) + '_>)>,
+        draw: Option<([f32; 4], Box<dyn FnOnce(&mut Recorder<'_>) + '_>)>,
     ) -> GpuResult<Pixels> {
         let staging = Buffer::<u8>::new(
             gpu,
@@ -210,15 +238,18 @@ impl RenderTarget {
             vk::BufferUsageFlags::empty(),
             MemoryKind::GpuToCpu,
         )?;
-        gpu.run(|cmd| {
+        gpu.run(|rec| {
             if let Some((clear, draw)) = draw {
-                self.record_begin(cmd, clear);
-                draw(cmd);
-                self.record_end(cmd);
+                self.record_begin(rec, clear);
+                draw(rec);
+                self.record_end(rec);
             }
-            self.record_readback(gpu, cmd, staging.raw());
+            self.record_readback(rec, &staging);
         })?;
-        let bytes = staging.mapped().expect("GpuToCpu memory is mapped");
+        let bytes = staging.mapped().ok_or_else(|| crate::gpu::GpuError::NotMappable {
+            name: staging.name().to_string(),
+            reason: "readback staging is not host-visible",
+        })?;
         Ok(match self.format {
             ColorFormat::Rgba8 => Pixels::Rgba8(bytes.to_vec()),
             ColorFormat::Rgba32F => Pixels::Rgba32F(bytemuck::pod_collect_to_vec(bytes)),

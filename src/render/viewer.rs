@@ -24,8 +24,8 @@ use super::{write_png_rgba8, Camera, ColorFormat, Colormap, RenderTarget};
 use crate::demo::field::{FieldOutput, FieldPass};
 use crate::demo::scene::DemoScene;
 use crate::gpu::{
-    record_image_barrier, surface_extensions, Buffer, Gpu, GpuDesc, MemoryKind, Submission, Surface,
-    Swapchain,
+    record_image_barrier, surface_extensions, Buffer, Gpu, GpuDesc, MemoryKind, Recorder, Submission,
+    Surface, Swapchain,
 };
 
 /// What the viewer shows. The viewer owns the window, the swapchain, the offscreen target and
@@ -46,14 +46,14 @@ pub trait ViewerContent {
     /// what `record` draws). Default: none.
     fn record_prepass(
         &mut self,
-        _cmd: vk::CommandBuffer,
+        _rec: &mut Recorder<'_>,
         _target: &RenderTarget,
         _camera: &Camera,
     ) -> Result<()> {
         Ok(())
     }
     /// Records the frame's draws inside the target's render pass.
-    fn record(&mut self, cmd: vk::CommandBuffer, target: &RenderTarget, camera: &Camera) -> Result<()>;
+    fn record(&mut self, rec: &mut Recorder<'_>, target: &RenderTarget, camera: &Camera) -> Result<()>;
     /// A key the viewer does not use (a character, or " " for the space bar); true if it
     /// changed what is shown.
     fn key(&mut self, key: &str) -> bool;
@@ -107,9 +107,9 @@ impl ViewerContent for DemoContent {
         Ok(false)
     }
 
-    fn record(&mut self, cmd: vk::CommandBuffer, target: &RenderTarget, camera: &Camera) -> Result<()> {
+    fn record(&mut self, rec: &mut Recorder<'_>, target: &RenderTarget, camera: &Camera) -> Result<()> {
         if let Some(pass) = &self.pass {
-            pass.record(cmd, target.extent(), camera);
+            pass.record(rec, target.extent(), camera);
         }
         Ok(())
     }
@@ -290,25 +290,29 @@ impl State {
             (&self.gpu, &self.target, &mut self.content, &self.camera, &self.readback);
         let waits = [(swapchain.image_available, vk::PipelineStageFlags::TRANSFER)];
         let signals = [swapchain.render_finished[index as usize]];
-        let (submission, recorded) = gpu.submit_with_semaphores(&waits, &signals, |cmd| {
-            let prepared = content.record_prepass(cmd, target, camera);
-            target.record_begin(cmd, crate::render::BACKGROUND);
-            let recorded = prepared.and_then(|()| content.record(cmd, target, camera));
-            target.record_end(cmd);
+        let (submission, recorded) = gpu.submit_with_semaphores(&waits, &signals, |rec| {
+            let prepared = content.record_prepass(rec, target, camera);
+            target.record_begin(rec, crate::render::BACKGROUND);
+            let recorded = prepared.and_then(|()| content.record(rec, target, camera));
+            target.record_end(rec);
             let dev = gpu.device();
             let color = vk::ImageAspectFlags::COLOR;
-            record_image_barrier(
-                dev,
-                cmd,
-                image,
-                color,
-                (vk::ImageLayout::UNDEFINED, vk::PipelineStageFlags::TRANSFER, vk::AccessFlags::empty()),
-                (
-                    vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                    vk::PipelineStageFlags::TRANSFER,
-                    vk::AccessFlags::TRANSFER_WRITE,
-                ),
-            );
+            target.keep(rec);
+            // SAFETY: the swapchain image is live until the swapchain is recreated, which
+            // waits for this frame's submission first.
+            unsafe {
+                record_image_barrier(
+                    rec,
+                    image,
+                    color,
+                    (vk::ImageLayout::UNDEFINED, vk::PipelineStageFlags::TRANSFER, vk::AccessFlags::empty()),
+                    (
+                        vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                        vk::PipelineStageFlags::TRANSFER,
+                        vk::AccessFlags::TRANSFER_WRITE,
+                    ),
+                )
+            };
             let te = target.extent();
             let corner =
                 |w: u32, h: u32| [vk::Offset3D::default(), vk::Offset3D { x: w as i32, y: h as i32, z: 1 }];
@@ -328,7 +332,7 @@ impl State {
             // just moved to TRANSFER_DST; both are alive until the fence.
             unsafe {
                 dev.cmd_blit_image(
-                    cmd,
+                    rec.raw(),
                     target.color_image(),
                     vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
                     image,
@@ -348,7 +352,9 @@ impl State {
                     vk::PipelineStageFlags::TRANSFER,
                     vk::AccessFlags::TRANSFER_READ,
                 );
-                record_image_barrier(dev, cmd, image, color, layout, next);
+                // SAFETY: as above.
+                unsafe { record_image_barrier(rec, image, color, layout, next) };
+                rec.keep(buf);
                 layout = next;
                 let region = vk::BufferImageCopy {
                     buffer_offset: 0,
@@ -361,7 +367,7 @@ impl State {
                 // SAFETY: the image is in TRANSFER_SRC; the buffer holds the whole image.
                 unsafe {
                     dev.cmd_copy_image_to_buffer(
-                        cmd,
+                        rec.raw(),
                         image,
                         vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
                         buf.raw(),
@@ -369,18 +375,20 @@ impl State {
                     )
                 };
             }
-            record_image_barrier(
-                dev,
-                cmd,
-                image,
-                color,
-                layout,
-                (
-                    vk::ImageLayout::PRESENT_SRC_KHR,
-                    vk::PipelineStageFlags::BOTTOM_OF_PIPE,
-                    vk::AccessFlags::empty(),
-                ),
-            );
+            // SAFETY: as above.
+            unsafe {
+                record_image_barrier(
+                    rec,
+                    image,
+                    color,
+                    layout,
+                    (
+                        vk::ImageLayout::PRESENT_SRC_KHR,
+                        vk::PipelineStageFlags::BOTTOM_OF_PIPE,
+                        vk::AccessFlags::empty(),
+                    ),
+                )
+            };
             recorded
         })?;
         self.last_frame = Some(submission);

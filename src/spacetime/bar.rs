@@ -353,11 +353,11 @@ impl BarRenderer {
             flags: [u32::from(data), u32::from(per_vertex), 0, 0],
         };
         let clear = if data { [f32::NAN; 4] } else { BACKGROUND };
-        let (vertices, count) = (self.vertices.raw(), self.vertices.len() as u32);
+        let (vertices, count) = (self.vertices.whole(), self.vertices.len() as u32);
         let extent = target.extent();
         target
-            .render(&self.gpu, clear, |cmd| {
-                pipeline.record_draw(cmd, extent, set, bytemuck::bytes_of(&push), Some(vertices), count)
+            .render(&self.gpu, clear, |rec| {
+                pipeline.record_draw(rec, extent, set, bytemuck::bytes_of(&push), Some(vertices), count)
             })
             .map_err(dev("drawing the bar"))
     }

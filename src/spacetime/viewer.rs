@@ -5,10 +5,9 @@
 //! (the view's, or the largest U of the first frame), so colours are comparable as t moves.
 
 use anyhow::Result;
-use ash::vk;
 
 use super::{SpacetimeData, SpacetimeRenderer, SpacetimeView};
-use crate::gpu::Gpu;
+use crate::gpu::{Gpu, Recorder};
 use crate::render::viewer::ViewerContent;
 use crate::render::{Camera, Colormap, RenderTarget};
 
@@ -114,10 +113,10 @@ impl ViewerContent for SpacetimeContent {
         Ok(self.playing)
     }
 
-    fn record(&mut self, cmd: vk::CommandBuffer, target: &RenderTarget, camera: &Camera) -> Result<()> {
+    fn record(&mut self, rec: &mut Recorder<'_>, target: &RenderTarget, camera: &Camera) -> Result<()> {
         if let Some(r) = self.renderer.as_mut() {
             let view = SpacetimeView { camera: *camera, ..self.view };
-            r.record_draw_into(cmd, target, &view, self.u_max)?;
+            r.record_draw_into(rec, target, &view, self.u_max)?;
         }
         Ok(())
     }

@@ -12,10 +12,9 @@
 use std::sync::Arc;
 
 use anyhow::Result;
-use ash::vk;
 
 use super::{fit_camera, SpectralMesh, SpectralRenderer, SpectralView};
-use crate::gpu::Gpu;
+use crate::gpu::{Gpu, Recorder};
 use crate::render::viewer::ViewerContent;
 use crate::render::{Camera, Colormap, RenderTarget};
 
@@ -179,21 +178,21 @@ impl ViewerContent for SpectralContent {
 
     fn record_prepass(
         &mut self,
-        cmd: vk::CommandBuffer,
+        rec: &mut Recorder<'_>,
         target: &RenderTarget,
         camera: &Camera,
     ) -> Result<()> {
         if let Some(r) = self.renderer.as_mut() {
             let view = SpectralView { camera: Some(*camera), ..self.view.clone() };
-            r.record_prepass(cmd, target, &view)?;
+            r.record_prepass(rec, target, &view)?;
         }
         Ok(())
     }
 
-    fn record(&mut self, cmd: vk::CommandBuffer, target: &RenderTarget, camera: &Camera) -> Result<()> {
+    fn record(&mut self, rec: &mut Recorder<'_>, target: &RenderTarget, camera: &Camera) -> Result<()> {
         if let Some(r) = self.renderer.as_mut() {
             let view = SpectralView { camera: Some(*camera), ..self.view.clone() };
-            r.record_draw_into(cmd, target, &view)?;
+            r.record_draw_into(rec, target, &view)?;
         }
         Ok(())
     }

@@ -135,5 +135,5 @@ pub fn run_probe_specialized(
     .expect("the probe pipeline builds");
     let resources: Vec<Resource> = buffers.iter().map(|&b| Resource::Storage(b)).collect();
     let set = pipeline.bind(gpu, &resources).expect("the probe binds");
-    gpu.run(|cmd| pipeline.record_dispatch(cmd, &set, push, [groups, 1, 1])).expect("the probe runs");
+    gpu.run(|rec| pipeline.record_dispatch(rec, &set, push, [groups, 1, 1])).expect("the probe runs");
 }

@@ -22,7 +22,7 @@ use super::plan::{chunks_of_groups, sorted_entries, unit_and_key_positions, unit
 use super::{unit_row, unit_size, Packing, PremultiplyOptions, PremultiplyPlan, Setup, Unit};
 use crate::gpu::{
     shaders, BindingKind, Buffer, BufferBinding, ComputePipeline, ComputePipelineDesc, Gpu, GpuError,
-    MemoryKind, Resource,
+    MemoryKind, Recorder, Resource,
 };
 use crate::reduce::ReduceError;
 use crate::tensor::gpu::GEMM_TILE;
@@ -61,8 +61,8 @@ fn dev(context: &str) -> impl FnOnce(GpuError) -> ReduceError + '_ {
     move |e| ReduceError::Device { context: context.to_string(), detail: e.to_string() }
 }
 
-fn whole<T: Pod>(b: &Buffer<T>) -> BufferBinding {
-    BufferBinding { buffer: b.raw(), offset: 0, range: b.size_bytes().max(4) }
+fn whole<T: Pod>(b: &Buffer<T>) -> BufferBinding<'_> {
+    b.whole()
 }
 
 /// The pipelines of the GPU backend.
@@ -136,14 +136,14 @@ impl Ctx<'_> {
     /// Records `dst[r] = Σ_{i ∈ starts[r]..starts[r+1]} src[perm[i]]` (rows of `block` floats).
     fn record_gather(
         &self,
-        cmd: vk::CommandBuffer,
+        rec: &mut Recorder<'_>,
         set: &crate::gpu::DescriptorSet,
         rows: usize,
         block: usize,
     ) {
         let push = GatherPush { rows: rows as u32, block: block as u32 };
         let groups = self.gpu.caps().groups_1d((rows * block) as u64, 256);
-        self.k.gather.record_dispatch(cmd, set, bytemuck::bytes_of(&push), [groups, 1, 1]);
+        self.k.gather.record_dispatch(rec, set, bytemuck::bytes_of(&push), [groups, 1, 1]);
     }
 
     /// Rows `perm` of `src` (rows of `block` floats), in that order, in a new device buffer.
@@ -168,7 +168,7 @@ impl Ctx<'_> {
             .bind(self.gpu, &[whole(src), whole(&pb), whole(&sb), whole(&dst)].map(Resource::Storage))
             .map_err(dev("binding the gather"))?;
         self.gpu
-            .run(|cmd| self.record_gather(cmd, &set, perm.len(), block))
+            .run(|rec| self.record_gather(rec, &set, perm.len(), block))
             .map_err(dev("gathering rows"))?;
         Ok(dst)
     }
@@ -298,15 +298,16 @@ impl Ctx<'_> {
                 size: (n * 4) as u64,
             };
             self.gpu
-                .run(|cmd| {
-                    self.k.stage.record_dispatch(cmd, &set, bytemuck::bytes_of(&push), [wg, 1, 1]);
-                    self.gpu.memory_barrier(
-                        cmd,
+                .run(|rec| {
+                    self.k.stage.record_dispatch(rec, &set, bytemuck::bytes_of(&push), [wg, 1, 1]);
+                    rec.memory_barrier(
                         (vk::PipelineStageFlags::COMPUTE_SHADER, vk::AccessFlags::SHADER_WRITE),
                         (vk::PipelineStageFlags::TRANSFER, vk::AccessFlags::TRANSFER_READ),
                     );
                     // SAFETY: both buffers are alive until the submission completes (run waits).
-                    unsafe { self.gpu.device().cmd_copy_buffer(cmd, out_b.raw(), out.raw(), &[region]) };
+                    unsafe {
+                        self.gpu.device().cmd_copy_buffer(rec.raw(), out_b.raw(), out.raw(), &[region])
+                    };
                 })
                 .map_err(dev("running a stage"))?;
             g0 = g1;
@@ -552,16 +553,15 @@ impl Ctx<'_> {
             let groups =
                 [((last_size * block) as u32).div_ceil(GEMM_TILE), (size as u32).div_ceil(GEMM_TILE), 1];
             self.gpu
-                .run(|cmd| {
+                .run(|rec| {
                     if let Some(gather) = &gathered {
-                        self.record_gather(cmd, gather, n_rows, block);
-                        self.gpu.memory_barrier(
-                            cmd,
+                        self.record_gather(rec, gather, n_rows, block);
+                        rec.memory_barrier(
                             (vk::PipelineStageFlags::COMPUTE_SHADER, vk::AccessFlags::SHADER_WRITE),
                             (vk::PipelineStageFlags::COMPUTE_SHADER, vk::AccessFlags::SHADER_READ),
                         );
                     }
-                    self.k.fused.record_dispatch(cmd, &set, bytemuck::bytes_of(&push), groups);
+                    self.k.fused.record_dispatch(rec, &set, bytemuck::bytes_of(&push), groups);
                 })
                 .map_err(dev("the final GEMM"))?;
             accumulate = true;

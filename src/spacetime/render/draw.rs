@@ -2,6 +2,7 @@
 //! pipelines, the colour ramp's U_max (a data pass reduced on the device), and the draws —
 //! into a caller's render pass, an offscreen image, or a timed frame.
 
+use crate::gpu::Recorder;
 use ash::vk;
 
 use super::*;
@@ -144,22 +145,20 @@ impl SpacetimeRenderer {
         let pix = self.umax_pixels.as_ref().expect("made above");
         let (reducer, set, result) =
             (&self.umax_reducer, self.umax_set.as_ref().expect("bound above"), &self.umax_result);
-        gpu.run(|cmd| {
-            data.record_begin(cmd, [f32::NAN; 4]);
-            draw(cmd);
-            data.record_end(cmd);
-            data.record_readback(&gpu, cmd, pix.raw());
-            result.record_fill(cmd, 0);
+        gpu.run(|rec| {
+            data.record_begin(rec, [f32::NAN; 4]);
+            draw(rec);
+            data.record_end(rec);
+            data.record_readback(rec, pix);
+            rec.fill_buffer(result, 0);
             let cs = vk::PipelineStageFlags::COMPUTE_SHADER;
-            gpu.memory_barrier(
-                cmd,
+            rec.memory_barrier(
                 (vk::PipelineStageFlags::TRANSFER, vk::AccessFlags::TRANSFER_WRITE),
                 (cs, vk::AccessFlags::SHADER_READ | vk::AccessFlags::SHADER_WRITE),
             );
             let n = pixels as u32;
-            reducer.record_dispatch(cmd, set, &n.to_ne_bytes(), [64, 1, 1]);
-            gpu.memory_barrier(
-                cmd,
+            reducer.record_dispatch(rec, set, &n.to_ne_bytes(), [64, 1, 1]);
+            rec.memory_barrier(
                 (cs, vk::AccessFlags::SHADER_WRITE),
                 (vk::PipelineStageFlags::TRANSFER, vk::AccessFlags::TRANSFER_READ),
             );
@@ -196,7 +195,7 @@ impl SpacetimeRenderer {
         target: &RenderTarget,
         view: &SpacetimeView,
         push: &DrawPush,
-    ) -> Result<impl FnOnce(vk::CommandBuffer) + '_, SpacetimeError> {
+    ) -> Result<impl FnOnce(&mut Recorder<'_>) + '_, SpacetimeError> {
         self.pipelines_for(target)?;
         Ok(self.draw_commands(target, view, push))
     }
@@ -208,25 +207,26 @@ impl SpacetimeRenderer {
         target: &RenderTarget,
         view: &SpacetimeView,
         push: &DrawPush,
-    ) -> impl FnOnce(vk::CommandBuffer) + '_ {
-        let (tris, lines, draws) = (self.tris.raw(), self.lines.raw(), self.draws.raw());
+    ) -> impl FnOnce(&mut Recorder<'_>) + '_ {
+        let (tris, lines, draws) = (&self.tris, &self.lines, &self.draws);
         let extent = target.extent();
         let edges_on = view.edges;
         let (push, edge_push) = (*push, push.for_edges());
         let (fill, edges) = &self.pipelines[&target.format()];
         let (fill_set, edges_set) = &self.draw_sets[&target.format()];
-        move |cmd| {
+        move |rec| {
             fill.record_draw_indirect(
-                cmd,
+                rec,
                 extent,
                 fill_set,
                 bytemuck::bytes_of(&push),
-                Some(tris),
-                (draws, 0),
+                Some(tris.whole()),
+                draws.binding_range(crate::gpu::Chunk { first: 0, len: 4 }),
             );
             if edges_on {
                 let bytes = bytemuck::bytes_of(&edge_push);
-                edges.record_draw_indirect(cmd, extent, edges_set, bytes, Some(lines), (draws, 16));
+                let second = draws.binding_range(crate::gpu::Chunk { first: 4, len: 4 });
+                edges.record_draw_indirect(rec, extent, edges_set, bytes, Some(lines.whole()), second);
             }
         }
     }
@@ -244,14 +244,14 @@ impl SpacetimeRenderer {
     /// viewer that own the frame's command buffer.
     pub fn record_draw_into(
         &mut self,
-        cmd: vk::CommandBuffer,
+        rec: &mut Recorder<'_>,
         target: &RenderTarget,
         view: &SpacetimeView,
         u_max: f64,
     ) -> Result<(), SpacetimeError> {
         let push = self.draw_push(target, view, u_max);
         let draw = self.record_draw(target, view, &push)?;
-        draw(cmd);
+        draw(rec);
         Ok(())
     }
 
@@ -263,7 +263,7 @@ impl SpacetimeRenderer {
         let push = self.draw_push(target, view, u_max);
         let gpu = self.gpu.clone();
         let draw = self.record_draw(target, view, &push)?;
-        target.render(&gpu, clear_colour(target), draw).map_err(dev("drawing the slice"))
+        target.render(&gpu, clear_colour(target), |rec| draw(rec)).map_err(dev("drawing the slice"))
     }
 
     /// One frame as an interactive loop runs it: the slice (always redone, as when `t`
@@ -291,19 +291,19 @@ impl SpacetimeRenderer {
                 let mut profiler = profiler.as_deref_mut();
                 let slicer = &*self;
                 let commands = slicer.draw_commands(target, view, &push);
-                gpu.run(|cmd| {
+                gpu.run(|rec| {
                     if let Some(p) = profiler.as_deref_mut() {
-                        p.record_reset(cmd);
+                        p.record_reset(rec);
                     }
-                    slicer.record_slice(cmd, &slice_push, profiler.as_deref_mut());
-                    let draw = || {
-                        target.record_begin(cmd, clear);
-                        commands(cmd);
-                        target.record_end(cmd);
+                    slicer.record_slice(rec, &slice_push, profiler.as_deref_mut());
+                    let draw = |rec: &mut Recorder<'_>| {
+                        target.record_begin(rec, clear);
+                        commands(rec);
+                        target.record_end(rec);
                     };
                     match profiler {
-                        Some(p) => p.scope(cmd, "draw", draw),
-                        None => draw(),
+                        Some(p) => p.scope(rec, "draw", draw),
+                        None => draw(rec),
                     }
                 })
                 .map_err(dev("drawing a frame"))?;

@@ -2,6 +2,7 @@
 //! records streamed as `t` moves, and the two compute passes — the cut (`slice.comp`) and the
 //! quadrisection (`subdivide.comp`) — with their output buffers grown on overflow.
 
+use crate::gpu::Recorder;
 use std::ops::Range;
 
 use ash::vk;
@@ -123,9 +124,11 @@ impl SpacetimeRenderer {
             return Ok(());
         }
         let window = self.window.as_ref().expect("made resident before slicing");
-        let b = |r: crate::gpu::GpuResult<crate::gpu::BufferBinding>| {
+        fn b(
+            r: crate::gpu::GpuResult<crate::gpu::BufferBinding<'_>>,
+        ) -> Result<Resource<'_>, SpacetimeError> {
             r.map(Resource::Storage).map_err(dev("binding the slicer"))
-        };
+        }
         let records = b(window.buffer.binding())?;
         let cuts = b(self.cuts.binding())?;
         let draws = b(self.draws.binding())?;
@@ -146,39 +149,32 @@ impl SpacetimeRenderer {
     /// Records the two slicing passes; `scope` wraps each in a profiler scope.
     pub(super) fn record_slice(
         &self,
-        cmd: vk::CommandBuffer,
+        rec: &mut Recorder<'_>,
         push: &SlicePushCompute,
         mut profiler: Option<&mut Profiler>,
     ) {
         let (slice_set, subdivide_set) = self.slice_sets.as_ref().expect("bound before recording");
         let reset: [u32; COUNTERS as usize] = [0, 1, 0, 0, 0, 1, 0, 0, 0, 0];
-        let d = self.gpu.device();
         let rw = vk::AccessFlags::SHADER_READ | vk::AccessFlags::SHADER_WRITE;
         let cs = vk::PipelineStageFlags::COMPUTE_SHADER;
-        let cut = || {
-            // SAFETY: the buffer is alive and was created with TRANSFER_DST; 40 bytes.
-            unsafe { d.cmd_update_buffer(cmd, self.draws.raw(), 0, bytemuck::cast_slice(&reset)) };
-            self.gpu.memory_barrier(
-                cmd,
-                (vk::PipelineStageFlags::TRANSFER, vk::AccessFlags::TRANSFER_WRITE),
-                (cs, rw),
-            );
+        let cut = |rec: &mut Recorder<'_>| {
+            rec.update_buffer(&self.draws, 0, &reset);
+            rec.memory_barrier((vk::PipelineStageFlags::TRANSFER, vk::AccessFlags::TRANSFER_WRITE), (cs, rw));
             let groups = self.gpu.caps().groups_1d(u64::from(push.count.max(1)), 64);
-            self.slicer.record_dispatch(cmd, slice_set, bytemuck::bytes_of(push), [groups, 1, 1]);
-            self.gpu.memory_barrier(cmd, (cs, vk::AccessFlags::SHADER_WRITE), (cs, rw));
+            self.slicer.record_dispatch(rec, slice_set, bytemuck::bytes_of(push), [groups, 1, 1]);
+            rec.memory_barrier((cs, vk::AccessFlags::SHADER_WRITE), (cs, rw));
         };
         match profiler.as_deref_mut() {
-            Some(p) => p.scope(cmd, "slice", cut),
-            None => cut(),
+            Some(p) => p.scope(rec, "slice", cut),
+            None => cut(rec),
         }
-        let subdivide = || {
+        let subdivide = |rec: &mut Recorder<'_>| {
             // A polygon is cut into at most two triangles.
             let groups = self.gpu.caps().groups_1d(u64::from(push.count.max(1)) * 2, 64);
-            self.subdivider.record_dispatch(cmd, subdivide_set, bytemuck::bytes_of(push), [groups, 1, 1]);
+            self.subdivider.record_dispatch(rec, subdivide_set, bytemuck::bytes_of(push), [groups, 1, 1]);
             // Later commands and submissions draw from these buffers (vertex input; the restricted
             // cubics in the fragment stage) and read the counters.
-            self.gpu.memory_barrier(
-                cmd,
+            rec.memory_barrier(
                 (cs, vk::AccessFlags::SHADER_WRITE),
                 (
                     vk::PipelineStageFlags::DRAW_INDIRECT
@@ -193,8 +189,8 @@ impl SpacetimeRenderer {
             );
         };
         match profiler {
-            Some(p) => p.scope(cmd, "subdivide", subdivide),
-            None => subdivide(),
+            Some(p) => p.scope(rec, "subdivide", subdivide),
+            None => subdivide(rec),
         }
     }
 
@@ -253,7 +249,7 @@ impl SpacetimeRenderer {
         loop {
             self.bind_slicer()?;
             let push = self.slice_push(t, subdivide, &active);
-            self.gpu.run(|cmd| self.record_slice(cmd, &push, None)).map_err(dev("slicing"))?;
+            self.gpu.run(|rec| self.record_slice(rec, &push, None)).map_err(dev("slicing"))?;
             if let Some(stats) = self.finish_slice(active.len(), streamed)? {
                 self.sliced = Some((t, subdivide, stats));
                 return Ok(stats);

@@ -3,6 +3,7 @@
 //! (`cut.comp`), and the pipeline whose fragments pull their plane point back into the element
 //! (`cut.vert`/`cut.frag`).
 
+use crate::gpu::Recorder;
 use std::collections::HashMap;
 
 use ash::vk;
@@ -64,9 +65,9 @@ impl Cutter {
             },
         )
         .map_err(dev("building the cut pass"))?;
-        let b = |r: crate::gpu::GpuResult<crate::gpu::BufferBinding>| {
+        fn b(r: crate::gpu::GpuResult<crate::gpu::BufferBinding<'_>>) -> Result<Resource<'_>> {
             r.map(Resource::Storage).map_err(dev("binding"))
-        };
+        }
         let pass_set = pass
             .bind(
                 gpu,
@@ -124,7 +125,8 @@ impl SpectralRenderer {
             target,
         );
         let pipeline = GraphicsPipeline::new(&self.gpu, &desc).map_err(dev("building the cut pipeline"))?;
-        let resources = [self.resources[0], self.resources[1], self.resources[2], planes];
+        let r = self.resources()?;
+        let resources = [r[0], r[1], r[2], planes];
         let set = pipeline.bind(&self.gpu, &resources).map_err(dev("binding the cut pipeline"))?;
         let c = self.cutter.as_mut().expect("checked above");
         c.pipelines.insert(format, (pipeline, set));
@@ -136,7 +138,7 @@ impl SpectralRenderer {
         &mut self,
         target: &RenderTarget,
         view: &SpectralView,
-    ) -> Result<(Box<dyn FnOnce(vk::CommandBuffer) + '_>, Box<dyn FnOnce(vk::CommandBuffer) + '_>)> {
+    ) -> Result<(Box<dyn FnOnce(&mut Recorder<'_>) + '_>, Box<dyn FnOnce(&mut Recorder<'_>) + '_>)> {
         self.show(view.field, view.step)?;
         self.cut_pipeline_for(target)?;
         let planes = self.cut_planes(view)?;
@@ -149,12 +151,11 @@ impl SpectralRenderer {
             elements: self.mesh.elements() as u32,
             points_per_element: self.mesh.points_per_element() as u32,
         };
-        let pre = move |cmd: vk::CommandBuffer| {
+        let pre = move |rec: &mut Recorder<'_>| {
             let cs = vk::PipelineStageFlags::COMPUTE_SHADER;
             let fs = vk::PipelineStageFlags::FRAGMENT_SHADER;
             // The last frame has read what this pass rewrites.
-            gpu.memory_barrier(
-                cmd,
+            rec.memory_barrier(
                 (
                     vk::PipelineStageFlags::VERTEX_INPUT | vk::PipelineStageFlags::DRAW_INDIRECT | fs,
                     vk::AccessFlags::empty(),
@@ -165,23 +166,21 @@ impl SpectralRenderer {
             // SAFETY: both buffers are alive, created with TRANSFER_DST, and large enough
             // (planes ≤ MAX_CUT_PLANES, checked in cut_planes).
             unsafe {
-                gpu.device().cmd_update_buffer(cmd, c.draw.raw(), 0, bytemuck::cast_slice(&header));
-                gpu.device().cmd_update_buffer(cmd, c.planes.raw(), 0, bytemuck::cast_slice(&planes));
+                gpu.device().cmd_update_buffer(rec.raw(), c.draw.raw(), 0, bytemuck::cast_slice(&header));
+                gpu.device().cmd_update_buffer(rec.raw(), c.planes.raw(), 0, bytemuck::cast_slice(&planes));
             }
-            gpu.memory_barrier(
-                cmd,
+            rec.memory_barrier(
                 (vk::PipelineStageFlags::TRANSFER, vk::AccessFlags::TRANSFER_WRITE),
                 (cs | fs, vk::AccessFlags::SHADER_READ | vk::AccessFlags::SHADER_WRITE),
             );
             let groups = (cut_push.elements.div_ceil(64), planes.len() as u32, 1);
             c.pass.record_dispatch(
-                cmd,
+                rec,
                 &c.pass_set,
                 bytemuck::bytes_of(&cut_push),
                 [groups.0, groups.1, groups.2],
             );
-            gpu.memory_barrier(
-                cmd,
+            rec.memory_barrier(
                 (cs, vk::AccessFlags::SHADER_WRITE),
                 (
                     vk::PipelineStageFlags::DRAW_INDIRECT | vk::PipelineStageFlags::VERTEX_INPUT,
@@ -189,9 +188,9 @@ impl SpectralRenderer {
                 ),
             );
         };
-        let draw = move |cmd: vk::CommandBuffer| {
+        let draw = move |rec: &mut Recorder<'_>| {
             let bytes = bytemuck::bytes_of(&push);
-            pipeline.record_draw_indirect(cmd, extent, set, bytes, Some(c.vertices.raw()), (c.draw.raw(), 0));
+            pipeline.record_draw_indirect(rec, extent, set, bytes, Some(c.vertices.whole()), c.draw.whole());
         };
         Ok((Box::new(pre), Box::new(draw)))
     }

@@ -35,7 +35,7 @@ use super::mesh::SpectralMesh;
 use super::proxy::{self, DrawVertex};
 use crate::gpu::{
     shaders, BindingKind, Buffer, ComputePipeline, ComputePipelineDesc, DescriptorSet, Gpu, GraphicsPipeline,
-    GraphicsPipelineDesc, MemoryKind, Profiler, Resource,
+    GraphicsPipelineDesc, MemoryKind, Profiler, Recorder, Resource,
 };
 use crate::render::{Camera, ColorFormat, Colormap, ColormapTexture, Pixels, RenderTarget, BACKGROUND};
 
@@ -186,7 +186,6 @@ pub struct SpectralRenderer {
     counts: [u32; 3],
     planar: bool,
     colormap: ColormapTexture,
-    resources: Vec<Resource>,
     shown: (usize, usize),
     pipelines: HashMap<ColorFormat, Pipelines>,
     ranges: HashMap<(usize, usize), (f64, f64)>,
@@ -240,12 +239,9 @@ impl SpectralRenderer {
         let patches =
             Buffer::from_slice(gpu, "spectral patches", patch_slice, storage).map_err(dev("uploading"))?;
         let colormap = colormap.upload(gpu).map_err(dev("uploading the colour map"))?;
-        let resources = vec![
-            Resource::Storage(points.binding().map_err(dev("binding"))?),
-            Resource::Storage(values.binding().map_err(dev("binding"))?),
-            colormap.resource(),
-            Resource::Storage(patches.binding().map_err(dev("binding"))?),
-        ];
+        points.binding().map_err(dev("binding"))?;
+        values.binding().map_err(dev("binding"))?;
+        patches.binding().map_err(dev("binding"))?;
         let specialization = basis_specialization(&mesh);
         let bounds = mesh.bounds();
         let cutter =
@@ -266,7 +262,6 @@ impl SpectralRenderer {
             counts,
             planar,
             colormap,
-            resources,
             shown: (0, 0),
             pipelines: HashMap::new(),
             ranges: HashMap::new(),
@@ -280,7 +275,6 @@ impl SpectralRenderer {
     /// Replaces the colour map (rebinding the draws); call when no frame is in flight.
     pub fn set_colormap(&mut self, gpu: &Gpu, colormap: &Colormap) -> Result<()> {
         self.colormap = colormap.upload(gpu).map_err(dev("uploading the colour map"))?;
-        self.resources[2] = self.colormap.resource();
         self.pipelines.clear();
         if let Some(t) = self.tessellator.as_mut() {
             t.set = None;
@@ -370,10 +364,22 @@ impl SpectralRenderer {
             GraphicsPipeline::new(&self.gpu, &desc).map_err(dev("building the spectral pipelines"))
         };
         let (fill, lines) = (make(false)?, make(true)?);
-        let bind = |p: &GraphicsPipeline| p.bind(&self.gpu, &self.resources).map_err(dev("binding"));
+        let resources = self.resources()?;
+        let bind = |p: &GraphicsPipeline| p.bind(&self.gpu, &resources).map_err(dev("binding"));
         let (fill_set, lines_set) = (bind(&fill)?, bind(&lines)?);
         self.pipelines.insert(format, Pipelines { fill, lines, fill_set, lines_set });
         Ok(())
+    }
+
+    /// The four bindings of every spectral draw: geometry, coefficients, colour map, patches
+    /// (each checked to fit one storage binding when the renderer was made).
+    fn resources(&self) -> Result<Vec<Resource<'_>>> {
+        Ok(vec![
+            Resource::Storage(self._points.binding().map_err(dev("binding"))?),
+            Resource::Storage(self.values.binding().map_err(dev("binding"))?),
+            self.colormap.resource(),
+            Resource::Storage(self._patches.binding().map_err(dev("binding"))?),
+        ])
     }
 
     fn push(&mut self, target: &RenderTarget, view: &SpectralView) -> SpectralPush {
@@ -417,12 +423,12 @@ impl SpectralRenderer {
     /// (for applications and the viewer that own the frame's command buffer).
     pub fn record_draw_into(
         &mut self,
-        cmd: vk::CommandBuffer,
+        rec: &mut Recorder<'_>,
         target: &RenderTarget,
         view: &SpectralView,
     ) -> Result<()> {
         let draw = self.prepare(target, view)?.1;
-        draw(cmd);
+        draw(rec);
         Ok(())
     }
 
@@ -431,12 +437,12 @@ impl SpectralRenderer {
     /// themselves, before [`Self::record_draw_into`].
     pub fn record_prepass(
         &mut self,
-        cmd: vk::CommandBuffer,
+        rec: &mut Recorder<'_>,
         target: &RenderTarget,
         view: &SpectralView,
     ) -> Result<()> {
         let pre = self.prepare(target, view)?.0;
-        pre(cmd);
+        pre(rec);
         Ok(())
     }
 
@@ -445,7 +451,7 @@ impl SpectralRenderer {
         &mut self,
         target: &RenderTarget,
         view: &SpectralView,
-    ) -> Result<(Box<dyn FnOnce(vk::CommandBuffer) + '_>, Box<dyn FnOnce(vk::CommandBuffer) + '_>)> {
+    ) -> Result<(Box<dyn FnOnce(&mut Recorder<'_>) + '_>, Box<dyn FnOnce(&mut Recorder<'_>) + '_>)> {
         if self.cutter.is_some() {
             return self.prepare_cuts(target, view);
         }
@@ -463,15 +469,14 @@ impl SpectralRenderer {
         }
         let p = &self.pipelines[&target.format()];
         let extent = target.extent();
-        let (edges, edge_count) = (self.edges.raw(), self.counts[2]);
+        let (edges, edge_count) = (&self.edges, self.counts[2]);
         let (overdraw, mesh_lines) = (view.overdraw, view.edges);
         let offsets = if lifted { SURFACE_OFFSETS } else { PLANAR_OFFSETS };
-        let gpu = &self.gpu;
         let tess = self.tessellator.as_ref().filter(|_| surface);
         let capacity = self.tessellated as u32;
         let elements = self.mesh.elements() as u64;
         let key_cell = &self.tessellation_key;
-        let pre = move |cmd: vk::CommandBuffer| {
+        let pre = move |rec: &mut Recorder<'_>| {
             let Some(t) = tess else { return };
             if fresh {
                 // The stream already holds this view's tessellation (e.g. a new time step).
@@ -479,8 +484,7 @@ impl SpectralRenderer {
             }
             let cs = vk::PipelineStageFlags::COMPUTE_SHADER;
             // The last frame's draw has read the buffers this pass rewrites.
-            gpu.memory_barrier(
-                cmd,
+            rec.memory_barrier(
                 (
                     vk::PipelineStageFlags::VERTEX_INPUT | vk::PipelineStageFlags::DRAW_INDIRECT,
                     vk::AccessFlags::empty(),
@@ -488,10 +492,8 @@ impl SpectralRenderer {
                 (vk::PipelineStageFlags::TRANSFER | cs, vk::AccessFlags::empty()),
             );
             let header: [u32; 6] = [0, 1, 0, 0, capacity, 0];
-            // SAFETY: the buffer is alive, 24 bytes, created with TRANSFER_DST.
-            unsafe { gpu.device().cmd_update_buffer(cmd, t.draw.raw(), 0, bytemuck::cast_slice(&header)) };
-            gpu.memory_barrier(
-                cmd,
+            rec.update_buffer(&t.draw, 0, &header);
+            rec.memory_barrier(
                 (vk::PipelineStageFlags::TRANSFER, vk::AccessFlags::TRANSFER_WRITE),
                 (cs, vk::AccessFlags::SHADER_READ | vk::AccessFlags::SHADER_WRITE),
             );
@@ -500,9 +502,8 @@ impl SpectralRenderer {
             let x = groups.min(65_535);
             let y = groups.div_ceil(x);
             let set = t.set.as_ref().expect("bound in tessellator_for");
-            t.pipeline.record_dispatch(cmd, set, bytemuck::bytes_of(&push), [x as u32, y as u32, 1]);
-            gpu.memory_barrier(
-                cmd,
+            t.pipeline.record_dispatch(rec, set, bytemuck::bytes_of(&push), [x as u32, y as u32, 1]);
+            rec.memory_barrier(
                 (cs, vk::AccessFlags::SHADER_WRITE),
                 (
                     vk::PipelineStageFlags::DRAW_INDIRECT | vk::PipelineStageFlags::VERTEX_INPUT,
@@ -512,22 +513,22 @@ impl SpectralRenderer {
             key_cell.set(Some(key));
         };
         let (faces, face_count) = if view.per_vertex {
-            (self.node_grids.raw(), self.counts[1])
+            (&self.node_grids, self.counts[1])
         } else {
-            (self.proxies.raw(), self.counts[0])
+            (&self.proxies, self.counts[0])
         };
-        let draw = move |cmd: vk::CommandBuffer| {
+        let draw = move |rec: &mut Recorder<'_>| {
             let bytes = bytemuck::bytes_of(&push);
             match tess {
                 Some(t) => p.fill.record_draw_indirect(
-                    cmd,
+                    rec,
                     extent,
                     &p.fill_set,
                     bytes,
-                    Some(t.vertices.as_ref().expect("made in tessellator_for").raw()),
-                    (t.draw.raw(), 0),
+                    Some(t.vertices.as_ref().expect("made in tessellator_for").whole()),
+                    t.draw.whole(),
                 ),
-                None => p.fill.record_draw(cmd, extent, &p.fill_set, bytes, Some(faces), face_count),
+                None => p.fill.record_draw(rec, extent, &p.fill_set, bytes, Some(faces.whole()), face_count),
             }
             // Edge overdraw behind the faces, then the mesh lines in front.
             for (on, mode, offset) in
@@ -538,7 +539,7 @@ impl SpectralRenderer {
                     lines.flags[2] = mode;
                     lines.misc[0] = offset;
                     let bytes = bytemuck::bytes_of(&lines);
-                    p.lines.record_draw(cmd, extent, &p.lines_set, bytes, Some(edges), edge_count);
+                    p.lines.record_draw(rec, extent, &p.lines_set, bytes, Some(edges.whole()), edge_count);
                 }
             }
         };
@@ -557,13 +558,13 @@ impl SpectralRenderer {
         let gpu = self.gpu.clone();
         let clear = if target.format() == ColorFormat::Rgba32F { [f32::NAN; 4] } else { BACKGROUND };
         let (pre, draw) = self.prepare(target, view)?;
-        gpu.run(|cmd| {
-            profiler.record_reset(cmd);
-            profiler.scope(cmd, "draw", || {
-                pre(cmd);
-                target.record_begin(cmd, clear);
-                draw(cmd);
-                target.record_end(cmd);
+        gpu.run(|rec| {
+            profiler.record_reset(rec);
+            profiler.scope(rec, "draw", |rec| {
+                pre(rec);
+                target.record_begin(rec, clear);
+                draw(rec);
+                target.record_end(rec);
             });
         })
         .map_err(dev("drawing a frame"))?;
@@ -590,7 +591,7 @@ impl SpectralRenderer {
         let gpu = self.gpu.clone();
         let clear = if target.format() == ColorFormat::Rgba32F { [f32::NAN; 4] } else { BACKGROUND };
         let (pre, draw) = self.prepare(target, view)?;
-        gpu.run(pre).map_err(dev("tessellating the surface"))?;
-        target.render(&gpu, clear, draw).map_err(dev("drawing the spectral elements"))
+        gpu.run(|rec| pre(rec)).map_err(dev("tessellating the surface"))?;
+        target.render(&gpu, clear, |rec| draw(rec)).map_err(dev("drawing the spectral elements"))
     }
 }

@@ -118,7 +118,15 @@ impl SpectralRenderer {
         let max = self.gpu.max_binding_bytes() / std::mem::size_of::<DrawVertex>() as u64;
         let need = need.min(max);
         self.tessellated = need;
-        let t = self.tessellator.as_mut().expect("made above");
+        let mut t = self.tessellator.take().expect("made above");
+        let grown = self.grow_tessellation(&mut t, need, max);
+        let bound = grown.and_then(|()| self.bind_tessellation(&mut t));
+        self.tessellator = Some(t);
+        bound
+    }
+
+    /// Makes room for `need` tessellated vertices (at most `max`).
+    fn grow_tessellation(&mut self, t: &mut Tessellator, need: u64, max: u64) -> Result<()> {
         if t.vertices.as_ref().is_none_or(|v| v.len() < need) {
             // Grow by half again, so a slowly moving camera does not reallocate every frame.
             let len = (need + need / 2).min(max);
@@ -136,9 +144,14 @@ impl SpectralRenderer {
                 .map_err(dev("the tessellation pass"))?,
             );
         }
+        Ok(())
+    }
+
+    /// Binds the tessellation pass's resources, if not bound yet.
+    fn bind_tessellation(&self, t: &mut Tessellator) -> Result<()> {
         if t.set.is_none() {
             let vertices = t.vertices.as_ref().expect("made above");
-            let mut resources = self.resources.clone();
+            let mut resources = self.resources()?;
             // Binding 2 (the colour map in the draws) is unused by the pass: bind the values.
             resources[2] = Resource::Storage(self.values.binding().map_err(dev("binding"))?);
             resources.push(Resource::Storage(t.draw.binding().map_err(dev("binding"))?));

@@ -1,12 +1,11 @@
 //! The shared-memory tiled SGEMM (`shaders-glsl/tensor/gemm.comp`, tiling in
 //! `shaders-glsl/include/gemm_tile.glsl`).
 
-use ash::vk;
 use bytemuck::{Pod, Zeroable};
 
 use crate::gpu::{
     shaders, BindingKind, BufferBinding, ComputePipeline, ComputePipelineDesc, DescriptorSet, Gpu, GpuResult,
-    Resource,
+    Recorder, Resource,
 };
 
 /// Tile edge of `gemm.comp` (rows and columns of C per workgroup).
@@ -96,9 +95,9 @@ impl Gemm {
     }
 
     /// Records `C = A·B`, or `C += A·B` with `accumulate`.
-    pub fn record(&self, cmd: vk::CommandBuffer, binding: &GemmBinding, accumulate: bool) {
+    pub fn record(&self, rec: &mut Recorder<'_>, binding: &GemmBinding, accumulate: bool) {
         let push = GemmPush { m: binding.m, n: binding.n, k: binding.k, accumulate: u32::from(accumulate) };
         let groups = [binding.n.div_ceil(GEMM_TILE), binding.m.div_ceil(GEMM_TILE), 1];
-        self.pipeline.record_dispatch(cmd, &binding.set, bytemuck::bytes_of(&push), groups);
+        self.pipeline.record_dispatch(rec, &binding.set, bytemuck::bytes_of(&push), groups);
     }
 }

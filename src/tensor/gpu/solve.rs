@@ -124,9 +124,9 @@ impl BatchedSolve {
                     xs.upload(gpu, 0, &b)?;
                     tol.upload(gpu, 0, &t)?;
                     let push = SolvePush { n: n as u32, batch: chunk.len() as u32 };
-                    gpu.run(|cmd| {
+                    gpu.run(|rec| {
                         self.pipeline.record_dispatch(
-                            cmd,
+                            rec,
                             &set,
                             bytemuck::bytes_of(&push),
                             [chunk.len() as u32, 1, 1],
