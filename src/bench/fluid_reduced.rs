@@ -12,8 +12,7 @@ use std::time::Instant;
 
 use crate::fluid::reduced::bases::{constraint_basis, remove_divergence};
 use crate::fluid::reduced::{
-    AdvectionStorage, BasisSizes, Exponential, FluidBases, MeshOf, ReducedFluid, ReducedFluidModel,
-    ReducedState, ReducedStepReport, Trajectory,
+    BasisSizes, Exponential, FluidBases, MeshOf, ReducedFluid, ReducedFluidModel, ReducedState, Trajectory,
 };
 use crate::fluid::scene::FluidScene;
 use crate::fluid::FluidError;
@@ -39,7 +38,7 @@ fn orthonormal(name: &str, a: faer::Mat<f64>) -> Result<Basis, FluidError> {
 /// Medians of one configuration's stages.
 #[derive(Clone, Debug)]
 pub struct StepTiming {
-    /// "Krylov", "Padé 13" or "Krylov, Â in f32".
+    /// "Krylov" or "Padé 13".
     pub exponential: &'static str,
     /// (m_u, m_f, m_g, m_h, m_d).
     pub dims: (usize, usize, usize, usize, usize),
@@ -62,11 +61,8 @@ pub struct CavityBench {
     pub model_bytes: usize,
     /// Bytes of the reduced tensors alone.
     pub tensor_bytes: usize,
-    /// Per configuration (exponential and advection storage).
+    /// Per exponential.
     pub timings: Vec<StepTiming>,
-    /// `‖û'_f32 − û'_f64‖ / ‖û'_f64‖` after one advection from the same state, Â stored in f32
-    /// against f64.
-    pub f32_step_difference: f64,
 }
 
 /// The reduced step on `scene`'s mesh (a cavity) at basis sizes `(m_u, m_f, m_g, m_h)`,
@@ -127,15 +123,9 @@ pub fn cavity_step(
     let mut fluid = ReducedFluid::new(&model)?;
     let md = model.dim_of("d");
     let mut timings = Vec::new();
-    let configurations = [
-        ("Krylov", Exponential::Krylov(1e-12), AdvectionStorage::F64),
-        ("Padé 13", Exponential::Pade, AdvectionStorage::F64),
-        ("Krylov, Â in f32", Exponential::Krylov(1e-12), AdvectionStorage::F32),
-    ];
-    for (label, exponential, storage) in configurations {
+    for (label, exponential) in [("Krylov", Exponential::Krylov(1e-12)), ("Padé 13", Exponential::Pade)] {
         stage(label);
         fluid.exponential = exponential;
-        fluid.set_advection_storage(storage);
         let mut state = ReducedState { u: random(mu, 7), f: random(mf, 8), g: gh0.clone() };
         let (mut st, mut tot, mut prods) = (vec![Vec::new(); 4], Vec::new(), Vec::new());
         for k in 0..steps {
@@ -167,20 +157,7 @@ pub fn cavity_step(
             products: med(&mut prods) as usize,
         });
     }
-    // What f32 storage costs in accuracy: one advection from the same state both ways (the
-    // advection is what Â's precision enters; the synthetic bases' boundary constraint has
-    // full rank, so their projection pins f̂ and would hide it).
-    let (u0, f0) = (random(mu, 7), random(mf, 8));
-    let hh: Vec<f64> = (0..mh).map(|j| 1e-3 * (j as f64 * 0.13).cos()).collect();
-    let mut exact = ReducedFluid::new(&model)?;
-    exact.exponential = Exponential::Krylov(1e-12);
-    let mut r = ReducedStepReport::default();
-    let single = fluid.advect(&u0, &f0, &gh0, &hh, model.frame_time, &mut r)?;
-    let double = exact.advect(&u0, &f0, &gh0, &hh, model.frame_time, &mut r)?;
-    let diff = single.iter().zip(&double).map(|(a, b)| (a - b).powi(2)).sum::<f64>().sqrt();
-    let f32_step_difference = diff / double.iter().map(|a| a * a).sum::<f64>().sqrt().max(f64::MIN_POSITIVE);
     Ok(CavityBench {
-        f32_step_difference,
         cells: mesh.cell_count(),
         premultiply_seconds,
         model_bytes: model.bytes(),

@@ -58,11 +58,6 @@ pub struct ReducedArgs {
     /// Overwrite a directory that already holds snapshots.
     #[arg(long)]
     pub force: bool,
-    /// Store the advection tensors Â, Â_h in f32 for the step (half the memory traffic of its
-    /// largest contraction; products still accumulate in f64, energy behaviour unchanged,
-    /// K̂ carries ~6e-8 relative rounding).
-    #[arg(long)]
-    pub f32_advection: bool,
 }
 
 /// Arguments of `galerkin fluid error-study`.
@@ -184,10 +179,7 @@ pub fn train(args: &TrainArgs) -> Result<()> {
 
 pub fn reduced(args: &ReducedArgs) -> Result<()> {
     let model = ReducedFluidModel::load(&args.model)?;
-    let mut fluid = ReducedFluid::new(&model)?;
-    if args.f32_advection {
-        fluid.set_advection_storage(galerkin::fluid::reduced::AdvectionStorage::F32);
-    }
+    let fluid = ReducedFluid::new(&model)?;
     let k = args.motion.run();
     let available = model.trajectories.get(k).map_or(0, |t| t.g.shape()[0].saturating_sub(1));
     let frames = args.frames.unwrap_or(available);
@@ -218,7 +210,7 @@ pub struct BenchArgs {
     /// Reduced steps timed per exponential.
     #[arg(long, default_value_t = 200)]
     pub steps: usize,
-    /// Reduced steps of the energy run (default 10⁶; 10⁴ with --quick; 0 skips it).
+    /// Reduced steps of the energy run (default 10⁶; 10⁴ with --quick).
     #[arg(long)]
     pub energy_steps: Option<usize>,
     /// Basis sizes m_u,m_f,m_g,m_h of the cavity step (Table 1's cavity: 128,64,5; m_h ours).
@@ -244,12 +236,12 @@ pub fn bench(args: &BenchArgs) -> Result<()> {
         b.model_bytes as f64 / 1e6
     );
     println!(
-        "  configuration      m_u  m_f  m_g  m_h  m_d   K̂ (ms)  V̂ (ms)  exp (ms)  proj (ms)  step (ms)  products"
+        "  exponential  m_u  m_f  m_g  m_h  m_d   K̂ (ms)  V̂ (ms)  exp (ms)  proj (ms)  step (ms)  products"
     );
     for t in &b.timings {
         let (a, f, g, h, d) = t.dims;
         println!(
-            "  {:<17} {a:>4} {f:>4} {g:>4} {h:>4} {d:>4}  {:>7.3}  {:>6.3}  {:>8.3}  {:>9.3}  {:>9.3}  {:>8}",
+            "  {:<11} {a:>4} {f:>4} {g:>4} {h:>4} {d:>4}  {:>7.3}  {:>6.3}  {:>8.3}  {:>9.3}  {:>9.3}  {:>8}",
             t.exponential,
             1e3 * t.stages[0],
             1e3 * t.stages[1],
@@ -258,13 +250,6 @@ pub fn bench(args: &BenchArgs) -> Result<()> {
             1e3 * t.total,
             t.products
         );
-    }
-    println!(
-        "  Â in f32 moves one advection by {:.1e} of its size (‖û'_f32 − û'_f64‖ / ‖û'_f64‖)",
-        b.f32_step_difference
-    );
-    if args.energy_steps == Some(0) {
-        return Ok(());
     }
     // The energy run: a small tunnel model trained here.
     let (runs, _) = small_tunnel_runs(std::path::Path::new("out/bench-fluid-reduced"), 100)?;

@@ -165,7 +165,10 @@ impl<'g> Recorder<'g> {
         let bytes: &[u8] = bytemuck::cast_slice(data);
         let offset = first * std::mem::size_of::<T>() as u64;
         assert!(
-            bytes.len().is_multiple_of(4) && offset.is_multiple_of(4) && bytes.len() <= 65_536 && !bytes.is_empty(),
+            bytes.len().is_multiple_of(4)
+                && offset.is_multiple_of(4)
+                && bytes.len() <= 65_536
+                && !bytes.is_empty(),
             "vkCmdUpdateBuffer of {} bytes at {offset} into `{}`",
             bytes.len(),
             buffer.name()

@@ -30,8 +30,6 @@ pub mod training;
 pub use bases::{BasisReport, BasisSizes, FluidBases};
 pub use model::{MeshFingerprint, MeshOf, ReducedFluidModel, Trajectory};
 pub use run::{run_reduced, write_lifted, ReducedMotion, ReducedRun};
-pub use step::{
-    AdvectionStorage, Exponential, FluxCombination, ReducedFluid, ReducedState, ReducedStepReport,
-};
+pub use step::{Exponential, FluxCombination, ReducedFluid, ReducedState, ReducedStepReport};
 pub use study::{one_step_errors, ErrorStudy, SizeErrors};
 pub use training::TrainingSet;

@@ -33,8 +33,9 @@ use faer::{Accum, Mat, MatRef, Par};
 use crate::fluid::FluidError;
 use crate::tensor::expm_krylov;
 
-pub use super::dense::AdvectionStorage;
-use super::dense::{cholesky, cholesky_solve, fold_symmetric, matvec, row_major, transpose_times, RowMajor};
+use super::dense::{
+    cholesky, cholesky_solve, fold_symmetric, matvec, matvec_split, row_major, transpose_times,
+};
 use super::model::ReducedFluidModel;
 
 /// How the induced flux enters advection (see the module docs).
@@ -130,11 +131,11 @@ pub struct ReducedFluid {
     /// Â, row-major: when every `Â[:, :, j]` is skew (B_f divergence-free, B_u = B_p: §A.2)
     /// only its strict upper triangle, `m_u(m_u−1)/2 × m_f` (half the memory traffic of the
     /// step's largest contraction); otherwise all of it, `(m_u·m_u) × m_f`.
-    a: RowMajor,
+    a: Vec<f64>,
     /// Whether `a` holds the skew upper triangle.
     a_skew: bool,
     /// Â_h as (m_u·m_u) × m_h.
-    ah: RowMajor,
+    ah: Vec<f64>,
     /// Δ̂ (m_u·m_u).
     lap: Vec<f64>,
     /// P̂ as (m_u·m_f) × m_g.
@@ -248,9 +249,9 @@ impl ReducedFluid {
             mh,
             viscosity: model.viscosity,
             frame_time: model.frame_time,
-            a: RowMajor::F64(a),
+            a,
             a_skew,
-            ah: RowMajor::F64(if mh > 0 { t("Ah")?.data().to_vec() } else { Vec::new() }),
+            ah: if mh > 0 { t("Ah")?.data().to_vec() } else { Vec::new() },
             lap: t("L")?.data().to_vec(),
             p: t("P")?.data().to_vec(),
             v,
@@ -263,18 +264,6 @@ impl ReducedFluid {
             exponential: Exponential::default(),
             factor: FactorCache::default(),
         })
-    }
-
-    /// Stores `Â` and `Â_h` in `storage`'s precision for every later step (see
-    /// [`AdvectionStorage`]; converting back from f32 does not restore the dropped digits).
-    pub fn set_advection_storage(&mut self, storage: AdvectionStorage) {
-        self.a = std::mem::replace(&mut self.a, RowMajor::F64(Vec::new())).stored(storage);
-        self.ah = std::mem::replace(&mut self.ah, RowMajor::F64(Vec::new())).stored(storage);
-    }
-
-    /// The precision `Â` and `Â_h` are stored in.
-    pub fn advection_storage(&self) -> AdvectionStorage {
-        self.a.storage()
     }
 
     /// Reduced dimensions (m_u, m_f, m_g, m_h).
@@ -359,7 +348,7 @@ impl ReducedFluid {
         };
         let mut k = Mat::from_fn(mu, mu, |i, j| self.viscosity * self.lap[i * mu + j]);
         if self.a_skew {
-            let packed = self.a.matvec_split(mu * (mu - 1) / 2, self.mf, &fp);
+            let packed = matvec_split(&self.a, mu * (mu - 1) / 2, self.mf, &fp);
             let mut row = 0;
             for p in 0..mu {
                 for u in p + 1..mu {
@@ -369,7 +358,7 @@ impl ReducedFluid {
                 }
             }
         } else {
-            let flat = self.a.matvec_split(mu * mu, self.mf, &fp);
+            let flat = matvec_split(&self.a, mu * mu, self.mf, &fp);
             for p in 0..mu {
                 for u in 0..mu {
                     k[(p, u)] += flat[p * mu + u];
@@ -377,7 +366,7 @@ impl ReducedFluid {
             }
         }
         if self.mh > 0 && self.combination == FluxCombination::Separate {
-            let kh = self.ah.matvec_split(mu * mu, self.mh, h);
+            let kh = matvec_split(&self.ah, mu * mu, self.mh, h);
             for p in 0..mu {
                 for u in 0..mu {
                     k[(p, u)] -= kh[p * mu + u];
@@ -613,9 +602,9 @@ mod tests {
             mh: 0,
             viscosity: 0.0,
             frame_time: 0.1,
-            a: RowMajor::F64(vec![0.0; mu * (mu - 1) / 2 * mf]),
+            a: vec![0.0; mu * (mu - 1) / 2 * mf],
             a_skew: true,
-            ah: RowMajor::F64(Vec::new()),
+            ah: Vec::new(),
             lap: vec![0.0; mu * mu],
             p: vec![1.0, 1.0, 0.0, 0.0],
             v: vec![1.0, 0.0, 1.0],
