@@ -10,7 +10,8 @@ use bytemuck::{Pod, Zeroable};
 use super::particles::{AdvectReport, GridHash, Particle};
 use super::FluidError;
 use crate::gpu::{
-    shaders, BindingKind, Buffer, ComputePipeline, ComputePipelineDesc, DescriptorSet, Gpu, Resource,
+    shaders, BindingKind, Buffer, ComputePipeline, ComputePipelineDesc, DescriptorSet, Gpu, Recorder,
+    Resource,
 };
 use crate::mesh::{FaceKind, Point, SimplexMesh, Topology};
 
@@ -164,7 +165,9 @@ impl GpuParticles {
         self.particles.upload(gpu, 0, &pack(particles)).map_err(gpu_err)
     }
 
-    /// Advects through one frame (see [`super::particles::advect_particles`]).
+    /// Advects through one frame (see [`super::particles::advect_particles`]): the
+    /// convenience of [`Self::prepare`], [`Self::record_advect`] in one engine submission, and
+    /// [`Self::report`].
     #[allow(clippy::too_many_arguments)]
     pub fn advect(
         &mut self,
@@ -179,6 +182,22 @@ impl GpuParticles {
         if self.count == 0 {
             return Ok(AdvectReport::default());
         }
+        self.prepare(gpu, mesh, g0, g1, f)?;
+        gpu.run(|rec| self.record_advect(rec, frame_time, substeps)).map_err(gpu_err)??;
+        self.report(gpu)
+    }
+
+    /// Uploads a frame's geometries `g0 → g1` and flux `f` and binds them (the grid hash of the
+    /// two geometries is rebuilt only when they change). Engine transfers, done before a frame
+    /// is recorded; no recording of this pass may be pending.
+    pub fn prepare(
+        &mut self,
+        gpu: &Gpu,
+        mesh: &SimplexMesh,
+        g0: &[f64],
+        g1: &[f64],
+        f: &[f64],
+    ) -> Result<(), FluidError> {
         if g0.len() != self.g0.len() as usize || g1.len() != g0.len() || f.len() != self.flux.len() as usize {
             return Err(FluidError::State(format!(
                 "particles: geometries of {} and {} coordinates and {} fluxes for a mesh of {} and {}",
@@ -227,8 +246,27 @@ impl GpuParticles {
                 set,
             });
         }
-        self.counts.upload(gpu, 0, &[0u32; 3]).map_err(gpu_err)?;
-        let frame = self.frame.as_ref().expect("bound above");
+        Ok(())
+    }
+
+    /// Records the advection through one frame of `frame_time` in `substeps` steps, from the
+    /// frame [`Self::prepare`] uploaded. Outside a render pass. Before: the prepared buffers'
+    /// transfers are finished (they were waited for). It records the reset of its counters (a
+    /// transfer) and a barrier to the dispatch itself; after it, a barrier makes the particle
+    /// writes visible to compute, vertex and fragment shaders (a sprite draw) and to transfers
+    /// (a readback). An error if nothing was prepared.
+    pub fn record_advect(
+        &self,
+        rec: &mut Recorder<'_>,
+        frame_time: f64,
+        substeps: usize,
+    ) -> Result<(), FluidError> {
+        let Some(frame) = self.frame.as_ref() else {
+            return Err(FluidError::State("particles: record_advect before prepare".into()));
+        };
+        if self.count == 0 {
+            return Ok(());
+        }
         let (lo, size, dims) = frame.grid;
         let set = &frame.set;
         let push = Push {
@@ -240,15 +278,36 @@ impl GpuParticles {
             grid_size: [size[0] as f32, size[1] as f32, size[2] as f32, 0.0],
             grid_dims: [dims[0] as u32, dims[1] as u32, dims[2] as u32, 0],
         };
-        gpu.run(|rec| {
-            self.pipeline.record_dispatch(
-                rec,
-                set,
-                bytemuck::bytes_of(&push),
-                [(self.count as u32).div_ceil(64), 1, 1],
-            );
-        })
-        .map_err(gpu_err)?;
+        let cs = vk::PipelineStageFlags::COMPUTE_SHADER;
+        let rw = vk::AccessFlags::SHADER_READ | vk::AccessFlags::SHADER_WRITE;
+        rec.fill_buffer(&self.counts, 0);
+        rec.memory_barrier(
+            (
+                vk::PipelineStageFlags::TRANSFER | cs | vk::PipelineStageFlags::VERTEX_SHADER,
+                vk::AccessFlags::TRANSFER_WRITE | vk::AccessFlags::SHADER_WRITE,
+            ),
+            (cs, rw),
+        );
+        self.pipeline.record_dispatch(
+            rec,
+            set,
+            bytemuck::bytes_of(&push),
+            [(self.count as u32).div_ceil(64), 1, 1],
+        );
+        rec.memory_barrier(
+            (cs, vk::AccessFlags::SHADER_WRITE),
+            (
+                cs | vk::PipelineStageFlags::VERTEX_SHADER
+                    | vk::PipelineStageFlags::FRAGMENT_SHADER
+                    | vk::PipelineStageFlags::TRANSFER,
+                vk::AccessFlags::SHADER_READ | vk::AccessFlags::TRANSFER_READ,
+            ),
+        );
+        Ok(())
+    }
+
+    /// What the last recorded advection counted (read once its work has finished).
+    pub fn report(&self, gpu: &Gpu) -> Result<AdvectReport, FluidError> {
         let counts = self.counts.download(gpu).map_err(gpu_err)?;
         Ok(AdvectReport {
             walked: counts[0] as usize,

@@ -35,4 +35,6 @@ pub use data::{DataSummary, SpacetimeData};
 pub use error::SpacetimeError;
 pub use mesh::{ElementField, SpacetimeMesh};
 pub use record::ElementRecord;
-pub use render::{FrameTimes, SliceLine, SliceStats, SliceTriangle, SpacetimeRenderer, SpacetimeView};
+pub use render::{
+    FrameTimes, SliceLine, SlicePlan, SliceStats, SliceTriangle, SpacetimeRenderer, SpacetimeView,
+};

@@ -32,6 +32,8 @@ use crate::render::{Camera, ColorFormat, Colormap, ColormapTexture, Pixels, Rend
 mod draw;
 mod slicing;
 
+pub use slicing::SlicePlan;
+
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
 struct SliceVertex {
@@ -41,7 +43,7 @@ struct SliceVertex {
 }
 
 #[repr(C)]
-#[derive(Clone, Copy, Pod, Zeroable)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
 struct SlicePushCompute {
     /// Ring slot of the first active element.
     first: u32,

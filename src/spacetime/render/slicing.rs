@@ -257,6 +257,52 @@ impl SpacetimeRenderer {
         }
     }
 
+    /// For a frame the host records itself: streams the elements active at `t` to the device
+    /// (engine transfers, done before the frame is recorded) and binds the slicer. Then
+    /// [`Self::record_slice_into`] records the slice into the host's command buffer, and
+    /// [`Self::finish_host_slice`] checks it once that work has finished.
+    pub fn prepare_slice(&mut self, t: f64, subdivide: Option<f64>) -> Result<SlicePlan, SpacetimeError> {
+        self.sliced = None;
+        let active = self.data.active_range(t);
+        let streamed = self.make_resident(active.clone())?;
+        self.bind_slicer()?;
+        let push = self.slice_push(t, subdivide, &active);
+        Ok(SlicePlan { t, subdivide, active, streamed, push })
+    }
+
+    /// Records the two slicing passes of `plan` (outside a render pass). It starts with an
+    /// execution barrier after every earlier read of the slice buffers (a previous frame's
+    /// indirect draw, vertex input, fragment shading or readback, in this or an earlier
+    /// submission on the queue) and ends with a barrier that makes the slice visible to
+    /// indirect draws, vertex input, fragment shaders and transfers; draw it with
+    /// [`Self::record_draw_into`].
+    pub fn record_slice_into(&self, rec: &mut Recorder<'_>, plan: &SlicePlan) {
+        rec.memory_barrier(
+            (
+                vk::PipelineStageFlags::DRAW_INDIRECT
+                    | vk::PipelineStageFlags::VERTEX_INPUT
+                    | vk::PipelineStageFlags::FRAGMENT_SHADER
+                    | vk::PipelineStageFlags::TRANSFER,
+                vk::AccessFlags::empty(),
+            ),
+            (
+                vk::PipelineStageFlags::TRANSFER | vk::PipelineStageFlags::COMPUTE_SHADER,
+                vk::AccessFlags::empty(),
+            ),
+        );
+        self.record_slice(rec, &plan.push, None);
+    }
+
+    /// After the recording of `plan` has finished: `Ok(Some(stats))` if the slice fit its
+    /// buffers, `Ok(None)` if they were grown and the frame must be recorded again.
+    pub fn finish_host_slice(&mut self, plan: &SlicePlan) -> Result<Option<SliceStats>, SpacetimeError> {
+        let stats = self.finish_slice(plan.active.len(), plan.streamed)?;
+        if let Some(s) = stats {
+            self.sliced = Some((plan.t, plan.subdivide, s));
+        }
+        Ok(stats)
+    }
+
     /// The triangles of the current slice, read back: (element of the data, corners). For
     /// tests and inspection.
     pub fn slice_triangles(&self) -> Result<Vec<SliceTriangle>, SpacetimeError> {
@@ -275,4 +321,14 @@ impl SpacetimeRenderer {
         self.lines.download_into(&self.gpu, 0, &mut v).map_err(dev("reading the slice"))?;
         Ok(v.chunks_exact(2).map(|l| (self.element_of_slot(l[0].element), [l[0].xy, l[1].xy])).collect())
     }
+}
+
+/// A slice prepared for a host-recorded frame ([`SpacetimeRenderer::prepare_slice`]).
+#[derive(Clone, Debug)]
+pub struct SlicePlan {
+    t: f64,
+    subdivide: Option<f64>,
+    active: Range<usize>,
+    streamed: usize,
+    push: SlicePushCompute,
 }
