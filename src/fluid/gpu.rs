@@ -292,7 +292,7 @@ impl GpuParticles {
             rec,
             set,
             bytemuck::bytes_of(&push),
-            [(self.count as u32).div_ceil(64), 1, 1],
+            [(self.count as u32).div_ceil(self.pipeline.local_size()[0]), 1, 1],
         );
         rec.memory_barrier(
             (cs, vk::AccessFlags::SHADER_WRITE),

@@ -71,6 +71,15 @@ pub enum GpuError {
         /// Unit of both numbers.
         unit: &'static str,
     },
+    /// A pipeline's description disagrees with what its shaders declare (push-constant bytes,
+    /// bindings), read from their SPIR-V.
+    #[error("pipeline `{pipeline}`: {detail}")]
+    ShaderLayout {
+        /// The pipeline's name.
+        pipeline: String,
+        /// What disagrees.
+        detail: String,
+    },
     /// An object made on one device was used with another [`crate::gpu::Gpu`].
     #[error("`{name}` belongs to another Vulkan device than the one it was used with")]
     WrongDevice {

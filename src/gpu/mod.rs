@@ -30,6 +30,7 @@ mod memory;
 mod pipeline;
 mod query;
 mod recorder;
+pub mod reflect;
 mod renderpass;
 pub mod shaders;
 mod staging;

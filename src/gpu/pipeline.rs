@@ -166,28 +166,16 @@ pub struct ComputePipelineDesc<'a> {
     pub shared_bytes: u32,
 }
 
-/// The workgroup size of a compute shader: the literal `LocalSize` execution mode
-/// (`OpExecutionMode %main LocalSize x y z`), if the module has one.
+/// The workgroup size of a compute shader (its `LocalSize` execution mode, read by
+/// [`super::reflect`]), if the module has one and can be reflected.
 pub fn spirv_local_size(spirv: &[u32]) -> Option<[u32; 3]> {
-    const OP_EXECUTION_MODE: u32 = 16;
-    const LOCAL_SIZE: u32 = 17;
-    let mut i = 5; // past the header
-    while i < spirv.len() {
-        let (count, opcode) = ((spirv[i] >> 16) as usize, spirv[i] & 0xffff);
-        if count == 0 {
-            return None;
-        }
-        if opcode == OP_EXECUTION_MODE && count >= 6 && spirv.get(i + 2) == Some(&LOCAL_SIZE) {
-            return Some([spirv[i + 3], spirv[i + 4], spirv[i + 5]]);
-        }
-        i += count;
-    }
-    None
+    super::reflect::reflect("a shader", spirv).ok()?.local_size
 }
 
 /// A compute pipeline with its layout.
 pub struct ComputePipeline {
     core: PipelineCore,
+    local_size: [u32; 3],
 }
 
 impl Tracked for ComputePipeline {
@@ -200,7 +188,10 @@ impl ComputePipeline {
     /// Builds the pipeline, after checking its workgroup (size read from the SPIR-V, shared
     /// memory from the description) fits the device.
     pub fn new(gpu: &Gpu, desc: &ComputePipelineDesc<'_>) -> GpuResult<Self> {
-        let invocations = spirv_local_size(desc.spirv).map_or(1, |[x, y, z]| x * y * z);
+        let shader = super::reflect::reflect(desc.name, desc.spirv)?;
+        super::reflect::check_layout(desc.name, &shader, desc.push_constant_bytes, desc.bindings)?;
+        let local_size = shader.local_size.unwrap_or([1, 1, 1]);
+        let invocations = local_size.iter().product();
         gpu.caps().check_workgroup(desc.name, invocations, desc.shared_bytes)?;
         let layout = PipelineLayout::new(
             gpu,
@@ -221,7 +212,16 @@ impl ComputePipeline {
         // SAFETY: valid create info; the module and layout are alive.
         let raw = unsafe { gpu.device().create_compute_pipelines(vk::PipelineCache::null(), &[info], None) }
             .map_err(|(_, e)| vk_error("vkCreateComputePipelines", e))?[0];
-        Ok(Self { core: PipelineCore::new(gpu, raw, layout, vk::PipelineBindPoint::COMPUTE, desc.name) })
+        Ok(Self {
+            core: PipelineCore::new(gpu, raw, layout, vk::PipelineBindPoint::COMPUTE, desc.name),
+            local_size,
+        })
+    }
+
+    /// The workgroup size its shader declares (read from the SPIR-V): dispatch counts divide by
+    /// it instead of repeating it.
+    pub fn local_size(&self) -> [u32; 3] {
+        self.local_size
     }
 
     /// Binds resources to this pipeline's bindings (see [`DescriptorSet::new`]).
@@ -350,6 +350,15 @@ impl GraphicsPipeline {
         if desc.polygon_mode != vk::PolygonMode::FILL && !gpu.caps().fill_mode_non_solid {
             return Err(GpuError::Unsupported(format!("fillModeNonSolid (pipeline `{}`)", desc.name)));
         }
+        let mut modules = vec![desc.vertex, desc.fragment];
+        modules.extend(desc.geometry);
+        if let Some((tc, te, _)) = desc.tessellation {
+            modules.extend([tc, te]);
+        }
+        let layouts =
+            modules.iter().map(|m| super::reflect::reflect(desc.name, m)).collect::<GpuResult<Vec<_>>>()?;
+        let shaders = super::reflect::merge(desc.name, &layouts)?;
+        super::reflect::check_layout(desc.name, &shaders, desc.push_constant_bytes, desc.bindings)?;
         let layout = PipelineLayout::new(gpu, desc.bindings, desc.push_constant_bytes, stages, desc.name)?;
         let device = gpu.device();
         let vs = ShaderModule::new(device, desc.vertex)?;

@@ -186,7 +186,8 @@ impl GpuRadiosity {
         gpu.run(|rec| {
             for (&(row0, count), set) in blocks.iter().zip(&sets) {
                 let push = Push { n: n as u32, row0, rows: count, extra: bvh.nodes.len() as u32 };
-                let groups = [(n as u32).div_ceil(8), count.div_ceil(8), 1];
+                let [wx, wy, _] = pipeline.local_size();
+                let groups = [(n as u32).div_ceil(wx), count.div_ceil(wy), 1];
                 pipeline.record_dispatch(rec, set, bytemuck::bytes_of(&push), groups);
             }
         })?;
@@ -248,7 +249,7 @@ impl GpuRadiosity {
                             rec,
                             &pair[(sweeps + k) % 2],
                             bytemuck::bytes_of(&push),
-                            [count.div_ceil(64), 1, 1],
+                            [count.div_ceil(self.jacobi.local_size()[0]), 1, 1],
                         );
                     }
                     rec.compute_to_compute_barrier();

@@ -142,7 +142,7 @@ impl Ctx<'_> {
         block: usize,
     ) {
         let push = GatherPush { rows: rows as u32, block: block as u32 };
-        let groups = self.gpu.caps().groups_1d((rows * block) as u64, 256);
+        let groups = self.gpu.caps().groups_1d((rows * block) as u64, self.k.gather.local_size()[0]);
         self.k.gather.record_dispatch(rec, set, bytemuck::bytes_of(&push), [groups, 1, 1]);
     }
 
@@ -291,12 +291,8 @@ impl Ctx<'_> {
                 m: m as u32,
             };
             let n = (g1 - g0) * size * block;
-            let wg = self.gpu.caps().groups_1d(n as u64, 64);
-            let region = vk::BufferCopy {
-                src_offset: 0,
-                dst_offset: (g0 * size * block * 4) as u64,
-                size: (n * 4) as u64,
-            };
+            let wg = self.gpu.caps().groups_1d(n as u64, self.k.stage.local_size()[0]);
+            let dst_first = (g0 * size * block) as u64;
             self.gpu
                 .run(|rec| {
                     self.k.stage.record_dispatch(rec, &set, bytemuck::bytes_of(&push), [wg, 1, 1]);
@@ -304,10 +300,7 @@ impl Ctx<'_> {
                         (vk::PipelineStageFlags::COMPUTE_SHADER, vk::AccessFlags::SHADER_WRITE),
                         (vk::PipelineStageFlags::TRANSFER, vk::AccessFlags::TRANSFER_READ),
                     );
-                    // SAFETY: both buffers are alive until the submission completes (run waits).
-                    unsafe {
-                        self.gpu.device().cmd_copy_buffer(rec.raw(), out_b.raw(), out.raw(), &[region])
-                    };
+                    rec.copy_buffer(&out_b, 0, &out, dst_first, n as u64);
                 })
                 .map_err(dev("running a stage"))?;
             g0 = g1;

@@ -160,7 +160,7 @@ impl SpacetimeRenderer {
         let cut = |rec: &mut Recorder<'_>| {
             rec.update_buffer(&self.draws, 0, &reset);
             rec.memory_barrier((vk::PipelineStageFlags::TRANSFER, vk::AccessFlags::TRANSFER_WRITE), (cs, rw));
-            let groups = self.gpu.caps().groups_1d(u64::from(push.count.max(1)), 64);
+            let groups = self.gpu.caps().groups_1d(u64::from(push.count.max(1)), self.slicer.local_size()[0]);
             self.slicer.record_dispatch(rec, slice_set, bytemuck::bytes_of(push), [groups, 1, 1]);
             rec.memory_barrier((cs, vk::AccessFlags::SHADER_WRITE), (cs, rw));
         };
@@ -170,7 +170,8 @@ impl SpacetimeRenderer {
         }
         let subdivide = |rec: &mut Recorder<'_>| {
             // A polygon is cut into at most two triangles.
-            let groups = self.gpu.caps().groups_1d(u64::from(push.count.max(1)) * 2, 64);
+            let wg = self.subdivider.local_size()[0];
+            let groups = self.gpu.caps().groups_1d(u64::from(push.count.max(1)) * 2, wg);
             self.subdivider.record_dispatch(rec, subdivide_set, bytemuck::bytes_of(push), [groups, 1, 1]);
             // Later commands and submissions draw from these buffers (vertex input; the restricted
             // cubics in the fragment stage) and read the counters.

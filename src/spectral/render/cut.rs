@@ -143,7 +143,6 @@ impl SpectralRenderer {
         self.cut_pipeline_for(target)?;
         let planes = self.cut_planes(view)?;
         let push = self.push(target, view);
-        let gpu = &self.gpu;
         let c = self.cutter.as_ref().expect("a hexahedral mesh has a cutter");
         let (pipeline, set) = &c.pipelines[&target.format()];
         let extent = target.extent();
@@ -163,17 +162,14 @@ impl SpectralRenderer {
                 (vk::PipelineStageFlags::TRANSFER | cs, vk::AccessFlags::empty()),
             );
             let header: [u32; 4] = [0, 1, 0, 0];
-            // SAFETY: both buffers are alive, created with TRANSFER_DST, and large enough
-            // (planes ≤ MAX_CUT_PLANES, checked in cut_planes).
-            unsafe {
-                gpu.device().cmd_update_buffer(rec.raw(), c.draw.raw(), 0, bytemuck::cast_slice(&header));
-                gpu.device().cmd_update_buffer(rec.raw(), c.planes.raw(), 0, bytemuck::cast_slice(&planes));
-            }
+            rec.update_buffer(&c.draw, 0, &header);
+            // At most MAX_CUT_PLANES planes (checked in cut_planes): inside the buffer.
+            rec.update_buffer(&c.planes, 0, &planes);
             rec.memory_barrier(
                 (vk::PipelineStageFlags::TRANSFER, vk::AccessFlags::TRANSFER_WRITE),
                 (cs | fs, vk::AccessFlags::SHADER_READ | vk::AccessFlags::SHADER_WRITE),
             );
-            let groups = (cut_push.elements.div_ceil(64), planes.len() as u32, 1);
+            let groups = (cut_push.elements.div_ceil(c.pass.local_size()[0]), planes.len() as u32, 1);
             c.pass.record_dispatch(
                 rec,
                 &c.pass_set,

@@ -498,7 +498,7 @@ impl SpectralRenderer {
                 (cs, vk::AccessFlags::SHADER_READ | vk::AccessFlags::SHADER_WRITE),
             );
             // One invocation per element, 64 per workgroup.
-            let groups = elements.div_ceil(64).max(1);
+            let groups = elements.div_ceil(u64::from(t.pipeline.local_size()[0])).max(1);
             let x = groups.min(65_535);
             let y = groups.div_ceil(x);
             let set = t.set.as_ref().expect("bound in tessellator_for");
