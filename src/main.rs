@@ -423,7 +423,7 @@ fn view(
 ) -> Result<()> {
     let scene = DemoScene::load(scene_path)?;
     let options = galerkin::render::viewer::ViewOptions { frames, screenshot, resize_to };
-    galerkin::render::viewer::run(desc, Box::new(galerkin::render::viewer::DemoContent::new(scene)), options)
+    galerkin::render::viewer::run(desc, Box::new(galerkin::demo::viewer::DemoContent::new(scene)), options)
 }
 
 #[cfg(not(feature = "viewer"))]

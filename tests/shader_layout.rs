@@ -18,7 +18,7 @@ fn every_embedded_shader_reflects() {
         }
     }
     // axpy.comp: `layout(local_size_x = 256)` and two storage buffers.
-    let axpy = reflect("axpy", shaders::demo::AXPY).unwrap();
+    let axpy = reflect("axpy", galerkin::demo::shaders::AXPY).unwrap();
     assert_eq!(axpy.local_size, Some([256, 1, 1]));
     assert_eq!(axpy.bindings.values().copied().collect::<Vec<_>>(), vec![BindingKind::StorageBuffer; 2]);
 }
@@ -26,10 +26,10 @@ fn every_embedded_shader_reflects() {
 #[test]
 fn a_layout_that_disagrees_with_the_shader_is_refused_naming_the_pipeline() {
     let gpu = common::gpu();
-    let push = reflect("axpy", shaders::demo::AXPY).unwrap().push_bytes;
+    let push = reflect("axpy", galerkin::demo::shaders::AXPY).unwrap().push_bytes;
     let desc = |push_constant_bytes: u32, bindings: &'static [BindingKind]| ComputePipelineDesc {
         name: "axpy under test",
-        spirv: shaders::demo::AXPY,
+        spirv: galerkin::demo::shaders::AXPY,
         bindings,
         push_constant_bytes,
         specialization: &[],

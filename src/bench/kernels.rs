@@ -6,8 +6,8 @@ use ash::vk;
 use bytemuck::{Pod, Zeroable};
 
 use crate::gpu::{
-    shaders, BindingKind, Buffer, ComputePipeline, ComputePipelineDesc, DescriptorSet, Gpu, GpuResult,
-    Recorder, Resource,
+    BindingKind, Buffer, ComputePipeline, ComputePipelineDesc, DescriptorSet, Gpu, GpuResult, Recorder,
+    Resource,
 };
 use crate::tensor::gpu::{Gemm, GemmBinding, GemmShape};
 
@@ -29,7 +29,7 @@ impl EmptyKernel {
             gpu,
             &ComputePipelineDesc {
                 name: "empty",
-                spirv: shaders::bench::EMPTY,
+                spirv: crate::bench::shaders::EMPTY,
                 bindings: &[BindingKind::StorageBuffer],
                 push_constant_bytes: 0,
                 specialization: &[],
@@ -80,7 +80,7 @@ impl FmaKernel {
             gpu,
             &ComputePipelineDesc {
                 name: "fma peak",
-                spirv: shaders::bench::FMA,
+                spirv: crate::bench::shaders::FMA,
                 bindings: &[BindingKind::StorageBuffer],
                 push_constant_bytes: std::mem::size_of::<FmaPush>() as u32,
                 specialization: &[],
@@ -155,7 +155,7 @@ impl TriadKernel {
             gpu,
             &ComputePipelineDesc {
                 name: "triad",
-                spirv: shaders::bench::TRIAD,
+                spirv: crate::bench::shaders::TRIAD,
                 bindings: &[BindingKind::StorageBuffer; 3],
                 push_constant_bytes: std::mem::size_of::<TriadPush>() as u32,
                 specialization: &[],

@@ -4,6 +4,11 @@
 //! later kernel is judged against these numbers. GPU throughput is timed with timestamp
 //! queries (kernel only); overheads and transfers with the wall clock. Medians throughout.
 
+/// This part's shaders: SPIR-V compiled by build.rs from `shaders-glsl/bench/` (glslc), one
+/// `&[u32]` constant per file (`foo.comp` is `FOO`, `bar.vert` is `BAR_VERT`).
+pub mod shaders {
+    include!(concat!(env!("OUT_DIR"), "/shaders_bench.rs"));
+}
 pub mod cpu;
 pub mod fluid_reduced;
 pub mod kernels;

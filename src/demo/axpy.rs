@@ -4,7 +4,7 @@
 use bytemuck::{Pod, Zeroable};
 
 use crate::gpu::{
-    shaders, BindingKind, Buffer, Chunk, ComputePipeline, ComputePipelineDesc, DescriptorSet, Gpu, GpuResult,
+    BindingKind, Buffer, Chunk, ComputePipeline, ComputePipelineDesc, DescriptorSet, Gpu, GpuResult,
     Recorder, Resource,
 };
 
@@ -42,7 +42,7 @@ impl Axpy {
             gpu,
             &ComputePipelineDesc {
                 name: "axpy",
-                spirv: shaders::demo::AXPY,
+                spirv: crate::demo::shaders::AXPY,
                 bindings: &[BindingKind::StorageBuffer, BindingKind::StorageBuffer],
                 push_constant_bytes: std::mem::size_of::<Push>() as u32,
                 specialization: &[],

@@ -11,8 +11,8 @@ use glam::DVec2;
 
 use super::polynomial::BivariateCubic;
 use crate::gpu::{
-    shaders, BindingKind, Buffer, DescriptorSet, Gpu, GpuResult, GraphicsPipeline, GraphicsPipelineDesc,
-    Recorder, RenderPass, Resource,
+    BindingKind, Buffer, DescriptorSet, Gpu, GpuResult, GraphicsPipeline, GraphicsPipelineDesc, Recorder,
+    RenderPass, Resource,
 };
 use crate::render::{ramp_coordinate, Camera, Colormap, ColormapTexture};
 
@@ -109,8 +109,8 @@ impl FieldPass {
         let spec = [u32::from(output == FieldOutput::Value)];
         let mut desc = GraphicsPipelineDesc::new(
             "field",
-            shaders::demo::FIELD_VERT,
-            shaders::demo::FIELD_FRAG,
+            crate::demo::shaders::FIELD_VERT,
+            crate::demo::shaders::FIELD_FRAG,
             pass.raw(),
         );
         desc.bindings = &[BindingKind::UniformBuffer, BindingKind::Texture];

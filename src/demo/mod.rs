@@ -3,7 +3,14 @@
 //! position ([`field`]). `galerkin demo` runs them from a TOML scene ([`scene`]) and writes
 //! `out/*.png`; later capabilities add their own parts to the demo.
 
+/// This part's shaders: SPIR-V compiled by build.rs from `shaders-glsl/demo/` (glslc), one
+/// `&[u32]` constant per file (`foo.comp` is `FOO`, `bar.vert` is `BAR_VERT`).
+pub mod shaders {
+    include!(concat!(env!("OUT_DIR"), "/shaders_demo.rs"));
+}
 pub mod axpy;
 pub mod field;
 pub mod polynomial;
 pub mod scene;
+#[cfg(feature = "viewer")]
+pub mod viewer;

@@ -10,8 +10,7 @@ use bytemuck::{Pod, Zeroable};
 use super::particles::{AdvectReport, GridHash, Particle};
 use super::FluidError;
 use crate::gpu::{
-    shaders, BindingKind, Buffer, ComputePipeline, ComputePipelineDesc, DescriptorSet, Gpu, Recorder,
-    Resource,
+    BindingKind, Buffer, ComputePipeline, ComputePipelineDesc, DescriptorSet, Gpu, Recorder, Resource,
 };
 use crate::mesh::{FaceKind, Point, SimplexMesh, Topology};
 
@@ -105,7 +104,7 @@ impl GpuParticles {
             gpu,
             &ComputePipelineDesc {
                 name: "fluid particles",
-                spirv: shaders::fluid::PARTICLES,
+                spirv: crate::fluid::shaders::PARTICLES,
                 bindings: &[BindingKind::StorageBuffer; 10],
                 push_constant_bytes: std::mem::size_of::<Push>() as u32,
                 specialization: &[],

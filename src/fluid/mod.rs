@@ -16,6 +16,11 @@
 // Numerical code indexes several arrays by the same cell, face or axis.
 #![allow(clippy::needless_range_loop)]
 
+/// This part's shaders: SPIR-V compiled by build.rs from `shaders-glsl/fluid/` (glslc), one
+/// `&[u32]` constant per file (`foo.comp` is `FOO`, `bar.vert` is `BAR_VERT`).
+pub mod shaders {
+    include!(concat!(env!("OUT_DIR"), "/shaders_fluid.rs"));
+}
 pub mod bird;
 pub mod cavity;
 pub mod embedded;

@@ -16,8 +16,8 @@ use super::gpu::GpuParticles;
 use super::operators::CellOperators;
 use super::FluidError;
 use crate::gpu::{
-    shaders, BindingKind, Buffer, DescriptorSet, Gpu, GraphicsPipeline, GraphicsPipelineDesc, MemoryKind,
-    Recorder, RenderPass, Resource,
+    BindingKind, Buffer, DescriptorSet, Gpu, GraphicsPipeline, GraphicsPipelineDesc, MemoryKind, Recorder,
+    RenderPass, Resource,
 };
 use crate::mesh::{SimplexMesh, Topology};
 use crate::render::{ColorFormat, Colormap, ColormapTexture, Pixels, RenderTarget, BACKGROUND};
@@ -232,8 +232,8 @@ impl FluidRenderer {
         let spec = [u32::from(output == Output::Raw)];
         let mut desc = GraphicsPipelineDesc::new(
             "fluid cells",
-            shaders::fluid::CELLS_VERT,
-            shaders::fluid::CELLS_FRAG,
+            crate::fluid::shaders::CELLS_VERT,
+            crate::fluid::shaders::CELLS_FRAG,
             pass.raw(),
         );
         desc.push_constant_bytes = std::mem::size_of::<Push>() as u32;
@@ -253,8 +253,8 @@ impl FluidRenderer {
         let surface = GraphicsPipeline::new(gpu, &desc).map_err(gpu_err)?;
         let mut desc = GraphicsPipelineDesc::new(
             "fluid particles",
-            shaders::fluid::SPRITES_VERT,
-            shaders::fluid::SPRITES_FRAG,
+            crate::fluid::shaders::SPRITES_VERT,
+            crate::fluid::shaders::SPRITES_FRAG,
             pass.raw(),
         );
         desc.push_constant_bytes = std::mem::size_of::<Push>() as u32;

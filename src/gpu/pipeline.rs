@@ -557,13 +557,12 @@ impl GraphicsPipeline {
 #[cfg(test)]
 mod tests {
     use super::spirv_local_size;
-    use crate::gpu::shaders;
 
     #[test]
     fn workgroup_sizes_are_read_from_spirv() {
-        assert_eq!(spirv_local_size(shaders::tensor::GEMM), Some([8, 8, 1]));
-        assert_eq!(spirv_local_size(shaders::demo::AXPY), Some([256, 1, 1]));
-        assert_eq!(spirv_local_size(shaders::demo::FIELD_FRAG), None);
+        assert_eq!(spirv_local_size(crate::tensor::shaders::GEMM), Some([8, 8, 1]));
+        assert_eq!(spirv_local_size(crate::demo::shaders::AXPY), Some([256, 1, 1]));
+        assert_eq!(spirv_local_size(crate::demo::shaders::FIELD_FRAG), None);
         assert_eq!(spirv_local_size(&[]), None);
     }
 }

@@ -1,8 +1,8 @@
 //! Every GLSL shader under `shaders-glsl/`, compiled to SPIR-V by `build.rs` (glslc,
 //! `--target-env=vulkan1.2 -O`) and embedded as `&'static [u32]` words — aligned by
 //! construction, never a cast of `include_bytes!`. `shaders-glsl/demo/axpy.comp` is
-//! `shaders::demo::AXPY`; graphics stages carry their stage: `demo/field.vert` is
-//! `shaders::demo::FIELD_VERT`. [`ALL`] lists them for `galerkin info`.
+//! `crate::demo::shaders::AXPY`; graphics stages carry their stage: `demo/field.vert` is
+//! `crate::demo::shaders::FIELD_VERT`. [`ALL`] lists them for `galerkin info`.
 
 include!(concat!(env!("OUT_DIR"), "/shaders.rs"));
 

@@ -17,8 +17,7 @@ use super::form_factor::{bvh_of, FormFactors, NearField};
 use super::mesh::SceneMesh;
 use super::solve::Rgb;
 use crate::gpu::{
-    shaders, BindingKind, Buffer, ComputePipeline, ComputePipelineDesc, DescriptorSet, Gpu, MemoryKind,
-    Resource,
+    BindingKind, Buffer, ComputePipeline, ComputePipelineDesc, DescriptorSet, Gpu, MemoryKind, Resource,
 };
 
 #[repr(C)]
@@ -110,7 +109,7 @@ impl GpuRadiosity {
                 gpu,
                 &ComputePipelineDesc {
                     name: "radiosity form factors",
-                    spirv: shaders::radiosity::FORM_FACTORS,
+                    spirv: crate::radiosity::shaders::FORM_FACTORS,
                     bindings: &[BindingKind::StorageBuffer; 4],
                     push_constant_bytes: std::mem::size_of::<Push>() as u32,
                     specialization: &[regularised],
@@ -122,7 +121,7 @@ impl GpuRadiosity {
             gpu,
             &ComputePipelineDesc {
                 name: "radiosity jacobi",
-                spirv: shaders::radiosity::JACOBI,
+                spirv: crate::radiosity::shaders::JACOBI,
                 bindings: &[BindingKind::StorageBuffer; 5],
                 push_constant_bytes: std::mem::size_of::<Push>() as u32,
                 specialization: &[],

@@ -9,6 +9,11 @@
 //! drawn by a graphics pipeline ([`render`]). The same radiosity as Table 2's chain of
 //! tensor operations, for the reduction core, is [`chain`].
 
+/// This part's shaders: SPIR-V compiled by build.rs from `shaders-glsl/radiosity/` (glslc), one
+/// `&[u32]` constant per file (`foo.comp` is `FOO`, `bar.vert` is `BAR_VERT`).
+pub mod shaders {
+    include!(concat!(env!("OUT_DIR"), "/shaders_radiosity.rs"));
+}
 pub mod any_scene;
 pub mod architecture;
 pub use crate::mesh::bvh;

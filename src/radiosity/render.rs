@@ -20,8 +20,8 @@ use super::mesh::{FaceGeometry, FaceKind, SceneMesh};
 use super::scene::{LightMode, Lights, SceneSpec};
 use super::solve::Rgb;
 use crate::gpu::{
-    shaders, Buffer, DescriptorSet, Gpu, GpuResult, GraphicsPipeline, GraphicsPipelineDesc, MemoryKind,
-    Recorder, RenderPass,
+    Buffer, DescriptorSet, Gpu, GpuResult, GraphicsPipeline, GraphicsPipelineDesc, MemoryKind, Recorder,
+    RenderPass,
 };
 use crate::render::Camera;
 
@@ -144,8 +144,8 @@ impl SceneRenderer {
         let spec = [u32::from(output == Output::Raw)];
         let mut desc = GraphicsPipelineDesc::new(
             "radiosity scene",
-            shaders::radiosity::SCENE_VERT,
-            shaders::radiosity::SCENE_FRAG,
+            crate::radiosity::shaders::SCENE_VERT,
+            crate::radiosity::shaders::SCENE_FRAG,
             pass.raw(),
         );
         desc.push_constant_bytes = std::mem::size_of::<Push>() as u32;

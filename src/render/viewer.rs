@@ -1,5 +1,6 @@
 //! The interactive window (feature `viewer`): winit + an ash-window surface + a swapchain.
-//! Each frame renders the content ([`ViewerContent`]: the demo scene, a spacetime slice)
+//! Each frame renders the content ([`ViewerContent`], which each capability implements: the
+//! demo scene in `crate::demo::viewer`, a spacetime slice, spectral elements, …)
 //! offscreen with the same render pass and pipelines as the offscreen commands, then blits it
 //! into the acquired swapchain image, so the window shows exactly what the PNG would hold. Esc
 //! quits, S saves a screenshot (copied back from the presented swapchain image), arrow keys
@@ -20,9 +21,7 @@ use winit::keyboard::{Key, NamedKey};
 use winit::raw_window_handle::{HasDisplayHandle, HasWindowHandle};
 use winit::window::{Window, WindowId};
 
-use super::{write_png_rgba8, Camera, ColorFormat, Colormap, RenderTarget};
-use crate::demo::field::{FieldOutput, FieldPass};
-use crate::demo::scene::DemoScene;
+use super::{write_png_rgba8, Camera, ColorFormat, RenderTarget};
 use crate::gpu::{
     record_image_barrier, surface_extensions, Buffer, Gpu, GpuDesc, MemoryKind, Recorder, Submission,
     Surface, Swapchain,
@@ -60,62 +59,6 @@ pub trait ViewerContent {
     /// A line for the terminal when the viewer closes (e.g. where an animation stopped).
     fn summary(&self) -> Option<String> {
         None
-    }
-}
-
-/// The demo scene of `galerkin demo` (one polynomial, per-pixel colour).
-pub struct DemoContent {
-    scene: DemoScene,
-    pass: Option<FieldPass>,
-}
-
-impl DemoContent {
-    /// The content of `scene`.
-    pub fn new(scene: DemoScene) -> Self {
-        Self { scene, pass: None }
-    }
-}
-
-impl ViewerContent for DemoContent {
-    fn title(&self) -> String {
-        "galerkin".into()
-    }
-
-    fn size(&self) -> (u32, u32) {
-        (self.scene.image.width, self.scene.image.height)
-    }
-
-    fn camera(&self) -> Camera {
-        self.scene.camera
-    }
-
-    fn start(&mut self, gpu: &Gpu, target: &RenderTarget) -> Result<()> {
-        let colormap = Colormap::by_name(&self.scene.colormap_name())?;
-        self.pass = Some(FieldPass::new(
-            gpu,
-            target.render_pass(),
-            &self.scene.field.coefficients,
-            self.scene.field.tessellation,
-            &colormap,
-            self.scene.ramp(),
-            FieldOutput::Colour,
-        )?);
-        Ok(())
-    }
-
-    fn update(&mut self, _: &RenderTarget, _: f64) -> Result<bool> {
-        Ok(false)
-    }
-
-    fn record(&mut self, rec: &mut Recorder<'_>, target: &RenderTarget, camera: &Camera) -> Result<()> {
-        if let Some(pass) = &self.pass {
-            pass.record(rec, target.extent(), camera);
-        }
-        Ok(())
-    }
-
-    fn key(&mut self, _: &str) -> bool {
-        false
     }
 }
 

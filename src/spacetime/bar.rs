@@ -19,9 +19,7 @@ use rayon::prelude::*;
 
 use super::cubic::{evaluate, CubicCoefficients, LocalFrame, Material, PointFields, MONOMIALS};
 use super::error::SpacetimeError;
-use crate::gpu::{
-    shaders, BindingKind, Buffer, Gpu, GpuError, GraphicsPipeline, GraphicsPipelineDesc, Resource,
-};
+use crate::gpu::{BindingKind, Buffer, Gpu, GpuError, GraphicsPipeline, GraphicsPipelineDesc, Resource};
 use crate::render::{ColorFormat, Colormap, ColormapTexture, Pixels, RenderTarget, BACKGROUND};
 use crate::tensor::{solve, Tensor};
 
@@ -330,8 +328,8 @@ impl BarRenderer {
         if !self.pipelines.contains_key(&format) {
             let mut desc = GraphicsPipelineDesc::new(
                 "spacetime bar",
-                shaders::spacetime::BAR_VERT,
-                shaders::spacetime::BAR_FRAG,
+                crate::spacetime::shaders::BAR_VERT,
+                crate::spacetime::shaders::BAR_FRAG,
                 target.render_pass().raw(),
             );
             desc.bindings = &[BindingKind::StorageBuffer, BindingKind::Texture];

@@ -13,6 +13,11 @@
 //! generated ([`generate`]: structured meshes; [`tent`]: tent pitching; [`scenario`]: the
 //! seed's crack, inclusion and booster scenarios): the fields are analytic, not solved.
 
+/// This part's shaders: SPIR-V compiled by build.rs from `shaders-glsl/spacetime/` (glslc), one
+/// `&[u32]` constant per file (`foo.comp` is `FOO`, `bar.vert` is `BAR_VERT`).
+pub mod shaders {
+    include!(concat!(env!("OUT_DIR"), "/shaders_spacetime.rs"));
+}
 pub mod bar;
 pub mod cubic;
 pub mod data;

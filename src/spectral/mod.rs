@@ -16,6 +16,11 @@
 //!   GLVis solution streams.
 //! - [`mod@reference`]: the per-pixel check against the f64 reference (tests and demo).
 
+/// This part's shaders: SPIR-V compiled by build.rs from `shaders-glsl/spectral/` (glslc), one
+/// `&[u32]` constant per file (`foo.comp` is `FOO`, `bar.vert` is `BAR_VERT`).
+pub mod shaders {
+    include!(concat!(env!("OUT_DIR"), "/shaders_spectral.rs"));
+}
 pub mod basis;
 pub mod error;
 pub mod generate;

@@ -9,6 +9,11 @@
 //! The operations here are written plainly: they are the test oracle for every fast path
 //! (premultiplication, GPU kernels) and the documentation of the maths.
 
+/// This part's shaders: SPIR-V compiled by build.rs from `shaders-glsl/tensor/` (glslc), one
+/// `&[u32]` constant per file (`foo.comp` is `FOO`, `bar.vert` is `BAR_VERT`).
+pub mod shaders {
+    include!(concat!(env!("OUT_DIR"), "/shaders_tensor.rs"));
+}
 pub mod amg;
 mod csr;
 mod dense;

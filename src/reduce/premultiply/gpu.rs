@@ -21,8 +21,8 @@ use bytemuck::{Pod, Zeroable};
 use super::plan::{chunks_of_groups, sorted_entries, unit_and_key_positions, unit_positions};
 use super::{unit_row, unit_size, Packing, PremultiplyOptions, PremultiplyPlan, Setup, Unit};
 use crate::gpu::{
-    shaders, BindingKind, Buffer, BufferBinding, ComputePipeline, ComputePipelineDesc, Gpu, GpuError,
-    MemoryKind, Recorder, Resource,
+    BindingKind, Buffer, BufferBinding, ComputePipeline, ComputePipelineDesc, Gpu, GpuError, MemoryKind,
+    Recorder, Resource,
 };
 use crate::reduce::ReduceError;
 use crate::tensor::gpu::GEMM_TILE;
@@ -663,21 +663,21 @@ pub fn premultiply_sparse_gpu(
     let kernels = Kernels {
         stage: stage(
             "premultiply unit stage",
-            shaders::tensor::UNIT_STAGE,
+            crate::tensor::shaders::UNIT_STAGE,
             &[BindingKind::StorageBuffer; 7],
             std::mem::size_of::<StagePush>(),
             0,
         )?,
         gather: stage(
             "premultiply gather",
-            shaders::tensor::GATHER_ROWS,
+            crate::tensor::shaders::GATHER_ROWS,
             &[BindingKind::StorageBuffer; 4],
             std::mem::size_of::<GatherPush>(),
             0,
         )?,
         fused: stage(
             "premultiply final GEMM",
-            shaders::tensor::PREMULTIPLY_GEMM,
+            crate::tensor::shaders::PREMULTIPLY_GEMM,
             &[BindingKind::StorageBuffer; 6],
             std::mem::size_of::<FusedPush>(),
             16 * 1024,

@@ -17,8 +17,8 @@ impl SpacetimeRenderer {
             let make = |lines: bool| -> Result<GraphicsPipeline, SpacetimeError> {
                 let mut desc = GraphicsPipelineDesc::new(
                     if lines { "spacetime slice edges" } else { "spacetime slice" },
-                    shaders::spacetime::SLICE_VERT,
-                    shaders::spacetime::SLICE_FRAG,
+                    crate::spacetime::shaders::SLICE_VERT,
+                    crate::spacetime::shaders::SLICE_FRAG,
                     target.render_pass().raw(),
                 );
                 desc.bindings = &[

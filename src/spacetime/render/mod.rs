@@ -24,7 +24,7 @@ use super::error::SpacetimeError;
 use super::mesh::SpacetimeMesh;
 use super::record::{gpu_material, ElementRecord};
 use crate::gpu::{
-    shaders, BindingKind, Buffer, ComputePipeline, ComputePipelineDesc, DescriptorSet, Gpu, GpuError,
+    BindingKind, Buffer, ComputePipeline, ComputePipelineDesc, DescriptorSet, Gpu, GpuError,
     GraphicsPipeline, GraphicsPipelineDesc, MemoryKind, Profiler, Resource,
 };
 use crate::render::{Camera, ColorFormat, Colormap, ColormapTexture, Pixels, RenderTarget, BACKGROUND};
@@ -295,8 +295,8 @@ impl SpacetimeRenderer {
             tris,
             lines,
             draws,
-            slicer: compute(gpu, "spacetime slice", shaders::spacetime::SLICE)?,
-            subdivider: compute(gpu, "spacetime subdivide", shaders::spacetime::SUBDIVIDE)?,
+            slicer: compute(gpu, "spacetime slice", crate::spacetime::shaders::SLICE)?,
+            subdivider: compute(gpu, "spacetime subdivide", crate::spacetime::shaders::SUBDIVIDE)?,
             colormap: colormap.upload(gpu).map_err(dev("uploading the colour map"))?,
             pipelines: HashMap::new(),
             draw_sets: HashMap::new(),
@@ -308,7 +308,7 @@ impl SpacetimeRenderer {
                 gpu,
                 &ComputePipelineDesc {
                     name: "spacetime U_max",
-                    spirv: shaders::spacetime::MAX_U,
+                    spirv: crate::spacetime::shaders::MAX_U,
                     bindings: &[BindingKind::StorageBuffer; 2],
                     push_constant_bytes: 4,
                     specialization: &[],

@@ -57,7 +57,7 @@ impl Cutter {
             gpu,
             &ComputePipelineDesc {
                 name: "spectral cut",
-                spirv: shaders::spectral::CUT,
+                spirv: crate::spectral::shaders::CUT,
                 bindings: &[BindingKind::StorageBuffer; 7],
                 push_constant_bytes: std::mem::size_of::<CutPush>() as u32,
                 specialization,
@@ -120,8 +120,8 @@ impl SpectralRenderer {
         let planes = Resource::Storage(c.planes.binding().map_err(dev("binding"))?);
         let desc = self.draw_desc(
             "spectral cut planes",
-            shaders::spectral::CUT_VERT,
-            shaders::spectral::CUT_FRAG,
+            crate::spectral::shaders::CUT_VERT,
+            crate::spectral::shaders::CUT_FRAG,
             target,
         );
         let pipeline = GraphicsPipeline::new(&self.gpu, &desc).map_err(dev("building the cut pipeline"))?;

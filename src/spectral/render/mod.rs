@@ -34,7 +34,7 @@ use super::error::SpectralError;
 use super::mesh::SpectralMesh;
 use super::proxy::{self, DrawVertex};
 use crate::gpu::{
-    shaders, BindingKind, Buffer, ComputePipeline, ComputePipelineDesc, DescriptorSet, Gpu, GraphicsPipeline,
+    BindingKind, Buffer, ComputePipeline, ComputePipelineDesc, DescriptorSet, Gpu, GraphicsPipeline,
     GraphicsPipelineDesc, MemoryKind, Profiler, Recorder, Resource,
 };
 use crate::render::{Camera, ColorFormat, Colormap, ColormapTexture, Pixels, RenderTarget, BACKGROUND};
@@ -354,8 +354,8 @@ impl SpectralRenderer {
             let name = if lines { "spectral edges" } else { "spectral elements" };
             let mut desc = self.draw_desc(
                 name,
-                shaders::spectral::ELEMENT_VERT,
-                shaders::spectral::ELEMENT_FRAG,
+                crate::spectral::shaders::ELEMENT_VERT,
+                crate::spectral::shaders::ELEMENT_FRAG,
                 target,
             );
             if lines {

@@ -81,7 +81,7 @@ impl SpectralRenderer {
                 &self.gpu,
                 &ComputePipelineDesc {
                     name: "spectral tessellation",
-                    spirv: shaders::spectral::TESSELLATE,
+                    spirv: crate::spectral::shaders::TESSELLATE,
                     bindings: &bindings,
                     push_constant_bytes: std::mem::size_of::<SpectralPush>() as u32,
                     specialization: &self.specialization,

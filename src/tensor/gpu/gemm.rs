@@ -4,7 +4,7 @@
 use bytemuck::{Pod, Zeroable};
 
 use crate::gpu::{
-    shaders, BindingKind, BufferBinding, ComputePipeline, ComputePipelineDesc, DescriptorSet, Gpu, GpuResult,
+    BindingKind, BufferBinding, ComputePipeline, ComputePipelineDesc, DescriptorSet, Gpu, GpuResult,
     Recorder, Resource,
 };
 
@@ -58,7 +58,7 @@ impl Gemm {
             gpu,
             &ComputePipelineDesc {
                 name: "gemm",
-                spirv: shaders::tensor::GEMM,
+                spirv: crate::tensor::shaders::GEMM,
                 bindings: &[BindingKind::StorageBuffer; 3],
                 push_constant_bytes: std::mem::size_of::<GemmPush>() as u32,
                 specialization: &[],

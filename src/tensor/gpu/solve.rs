@@ -7,8 +7,7 @@ use ash::vk;
 use bytemuck::{Pod, Zeroable};
 
 use crate::gpu::{
-    shaders, BindingKind, Buffer, ComputePipeline, ComputePipelineDesc, Gpu, GpuError, GpuResult, MemoryKind,
-    Resource,
+    BindingKind, Buffer, ComputePipeline, ComputePipelineDesc, Gpu, GpuError, GpuResult, MemoryKind, Resource,
 };
 use crate::tensor::{check_system, pivot_tolerance, Tensor, TensorError};
 
@@ -38,7 +37,7 @@ impl BatchedSolve {
             gpu,
             &ComputePipelineDesc {
                 name: "batched LU solve",
-                spirv: shaders::tensor::LU_SOLVE,
+                spirv: crate::tensor::shaders::LU_SOLVE,
                 bindings: &[BindingKind::StorageBuffer; 4],
                 push_constant_bytes: std::mem::size_of::<SolvePush>() as u32,
                 specialization: &[],
