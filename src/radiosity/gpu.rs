@@ -17,7 +17,8 @@ use super::form_factor::{bvh_of, FormFactors, NearField};
 use super::mesh::SceneMesh;
 use super::solve::Rgb;
 use crate::gpu::{
-    BindingKind, Buffer, ComputePipeline, ComputePipelineDesc, DescriptorSet, Gpu, MemoryKind, Resource,
+    BindingKind, Buffer, ComputePipeline, ComputePipelineDesc, DescriptorSet, Gpu, MemoryKind, Recorder,
+    Resource,
 };
 
 #[repr(C)]
@@ -52,6 +53,24 @@ pub fn flatten_bvh(bvh: &Bvh) -> (Vec<[f32; 4]>, Vec<[f32; 4]>) {
         }
     }
     (nodes, tris)
+}
+
+/// Form factors prepared for recording ([`GpuRadiosity::prepare_form_factors`]): the rows
+/// to fill, their descriptor sets and the uploaded scene.
+pub struct FormFactorPass {
+    rows: DeviceFormFactors,
+    sets: Vec<DescriptorSet>,
+    near: NearField,
+    bvh_nodes: u32,
+    /// Faces, BVH nodes and BVH triangles.
+    _inputs: [Buffer<[f32; 4]>; 3],
+}
+
+impl FormFactorPass {
+    /// The rows, once the recording of [`GpuRadiosity::record_form_factors`] has finished.
+    pub fn finish(self) -> DeviceFormFactors {
+        self.rows
+    }
 }
 
 /// `F` on the device, in row blocks.
@@ -132,13 +151,28 @@ impl GpuRadiosity {
     }
 
     /// Every `F_ij` of `mesh` on the device (f32; the facing test's threshold is 10⁻⁵
-    /// relative instead of the CPU's 10⁻⁹, above f32's rounding of a cosine).
+    /// relative instead of the CPU's 10⁻⁹, above f32's rounding of a cosine): the convenience
+    /// of [`Self::prepare_form_factors`], [`Self::record_form_factors`] in one engine
+    /// submission, and [`FormFactorPass::finish`].
     pub fn form_factors(
         &self,
         gpu: &Gpu,
         mesh: &SceneMesh,
         near: NearField,
     ) -> Result<DeviceFormFactors, RadiosityError> {
+        let pass = self.prepare_form_factors(gpu, mesh, near)?;
+        gpu.run(|rec| self.record_form_factors(rec, &pass))?;
+        Ok(pass.finish())
+    }
+
+    /// Uploads `mesh`'s faces and ray-casting BVH and binds the form-factor rows (engine
+    /// transfers, before a frame is recorded).
+    pub fn prepare_form_factors(
+        &self,
+        gpu: &Gpu,
+        mesh: &SceneMesh,
+        near: NearField,
+    ) -> Result<FormFactorPass, RadiosityError> {
         mesh.validate()?;
         let n = mesh.len();
         let g = mesh.geometry();
@@ -182,15 +216,34 @@ impl GpuRadiosity {
                 )
             })
             .collect::<Result<_, _>>()?;
-        gpu.run(|rec| {
-            for (&(row0, count), set) in blocks.iter().zip(&sets) {
-                let push = Push { n: n as u32, row0, rows: count, extra: bvh.nodes.len() as u32 };
-                let [wx, wy, _] = pipeline.local_size();
-                let groups = [(n as u32).div_ceil(wx), count.div_ceil(wy), 1];
-                pipeline.record_dispatch(rec, set, bytemuck::bytes_of(&push), groups);
-            }
-        })?;
-        Ok(DeviceFormFactors { n, rows, blocks })
+        Ok(FormFactorPass {
+            rows: DeviceFormFactors { n, rows, blocks },
+            sets,
+            near,
+            bvh_nodes: bvh.nodes.len() as u32,
+            _inputs: [faces, nodes_buf, tris],
+        })
+    }
+
+    /// Records the form-factor rows of `pass` (outside a render pass): one dispatch per block
+    /// of rows, then a barrier that makes the rows visible to compute shaders (the Jacobi
+    /// sweeps) and transfers (a readback).
+    pub fn record_form_factors(&self, rec: &mut Recorder<'_>, pass: &FormFactorPass) {
+        let pipeline = &self.form_factors[usize::from(pass.near == NearField::Regularised)];
+        let n = pass.rows.n;
+        for (&(row0, count), set) in pass.rows.blocks.iter().zip(&pass.sets) {
+            let push = Push { n: n as u32, row0, rows: count, extra: pass.bvh_nodes };
+            let [wx, wy, _] = pipeline.local_size();
+            let groups = [(n as u32).div_ceil(wx), count.div_ceil(wy), 1];
+            pipeline.record_dispatch(rec, set, bytemuck::bytes_of(&push), groups);
+        }
+        rec.memory_barrier(
+            (vk::PipelineStageFlags::COMPUTE_SHADER, vk::AccessFlags::SHADER_WRITE),
+            (
+                vk::PipelineStageFlags::COMPUTE_SHADER | vk::PipelineStageFlags::TRANSFER,
+                vk::AccessFlags::SHADER_READ | vk::AccessFlags::TRANSFER_READ,
+            ),
+        );
     }
 
     /// Eq. 14 by Jacobi sweeps on the device from `b = e`, in batches of 8 sweeps, until the
@@ -204,6 +257,43 @@ impl GpuRadiosity {
         tolerance: f64,
         max_sweeps: usize,
     ) -> Result<(Vec<Rgb>, usize), RadiosityError> {
+        let pass = self.prepare_jacobi(gpu, f, albedo, e)?;
+        const BATCH: usize = 8;
+        let mut sweeps = 0;
+        while sweeps < max_sweeps {
+            gpu.run(|rec| self.record_jacobi_sweeps(rec, f, &pass, sweeps, BATCH))?;
+            sweeps += BATCH;
+            // After an even number of sweeps the newest iterate is in b[0], the one before in b[1].
+            let (newest, before) = pass.iterates(gpu)?;
+            let change = newest
+                .iter()
+                .zip(&before)
+                .flat_map(|(x, y)| (0..3).map(move |c| (x[c] - y[c]).abs()))
+                .fold(0f32, f32::max);
+            let top = newest.iter().flat_map(|x| x[..3].iter()).fold(0f32, |m, v| m.max(v.abs()));
+            if !change.is_finite() {
+                return Err(RadiosityError::Solve(format!(
+                    "Jacobi diverged on the device by sweep {sweeps}"
+                )));
+            }
+            if f64::from(change) <= tolerance * f64::from(top) {
+                return Ok((newest.iter().map(|x| [x[0], x[1], x[2]].map(f64::from)).collect(), sweeps));
+            }
+        }
+        Err(RadiosityError::Solve(format!(
+            "Jacobi did not converge to {tolerance:e} in {max_sweeps} sweeps on the device"
+        )))
+    }
+
+    /// Uploads albedo and emission, starts both iterates at `b = e`, and binds each row block
+    /// of `f` both ways (engine transfers, before a frame is recorded).
+    pub fn prepare_jacobi(
+        &self,
+        gpu: &Gpu,
+        f: &DeviceFormFactors,
+        albedo: &[Rgb],
+        e: &[Rgb],
+    ) -> Result<JacobiPass, RadiosityError> {
         let n = f.n;
         if albedo.len() != n || e.len() != n {
             return Err(RadiosityError::Mesh(format!(
@@ -237,44 +327,53 @@ impl GpuRadiosity {
             }
             sets.push(pair);
         }
-        const BATCH: usize = 8;
-        let mut sweeps = 0;
-        while sweeps < max_sweeps {
-            gpu.run(|rec| {
-                for k in 0..BATCH {
-                    for (&(row0, count), pair) in f.blocks.iter().zip(&sets) {
-                        let push = Push { n: n as u32, row0, rows: count, extra: 0 };
-                        self.jacobi.record_dispatch(
-                            rec,
-                            &pair[(sweeps + k) % 2],
-                            bytemuck::bytes_of(&push),
-                            [count.div_ceil(self.jacobi.local_size()[0]), 1, 1],
-                        );
-                    }
-                    rec.compute_to_compute_barrier();
-                }
-            })?;
-            sweeps += BATCH;
-            // After an even number of sweeps the newest iterate is in b[0], the one before in b[1].
-            let newest = b[0].download(gpu)?;
-            let before = b[1].download(gpu)?;
-            let change = newest
-                .iter()
-                .zip(&before)
-                .flat_map(|(x, y)| (0..3).map(move |c| (x[c] - y[c]).abs()))
-                .fold(0f32, f32::max);
-            let top = newest.iter().flat_map(|x| x[..3].iter()).fold(0f32, |m, v| m.max(v.abs()));
-            if !change.is_finite() {
-                return Err(RadiosityError::Solve(format!(
-                    "Jacobi diverged on the device by sweep {sweeps}"
-                )));
+        Ok(JacobiPass { sets, b, _inputs: (albedo_buf, emission) })
+    }
+
+    /// Records `count` Jacobi sweeps (Eq. 14) numbered from `first` (sweep k reads iterate
+    /// k mod 2 and writes the other; outside a render pass), each followed by a compute-to-
+    /// compute barrier; after an even `first + count` the newest iterate is `b[0]`. Before:
+    /// the form-factor rows' writes are visible to compute shaders
+    /// ([`Self::record_form_factors`] ends with that barrier).
+    pub fn record_jacobi_sweeps(
+        &self,
+        rec: &mut Recorder<'_>,
+        f: &DeviceFormFactors,
+        pass: &JacobiPass,
+        first: usize,
+        count: usize,
+    ) {
+        let wx = self.jacobi.local_size()[0];
+        for k in first..first + count {
+            for (&(row0, rows), pair) in f.blocks.iter().zip(&pass.sets) {
+                let push = Push { n: f.n as u32, row0, rows, extra: 0 };
+                self.jacobi.record_dispatch(
+                    rec,
+                    &pair[k % 2],
+                    bytemuck::bytes_of(&push),
+                    [rows.div_ceil(wx), 1, 1],
+                );
             }
-            if f64::from(change) <= tolerance * f64::from(top) {
-                return Ok((newest.iter().map(|x| [x[0], x[1], x[2]].map(f64::from)).collect(), sweeps));
-            }
+            rec.compute_to_compute_barrier();
         }
-        Err(RadiosityError::Solve(format!(
-            "Jacobi did not converge to {tolerance:e} in {max_sweeps} sweeps on the device"
-        )))
+    }
+}
+
+/// One face's radiosity on the device: RGB and a spare lane.
+pub type Radiance4 = [f32; 4];
+
+/// A Jacobi solve prepared for recording ([`GpuRadiosity::prepare_jacobi`]): the two iterates
+/// and, per row block, the descriptor sets of both sweep directions.
+pub struct JacobiPass {
+    sets: Vec<Vec<DescriptorSet>>,
+    b: [Buffer<[f32; 4]>; 2],
+    _inputs: (Buffer<[f32; 4]>, Buffer<[f32; 4]>),
+}
+
+impl JacobiPass {
+    /// The iterates `(b[0], b[1])` (RGB and a spare lane per face), read back once the recorded
+    /// sweeps have finished.
+    pub fn iterates(&self, gpu: &Gpu) -> Result<(Vec<Radiance4>, Vec<Radiance4>), RadiosityError> {
+        Ok((self.b[0].download(gpu)?, self.b[1].download(gpu)?))
     }
 }
