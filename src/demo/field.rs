@@ -111,7 +111,7 @@ impl FieldPass {
             "field",
             crate::demo::shaders::FIELD_VERT,
             crate::demo::shaders::FIELD_FRAG,
-            pass.raw(),
+            pass,
         );
         desc.bindings = &[BindingKind::UniformBuffer, BindingKind::Texture];
         desc.push_constant_bytes = 64;

@@ -234,7 +234,7 @@ impl FluidRenderer {
             "fluid cells",
             crate::fluid::shaders::CELLS_VERT,
             crate::fluid::shaders::CELLS_FRAG,
-            pass.raw(),
+            pass,
         );
         desc.push_constant_bytes = std::mem::size_of::<Push>() as u32;
         desc.vertex_stride = std::mem::size_of::<CellVertex>() as u32;
@@ -255,7 +255,7 @@ impl FluidRenderer {
             "fluid particles",
             crate::fluid::shaders::SPRITES_VERT,
             crate::fluid::shaders::SPRITES_FRAG,
-            pass.raw(),
+            pass,
         );
         desc.push_constant_bytes = std::mem::size_of::<Push>() as u32;
         desc.bindings = &[BindingKind::Texture, BindingKind::StorageBuffer, BindingKind::StorageBuffer];

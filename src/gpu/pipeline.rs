@@ -12,6 +12,7 @@ use super::descriptors::{BindingKind, DescriptorSet, DescriptorSetLayout, Resour
 use super::error::{vk_error, GpuError, GpuResult, VkContext};
 use super::lifetime::{Lifetime, Tracked};
 use super::recorder::Recorder;
+use super::renderpass::RenderPass;
 
 /// A shader module, destroyed as soon as the pipeline using it exists.
 struct ShaderModule<'a> {
@@ -281,8 +282,9 @@ pub struct GraphicsPipelineDesc<'a> {
     pub blend: bool,
     /// Depth bias (constant, slope) — pulls edge overdraw in front of faces.
     pub depth_bias: Option<(f32, f32)>,
-    /// Render pass it draws in (subpass 0) and its number of colour attachments.
-    pub render_pass: vk::RenderPass,
+    /// Render pass it draws in (subpass 0; any render pass compatible with it, in Vulkan's
+    /// sense, may be used to draw).
+    pub render_pass: &'a RenderPass,
     /// Number of colour attachments of the render pass.
     pub color_attachments: u32,
     /// Values of specialization constants 0, 1, … (all stages).
@@ -292,7 +294,7 @@ pub struct GraphicsPipelineDesc<'a> {
 impl<'a> GraphicsPipelineDesc<'a> {
     /// Defaults: triangle list, filled, no culling, depth on, no blending, no vertex buffer,
     /// one colour attachment.
-    pub fn new(name: &'a str, vertex: &'a [u32], fragment: &'a [u32], render_pass: vk::RenderPass) -> Self {
+    pub fn new(name: &'a str, vertex: &'a [u32], fragment: &'a [u32], render_pass: &'a RenderPass) -> Self {
         Self {
             name,
             vertex,
@@ -359,6 +361,11 @@ impl GraphicsPipeline {
             modules.iter().map(|m| super::reflect::reflect(desc.name, m)).collect::<GpuResult<Vec<_>>>()?;
         let shaders = super::reflect::merge(desc.name, &layouts)?;
         super::reflect::check_layout(desc.name, &shaders, desc.push_constant_bytes, desc.bindings)?;
+        if !desc.render_pass.lifetime().is_on(&gpu.shared) {
+            return Err(GpuError::WrongDevice {
+                name: format!("the render pass of pipeline `{}`", desc.name),
+            });
+        }
         let layout = PipelineLayout::new(gpu, desc.bindings, desc.push_constant_bytes, stages, desc.name)?;
         let device = gpu.device();
         let vs = ShaderModule::new(device, desc.vertex)?;
@@ -471,7 +478,7 @@ impl GraphicsPipeline {
             .color_blend_state(&blend)
             .dynamic_state(&dynamic)
             .layout(layout.raw)
-            .render_pass(desc.render_pass)
+            .render_pass(desc.render_pass.raw())
             .subpass(0);
         let info = if tess.is_some() { info.tessellation_state(&tessellation_state) } else { info };
         // SAFETY: every pointer in `info` refers to locals alive during the call.

@@ -150,6 +150,15 @@ impl RenderPass {
     }
 }
 
+impl std::fmt::Debug for RenderPass {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("RenderPass")
+            .field("color_format", &self.color_format)
+            .field("depth_format", &self.depth_format)
+            .finish()
+    }
+}
+
 impl Tracked for RenderPass {
     fn lifetime(&self) -> &Arc<Lifetime> {
         &self.life

@@ -146,7 +146,7 @@ impl SceneRenderer {
             "radiosity scene",
             crate::radiosity::shaders::SCENE_VERT,
             crate::radiosity::shaders::SCENE_FRAG,
-            pass.raw(),
+            pass,
         );
         desc.push_constant_bytes = std::mem::size_of::<Push>() as u32;
         desc.vertex_stride = std::mem::size_of::<SceneVertex>() as u32;

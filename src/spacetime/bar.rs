@@ -330,7 +330,7 @@ impl BarRenderer {
                 "spacetime bar",
                 crate::spacetime::shaders::BAR_VERT,
                 crate::spacetime::shaders::BAR_FRAG,
-                target.render_pass().raw(),
+                target.render_pass(),
             );
             desc.bindings = &[BindingKind::StorageBuffer, BindingKind::Texture];
             desc.push_constant_bytes = std::mem::size_of::<BarPush>() as u32;

@@ -19,7 +19,7 @@ impl SpacetimeRenderer {
                     if lines { "spacetime slice edges" } else { "spacetime slice" },
                     crate::spacetime::shaders::SLICE_VERT,
                     crate::spacetime::shaders::SLICE_FRAG,
-                    target.render_pass().raw(),
+                    target.render_pass(),
                 );
                 desc.bindings = &[
                     BindingKind::StorageBuffer,

@@ -335,9 +335,9 @@ impl SpectralRenderer {
         name: &'a str,
         vertex: &'a [u32],
         fragment: &'a [u32],
-        target: &RenderTarget,
+        target: &'a RenderTarget,
     ) -> GraphicsPipelineDesc<'a> {
-        let mut desc = GraphicsPipelineDesc::new(name, vertex, fragment, target.render_pass().raw());
+        let mut desc = GraphicsPipelineDesc::new(name, vertex, fragment, target.render_pass());
         desc.bindings = &DRAW_BINDINGS;
         desc.specialization = &self.specialization;
         desc.push_constant_bytes = std::mem::size_of::<SpectralPush>() as u32;
