@@ -291,13 +291,19 @@ impl Gpu {
 
     /// Records and submits without waiting; wait on the returned [`Submission`].
     pub fn submit<R>(&self, record: impl FnOnce(&mut Recorder<'_>) -> R) -> GpuResult<(Submission, R)> {
-        self.submit_with_semaphores(&[], &[], record)
+        // SAFETY: no semaphores.
+        unsafe { self.submit_with_semaphores(&[], &[], record) }
     }
 
     /// Like [`Gpu::submit`], waiting on `wait` semaphores (each at its stage) before the work
     /// and signalling `signal` after it — how a frame waits for a swapchain image and tells
     /// presentation it is done.
-    pub fn submit_with_semaphores<R>(
+    ///
+    /// # Safety
+    /// Every semaphore is a live binary semaphore of this device that stays alive until the
+    /// submission has finished; each `wait` semaphore has a signal operation submitted (or a
+    /// presentation-engine acquire pending) and each `signal` semaphore has no pending signal.
+    pub unsafe fn submit_with_semaphores<R>(
         &self,
         wait: &[(vk::Semaphore, vk::PipelineStageFlags)],
         signal: &[vk::Semaphore],

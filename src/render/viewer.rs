@@ -233,7 +233,7 @@ impl State {
             (&self.gpu, &self.target, &mut self.content, &self.camera, &self.readback);
         let waits = [(swapchain.image_available, vk::PipelineStageFlags::TRANSFER)];
         let signals = [swapchain.render_finished[index as usize]];
-        let (submission, recorded) = gpu.submit_with_semaphores(&waits, &signals, |rec| {
+        let record = |rec: &mut Recorder<'_>| {
             let prepared = content.record_prepass(rec, target, camera);
             target.record_begin(rec, crate::render::BACKGROUND);
             let recorded = prepared.and_then(|()| content.record(rec, target, camera));
@@ -333,7 +333,12 @@ impl State {
                 )
             };
             recorded
-        })?;
+        };
+        // SAFETY: the swapchain's semaphores are live until the swapchain is recreated, which
+        // waits for this frame first; `image_available` was handed to the acquire of `index`,
+        // and this image's `render_finished` was waited on by its last presentation.
+        let frame = unsafe { gpu.submit_with_semaphores(&waits, &signals, record) };
+        let (submission, recorded) = frame?;
         self.last_frame = Some(submission);
         recorded?;
         let fresh = swapchain.present(index)?;
