@@ -292,19 +292,28 @@ impl Image {
 
     /// The single full-image buffer/image copy region.
     fn copy_region(&self) -> vk::BufferImageCopy {
-        vk::BufferImageCopy {
-            buffer_offset: 0,
-            buffer_row_length: 0,
-            buffer_image_height: 0,
-            image_subresource: vk::ImageSubresourceLayers {
-                aspect_mask: self.desc.aspect(),
-                mip_level: 0,
-                base_array_layer: 0,
-                layer_count: 1,
-            },
-            image_offset: vk::Offset3D::default(),
-            image_extent: vk::Extent3D { width: self.desc.width, height: self.desc.height, depth: 1 },
-        }
+        full_copy_region(
+            self.desc.aspect(),
+            vk::Extent2D { width: self.desc.width, height: self.desc.height },
+        )
+    }
+}
+
+/// The copy of a whole single-level, single-layer image of `extent` to or from a tightly
+/// packed buffer (also for images the engine does not own).
+pub(crate) fn full_copy_region(aspect: vk::ImageAspectFlags, extent: vk::Extent2D) -> vk::BufferImageCopy {
+    vk::BufferImageCopy {
+        buffer_offset: 0,
+        buffer_row_length: 0,
+        buffer_image_height: 0,
+        image_subresource: vk::ImageSubresourceLayers {
+            aspect_mask: aspect,
+            mip_level: 0,
+            base_array_layer: 0,
+            layer_count: 1,
+        },
+        image_offset: vk::Offset3D::default(),
+        image_extent: vk::Extent3D { width: extent.width, height: extent.height, depth: 1 },
     }
 }
 

@@ -45,6 +45,7 @@ pub use context::{Gpu, GpuDesc, RawDevice};
 pub use debug::ValidationLog;
 pub use descriptors::{BindingKind, DescriptorSet, DescriptorSetLayout, Resource};
 pub use error::{GpuError, GpuResult};
+pub(crate) use image::full_copy_region;
 pub use image::{record_image_barrier, texel_bytes, Image, ImageDesc, Sampler};
 pub use lifetime::{Lifetime, Tracked};
 pub use memory::MemoryKind;

@@ -171,23 +171,7 @@ impl RenderTarget {
             ColorAttachment::Foreign { image, view } => {
                 rec.keep(view);
                 rec.keep(dst);
-                let region = vk::BufferImageCopy {
-                    buffer_offset: 0,
-                    buffer_row_length: 0,
-                    buffer_image_height: 0,
-                    image_subresource: vk::ImageSubresourceLayers {
-                        aspect_mask: vk::ImageAspectFlags::COLOR,
-                        mip_level: 0,
-                        base_array_layer: 0,
-                        layer_count: 1,
-                    },
-                    image_offset: vk::Offset3D::default(),
-                    image_extent: vk::Extent3D {
-                        width: self.extent.width,
-                        height: self.extent.height,
-                        depth: 1,
-                    },
-                };
+                let region = crate::gpu::full_copy_region(vk::ImageAspectFlags::COLOR, self.extent);
                 // SAFETY: the host's image is live for the target's life and its recordings
                 // (`from_host_image`'s contract), in TRANSFER_SRC_OPTIMAL after the pass; `dst`
                 // is kept alive and large enough (checked above).

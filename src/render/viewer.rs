@@ -299,14 +299,7 @@ impl State {
                 unsafe { record_image_barrier(rec, image, color, layout, next) };
                 rec.keep(buf);
                 layout = next;
-                let region = vk::BufferImageCopy {
-                    buffer_offset: 0,
-                    buffer_row_length: 0,
-                    buffer_image_height: 0,
-                    image_subresource: layers,
-                    image_offset: vk::Offset3D::default(),
-                    image_extent: vk::Extent3D { width: extent.width, height: extent.height, depth: 1 },
-                };
+                let region = crate::gpu::full_copy_region(color, extent);
                 // SAFETY: the image is in TRANSFER_SRC; the buffer holds the whole image.
                 unsafe {
                     dev.cmd_copy_image_to_buffer(
