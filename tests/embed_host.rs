@@ -1,8 +1,9 @@
 //! The host-embedding example, run on lavapipe with the validation layer and synchronization
 //! validation on (the host's own messenger): a six-frame host loop, two frames in flight, in
-//! which galerkin records particles, a spacetime slice and three draws into the host's command
-//! buffers and images between the host's own passes; the host checks every frame's pixels and
-//! the particles, and there must be no validation error, before or after galerkin drops.
+//! which galerkin records particles, a spacetime slice, the spectral prepass, a field drawn by
+//! its own pass into a host image, and spectral and spacetime draws inside the host's own
+//! render pass in viewports the host chose; the host checks every frame's pixels and the
+//! particles, and there must be no validation error, before or after galerkin drops.
 
 #[path = "../examples/embed_host.rs"]
 mod embed_host;
@@ -15,11 +16,19 @@ fn a_plain_ash_host_embeds_galerkin() {
     assert_eq!(report.frames, 6, "{report:?}");
     assert!(report.pixels_checked > 6 * 3_000, "{report:?}");
     assert_eq!(report.pixel_failures, 0, "{report:?}");
-    // The spectral and spacetime regions equal galerkin's own offscreen renders (each tested
-    // pixel-exact against the CPU f64 reference elsewhere) bit for bit: same pipelines, same
-    // device, a NEAREST blit of the same size.
-    assert!(report.pixels_covered > 6 * 5_000, "{report:?}");
-    assert_eq!(report.pixels_differing, 0, "{report:?}");
+    // The spectral viewport equals galerkin's own offscreen render (tested pixel-exact against
+    // the CPU f64 reference elsewhere) bit for bit: its fragments take their world point from
+    // the pixel centre relative to the viewport's corner (exact in f32), whatever the viewport.
+    // Pixels neither render covers show the host's clear colour.
+    assert!(report.pixels_covered[0] > 6 * 5_000, "{report:?}");
+    assert_eq!(report.pixels_differing[0], 0, "{report:?}");
+    // The spacetime slice is drawn from interpolated vertex attributes: moved by the viewport
+    // offset, the rasteriser computes their barycentric weights from other framebuffer
+    // coordinates, which round differently in the last bit; a few pixels then land one 8-bit
+    // step away from the offscreen render (measured: 2 of about 130,000), never more.
+    assert!(report.pixels_covered[1] > 6 * 5_000, "{report:?}");
+    assert!(report.largest_difference[1] <= 1, "{report:?}");
+    assert!(report.pixels_differing[1] * 1000 < report.pixels_covered[1], "{report:?}");
     // Uniform flow: the closed form U·t; device positions in f32 near 2.0 round at ~1.2e-7 per
     // substep over 60 substeps.
     assert!(report.particle_error < 1e-4, "{report:?}");

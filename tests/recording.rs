@@ -8,66 +8,13 @@
 
 mod common;
 
+use common::host::HostCommands;
+
 use std::time::{Duration, Instant};
 
 use galerkin::bench::kernels::FmaKernel;
 use galerkin::demo::axpy::{axpy_error_ratio, Axpy};
-use galerkin::gpu::{vk, Buffer, Gpu, GpuError, MemoryKind, Recorder, Resource};
-
-/// A command pool, one primary command buffer and a fence made by the "host" on the engine's
-/// device, as an embedding application would.
-struct HostCommands<'g> {
-    gpu: &'g Gpu,
-    pool: vk::CommandPool,
-    cmd: vk::CommandBuffer,
-    fence: vk::Fence,
-}
-
-impl<'g> HostCommands<'g> {
-    fn new(gpu: &'g Gpu) -> Self {
-        let d = gpu.device();
-        // SAFETY: plain object creation on a live device.
-        unsafe {
-            let pool = d
-                .create_command_pool(
-                    &vk::CommandPoolCreateInfo::default().queue_family_index(gpu.queue_family()),
-                    None,
-                )
-                .unwrap();
-            let info = vk::CommandBufferAllocateInfo::default()
-                .command_pool(pool)
-                .level(vk::CommandBufferLevel::PRIMARY)
-                .command_buffer_count(1);
-            let cmd = d.allocate_command_buffers(&info).unwrap()[0];
-            let fence = d.create_fence(&vk::FenceCreateInfo::default(), None).unwrap();
-            d.begin_command_buffer(cmd, &vk::CommandBufferBeginInfo::default()).unwrap();
-            Self { gpu, pool, cmd, fence }
-        }
-    }
-
-    /// Ends, submits on the engine's queue (nothing else uses it meanwhile) and waits.
-    fn submit_and_wait(&self) {
-        let d = self.gpu.device();
-        let cmds = [self.cmd];
-        // SAFETY: the buffer was recorded on this device; the queue is idle otherwise.
-        unsafe {
-            d.end_command_buffer(self.cmd).unwrap();
-            let queue = d.get_device_queue(self.gpu.queue_family(), 0);
-            d.queue_submit(queue, &[vk::SubmitInfo::default().command_buffers(&cmds)], self.fence).unwrap();
-            d.wait_for_fences(&[self.fence], true, u64::MAX).unwrap();
-        }
-    }
-}
-
-impl Drop for HostCommands<'_> {
-    fn drop(&mut self) {
-        // SAFETY: the buffer's work (if submitted) has completed.
-        unsafe {
-            self.gpu.device().destroy_fence(self.fence, None);
-            self.gpu.device().destroy_command_pool(self.pool, None);
-        }
-    }
-}
+use galerkin::gpu::{vk, Buffer, GpuError, MemoryKind, Recorder, Resource};
 
 #[test]
 fn objects_dropped_after_recording_into_a_host_buffer_live_until_the_host_releases_it() {

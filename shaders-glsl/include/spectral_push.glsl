@@ -16,8 +16,9 @@ layout(push_constant) uniform SpectralPush {
     // Colour range lo, hi; ramp texels; iso-lines per range (0: none).
     vec4 range;
     // Depth offset of this pass (planar: from 0.5; surface: added to clip z / w); the
-    // reference-square tolerance of the inside test; the screen-space error budget in pixels;
-    // the largest tessellation level.
+    // reference-square tolerance of the inside test. Surface: the screen-space error budget in
+    // pixels and the largest tessellation level. Planar: the viewport's corner in framebuffer
+    // pixels (pixel_to_world maps pixels counted from it).
     vec4 misc;
     // Data output (raw values), log scale, mode (SPECTRAL_MODE_*), SPECTRAL_PLANAR or _SURFACE.
     uvec4 flags;

@@ -29,7 +29,7 @@ void main() {
     vec2 r = in_reference;
     bool inside = true;
     if (mode == SPECTRAL_MODE_PER_PIXEL && !surface) {
-        vec2 p = pc.pixel_to_world.xy + gl_FragCoord.xy * pc.pixel_to_world.zw;
+        vec2 p = pc.pixel_to_world.xy + (gl_FragCoord.xy - pc.misc.zw) * pc.pixel_to_world.zw;
         float tol = pc.misc.y;
         inside = spectral_inverse_map(element, p, r)
               && all(greaterThanEqual(r, vec2(-tol))) && all(lessThanEqual(r, vec2(1.0 + tol)));

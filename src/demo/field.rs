@@ -12,7 +12,7 @@ use glam::DVec2;
 use super::polynomial::BivariateCubic;
 use crate::gpu::{
     BindingKind, Buffer, DescriptorSet, Gpu, GpuResult, GraphicsPipeline, GraphicsPipelineDesc, Recorder,
-    RenderPass, Resource,
+    RenderPass, Resource, Viewport,
 };
 use crate::render::{ramp_coordinate, Camera, Colormap, ColormapTexture};
 
@@ -123,13 +123,14 @@ impl FieldPass {
         Ok(Self { pipeline, set, vertices, _uniform: uniform, _colormap: texture })
     }
 
-    /// Records the draw (inside the target's render pass).
-    pub fn record(&self, rec: &mut Recorder<'_>, extent: vk::Extent2D, camera: &Camera) {
-        let aspect = f64::from(extent.width) / f64::from(extent.height);
-        let m = camera.view_proj_f32(aspect).to_cols_array();
+    /// Records the draw inside the render pass it was built for, in `viewport` (an extent: the
+    /// whole target).
+    pub fn record(&self, rec: &mut Recorder<'_>, viewport: impl Into<Viewport>, camera: &Camera) {
+        let viewport = viewport.into();
+        let m = camera.view_proj_f32(viewport.aspect()).to_cols_array();
         self.pipeline.record_draw(
             rec,
-            extent,
+            viewport,
             &self.set,
             bytemuck::bytes_of(&m),
             Some(self.vertices.whole()),

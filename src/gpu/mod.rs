@@ -51,10 +51,12 @@ pub use lifetime::{Lifetime, Tracked};
 pub use memory::MemoryKind;
 pub use pipeline::{
     spirv_local_size, ComputePipeline, ComputePipelineDesc, GraphicsPipeline, GraphicsPipelineDesc,
-    VertexAttribute,
+    VertexAttribute, Viewport,
 };
 pub use query::Profiler;
 pub use recorder::{Recorder, Recording};
-pub use renderpass::{Attachment, ForeignView, Framebuffer, RenderPass};
+pub use renderpass::{
+    is_drawable_color_format, Attachment, ForeignView, Framebuffer, HostRenderPass, PassKey, RenderPass,
+};
 #[cfg(feature = "viewer")]
 pub use swapchain::{surface_extensions, Surface, Swapchain};

@@ -245,6 +245,43 @@ impl ComputePipeline {
     }
 }
 
+/// The rectangle of the framebuffer a draw covers, in pixels (viewport and scissor alike): the
+/// whole of an engine target, or the part of a host's framebuffer the host gives galerkin.
+#[derive(Copy, Clone, Debug, PartialEq, Eq, Hash)]
+pub struct Viewport {
+    /// Left column.
+    pub x: u32,
+    /// Top row.
+    pub y: u32,
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+}
+
+impl Viewport {
+    /// Its size.
+    pub fn extent(&self) -> vk::Extent2D {
+        vk::Extent2D { width: self.width, height: self.height }
+    }
+
+    /// Width / height.
+    pub fn aspect(&self) -> f64 {
+        f64::from(self.width) / f64::from(self.height.max(1))
+    }
+
+    /// As a Vulkan rectangle (the scissor).
+    pub fn rect(&self) -> vk::Rect2D {
+        vk::Rect2D { offset: vk::Offset2D { x: self.x as i32, y: self.y as i32 }, extent: self.extent() }
+    }
+}
+
+impl From<vk::Extent2D> for Viewport {
+    fn from(e: vk::Extent2D) -> Self {
+        Self { x: 0, y: 0, width: e.width, height: e.height }
+    }
+}
+
 /// One vertex attribute: (location, format, byte offset in the vertex).
 pub type VertexAttribute = (u32, vk::Format, u32);
 
@@ -282,8 +319,8 @@ pub struct GraphicsPipelineDesc<'a> {
     pub blend: bool,
     /// Depth bias (constant, slope) — pulls edge overdraw in front of faces.
     pub depth_bias: Option<(f32, f32)>,
-    /// Render pass it draws in (subpass 0; any render pass compatible with it, in Vulkan's
-    /// sense, may be used to draw).
+    /// Render pass it draws in (in the pass's subpass; any render pass compatible with it, in
+    /// Vulkan's sense, may be used to draw). Without a depth attachment, `depth` is ignored.
     pub render_pass: &'a RenderPass,
     /// Number of colour attachments of the render pass.
     pub color_attachments: u32,
@@ -450,9 +487,10 @@ impl GraphicsPipeline {
         }
         let multisample = vk::PipelineMultisampleStateCreateInfo::default()
             .rasterization_samples(vk::SampleCountFlags::TYPE_1);
+        let depth_on = desc.depth && desc.render_pass.depth_format().is_some();
         let depth = vk::PipelineDepthStencilStateCreateInfo::default()
-            .depth_test_enable(desc.depth)
-            .depth_write_enable(desc.depth)
+            .depth_test_enable(depth_on)
+            .depth_write_enable(depth_on)
             .depth_compare_op(vk::CompareOp::LESS_OR_EQUAL);
         let attachment = vk::PipelineColorBlendAttachmentState::default()
             .blend_enable(desc.blend)
@@ -479,7 +517,7 @@ impl GraphicsPipeline {
             .dynamic_state(&dynamic)
             .layout(layout.raw)
             .render_pass(desc.render_pass.raw())
-            .subpass(0);
+            .subpass(desc.render_pass.subpass());
         let info = if tess.is_some() { info.tessellation_state(&tessellation_state) } else { info };
         // SAFETY: every pointer in `info` refers to locals alive during the call.
         let raw = unsafe { device.create_graphics_pipelines(vk::PipelineCache::null(), &[info], None) }
@@ -493,17 +531,18 @@ impl GraphicsPipeline {
     }
 
     /// Records, inside a render pass: bind the pipeline, `set` and the vertex buffer (if any),
-    /// set the viewport and scissor to `extent`, push `push`, and draw `vertex_count` vertices.
+    /// set the viewport and scissor to `viewport` (an extent: the whole target), push `push`,
+    /// and draw `vertex_count` vertices.
     pub fn record_draw(
         &self,
         rec: &mut Recorder<'_>,
-        extent: vk::Extent2D,
+        viewport: impl Into<Viewport>,
         set: &DescriptorSet,
         push: &[u8],
         vertices: Option<BufferBinding<'_>>,
         vertex_count: u32,
     ) {
-        self.record_state(rec, extent, set, push, vertices);
+        self.record_state(rec, viewport.into(), set, push, vertices);
         // SAFETY: recording inside a render pass (the caller's documented state) with this
         // pipeline and its resources bound and kept alive.
         unsafe { rec.device().cmd_draw(rec.raw(), vertex_count, 1, 0, 0) };
@@ -516,14 +555,14 @@ impl GraphicsPipeline {
     pub fn record_draw_indirect(
         &self,
         rec: &mut Recorder<'_>,
-        extent: vk::Extent2D,
+        viewport: impl Into<Viewport>,
         set: &DescriptorSet,
         push: &[u8],
         vertices: Option<BufferBinding<'_>>,
         indirect: BufferBinding<'_>,
     ) {
         assert!(indirect.range >= 16, "an indirect draw reads 16 bytes");
-        self.record_state(rec, extent, set, push, vertices);
+        self.record_state(rec, viewport.into(), set, push, vertices);
         let buffer = rec.bound(&indirect);
         // SAFETY: recording inside a render pass with this pipeline bound; `indirect` is kept
         // alive and holds at least one draw command at its offset.
@@ -533,21 +572,21 @@ impl GraphicsPipeline {
     fn record_state(
         &self,
         rec: &mut Recorder<'_>,
-        extent: vk::Extent2D,
+        area: Viewport,
         set: &DescriptorSet,
         push: &[u8],
         vertices: Option<BufferBinding<'_>>,
     ) {
         self.core.record_bind(rec, set, push);
         let viewport = vk::Viewport {
-            x: 0.0,
-            y: 0.0,
-            width: extent.width as f32,
-            height: extent.height as f32,
+            x: area.x as f32,
+            y: area.y as f32,
+            width: area.width as f32,
+            height: area.height as f32,
             min_depth: 0.0,
             max_depth: 1.0,
         };
-        let scissor = vk::Rect2D { offset: vk::Offset2D::default(), extent };
+        let scissor = area.rect();
         let vertex_buffer = vertices.map(|v| (rec.bound(&v), v.offset));
         let (d, cmd) = (rec.device(), rec.raw());
         // SAFETY: recording with this pipeline bound; the vertex buffer is kept alive.

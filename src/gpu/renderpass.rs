@@ -1,9 +1,12 @@
-//! Render passes and framebuffers. galerkin's passes draw into one colour attachment (plus an
-//! optional depth attachment) cleared at the start and left in `TRANSFER_SRC_OPTIMAL` at the
+//! Render passes and framebuffers. galerkin's own passes draw into one colour attachment (plus
+//! an optional depth attachment) cleared at the start and left in `TRANSFER_SRC_OPTIMAL` at the
 //! end — ready to be read back, written to a file, or blitted to a window. The same render pass
 //! serves the offscreen path, the viewer (which blits the result to its swapchain) and a host's
-//! own image.
+//! own image. A host's own render pass is described to the engine by
+//! [`RenderPass::from_host`]: galerkin's pipelines are then built for it and draw inside it,
+//! begun, ended and owned by the host.
 
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;
 
 use ash::vk;
@@ -14,15 +17,59 @@ use super::image::Image;
 use super::lifetime::{Lifetime, Tracked};
 use super::recorder::Recorder;
 
-/// A single-subpass render pass: colour (cleared, stored, ends in `TRANSFER_SRC_OPTIMAL`) and
-/// an optional depth attachment (cleared, not stored).
+/// A render pass galerkin's pipelines draw in: the engine's own (single subpass: colour
+/// cleared, stored, ending in `TRANSFER_SRC_OPTIMAL`, and an optional depth attachment) or a
+/// host's ([`RenderPass::from_host`]: the subpass galerkin draws in, with its colour and depth
+/// formats).
 pub struct RenderPass {
     life: Arc<Lifetime>,
     _device: Arc<DeviceShared>,
     raw: vk::RenderPass,
     color_format: vk::Format,
     depth_format: Option<vk::Format>,
+    subpass: u32,
+    /// `None` for the engine's own passes (all compatible when their formats agree); a unique
+    /// number for each host pass (whose compatibility the engine cannot see).
+    host_id: Option<u64>,
 }
+
+/// What the engine must know of a host's render pass to draw in it (see
+/// [`RenderPass::from_host`]).
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+pub struct HostRenderPass {
+    /// The render pass.
+    pub raw: vk::RenderPass,
+    /// The subpass galerkin's draws are recorded in.
+    pub subpass: u32,
+    /// Format of that subpass's one colour attachment.
+    pub color_format: vk::Format,
+    /// Format of its depth attachment, if it has one. The spectral and spacetime draws need
+    /// one (they order surfaces and edges by depth) and refuse a pass without; simpler draws
+    /// (the demo field) are then not depth-tested.
+    pub depth_format: Option<vk::Format>,
+}
+
+/// Which pipelines can draw in a render pass: galerkin's own passes with equal formats are
+/// compatible; each host pass is its own class. Capabilities key their pipeline caches by it.
+#[derive(Copy, Clone, Debug, PartialEq, Eq, Hash)]
+pub enum PassKey {
+    /// An engine render pass with these colour and depth formats.
+    Engine(vk::Format, Option<vk::Format>),
+    /// The host render pass with this number.
+    Host(u64),
+}
+
+/// True for the colour formats galerkin's pipelines write: 8-bit UNORM RGBA or BGRA (colours,
+/// sRGB-encoded by the shaders) and 32-bit float RGBA (raw values).
+pub fn is_drawable_color_format(format: vk::Format) -> bool {
+    matches!(
+        format,
+        vk::Format::R8G8B8A8_UNORM | vk::Format::B8G8R8A8_UNORM | vk::Format::R32G32B32A32_SFLOAT
+    )
+}
+
+/// Numbers host render passes.
+static NEXT_HOST_PASS: AtomicU64 = AtomicU64::new(1);
 
 impl RenderPass {
     /// Creates the render pass. Its external dependencies order earlier transfer reads of the
@@ -102,7 +149,70 @@ impl RenderPass {
             // SAFETY: no framebuffer or recording uses it any more.
             unsafe { dev.raw.destroy_render_pass(raw, None) }
         });
-        Ok(Self { life, _device: gpu.shared.clone(), raw, color_format, depth_format })
+        Ok(Self {
+            life,
+            _device: gpu.shared.clone(),
+            raw,
+            color_format,
+            depth_format,
+            subpass: 0,
+            host_id: None,
+        })
+    }
+
+    /// Describes a host's render pass so that galerkin's pipelines can be built for it and
+    /// record their draws inside it (the host begins and ends it; the engine destroys nothing
+    /// of it). Make one per host render pass and keep it: pipelines are cached per description.
+    ///
+    /// The colour attachment must be one galerkin writes: `R8G8B8A8_UNORM` or
+    /// `B8G8R8A8_UNORM` (colours, written sRGB-encoded, as into a PNG) or `R32G32B32A32_SFLOAT`
+    /// (raw values); anything else, an `_SRGB` format included (it would encode the colours a
+    /// second time), is [`GpuError::Unsupported`]. The subpass is single-sampled.
+    ///
+    /// # Safety
+    /// - `desc.raw` is a live render pass of `gpu`'s device whose subpass `desc.subpass` has
+    ///   exactly one colour attachment, of `desc.color_format`, single-sampled, and the depth
+    ///   attachment `desc.depth_format` says (none if `None`);
+    /// - it stays alive while pipelines are built for it (galerkin builds them on first draw
+    ///   into it, and not later than that).
+    pub unsafe fn from_host(gpu: &Gpu, desc: HostRenderPass) -> GpuResult<Self> {
+        if !is_drawable_color_format(desc.color_format) {
+            return Err(GpuError::Unsupported(format!(
+                "drawing into a host colour attachment of format {:?} (galerkin writes R8G8B8A8_UNORM, \
+                 B8G8R8A8_UNORM or R32G32B32A32_SFLOAT)",
+                desc.color_format
+            )));
+        }
+        let life = Lifetime::new(&gpu.shared, "a host's render pass", |_| {
+            // The host owns and destroys it.
+        });
+        Ok(Self {
+            life,
+            _device: gpu.shared.clone(),
+            raw: desc.raw,
+            color_format: desc.color_format,
+            depth_format: desc.depth_format,
+            subpass: desc.subpass,
+            host_id: Some(NEXT_HOST_PASS.fetch_add(1, Ordering::Relaxed)),
+        })
+    }
+
+    /// The pipeline compatibility class of this pass (see [`PassKey`]).
+    pub fn key(&self) -> PassKey {
+        match self.host_id {
+            Some(id) => PassKey::Host(id),
+            None => PassKey::Engine(self.color_format, self.depth_format),
+        }
+    }
+
+    /// The subpass galerkin draws in (0 for the engine's own passes).
+    pub fn subpass(&self) -> u32 {
+        self.subpass
+    }
+
+    /// True for a host's render pass.
+    pub fn is_host(&self) -> bool {
+        self.host_id.is_some()
     }
 
     /// The Vulkan handle (pipelines are built against it).
@@ -125,6 +235,7 @@ impl RenderPass {
     /// framebuffer was made for another render pass.
     pub fn record_begin(&self, rec: &mut Recorder<'_>, framebuffer: &Framebuffer, clear: [f32; 4]) {
         assert!(framebuffer.pass == self.raw, "the framebuffer was made for another render pass");
+        assert!(!self.is_host(), "a host's render pass is begun by the host");
         rec.keep(self);
         rec.keep(framebuffer);
         let clears = [
@@ -144,6 +255,7 @@ impl RenderPass {
 
     /// Records `vkCmdEndRenderPass`.
     pub fn record_end(&self, rec: &mut Recorder<'_>) {
+        assert!(!self.is_host(), "a host's render pass is ended by the host");
         // SAFETY: recording on this device, inside this render pass (the caller's documented
         // state; a validation error, not memory unsafety, otherwise).
         unsafe { rec.device().cmd_end_render_pass(rec.raw()) };
@@ -155,6 +267,8 @@ impl std::fmt::Debug for RenderPass {
         f.debug_struct("RenderPass")
             .field("color_format", &self.color_format)
             .field("depth_format", &self.depth_format)
+            .field("subpass", &self.subpass)
+            .field("host", &self.is_host())
             .finish()
     }
 }
@@ -207,6 +321,12 @@ impl Framebuffer {
         attachments: &[&dyn Attachment],
         extent: vk::Extent2D,
     ) -> GpuResult<Self> {
+        if pass.is_host() {
+            return Err(GpuError::Unsupported(
+                "an engine framebuffer for a host's render pass (the host begins its pass on its own framebuffer)"
+                    .into(),
+            ));
+        }
         let mut held: Vec<Arc<Lifetime>> = attachments.iter().map(|a| a.lifetime().clone()).collect();
         held.push(pass.life.clone());
         if let Some(other) = held.iter().find(|l| !l.is_on(&gpu.shared)) {

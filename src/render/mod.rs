@@ -4,6 +4,7 @@
 mod camera;
 mod colormap;
 mod colormap_data;
+mod draw_target;
 mod error;
 mod image_io;
 mod phong;
@@ -17,6 +18,7 @@ pub const BACKGROUND: [f32; 4] = [0.12, 0.12, 0.14, 1.0];
 
 pub use camera::{camera_for_box, Camera};
 pub use colormap::{ramp_coordinate, ramp_texcoord, Colormap, ColormapTexture, RAMP_TEXELS};
+pub use draw_target::DrawTarget;
 pub use error::RenderError;
 pub use image_io::{
     read_png_rgba8, rgba32f_channel, rgba8_channel, write_exr_channels, write_exr_rgba, write_png_rgba8,

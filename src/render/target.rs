@@ -3,6 +3,8 @@
 
 use ash::vk;
 
+use super::draw_target::DrawTarget;
+
 use crate::gpu::{
     Attachment, Buffer, ForeignView, Framebuffer, Gpu, GpuResult, Image, ImageDesc, MemoryKind, Recorder,
     RenderPass,
@@ -24,6 +26,15 @@ impl ColorFormat {
             Self::Rgba8 => vk::Format::R8G8B8A8_UNORM,
             Self::Rgba32F => vk::Format::R32G32B32A32_SFLOAT,
         }
+    }
+
+    /// What a colour attachment of `format` holds, if galerkin's pipelines write it:
+    /// 8-bit UNORM RGBA or BGRA hold colours, 32-bit float RGBA raw values.
+    pub fn of_attachment(format: vk::Format) -> Option<Self> {
+        if !crate::gpu::is_drawable_color_format(format) {
+            return None;
+        }
+        Some(if format == vk::Format::R32G32B32A32_SFLOAT { Self::Rgba32F } else { Self::Rgba8 })
     }
 
     fn texel_bytes(self) -> u64 {
@@ -110,6 +121,13 @@ impl RenderTarget {
         };
         let framebuffer = Framebuffer::new(gpu, &pass, &[color_view, &depth], extent)?;
         Ok(Self { color, _depth: depth, framebuffer, pass, format, extent })
+    }
+
+    /// The whole target as the place a draw lands (between [`Self::record_begin`] and
+    /// [`Self::record_end`]).
+    pub fn draw_target(&self) -> DrawTarget<'_> {
+        DrawTarget::new(&self.pass, self.extent.into())
+            .unwrap_or_else(|e| unreachable!("an engine target is always drawable: {e}"))
     }
 
     /// The render pass pipelines drawing here are built against.

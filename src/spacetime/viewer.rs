@@ -116,7 +116,7 @@ impl ViewerContent for SpacetimeContent {
     fn record(&mut self, rec: &mut Recorder<'_>, target: &RenderTarget, camera: &Camera) -> Result<()> {
         if let Some(r) = self.renderer.as_mut() {
             let view = SpacetimeView { camera: *camera, ..self.view };
-            r.record_draw_into(rec, target, &view, self.u_max)?;
+            r.record_draw_into(rec, target.draw_target(), &view, self.u_max)?;
         }
         Ok(())
     }

@@ -184,7 +184,7 @@ impl ViewerContent for SpectralContent {
     ) -> Result<()> {
         if let Some(r) = self.renderer.as_mut() {
             let view = SpectralView { camera: Some(*camera), ..self.view.clone() };
-            r.record_prepass(rec, target, &view)?;
+            r.record_prepass(rec, target.draw_target(), &view)?;
         }
         Ok(())
     }
@@ -192,7 +192,7 @@ impl ViewerContent for SpectralContent {
     fn record(&mut self, rec: &mut Recorder<'_>, target: &RenderTarget, camera: &Camera) -> Result<()> {
         if let Some(r) = self.renderer.as_mut() {
             let view = SpectralView { camera: Some(*camera), ..self.view.clone() };
-            r.record_draw_into(rec, target, &view)?;
+            r.record_draw_into(rec, target.draw_target(), &view)?;
         }
         Ok(())
     }

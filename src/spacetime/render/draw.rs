@@ -8,12 +8,13 @@ use ash::vk;
 use super::*;
 
 impl SpacetimeRenderer {
-    /// Makes the fill and edge pipelines for `target`'s format on first use, and their
+    /// Makes the fill and edge pipelines for `target`'s render pass on first use, and their
     /// bindings (the window, the colour map, the materials, the slice cubics) whenever they were
     /// dropped because the window was reallocated — rebinding, not recompiling.
-    pub(super) fn pipelines_for(&mut self, target: &RenderTarget) -> Result<(), SpacetimeError> {
-        let format = target.format();
+    pub(super) fn pipelines_for(&mut self, target: &DrawTarget<'_>) -> Result<(), SpacetimeError> {
+        let format = target.key();
         if !self.pipelines.contains_key(&format) {
+            target.require_depth("a spacetime slice").map_err(dev("building the slice pipelines"))?;
             let make = |lines: bool| -> Result<GraphicsPipeline, SpacetimeError> {
                 let mut desc = GraphicsPipelineDesc::new(
                     if lines { "spacetime slice edges" } else { "spacetime slice" },
@@ -66,7 +67,7 @@ impl SpacetimeRenderer {
     /// binding).
     pub(super) fn resolve_u_max(
         &mut self,
-        target: &RenderTarget,
+        target: &DrawTarget<'_>,
         view: &SpacetimeView,
     ) -> Result<f64, SpacetimeError> {
         match view.u_max {
@@ -138,10 +139,10 @@ impl SpacetimeRenderer {
                     .map_err(dev("the U_max pass"))?,
             );
         }
-        let push = self.draw_push(data, view, 1.0);
+        let push = self.draw_push(&data.draw_target(), view, 1.0);
         let gpu = self.gpu.clone();
-        self.pipelines_for(data)?;
-        let draw = self.draw_commands(data, view, &push);
+        self.pipelines_for(&data.draw_target())?;
+        let draw = self.draw_commands(&data.draw_target(), view, &push);
         let pix = self.umax_pixels.as_ref().expect("made above");
         let (reducer, set, result) =
             (&self.umax_reducer, self.umax_set.as_ref().expect("bound above"), &self.umax_result);
@@ -168,7 +169,7 @@ impl SpacetimeRenderer {
         Ok(f64::from(f32::from_bits(bits[0])))
     }
 
-    pub(super) fn draw_push(&self, target: &RenderTarget, view: &SpacetimeView, u_max: f64) -> DrawPush {
+    pub(super) fn draw_push(&self, target: &DrawTarget<'_>, view: &SpacetimeView, u_max: f64) -> DrawPush {
         let height_scale = view.height_scale.unwrap_or_else(|| self.default_height_scale());
         let eye = view.camera.eye.map(|x| x as f32);
         DrawPush {
@@ -189,10 +190,10 @@ impl SpacetimeRenderer {
         }
     }
 
-    /// Records the render pass of the current slice into `target`.
+    /// The draws of the current slice into `target` (making its pipelines first).
     pub(super) fn record_draw(
         &mut self,
-        target: &RenderTarget,
+        target: &DrawTarget<'_>,
         view: &SpacetimeView,
         push: &DrawPush,
     ) -> Result<impl FnOnce(&mut Recorder<'_>) + '_, SpacetimeError> {
@@ -204,16 +205,16 @@ impl SpacetimeRenderer {
     /// exist ([`Self::pipelines_for`]).
     pub(super) fn draw_commands(
         &self,
-        target: &RenderTarget,
+        target: &DrawTarget<'_>,
         view: &SpacetimeView,
         push: &DrawPush,
     ) -> impl FnOnce(&mut Recorder<'_>) + '_ {
         let (tris, lines, draws) = (&self.tris, &self.lines, &self.draws);
-        let extent = target.extent();
+        let extent = target.viewport();
         let edges_on = view.edges;
         let (push, edge_push) = (*push, push.for_edges());
-        let (fill, edges) = &self.pipelines[&target.format()];
-        let (fill_set, edges_set) = &self.draw_sets[&target.format()];
+        let (fill, edges) = &self.pipelines[&target.key()];
+        let (fill_set, edges_set) = &self.draw_sets[&target.key()];
         move |rec| {
             fill.record_draw_indirect(
                 rec,
@@ -234,23 +235,30 @@ impl SpacetimeRenderer {
     /// The colour ramp's `U_max` for `view` in a colour `target`: the view's own, or the
     /// largest U over the slice's pixels (a data pass at the target's size). For callers that
     /// fix the ramp once, e.g. while animating t.
-    pub fn u_max_for(&mut self, target: &RenderTarget, view: &SpacetimeView) -> Result<f64, SpacetimeError> {
+    pub fn u_max_for<'a>(
+        &mut self,
+        target: impl Into<DrawTarget<'a>>,
+        view: &SpacetimeView,
+    ) -> Result<f64, SpacetimeError> {
         self.slice(view.time, view.subdivide)?;
-        self.resolve_u_max(target, view)
+        self.resolve_u_max(&target.into(), view)
     }
 
     /// Records the draw of the current slice (see [`Self::slice`]; slice at `view.time` first)
-    /// into `target`'s render pass, begun and ended by the caller — for applications and the
-    /// viewer that own the frame's command buffer.
+    /// inside `target`'s render pass, begun and ended by the caller, in its viewport — an
+    /// engine target ([`RenderTarget::draw_target`]) or a host's render pass
+    /// ([`crate::gpu::RenderPass::from_host`]). It reads the slice's vertex streams (vertex
+    /// input) and indirect commands, whose writes the slicing pass made visible to those
+    /// stages, and writes only the colour and depth attachments of its viewport.
     pub fn record_draw_into(
         &mut self,
         rec: &mut Recorder<'_>,
-        target: &RenderTarget,
+        target: DrawTarget<'_>,
         view: &SpacetimeView,
         u_max: f64,
     ) -> Result<(), SpacetimeError> {
-        let push = self.draw_push(target, view, u_max);
-        let draw = self.record_draw(target, view, &push)?;
+        let push = self.draw_push(&target, view, u_max);
+        let draw = self.record_draw(&target, view, &push)?;
         draw(rec);
         Ok(())
     }
@@ -259,10 +267,10 @@ impl SpacetimeRenderer {
     /// colours in an RGBA8 target, `(U, |v|, n_x, n_y)` in an RGBA32F target.
     pub fn render(&mut self, target: &RenderTarget, view: &SpacetimeView) -> Result<Pixels, SpacetimeError> {
         self.slice(view.time, view.subdivide)?;
-        let u_max = self.resolve_u_max(target, view)?;
-        let push = self.draw_push(target, view, u_max);
+        let u_max = self.resolve_u_max(&target.draw_target(), view)?;
+        let push = self.draw_push(&target.draw_target(), view, u_max);
         let gpu = self.gpu.clone();
-        let draw = self.record_draw(target, view, &push)?;
+        let draw = self.record_draw(&target.draw_target(), view, &push)?;
         target.render(&gpu, clear_colour(target), |rec| draw(rec)).map_err(dev("drawing the slice"))
     }
 
@@ -276,21 +284,22 @@ impl SpacetimeRenderer {
         view: &SpacetimeView,
         mut profiler: Option<&mut Profiler>,
     ) -> Result<(SliceStats, Option<FrameTimes>), SpacetimeError> {
-        let u_max = self.resolve_u_max(target, view)?;
+        let drawn = target.draw_target();
+        let u_max = self.resolve_u_max(&drawn, view)?;
         self.sliced = None;
         let active = self.data.active_range(view.time);
         let streamed = self.make_resident(active.clone())?;
-        let push = self.draw_push(target, view, u_max);
+        let push = self.draw_push(&drawn, view, u_max);
         let gpu = self.gpu.clone();
         loop {
             self.bind_slicer()?;
-            self.pipelines_for(target)?;
+            self.pipelines_for(&drawn)?;
             let slice_push = self.slice_push(view.time, view.subdivide, &active);
             let clear = clear_colour(target);
             {
                 let mut profiler = profiler.as_deref_mut();
                 let slicer = &*self;
-                let commands = slicer.draw_commands(target, view, &push);
+                let commands = slicer.draw_commands(&drawn, view, &push);
                 gpu.run(|rec| {
                     if let Some(p) = profiler.as_deref_mut() {
                         p.record_reset(rec);

@@ -23,11 +23,14 @@ use super::data::{DataSummary, SpacetimeData};
 use super::error::SpacetimeError;
 use super::mesh::SpacetimeMesh;
 use super::record::{gpu_material, ElementRecord};
+use crate::gpu::PassKey;
 use crate::gpu::{
     BindingKind, Buffer, ComputePipeline, ComputePipelineDesc, DescriptorSet, Gpu, GpuError,
     GraphicsPipeline, GraphicsPipelineDesc, MemoryKind, Profiler, Resource,
 };
-use crate::render::{Camera, ColorFormat, Colormap, ColormapTexture, Pixels, RenderTarget, BACKGROUND};
+use crate::render::{
+    Camera, ColorFormat, Colormap, ColormapTexture, DrawTarget, Pixels, RenderTarget, BACKGROUND,
+};
 
 mod draw;
 mod slicing;
@@ -223,10 +226,10 @@ pub struct SpacetimeRenderer {
     slicer: ComputePipeline,
     subdivider: ComputePipeline,
     colormap: ColormapTexture,
-    /// Fill and edge pipelines per target format.
-    pipelines: HashMap<ColorFormat, (GraphicsPipeline, GraphicsPipeline)>,
+    /// Fill and edge pipelines per render pass class.
+    pipelines: HashMap<PassKey, (GraphicsPipeline, GraphicsPipeline)>,
     /// Their bindings, dropped when the window is reallocated.
-    draw_sets: HashMap<ColorFormat, (DescriptorSet, DescriptorSet)>,
+    draw_sets: HashMap<PassKey, (DescriptorSet, DescriptorSet)>,
     sliced: Option<(f64, Option<f64>, SliceStats)>,
     /// The slicing passes' bindings, kept until a buffer is replaced.
     slice_sets: Option<(DescriptorSet, DescriptorSet)>,

@@ -111,12 +111,13 @@ impl SpectralRenderer {
             .collect()
     }
 
-    pub(super) fn cut_pipeline_for(&mut self, target: &RenderTarget) -> Result<()> {
-        let format = target.format();
+    pub(super) fn cut_pipeline_for(&mut self, target: &DrawTarget<'_>) -> Result<()> {
+        let format = target.key();
         let Some(c) = self.cutter.as_ref() else { return Ok(()) };
         if c.pipelines.contains_key(&format) {
             return Ok(());
         }
+        target.require_depth("cut planes").map_err(dev("building the cut pipeline"))?;
         let planes = Resource::Storage(c.planes.binding().map_err(dev("binding"))?);
         let desc = self.draw_desc(
             "spectral cut planes",
@@ -136,7 +137,7 @@ impl SpectralRenderer {
     #[allow(clippy::type_complexity)]
     pub(super) fn prepare_cuts(
         &mut self,
-        target: &RenderTarget,
+        target: &DrawTarget<'_>,
         view: &SpectralView,
     ) -> Result<(Box<dyn FnOnce(&mut Recorder<'_>) + '_>, Box<dyn FnOnce(&mut Recorder<'_>) + '_>)> {
         self.show(view.field, view.step)?;
@@ -144,8 +145,8 @@ impl SpectralRenderer {
         let planes = self.cut_planes(view)?;
         let push = self.push(target, view);
         let c = self.cutter.as_ref().expect("a hexahedral mesh has a cutter");
-        let (pipeline, set) = &c.pipelines[&target.format()];
-        let extent = target.extent();
+        let (pipeline, set) = &c.pipelines[&target.key()];
+        let extent = target.viewport();
         let cut_push = CutPush {
             elements: self.mesh.elements() as u32,
             points_per_element: self.mesh.points_per_element() as u32,

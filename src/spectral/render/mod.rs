@@ -35,9 +35,11 @@ use super::mesh::SpectralMesh;
 use super::proxy::{self, DrawVertex};
 use crate::gpu::{
     BindingKind, Buffer, ComputePipeline, ComputePipelineDesc, DescriptorSet, Gpu, GraphicsPipeline,
-    GraphicsPipelineDesc, MemoryKind, Profiler, Recorder, Resource,
+    GraphicsPipelineDesc, MemoryKind, PassKey, Profiler, Recorder, Resource,
 };
-use crate::render::{Camera, ColorFormat, Colormap, ColormapTexture, Pixels, RenderTarget, BACKGROUND};
+use crate::render::{
+    Camera, ColorFormat, Colormap, ColormapTexture, DrawTarget, Pixels, RenderTarget, BACKGROUND,
+};
 
 mod cut;
 mod tessellate;
@@ -149,7 +151,7 @@ struct Cutter {
     draw: Buffer<u32>,
     vertices: Buffer<DrawVertex>,
     _hull: Buffer<[f32; 4]>,
-    pipelines: HashMap<ColorFormat, (GraphicsPipeline, DescriptorSet)>,
+    pipelines: HashMap<PassKey, (GraphicsPipeline, DescriptorSet)>,
 }
 
 /// What a tessellation depends on: the view-projection, the focal scale, the error budget and
@@ -187,7 +189,7 @@ pub struct SpectralRenderer {
     planar: bool,
     colormap: ColormapTexture,
     shown: (usize, usize),
-    pipelines: HashMap<ColorFormat, Pipelines>,
+    pipelines: HashMap<PassKey, Pipelines>,
     ranges: HashMap<(usize, usize), (f64, f64)>,
     tessellator: Option<Tessellator>,
     cutter: Option<Cutter>,
@@ -335,7 +337,7 @@ impl SpectralRenderer {
         name: &'a str,
         vertex: &'a [u32],
         fragment: &'a [u32],
-        target: &'a RenderTarget,
+        target: &DrawTarget<'a>,
     ) -> GraphicsPipelineDesc<'a> {
         let mut desc = GraphicsPipelineDesc::new(name, vertex, fragment, target.render_pass());
         desc.bindings = &DRAW_BINDINGS;
@@ -346,10 +348,11 @@ impl SpectralRenderer {
         desc
     }
 
-    fn pipelines_for(&mut self, format: ColorFormat, target: &RenderTarget) -> Result<()> {
-        if self.pipelines.contains_key(&format) {
+    fn pipelines_for(&mut self, target: &DrawTarget<'_>) -> Result<()> {
+        if self.pipelines.contains_key(&target.key()) {
             return Ok(());
         }
+        target.require_depth("spectral elements").map_err(dev("building the spectral pipelines"))?;
         let make = |lines: bool| {
             let name = if lines { "spectral edges" } else { "spectral elements" };
             let mut desc = self.draw_desc(
@@ -367,7 +370,7 @@ impl SpectralRenderer {
         let resources = self.resources()?;
         let bind = |p: &GraphicsPipeline| p.bind(&self.gpu, &resources).map_err(dev("binding"));
         let (fill_set, lines_set) = (bind(&fill)?, bind(&lines)?);
-        self.pipelines.insert(format, Pipelines { fill, lines, fill_set, lines_set });
+        self.pipelines.insert(target.key(), Pipelines { fill, lines, fill_set, lines_set });
         Ok(())
     }
 
@@ -382,7 +385,7 @@ impl SpectralRenderer {
         ])
     }
 
-    fn push(&mut self, target: &RenderTarget, view: &SpectralView) -> SpectralPush {
+    fn push(&mut self, target: &DrawTarget<'_>, view: &SpectralView) -> SpectralPush {
         let e = target.extent();
         let (lo, hi) = self.range(view);
         let height = self.height_scale(view);
@@ -409,7 +412,14 @@ impl SpectralRenderer {
             view_proj: view_proj.to_cols_array(),
             pixel_to_world,
             range: [lo as f32, hi as f32, self.colormap.texels() as f32, view.isolines as f32],
-            misc: [0.0, INSIDE_TOLERANCE as f32, view.max_error_px.max(1e-3) as f32, MAX_TESSELLATION as f32],
+            misc: if flat {
+                // The fragment stage maps framebuffer pixels to world points relative to the
+                // viewport's corner (exact: integers and pixel centres in f32).
+                let v = target.viewport();
+                [0.0, INSIDE_TOLERANCE as f32, v.x as f32, v.y as f32]
+            } else {
+                [0.0, INSIDE_TOLERANCE as f32, view.max_error_px.max(1e-3) as f32, MAX_TESSELLATION as f32]
+            },
             flags: [
                 u32::from(target.format() == ColorFormat::Rgba32F),
                 u32::from(view.log),
@@ -419,29 +429,36 @@ impl SpectralRenderer {
         }
     }
 
-    /// Records the draws of `view` into `target`'s render pass, begun and ended by the caller
-    /// (for applications and the viewer that own the frame's command buffer).
+    /// Records the draws of `view` inside `target`'s render pass, begun and ended by the
+    /// caller, in its viewport — an engine target ([`RenderTarget::draw_target`]) or a host's
+    /// render pass ([`crate::gpu::RenderPass::from_host`]). The pass expects
+    /// [`Self::record_prepass`] of the same view and target recorded before the render pass
+    /// began; it reads the mesh's buffers (vertex input, indirect, fragment storage reads) and
+    /// writes only the colour and depth attachments of its viewport.
     pub fn record_draw_into(
         &mut self,
         rec: &mut Recorder<'_>,
-        target: &RenderTarget,
+        target: DrawTarget<'_>,
         view: &SpectralView,
     ) -> Result<()> {
-        let draw = self.prepare(target, view)?.1;
+        let draw = self.prepare(&target, view)?.1;
         draw(rec);
         Ok(())
     }
 
-    /// Records the passes a frame needs before its render pass (the surface tessellation; for
-    /// planar meshes and per-vertex mode nothing) — for applications that record the frame
-    /// themselves, before [`Self::record_draw_into`].
+    /// Records the passes a frame needs before its render pass (the surface tessellation or
+    /// the cut planes' sections; for planar meshes and per-vertex mode nothing) — for
+    /// applications that record the frame themselves, outside any render pass, before
+    /// [`Self::record_draw_into`]. It orders itself after the previous frame's draws (a
+    /// barrier from vertex input and indirect reads) and makes its writes visible to the
+    /// draw's vertex input and indirect reads.
     pub fn record_prepass(
         &mut self,
         rec: &mut Recorder<'_>,
-        target: &RenderTarget,
+        target: DrawTarget<'_>,
         view: &SpectralView,
     ) -> Result<()> {
-        let pre = self.prepare(target, view)?.0;
+        let pre = self.prepare(&target, view)?.0;
         pre(rec);
         Ok(())
     }
@@ -449,14 +466,14 @@ impl SpectralRenderer {
     #[allow(clippy::type_complexity)]
     fn prepare(
         &mut self,
-        target: &RenderTarget,
+        target: &DrawTarget<'_>,
         view: &SpectralView,
     ) -> Result<(Box<dyn FnOnce(&mut Recorder<'_>) + '_>, Box<dyn FnOnce(&mut Recorder<'_>) + '_>)> {
         if self.cutter.is_some() {
             return self.prepare_cuts(target, view);
         }
         self.show(view.field, view.step)?;
-        self.pipelines_for(target.format(), target)?;
+        self.pipelines_for(target)?;
         self.patches_for_view(view)?;
         let push = self.push(target, view);
         let lifted = !self.planar || push.flags[3] == 1;
@@ -467,8 +484,8 @@ impl SpectralRenderer {
         if surface && !fresh {
             self.tessellator_for(&push)?;
         }
-        let p = &self.pipelines[&target.format()];
-        let extent = target.extent();
+        let p = &self.pipelines[&target.key()];
+        let extent = target.viewport();
         let (edges, edge_count) = (&self.edges, self.counts[2]);
         let (overdraw, mesh_lines) = (view.overdraw, view.edges);
         let offsets = if lifted { SURFACE_OFFSETS } else { PLANAR_OFFSETS };
@@ -557,7 +574,7 @@ impl SpectralRenderer {
     ) -> Result<f64> {
         let gpu = self.gpu.clone();
         let clear = if target.format() == ColorFormat::Rgba32F { [f32::NAN; 4] } else { BACKGROUND };
-        let (pre, draw) = self.prepare(target, view)?;
+        let (pre, draw) = self.prepare(&target.draw_target(), view)?;
         gpu.run(|rec| {
             profiler.record_reset(rec);
             profiler.scope(rec, "draw", |rec| {
@@ -590,7 +607,7 @@ impl SpectralRenderer {
     pub fn render(&mut self, target: &RenderTarget, view: &SpectralView) -> Result<Pixels> {
         let gpu = self.gpu.clone();
         let clear = if target.format() == ColorFormat::Rgba32F { [f32::NAN; 4] } else { BACKGROUND };
-        let (pre, draw) = self.prepare(target, view)?;
+        let (pre, draw) = self.prepare(&target.draw_target(), view)?;
         gpu.run(|rec| pre(rec)).map_err(dev("tessellating the surface"))?;
         target.render(&gpu, clear, |rec| draw(rec)).map_err(dev("drawing the spectral elements"))
     }

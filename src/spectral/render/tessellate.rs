@@ -174,7 +174,7 @@ impl SpectralRenderer {
     /// The vertices the CPU twin of the tessellation levels ([`proxy::tessellation_level`])
     /// gives `view` in `target`: 6 L² per element.
     pub fn expected_tessellation(&mut self, target: &RenderTarget, view: &SpectralView) -> u64 {
-        let push = self.push(target, view);
+        let push = self.push(&target.draw_target(), view);
         self.cpu_levels(&push).map(|l| 6 * u64::from(l) * u64::from(l)).sum()
     }
 }
