@@ -8,7 +8,9 @@
 //!   that every resource holds, so the device outlives its resources.
 //! - Passes record through a [`Recorder`] they are handed — over the engine's command buffer
 //!   ([`Gpu::run`], which submits and waits on its own fence, never `vkDeviceWaitIdle`) or a
-//!   host's ([`Recorder::from_host`]) — and never submit.
+//!   host's ([`Recorder::from_host`]) — and never submit. Jobs that need several submissions
+//!   (host work between device steps) take a [`Submitter`]: the engine's queue
+//!   ([`Gpu::submitter`]) or a host's.
 //! - Every object frees itself when it and every recording and descriptor set that use it are
 //!   gone ([`Lifetime`]): a recording keeps what it recorded until its work is known to be
 //!   finished, so no safe code can destroy an object the device may still use.
@@ -34,6 +36,7 @@ pub mod reflect;
 mod renderpass;
 pub mod shaders;
 mod staging;
+mod submitter;
 #[cfg(feature = "viewer")]
 mod swapchain;
 
@@ -58,5 +61,6 @@ pub use recorder::{Recorder, Recording};
 pub use renderpass::{
     is_drawable_color_format, Attachment, ForeignView, Framebuffer, HostRenderPass, PassKey, RenderPass,
 };
+pub use submitter::{EngineSubmitter, Readback, Submitter};
 #[cfg(feature = "viewer")]
 pub use swapchain::{surface_extensions, Surface, Swapchain};

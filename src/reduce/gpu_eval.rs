@@ -20,7 +20,8 @@ use ash::vk;
 use super::error::ReduceError;
 use super::eval::{evaluate, Operands};
 use super::reduced::ReducedModel;
-use crate::gpu::{Buffer, Gpu, GpuError, MemoryKind};
+
+use crate::gpu::{Buffer, Gpu, GpuError, MemoryKind, Submitter};
 use crate::tensor::gpu::{BatchedSolve, Gemm, GemmShape};
 use crate::tensor::{Tensor, TensorError};
 
@@ -94,11 +95,24 @@ impl GpuReducedModel {
     /// GEMM per contraction for the whole batch) and solves (one batched LU) on the device,
     /// roots and sums on the CPU.
     pub fn evaluate_batch(&self, batch: &[BTreeMap<&str, &[f64]>]) -> Result<Vec<Tensor>, ReduceError> {
+        self.evaluate_batch_with(&mut self.gpu.submitter(), batch)
+    }
+
+    /// [`Self::evaluate_batch`] with the device steps submitted through `submitter` (the
+    /// engine's queue or a host's): per contraction, the Khatri–Rao rows uploaded, the GEMMs
+    /// and the readback of their results; per set of inverses, the batched solve. The host
+    /// steps between them (roots, sums, the walk of the composition) run on this thread.
+    pub fn evaluate_batch_with(
+        &self,
+        submitter: &mut dyn Submitter,
+        batch: &[BTreeMap<&str, &[f64]>],
+    ) -> Result<Vec<Tensor>, ReduceError> {
         self.model.check_inputs(batch)?;
         if batch.is_empty() {
             return Ok(Vec::new());
         }
-        evaluate(&self.model.output, &GpuOperands { owner: self, inputs: batch })
+        let operands = GpuOperands { owner: self, inputs: batch, submitter: Mutex::new(submitter) };
+        evaluate(&self.model.output, &operands)
     }
 
     fn floats_per_binding(&self) -> usize {
@@ -107,6 +121,7 @@ impl GpuReducedModel {
 
     fn contraction(
         &self,
+        submitter: &mut dyn Submitter,
         name: &str,
         axes: &[usize],
     ) -> Result<std::sync::Arc<DeviceContraction>, ReduceError> {
@@ -127,13 +142,13 @@ impl GpuReducedModel {
             let data: Vec<f32> = (0..k)
                 .flat_map(|i| p.data()[i * r + start..i * r + start + cols].iter().map(|&v| v as f32))
                 .collect();
-            let buf = Buffer::from_slice(
-                &self.gpu,
-                &format!("{name} for contraction {axes:?}"),
-                &data,
-                vk::BufferUsageFlags::STORAGE_BUFFER,
-            )
-            .map_err(gpu_err("uploading a reduced tensor"))?;
+            let buf = submitter
+                .buffer_from_slice(
+                    &format!("{name} for contraction {axes:?}"),
+                    &data,
+                    vk::BufferUsageFlags::STORAGE_BUFFER,
+                )
+                .map_err(gpu_err("uploading a reduced tensor"))?;
             blocks.push((start, cols, buf));
         }
         let c = std::sync::Arc::new(DeviceContraction {
@@ -146,11 +161,17 @@ impl GpuReducedModel {
         Ok(c)
     }
 
-    /// `Q̂ ⊗ …` for every input set: one GEMM per (column block, batch chunk), one submission.
-    fn contract_batch(&self, name: &str, args: &[Vec<(usize, &[f64])>]) -> Result<Vec<Tensor>, ReduceError> {
+    /// `Q̂ ⊗ …` for every input set: one GEMM per (column block, batch chunk), one submission
+    /// per batch chunk.
+    fn contract_batch(
+        &self,
+        submitter: &mut dyn Submitter,
+        name: &str,
+        args: &[Vec<(usize, &[f64])>],
+    ) -> Result<Vec<Tensor>, ReduceError> {
         let mut axes: Vec<usize> = args[0].iter().map(|a| a.0).collect();
         axes.sort_unstable();
-        let dc = self.contraction(name, &axes)?;
+        let dc = self.contraction(submitter, name, &axes)?;
         let batch = args.len();
         // Khatri–Rao rows, x_{a0} ⊗ x_{a1} ⊗ … in the permuted axis order.
         let mut kr = Vec::with_capacity(batch * dc.k);
@@ -173,13 +194,13 @@ impl GpuReducedModel {
         let mut out = vec![0.0f64; batch * r_total];
         for b0 in (0..batch).step_by(rows_per_chunk) {
             let rows = rows_per_chunk.min(batch - b0);
-            let krb = Buffer::from_slice(
-                &self.gpu,
-                "Khatri–Rao rows",
-                &kr[b0 * dc.k..(b0 + rows) * dc.k],
-                vk::BufferUsageFlags::STORAGE_BUFFER,
-            )
-            .map_err(gpu_err("uploading inputs"))?;
+            let krb = submitter
+                .buffer_from_slice(
+                    "Khatri–Rao rows",
+                    &kr[b0 * dc.k..(b0 + rows) * dc.k],
+                    vk::BufferUsageFlags::STORAGE_BUFFER,
+                )
+                .map_err(gpu_err("uploading inputs"))?;
             let mut results = Vec::new();
             let mut bindings = Vec::new();
             for (start, cols, t) in &dc.blocks {
@@ -205,11 +226,17 @@ impl GpuReducedModel {
                 bindings.push(binding);
                 results.push((*start, *cols, c));
             }
-            self.gpu
-                .run(|rec| bindings.iter().for_each(|b| self.gemm.record(rec, b, false)))
+            submitter
+                .submit(&mut |rec| bindings.iter().for_each(|b| self.gemm.record(rec, b, false)))
                 .map_err(gpu_err("contracting on the device"))?;
-            for (start, cols, c) in &results {
-                let vals = c.download(&self.gpu).map_err(gpu_err("reading results"))?;
+            let readbacks = results
+                .iter()
+                .map(|(_, _, c)| submitter.record_readback(c, 0, c.len()))
+                .collect::<Result<Vec<_>, _>>()
+                .map_err(gpu_err("reading results"))?;
+            submitter.complete().map_err(gpu_err("contracting on the device"))?;
+            for ((start, cols, _), readback) in results.iter().zip(&readbacks) {
+                let vals = readback.read().map_err(gpu_err("reading results"))?;
                 for i in 0..rows {
                     for j in 0..*cols {
                         out[(b0 + i) * r_total + start + j] = f64::from(vals[i * cols + j]);
@@ -228,6 +255,16 @@ impl GpuReducedModel {
     /// `y = B_y ŷ` on the device for a batch of vector outputs: `Yᵀ = B_y · Ŷᵀ`, the basis in
     /// row blocks of one binding each.
     pub fn lift_batch(&self, yhat: &[Vec<f64>]) -> Result<Vec<Vec<f64>>, ReduceError> {
+        self.lift_batch_with(&mut self.gpu.submitter(), yhat)
+    }
+
+    /// [`Self::lift_batch`] through `submitter` (the engine's queue or a host's): per row
+    /// block of the basis, its upload, one GEMM and the readback of its rows.
+    pub fn lift_batch_with(
+        &self,
+        submitter: &mut dyn Submitter,
+        yhat: &[Vec<f64>],
+    ) -> Result<Vec<Vec<f64>>, ReduceError> {
         let [basis] = self.model.output_axes.as_slice() else {
             return Err(ReduceError::BadContraction {
                 what: self.model.output.to_string(),
@@ -250,16 +287,17 @@ impl GpuReducedModel {
         let per = self.floats_per_binding();
         let rows_per_block = (per / m.max(1)).min(per / batch.max(1)).max(1);
         let yt: Vec<f32> = (0..m).flat_map(|j| yhat.iter().map(move |y| y[j] as f32)).collect();
-        let ytb = Buffer::from_slice(&self.gpu, "Ŷᵀ", &yt, vk::BufferUsageFlags::STORAGE_BUFFER)
+        let ytb = submitter
+            .buffer_from_slice("Ŷᵀ", &yt, vk::BufferUsageFlags::STORAGE_BUFFER)
             .map_err(gpu_err("uploading ŷ"))?;
         let mut out = vec![vec![0.0f64; n]; batch];
         for r0 in (0..n).step_by(rows_per_block) {
             let rows = rows_per_block.min(n - r0);
             let block: Vec<f32> =
                 b.matrix().data()[r0 * m..(r0 + rows) * m].iter().map(|&v| v as f32).collect();
-            let bb =
-                Buffer::from_slice(&self.gpu, "basis rows", &block, vk::BufferUsageFlags::STORAGE_BUFFER)
-                    .map_err(gpu_err("uploading the basis"))?;
+            let bb = submitter
+                .buffer_from_slice("basis rows", &block, vk::BufferUsageFlags::STORAGE_BUFFER)
+                .map_err(gpu_err("uploading the basis"))?;
             let c = Buffer::<f32>::new(
                 &self.gpu,
                 "lifted rows",
@@ -279,8 +317,10 @@ impl GpuReducedModel {
                     GemmShape { m: rows as u32, n: batch as u32, k: m as u32 },
                 )
                 .map_err(gpu_err("binding"))?;
-            self.gpu.run(|rec| self.gemm.record(rec, &binding, false)).map_err(gpu_err("lifting"))?;
-            let vals = c.download(&self.gpu).map_err(gpu_err("reading results"))?;
+            submitter
+                .submit(&mut |rec| self.gemm.record(rec, &binding, false))
+                .map_err(gpu_err("lifting"))?;
+            let vals = submitter.download(&c).map_err(gpu_err("reading results"))?;
             for i in 0..rows {
                 for (k, y) in out.iter_mut().enumerate() {
                     y[r0 + i] = f64::from(vals[i * batch + k]);
@@ -291,12 +331,13 @@ impl GpuReducedModel {
     }
 }
 
-struct GpuOperands<'a> {
+struct GpuOperands<'a, 's> {
     owner: &'a GpuReducedModel,
     inputs: &'a [BTreeMap<&'a str, &'a [f64]>],
+    submitter: Mutex<&'s mut dyn Submitter>,
 }
 
-impl Operands for GpuOperands<'_> {
+impl Operands for GpuOperands<'_, '_> {
     fn tensor_axes(&self, name: &str) -> Option<&[String]> {
         self.owner.model.tensors.get(name).map(|t| t.axes.as_slice())
     }
@@ -314,8 +355,9 @@ impl Operands for GpuOperands<'_> {
         name: &str,
         args: &[Vec<(usize, &[f64])>],
     ) -> Result<Vec<Tensor>, TensorError> {
+        let mut submitter = self.submitter.lock().unwrap_or_else(|p| p.into_inner());
         self.owner
-            .contract_batch(name, args)
+            .contract_batch(&mut **submitter, name, args)
             .map_err(|e| TensorError::NotFinite { what: name.into(), detail: e.to_string() })
     }
 
@@ -326,7 +368,8 @@ impl Operands for GpuOperands<'_> {
         rhs: &[&[f64]],
     ) -> Result<Vec<Result<Vec<f64>, TensorError>>, ReduceError> {
         let refs: Vec<&Tensor> = matrices.iter().collect();
-        self.owner.solver.solve(&self.owner.gpu, what, &refs, rhs).map_err(gpu_err(what))
+        let mut submitter = self.submitter.lock().unwrap_or_else(|p| p.into_inner());
+        self.owner.solver.solve_with(&mut **submitter, what, &refs, rhs).map_err(gpu_err(what))
     }
 
     fn batch(&self) -> usize {

@@ -33,11 +33,11 @@ pub(crate) use file::erased;
 pub use file::{ModelExtras, FORMAT, VERSION};
 pub use gpu_eval::{Backend, GpuReducedModel};
 pub use model::{FullTensor, Model, ReduceOptions, StreamedTensor, TensorDecl};
-pub use pca::{pca, pca_with, Pca, SnapshotFile, SnapshotFn, SnapshotSource, Truncation};
+pub use pca::{pca, pca_on, pca_with, Pca, SnapshotFile, SnapshotFn, SnapshotSource, Truncation};
 pub use premultiply::{
-    premultiply_dense, premultiply_sparse, premultiply_sparse_gpu, premultiply_sparse_with,
-    premultiply_streamed, premultiply_streamed_together, AxisRows, BasisRows, PremultiplyOptions,
-    PremultiplyPlan, TensorChunks, Unit,
+    premultiply_dense, premultiply_sparse, premultiply_sparse_gpu, premultiply_sparse_on,
+    premultiply_sparse_with, premultiply_streamed, premultiply_streamed_together, AxisRows, BasisRows,
+    PremultiplyOptions, PremultiplyPlan, TensorChunks, Unit,
 };
 pub use reduced::ReducedModel;
 pub use snapshot_basis::{basis_grams, snapshot_grams, SnapshotBasis, SnapshotRows, Spectrum};

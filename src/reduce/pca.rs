@@ -20,7 +20,7 @@ use ash::vk;
 use super::basis::Basis;
 use super::error::ReduceError;
 use super::gpu_eval::Backend;
-use crate::gpu::{Buffer, Gpu, MemoryKind};
+use crate::gpu::{Buffer, Gpu, MemoryKind, Submitter};
 use crate::tensor::gpu::{Gemm, GemmShape};
 use crate::tensor::{symmetric_eigen, Tensor};
 
@@ -174,6 +174,30 @@ pub fn pca_with(
     backend: Backend,
     gpu: Option<&Gpu>,
 ) -> Result<Pca, ReduceError> {
+    match (backend.uses_gpu(gpu), gpu) {
+        (true, Some(g)) => pca_inner(name, source, truncation, Some(&mut g.submitter())),
+        _ => pca_inner(name, source, truncation, None),
+    }
+}
+
+/// [`pca`] with the Gram matrix accumulated on the device through `submitter` (the engine's
+/// queue or a host's): per block of rows, its upload and one accumulating GEMM; one readback
+/// at the end.
+pub fn pca_on(
+    name: &str,
+    source: &mut impl SnapshotSource,
+    truncation: Truncation,
+    submitter: &mut dyn Submitter,
+) -> Result<Pca, ReduceError> {
+    pca_inner(name, source, truncation, Some(submitter))
+}
+
+fn pca_inner(
+    name: &str,
+    source: &mut impl SnapshotSource,
+    truncation: Truncation,
+    submitter: Option<&mut dyn Submitter>,
+) -> Result<Pca, ReduceError> {
     let (n, k) = (source.dim(), source.count());
     let bad = |detail: String| ReduceError::BadBasis { basis: name.to_string(), detail };
     if n == 0 || k == 0 {
@@ -184,16 +208,16 @@ pub fn pca_with(
     }
     // Pass 1: G = Σ_blocks Sᵀ_b S_b.
     let mut gram = vec![0.0; k * k];
-    let device = match (backend.uses_gpu(gpu), gpu) {
-        (true, Some(g)) => Some(DeviceGram::new(g, k)?),
-        _ => None,
+    let mut device = match submitter {
+        Some(submitter) => Some(DeviceGram::new(submitter, k)?),
+        None => None,
     };
     for start in (0..n).step_by(BLOCK_ROWS) {
         let block = source.rows(start..(start + BLOCK_ROWS).min(n))?;
         if let Some(i) = block.data().iter().position(|v| !v.is_finite()) {
             return Err(bad(format!("snapshot {} row {} is not finite", i % k, start + i / k)));
         }
-        match &device {
+        match &mut device {
             Some(d) => d.accumulate(&block, start == 0)?,
             None => {
                 let s = MatRef::from_row_major_slice(block.data(), block.shape()[0], k);
@@ -202,7 +226,7 @@ pub fn pca_with(
             }
         }
     }
-    if let Some(d) = &device {
+    if let Some(d) = &mut device {
         gram = d.read()?;
     }
     let modes = modes_from_gram(name, gram, k, truncation, 0.0)?;
@@ -300,20 +324,21 @@ pub(crate) fn modes_from_gram(
 }
 
 /// The Gram matrix accumulated on the device: `G (k × k) += S_bᵀ · S_b` per block of rows.
-struct DeviceGram<'a> {
-    gpu: &'a Gpu,
+struct DeviceGram<'s> {
+    submitter: &'s mut dyn Submitter,
     gemm: Gemm,
     g: Buffer<f32>,
     k: usize,
 }
 
-impl<'a> DeviceGram<'a> {
-    fn new(gpu: &'a Gpu, k: usize) -> Result<Self, ReduceError> {
-        let err = |e: crate::gpu::GpuError| ReduceError::Device {
-            context: "PCA on the device".into(),
-            detail: e.to_string(),
-        };
-        let gemm = Gemm::new(gpu).map_err(err)?;
+fn device_err(e: crate::gpu::GpuError) -> ReduceError {
+    ReduceError::Device { context: "PCA on the device".into(), detail: e.to_string() }
+}
+
+impl<'s> DeviceGram<'s> {
+    fn new(submitter: &'s mut dyn Submitter, k: usize) -> Result<Self, ReduceError> {
+        let gpu = submitter.gpu();
+        let gemm = Gemm::new(gpu).map_err(device_err)?;
         let g = Buffer::new(
             gpu,
             "Gram matrix",
@@ -321,33 +346,30 @@ impl<'a> DeviceGram<'a> {
             vk::BufferUsageFlags::STORAGE_BUFFER,
             MemoryKind::GpuOnly,
         )
-        .map_err(err)?;
-        Ok(Self { gpu, gemm, g, k })
+        .map_err(device_err)?;
+        Ok(Self { submitter, gemm, g, k })
     }
 
-    fn accumulate(&self, block: &Tensor, first: bool) -> Result<(), ReduceError> {
-        let err = |e: crate::gpu::GpuError| ReduceError::Device {
-            context: "PCA on the device".into(),
-            detail: e.to_string(),
-        };
+    fn accumulate(&mut self, block: &Tensor, first: bool) -> Result<(), ReduceError> {
         let (rows, k) = (block.shape()[0], self.k);
         let st: Vec<f32> =
             (0..k).flat_map(|j| (0..rows).map(move |i| block.data()[i * k + j] as f32)).collect();
         let s: Vec<f32> = block.data().iter().map(|&v| v as f32).collect();
         let usage = vk::BufferUsageFlags::STORAGE_BUFFER;
-        let a = Buffer::from_slice(self.gpu, "snapshot block transposed", &st, usage).map_err(err)?;
-        let b = Buffer::from_slice(self.gpu, "snapshot block", &s, usage).map_err(err)?;
+        let sub = &mut *self.submitter;
+        let a = sub.buffer_from_slice("snapshot block transposed", &st, usage).map_err(device_err)?;
+        let b = sub.buffer_from_slice("snapshot block", &s, usage).map_err(device_err)?;
         let whole = |x| Buffer::<f32>::whole(x);
         let shape = GemmShape { m: k as u32, n: k as u32, k: rows as u32 };
-        let binding = self.gemm.bind(self.gpu, whole(&a), whole(&b), whole(&self.g), shape).map_err(err)?;
-        self.gpu.run(|rec| self.gemm.record(rec, &binding, !first)).map_err(err)
+        let gpu = sub.gpu().clone();
+        let binding =
+            self.gemm.bind(&gpu, whole(&a), whole(&b), whole(&self.g), shape).map_err(device_err)?;
+        let gemm = &self.gemm;
+        sub.submit(&mut |rec| gemm.record(rec, &binding, !first)).map_err(device_err)
     }
 
-    fn read(&self) -> Result<Vec<f64>, ReduceError> {
-        let v = self.g.download(self.gpu).map_err(|e| ReduceError::Device {
-            context: "PCA on the device".into(),
-            detail: e.to_string(),
-        })?;
+    fn read(&mut self) -> Result<Vec<f64>, ReduceError> {
+        let v = self.submitter.download(&self.g).map_err(device_err)?;
         Ok(v.into_iter().map(f64::from).collect())
     }
 }

@@ -199,3 +199,81 @@ impl Drop for HostPass<'_> {
         }
     }
 }
+
+/// A host's own [`galerkin::gpu::Submitter`]: its command pool, a fresh primary command buffer
+/// and fence per submission, submitted to the queue it owns (here the device's one queue,
+/// which the engine does not use meanwhile); it keeps each submission's `Recording` until its
+/// fence was waited for, as the trait requires. Counts its submissions.
+pub struct HostSubmitter<'g> {
+    gpu: &'g Gpu,
+    pool: vk::CommandPool,
+    pending: Vec<(vk::CommandBuffer, vk::Fence, galerkin::gpu::Recording)>,
+    pub submissions: usize,
+}
+
+impl<'g> HostSubmitter<'g> {
+    pub fn new(gpu: &'g Gpu) -> Self {
+        let info = vk::CommandPoolCreateInfo::default().queue_family_index(gpu.queue_family());
+        // SAFETY: plain object creation on a live device.
+        let pool = unsafe { gpu.device().create_command_pool(&info, None) }.unwrap();
+        Self { gpu, pool, pending: Vec::new(), submissions: 0 }
+    }
+}
+
+impl galerkin::gpu::Submitter for HostSubmitter<'_> {
+    fn gpu(&self) -> &Gpu {
+        self.gpu
+    }
+
+    fn record_and_submit(
+        &mut self,
+        record: &mut dyn FnMut(&mut galerkin::gpu::Recorder<'_>),
+    ) -> galerkin::gpu::GpuResult<()> {
+        let d = self.gpu.device();
+        // SAFETY: the host's own objects on a live device; the command buffer is recorded on
+        // this thread only and its Recording is kept until its fence has been waited for.
+        unsafe {
+            let info = vk::CommandBufferAllocateInfo::default()
+                .command_pool(self.pool)
+                .level(vk::CommandBufferLevel::PRIMARY)
+                .command_buffer_count(1);
+            let cmd = d.allocate_command_buffers(&info).unwrap()[0];
+            d.begin_command_buffer(cmd, &vk::CommandBufferBeginInfo::default()).unwrap();
+            let mut rec = galerkin::gpu::Recorder::from_host(self.gpu, cmd);
+            record(&mut rec);
+            let recording = rec.finish();
+            d.end_command_buffer(cmd).unwrap();
+            let fence = d.create_fence(&vk::FenceCreateInfo::default(), None).unwrap();
+            let queue = d.get_device_queue(self.gpu.queue_family(), 0);
+            let cmds = [cmd];
+            d.queue_submit(queue, &[vk::SubmitInfo::default().command_buffers(&cmds)], fence).unwrap();
+            self.pending.push((cmd, fence, recording));
+        }
+        self.submissions += 1;
+        Ok(())
+    }
+
+    fn complete(&mut self) -> galerkin::gpu::GpuResult<()> {
+        let d = self.gpu.device();
+        for (cmd, fence, recording) in self.pending.drain(..) {
+            // SAFETY: the fence and command buffer are the host's; the buffer is freed only
+            // after its fence signalled, and then its Recording is released.
+            unsafe {
+                d.wait_for_fences(&[fence], true, u64::MAX).unwrap();
+                d.destroy_fence(fence, None);
+                d.free_command_buffers(self.pool, &[cmd]);
+            }
+            drop(recording);
+        }
+        Ok(())
+    }
+}
+
+impl Drop for HostSubmitter<'_> {
+    fn drop(&mut self) {
+        use galerkin::gpu::Submitter;
+        let _ = self.complete();
+        // SAFETY: every command buffer of the pool has completed and been freed.
+        unsafe { self.gpu.device().destroy_command_pool(self.pool, None) };
+    }
+}

@@ -22,7 +22,7 @@ use super::plan::{chunks_of_groups, sorted_entries, unit_and_key_positions, unit
 use super::{unit_row, unit_size, Packing, PremultiplyOptions, PremultiplyPlan, Setup, Unit};
 use crate::gpu::{
     BindingKind, Buffer, BufferBinding, ComputePipeline, ComputePipelineDesc, Gpu, GpuError, MemoryKind,
-    Recorder, Resource,
+    Recorder, Resource, Submitter,
 };
 use crate::reduce::ReduceError;
 use crate::tensor::gpu::GEMM_TILE;
@@ -91,6 +91,8 @@ struct DevicePartial {
 
 struct Ctx<'a> {
     gpu: &'a Gpu,
+    /// Where the steps go: each batch is one submission (the engine's queue or a host's).
+    sub: std::cell::RefCell<&'a mut dyn Submitter>,
     k: &'a Kernels,
     bases: &'a [&'a Tensor],
     packings: &'a HashMap<Vec<usize>, Packing>,
@@ -108,8 +110,13 @@ impl Ctx<'_> {
             MemoryKind::GpuOnly,
         )
         .map_err(dev(name))?;
-        b.upload(self.gpu, 0, data).map_err(dev(name))?;
+        self.sub.borrow_mut().upload(&b, 0, data).map_err(dev(name))?;
         Ok(b)
+    }
+
+    /// Submits one step (see [`Submitter`]).
+    fn submit(&self, record: &mut dyn FnMut(&mut Recorder<'_>)) -> Result<(), GpuError> {
+        self.sub.borrow_mut().submit(record)
     }
 
     fn scratch(&self, name: &str, len: usize) -> Result<Buffer<f32>, ReduceError> {
@@ -167,8 +174,7 @@ impl Ctx<'_> {
             .gather
             .bind(self.gpu, &[whole(src), whole(&pb), whole(&sb), whole(&dst)].map(Resource::Storage))
             .map_err(dev("binding the gather"))?;
-        self.gpu
-            .run(|rec| self.record_gather(rec, &set, perm.len(), block))
+        self.submit(&mut |rec| self.record_gather(rec, &set, perm.len(), block))
             .map_err(dev("gathering rows"))?;
         Ok(dst)
     }
@@ -293,16 +299,15 @@ impl Ctx<'_> {
             let n = (g1 - g0) * size * block;
             let wg = self.gpu.caps().groups_1d(n as u64, self.k.stage.local_size()[0]);
             let dst_first = (g0 * size * block) as u64;
-            self.gpu
-                .run(|rec| {
-                    self.k.stage.record_dispatch(rec, &set, bytemuck::bytes_of(&push), [wg, 1, 1]);
-                    rec.memory_barrier(
-                        (vk::PipelineStageFlags::COMPUTE_SHADER, vk::AccessFlags::SHADER_WRITE),
-                        (vk::PipelineStageFlags::TRANSFER, vk::AccessFlags::TRANSFER_READ),
-                    );
-                    rec.copy_buffer(&out_b, 0, &out, dst_first, n as u64);
-                })
-                .map_err(dev("running a stage"))?;
+            self.submit(&mut |rec| {
+                self.k.stage.record_dispatch(rec, &set, bytemuck::bytes_of(&push), [wg, 1, 1]);
+                rec.memory_barrier(
+                    (vk::PipelineStageFlags::COMPUTE_SHADER, vk::AccessFlags::SHADER_WRITE),
+                    (vk::PipelineStageFlags::TRANSFER, vk::AccessFlags::TRANSFER_READ),
+                );
+                rec.copy_buffer(&out_b, 0, &out, dst_first, n as u64);
+            })
+            .map_err(dev("running a stage"))?;
             g0 = g1;
         }
         let coords: Vec<u32> = group_rows[..groups].iter().flat_map(|&r| key(idx[row_starts[r]])).collect();
@@ -545,18 +550,17 @@ impl Ctx<'_> {
             };
             let groups =
                 [((last_size * block) as u32).div_ceil(GEMM_TILE), (size as u32).div_ceil(GEMM_TILE), 1];
-            self.gpu
-                .run(|rec| {
-                    if let Some(gather) = &gathered {
-                        self.record_gather(rec, gather, n_rows, block);
-                        rec.memory_barrier(
-                            (vk::PipelineStageFlags::COMPUTE_SHADER, vk::AccessFlags::SHADER_WRITE),
-                            (vk::PipelineStageFlags::COMPUTE_SHADER, vk::AccessFlags::SHADER_READ),
-                        );
-                    }
-                    self.k.fused.record_dispatch(rec, &set, bytemuck::bytes_of(&push), groups);
-                })
-                .map_err(dev("the final GEMM"))?;
+            self.submit(&mut |rec| {
+                if let Some(gather) = &gathered {
+                    self.record_gather(rec, gather, n_rows, block);
+                    rec.memory_barrier(
+                        (vk::PipelineStageFlags::COMPUTE_SHADER, vk::AccessFlags::SHADER_WRITE),
+                        (vk::PipelineStageFlags::COMPUTE_SHADER, vk::AccessFlags::SHADER_READ),
+                    );
+                }
+                self.k.fused.record_dispatch(rec, &set, bytemuck::bytes_of(&push), groups);
+            })
+            .map_err(dev("the final GEMM"))?;
             accumulate = true;
             r0 = r1;
             progress(r0 as f64 / rows as f64);
@@ -607,7 +611,7 @@ impl<T: Pod> Reused<T> {
     fn fill(&mut self, ctx: &Ctx<'_>, name: &str, data: &[T]) -> Result<&Buffer<T>, ReduceError> {
         self.reserve(ctx, name, data.len())?;
         let b = self.get();
-        b.upload(ctx.gpu, 0, data).map_err(dev(name))?;
+        ctx.sub.borrow_mut().upload(b, 0, data).map_err(dev(name))?;
         Ok(b)
     }
 
@@ -638,6 +642,20 @@ pub fn premultiply_sparse_gpu(
     bases: &[&Tensor],
     options: PremultiplyOptions<'_>,
 ) -> Result<(Tensor, PremultiplyPlan), ReduceError> {
+    premultiply_sparse_on(&mut gpu.submitter(), q, bases, options)
+}
+
+/// [`premultiply_sparse_gpu`] through `submitter` (the engine's queue or a host's): every
+/// batch of every stage is one submission — its index data and values uploaded, its gather,
+/// unit-stage or fused-GEMM dispatches recorded — with the host's sorting and grouping of
+/// coordinates between them; the result is read back once at the end.
+pub fn premultiply_sparse_on(
+    submitter: &mut dyn Submitter,
+    q: &SparseTensor,
+    bases: &[&Tensor],
+    options: PremultiplyOptions<'_>,
+) -> Result<(Tensor, PremultiplyPlan), ReduceError> {
+    let gpu = &submitter.gpu().clone();
     let floats = (gpu.max_binding_bytes() / 4) as usize;
     // The planner counts 8-byte values; keep every intermediate within one binding of f32.
     let budget = options.memory_budget.min(2 * gpu.max_binding_bytes());
@@ -683,7 +701,14 @@ pub fn premultiply_sparse_gpu(
             16 * 1024,
         )?,
     };
-    let ctx = Ctx { gpu, k: &kernels, bases, packings: &setup.packings, floats };
+    let ctx = Ctx {
+        gpu,
+        sub: std::cell::RefCell::new(submitter),
+        k: &kernels,
+        bases,
+        packings: &setup.packings,
+        floats,
+    };
     let values: Vec<f32> = q.values().iter().map(|&v| v as f32).collect();
     let mut part = DevicePartial {
         sparse_axes: (0..q.order()).collect(),
@@ -712,7 +737,7 @@ pub fn premultiply_sparse_gpu(
         done += flops;
     }
     let values: Vec<f64> = match &part.values {
-        Values::Device(b) => b.download(gpu).map_err(dev("reading the result"))?,
+        Values::Device(b) => ctx.sub.borrow_mut().download(b).map_err(dev("reading the result"))?,
         Values::Host(v) => v.clone(),
     }
     .into_iter()

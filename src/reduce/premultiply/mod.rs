@@ -38,7 +38,7 @@ mod stream;
 
 pub(crate) use cpu::Buffers;
 use cpu::{accumulate, Partial};
-pub use gpu::premultiply_sparse_gpu;
+pub use gpu::{premultiply_sparse_gpu, premultiply_sparse_on};
 use plan::plan;
 pub(crate) use plan::{unit_row, unit_size, Packing};
 pub use stream::{premultiply_streamed, premultiply_streamed_together, AxisRows, BasisRows, TensorChunks};

@@ -7,7 +7,8 @@ use ash::vk;
 use bytemuck::{Pod, Zeroable};
 
 use crate::gpu::{
-    BindingKind, Buffer, ComputePipeline, ComputePipelineDesc, Gpu, GpuError, GpuResult, MemoryKind, Resource,
+    BindingKind, Buffer, ComputePipeline, ComputePipelineDesc, Gpu, GpuError, GpuResult, MemoryKind,
+    Resource, Submitter,
 };
 use crate::tensor::{check_system, pivot_tolerance, Tensor, TensorError};
 
@@ -60,6 +61,21 @@ impl BatchedSolve {
         matrices: &[&Tensor],
         rhs: &[&[f64]],
     ) -> GpuResult<Vec<Result<Vec<f64>, TensorError>>> {
+        self.solve_with(&mut gpu.submitter(), what, matrices, rhs)
+    }
+
+    /// [`Self::solve`] through `submitter` (the engine's queue or a host's): per chunk of
+    /// systems, an upload of the matrices, right-hand sides and pivot thresholds, one
+    /// workgroup per system, and a recorded readback of solutions and statuses; the results
+    /// are read once after every chunk was submitted.
+    pub fn solve_with(
+        &self,
+        submitter: &mut dyn Submitter,
+        what: &str,
+        matrices: &[&Tensor],
+        rhs: &[&[f64]],
+    ) -> GpuResult<Vec<Result<Vec<f64>, TensorError>>> {
+        let gpu = &submitter.gpu().clone();
         assert_eq!(matrices.len(), rhs.len(), "one right-hand side per matrix");
         let Some(first) = matrices.first() else { return Ok(Vec::new()) };
         let n = first.shape().first().copied().unwrap_or(0);
@@ -111,6 +127,7 @@ impl BatchedSolve {
                     &[mats.binding()?, xs.binding()?, tol.binding()?, status.binding()?]
                         .map(Resource::Storage),
                 )?;
+                let mut readbacks = Vec::new();
                 for chunk in sent.chunks(per_chunk) {
                     let a: Vec<f32> =
                         chunk.iter().flat_map(|&s| matrices[s].data().iter().map(|&v| v as f32)).collect();
@@ -119,11 +136,13 @@ impl BatchedSolve {
                         .iter()
                         .map(|&s| pivot_tolerance(matrices[s], f64::from(f32::EPSILON)) as f32)
                         .collect();
-                    mats.upload(gpu, 0, &a)?;
-                    xs.upload(gpu, 0, &b)?;
-                    tol.upload(gpu, 0, &t)?;
+                    // Each step's leading barrier orders these copies after the previous
+                    // chunk's solve and readback.
+                    submitter.upload(&mats, 0, &a)?;
+                    submitter.upload(&xs, 0, &b)?;
+                    submitter.upload(&tol, 0, &t)?;
                     let push = SolvePush { n: n as u32, batch: chunk.len() as u32 };
-                    gpu.run(|rec| {
+                    submitter.submit(&mut |rec| {
                         self.pipeline.record_dispatch(
                             rec,
                             &set,
@@ -131,10 +150,13 @@ impl BatchedSolve {
                             [chunk.len() as u32, 1, 1],
                         )
                     })?;
-                    let mut x = vec![0f32; chunk.len() * n];
-                    xs.download_into(gpu, 0, &mut x)?;
-                    let mut st = vec![Status::default(); chunk.len()];
-                    status.download_into(gpu, 0, &mut st)?;
+                    let x = submitter.record_readback(&xs, 0, (chunk.len() * n) as u64)?;
+                    let st = submitter.record_readback(&status, 0, chunk.len() as u64)?;
+                    readbacks.push((chunk, x, st));
+                }
+                submitter.complete()?;
+                for (chunk, x, st) in readbacks {
+                    let (x, st) = (x.read()?, st.read()?);
                     for (c, &s) in chunk.iter().enumerate() {
                         results[s] = Some(match st[c] {
                             Status { row_plus_one: 0, .. } => {
