@@ -34,7 +34,7 @@ fn glsl_includes_match_their_rust_twins() {
     let cb = Buffer::from_slice(&gpu, "coefficients", &coeffs, usage).unwrap();
     let ob = Buffer::<[f32; 4]>::new(&gpu, "out", n as u64, usage, MemoryKind::GpuOnly).unwrap();
     let bindings = [rb.binding(), xb.binding(), cb.binding(), ob.binding()].map(|b| b.unwrap());
-    let push = (n as u32).to_ne_bytes();
+    let push = common::CountPush { n: n as u32 };
     common::run_probe(
         &gpu,
         "include probe",
@@ -107,7 +107,7 @@ fn simplex_glsl_matches_the_mesh_geometry() {
         "simplex probe",
         shaders::probe::SIMPLEX,
         &bindings,
-        &(n as u32).to_ne_bytes(),
+        &common::CountPush { n: n as u32 },
         1,
     );
     let out = ob.download(&gpu).unwrap();

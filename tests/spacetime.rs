@@ -55,9 +55,14 @@ fn glsl_field_and_shading_match_their_rust_twins() {
     let ob = Buffer::<[f32; 4]>::new(&gpu, "out", 6 * 300, usage, MemoryKind::GpuOnly).unwrap();
     let mb = Buffer::from_slice(&gpu, "materials", &materials, usage).unwrap();
     let height_scale = 3.0f32;
-    let mut push = [0u8; 8];
-    push[..4].copy_from_slice(&300u32.to_ne_bytes());
-    push[4..].copy_from_slice(&height_scale.to_ne_bytes());
+    galerkin::push_constants! {
+        /// `probe/spacetime.comp`'s `Push { uint n; float height_scale; }`.
+        struct ProbePush {
+            n: u32,
+            height_scale: f32,
+        }
+    }
+    let push = ProbePush { n: 300, height_scale };
     let bindings = [eb.binding(), pb.binding(), qb.binding(), ob.binding(), mb.binding()].map(|b| b.unwrap());
     common::run_probe(&gpu, "spacetime probe", shaders::probe::SPACETIME, &bindings, &push, 5);
     let out = ob.download(&gpu).unwrap();

@@ -71,7 +71,7 @@ fn glsl_element_maths_match_their_rust_twins() {
             "spectral probe",
             shaders::probe::SPECTRAL,
             &bindings,
-            &(n as u32).to_ne_bytes(),
+            &common::CountPush { n: n as u32 },
             2,
             &basis_specialization(mesh),
         );

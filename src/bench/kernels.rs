@@ -3,7 +3,6 @@
 //! check its result against the CPU before the benchmark trusts its timing.
 
 use ash::vk;
-use bytemuck::{Pod, Zeroable};
 
 use crate::gpu::{
     BindingKind, Buffer, ComputePipeline, ComputePipelineDesc, DescriptorSet, Gpu, GpuResult, Recorder,
@@ -31,9 +30,8 @@ impl EmptyKernel {
                 name: "empty",
                 spirv: crate::bench::shaders::EMPTY,
                 bindings: &[BindingKind::StorageBuffer],
-                push_constant_bytes: 0,
+                push: crate::gpu::PushLayout::none(),
                 specialization: &[],
-                shared_bytes: 0,
             },
         )?;
         let sink = Buffer::new(
@@ -49,16 +47,16 @@ impl EmptyKernel {
 
     /// Records one 1×1×1 dispatch.
     pub fn record(&self, rec: &mut Recorder<'_>) {
-        self.pipeline.record_dispatch(rec, &self.set, &[], [1, 1, 1]);
+        self.pipeline.record_dispatch(rec, &self.set, &(), [1, 1, 1]);
     }
 }
 
-#[repr(C)]
-#[derive(Clone, Copy, Pod, Zeroable)]
-struct FmaPush {
-    iterations: u32,
-    a: f32,
-    b: f32,
+crate::push_constants! {
+    struct FmaPush {
+        iterations: u32,
+        a: f32,
+        b: f32,
+    }
 }
 
 /// Eight independent FMA chains per invocation (`fma.comp`).
@@ -82,9 +80,8 @@ impl FmaKernel {
                 name: "fma peak",
                 spirv: crate::bench::shaders::FMA,
                 bindings: &[BindingKind::StorageBuffer],
-                push_constant_bytes: std::mem::size_of::<FmaPush>() as u32,
+                push: crate::gpu::PushLayout::of::<FmaPush>(),
                 specialization: &[],
-                shared_bytes: 0,
             },
         )?;
         let invocations = groups * FMA_LOCAL_SIZE;
@@ -102,12 +99,7 @@ impl FmaKernel {
     /// Records the kernel: `iterations` rounds of `v ← v·a + b` on each of 8 chains.
     pub fn record(&self, rec: &mut Recorder<'_>, iterations: u32, a: f32, b: f32) {
         let push = FmaPush { iterations, a, b };
-        self.pipeline.record_dispatch(
-            rec,
-            &self.set,
-            bytemuck::bytes_of(&push),
-            [self.invocations / FMA_LOCAL_SIZE, 1, 1],
-        );
+        self.pipeline.record_dispatch(rec, &self.set, &push, [self.invocations / FMA_LOCAL_SIZE, 1, 1]);
     }
 
     /// Floating-point operations of one run.
@@ -130,11 +122,11 @@ impl FmaKernel {
     }
 }
 
-#[repr(C)]
-#[derive(Clone, Copy, Pod, Zeroable)]
-struct TriadPush {
-    s: f32,
-    n4: u32,
+crate::push_constants! {
+    struct TriadPush {
+        s: f32,
+        n4: u32,
+    }
 }
 
 /// STREAM triad `a ← b + s·c` (`triad.comp`).
@@ -157,9 +149,8 @@ impl TriadKernel {
                 name: "triad",
                 spirv: crate::bench::shaders::TRIAD,
                 bindings: &[BindingKind::StorageBuffer; 3],
-                push_constant_bytes: std::mem::size_of::<TriadPush>() as u32,
+                push: crate::gpu::PushLayout::of::<TriadPush>(),
                 specialization: &[],
-                shared_bytes: 0,
             },
         )?;
         let set = pipeline.bind(gpu, &[storage(a)?, storage(b)?, storage(c)?])?;
@@ -170,7 +161,7 @@ impl TriadKernel {
     pub fn record(&self, gpu: &Gpu, rec: &mut Recorder<'_>, s: f32) {
         let push = TriadPush { s, n4: self.n4 };
         let groups = gpu.caps().groups_1d(u64::from(self.n4), 256);
-        self.pipeline.record_dispatch(rec, &self.set, bytemuck::bytes_of(&push), [groups, 1, 1]);
+        self.pipeline.record_dispatch(rec, &self.set, &push, [groups, 1, 1]);
     }
 
     /// Bytes read and written by one sweep.

@@ -1,21 +1,16 @@
 //! `y ← a·x + y` on the device: the first compute pass. Arrays larger than one storage binding
 //! (128 MiB on lavapipe) are walked chunk by chunk, one descriptor set per chunk.
 
-use bytemuck::{Pod, Zeroable};
-
 use crate::gpu::{
     BindingKind, Buffer, Chunk, ComputePipeline, ComputePipelineDesc, DescriptorSet, Gpu, GpuResult,
     Recorder, Resource,
 };
 
-/// Workgroup size of `axpy.comp`.
-const LOCAL_SIZE: u32 = 256;
-
-#[repr(C)]
-#[derive(Clone, Copy, Pod, Zeroable)]
-struct Push {
-    a: f32,
-    n: u32,
+crate::push_constants! {
+    struct Push {
+        a: f32,
+        n: u32,
+    }
 }
 
 /// The axpy compute pipeline.
@@ -44,9 +39,8 @@ impl Axpy {
                 name: "axpy",
                 spirv: crate::demo::shaders::AXPY,
                 bindings: &[BindingKind::StorageBuffer, BindingKind::StorageBuffer],
-                push_constant_bytes: std::mem::size_of::<Push>() as u32,
+                push: crate::gpu::PushLayout::of::<Push>(),
                 specialization: &[],
-                shared_bytes: 0,
             },
         )?;
         Ok(Self { pipeline })
@@ -74,8 +68,8 @@ impl Axpy {
         for (chunk, set) in &binding.chunks {
             let n = u32::try_from(chunk.len).expect("a binding chunk holds fewer than 2^32 floats");
             let push = Push { a, n };
-            let groups = gpu.caps().groups_1d(chunk.len, LOCAL_SIZE);
-            self.pipeline.record_dispatch(rec, set, bytemuck::bytes_of(&push), [groups, 1, 1]);
+            let groups = gpu.caps().groups_1d(chunk.len, self.pipeline.local_size()[0]);
+            self.pipeline.record_dispatch(rec, set, &push, [groups, 1, 1]);
         }
     }
 }

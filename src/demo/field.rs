@@ -11,8 +11,8 @@ use glam::DVec2;
 
 use super::polynomial::BivariateCubic;
 use crate::gpu::{
-    BindingKind, Buffer, DescriptorSet, Gpu, GpuResult, GraphicsPipeline, GraphicsPipelineDesc, Recorder,
-    RenderPass, Resource, Viewport,
+    BindingKind, Buffer, DescriptorSet, Gpu, GpuResult, GraphicsPipeline, GraphicsPipelineDesc, PushLayout,
+    Recorder, RenderPass, Resource, Viewport,
 };
 use crate::render::{ramp_coordinate, Camera, Colormap, ColormapTexture};
 
@@ -62,6 +62,13 @@ pub fn square_triangles(k: u32) -> Vec<[f32; 3]> {
         }
     }
     v
+}
+
+crate::push_constants! {
+    /// `field.vert`'s push constants.
+    struct FieldPush {
+        view_proj: [f32; 16],
+    }
 }
 
 /// The field pass, resident: pipeline, triangles, coefficients, colour map.
@@ -114,7 +121,7 @@ impl FieldPass {
             pass,
         );
         desc.bindings = &[BindingKind::UniformBuffer, BindingKind::Texture];
-        desc.push_constant_bytes = 64;
+        desc.push = PushLayout::of::<FieldPush>();
         desc.vertex_stride = 12;
         desc.vertex_attributes = &[(0, vk::Format::R32G32B32_SFLOAT, 0)];
         desc.specialization = &spec;
@@ -127,12 +134,12 @@ impl FieldPass {
     /// whole target).
     pub fn record(&self, rec: &mut Recorder<'_>, viewport: impl Into<Viewport>, camera: &Camera) {
         let viewport = viewport.into();
-        let m = camera.view_proj_f32(viewport.aspect()).to_cols_array();
+        let m = FieldPush { view_proj: camera.view_proj_f32(viewport.aspect()).to_cols_array() };
         self.pipeline.record_draw(
             rec,
             viewport,
             &self.set,
-            bytemuck::bytes_of(&m),
+            &m,
             Some(self.vertices.whole()),
             self.vertices.len() as u32,
         );

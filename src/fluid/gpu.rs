@@ -5,7 +5,7 @@
 //! particle buffer stays on the device, where the renderer reads it.
 
 use ash::vk;
-use bytemuck::{Pod, Zeroable};
+use bytemuck::Pod;
 
 use super::particles::{AdvectReport, GridHash, Particle};
 use super::FluidError;
@@ -14,16 +14,16 @@ use crate::gpu::{
 };
 use crate::mesh::{FaceKind, Point, SimplexMesh, Topology};
 
-#[repr(C)]
-#[derive(Clone, Copy, Pod, Zeroable)]
-struct Push {
-    dim: u32,
-    count: u32,
-    substeps: u32,
-    frame_time: f32,
-    grid_lo: [f32; 4],
-    grid_size: [f32; 4],
-    grid_dims: [u32; 4],
+crate::push_constants! {
+    struct Push {
+        dim: u32,
+        count: u32,
+        substeps: u32,
+        frame_time: f32,
+        grid_lo: [f32; 4],
+        grid_size: [f32; 4],
+        grid_dims: [u32; 4],
+    }
 }
 
 fn gpu_err(e: crate::gpu::GpuError) -> FluidError {
@@ -106,9 +106,8 @@ impl GpuParticles {
                 name: "fluid particles",
                 spirv: crate::fluid::shaders::PARTICLES,
                 bindings: &[BindingKind::StorageBuffer; 10],
-                push_constant_bytes: std::mem::size_of::<Push>() as u32,
+                push: crate::gpu::PushLayout::of::<Push>(),
                 specialization: &[],
-                shared_bytes: 0,
             },
         )
         .map_err(gpu_err)?;
@@ -290,7 +289,7 @@ impl GpuParticles {
         self.pipeline.record_dispatch(
             rec,
             set,
-            bytemuck::bytes_of(&push),
+            &push,
             [(self.count as u32).div_ceil(self.pipeline.local_size()[0]), 1, 1],
         );
         rec.memory_barrier(

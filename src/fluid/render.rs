@@ -168,12 +168,12 @@ pub struct DrawStyle {
     pub sprite_px: f64,
 }
 
-#[repr(C)]
-#[derive(Clone, Copy, Pod, Zeroable)]
-struct Push {
-    view_proj: [f32; 16],
-    range: [f32; 4],
-    sprite: [f32; 4],
+crate::push_constants! {
+    struct Push {
+        view_proj: [f32; 16],
+        range: [f32; 4],
+        sprite: [f32; 4],
+    }
 }
 
 /// What the fragment stages write.
@@ -236,7 +236,7 @@ impl FluidRenderer {
             crate::fluid::shaders::CELLS_FRAG,
             pass,
         );
-        desc.push_constant_bytes = std::mem::size_of::<Push>() as u32;
+        desc.push = crate::gpu::PushLayout::of::<Push>();
         desc.vertex_stride = std::mem::size_of::<CellVertex>() as u32;
         desc.vertex_attributes = &[
             (0, vk::Format::R32G32B32_SFLOAT, 0),
@@ -257,7 +257,7 @@ impl FluidRenderer {
             crate::fluid::shaders::SPRITES_FRAG,
             pass,
         );
-        desc.push_constant_bytes = std::mem::size_of::<Push>() as u32;
+        desc.push = crate::gpu::PushLayout::of::<Push>();
         desc.bindings = &[BindingKind::Texture, BindingKind::StorageBuffer, BindingKind::StorageBuffer];
         desc.specialization = &spec;
         let sprites = GraphicsPipeline::new(gpu, &desc).map_err(gpu_err)?;
@@ -337,24 +337,10 @@ impl FluidRenderer {
             sprite: [half[0], half[1], mode, f32::from(u8::from(style.colour_cells && !surface))],
         };
         let pipeline = if surface { &self.surface } else { &self.cells };
-        pipeline.record_draw(
-            rec,
-            extent,
-            &self.cell_set,
-            bytemuck::bytes_of(&push),
-            Some(self.vertices.whole()),
-            self.count,
-        );
+        pipeline.record_draw(rec, extent, &self.cell_set, &push, Some(self.vertices.whole()), self.count);
         if let Some((set, count)) = particles {
             if style.sprite_px > 0.0 && count > 0 {
-                self.sprites.record_draw(
-                    rec,
-                    extent,
-                    set,
-                    bytemuck::bytes_of(&push),
-                    None,
-                    (6 * count) as u32,
-                );
+                self.sprites.record_draw(rec, extent, set, &push, None, (6 * count) as u32);
             }
         }
     }

@@ -30,6 +30,7 @@ mod instance;
 mod lifetime;
 mod memory;
 mod pipeline;
+mod push;
 mod query;
 mod recorder;
 pub mod reflect;
@@ -42,6 +43,8 @@ mod swapchain;
 
 pub use ash::vk;
 pub use buffer::{chunk_elements, Buffer, BufferBinding, Chunk, STAGING_CHUNK_BYTES};
+/// Re-exported for [`crate::push_constants!`].
+pub use bytemuck;
 pub use caps::Capabilities;
 pub use commands::Submission;
 pub use context::{Gpu, GpuDesc, RawDevice};
@@ -56,6 +59,7 @@ pub use pipeline::{
     spirv_local_size, ComputePipeline, ComputePipelineDesc, GraphicsPipeline, GraphicsPipelineDesc,
     VertexAttribute, Viewport,
 };
+pub use push::{PushConstants, PushLayout, PushMember, PushScalar, Scalar};
 pub use query::Profiler;
 pub use recorder::{Recorder, Recording};
 pub use renderpass::{

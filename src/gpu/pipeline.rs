@@ -11,6 +11,7 @@ use super::context::{DeviceShared, Gpu};
 use super::descriptors::{BindingKind, DescriptorSet, DescriptorSetLayout, Resource};
 use super::error::{vk_error, GpuError, GpuResult, VkContext};
 use super::lifetime::{Lifetime, Tracked};
+use super::push::{PushConstants, PushLayout};
 use super::recorder::Recorder;
 use super::renderpass::RenderPass;
 
@@ -57,7 +58,7 @@ struct PipelineLayout {
     _device: Arc<DeviceShared>,
     raw: vk::PipelineLayout,
     set: DescriptorSetLayout,
-    push_bytes: u32,
+    push: PushLayout,
     stages: vk::ShaderStageFlags,
 }
 
@@ -65,10 +66,11 @@ impl PipelineLayout {
     fn new(
         gpu: &Gpu,
         bindings: &[BindingKind],
-        push_bytes: u32,
+        push: PushLayout,
         stages: vk::ShaderStageFlags,
         name: &str,
     ) -> GpuResult<Self> {
+        let push_bytes = push.bytes;
         if push_bytes > gpu.caps().max_push_constants_size {
             return Err(GpuError::OverLimit {
                 name: format!("push constants of `{name}`"),
@@ -94,7 +96,7 @@ impl PipelineLayout {
             unsafe { dev.raw.destroy_pipeline_layout(raw, None) };
             drop(set_life);
         });
-        Ok(Self { life, _device: gpu.shared.clone(), raw, set, push_bytes, stages })
+        Ok(Self { life, _device: gpu.shared.clone(), raw, set, push, stages })
     }
 }
 
@@ -130,10 +132,19 @@ impl PipelineCore {
         DescriptorSet::new(gpu, &self.layout.set, resources)
     }
 
-    /// Records the pipeline, `set` and `push` (exactly the declared size), keeping both alive.
-    fn record_bind(&self, rec: &mut Recorder<'_>, set: &DescriptorSet, push: &[u8]) {
+    /// Records the pipeline, `set` and `push` (of the type the pipeline was built with),
+    /// keeping both alive. Panics if `P` is another type (a bug: its layout was never checked
+    /// against the shader).
+    fn record_bind<P: PushConstants + 'static>(&self, rec: &mut Recorder<'_>, set: &DescriptorSet, push: &P) {
         let l = &self.layout;
-        assert_eq!(push.len() as u32, l.push_bytes, "push constants of `{}`", self.name);
+        assert!(
+            std::any::TypeId::of::<P>() == l.push.type_id,
+            "`{}` pushes `{}`, not `{}`",
+            self.name,
+            l.push.type_name,
+            std::any::type_name::<P>()
+        );
+        let push: &[u8] = bytemuck::bytes_of(push);
         rec.keep_lifetime(&self.life);
         rec.keep(set);
         let (d, cmd) = (rec.device(), rec.raw());
@@ -158,13 +169,11 @@ pub struct ComputePipelineDesc<'a> {
     pub spirv: &'a [u32],
     /// Bindings of set 0, in order.
     pub bindings: &'a [BindingKind],
-    /// Bytes of push constants (0 for none).
-    pub push_constant_bytes: u32,
+    /// The push-constant struct (checked against the shader's block member by member;
+    /// [`PushLayout::none`] for none).
+    pub push: PushLayout,
     /// Values of specialization constants 0, 1, ….
     pub specialization: &'a [u32],
-    /// Bytes of `shared` memory the shader declares (checked against the device's
-    /// `maxComputeSharedMemorySize`; the workgroup size is read from the SPIR-V itself).
-    pub shared_bytes: u32,
 }
 
 /// The workgroup size of a compute shader (its `LocalSize` execution mode, read by
@@ -186,21 +195,16 @@ impl Tracked for ComputePipeline {
 }
 
 impl ComputePipeline {
-    /// Builds the pipeline, after checking its workgroup (size read from the SPIR-V, shared
-    /// memory from the description) fits the device.
+    /// Builds the pipeline, after checking its layout against the shader and its workgroup
+    /// (size and shared memory, both read from the SPIR-V) against the device.
     pub fn new(gpu: &Gpu, desc: &ComputePipelineDesc<'_>) -> GpuResult<Self> {
         let shader = super::reflect::reflect(desc.name, desc.spirv)?;
-        super::reflect::check_layout(desc.name, &shader, desc.push_constant_bytes, desc.bindings)?;
+        super::reflect::check_layout(desc.name, &shader, &desc.push, desc.bindings)?;
         let local_size = shader.local_size.unwrap_or([1, 1, 1]);
         let invocations = local_size.iter().product();
-        gpu.caps().check_workgroup(desc.name, invocations, desc.shared_bytes)?;
-        let layout = PipelineLayout::new(
-            gpu,
-            desc.bindings,
-            desc.push_constant_bytes,
-            vk::ShaderStageFlags::COMPUTE,
-            desc.name,
-        )?;
+        gpu.caps().check_workgroup(desc.name, invocations, shader.shared_bytes)?;
+        let layout =
+            PipelineLayout::new(gpu, desc.bindings, desc.push, vk::ShaderStageFlags::COMPUTE, desc.name)?;
         let module = ShaderModule::new(gpu.device(), desc.spirv)?;
         let mut entries = Vec::new();
         let spec = specialization(desc.specialization, &mut entries);
@@ -230,13 +234,13 @@ impl ComputePipeline {
         self.core.bind(gpu, resources)
     }
 
-    /// Records: bind the pipeline and `set`, push `push` (exactly the declared size), dispatch
-    /// `groups` workgroups.
-    pub fn record_dispatch(
+    /// Records: bind the pipeline and `set`, push `push` (of the struct the pipeline was built
+    /// with), dispatch `groups` workgroups.
+    pub fn record_dispatch<P: PushConstants + 'static>(
         &self,
         rec: &mut Recorder<'_>,
         set: &DescriptorSet,
-        push: &[u8],
+        push: &P,
         groups: [u32; 3],
     ) {
         self.core.record_bind(rec, set, push);
@@ -301,8 +305,9 @@ pub struct GraphicsPipelineDesc<'a> {
     pub tessellation: Option<(&'a [u32], &'a [u32], u32)>,
     /// Bindings of set 0 (visible to every stage).
     pub bindings: &'a [BindingKind],
-    /// Bytes of push constants (visible to every stage).
-    pub push_constant_bytes: u32,
+    /// The push-constant struct (visible to every stage; checked against the shaders' block
+    /// member by member; [`PushLayout::none`] for none).
+    pub push: PushLayout,
     /// Stride of the one vertex buffer (0: no vertex buffer).
     pub vertex_stride: u32,
     /// Its attributes.
@@ -339,7 +344,7 @@ impl<'a> GraphicsPipelineDesc<'a> {
             geometry: None,
             tessellation: None,
             bindings: &[],
-            push_constant_bytes: 0,
+            push: PushLayout::none(),
             vertex_stride: 0,
             vertex_attributes: &[],
             topology: vk::PrimitiveTopology::TRIANGLE_LIST,
@@ -397,13 +402,13 @@ impl GraphicsPipeline {
         let layouts =
             modules.iter().map(|m| super::reflect::reflect(desc.name, m)).collect::<GpuResult<Vec<_>>>()?;
         let shaders = super::reflect::merge(desc.name, &layouts)?;
-        super::reflect::check_layout(desc.name, &shaders, desc.push_constant_bytes, desc.bindings)?;
+        super::reflect::check_layout(desc.name, &shaders, &desc.push, desc.bindings)?;
         if !desc.render_pass.lifetime().is_on(&gpu.shared) {
             return Err(GpuError::WrongDevice {
                 name: format!("the render pass of pipeline `{}`", desc.name),
             });
         }
-        let layout = PipelineLayout::new(gpu, desc.bindings, desc.push_constant_bytes, stages, desc.name)?;
+        let layout = PipelineLayout::new(gpu, desc.bindings, desc.push, stages, desc.name)?;
         let device = gpu.device();
         let vs = ShaderModule::new(device, desc.vertex)?;
         let fs = ShaderModule::new(device, desc.fragment)?;
@@ -533,12 +538,12 @@ impl GraphicsPipeline {
     /// Records, inside a render pass: bind the pipeline, `set` and the vertex buffer (if any),
     /// set the viewport and scissor to `viewport` (an extent: the whole target), push `push`,
     /// and draw `vertex_count` vertices.
-    pub fn record_draw(
+    pub fn record_draw<P: PushConstants + 'static>(
         &self,
         rec: &mut Recorder<'_>,
         viewport: impl Into<Viewport>,
         set: &DescriptorSet,
-        push: &[u8],
+        push: &P,
         vertices: Option<BufferBinding<'_>>,
         vertex_count: u32,
     ) {
@@ -552,12 +557,12 @@ impl GraphicsPipeline {
     /// from the `VkDrawIndirectCommand` at the start of `indirect` (written by an earlier pass,
     /// whose writes a barrier has made visible to `DRAW_INDIRECT`). Panics if `indirect` is
     /// shorter than one command (16 bytes).
-    pub fn record_draw_indirect(
+    pub fn record_draw_indirect<P: PushConstants + 'static>(
         &self,
         rec: &mut Recorder<'_>,
         viewport: impl Into<Viewport>,
         set: &DescriptorSet,
-        push: &[u8],
+        push: &P,
         vertices: Option<BufferBinding<'_>>,
         indirect: BufferBinding<'_>,
     ) {
@@ -569,12 +574,12 @@ impl GraphicsPipeline {
         unsafe { rec.device().cmd_draw_indirect(rec.raw(), buffer, indirect.offset, 1, 16) };
     }
 
-    fn record_state(
+    fn record_state<P: PushConstants + 'static>(
         &self,
         rec: &mut Recorder<'_>,
         area: Viewport,
         set: &DescriptorSet,
-        push: &[u8],
+        push: &P,
         vertices: Option<BufferBinding<'_>>,
     ) {
         self.core.record_bind(rec, set, push);

@@ -9,7 +9,7 @@
 //! [`Backend::Auto`]: crate::reduce::Backend::Auto
 
 use ash::vk;
-use bytemuck::{Pod, Zeroable};
+use bytemuck::Pod;
 
 use super::bvh::Bvh;
 use super::error::RadiosityError;
@@ -21,13 +21,13 @@ use crate::gpu::{
     Resource,
 };
 
-#[repr(C)]
-#[derive(Clone, Copy, Pod, Zeroable)]
-struct Push {
-    n: u32,
-    row0: u32,
-    rows: u32,
-    extra: u32,
+crate::push_constants! {
+    struct Push {
+        n: u32,
+        row0: u32,
+        rows: u32,
+        extra: u32,
+    }
 }
 
 /// The two compute pipelines.
@@ -130,9 +130,8 @@ impl GpuRadiosity {
                     name: "radiosity form factors",
                     spirv: crate::radiosity::shaders::FORM_FACTORS,
                     bindings: &[BindingKind::StorageBuffer; 4],
-                    push_constant_bytes: std::mem::size_of::<Push>() as u32,
+                    push: crate::gpu::PushLayout::of::<Push>(),
                     specialization: &[regularised],
-                    shared_bytes: 0,
                 },
             )
         };
@@ -142,9 +141,8 @@ impl GpuRadiosity {
                 name: "radiosity jacobi",
                 spirv: crate::radiosity::shaders::JACOBI,
                 bindings: &[BindingKind::StorageBuffer; 5],
-                push_constant_bytes: std::mem::size_of::<Push>() as u32,
+                push: crate::gpu::PushLayout::of::<Push>(),
                 specialization: &[],
-                shared_bytes: 0,
             },
         )?;
         Ok(Self { form_factors: [ff(0)?, ff(1)?], jacobi })
@@ -235,7 +233,7 @@ impl GpuRadiosity {
             let push = Push { n: n as u32, row0, rows: count, extra: pass.bvh_nodes };
             let [wx, wy, _] = pipeline.local_size();
             let groups = [(n as u32).div_ceil(wx), count.div_ceil(wy), 1];
-            pipeline.record_dispatch(rec, set, bytemuck::bytes_of(&push), groups);
+            pipeline.record_dispatch(rec, set, &push, groups);
         }
         rec.memory_barrier(
             (vk::PipelineStageFlags::COMPUTE_SHADER, vk::AccessFlags::SHADER_WRITE),
@@ -347,12 +345,7 @@ impl GpuRadiosity {
         for k in first..first + count {
             for (&(row0, rows), pair) in f.blocks.iter().zip(&pass.sets) {
                 let push = Push { n: f.n as u32, row0, rows, extra: 0 };
-                self.jacobi.record_dispatch(
-                    rec,
-                    &pair[k % 2],
-                    bytemuck::bytes_of(&push),
-                    [rows.div_ceil(wx), 1, 1],
-                );
+                self.jacobi.record_dispatch(rec, &pair[k % 2], &push, [rows.div_ceil(wx), 1, 1]);
             }
             rec.compute_to_compute_barrier();
         }

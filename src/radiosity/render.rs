@@ -131,11 +131,11 @@ pub struct SceneRenderer {
     count: u32,
 }
 
-#[repr(C)]
-#[derive(Clone, Copy, Pod, Zeroable)]
-struct Push {
-    view_proj: [f32; 16],
-    tone: [f32; 4],
+crate::push_constants! {
+    struct Push {
+        view_proj: [f32; 16],
+        tone: [f32; 4],
+    }
 }
 
 impl SceneRenderer {
@@ -148,7 +148,7 @@ impl SceneRenderer {
             crate::radiosity::shaders::SCENE_FRAG,
             pass,
         );
-        desc.push_constant_bytes = std::mem::size_of::<Push>() as u32;
+        desc.push = crate::gpu::PushLayout::of::<Push>();
         desc.vertex_stride = std::mem::size_of::<SceneVertex>() as u32;
         desc.vertex_attributes = &[
             (0, vk::Format::R32G32B32_SFLOAT, 0),
@@ -187,14 +187,7 @@ impl SceneRenderer {
             view_proj: camera.view_proj_f32(aspect).to_cols_array(),
             tone: [exposure as f32, 0.0, 0.0, 0.0],
         };
-        self.pipeline.record_draw(
-            rec,
-            extent,
-            &self.set,
-            bytemuck::bytes_of(&push),
-            Some(self.vertices.whole()),
-            self.count,
-        );
+        self.pipeline.record_draw(rec, extent, &self.set, &push, Some(self.vertices.whole()), self.count);
     }
 }
 

@@ -238,12 +238,12 @@ struct BarVertex {
     pad: u32,
 }
 
-#[repr(C)]
-#[derive(Clone, Copy, Pod, Zeroable)]
-struct BarPush {
-    window: [f32; 4],
-    ramp: [f32; 4],
-    flags: [u32; 4],
+crate::push_constants! {
+    struct BarPush {
+        window: [f32; 4],
+        ramp: [f32; 4],
+        flags: [u32; 4],
+    }
 }
 
 /// A device failure met while doing `context` ([`SpacetimeError::device`]).
@@ -333,7 +333,7 @@ impl BarRenderer {
                 target.render_pass(),
             );
             desc.bindings = &[BindingKind::StorageBuffer, BindingKind::Texture];
-            desc.push_constant_bytes = std::mem::size_of::<BarPush>() as u32;
+            desc.push = crate::gpu::PushLayout::of::<BarPush>();
             desc.vertex_stride = std::mem::size_of::<BarVertex>() as u32;
             desc.vertex_attributes = &[(0, vk::Format::R32G32_SFLOAT, 0), (1, vk::Format::R32_UINT, 8)];
             let p = GraphicsPipeline::new(&self.gpu, &desc).map_err(dev("building the bar pipeline"))?;
@@ -355,7 +355,7 @@ impl BarRenderer {
         let extent = target.extent();
         target
             .render(&self.gpu, clear, |rec| {
-                pipeline.record_draw(rec, extent, set, bytemuck::bytes_of(&push), Some(vertices), count)
+                pipeline.record_draw(rec, extent, set, &push, Some(vertices), count)
             })
             .map_err(dev("drawing the bar"))
     }

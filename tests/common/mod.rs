@@ -98,25 +98,33 @@ pub fn random_sparse(order: usize, nnz: usize) -> galerkin::tensor::SparseTensor
 }
 
 /// Runs a test probe: the compute shader `spirv` with one storage buffer per entry of
-/// `buffers` (bindings 0, 1, …), push constants `push` and `groups` workgroups, and waits.
-pub fn run_probe(
+/// `buffers` (bindings 0, 1, …), push constants `push` (checked against the shader's block)
+/// and `groups` workgroups, and waits.
+pub fn run_probe<P: galerkin::gpu::PushConstants + 'static>(
     gpu: &galerkin::gpu::Gpu,
     name: &str,
     spirv: &'static [u32],
     buffers: &[galerkin::gpu::BufferBinding],
-    push: &[u8],
+    push: &P,
     groups: u32,
 ) {
     run_probe_specialized(gpu, name, spirv, buffers, push, groups, &[]);
 }
 
+galerkin::push_constants! {
+    /// The probes' `Push { uint n; }`: how many inputs.
+    pub struct CountPush {
+        pub n: u32,
+    }
+}
+
 /// [`run_probe`] with specialization constants 0, 1, … set to `specialization`.
-pub fn run_probe_specialized(
+pub fn run_probe_specialized<P: galerkin::gpu::PushConstants + 'static>(
     gpu: &galerkin::gpu::Gpu,
     name: &str,
     spirv: &'static [u32],
     buffers: &[galerkin::gpu::BufferBinding],
-    push: &[u8],
+    push: &P,
     groups: u32,
     specialization: &[u32],
 ) {
@@ -128,9 +136,8 @@ pub fn run_probe_specialized(
             name,
             spirv,
             bindings: &bindings,
-            push_constant_bytes: push.len() as u32,
+            push: galerkin::gpu::PushLayout::of::<P>(),
             specialization,
-            shared_bytes: 0,
         },
     )
     .expect("the probe pipeline builds");

@@ -16,13 +16,13 @@
 //! per page on first touch, which dominated before).
 
 use ash::vk;
-use bytemuck::{Pod, Zeroable};
+use bytemuck::Pod;
 
 use super::plan::{chunks_of_groups, sorted_entries, unit_and_key_positions, unit_positions};
 use super::{unit_row, unit_size, Packing, PremultiplyOptions, PremultiplyPlan, Setup, Unit};
 use crate::gpu::{
     BindingKind, Buffer, BufferBinding, ComputePipeline, ComputePipelineDesc, Gpu, GpuError, MemoryKind,
-    Recorder, Resource, Submitter,
+    PushLayout, Recorder, Resource, Submitter,
 };
 use crate::reduce::ReduceError;
 use crate::tensor::gpu::GEMM_TILE;
@@ -30,31 +30,31 @@ use crate::tensor::{SparseTensor, Tensor};
 
 use std::collections::HashMap;
 
-#[repr(C)]
-#[derive(Clone, Copy, Pod, Zeroable)]
-struct StagePush {
-    groups: u32,
-    size: u32,
-    block: u32,
-    g: u32,
-    m: u32,
+crate::push_constants! {
+    struct StagePush {
+        groups: u32,
+        size: u32,
+        block: u32,
+        g: u32,
+        m: u32,
+    }
 }
 
-#[repr(C)]
-#[derive(Clone, Copy, Pod, Zeroable)]
-struct FusedPush {
-    m: u32,
-    k: u32,
-    size: u32,
-    block: u32,
-    accumulate: u32,
+crate::push_constants! {
+    struct FusedPush {
+        m: u32,
+        k: u32,
+        size: u32,
+        block: u32,
+        accumulate: u32,
+    }
 }
 
-#[repr(C)]
-#[derive(Clone, Copy, Pod, Zeroable)]
-struct GatherPush {
-    rows: u32,
-    block: u32,
+crate::push_constants! {
+    struct GatherPush {
+        rows: u32,
+        block: u32,
+    }
 }
 
 fn dev(context: &str) -> impl FnOnce(GpuError) -> ReduceError + '_ {
@@ -150,7 +150,7 @@ impl Ctx<'_> {
     ) {
         let push = GatherPush { rows: rows as u32, block: block as u32 };
         let groups = self.gpu.caps().groups_1d((rows * block) as u64, self.k.gather.local_size()[0]);
-        self.k.gather.record_dispatch(rec, set, bytemuck::bytes_of(&push), [groups, 1, 1]);
+        self.k.gather.record_dispatch(rec, set, &push, [groups, 1, 1]);
     }
 
     /// Rows `perm` of `src` (rows of `block` floats), in that order, in a new device buffer.
@@ -300,7 +300,7 @@ impl Ctx<'_> {
             let wg = self.gpu.caps().groups_1d(n as u64, self.k.stage.local_size()[0]);
             let dst_first = (g0 * size * block) as u64;
             self.submit(&mut |rec| {
-                self.k.stage.record_dispatch(rec, &set, bytemuck::bytes_of(&push), [wg, 1, 1]);
+                self.k.stage.record_dispatch(rec, &set, &push, [wg, 1, 1]);
                 rec.memory_barrier(
                     (vk::PipelineStageFlags::COMPUTE_SHADER, vk::AccessFlags::SHADER_WRITE),
                     (vk::PipelineStageFlags::TRANSFER, vk::AccessFlags::TRANSFER_READ),
@@ -558,7 +558,7 @@ impl Ctx<'_> {
                         (vk::PipelineStageFlags::COMPUTE_SHADER, vk::AccessFlags::SHADER_READ),
                     );
                 }
-                self.k.fused.record_dispatch(rec, &set, bytemuck::bytes_of(&push), groups);
+                self.k.fused.record_dispatch(rec, &set, &push, groups);
             })
             .map_err(dev("the final GEMM"))?;
             accumulate = true;
@@ -664,41 +664,28 @@ pub fn premultiply_sparse_on(
     if q.nnz() == 0 {
         return Ok((Tensor::zeros(&setup.reduced_shape), setup.plan));
     }
-    let stage = |name: &str, spirv: &[u32], bindings: &[BindingKind], push: usize, shared: u32| {
-        ComputePipeline::new(
-            gpu,
-            &ComputePipelineDesc {
-                name,
-                spirv,
-                bindings,
-                push_constant_bytes: push as u32,
-                specialization: &[],
-                shared_bytes: shared,
-            },
-        )
-        .map_err(dev("building a premultiply pipeline"))
+    let stage = |name: &str, spirv: &[u32], bindings: &[BindingKind], push: PushLayout| {
+        ComputePipeline::new(gpu, &ComputePipelineDesc { name, spirv, bindings, push, specialization: &[] })
+            .map_err(dev("building a premultiply pipeline"))
     };
     let kernels = Kernels {
         stage: stage(
             "premultiply unit stage",
             crate::tensor::shaders::UNIT_STAGE,
             &[BindingKind::StorageBuffer; 7],
-            std::mem::size_of::<StagePush>(),
-            0,
+            PushLayout::of::<StagePush>(),
         )?,
         gather: stage(
             "premultiply gather",
             crate::tensor::shaders::GATHER_ROWS,
             &[BindingKind::StorageBuffer; 4],
-            std::mem::size_of::<GatherPush>(),
-            0,
+            PushLayout::of::<GatherPush>(),
         )?,
         fused: stage(
             "premultiply final GEMM",
             crate::tensor::shaders::PREMULTIPLY_GEMM,
             &[BindingKind::StorageBuffer; 6],
-            std::mem::size_of::<FusedPush>(),
-            16 * 1024,
+            PushLayout::of::<FusedPush>(),
         )?,
     };
     let ctx = Ctx {

@@ -28,7 +28,7 @@ impl SpacetimeRenderer {
                     BindingKind::StorageBuffer,
                     BindingKind::StorageBuffer,
                 ];
-                desc.push_constant_bytes = std::mem::size_of::<DrawPush>() as u32;
+                desc.push = crate::gpu::PushLayout::of::<DrawPush>();
                 desc.vertex_stride = std::mem::size_of::<SliceVertex>() as u32;
                 desc.vertex_attributes = &[
                     (0, vk::Format::R32G32_SFLOAT, 0),
@@ -158,7 +158,7 @@ impl SpacetimeRenderer {
                 (cs, vk::AccessFlags::SHADER_READ | vk::AccessFlags::SHADER_WRITE),
             );
             let n = pixels as u32;
-            reducer.record_dispatch(rec, set, &n.to_ne_bytes(), [64, 1, 1]);
+            reducer.record_dispatch(rec, set, &MaxUPush { n }, [64, 1, 1]);
             rec.memory_barrier(
                 (cs, vk::AccessFlags::SHADER_WRITE),
                 (vk::PipelineStageFlags::TRANSFER, vk::AccessFlags::TRANSFER_READ),
@@ -220,12 +220,12 @@ impl SpacetimeRenderer {
                 rec,
                 extent,
                 fill_set,
-                bytemuck::bytes_of(&push),
+                &push,
                 Some(tris.whole()),
                 draws.binding_range(crate::gpu::Chunk { first: 0, len: 4 }),
             );
             if edges_on {
-                let bytes = bytemuck::bytes_of(&edge_push);
+                let bytes = &edge_push;
                 let second = draws.binding_range(crate::gpu::Chunk { first: 4, len: 4 });
                 edges.record_draw_indirect(rec, extent, edges_set, bytes, Some(lines.whole()), second);
             }

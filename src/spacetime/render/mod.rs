@@ -45,30 +45,38 @@ struct SliceVertex {
     speed: f32,
 }
 
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable)]
-struct SlicePushCompute {
-    /// Ring slot of the first active element.
-    first: u32,
-    count: u32,
-    t: f32,
-    max_area: f32,
-    max_level: u32,
-    tri_capacity: u32,
-    line_capacity: u32,
-    cut_capacity: u32,
-    /// Records in the window's ring.
-    capacity: u32,
+crate::push_constants! {
+    #[derive(Debug)]
+    struct SlicePushCompute {
+        /// Ring slot of the first active element.
+        first: u32,
+        count: u32,
+        t: f32,
+        max_area: f32,
+        max_level: u32,
+        tri_capacity: u32,
+        line_capacity: u32,
+        cut_capacity: u32,
+        /// Records in the window's ring.
+        capacity: u32,
+    }
 }
 
-#[repr(C)]
-#[derive(Clone, Copy, Pod, Zeroable)]
-struct DrawPush {
-    view_proj: [f32; 16],
-    eye_t: [f32; 4],
-    light_scale: [f32; 4],
-    ramp: [f32; 4],
-    flags: [u32; 4],
+crate::push_constants! {
+    /// `max_u.comp`: the pixels to reduce.
+    struct MaxUPush {
+        n: u32,
+    }
+}
+
+crate::push_constants! {
+    struct DrawPush {
+        view_proj: [f32; 16],
+        eye_t: [f32; 4],
+        light_scale: [f32; 4],
+        ramp: [f32; 4],
+        flags: [u32; 4],
+    }
 }
 
 impl DrawPush {
@@ -262,9 +270,8 @@ fn compute(gpu: &Gpu, name: &'static str, spirv: &'static [u32]) -> Result<Compu
             name,
             spirv,
             bindings: &[BindingKind::StorageBuffer; 6],
-            push_constant_bytes: std::mem::size_of::<SlicePushCompute>() as u32,
+            push: crate::gpu::PushLayout::of::<SlicePushCompute>(),
             specialization: &[],
-            shared_bytes: 0,
         },
     )
     .map_err(dev("building the slicer"))
@@ -313,9 +320,8 @@ impl SpacetimeRenderer {
                     name: "spacetime U_max",
                     spirv: crate::spacetime::shaders::MAX_U,
                     bindings: &[BindingKind::StorageBuffer; 2],
-                    push_constant_bytes: 4,
+                    push: crate::gpu::PushLayout::of::<MaxUPush>(),
                     specialization: &[],
-                    shared_bytes: 0,
                 },
             )
             .map_err(dev("building the U_max reduction"))?,

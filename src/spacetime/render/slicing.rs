@@ -161,7 +161,7 @@ impl SpacetimeRenderer {
             rec.update_buffer(&self.draws, 0, &reset);
             rec.memory_barrier((vk::PipelineStageFlags::TRANSFER, vk::AccessFlags::TRANSFER_WRITE), (cs, rw));
             let groups = self.gpu.caps().groups_1d(u64::from(push.count.max(1)), self.slicer.local_size()[0]);
-            self.slicer.record_dispatch(rec, slice_set, bytemuck::bytes_of(push), [groups, 1, 1]);
+            self.slicer.record_dispatch(rec, slice_set, push, [groups, 1, 1]);
             rec.memory_barrier((cs, vk::AccessFlags::SHADER_WRITE), (cs, rw));
         };
         match profiler.as_deref_mut() {
@@ -172,7 +172,7 @@ impl SpacetimeRenderer {
             // A polygon is cut into at most two triangles.
             let wg = self.subdivider.local_size()[0];
             let groups = self.gpu.caps().groups_1d(u64::from(push.count.max(1)) * 2, wg);
-            self.subdivider.record_dispatch(rec, subdivide_set, bytemuck::bytes_of(push), [groups, 1, 1]);
+            self.subdivider.record_dispatch(rec, subdivide_set, push, [groups, 1, 1]);
             // Later commands and submissions draw from these buffers (vertex input; the restricted
             // cubics in the fragment stage) and read the counters.
             rec.memory_barrier(

@@ -10,12 +10,12 @@ use ash::vk;
 
 use super::*;
 
-/// `cut.comp`'s push constants.
-#[repr(C)]
-#[derive(Clone, Copy, Pod, Zeroable)]
-struct CutPush {
-    elements: u32,
-    points_per_element: u32,
+crate::push_constants! {
+    /// `cut.comp`'s push constants.
+    struct CutPush {
+        elements: u32,
+        points_per_element: u32,
+    }
 }
 
 impl Cutter {
@@ -59,9 +59,8 @@ impl Cutter {
                 name: "spectral cut",
                 spirv: crate::spectral::shaders::CUT,
                 bindings: &[BindingKind::StorageBuffer; 7],
-                push_constant_bytes: std::mem::size_of::<CutPush>() as u32,
+                push: crate::gpu::PushLayout::of::<CutPush>(),
                 specialization,
-                shared_bytes: 0,
             },
         )
         .map_err(dev("building the cut pass"))?;
@@ -171,12 +170,7 @@ impl SpectralRenderer {
                 (cs | fs, vk::AccessFlags::SHADER_READ | vk::AccessFlags::SHADER_WRITE),
             );
             let groups = (cut_push.elements.div_ceil(c.pass.local_size()[0]), planes.len() as u32, 1);
-            c.pass.record_dispatch(
-                rec,
-                &c.pass_set,
-                bytemuck::bytes_of(&cut_push),
-                [groups.0, groups.1, groups.2],
-            );
+            c.pass.record_dispatch(rec, &c.pass_set, &cut_push, [groups.0, groups.1, groups.2]);
             rec.memory_barrier(
                 (cs, vk::AccessFlags::SHADER_WRITE),
                 (
@@ -186,7 +180,7 @@ impl SpectralRenderer {
             );
         };
         let draw = move |rec: &mut Recorder<'_>| {
-            let bytes = bytemuck::bytes_of(&push);
+            let bytes = &push;
             pipeline.record_draw_indirect(rec, extent, set, bytes, Some(c.vertices.whole()), c.draw.whole());
         };
         Ok((Box::new(pre), Box::new(draw)))

@@ -26,7 +26,7 @@ use std::collections::HashMap;
 use std::sync::Arc;
 
 use ash::vk;
-use bytemuck::{Pod, Zeroable};
+use bytemuck::Zeroable;
 use glam::Mat4;
 
 use super::basis::{NodeSet, MAX_ORDER};
@@ -113,15 +113,15 @@ const DRAW_BINDINGS: [BindingKind; 4] = [
     BindingKind::StorageBuffer,
 ];
 
-/// `spectral_push.glsl`.
-#[repr(C)]
-#[derive(Clone, Copy, Pod, Zeroable)]
-struct SpectralPush {
-    view_proj: [f32; 16],
-    pixel_to_world: [f32; 4],
-    range: [f32; 4],
-    misc: [f32; 4],
-    flags: [u32; 4],
+crate::push_constants! {
+    /// `spectral_push.glsl`.
+    struct SpectralPush {
+        view_proj: [f32; 16],
+        pixel_to_world: [f32; 4],
+        range: [f32; 4],
+        misc: [f32; 4],
+        flags: [u32; 4],
+    }
 }
 
 const MODE_PER_PIXEL: u32 = 0;
@@ -342,7 +342,7 @@ impl SpectralRenderer {
         let mut desc = GraphicsPipelineDesc::new(name, vertex, fragment, target.render_pass());
         desc.bindings = &DRAW_BINDINGS;
         desc.specialization = &self.specialization;
-        desc.push_constant_bytes = std::mem::size_of::<SpectralPush>() as u32;
+        desc.push = crate::gpu::PushLayout::of::<SpectralPush>();
         desc.vertex_stride = std::mem::size_of::<DrawVertex>() as u32;
         desc.vertex_attributes = &DRAW_VERTEX_ATTRIBUTES;
         desc
@@ -519,7 +519,7 @@ impl SpectralRenderer {
             let x = groups.min(65_535);
             let y = groups.div_ceil(x);
             let set = t.set.as_ref().expect("bound in tessellator_for");
-            t.pipeline.record_dispatch(rec, set, bytemuck::bytes_of(&push), [x as u32, y as u32, 1]);
+            t.pipeline.record_dispatch(rec, set, &push, [x as u32, y as u32, 1]);
             rec.memory_barrier(
                 (cs, vk::AccessFlags::SHADER_WRITE),
                 (
@@ -535,7 +535,7 @@ impl SpectralRenderer {
             (&self.proxies, self.counts[0])
         };
         let draw = move |rec: &mut Recorder<'_>| {
-            let bytes = bytemuck::bytes_of(&push);
+            let bytes = &push;
             match tess {
                 Some(t) => p.fill.record_draw_indirect(
                     rec,
@@ -555,7 +555,7 @@ impl SpectralRenderer {
                     let mut lines = push;
                     lines.flags[2] = mode;
                     lines.misc[0] = offset;
-                    let bytes = bytemuck::bytes_of(&lines);
+                    let bytes = &lines;
                     p.lines.record_draw(rec, extent, &p.lines_set, bytes, Some(edges.whole()), edge_count);
                 }
             }

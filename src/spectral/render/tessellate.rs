@@ -83,9 +83,8 @@ impl SpectralRenderer {
                     name: "spectral tessellation",
                     spirv: crate::spectral::shaders::TESSELLATE,
                     bindings: &bindings,
-                    push_constant_bytes: std::mem::size_of::<SpectralPush>() as u32,
+                    push: crate::gpu::PushLayout::of::<SpectralPush>(),
                     specialization: &self.specialization,
-                    shared_bytes: 0,
                 },
             )
             .map_err(dev("building the tessellation pass"))?;

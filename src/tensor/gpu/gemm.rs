@@ -1,23 +1,26 @@
 //! The shared-memory tiled SGEMM (`shaders-glsl/tensor/gemm.comp`, tiling in
 //! `shaders-glsl/include/gemm_tile.glsl`).
 
-use bytemuck::{Pod, Zeroable};
-
 use crate::gpu::{
     BindingKind, BufferBinding, ComputePipeline, ComputePipelineDesc, DescriptorSet, Gpu, GpuResult,
     Recorder, Resource,
 };
 
-/// Tile edge of `gemm.comp` (rows and columns of C per workgroup).
+/// Tile edge of `include/gemm_tile.glsl` (rows and columns of C per workgroup). Its shared
+/// tiles hold `2 · GEMM_TILE · GEMM_KT` floats, which `tests/shader_layout.rs` checks against
+/// the workgroup memory the SPIR-V declares.
 pub const GEMM_TILE: u32 = 64;
 
-#[repr(C)]
-#[derive(Clone, Copy, Pod, Zeroable)]
-struct GemmPush {
-    m: u32,
-    n: u32,
-    k: u32,
-    accumulate: u32,
+/// The k-step of `include/gemm_tile.glsl` (the depth of its shared tiles).
+pub const GEMM_KT: u32 = 32;
+
+crate::push_constants! {
+    struct GemmPush {
+        m: u32,
+        n: u32,
+        k: u32,
+        accumulate: u32,
+    }
 }
 
 /// `C = A·B` or `C += A·B` in f32, row-major, any sizes.
@@ -60,9 +63,8 @@ impl Gemm {
                 name: "gemm",
                 spirv: crate::tensor::shaders::GEMM,
                 bindings: &[BindingKind::StorageBuffer; 3],
-                push_constant_bytes: std::mem::size_of::<GemmPush>() as u32,
+                push: crate::gpu::PushLayout::of::<GemmPush>(),
                 specialization: &[],
-                shared_bytes: 16 * 1024,
             },
         )?;
         Ok(Self { pipeline })
@@ -98,6 +100,6 @@ impl Gemm {
     pub fn record(&self, rec: &mut Recorder<'_>, binding: &GemmBinding, accumulate: bool) {
         let push = GemmPush { m: binding.m, n: binding.n, k: binding.k, accumulate: u32::from(accumulate) };
         let groups = [binding.n.div_ceil(GEMM_TILE), binding.m.div_ceil(GEMM_TILE), 1];
-        self.pipeline.record_dispatch(rec, &binding.set, bytemuck::bytes_of(&push), groups);
+        self.pipeline.record_dispatch(rec, &binding.set, &push, groups);
     }
 }

@@ -7,5 +7,5 @@
 mod gemm;
 mod solve;
 
-pub use gemm::{Gemm, GemmBinding, GemmShape, GEMM_TILE};
+pub use gemm::{Gemm, GemmBinding, GemmShape, GEMM_KT, GEMM_TILE};
 pub use solve::BatchedSolve;

@@ -12,11 +12,11 @@ use crate::gpu::{
 };
 use crate::tensor::{check_system, pivot_tolerance, Tensor, TensorError};
 
-#[repr(C)]
-#[derive(Clone, Copy, Pod, Zeroable)]
-struct SolvePush {
-    n: u32,
-    batch: u32,
+crate::push_constants! {
+    struct SolvePush {
+        n: u32,
+        batch: u32,
+    }
 }
 
 #[repr(C)]
@@ -40,9 +40,8 @@ impl BatchedSolve {
                 name: "batched LU solve",
                 spirv: crate::tensor::shaders::LU_SOLVE,
                 bindings: &[BindingKind::StorageBuffer; 4],
-                push_constant_bytes: std::mem::size_of::<SolvePush>() as u32,
+                push: crate::gpu::PushLayout::of::<SolvePush>(),
                 specialization: &[],
-                shared_bytes: 64 * 8,
             },
         )?;
         Ok(Self { pipeline })
@@ -143,12 +142,7 @@ impl BatchedSolve {
                     submitter.upload(&tol, 0, &t)?;
                     let push = SolvePush { n: n as u32, batch: chunk.len() as u32 };
                     submitter.submit(&mut |rec| {
-                        self.pipeline.record_dispatch(
-                            rec,
-                            &set,
-                            bytemuck::bytes_of(&push),
-                            [chunk.len() as u32, 1, 1],
-                        )
+                        self.pipeline.record_dispatch(rec, &set, &push, [chunk.len() as u32, 1, 1])
                     })?;
                     let x = submitter.record_readback(&xs, 0, (chunk.len() * n) as u64)?;
                     let st = submitter.record_readback(&status, 0, chunk.len() as u64)?;
