@@ -1,11 +1,12 @@
 //! The host-embedding example, run on lavapipe with the validation layer and synchronization
 //! validation on (the host's own messenger): a six-frame host loop, two frames in flight, in
-//! which galerkin records particles, a spacetime slice, the spectral prepass, a field drawn by
+//! which galerkin records particles, a spacetime slice, radiosity form factors and Jacobi sweeps,
+//! the spectral prepass, a field drawn by
 //! its own pass into a host image, and spectral and spacetime draws inside the host's own
 //! render pass in viewports the host chose; the host checks every frame's pixels and the
 //! particles, and there must be no validation error, before or after galerkin drops.
 
-#[path = "../examples/embed_host.rs"]
+#[path = "../examples/embed_host/main.rs"]
 mod embed_host;
 
 #[test]
@@ -32,4 +33,13 @@ fn a_plain_ash_host_embeds_galerkin() {
     // Uniform flow: the closed form U·t; device positions in f32 near 2.0 round at ~1.2e-7 per
     // substep over 60 substeps.
     assert!(report.particle_error < 1e-4, "{report:?}");
+    // Form factors recorded in the host's frames: f32 against the CPU's f64 within 5·10⁻⁵ of
+    // max(|F|, 10⁻³ max F), at most 0.1 % of visible pairs flipped by a grazing segment or the
+    // facing threshold (the bounds of tests/radiosity_gpu.rs, where they are explained).
+    assert!(report.form_factor_error < 5e-5, "{report:?}");
+    assert!(report.form_factor_flips.0 * 1000 <= report.form_factor_flips.1, "{report:?}");
+    // 48 Jacobi sweeps over six frames, against the same sweeps in f64 on the device's F:
+    // each sweep's f32 sums of ~500 terms round at ~10⁻⁷ relative; 10⁻⁵ of the largest value.
+    assert_eq!(report.sweeps, 48);
+    assert!(report.radiosity_error <= 1e-5, "{report:?}");
 }

@@ -67,6 +67,11 @@ pub struct FormFactorPass {
 }
 
 impl FormFactorPass {
+    /// The rows it fills (for [`GpuRadiosity::prepare_jacobi`] and the sweeps that read them).
+    pub fn rows(&self) -> &DeviceFormFactors {
+        &self.rows
+    }
+
     /// The rows, once the recording of [`GpuRadiosity::record_form_factors`] has finished.
     pub fn finish(self) -> DeviceFormFactors {
         self.rows
@@ -223,12 +228,20 @@ impl GpuRadiosity {
         })
     }
 
-    /// Records the form-factor rows of `pass` (outside a render pass): one dispatch per block
-    /// of rows, then a barrier that makes the rows visible to compute shaders (the Jacobi
-    /// sweeps) and transfers (a readback).
+    /// Records the form-factor rows of `pass` (outside a render pass): a barrier that orders
+    /// them after earlier compute and transfer reads of the rows (the previous frame's sweeps
+    /// or readback), one dispatch per block of rows, then a barrier that makes the rows
+    /// visible to compute shaders (the Jacobi sweeps) and transfers (a readback).
     pub fn record_form_factors(&self, rec: &mut Recorder<'_>, pass: &FormFactorPass) {
         let pipeline = &self.form_factors[usize::from(pass.near == NearField::Regularised)];
         let n = pass.rows.n;
+        rec.memory_barrier(
+            (
+                vk::PipelineStageFlags::COMPUTE_SHADER | vk::PipelineStageFlags::TRANSFER,
+                vk::AccessFlags::empty(),
+            ),
+            (vk::PipelineStageFlags::COMPUTE_SHADER, vk::AccessFlags::empty()),
+        );
         for (&(row0, count), set) in pass.rows.blocks.iter().zip(&pass.sets) {
             let push = Push { n: n as u32, row0, rows: count, extra: pass.bvh_nodes };
             let [wx, wy, _] = pipeline.local_size();
