@@ -219,6 +219,11 @@ impl<T: Pod> Buffer<T> {
         Some(unsafe { std::slice::from_raw_parts(p.as_ptr().cast::<T>(), self.len as usize) })
     }
 
+    /// True unless a recording that uses the buffer may still be running.
+    pub(crate) fn is_idle(&self) -> bool {
+        self.life.pending() == 0
+    }
+
     /// Mutable mapped elements of a host-visible buffer. An error if the memory is not
     /// host-visible, or if recorded GPU work not yet known to be finished may read it (wait
     /// for the submission, or drop the host's [`crate::gpu::Recording`], first).

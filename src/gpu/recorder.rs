@@ -212,6 +212,32 @@ impl<'g> Recorder<'g> {
         unsafe { self.device().cmd_copy_buffer(self.cmd, src.raw(), dst.raw(), &[region]) };
     }
 
+    /// Records a copy of `bytes` bytes between buffers of any element types (staging copies).
+    /// Panics if either range is outside its buffer.
+    pub(crate) fn copy_bytes<A: Pod, B: Pod>(
+        &mut self,
+        src: &Buffer<A>,
+        src_offset: u64,
+        dst: &Buffer<B>,
+        dst_offset: u64,
+        bytes: u64,
+    ) {
+        assert!(
+            src_offset + bytes <= src.size_bytes() && dst_offset + bytes <= dst.size_bytes(),
+            "copy of {bytes} bytes from `{}`+{src_offset} to `{}`+{dst_offset} is out of range",
+            src.name(),
+            dst.name()
+        );
+        if bytes == 0 {
+            return;
+        }
+        self.keep(src);
+        self.keep(dst);
+        let region = vk::BufferCopy { src_offset, dst_offset, size: bytes };
+        // SAFETY: recording on this device; both ranges lie inside live buffers (kept alive).
+        unsafe { self.device().cmd_copy_buffer(self.cmd, src.raw(), dst.raw(), &[region]) };
+    }
+
     /// Keeps the buffer of `binding` alive and returns its handle (for passes recording a
     /// command that names it).
     pub(crate) fn bound(&mut self, binding: &BufferBinding<'_>) -> vk::Buffer {

@@ -32,7 +32,8 @@ impl StagingPool {
             let best = idle
                 .iter()
                 .enumerate()
-                .filter(|(_, b)| b.kind() == kind && b.size_bytes() >= bytes)
+                // A buffer given back while a recording still uses it waits for that.
+                .filter(|(_, b)| b.kind() == kind && b.size_bytes() >= bytes && b.is_idle())
                 .min_by_key(|(_, b)| b.size_bytes())
                 .map(|(i, _)| i);
             if let Some(i) = best {
@@ -47,7 +48,9 @@ impl StagingPool {
         Buffer::new(gpu, name, size, vk::BufferUsageFlags::empty(), kind)
     }
 
-    /// Returns an idle buffer (its transfers have finished) to the pool.
+    /// Returns a buffer to the pool: one whose transfers have finished, or one a pending
+    /// recording still uses ([`Self::take`] hands it out again only once that recording is
+    /// known to be finished).
     pub(crate) fn give_back(&self, buffer: Buffer<u8>) {
         let mut idle = self.idle.lock().unwrap_or_else(|p| p.into_inner());
         idle.push(buffer);

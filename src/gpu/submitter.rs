@@ -74,19 +74,19 @@ impl dyn Submitter + '_ {
         if !dst.is_on(self.gpu()) {
             return Err(GpuError::WrongDevice { name: dst.name().to_string() });
         }
-        let elem = std::mem::size_of::<T>();
-        let per_chunk = (STAGING_CHUNK_BYTES as usize / elem.max(1)).max(1);
-        for (i, part) in data.chunks(per_chunk).enumerate() {
-            let mut staging = Buffer::<T>::new(
-                self.gpu(),
-                "upload staging",
-                part.len() as u64,
-                vk::BufferUsageFlags::empty(),
-                MemoryKind::CpuToGpu,
-            )?;
-            staging.mapped_mut()?.copy_from_slice(part);
-            let at = first + (i * per_chunk) as u64;
-            self.submit(&mut |rec| rec.copy_buffer(&staging, 0, dst, at, part.len() as u64))?;
+        let bytes: &[u8] = bytemuck::cast_slice(data);
+        let elem = std::mem::size_of::<T>() as u64;
+        let chunk = STAGING_CHUNK_BYTES as usize;
+        for (i, part) in bytes.chunks(chunk).enumerate() {
+            let gpu = self.gpu().clone();
+            let mut staging = gpu.staging.take(&gpu, MemoryKind::CpuToGpu, part.len() as u64)?;
+            staging.mapped_mut()?[..part.len()].copy_from_slice(part);
+            let at = first * elem + (i * chunk) as u64;
+            let len = part.len() as u64;
+            let submitted = self.submit(&mut |rec| rec.copy_bytes(&staging, 0, dst, at, len));
+            // Back to the pool at once: it is handed out again only when the copy is done.
+            gpu.staging.give_back(staging);
+            submitted?;
         }
         Ok(())
     }
@@ -133,39 +133,65 @@ impl dyn Submitter + '_ {
         if !src.is_on(self.gpu()) {
             return Err(GpuError::WrongDevice { name: src.name().to_string() });
         }
-        let staging = Buffer::<T>::new(
-            self.gpu(),
-            &format!("{} readback", src.name()),
-            len.max(1),
-            vk::BufferUsageFlags::empty(),
-            MemoryKind::GpuToCpu,
-        )?;
+        let gpu = self.gpu().clone();
+        let elem = std::mem::size_of::<T>() as u64;
+        let bytes = len * elem;
+        // One pooled buffer when it fits a staging chunk; a buffer of its own otherwise.
+        let staging = if bytes <= STAGING_CHUNK_BYTES {
+            gpu.staging.take(&gpu, MemoryKind::GpuToCpu, bytes)?
+        } else {
+            Buffer::<u8>::new(
+                &gpu,
+                &format!("{} readback", src.name()),
+                bytes,
+                vk::BufferUsageFlags::empty(),
+                MemoryKind::GpuToCpu,
+            )?
+        };
         self.submit(&mut |rec| {
-            rec.copy_buffer(src, first, &staging, 0, len);
+            rec.copy_bytes(src, first * elem, &staging, 0, bytes);
             rec.memory_barrier(
                 (vk::PipelineStageFlags::TRANSFER, vk::AccessFlags::TRANSFER_WRITE),
                 (vk::PipelineStageFlags::HOST, vk::AccessFlags::HOST_READ),
             );
         })?;
-        Ok(Readback { staging, len: len as usize })
+        Ok(Readback { staging: Some(staging), len: len as usize, gpu, _t: std::marker::PhantomData })
     }
 }
 
 /// Results copied into host-visible memory by [`dyn Submitter::record_readback`].
 pub struct Readback<T: Pod> {
-    staging: Buffer<T>,
+    /// Pooled (or its own) staging buffer, returned to the pool when dropped.
+    staging: Option<Buffer<u8>>,
     len: usize,
+    gpu: Gpu,
+    _t: std::marker::PhantomData<T>,
 }
 
 impl<T: Pod> Readback<T> {
     /// The values, once the copy has completed; [`GpuError::NotMappable`] while a recording
     /// that writes them may still be running.
     pub fn read(&self) -> GpuResult<Vec<T>> {
-        let mapped = self.staging.mapped().ok_or_else(|| GpuError::NotMappable {
-            name: self.staging.name().to_string(),
+        let staging = self
+            .staging
+            .as_ref()
+            .ok_or(GpuError::NotMappable { name: "a readback".into(), reason: "it was already returned" })?;
+        let mapped = staging.mapped().ok_or_else(|| GpuError::NotMappable {
+            name: staging.name().to_string(),
             reason: "its copy may still be running (complete the submitter first)",
         })?;
-        Ok(mapped[..self.len].to_vec())
+        let bytes = self.len * std::mem::size_of::<T>();
+        Ok(bytemuck::pod_collect_to_vec(&mapped[..bytes]))
+    }
+}
+
+impl<T: Pod> Drop for Readback<T> {
+    fn drop(&mut self) {
+        if let Some(b) = self.staging.take() {
+            if b.size_bytes() <= STAGING_CHUNK_BYTES {
+                self.gpu.staging.give_back(b);
+            }
+        }
     }
 }
 
