@@ -68,6 +68,15 @@ pub enum SpacetimeError {
         /// Records per binding.
         limit: usize,
     },
+    /// The slice at a time still overflowed its output buffers after they were grown to what
+    /// it asked for (a bug in the slicer's counts, not bad data).
+    #[error("the slice at t = {t} still overflowed its buffers after {rounds} rounds of growing them")]
+    SliceOverflow {
+        /// The time.
+        t: f64,
+        /// Rounds tried.
+        rounds: usize,
+    },
     /// A device failure.
     #[error("{context}: {source}")]
     Device {

@@ -10,6 +10,10 @@ use bytemuck::Zeroable;
 
 use super::*;
 
+/// Rounds of slicing [`SpacetimeRenderer::slice`] tries before it gives up (each redo grows the
+/// buffers to what the slice asked for; two suffice).
+const MAX_SLICE_ROUNDS: usize = 4;
+
 impl SpacetimeRenderer {
     /// Makes `active` resident. The window is a ring of `capacity` records (record `e` in slot
     /// `e mod capacity`) covering `[start, start + capacity)` from the active range's first
@@ -244,18 +248,20 @@ impl SpacetimeRenderer {
                 return Ok(stats);
             }
         }
-        self.sliced = None;
-        let active = self.data.active_range(t);
-        let streamed = self.make_resident(active.clone())?;
-        loop {
-            self.bind_slicer()?;
-            let push = self.slice_push(t, subdivide, &active);
-            self.gpu.run(|rec| self.record_slice(rec, &push, None)).map_err(dev("slicing"))?;
-            if let Some(stats) = self.finish_slice(active.len(), streamed)? {
-                self.sliced = Some((t, subdivide, stats));
+        let mut plan = self.prepare_slice(t, subdivide)?;
+        let streamed = plan.streamed;
+        let gpu = self.gpu.clone();
+        // Each redo follows a growth of the buffers to what the slice asked for: the cuts
+        // first, then triangles and lines; more rounds than that mean the counts are wrong.
+        for _ in 0..MAX_SLICE_ROUNDS {
+            gpu.run(|rec| self.record_slice_into(rec, &plan)).map_err(dev("slicing"))?;
+            if let Some(stats) = self.finish_host_slice(&plan)? {
                 return Ok(stats);
             }
+            // The buffers grew: bind them again, with the first round's streamed count.
+            plan = SlicePlan { streamed, ..self.prepare_slice(t, subdivide)? };
         }
+        Err(SpacetimeError::SliceOverflow { t, rounds: MAX_SLICE_ROUNDS })
     }
 
     /// For a frame the host records itself: streams the elements active at `t` to the device
