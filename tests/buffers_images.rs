@@ -71,7 +71,9 @@ fn colormap_textures_upload_and_ramps_load() {
     let cw = Colormap::cool_warm();
     assert!(cw.texels()[0][2] > cw.texels()[0][0] && cw.texels()[255][0] > cw.texels()[255][2]);
 
-    let dir = std::env::temp_dir().join(format!("galerkin-ramp-{}", std::process::id()));
+    let scratch = tempfile::Builder::new().prefix("galerkin-").tempdir().expect("a scratch directory");
+
+    let dir = scratch.path().to_path_buf();
     let path = dir.join("ramp.png");
     write_png_rgba8(
         &path,
@@ -92,12 +94,12 @@ fn colormap_textures_upload_and_ramps_load() {
     let err = Colormap::by_name(path.to_str().unwrap()).unwrap_err().to_string();
     assert!(err.contains("ramp.png") && err.contains("2 to 4096"), "{err}");
     assert!(Colormap::by_name("plasma-ish").unwrap_err().to_string().contains("viridis"));
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]
 fn png_and_exr_files_round_trip_without_leftovers() {
-    let dir = std::env::temp_dir().join(format!("galerkin-io-{}", std::process::id()));
+    let scratch = tempfile::Builder::new().prefix("galerkin-").tempdir().expect("a scratch directory");
+    let dir = scratch.path().to_path_buf();
     let rgba: Vec<u8> = (0..4 * 5 * 3).map(|i| (i * 7 % 256) as u8).collect();
     write_png_rgba8(&dir.join("a.png"), 5, 3, &rgba).unwrap();
     assert_eq!(read_png_rgba8(&dir.join("a.png")).unwrap(), (5, 3, rgba));
@@ -117,5 +119,4 @@ fn png_and_exr_files_round_trip_without_leftovers() {
     let names: Vec<_> =
         std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().file_name().into_string().unwrap()).collect();
     assert!(names.iter().all(|n| !n.ends_with(".tmp")), "temporary files left: {names:?}");
-    std::fs::remove_dir_all(&dir).unwrap();
 }

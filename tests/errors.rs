@@ -56,8 +56,8 @@ fn the_cli_reports_no_driver() {
 
 #[test]
 fn the_cli_names_file_and_line_of_a_bad_scene() {
-    let dir = std::env::temp_dir().join(format!("galerkin-errors-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let scratch = tempfile::Builder::new().prefix("galerkin-").tempdir().expect("a scratch directory");
+    let dir = scratch.path().to_path_buf();
     let good = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/demo.toml")).unwrap();
     let bad = good.replace("width = 640", "width = -640");
     let path = dir.join("bad.toml");
@@ -69,7 +69,6 @@ fn the_cli_names_file_and_line_of_a_bad_scene() {
     assert_eq!(out.status.code(), Some(1), "{stderr}");
     assert!(stderr.contains(&format!("bad.toml:{line}:")), "{stderr}");
     assert!(!out_dir.exists(), "nothing may be written for a bad scene");
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]

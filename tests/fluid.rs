@@ -405,8 +405,8 @@ fn tunnel_scenes_load_and_bad_keys_name_their_line() {
 
 #[test]
 fn snapshots_stream_back_by_frame_and_by_rows() {
-    let dir = std::env::temp_dir().join(format!("galerkin-snapshots-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
+    let scratch = tempfile::Builder::new().prefix("galerkin-").tempdir().expect("a scratch directory");
+    let dir = scratch.path().to_path_buf();
     let (mesh, topo) = channel(2, 3);
     let meta = SnapshotMeta::new(&mesh, &topo, 0.1, Some(0));
     let mut w = SnapshotWriter::create(&dir, meta.clone(), mesh.cells(), false).expect("create");
@@ -426,7 +426,6 @@ fn snapshots_stream_back_by_frame_and_by_rows() {
     let rows = src.rows(3..6).expect("rows");
     assert_eq!(rows.get(&[1, 3]), -3004.0);
     assert!(r.frame("u", 9).is_err() && r.frame("q", 0).is_err());
-    std::fs::remove_dir_all(&dir).expect("clean up");
 }
 
 #[test]
@@ -496,8 +495,8 @@ fn dist3(a: [f64; 3], b: [f64; 3]) -> f64 {
 
 #[test]
 fn a_users_gmsh_mesh_runs_as_a_periodic_scene() {
-    let dir = std::env::temp_dir().join(format!("galerkin-msh-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("temp dir");
+    let scratch = tempfile::Builder::new().prefix("galerkin-").tempdir().expect("a scratch directory");
+    let dir = scratch.path().to_path_buf();
     let (mesh, _) = channel(3, 2);
     std::fs::write(dir.join("channel.msh"), galerkin::mesh::gmsh::write_msh(&mesh, true)).expect("write msh");
     let scene_text = "[mesh]\nfile = \"channel.msh\"\nperiodic_axis = 0\n[flow]\ninitial_velocity = [0.5, 0.0, 0.0]\nviscosity = 1e-3\nframe_time = 0.05\nframes = 3\n";
@@ -518,14 +517,13 @@ fn a_users_gmsh_mesh_runs_as_a_periodic_scene() {
     std::fs::write(dir.join("bad.toml"), scene_text.replace("channel.msh", "nope.msh")).expect("write");
     let e = FluidScene::load(&dir.join("bad.toml")).expect_err("missing").to_string();
     assert!(e.contains("bad.toml:2:") && e.contains("nope.msh"), "{e}");
-    std::fs::remove_dir_all(&dir).expect("clean up");
 }
 
 #[test]
 fn the_streaming_pca_reads_velocity_snapshots_from_disk() {
     use galerkin::reduce::{pca, Truncation};
-    let dir = std::env::temp_dir().join(format!("galerkin-fluid-pca-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
+    let scratch = tempfile::Builder::new().prefix("galerkin-").tempdir().expect("a scratch directory");
+    let dir = scratch.path().to_path_buf();
     let scene = FluidScene::load(std::path::Path::new("scenes/fluid/tunnel_small.toml")).expect("scene");
     let (mesh, topo) = (&scene.mesh, &scene.topology);
     let mut solver = FluidSolver::new(mesh.clone(), topo.clone(), scene.params).expect("solver");
@@ -553,5 +551,4 @@ fn the_streaming_pca_reads_velocity_snapshots_from_disk() {
         let norm: f64 = u.iter().map(|a| a * a).sum::<f64>();
         assert!(err <= 1e-4 * norm, "frame {k}: relative error² {}", err / norm);
     }
-    std::fs::remove_dir_all(&dir).expect("clean up");
 }

@@ -72,7 +72,8 @@ fn every_frame_of_the_bird_keeps_the_volume_and_the_surface_vertices_on_the_bird
 fn the_bird_written_as_an_obj_sequence_loads_back_as_the_same_domain() {
     let frames = 12;
     let mut bird = load(&scene_text(frames, 3));
-    let dir = std::env::temp_dir().join(format!("galerkin-bird-obj-{}", std::process::id()));
+    let scratch = tempfile::Builder::new().prefix("galerkin-").tempdir().expect("a scratch directory");
+    let dir = scratch.path().to_path_buf();
     bird.animation().expect("a bird").write_sequence(&dir, "bird").expect("written");
     let text =
         scene_text(frames, 3).replace("[bird]\nframes = 12\n", "[surface]\nobj_sequence = \"bird_*.obj\"\n");
@@ -85,7 +86,6 @@ fn the_bird_written_as_an_obj_sequence_loads_back_as_the_same_domain() {
         // 17 significant digits in the files: the same doubles, the same stuffing.
         assert!(worst < 1e-13, "frame {frame}: {worst:e}");
     }
-    std::fs::remove_dir_all(&dir).expect("clean up");
 }
 
 #[test]
@@ -132,8 +132,8 @@ fn bad_bird_scenes_are_refused_naming_the_key() {
 
 #[test]
 fn the_cli_writes_a_scene_s_surface_animation_as_an_obj_sequence() {
-    let dir = std::env::temp_dir().join(format!("galerkin-bird-cli-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("dir");
+    let scratch = tempfile::Builder::new().prefix("galerkin-").tempdir().expect("a scratch directory");
+    let dir = scratch.path().to_path_buf();
     let scene = dir.join("bird.toml");
     std::fs::write(&scene, scene_text(6, 2)).expect("scene");
     let out_dir = dir.join("obj");
@@ -170,5 +170,4 @@ fn the_cli_writes_a_scene_s_surface_animation_as_an_obj_sequence() {
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(1), "{stderr}");
     assert!(stderr.contains("only [bird] and [surface] scenes"), "{stderr}");
-    std::fs::remove_dir_all(&dir).expect("clean up");
 }

@@ -12,7 +12,8 @@ use common::obj_box::{box_obj, write_scene, SCENE};
 
 #[test]
 fn an_obj_scene_with_a_deformation_target_trains_and_reduces() {
-    let dir = std::env::temp_dir().join(format!("galerkin-obj-{}", std::process::id()));
+    let scratch = tempfile::Builder::new().prefix("galerkin-").tempdir().expect("a scratch directory");
+    let dir = scratch.path().to_path_buf();
     let scene = ObjScene::load(&write_scene(&dir, SCENE, &box_obj(1.5))).unwrap();
     assert_eq!(scene.names(), ["stretch"]);
     let (m0, m1) = (scene.mesh(&[0.0]).unwrap(), scene.mesh(&[1.0]).unwrap());
@@ -37,12 +38,12 @@ fn an_obj_scene_with_a_deformation_target_trains_and_reduces() {
         let e = relative_error(&b, &c.radiosity, &c.geometry.areas);
         assert!(e < 2e-2, "configuration {:?}: {e}", c.params);
     }
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]
 fn bad_obj_scenes_name_the_file() {
-    let dir = std::env::temp_dir().join(format!("galerkin-obj-bad-{}", std::process::id()));
+    let scratch = tempfile::Builder::new().prefix("galerkin-").tempdir().expect("a scratch directory");
+    let dir = scratch.path().to_path_buf();
     // A target with another topology.
     let short: String = box_obj(1.5).lines().take(20).map(|l| format!("{l}\n")).collect();
     let e = ObjScene::load(&write_scene(&dir, SCENE, &short)).unwrap_err().to_string();
@@ -58,7 +59,6 @@ fn bad_obj_scenes_name_the_file() {
     std::fs::remove_file(dir.join("box.obj")).unwrap();
     let e = ObjScene::load(&dir.join("scene.toml")).unwrap_err().to_string();
     assert!(e.contains("box.obj"), "{e}");
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// An OBJ scene is one of the scene kinds the CLI and the viewer take: its parameters by name,
@@ -71,7 +71,8 @@ fn the_viewer_moves_an_obj_scenes_parameter_by_number_and_brackets() {
     use galerkin::radiosity::render::{Shading, Viewpoint};
     use galerkin::radiosity::viewer::{RadiosityContent, ViewSettings};
     use galerkin::render::viewer::ViewerContent;
-    let dir = std::env::temp_dir().join(format!("galerkin-obj-viewer-{}", std::process::id()));
+    let scratch = tempfile::Builder::new().prefix("galerkin-").tempdir().expect("a scratch directory");
+    let dir = scratch.path().to_path_buf();
     let scene = AnyScene::load(&write_scene(&dir, SCENE, &box_obj(1.5)), None).unwrap();
     assert_eq!(scene.names(), ["stretch"]);
     let e = scene.parameters_from(&[("width".into(), 1.0)]).unwrap_err().to_string();
@@ -98,5 +99,4 @@ fn the_viewer_moves_an_obj_scenes_parameter_by_number_and_brackets() {
     }
     assert!(content.title().contains("[stretch 0.00]"), "{}", content.title());
     assert!(!content.key("["), "clamped at the range's end");
-    std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -112,8 +112,8 @@ fn streaming_pca_matches_an_independent_thin_svd() {
     let truncation = Truncation { energy: 1.0, max_modes: 5, centred: false };
 
     // From a file, read in blocks.
-    let dir = std::env::temp_dir().join(format!("galerkin-pca-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let scratch = tempfile::Builder::new().prefix("galerkin-").tempdir().expect("a scratch directory");
+    let dir = scratch.path().to_path_buf();
     let path = dir.join("snapshots.f64");
     std::fs::write(&path, s.data().iter().flat_map(|v| v.to_le_bytes()).collect::<Vec<u8>>()).unwrap();
     let from_file = pca("u", &mut SnapshotFile::open(&path, n, k).unwrap(), truncation).unwrap();
@@ -139,7 +139,6 @@ fn streaming_pca_matches_an_independent_thin_svd() {
     std::fs::write(&path, [0u8; 16]).unwrap();
     let err = SnapshotFile::open(&path, n, k).err().unwrap().to_string();
     assert!(err.contains("snapshots.f64") && err.contains("16 bytes"), "{err}");
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]

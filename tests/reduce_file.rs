@@ -36,17 +36,19 @@ fn model_and_bases() -> (Model, Bases) {
     (model, bases)
 }
 
-fn temp(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("galerkin-file-{}-{name}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir.join("model.safetensors")
+/// A scratch directory (removed when dropped) and the model path in it.
+fn temp(name: &str) -> (tempfile::TempDir, PathBuf) {
+    let scratch =
+        tempfile::Builder::new().prefix(&format!("galerkin-{name}-")).tempdir().expect("a scratch directory");
+    let path = scratch.path().join("model.safetensors");
+    (scratch, path)
 }
 
 #[test]
 fn a_saved_model_loads_and_evaluates_identically() {
     let (model, bases) = model_and_bases();
     let reduced = model.reduce(&bases).unwrap();
-    let path = temp("roundtrip");
+    let (_scratch, path) = temp("roundtrip");
     reduced.save(&path).unwrap();
     let loaded = ReducedModel::load(&path).unwrap();
     assert_eq!(loaded, reduced);
@@ -56,7 +58,6 @@ fn a_saved_model_loads_and_evaluates_identically() {
     let names: Vec<_> =
         std::fs::read_dir(path.parent().unwrap()).unwrap().map(|e| e.unwrap().file_name()).collect();
     assert_eq!(names.len(), 1, "no temporary file left: {names:?}");
-    std::fs::remove_dir_all(path.parent().unwrap()).unwrap();
 }
 
 /// Rewrites `path` with its tensors and metadata passed through `edit`.
@@ -84,7 +85,7 @@ fn rewrite(
 fn bad_files_are_refused_with_the_reason() {
     let (model, bases) = model_and_bases();
     let reduced = model.reduce(&bases).unwrap();
-    let path = temp("bad");
+    let (_scratch, path) = temp("bad");
     let err = |p: &Path| ReducedModel::load(p).unwrap_err().to_string();
 
     reduced.save(&path).unwrap();
@@ -114,5 +115,4 @@ fn bad_files_are_refused_with_the_reason() {
         meta.insert("format".into(), "something-else".into());
     });
     assert!(err(&path).contains("not a galerkin reduced model"));
-    std::fs::remove_dir_all(path.parent().unwrap()).unwrap();
 }

@@ -5,19 +5,13 @@
 
 mod common;
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use galerkin::render::{ColorFormat, Colormap, Pixels, RenderTarget};
 use galerkin::spacetime::generate::{pulses, structured_mesh, PULSES_MATERIAL};
 use galerkin::spacetime::{
     gst, vtu, Material, SpacetimeData, SpacetimeError, SpacetimeMesh, SpacetimeRenderer, SpacetimeView,
 };
-
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("galerkin-spacetime-files-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir.join(name)
-}
 
 fn file_error(e: SpacetimeError, path: &Path, wants: &str) {
     let text = e.to_string();
@@ -27,8 +21,9 @@ fn file_error(e: SpacetimeError, path: &Path, wants: &str) {
 
 #[test]
 fn gst_files_round_trip_bit_for_bit() {
+    let scratch = common::Scratch::new();
     let data = SpacetimeData::from_mesh(&pulses(3000)).unwrap();
-    let path = scratch("round.gst");
+    let path = scratch.file("round.gst");
     let summary = gst::write(&path, &data).unwrap();
     assert_eq!(&summary, data.summary());
     let back = gst::open(&path).unwrap();
@@ -42,13 +37,14 @@ fn gst_files_round_trip_bit_for_bit() {
 
 #[test]
 fn malformed_gst_files_are_refused_naming_file_and_element() {
+    let scratch = common::Scratch::new();
     let data = SpacetimeData::from_mesh(&pulses(1500)).unwrap();
-    let good = scratch("good.gst");
+    let good = scratch.file("good.gst");
     gst::write(&good, &data).unwrap();
     let bytes = std::fs::read(&good).unwrap();
     let n = data.len();
     let write = |name: &str, b: &[u8]| {
-        let p = scratch(name);
+        let p = scratch.file(name);
         std::fs::write(&p, b).unwrap();
         p
     };
@@ -93,19 +89,20 @@ fn malformed_gst_files_are_refused_naming_file_and_element() {
     drop(r);
 
     // The writer: out-of-order elements are refused, and an unfinished file leaves nothing.
-    let out = scratch("unfinished.gst");
+    let out = scratch.file("unfinished.gst");
     let mut w = gst::GstWriter::create(&out, data.materials()).unwrap();
     w.push(&data.records()[n - 1]).unwrap();
     file_error(w.push(&data.records()[0]).err().unwrap(), &out, "element 1: lowest time");
     drop(w);
     assert!(!out.exists());
-    assert!(!scratch("unfinished.gst.partial").exists());
+    assert!(!scratch.file("unfinished.gst.partial").exists());
 }
 
 #[test]
 fn vtu_files_round_trip_and_read_ascii_and_compressed_forms() {
+    let scratch = common::Scratch::new();
     let mesh = pulses(1500);
-    let path = scratch("round.vtu");
+    let path = scratch.file("round.vtu");
     vtu::write(&path, &mesh).unwrap();
     let back = vtu::read(&path).unwrap();
     assert_eq!(back, mesh, "appended raw binary round trip is exact (f64)");
@@ -138,7 +135,7 @@ fn vtu_files_round_trip_and_read_ascii_and_compressed_forms() {
 </VTKFile>"#,
         coeff_text.join(" ")
     );
-    let p = scratch("ascii.vtu");
+    let p = scratch.file("ascii.vtu");
     std::fs::write(&p, &ascii).unwrap();
     let m = vtu::read(&p).unwrap();
     assert_eq!(m.materials, vec![Material { lambda: 2.0, mu: 1.0, density: 1.0 }]);
@@ -171,7 +168,7 @@ fn vtu_files_round_trip_and_read_ascii_and_compressed_forms() {
             r#"<DataArray type="Float64" Name="coefficients" NumberOfComponents="40" format="binary">"#,
         )
         .replace(&coeff_text.join(" "), &block(&f64s(&coefficients)));
-    let p = scratch("zlib.vtu");
+    let p = scratch.file("zlib.vtu");
     std::fs::write(&p, &zipped).unwrap();
     assert_eq!(vtu::read(&p).unwrap(), m);
 
@@ -194,11 +191,11 @@ fn vtu_files_round_trip_and_read_ascii_and_compressed_forms() {
         ),
     ];
     for (name, text, wants) in cases {
-        let p = scratch(name);
+        let p = scratch.file(name);
         std::fs::write(&p, text).unwrap();
         file_error(vtu::read(&p).err().unwrap(), &p, wants);
     }
-    let p = scratch("truncated.vtu");
+    let p = scratch.file("truncated.vtu");
     let full = std::fs::read(&path).unwrap();
     std::fs::write(&p, &full[..full.len() - 5000]).unwrap();
     file_error(vtu::read(&p).err().unwrap(), &p, "truncated");
@@ -227,12 +224,13 @@ fn base64(b: &[u8]) -> String {
 /// slices uploaded records and how many of those reused part of the window.
 fn compare_streamed(
     gpu: &galerkin::gpu::Gpu,
+    scratch: &common::Scratch,
     name: &str,
     mesh: &SpacetimeMesh,
     times: &[f64],
 ) -> (usize, usize) {
     let n = mesh.tets.len();
-    let path = scratch(name);
+    let path = scratch.file(name);
     gst::write(&path, &SpacetimeData::from_mesh(mesh).unwrap()).unwrap();
     let colormap = Colormap::viridis();
     let mut whole = SpacetimeRenderer::from_mesh(gpu, mesh, &colormap).unwrap();
@@ -277,6 +275,7 @@ fn compare_streamed(
 
 #[test]
 fn a_streamed_file_renders_as_the_resident_mesh() {
+    let scratch = common::Scratch::new();
     let gpu = common::gpu();
     // 12 time layers: the active range at any t is one layer, a twelfth of the elements, and
     // the window (three layers) moves in whole jumps. Forward in time (as playback), then back.
@@ -285,7 +284,8 @@ fn a_streamed_file_renders_as_the_resident_mesh() {
         &mut mesh,
         &galerkin::spacetime::generate::crossing_pulses(PULSES_MATERIAL, [1.0, 1.0]),
     );
-    let (uploads, _) = compare_streamed(&gpu, "layers.gst", &mesh, &[0.05, 0.3, 0.37, 0.55, 0.81, 0.97, 0.2]);
+    let (uploads, _) =
+        compare_streamed(&gpu, &scratch, "layers.gst", &mesh, &[0.05, 0.3, 0.37, 0.55, 0.81, 0.97, 0.2]);
     assert!(uploads >= 3, "only {uploads} slices streamed");
     // A tent-pitched mesh: lowest times spread continuously, so a moving window keeps part of
     // what it holds and uploads the rest.
@@ -293,11 +293,11 @@ fn a_streamed_file_renders_as_the_resident_mesh() {
         galerkin::spacetime::scenario::generate(galerkin::spacetime::scenario::Scenario::Crack, 12_000);
     let [t0, t1] = SpacetimeData::from_mesh(&crack).unwrap().summary().time;
     let times: Vec<f64> = (0..12).map(|k| t0 + (t1 - t0) * (0.1 + 0.07 * f64::from(k))).collect();
-    let (uploads, partial) = compare_streamed(&gpu, "tents.gst", &crack, &times);
+    let (uploads, partial) = compare_streamed(&gpu, &scratch, "tents.gst", &crack, &times);
     assert!(uploads >= 3, "only {uploads} slices streamed");
     assert!(partial >= 1, "no slice reused the resident part of the window");
     // A window too small for the active range is an error that says so.
-    let path = scratch("layers.gst");
+    let path = scratch.file("layers.gst");
     let mut tiny = SpacetimeRenderer::new(&gpu, gst::open(&path).unwrap(), &Colormap::viridis())
         .unwrap()
         .with_window_limit(10);
@@ -335,15 +335,16 @@ fn frames_report_per_stage_device_times() {
 
 #[test]
 fn the_cli_generates_converts_and_refuses_bad_input_naming_it() {
+    let scratch = common::Scratch::new();
     let run = |args: &[&str]| {
         let out = std::process::Command::new(env!("CARGO_BIN_EXE_galerkin")).args(args).output().unwrap();
         let stderr = String::from_utf8_lossy(&out.stderr).to_string();
         assert!(!stderr.contains("panicked"), "{args:?}: {stderr}");
         (out.status.code(), stderr)
     };
-    let gst_path = scratch("cli.gst");
-    let vtu_path = scratch("cli.vtu");
-    let back = scratch("cli-back.gst");
+    let gst_path = scratch.file("cli.gst");
+    let vtu_path = scratch.file("cli.vtu");
+    let back = scratch.file("cli-back.gst");
     let s = |p: &Path| p.to_string_lossy().to_string();
     // spacetime-gen streams a scenario to .gst; convert to .vtu and back: the same records.
     let (code, err) =
@@ -362,7 +363,7 @@ fn the_cli_generates_converts_and_refuses_bad_input_naming_it() {
     rb.sort();
     assert!(ra == rb, "records changed in the .gst → .vtu → .gst round trip");
     // Bad input: each error names the file (or lists what exists) and exits 1.
-    let missing = scratch("missing.gst");
+    let missing = scratch.file("missing.gst");
     let (code, err) = run(&["spacetime", &s(&missing)]);
     assert_eq!(code, Some(1));
     assert!(err.contains(&s(&missing)), "{err}");
@@ -375,7 +376,7 @@ fn the_cli_generates_converts_and_refuses_bad_input_naming_it() {
     let (code, err) = run(&["spacetime", &s(&gst_path), "--time", "99"]);
     assert_eq!(code, Some(1));
     assert!(err.contains("outside the data set's time span"), "{err}");
-    let text = scratch("notes.txt");
+    let text = scratch.file("notes.txt");
     std::fs::write(&text, "not spacetime data").unwrap();
     let (code, err) = run(&["spacetime-convert", &s(&text), &s(&vtu_path)]);
     assert_eq!(code, Some(1));

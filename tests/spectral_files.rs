@@ -4,19 +4,12 @@
 
 mod common;
 
-use std::path::PathBuf;
 use std::sync::Arc;
 
 use galerkin::render::{ColorFormat, Colormap, Pixels, RenderTarget};
 use galerkin::spectral::generate::annulus;
 use galerkin::spectral::reference::rounding_bound;
 use galerkin::spectral::{vtu, NodeSet, Shape, SpectralRenderer, SpectralView, View2d};
-
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("galerkin-spectral-files-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir.join(name)
-}
 
 /// The reference points of a VTK Lagrange quadrilateral (k = None) or hexahedron of order n in
 /// VTK's documented order: corners counter-clockwise (bottom then top layer), edge interiors
@@ -143,9 +136,10 @@ fn ascii_vtu(n: usize, hex: bool, cells: usize) -> String {
 
 #[test]
 fn vtk_lagrange_cells_reproduce_a_degree_n_polynomial() {
+    let scratch = common::Scratch::new();
     for hex in [false, true] {
         for n in [1, 2, 3, 5, 8] {
-            let path = scratch(&format!("poly-{n}-{hex}.vtu"));
+            let path = scratch.file(&format!("poly-{n}-{hex}.vtu"));
             std::fs::write(&path, ascii_vtu(n, hex, 3)).unwrap();
             let mesh = vtu::read(&path).unwrap();
             assert_eq!(mesh.shape, if hex { Shape::Hexahedron } else { Shape::Quadrilateral });
@@ -177,9 +171,10 @@ fn vtk_lagrange_cells_reproduce_a_degree_n_polynomial() {
 /// The rendered quadrilaterals show p(pixel centre) itself, within each pixel's f32 bound.
 #[test]
 fn rendered_vtk_quadrilaterals_show_the_polynomial() {
+    let scratch = common::Scratch::new();
     let gpu = common::gpu();
     for n in [2, 5, 8] {
-        let path = scratch(&format!("render-{n}.vtu"));
+        let path = scratch.file(&format!("render-{n}.vtu"));
         std::fs::write(&path, ascii_vtu(n, false, 3)).unwrap();
         let mesh = Arc::new(vtu::read(&path).unwrap());
         let mut r = SpectralRenderer::new(&gpu, mesh.clone(), &Colormap::viridis()).unwrap();
@@ -216,9 +211,10 @@ fn rendered_vtk_quadrilaterals_show_the_polynomial() {
 
 #[test]
 fn written_vtu_round_trips() {
+    let scratch = common::Scratch::new();
     for set in [NodeSet::GaussLobatto, NodeSet::Bernstein] {
         let mesh = annulus(2, 3, 4, 5, set).unwrap();
-        let path = scratch(&format!("annulus-{}.vtu", set.name()));
+        let path = scratch.file(&format!("annulus-{}.vtu", set.name()));
         vtu::write(&path, &mesh).unwrap();
         let back = vtu::read(&path).unwrap();
         assert_eq!(back.elements(), mesh.elements());
@@ -242,6 +238,7 @@ fn written_vtu_round_trips() {
 
 #[test]
 fn malformed_vtu_names_file_and_element() {
+    let scratch = common::Scratch::new();
     let good = ascii_vtu(2, false, 3);
     let cases = [
         (good.replace(">70 70 70<", ">70 5 70<"), "element 1: cell type 5"),
@@ -258,7 +255,7 @@ fn malformed_vtu_names_file_and_element() {
         (good[..good.len() / 2].to_string(), "XML"),
     ];
     for (k, (text, expect)) in cases.iter().enumerate() {
-        let path = scratch(&format!("bad-{k}.vtu"));
+        let path = scratch.file(&format!("bad-{k}.vtu"));
         std::fs::write(&path, text).unwrap();
         let e = vtu::read(&path).unwrap_err().to_string();
         assert!(e.contains(expect) && e.contains(&format!("bad-{k}.vtu")), "case {k}: {e}");
@@ -270,7 +267,7 @@ fn malformed_vtu_names_file_and_element() {
         1,
     );
     let nan = nan.replacen(&format!("{:.17e}\n", poly(2, affine(0, [0.0; 3]))), "", 1);
-    let path = scratch("nan.vtu");
+    let path = scratch.file("nan.vtu");
     std::fs::write(&path, nan).unwrap();
     let e = vtu::read(&path).unwrap_err().to_string();
     assert!(e.contains("element 0") && e.contains("not finite"), "{e}");

@@ -7,7 +7,6 @@
 
 use std::collections::HashMap;
 use std::fmt::Write;
-use std::path::PathBuf;
 
 mod common;
 
@@ -16,12 +15,6 @@ use std::sync::Arc;
 use galerkin::render::{ColorFormat, Colormap, Pixels, RenderTarget};
 use galerkin::spectral::basis::gauss_lobatto_nodes;
 use galerkin::spectral::{load, mfem, Shape};
-
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("galerkin-mfem-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir.join(name)
-}
 
 /// A fixed polynomial of total degree ≤ p.
 fn poly(p: usize, x: [f64; 3]) -> f64 {
@@ -234,6 +227,7 @@ fn check_exact(mesh: &galerkin::spectral::SpectralMesh, p: usize, what: &str) {
 
 #[test]
 fn h1_quadrilaterals_and_hexahedra_load_exactly() {
+    let scratch = common::Scratch::new();
     for hex in [false, true] {
         for p in [2, 3, 4] {
             let (elements, vertices) = two_cells(hex);
@@ -242,13 +236,13 @@ fn h1_quadrilaterals_and_hexahedra_load_exactly() {
             let dim = if hex { 3 } else { 2 };
             let collection = format!("H1_{dim}D_P{p}");
             for by_vdim in [false, true] {
-                let mesh_path = scratch(&format!("h1-{hex}-{p}-{by_vdim}.mesh"));
+                let mesh_path = scratch.file(&format!("h1-{hex}-{p}-{by_vdim}.mesh"));
                 std::fs::write(
                     &mesh_path,
                     mesh_text(&elements, &vertices, hex, Some((&collection, &dofs, by_vdim))),
                 )
                 .unwrap();
-                let gf_path = scratch(&format!("u-{hex}-{p}.gf"));
+                let gf_path = scratch.file(&format!("u-{hex}-{p}.gf"));
                 let values: Vec<f64> = dofs.iter().map(|x| poly(p, *x)).collect();
                 std::fs::write(&gf_path, gf_text(&collection, &values)).unwrap();
                 let mesh = load(&mesh_path, std::slice::from_ref(&gf_path)).unwrap();
@@ -263,6 +257,7 @@ fn h1_quadrilaterals_and_hexahedra_load_exactly() {
 
 #[test]
 fn l2_fields_on_straight_meshes_and_solution_streams_load_exactly() {
+    let scratch = common::Scratch::new();
     for hex in [false, true] {
         let p = 3;
         let (elements, vertices) = two_cells(hex);
@@ -296,7 +291,7 @@ fn l2_fields_on_straight_meshes_and_solution_streams_load_exactly() {
             mesh_text(&elements, &vertices, hex, None),
             gf_text(&collection, &values)
         );
-        let path = scratch(&format!("solution-{hex}.sol"));
+        let path = scratch.file(&format!("solution-{hex}.sol"));
         std::fs::write(&path, text).unwrap();
         let mesh = load(&path, &[]).unwrap();
         assert_eq!(mesh.fields[0].name, "solution");
@@ -306,6 +301,7 @@ fn l2_fields_on_straight_meshes_and_solution_streams_load_exactly() {
 
 #[test]
 fn collection_names_and_malformed_files() {
+    let scratch = common::Scratch::new();
     use galerkin::spectral::NodeSet;
     let c = mfem::parse_collection("H1_3D_P2").unwrap();
     assert!(c.continuous && c.dim == 3 && c.order == 2 && c.set == NodeSet::GaussLobatto);
@@ -318,9 +314,9 @@ fn collection_names_and_malformed_files() {
 
     let (elements, vertices) = two_cells(false);
     let good = mesh_text(&elements, &vertices, false, None);
-    let gf = scratch("bad.gf");
+    let gf = scratch.file("bad.gf");
     std::fs::write(&gf, gf_text("H1_2D_P1", &[0.0; 5])).unwrap();
-    let mesh_path = scratch("good.mesh");
+    let mesh_path = scratch.file("good.mesh");
     std::fs::write(&mesh_path, &good).unwrap();
     // 5 values for the 6 vertex DOFs of a P1 space.
     assert_eq!(vertices.len(), 6, "the two cells share an edge");
@@ -345,14 +341,15 @@ fn collection_names_and_malformed_files() {
 /// against the f64 pull-back, within its f32 bound; none missing).
 #[test]
 fn mfem_quadrilaterals_render_per_pixel() {
+    let scratch = common::Scratch::new();
     let gpu = common::gpu();
     let p = 3;
     let (elements, vertices) = two_cells(false);
     let dofs = h1_positions(&elements, &vertices, p, false);
-    let mesh_path = scratch("render.mesh");
+    let mesh_path = scratch.file("render.mesh");
     std::fs::write(&mesh_path, mesh_text(&elements, &vertices, false, Some(("H1_2D_P3", &dofs, true))))
         .unwrap();
-    let gf_path = scratch("render.gf");
+    let gf_path = scratch.file("render.gf");
     let values: Vec<f64> = dofs.iter().map(|x| poly(p, *x)).collect();
     std::fs::write(&gf_path, gf_text("H1_2D_P3", &values)).unwrap();
     let mesh = Arc::new(load(&mesh_path, &[gf_path]).unwrap());

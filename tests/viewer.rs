@@ -44,7 +44,11 @@ impl Drop for Xvfb {
 
 /// Runs `galerkin view --frames frames [extra…]` on display `x` and returns the screenshot.
 fn run_viewer(x: &Xvfb, name: &str, frames: u32, extra: &[&str]) -> (u32, u32, Vec<u8>) {
-    let dir = std::env::temp_dir().join(format!("galerkin-viewer-{name}-{}", std::process::id()));
+    let scratch = tempfile::Builder::new()
+        .prefix(&format!("galerkin-viewer-{name}-"))
+        .tempdir()
+        .expect("a scratch directory");
+    let dir = scratch.path().to_path_buf();
     let shot = dir.join("shot.png");
     let scene_path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/demo.toml");
     let out = Command::new(env!("CARGO_BIN_EXE_galerkin"))
@@ -59,9 +63,7 @@ fn run_viewer(x: &Xvfb, name: &str, frames: u32, extra: &[&str]) -> (u32, u32, V
         .unwrap();
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "galerkin view failed: {stderr}");
-    let shot = read_png_rgba8(&shot).unwrap();
-    std::fs::remove_dir_all(&dir).unwrap();
-    shot
+    read_png_rgba8(&shot).unwrap()
 }
 
 /// Checks a screenshot against the CPU reference of the demo scene at its own size.
@@ -110,7 +112,8 @@ fn the_viewer_follows_a_resize() {
 #[test]
 fn the_spacetime_viewer_animates_t() {
     let x = Xvfb::start();
-    let dir = std::env::temp_dir().join(format!("galerkin-viewer-spacetime-{}", std::process::id()));
+    let scratch = tempfile::Builder::new().prefix("galerkin-").tempdir().expect("a scratch directory");
+    let dir = scratch.path().to_path_buf();
     let shot = dir.join("shot.png");
     let out = Command::new(env!("CARGO_BIN_EXE_galerkin"))
         .args(["spacetime", "--validation", "--generate", "pulses", "--elements", "6000", "--time", "0.2"])
@@ -136,13 +139,16 @@ fn the_spacetime_viewer_animates_t() {
     assert_eq!((w, h), (320, 200));
     let drawn = drawn_pixels(&rgba);
     assert!(drawn > (w * h / 10) as usize, "only {drawn} pixels drawn");
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// Runs `galerkin spectral --validation … --view --frames N --size 320x200 --screenshot …`
 /// on display `x`; returns its stdout and the screenshot's share of drawn pixels.
 fn run_spectral_viewer(x: &Xvfb, name: &str, args: &[&str], frames: u32) -> (String, f64) {
-    let dir = std::env::temp_dir().join(format!("galerkin-viewer-spectral-{name}-{}", std::process::id()));
+    let scratch = tempfile::Builder::new()
+        .prefix(&format!("galerkin-viewer-{name}-"))
+        .tempdir()
+        .expect("a scratch directory");
+    let dir = scratch.path().to_path_buf();
     let shot = dir.join("shot.png");
     let out = Command::new(env!("CARGO_BIN_EXE_galerkin"))
         .args(["spectral", "--validation"])
@@ -161,7 +167,6 @@ fn run_spectral_viewer(x: &Xvfb, name: &str, args: &[&str], frames: u32) -> (Str
     let (w, h, rgba) = read_png_rgba8(&shot).unwrap();
     assert_eq!((w, h), (320, 200));
     let drawn = drawn_pixels(&rgba);
-    std::fs::remove_dir_all(&dir).unwrap();
     (String::from_utf8_lossy(&out.stdout).to_string(), drawn as f64 / f64::from(w * h))
 }
 
@@ -214,13 +219,13 @@ fn run_radiosity_viewer(x: &Xvfb, scene: &Path, shot: &Path) -> (String, f64) {
 #[test]
 fn the_radiosity_viewer_sweeps_the_parameters() {
     let x = Xvfb::start();
-    let dir = std::env::temp_dir().join(format!("galerkin-viewer-radiosity-{}", std::process::id()));
+    let scratch = tempfile::Builder::new().prefix("galerkin-").tempdir().expect("a scratch directory");
+    let dir = scratch.path().to_path_buf();
     let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/radiosity/two_rooms_small.toml");
     let (stdout, drawn) = run_radiosity_viewer(&x, &scene, &dir.join("shot.png"));
     assert!(stdout.contains("radiosity: 496 faces, full mode"), "{stdout}");
     // From inside the living room every pixel sees a wall, the floor or the ceiling.
     assert!(drawn > 0.99, "only {drawn} of the pixels drawn");
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// A user's OBJ scene in the radiosity viewer: its deformation target sweeps, the camera is
@@ -228,20 +233,21 @@ fn the_radiosity_viewer_sweeps_the_parameters() {
 #[test]
 fn the_radiosity_viewer_shows_an_obj_scene() {
     let x = Xvfb::start();
-    let dir = std::env::temp_dir().join(format!("galerkin-viewer-obj-{}", std::process::id()));
+    let scratch = tempfile::Builder::new().prefix("galerkin-").tempdir().expect("a scratch directory");
+    let dir = scratch.path().to_path_buf();
     let scene = common::obj_box::write_scene(&dir, common::obj_box::SCENE, &common::obj_box::box_obj(1.5));
     let (stdout, drawn) = run_radiosity_viewer(&x, &scene, &dir.join("shot.png"));
     assert!(stdout.contains("full mode") && stdout.contains("at stretch="), "{stdout}");
     // Seen from outside: the box covers part of the window, not all of it.
     assert!((0.05..0.95).contains(&drawn), "{drawn} of the pixels drawn");
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// The fluid viewer steps the small tunnel and draws particles over it.
 #[test]
 fn the_fluid_viewer_plays_the_tunnel() {
     let x = Xvfb::start();
-    let dir = std::env::temp_dir().join(format!("galerkin-viewer-fluid-{}", std::process::id()));
+    let scratch = tempfile::Builder::new().prefix("galerkin-").tempdir().expect("a scratch directory");
+    let dir = scratch.path().to_path_buf();
     let shot = dir.join("shot.png");
     let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/fluid/tunnel_small.toml");
     let out = Command::new(env!("CARGO_BIN_EXE_galerkin"))
@@ -262,7 +268,6 @@ fn the_fluid_viewer_plays_the_tunnel() {
     let drawn = drawn_pixels(&rgba);
     // The tunnel (aspect 4:1 in a 3:1 window) covers most of the window, minus the obstacle.
     assert!(drawn as f64 > 0.6 * f64::from(w * h), "only {drawn} of {} pixels drawn", w * h);
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// The fluid viewer plays a reduced model (trained here on two small tunnel runs), its state
@@ -270,7 +275,8 @@ fn the_fluid_viewer_plays_the_tunnel() {
 #[test]
 fn the_fluid_viewer_plays_a_reduced_model() {
     let x = Xvfb::start();
-    let dir = std::env::temp_dir().join(format!("galerkin-viewer-reduced-{}", std::process::id()));
+    let scratch = tempfile::Builder::new().prefix("galerkin-").tempdir().expect("a scratch directory");
+    let dir = scratch.path().to_path_buf();
     let bin = env!("CARGO_BIN_EXE_galerkin");
     let mut runs = Vec::new();
     for scale in ["0.6", "1.4"] {
@@ -279,7 +285,6 @@ fn the_fluid_viewer_plays_a_reduced_model() {
         )
         .unwrap()
         .replace("scale = 1.0", &format!("scale = {scale}"));
-        std::fs::create_dir_all(&dir).unwrap();
         let scene = dir.join(format!("tunnel-{scale}.toml"));
         std::fs::write(&scene, text).unwrap();
         let run = dir.join(format!("run-{scale}"));
@@ -318,5 +323,4 @@ fn the_fluid_viewer_plays_a_reduced_model() {
     let (w, h, rgba) = read_png_rgba8(&shot).unwrap();
     let drawn = drawn_pixels(&rgba);
     assert!(drawn as f64 > 0.6 * f64::from(w * h), "only {drawn} of {} pixels drawn", w * h);
-    std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -145,3 +145,18 @@ pub fn run_probe_specialized<P: galerkin::gpu::PushConstants + 'static>(
     let set = pipeline.bind(gpu, &resources).expect("the probe binds");
     gpu.run(|rec| pipeline.record_dispatch(rec, &set, push, [groups, 1, 1])).expect("the probe runs");
 }
+
+/// A scratch directory for one test, removed (with everything in it) when dropped.
+pub struct Scratch(tempfile::TempDir);
+
+impl Scratch {
+    /// A new empty directory under the system's temporary directory.
+    pub fn new() -> Self {
+        Self(tempfile::Builder::new().prefix("galerkin-test-").tempdir().expect("a scratch directory"))
+    }
+
+    /// The path of `name` inside it.
+    pub fn file(&self, name: &str) -> std::path::PathBuf {
+        self.0.path().join(name)
+    }
+}
