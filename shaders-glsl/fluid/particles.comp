@@ -5,11 +5,18 @@
 // geometry, explicit Euler, the geometry moving linearly from g0 to g1 across the substeps, and after each substep the
 // capped walk across faces (with the periodic translation across wrap faces), the grid hash
 // when the walk is lost, and clamping into the cell at a wall.
+// REDUCED (src/fluid/reduced/particles.rs): the state comes from the reduced coordinates, and
+// only the vertices and faces of the cells a particle visits are evaluated (§6.5): vertex
+// positions as B_g rows times ĝ (moving linearly from ĝ0 to ĝ1), fluxes as B_f rows times f̂.
 #include "simplex.glsl"
 
 layout(local_size_x = 64) in;
 
+layout(constant_id = 0) const bool REDUCED = false;
+
+// Full: the frame's start geometry g0. Reduced: B_g, d·vertices rows of m_g.
 layout(std430, set = 0, binding = 0) readonly buffer G0 { float g0[]; };
+// Full: the frame's end geometry g1. Reduced: ĝ0 and ĝ1 (m_g each), then f̂ (m_f).
 layout(std430, set = 0, binding = 1) readonly buffer G1 { float g1[]; };
 layout(std430, set = 0, binding = 2) readonly buffer Cells { uint cells[]; };
 // Per (cell, local face): face index, bit 31 set if the cell's sign σ is −1.
@@ -17,6 +24,7 @@ layout(std430, set = 0, binding = 3) readonly buffer Faces { uint face_info[]; }
 // Per (cell, local face): neighbour + 1 in bits 0..27 (0: a wall), its local index of the face
 // in bits 28..29, bit 30 set for a wrap face.
 layout(std430, set = 0, binding = 4) readonly buffer Links { uint links[]; };
+// Full: the fluxes. Reduced: B_f, one row of m_f per face, rows below `reduced.z` here…
 layout(std430, set = 0, binding = 5) readonly buffer Flux { float flux[]; };
 // xyz position, w the cell's bits.
 layout(std430, set = 0, binding = 6) buffer Particles { vec4 particles[]; };
@@ -24,6 +32,8 @@ layout(std430, set = 0, binding = 7) readonly buffer GridStart { uint grid_start
 layout(std430, set = 0, binding = 8) readonly buffer GridCells { uint grid_cells[]; };
 // walked, hashed, clamped.
 layout(std430, set = 0, binding = 9) buffer Counts { uint counts[]; };
+// …and the rest here (B_f may exceed one storage binding). Full: unused.
+layout(std430, set = 0, binding = 10) readonly buffer FluxHigh { float flux_high[]; };
 
 layout(push_constant) uniform Push {
     uint dim;
@@ -33,6 +43,7 @@ layout(push_constant) uniform Push {
     vec4 grid_lo;     // xyz
     vec4 grid_size;   // xyz
     uvec4 grid_dims;  // xyz
+    uvec4 reduced;    // m_g, m_f, the first face of FluxHigh
 } pc;
 
 const uint WALK_CAP = 64u;
@@ -41,11 +52,38 @@ const float INSIDE = -1e-6;  // f32: a few ulps of a barycentric weight
 vec3 vertex_at(uint v, float t) {
     vec3 a = vec3(0.0);
     vec3 b = vec3(0.0);
-    for (uint k = 0u; k < pc.dim; ++k) {
-        a[k] = g0[pc.dim * v + k];
-        b[k] = g1[pc.dim * v + k];
+    if (REDUCED) {
+        uint m = pc.reduced.x;
+        for (uint k = 0u; k < pc.dim; ++k) {
+            uint row = (pc.dim * v + k) * m;
+            for (uint j = 0u; j < m; ++j) {
+                a[k] += g0[row + j] * g1[j];
+                b[k] += g0[row + j] * g1[m + j];
+            }
+        }
+    } else {
+        for (uint k = 0u; k < pc.dim; ++k) {
+            a[k] = g0[pc.dim * v + k];
+            b[k] = g1[pc.dim * v + k];
+        }
     }
     return a + t * (b - a);
+}
+
+float face_flux(uint face) {
+    if (!REDUCED) {
+        return flux[face];
+    }
+    uint m = pc.reduced.y;
+    uint coefficients = 2u * pc.reduced.x;
+    float s = 0.0;
+    if (face < pc.reduced.z) {
+        for (uint j = 0u; j < m; ++j) s += flux[face * m + j] * g1[coefficients + j];
+    } else {
+        uint row = (face - pc.reduced.z) * m;
+        for (uint j = 0u; j < m; ++j) s += flux_high[row + j] * g1[coefficients + j];
+    }
+    return s;
 }
 
 void cell_points(uint c, float t, out vec3 p[4]) {
@@ -65,7 +103,7 @@ vec3 cell_velocity(uint c, float t) {
     for (uint l = 0u; l <= pc.dim; ++l) {
         uint info = face_info[(pc.dim + 1u) * c + l];
         float sigma = (info & 0x80000000u) != 0u ? -1.0 : 1.0;
-        float f = sigma * flux[info & 0x7fffffffu];
+        float f = sigma * face_flux(info & 0x7fffffffu);
         u += f * (simplex_face_centroid(pc.dim, p, l) - xc);
     }
     return u / vol;

@@ -1,13 +1,18 @@
 //! Marker particles on the device (seed 000 §6.5): `particles.comp` advects every particle
 //! through a frame's substeps in one dispatch, the twin of
 //! [`super::particles::advect_particles`] (the CPU f64 reference) in f32. The topology is
-//! uploaded once; each frame uploads the two geometries, the fluxes and the grid hash. The
-//! particle buffer stays on the device, where the renderer reads it.
+//! uploaded once. On the full state each frame uploads the two geometries, the fluxes and the
+//! grid hash; on the reduced state ([`GpuParticles::new_reduced`], the twin of
+//! [`super::reduced::particles::ReducedParticles`]) `B_g`, `B_f` and the grid are uploaded once
+//! and a frame records only its reduced coordinates (ĝ_t, ĝ_{t+1}, f̂: a few hundred floats)
+//! into the command buffer. The particle buffer stays on the device, where the renderer reads
+//! it.
 
 use ash::vk;
 use bytemuck::Pod;
 
 use super::particles::{AdvectReport, GridHash, Particle};
+use super::reduced::particles::ReducedParticles;
 use super::FluidError;
 use crate::gpu::{
     BindingKind, Buffer, ComputePipeline, ComputePipelineDesc, DescriptorSet, Gpu, Recorder, Resource,
@@ -23,6 +28,7 @@ crate::push_constants! {
         grid_lo: [f32; 4],
         grid_size: [f32; 4],
         grid_dims: [u32; 4],
+        reduced: [u32; 4],
     }
 }
 
@@ -64,9 +70,22 @@ pub fn walk_links(topo: &Topology) -> Result<Vec<u32>, FluidError> {
     Ok(out)
 }
 
+/// Whether the pass reads the full state or the reduced one.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Mode {
+    Full,
+    /// `m_g`, `m_f`, and the first face whose `B_f` row is in the second buffer.
+    Reduced {
+        m_g: usize,
+        m_f: usize,
+        split: usize,
+    },
+}
+
 /// The particle pass with its topology and particles resident.
 pub struct GpuParticles {
     pipeline: ComputePipeline,
+    mode: Mode,
     dim: usize,
     count: usize,
     cells: Buffer<u32>,
@@ -74,10 +93,13 @@ pub struct GpuParticles {
     links: Buffer<u32>,
     particles: Buffer<[f32; 4]>,
     counts: Buffer<u32>,
-    /// The frame's geometries and fluxes (f32), rewritten per frame.
+    /// Full: the frame's geometries and fluxes (f32), rewritten per frame. Reduced: `B_g`, the
+    /// reduced coordinates (rewritten per frame) and `B_f` (two buffers when it exceeds one
+    /// binding; the second is the first again otherwise).
     g0: Buffer<f32>,
     g1: Buffer<f32>,
     flux: Buffer<f32>,
+    flux_high: Option<Buffer<f32>>,
     /// The grid hash and descriptor set of the last geometries, kept while they repeat (a
     /// static mesh builds and uploads its grid once).
     frame: Option<FrameGeometry>,
@@ -92,6 +114,38 @@ struct FrameGeometry {
     set: DescriptorSet,
 }
 
+/// The particle pipeline, full (`reduced` false) or reduced.
+fn pipeline(gpu: &Gpu, reduced: bool) -> Result<ComputePipeline, FluidError> {
+    ComputePipeline::new(
+        gpu,
+        &ComputePipelineDesc {
+            name: if reduced { "fluid particles (reduced state)" } else { "fluid particles" },
+            spirv: crate::fluid::shaders::PARTICLES,
+            bindings: &[BindingKind::StorageBuffer; 11],
+            push: crate::gpu::PushLayout::of::<Push>(),
+            specialization: &[u32::from(reduced)],
+        },
+    )
+    .map_err(gpu_err)
+}
+
+/// Per (cell, local face): the face's index, bit 31 set if the cell's sign σ is −1.
+fn face_info(mesh: &SimplexMesh, topo: &Topology) -> Vec<u32> {
+    let d = mesh.dim();
+    (0..mesh.cell_count())
+        .flat_map(|c| {
+            (0..=d).map(move |l| {
+                let f = topo.cell_face(c, l) as u32;
+                if topo.sign(c, l) < 0.0 {
+                    f | 0x8000_0000
+                } else {
+                    f
+                }
+            })
+        })
+        .collect()
+}
+
 impl GpuParticles {
     /// Uploads `mesh`'s topology and `particles`.
     pub fn new(
@@ -100,45 +154,113 @@ impl GpuParticles {
         topo: &Topology,
         particles: &[Particle],
     ) -> Result<Self, FluidError> {
-        let pipeline = ComputePipeline::new(
-            gpu,
-            &ComputePipelineDesc {
-                name: "fluid particles",
-                spirv: crate::fluid::shaders::PARTICLES,
-                bindings: &[BindingKind::StorageBuffer; 10],
-                push: crate::gpu::PushLayout::of::<Push>(),
-                specialization: &[],
-            },
-        )
-        .map_err(gpu_err)?;
         let d = mesh.dim();
-        let face_info: Vec<u32> = (0..mesh.cell_count())
-            .flat_map(|c| {
-                (0..=d).map(move |l| {
-                    let f = topo.cell_face(c, l) as u32;
-                    if topo.sign(c, l) < 0.0 {
-                        f | 0x8000_0000
-                    } else {
-                        f
-                    }
-                })
-            })
-            .collect();
         let links = walk_links(topo)?;
         Ok(Self {
-            pipeline,
+            pipeline: pipeline(gpu, false)?,
+            mode: Mode::Full,
             dim: d,
             count: particles.len(),
             cells: storage(gpu, "fluid cells", mesh.cells())?,
-            faces: storage(gpu, "fluid cell faces", &face_info)?,
+            faces: storage(gpu, "fluid cell faces", &face_info(mesh, topo))?,
             links: storage(gpu, "fluid walk links", &links)?,
             particles: storage(gpu, "fluid particles", &pack(particles))?,
             counts: storage(gpu, "fluid particle counts", &[0u32; 3])?,
             g0: storage(gpu, "fluid g0", &vec![0f32; mesh.g().len()])?,
             g1: storage(gpu, "fluid g1", &vec![0f32; mesh.g().len()])?,
             flux: storage(gpu, "fluid flux", &vec![0f32; topo.face_count()])?,
+            flux_high: None,
             frame: None,
         })
+    }
+
+    /// The pass on the reduced state of `model` (seed 000 §6.5): uploads the topology, `B_g`
+    /// and `B_f` (in f32; `B_f` split over two storage bindings when one cannot hold it), the
+    /// grid hash of the training motions' vertex boxes, and `particles`. Frames then record
+    /// their reduced coordinates with [`Self::record_reduced_frame`]. A `B_f` larger than two
+    /// bindings is [`FluidError::State`] naming the sizes.
+    pub fn new_reduced(
+        gpu: &Gpu,
+        model: &ReducedParticles,
+        particles: &[Particle],
+    ) -> Result<Self, FluidError> {
+        let (mesh, topo) = (model.mesh(), model.topology());
+        let (b_g, b_f) = (model.geometry_basis(), model.flux_basis());
+        let (m_g, m_f) = (b_g.shape()[1], b_f.shape()[1]);
+        let faces = b_f.shape()[0];
+        let narrow = |x: &[f64]| x.iter().map(|&v| v as f32).collect::<Vec<f32>>();
+        let rows_per_binding = (gpu.max_binding_bytes() / (4 * m_f.max(1) as u64)) as usize;
+        if faces > 2 * rows_per_binding {
+            return Err(FluidError::State(format!(
+                "reduced particles: B_f is {faces} × {m_f} floats; two storage bindings of {} bytes hold {} rows",
+                gpu.max_binding_bytes(),
+                2 * rows_per_binding
+            )));
+        }
+        let split = faces.min(rows_per_binding);
+        let flux = storage(gpu, "fluid B_f", &narrow(&b_f.data()[..split * m_f]))?;
+        let flux_high = if split < faces {
+            Some(storage(gpu, "fluid B_f (second part)", &narrow(&b_f.data()[split * m_f..]))?)
+        } else {
+            None
+        };
+        let links = walk_links(topo)?;
+        let mut pass = Self {
+            pipeline: pipeline(gpu, true)?,
+            mode: Mode::Reduced { m_g, m_f, split },
+            dim: mesh.dim(),
+            count: particles.len(),
+            cells: storage(gpu, "fluid cells", mesh.cells())?,
+            faces: storage(gpu, "fluid cell faces", &face_info(mesh, topo))?,
+            links: storage(gpu, "fluid walk links", &links)?,
+            particles: storage(gpu, "fluid particles", &pack(particles))?,
+            counts: storage(gpu, "fluid particle counts", &[0u32; 3])?,
+            g0: storage(gpu, "fluid B_g", &narrow(b_g.data()))?,
+            g1: storage(gpu, "fluid reduced coordinates", &vec![0f32; 2 * m_g + m_f])?,
+            flux,
+            flux_high,
+            frame: None,
+        };
+        pass.bind(gpu, model.grid(), None)?;
+        Ok(pass)
+    }
+
+    /// Uploads `grid` and binds every buffer; keeps `geometries` (the full frame's) to reuse
+    /// the set while they repeat.
+    fn bind(
+        &mut self,
+        gpu: &Gpu,
+        grid: &GridHash,
+        geometries: Option<(Vec<f64>, Vec<f64>)>,
+    ) -> Result<(), FluidError> {
+        let (lo, size, dims, start, grid_cells) = grid.parts();
+        let sb = storage(gpu, "fluid grid start", start)?;
+        let cb = storage(gpu, "fluid grid cells", grid_cells)?;
+        fn bind<T: Pod>(x: &Buffer<T>) -> Result<Resource<'_>, FluidError> {
+            x.binding().map(Resource::Storage).map_err(gpu_err)
+        }
+        let set = self
+            .pipeline
+            .bind(
+                gpu,
+                &[
+                    bind(&self.g0)?,
+                    bind(&self.g1)?,
+                    bind(&self.cells)?,
+                    bind(&self.faces)?,
+                    bind(&self.links)?,
+                    bind(&self.flux)?,
+                    bind(&self.particles)?,
+                    bind(&sb)?,
+                    bind(&cb)?,
+                    bind(&self.counts)?,
+                    bind(self.flux_high.as_ref().unwrap_or(&self.flux))?,
+                ],
+            )
+            .map_err(gpu_err)?;
+        let (g0, g1) = geometries.unwrap_or_default();
+        self.frame = Some(FrameGeometry { g0, g1, grid: (lo, size, dims), _grid_buffers: (sb, cb), set });
+        Ok(())
     }
 
     /// Number of particles.
@@ -196,6 +318,9 @@ impl GpuParticles {
         g1: &[f64],
         f: &[f64],
     ) -> Result<(), FluidError> {
+        if self.mode != Mode::Full {
+            return Err(FluidError::State("particles: a reduced pass takes reduced frames".into()));
+        }
         if g0.len() != self.g0.len() as usize || g1.len() != g0.len() || f.len() != self.flux.len() as usize {
             return Err(FluidError::State(format!(
                 "particles: geometries of {} and {} coordinates and {} fluxes for a mesh of {} and {}",
@@ -212,39 +337,69 @@ impl GpuParticles {
             self.g0.upload(gpu, 0, &narrow(g0)).map_err(gpu_err)?;
             self.g1.upload(gpu, 0, &narrow(g1)).map_err(gpu_err)?;
             let grid = GridHash::new(mesh, &[g0, g1]);
-            let (lo, size, dims, start, grid_cells) = grid.parts();
-            let sb = storage(gpu, "fluid grid start", start)?;
-            let cb = storage(gpu, "fluid grid cells", grid_cells)?;
-            fn bind(x: &Buffer<u32>) -> Result<Resource<'_>, FluidError> {
-                x.binding().map(Resource::Storage).map_err(gpu_err)
-            }
-            let set = self
-                .pipeline
-                .bind(
-                    gpu,
-                    &[
-                        self.g0.binding().map(Resource::Storage).map_err(gpu_err)?,
-                        self.g1.binding().map(Resource::Storage).map_err(gpu_err)?,
-                        bind(&self.cells)?,
-                        bind(&self.faces)?,
-                        bind(&self.links)?,
-                        self.flux.binding().map(Resource::Storage).map_err(gpu_err)?,
-                        self.particles.binding().map(Resource::Storage).map_err(gpu_err)?,
-                        bind(&sb)?,
-                        bind(&cb)?,
-                        bind(&self.counts)?,
-                    ],
-                )
-                .map_err(gpu_err)?;
-            self.frame = Some(FrameGeometry {
-                g0: g0.to_vec(),
-                g1: g1.to_vec(),
-                grid: (lo, size, dims),
-                _grid_buffers: (sb, cb),
-                set,
-            });
+            self.bind(gpu, &grid, Some((g0.to_vec(), g1.to_vec())))?;
         }
         Ok(())
+    }
+
+    /// Records a frame's reduced coordinates for a reduced pass: the geometry `g0 → g1` (ĝ)
+    /// and the end state's fluxes `f` (f̂), written into the command buffer (outside a render
+    /// pass; no engine transfer). It records an execution barrier after the previous
+    /// advection's reads of the coordinates, the write, and a barrier that makes it visible to
+    /// [`Self::record_advect`], which follows.
+    pub fn record_reduced_frame(
+        &self,
+        rec: &mut Recorder<'_>,
+        g0: &[f64],
+        g1: &[f64],
+        f: &[f64],
+    ) -> Result<(), FluidError> {
+        let Mode::Reduced { m_g, m_f, .. } = self.mode else {
+            return Err(FluidError::State("particles: a full pass takes full frames (prepare)".into()));
+        };
+        if g0.len() != m_g || g1.len() != m_g || f.len() != m_f {
+            return Err(FluidError::State(format!(
+                "reduced particles: ĝ of {} and {} and f̂ of {} for bases of {m_g} and {m_f}",
+                g0.len(),
+                g1.len(),
+                f.len()
+            )));
+        }
+        let coefficients: Vec<f32> = g0.iter().chain(g1).chain(f).map(|&v| v as f32).collect();
+        if coefficients.len() * 4 > 65_536 {
+            return Err(FluidError::State(format!(
+                "reduced particles: {} reduced coordinates exceed one command-buffer update",
+                coefficients.len()
+            )));
+        }
+        let cs = vk::PipelineStageFlags::COMPUTE_SHADER;
+        let transfer = vk::PipelineStageFlags::TRANSFER;
+        rec.memory_barrier((cs, vk::AccessFlags::empty()), (transfer, vk::AccessFlags::empty()));
+        rec.update_buffer(&self.g1, 0, &coefficients);
+        rec.memory_barrier((transfer, vk::AccessFlags::TRANSFER_WRITE), (cs, vk::AccessFlags::SHADER_READ));
+        Ok(())
+    }
+
+    /// Advects through one frame of the reduced state (see [`Self::record_reduced_frame`]):
+    /// the convenience that records it and the advection in one engine submission.
+    pub fn advect_reduced(
+        &mut self,
+        gpu: &Gpu,
+        g0: &[f64],
+        g1: &[f64],
+        f: &[f64],
+        frame_time: f64,
+        substeps: usize,
+    ) -> Result<AdvectReport, FluidError> {
+        if self.count == 0 {
+            return Ok(AdvectReport::default());
+        }
+        gpu.run(|rec| {
+            self.record_reduced_frame(rec, g0, g1, f)?;
+            self.record_advect(rec, frame_time, substeps)
+        })
+        .map_err(gpu_err)??;
+        self.report(gpu)
     }
 
     /// Records the advection through one frame of `frame_time` in `substeps` steps, from the
@@ -275,6 +430,10 @@ impl GpuParticles {
             grid_lo: [lo[0] as f32, lo[1] as f32, lo[2] as f32, 0.0],
             grid_size: [size[0] as f32, size[1] as f32, size[2] as f32, 0.0],
             grid_dims: [dims[0] as u32, dims[1] as u32, dims[2] as u32, 0],
+            reduced: match self.mode {
+                Mode::Full => [0, 0, u32::MAX, 0],
+                Mode::Reduced { m_g, m_f, split } => [m_g as u32, m_f as u32, split as u32, 0],
+            },
         };
         let cs = vk::PipelineStageFlags::COMPUTE_SHADER;
         let rw = vk::AccessFlags::SHADER_READ | vk::AccessFlags::SHADER_WRITE;

@@ -1,5 +1,12 @@
 //! Massless marker particles (seed 000 §6.5), the CPU f64 reference of the compute pass.
 //!
+//! A frame's state reaches the particles through two sources: [`FrameGeometry`] gives the
+//! position of one vertex at a fraction of the frame, [`FrameFlux`] the flux through one face
+//! — from the full state (arrays of every vertex and face, [`FullFrame`]) or from the reduced
+//! state (`B_g` rows of the vertex times ĝ, `B_f` rows of the face times f̂:
+//! [`super::reduced::particles`]), so a particle only ever evaluates the vertices and faces of
+//! the cells it visits.
+//!
 //! Each particle remembers the cell that contains it. Its velocity is the cell's, rebuilt
 //! locally from the flux (Eq. 13: `u_c = (V⁻¹(g)(P⊗g)f)_c`, which touches only the cell's
 //! own vertices and faces), with the frame's end state: the flux f_{t+1} and the geometry
@@ -34,17 +41,65 @@ pub struct Particle {
     pub cell: u32,
 }
 
+/// Where a frame's vertex positions come from: vertex `v` at fraction `t` ∈ [0, 1] of a frame
+/// whose geometry moves linearly from its start to its end.
+pub trait FrameGeometry: Sync {
+    /// The position of vertex `v` (z = 0 in 2D) of a `dim`-dimensional mesh at `t`.
+    fn vertex(&self, dim: usize, v: usize, t: f64) -> Point;
+}
+
+/// Where a frame's fluxes come from: the flux through face `face` (of the frame's end state).
+pub trait FrameFlux: Sync {
+    /// The flux through `face`.
+    fn flux(&self, face: usize) -> f64;
+}
+
+/// A frame of the full state: the geometries at its start and end and the end's fluxes.
+#[derive(Clone, Copy)]
+pub struct FullFrame<'a> {
+    /// Geometry at the frame's start.
+    pub g0: &'a [f64],
+    /// Geometry at its end.
+    pub g1: &'a [f64],
+    /// Fluxes of the end state.
+    pub f: &'a [f64],
+}
+
+impl FrameGeometry for FullFrame<'_> {
+    fn vertex(&self, dim: usize, v: usize, t: f64) -> Point {
+        let mut out = [0.0; 3];
+        for (k, x) in out.iter_mut().enumerate().take(dim) {
+            let j = dim * v + k;
+            *x = self.g0[j] + t * (self.g1[j] - self.g0[j]);
+        }
+        out
+    }
+}
+
+impl FrameFlux for FullFrame<'_> {
+    fn flux(&self, face: usize) -> f64 {
+        self.f[face]
+    }
+}
+
 /// The velocity of cell `c` from the fluxes (Eq. 13), at geometry `g`.
 pub fn cell_velocity(mesh: &SimplexMesh, topo: &Topology, g: &[f64], f: &[f64], c: usize) -> Point {
-    let d = mesh.dim();
-    let at = MovingGeometry { mesh, g0: g, g1: g, t: 0.0 };
+    let frame = FullFrame { g0: g, g1: g, f };
+    let at = MovingGeometry { mesh, frame: &frame, t: 1.0 };
+    cell_velocity_at(&at, topo, &frame, c)
+}
+
+/// The velocity of cell `c` (Eq. 13: `u_c = V_c⁻¹ Σ_faces σ f (x_face − x_c)`) with the cell's
+/// corners from `at` and its faces' fluxes from `flux` — only those.
+pub fn cell_velocity_at(at: &MovingGeometry, topo: &Topology, flux: &dyn FrameFlux, c: usize) -> Point {
+    let d = at.mesh.dim();
     let p = &at.points(c)[..=d];
     let vol = signed_volume(d, p);
     let xc = centroid(p);
     let mut u = [0.0; 3];
     for l in 0..=d {
         let xf = face_centroid(p, l);
-        let flux = topo.sign(c, l) * f[topo.cell_face(c, l)];
+        let flux = topo.sign(c, l) * flux.flux(topo.cell_face(c, l));
         for k in 0..d {
             u[k] += flux * (xf[k] - xc[k]) / vol;
         }
@@ -83,16 +138,31 @@ impl GridHash {
     /// geometry in between lie inside their union).
     pub fn new(mesh: &SimplexMesh, gs: &[&[f64]]) -> Self {
         let d = mesh.dim();
-        let nc = mesh.cell_count();
-        let mut lo = [f64::INFINITY; 3];
-        let mut hi = [f64::NEG_INFINITY; 3];
+        let mut boxes = vec![([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]); mesh.vertex_count()];
         for g in gs {
-            for v in 0..mesh.vertex_count() {
+            for (v, (lo, hi)) in boxes.iter_mut().enumerate() {
                 let p = point_of(d, g, v);
                 for k in 0..d {
                     lo[k] = lo[k].min(p[k]);
                     hi[k] = hi[k].max(p[k]);
                 }
+            }
+        }
+        Self::from_vertex_boxes(mesh, &boxes)
+    }
+
+    /// Like [`Self::new`], from a box per vertex that holds every position the vertex takes
+    /// (a cell then lies in the box of its vertices' boxes: a reduced model's training motions
+    /// and their convex combinations).
+    pub fn from_vertex_boxes(mesh: &SimplexMesh, boxes: &[(Point, Point)]) -> Self {
+        let d = mesh.dim();
+        let nc = mesh.cell_count();
+        let mut lo = [f64::INFINITY; 3];
+        let mut hi = [f64::NEG_INFINITY; 3];
+        for (a, b) in boxes {
+            for k in 0..d {
+                lo[k] = lo[k].min(a[k]);
+                hi[k] = hi[k].max(b[k]);
             }
         }
         let extent: Vec<f64> = (0..d).map(|k| (hi[k] - lo[k]).max(1e-300)).collect();
@@ -107,12 +177,14 @@ impl GridHash {
         let total = dims[0] * dims[1] * dims[2];
         let mut lists: Vec<Vec<u32>> = vec![Vec::new(); total];
         for c in 0..nc {
-            let p: Vec<Point> = gs.iter().flat_map(|g| mesh.cell_points_at(g, c)).collect();
+            let corners = mesh.cell(c);
             let mut a = [0usize; 3];
             let mut b = [0usize; 3];
             for k in 0..d {
-                let (mn, mx) =
-                    p.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(m, n), q| (m.min(q[k]), n.max(q[k])));
+                let (mn, mx) = corners.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(m, n), &v| {
+                    let (vlo, vhi) = boxes[v as usize];
+                    (m.min(vlo[k]), n.max(vhi[k]))
+                });
                 a[k] = (((mn - lo[k]) / size[k]).floor().max(0.0) as usize).min(dims[k] - 1);
                 b[k] = (((mx - lo[k]) / size[k]).floor().max(0.0) as usize).min(dims[k] - 1);
             }
@@ -168,16 +240,14 @@ pub enum Located {
 /// Tolerance on barycentric coordinates for "inside".
 const INSIDE: f64 = -1e-12;
 
-/// The mesh at time `t` ∈ [0, 1] of a frame whose vertices move linearly from `g0` to `g1`;
-/// only the vertices of the cells a particle visits are interpolated.
+/// The mesh at time `t` ∈ [0, 1] of a frame whose vertices move linearly across it; only the
+/// vertices of the cells a particle visits are evaluated.
 #[derive(Clone, Copy)]
 pub struct MovingGeometry<'a> {
-    /// The topology's mesh.
+    /// The topology's mesh (its cells; its own geometry is not used).
     pub mesh: &'a SimplexMesh,
-    /// Geometry at the frame's start.
-    pub g0: &'a [f64],
-    /// Geometry at its end.
-    pub g1: &'a [f64],
+    /// Where the vertices are.
+    pub frame: &'a dyn FrameGeometry,
     /// Fraction of the frame.
     pub t: f64,
 }
@@ -188,24 +258,33 @@ impl MovingGeometry<'_> {
         let d = self.mesh.dim();
         let mut out = [[0.0; 3]; 4];
         for (i, &v) in self.mesh.cell(c).iter().enumerate() {
-            for k in 0..d {
-                let j = d * v as usize + k;
-                out[i][k] = self.g0[j] + self.t * (self.g1[j] - self.g0[j]);
-            }
+            out[i] = self.frame.vertex(d, v as usize, self.t);
         }
         out
     }
 }
 
+/// The grid hash a walk falls back on: built when first needed, or given.
+#[derive(Clone, Copy)]
+pub enum WalkGrid<'a> {
+    /// Built by the function on first need, kept in the cell.
+    Lazy(&'a OnceLock<GridHash>, &'a (dyn Fn() -> GridHash + Sync)),
+    /// Already built.
+    Given(&'a GridHash),
+}
+
+impl WalkGrid<'_> {
+    fn get(&self) -> &GridHash {
+        match self {
+            WalkGrid::Lazy(cell, make) => cell.get_or_init(make),
+            WalkGrid::Given(g) => g,
+        }
+    }
+}
+
 /// Finds the cell containing `particle.position` in the mesh `at`, walking from its cell; a
-/// walk that reaches its cap asks the grid hash (`grid`, built by `make_grid` on first need).
-pub fn locate(
-    at: &MovingGeometry,
-    topo: &Topology,
-    grid: &OnceLock<GridHash>,
-    make_grid: &(dyn Fn() -> GridHash + Sync),
-    particle: &mut Particle,
-) -> Located {
+/// walk that reaches its cap asks the grid hash.
+pub fn locate(at: &MovingGeometry, topo: &Topology, grid: &WalkGrid, particle: &mut Particle) -> Located {
     let d = at.mesh.dim();
     let mut c = particle.cell as usize;
     for _ in 0..WALK_CAP {
@@ -235,7 +314,7 @@ pub fn locate(
             }
         }
     }
-    let grid = grid.get_or_init(make_grid);
+    let grid = grid.get();
     for &cand in grid.candidates(grid.bucket(particle.position)) {
         let p = at.points(cand as usize);
         let b = barycentric(d, &p[..=d], particle.position);
@@ -309,22 +388,50 @@ pub fn advect_particles(
     substeps: usize,
     particles: &mut [Particle],
 ) -> AdvectReport {
-    let d = mesh.dim();
-    let dt = frame_time / substeps as f64;
+    let frame = FullFrame { g0, g1, f };
     let grid = OnceLock::new();
     let make_grid = || GridHash::new(mesh, &[g0, g1]);
+    advect_through(
+        mesh,
+        topo,
+        &frame,
+        &frame,
+        WalkGrid::Lazy(&grid, &make_grid),
+        frame_time,
+        substeps,
+        particles,
+    )
+}
+
+/// [`advect_particles`] with the frame's vertices from `geometry` and its fluxes from `flux`
+/// (full or reduced), and the walk's fallback grid from `grid`.
+#[allow(clippy::too_many_arguments)]
+pub fn advect_through(
+    mesh: &SimplexMesh,
+    topo: &Topology,
+    geometry: &dyn FrameGeometry,
+    flux: &dyn FrameFlux,
+    grid: WalkGrid,
+    frame_time: f64,
+    substeps: usize,
+    particles: &mut [Particle],
+) -> AdvectReport {
+    let d = mesh.dim();
+    let substeps = substeps.max(1);
+    let dt = frame_time / substeps as f64;
+    let end = MovingGeometry { mesh, frame: geometry, t: 1.0 };
     particles
         .par_iter_mut()
         .map(|p| {
             let mut report = AdvectReport::default();
             for s in 0..substeps {
                 // The velocity of the frame's end state (f belongs to g1), then the mesh moves on.
-                let u = cell_velocity(mesh, topo, g1, f, p.cell as usize);
+                let u = cell_velocity_at(&end, topo, flux, p.cell as usize);
                 for k in 0..d {
                     p.position[k] += dt * u[k];
                 }
-                let at = MovingGeometry { mesh, g0, g1, t: (s + 1) as f64 / substeps as f64 };
-                match locate(&at, topo, &grid, &make_grid, p) {
+                let at = MovingGeometry { mesh, frame: geometry, t: (s + 1) as f64 / substeps as f64 };
+                match locate(&at, topo, &grid, p) {
                     Located::Walked => report.walked += 1,
                     Located::Hashed => report.hashed += 1,
                     Located::Clamped => report.clamped += 1,

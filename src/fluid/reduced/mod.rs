@@ -7,6 +7,7 @@
 //! - [`example`]: the small tunnel's training runs, for the demo, benchmarks and tests;
 //! - [`induced`]: the induced flux as a tensor in the stacked geometry, for driven motions;
 //! - [`model`]: §6.2's reduced tensors premultiplied by the core, and the model file;
+//! - [`particles`]: marker particles from the reduced state (Eq. 13), never the full one;
 //! - [`run`]: a reduced run under a motion, lifted to a snapshot directory;
 //! - [`step`]: the reduced step (flux combination, matrix exponential, constrained
 //!   projection, conversion to velocity).
@@ -21,6 +22,7 @@ mod dense;
 pub mod example;
 pub mod induced;
 pub mod model;
+pub mod particles;
 pub mod plot;
 pub mod run;
 pub mod step;
