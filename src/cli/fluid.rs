@@ -45,6 +45,10 @@ pub enum Action {
     /// projection) and write its frames lifted to the full space as a snapshot directory, which
     /// `galerkin fluid render` draws.
     Reduced(crate::cli::fluid_reduced::ReducedArgs),
+    /// Train a reduced model from a scene in one resumable command: simulate its training runs
+    /// (the cavity's 14, or the bird's animation), build the bases, premultiply the tensors.
+    /// Run it again to resume: finished runs and bases are kept in the work directory.
+    TrainScene(crate::cli::fluid_reduced::TrainSceneArgs),
     /// The one-step error study of seed 000 §7.1 (Fig. 5 d, e): train on RUNS at the largest
     /// basis size, then for every size step the test run's projected frames once in the full
     /// and once in the reduced space; writes CSV and labelled PNG plots.
@@ -163,6 +167,7 @@ pub fn run(desc: &GpuDesc, action: &Action) -> Result<()> {
         Action::Surface(args) => surface(args),
         Action::Train(args) => crate::cli::fluid_reduced::train(args),
         Action::Reduced(args) => crate::cli::fluid_reduced::reduced(args),
+        Action::TrainScene(args) => crate::cli::fluid_reduced::train_scene(args),
         Action::ErrorStudy(args) => crate::cli::fluid_reduced::error_study(args),
     }
 }

@@ -307,19 +307,11 @@ pub fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
         stats.streamed,
         stats.triangles,
         stats.lines,
-        peak_rss_mb().map_or("unknown".into(), |mb| format!("{mb:.0} MB")),
+        galerkin::process::peak_memory_mb().map_or("unknown".into(), |mb| format!("{mb:.0} MB")),
         args.out.display()
     );
     drop((target, renderer));
     crate::check_validation(gpu)
-}
-
-/// The process's peak resident set (VmHWM of /proc/self/status), in MB; `None` off Linux.
-pub fn peak_rss_mb() -> Option<f64> {
-    let status = std::fs::read_to_string("/proc/self/status").ok()?;
-    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
-    let kb: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kb / 1024.0)
 }
 
 /// Arguments of `galerkin bench spacetime`.

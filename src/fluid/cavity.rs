@@ -1,24 +1,28 @@
 //! The deforming cavity of seed 000 §7.2: a large central cavity and three smaller ones,
 //! joined to it by thin tunnels, designed from level-set primitives (spheres and capsules)
 //! and stuffed with tetrahedra ([`crate::mesh::stuffing`]). Each small cavity is compressed
-//! and re-inflated analytically; the central cavity inflates to keep the total volume
-//! constant (renormalised exactly, so the fluid stays incompressible); the interior follows
-//! by harmonic deformation ([`crate::mesh::deform`]).
+//! and re-inflated analytically (seed 000 §7.2: "by analytically compressing the outer
+//! cavities while renormalizing the volume"); the central cavity inflates to keep the total
+//! volume constant (renormalised exactly, so the fluid stays incompressible).
 //!
-//! **The boundary map.** A surface point p near small cavity i (weight `w_i(p)`: 1 within
-//! the cavity's radius of its centre c_i, falling smoothly to 0 halfway along its tunnel)
-//! moves to `c_i + (1 − a_i(t) w_i(p))(p − c_i)`, where `a_i(t)` is the compression (0 at
-//! rest, up to `amount` at the frame of deepest compression, a raised-cosine pulse in time).
-//! A point near the central cavity (weight w₀) moves to `c₀ + (1 + (λ − 1) w₀(p))(p − c₀)`,
-//! with λ found by the secant method so that the enclosed volume (a sum over boundary faces,
-//! independent of the interior vertices) equals the rest volume to 1e-12.
+//! **The map.** A point p near small cavity i (weight `w_i(p)`: 1 within the cavity's radius
+//! of its centre c_i, falling smoothly to 0 halfway along its tunnel) moves to
+//! `c_i + (1 − a_i(t) w_i(p))(p − c_i)`, where `a_i(t)` is the compression (0 at rest, up to
+//! `amount` at the frame of deepest compression, a raised-cosine pulse in time). A point near
+//! the central cavity (weight w₀) moves to `c₀ + (1 + (λ − 1) w₀(p))(p − c₀)`, with λ found by
+//! the secant method so that the enclosed volume (a sum over boundary faces) equals the rest
+//! volume to 1e-12. The map moves **every** vertex, the interior too: it is a radial scaling
+//! about each centre whose radial derivative `1 − a w − a w′ |p − c|` and tangential factor
+//! `1 − a w` stay positive for a < 1 (w decreases, and the small and central transition bands
+//! are disjoint), so it is orientation preserving and no cell inverts. (A harmonic interior,
+//! this module's first form, flattened cells at the tunnel mouths under the deeper training
+//! compressions — 0.45 and more — until the projection could not converge.)
 //!
 //! **The 14 training runs** ([`training_run`]): each small cavity alone at two amounts (6),
 //! each pair of small cavities at two amounts (6), and each of two cavities alone at a third,
 //! deeper amount (2); every run compresses over the first half of its frames and re-inflates
 //! over the second.
 
-use crate::mesh::deform::HarmonicDeformation;
 use crate::mesh::sdf::{Capsule, Sdf, Sphere, Union};
 use crate::mesh::stuffing::stuff;
 use crate::mesh::volume::enclosed_volume;
@@ -109,7 +113,7 @@ fn norm(a: [f64; 3]) -> f64 {
     (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt()
 }
 
-/// A stuffed cavity with its boundary motion and harmonic interior.
+/// A stuffed cavity with its analytic motion.
 #[derive(Debug)]
 pub struct Cavity {
     spec: CavitySpec,
@@ -117,10 +121,9 @@ pub struct Cavity {
     pub mesh: SimplexMesh,
     /// Its topology (no periodic axis).
     pub topology: Topology,
-    /// The surface vertices (prescribed).
+    /// The surface vertices.
     pub surface: Vec<u32>,
     rest_volume: f64,
-    deform: HarmonicDeformation,
 }
 
 impl Cavity {
@@ -129,15 +132,7 @@ impl Cavity {
         let stuffed = stuff(&spec.sdf(), spec.spacing)?;
         let topology = Topology::new(&stuffed.mesh, None)?;
         let rest_volume = enclosed_volume(&stuffed.mesh, &topology, stuffed.mesh.g());
-        let deform = HarmonicDeformation::new(&stuffed.mesh, &stuffed.surface)?;
-        Ok(Self {
-            spec: spec.clone(),
-            mesh: stuffed.mesh,
-            topology,
-            surface: stuffed.surface,
-            rest_volume,
-            deform,
-        })
+        Ok(Self { spec: spec.clone(), mesh: stuffed.mesh, topology, surface: stuffed.surface, rest_volume })
     }
 
     /// The spec.
@@ -153,14 +148,14 @@ impl Cavity {
         amounts.map(|a| a * pulse)
     }
 
-    /// The boundary positions for compressions `a` with the central cavity's factor λ.
-    fn boundary(&self, a: [f64; 3], lambda: f64) -> Vec<f64> {
+    /// Every vertex mapped for compressions `a` with the central cavity's factor λ (see the
+    /// module docs).
+    fn mapped(&self, a: [f64; 3], lambda: f64) -> Vec<f64> {
         let g0 = self.mesh.g();
         let mut g = g0.to_vec();
         let centres = self.spec.small_centres();
         let (r0, rs, dist) = (self.spec.central_radius, self.spec.small_radius, self.spec.small_distance);
-        for &v in &self.surface {
-            let v = v as usize;
+        for v in 0..self.mesh.vertex_count() {
             let p = [g0[3 * v], g0[3 * v + 1], g0[3 * v + 2]];
             let mut q = p;
             for (i, c) in centres.iter().enumerate() {
@@ -181,17 +176,17 @@ impl Cavity {
         g
     }
 
-    /// The boundary for compressions `a`, the central cavity inflated so that the enclosed
+    /// The geometry for compressions `a`, the central cavity inflated so that the enclosed
     /// volume is the rest volume: λ by the secant method on the volume (a cubic in λ) to
     /// 1e-13 relative, bisecting whenever the secant step leaves the bracket.
-    pub fn boundary_for(&self, a: [f64; 3]) -> Vec<f64> {
+    pub fn mapped_for(&self, a: [f64; 3]) -> Vec<f64> {
         let target = self.rest_volume;
         let residual =
-            |lambda: f64| enclosed_volume(&self.mesh, &self.topology, &self.boundary(a, lambda)) - target;
+            |lambda: f64| enclosed_volume(&self.mesh, &self.topology, &self.mapped(a, lambda)) - target;
         let (mut lo, mut hi) = (1.0, 2.0);
         let (r_lo, r_hi) = (residual(lo), residual(hi));
         if r_lo >= 0.0 || r_hi <= 0.0 {
-            return self.boundary(a, 1.0);
+            return self.mapped(a, 1.0);
         }
         let (mut x0, mut x1, mut r0, mut r1) = (lo, hi, r_lo, r_hi);
         for _ in 0..100 {
@@ -201,7 +196,7 @@ impl Cavity {
             }
             let r = residual(x);
             if r.abs() <= 1e-13 * target || hi - lo < 1e-15 {
-                return self.boundary(a, x);
+                return self.mapped(a, x);
             }
             if r < 0.0 {
                 lo = x;
@@ -210,14 +205,16 @@ impl Cavity {
             }
             (x0, r0, x1, r1) = (x1, r1, x, r);
         }
-        self.boundary(a, 0.5 * (lo + hi))
+        self.mapped(a, 0.5 * (lo + hi))
     }
 
-    /// The whole mesh's geometry at `frame` (boundary map, then harmonic interior); an
-    /// inverted cell is refused naming the frame.
+    /// The whole mesh's geometry for compressions `a` at `frame` (the map of the module docs);
+    /// an inverted cell — which the map cannot make unless the mesh is too coarse for its
+    /// transition bands — is refused naming the frame.
     pub fn geometry(&mut self, a: [f64; 3], frame: usize) -> Result<Vec<f64>, MeshError> {
-        let target = self.boundary_for(a);
-        self.deform.deform(&target, frame)
+        let g = self.mapped_for(a);
+        crate::mesh::refuse_inverted(&self.mesh.volumes_at(&g), Some(frame))?;
+        Ok(g)
     }
 
     /// The rest volume of the fluid.

@@ -60,32 +60,17 @@ impl ReducedModel {
             meta.insert(format!("extra/{k}"), v.clone());
         }
 
-        let mut bytes: Vec<(String, Vec<u8>, Vec<usize>)> = Vec::new();
+        let mut arrays: Vec<(String, &Tensor)> = Vec::new();
         for (name, t) in &self.tensors {
-            bytes.push((format!("tensor/{name}"), f64_bytes(&t.data), t.data.shape().to_vec()));
+            arrays.push((format!("tensor/{name}"), &t.data));
         }
         for (name, b) in &self.bases {
-            bytes.push((format!("basis/{name}"), f64_bytes(b.matrix()), b.matrix().shape().to_vec()));
+            arrays.push((format!("basis/{name}"), b.matrix()));
         }
         for (name, t) in &extras.arrays {
-            bytes.push((format!("data/{name}"), f64_bytes(t), t.shape().to_vec()));
+            arrays.push((format!("data/{name}"), t));
         }
-        let views = bytes
-            .iter()
-            .map(|(n, b, s)| TensorView::new(Dtype::F64, s.clone(), b).map(|v| (n.clone(), v)))
-            .collect::<Result<Vec<_>, _>>()
-            .map_err(|e| fail(e.to_string()))?;
-        let buffer = safetensors::serialize(views, Some(meta)).map_err(|e| fail(e.to_string()))?;
-        let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-        let tmp = path.with_file_name(format!(".{name}.{}.tmp", std::process::id()));
-        if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-            std::fs::create_dir_all(dir).map_err(|e| fail(e.to_string()))?;
-        }
-        std::fs::write(&tmp, &buffer).map_err(|e| fail(e.to_string()))?;
-        std::fs::rename(&tmp, path).map_err(|e| {
-            let _ = std::fs::remove_file(&tmp);
-            fail(e.to_string())
-        })
+        save_arrays(path, meta, &arrays)
     }
 
     /// Reads a model written by [`ReducedModel::save`] (this version or older).
@@ -96,12 +81,7 @@ impl ReducedModel {
     /// [`ReducedModel::load`], also returning the [`ModelExtras`] stored beside the model.
     pub fn load_with(path: &Path) -> Result<(ReducedModel, ModelExtras), ReduceError> {
         let fail = |detail: String| ReduceError::File { path: path.to_path_buf(), detail };
-        let buffer = std::fs::read(path).map_err(|e| fail(e.to_string()))?;
-        let (_, header) = SafeTensors::read_metadata(&buffer)
-            .map_err(|e| fail(format!("not a readable safetensors file ({e})")))?;
-        let file = SafeTensors::deserialize(&buffer)
-            .map_err(|e| fail(format!("not a readable safetensors file ({e})")))?;
-        let meta = header.metadata().clone().unwrap_or_default();
+        let (meta, mut arrays) = load_arrays(path)?;
         let get = |k: &str| meta.get(k).ok_or_else(|| fail(format!("metadata has no `{k}`")));
         if get("format")? != FORMAT {
             return Err(fail(format!("not a galerkin reduced model (format `{}`)", get("format")?)));
@@ -125,20 +105,12 @@ impl ReducedModel {
         let axes: BTreeMap<String, Vec<String>> = serde_json::from_value(parse("tensor_axes")?)
             .map_err(|e| fail(format!("metadata `tensor_axes`: {e}")))?;
 
-        let read = |name: &str| -> Result<Tensor, ReduceError> {
-            let view = file.tensor(name).map_err(|e| fail(format!("`{name}`: {e}")))?;
-            if view.dtype() != Dtype::F64 {
-                return Err(fail(format!("`{name}` is {:?}, expected F64", view.dtype())));
-            }
-            let data = view
-                .data()
-                .chunks_exact(8)
-                .map(|b| f64::from_le_bytes(b.try_into().expect("8 bytes")))
-                .collect();
-            Tensor::from_vec(view.shape(), data).map_err(|e| fail(format!("`{name}`: {e}")))
+        let names: Vec<String> = arrays.keys().cloned().collect();
+        let mut read = |name: &str| -> Result<Tensor, ReduceError> {
+            arrays.remove(name).ok_or_else(|| fail(format!("`{name}` is missing")))
         };
         let mut bases = Bases::new();
-        for (name, _) in file.tensors().iter().filter(|(n, _)| n.starts_with("basis/")) {
+        for name in names.iter().filter(|n| n.starts_with("basis/")) {
             let b = name.trim_start_matches("basis/");
             bases.insert(b.to_string(), Basis::new(b, read(name)?, 1e-9).map_err(|e| fail(e.to_string()))?);
         }
@@ -186,11 +158,65 @@ impl ReducedModel {
                 extras.metadata.insert(key.to_string(), v.clone());
             }
         }
-        for (name, _) in file.tensors().iter().filter(|(n, _)| n.starts_with("data/")) {
+        for name in names.iter().filter(|n| n.starts_with("data/")) {
             extras.arrays.insert(name.trim_start_matches("data/").to_string(), read(name)?);
         }
         Ok((model, extras))
     }
+}
+
+/// Writes f64 `arrays` (name, tensor) and string `metadata` as one safetensors file at `path`
+/// (a temporary file beside it, then renamed: never half-written). The format of reduced
+/// models, for capabilities that keep other arrays (a fluid's bases between training stages).
+pub fn save_arrays(
+    path: &Path,
+    metadata: HashMap<String, String>,
+    arrays: &[(String, &Tensor)],
+) -> Result<(), ReduceError> {
+    let fail = |detail: String| ReduceError::File { path: path.to_path_buf(), detail };
+    let bytes: Vec<(String, Vec<u8>, Vec<usize>)> =
+        arrays.iter().map(|(n, t)| (n.clone(), f64_bytes(t), t.shape().to_vec())).collect();
+    let views = bytes
+        .iter()
+        .map(|(n, b, s)| TensorView::new(Dtype::F64, s.clone(), b).map(|v| (n.clone(), v)))
+        .collect::<Result<Vec<_>, _>>()
+        .map_err(|e| fail(e.to_string()))?;
+    let buffer = safetensors::serialize(views, Some(metadata)).map_err(|e| fail(e.to_string()))?;
+    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let tmp = path.with_file_name(format!(".{name}.{}.tmp", std::process::id()));
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).map_err(|e| fail(e.to_string()))?;
+    }
+    std::fs::write(&tmp, &buffer).map_err(|e| fail(e.to_string()))?;
+    std::fs::rename(&tmp, path).map_err(|e| {
+        let _ = std::fs::remove_file(&tmp);
+        fail(e.to_string())
+    })
+}
+
+/// What [`load_arrays`] reads: the metadata and the arrays by name.
+pub type ArrayFile = (HashMap<String, String>, BTreeMap<String, Tensor>);
+
+/// Reads a file written by [`save_arrays`]: its metadata and every f64 array by name (errors
+/// name the file and the array).
+pub fn load_arrays(path: &Path) -> Result<ArrayFile, ReduceError> {
+    let fail = |detail: String| ReduceError::File { path: path.to_path_buf(), detail };
+    let buffer = std::fs::read(path).map_err(|e| fail(e.to_string()))?;
+    let (_, header) = SafeTensors::read_metadata(&buffer)
+        .map_err(|e| fail(format!("not a readable safetensors file ({e})")))?;
+    let file = SafeTensors::deserialize(&buffer)
+        .map_err(|e| fail(format!("not a readable safetensors file ({e})")))?;
+    let mut arrays = BTreeMap::new();
+    for (name, view) in file.tensors() {
+        if view.dtype() != Dtype::F64 {
+            return Err(fail(format!("`{name}` is {:?}, expected F64", view.dtype())));
+        }
+        let data =
+            view.data().chunks_exact(8).map(|b| f64::from_le_bytes(b.try_into().expect("8 bytes"))).collect();
+        let t = Tensor::from_vec(view.shape(), data).map_err(|e| fail(format!("`{name}`: {e}")))?;
+        arrays.insert(name, t);
+    }
+    Ok((header.metadata().clone().unwrap_or_default(), arrays))
 }
 
 /// `serde_json::to_string` behind a trait object, so one closure serves every type.

@@ -30,7 +30,7 @@ pub use basis::{Bases, Basis};
 pub use error::ReduceError;
 pub use expr::Expr;
 pub(crate) use file::erased;
-pub use file::{ModelExtras, FORMAT, VERSION};
+pub use file::{load_arrays, save_arrays, ModelExtras, FORMAT, VERSION};
 pub use gpu_eval::{Backend, GpuReducedModel};
 pub use model::{FullTensor, Model, ReduceOptions, StreamedTensor, TensorDecl};
 pub use pca::{pca, pca_on, pca_with, Pca, SnapshotFile, SnapshotFn, SnapshotSource, Truncation};

@@ -69,6 +69,10 @@ pub struct Amg {
     coarse_n: usize,
     fine_n: usize,
     entries: usize,
+    /// The kernel vector, normalised, where it is exact: conjugate gradients keep their
+    /// residuals and preconditioned residuals orthogonal to it (rounding would otherwise
+    /// feed the kernel until the iteration stalls).
+    kernel: Option<Vec<f64>>,
 }
 
 impl std::fmt::Debug for Amg {
@@ -316,7 +320,14 @@ impl Amg {
             what: "multigrid coarsest level".into(),
             detail: format!("{n} rows: {e:?}"),
         })?;
-        Ok(Self { levels, coarse, coarse_n: n, fine_n, entries: entries + n * n })
+        let kernel = match kernel {
+            Kernel::Exact => {
+                let norm = dot(near_null, near_null).sqrt();
+                (norm > 0.0).then(|| near_null.iter().map(|v| v / norm).collect())
+            }
+            Kernel::Near => None,
+        };
+        Ok(Self { levels, coarse, coarse_n: n, fine_n, entries: entries + n * n, kernel })
     }
 
     /// Rows per level, finest first.
@@ -380,11 +391,19 @@ impl Amg {
         for (ri, bi) in r.iter_mut().zip(b) {
             *ri = bi - *ri;
         }
+        let deflate = |v: &mut [f64]| {
+            if let Some(k) = &self.kernel {
+                let c = dot(v, k);
+                v.iter_mut().zip(k).for_each(|(x, kx)| *x -= c * kx);
+            }
+        };
+        deflate(&mut r);
         let mut res = dot(&r, &r).sqrt();
         if res <= target {
             return Ok(0);
         }
         let mut z = self.precondition(a, &r);
+        deflate(&mut z);
         let mut p = z.clone();
         let mut rz = dot(&r, &z);
         let mut q = vec![0.0; b.len()];
@@ -399,11 +418,13 @@ impl Amg {
                 *xi += alpha * pi;
                 *ri -= alpha * qi;
             }
+            deflate(&mut r);
             res = dot(&r, &r).sqrt();
             if res <= target {
                 return Ok(step);
             }
             z = self.precondition(a, &r);
+            deflate(&mut z);
             let rz_next = dot(&r, &z);
             let beta = rz_next / rz;
             rz = rz_next;

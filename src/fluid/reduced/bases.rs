@@ -23,7 +23,10 @@
 use crate::fluid::operators::divergence;
 use crate::fluid::FluidError;
 use crate::mesh::{SimplexMesh, Topology};
-use crate::reduce::{pca, Basis, Pca, ReduceError, SnapshotSource, Truncation};
+use std::collections::HashMap;
+use std::path::Path;
+
+use crate::reduce::{load_arrays, pca, save_arrays, Basis, Pca, ReduceError, SnapshotSource, Truncation};
 use crate::tensor::Tensor;
 
 use super::training::TrainingSet;
@@ -89,6 +92,54 @@ pub struct FluidBases {
     /// Sizes and energies.
     pub reports: Vec<BasisReport>,
 }
+
+impl FluidBases {
+    /// Writes the bases to `path` (the core's array file: `f u g h d` as f64 matrices, the
+    /// reports and `key` — what they were built from — in the metadata), for a training that
+    /// resumes after its bases.
+    pub fn save(&self, path: &Path, key: &str) -> Result<(), FluidError> {
+        let mut arrays: Vec<(String, &Tensor)> =
+            vec![("f".into(), self.f.matrix()), ("u".into(), self.u.matrix()), ("g".into(), self.g.matrix())];
+        arrays.extend(self.h.as_ref().map(|b| ("h".to_string(), b.matrix())));
+        arrays.extend(self.d.as_ref().map(|b| ("d".to_string(), b.matrix())));
+        let mut meta = HashMap::new();
+        meta.insert("format".to_string(), BASES_FORMAT.to_string());
+        meta.insert("key".to_string(), key.to_string());
+        let reports = serde_json::to_string(&self.reports).map_err(|e| FluidError::State(e.to_string()))?;
+        meta.insert("reports".to_string(), reports);
+        save_arrays(path, meta, &arrays).map_err(reduce_err)
+    }
+
+    /// Reads bases written by [`Self::save`] if they were built from `key`; `Ok(None)` if the
+    /// file holds bases of something else (a training asked for other runs or sizes).
+    pub fn load(path: &Path, key: &str) -> Result<Option<Self>, FluidError> {
+        let (meta, mut arrays) = load_arrays(path).map_err(reduce_err)?;
+        let fail = |m: String| FluidError::State(format!("{}: {m}", path.display()));
+        if meta.get("format").map(String::as_str) != Some(BASES_FORMAT) {
+            return Err(fail("not a galerkin fluid bases file".into()));
+        }
+        if meta.get("key").map(String::as_str) != Some(key) {
+            return Ok(None);
+        }
+        let reports: Vec<BasisReport> = serde_json::from_str(meta.get("reports").map_or("", String::as_str))
+            .map_err(|e| fail(format!("reports: {e}")))?;
+        let mut basis = |n: &str| -> Result<Option<Basis>, FluidError> {
+            arrays.remove(n).map(|m| Basis::new(n, m, 1e-9).map_err(|e| fail(e.to_string()))).transpose()
+        };
+        let need = |b: Option<Basis>, n: &str| b.ok_or_else(|| fail(format!("basis {n} is missing")));
+        Ok(Some(Self {
+            f: need(basis("f")?, "f")?,
+            u: need(basis("u")?, "u")?,
+            g: need(basis("g")?, "g")?,
+            h: basis("h")?,
+            d: basis("d")?,
+            reports,
+        }))
+    }
+}
+
+/// The metadata `format` of a bases file.
+const BASES_FORMAT: &str = "galerkin-fluid-bases";
 
 fn truncation(sizes: &BasisSizes, cap: Option<usize>, centred: bool) -> Truncation {
     Truncation { energy: sizes.energy, max_modes: cap.unwrap_or(usize::MAX), centred }

@@ -12,8 +12,10 @@
 //! Its entries come from the full solver's own `swept_volume` by polarization — the symmetric
 //! d-linear form of a homogeneous polynomial q of degree d is
 //! `T(x₁, …, x_d) = (1 / (d! 2^d)) Σ_{ε ∈ {±1}^d} ε₁⋯ε_d q(ε₁x₁ + ⋯ + ε_d x_d)` — evaluated
-//! on unit vectors of each face's 2d² local coordinates, so there is one implementation of the
-//! induced flux and the tensor is tested against it.
+//! on unit vectors of a face's 2d² local coordinates, so there is one implementation of the
+//! induced flux and the tensor is tested against it. The form depends only on the local
+//! coordinates and the face's orientation in its cell, so it is computed once per orientation
+//! (d + 1 of them) and placed at every face's global coordinates.
 
 use crate::mesh::geometry::{swept_volume, Point};
 use crate::mesh::{SimplexMesh, Topology};
@@ -38,8 +40,42 @@ pub fn induced_flux_tensor(mesh: &SimplexMesh, topo: &Topology, frame_time: f64)
         .map(|m| (0..d).map(|j| if m >> j & 1 == 1 { -1.0 } else { 1.0 }).collect())
         .collect();
     let norm = 1.0 / ((1..=d).product::<usize>() as f64 * (1u32 << d) as f64) / frame_time;
-    let mut x = vec![0.0; nl];
-    let mut values = Vec::with_capacity(tuples.len());
+    // The polarized form of a face depends only on its local coordinates and on which vertex
+    // of its cell it is opposite (the orientation), not on where the face is: compute it once
+    // per local index l (d + 1 forms of 2d² coordinates, instead of one per face).
+    let local: Vec<Vec<(usize, f64)>> = (0..=d)
+        .map(|l| {
+            let face: Vec<usize> = (0..=d).filter(|&a| a != l).collect();
+            let q = |x: &[f64]| -> f64 {
+                let mut p0 = vec![[0.0; 3]; d + 1];
+                let mut p1 = vec![[0.0; 3]; d + 1];
+                for (j, &a) in face.iter().enumerate() {
+                    for k in 0..d {
+                        p0[a][k] = x[j * d + k];
+                        p1[a][k] = x[d * d + j * d + k];
+                    }
+                }
+                swept_volume(d, &p0 as &[Point], &p1, l)
+            };
+            let mut x = vec![0.0; nl];
+            let values: Vec<f64> = tuples
+                .iter()
+                .map(|t| {
+                    let mut sum = 0.0;
+                    for s in &signs {
+                        x.iter_mut().for_each(|v| *v = 0.0);
+                        for (j, &i) in t.iter().enumerate() {
+                            x[i] += s[j];
+                        }
+                        sum += s.iter().product::<f64>() * q(&x);
+                    }
+                    sum * norm
+                })
+                .collect();
+            let largest = values.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            values.into_iter().enumerate().filter(|(_, v)| v.abs() > ZERO * largest).collect()
+        })
+        .collect();
     let mut index = vec![0usize; d + 1];
     for f in 0..topo.face_count() {
         let [c, _] = topo.face_cells(f);
@@ -47,38 +83,9 @@ pub fn induced_flux_tensor(mesh: &SimplexMesh, topo: &Topology, frame_time: f64)
         let cell = mesh.cell(c as usize);
         // The face's vertices (the cell's, without l), in the cell's order.
         let face: Vec<usize> = (0..=d).filter(|&a| a != l).collect();
-        let q = |x: &[f64]| -> f64 {
-            let mut p0 = vec![[0.0; 3]; d + 1];
-            let mut p1 = vec![[0.0; 3]; d + 1];
-            for (j, &a) in face.iter().enumerate() {
-                for k in 0..d {
-                    p0[a][k] = x[j * d + k];
-                    p1[a][k] = x[d * d + j * d + k];
-                }
-            }
-            swept_volume(d, &p0 as &[Point], &p1, l)
-        };
-        values.clear();
-        let mut largest: f64 = 0.0;
-        for t in &tuples {
-            let mut sum = 0.0;
-            for s in &signs {
-                x.iter_mut().for_each(|v| *v = 0.0);
-                for (j, &i) in t.iter().enumerate() {
-                    x[i] += s[j];
-                }
-                sum += s.iter().product::<f64>() * q(&x);
-            }
-            let v = sum * norm;
-            largest = largest.max(v.abs());
-            values.push(v);
-        }
         index[0] = f;
-        for (t, &v) in tuples.iter().zip(&values) {
-            if v.abs() <= ZERO * largest {
-                continue;
-            }
-            for (j, &i) in t.iter().enumerate() {
+        for &(t, v) in &local[l] {
+            for (j, &i) in tuples[t].iter().enumerate() {
                 // Local coordinate i: time τ = i / d², face vertex (i mod d²) / d, axis i mod d.
                 let (tau, rest) = (i / (d * d), i % (d * d));
                 let vertex = cell[face[rest / d]] as usize;

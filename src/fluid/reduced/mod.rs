@@ -7,6 +7,7 @@
 //! - [`example`]: the small tunnel's training runs, for the demo, benchmarks and tests;
 //! - [`induced`]: the induced flux as a tensor in the stacked geometry, for driven motions;
 //! - [`model`]: §6.2's reduced tensors premultiplied by the core, and the model file;
+//! - [`pipeline`]: a scene to a model in one resumable command (runs, bases, tensors);
 //! - [`particles`]: marker particles from the reduced state (Eq. 13), never the full one;
 //! - [`run`]: a reduced run under a motion, lifted to a snapshot directory;
 //! - [`step`]: the reduced step (flux combination, matrix exponential, constrained
@@ -23,6 +24,7 @@ pub mod example;
 pub mod induced;
 pub mod model;
 pub mod particles;
+pub mod pipeline;
 pub mod plot;
 pub mod run;
 pub mod step;
@@ -31,6 +33,7 @@ pub mod training;
 
 pub use bases::{BasisReport, BasisSizes, FluidBases};
 pub use model::{MeshFingerprint, MeshOf, ReducedFluidModel, Trajectory};
+pub use pipeline::{train_scene, SceneTraining, TrainingEvent};
 pub use run::{run_reduced, write_lifted, ReducedMotion, ReducedRun};
 pub use step::{Exponential, FluxCombination, ReducedFluid, ReducedState, ReducedStepReport};
 pub use study::{one_step_errors, ErrorStudy, SizeErrors};
