@@ -88,6 +88,12 @@ pub struct ReducedArgs {
     /// frames through the reduced induced-flux tensor.
     #[arg(long, default_value = "replay:0")]
     pub motion: ReducedMotion,
+    /// Drive a cavity model by its compressions instead (a motion never trained):
+    /// FRAME=A1/A2/A3 keyframes, comma-separated, interpolated linearly and held after the
+    /// last, e.g. 0=0/0/0,30=0.5/0/0,60=0.5/0/0.4,90=0/0/0.4. From rest; ĥ from the reduced
+    /// induced-flux tensor.
+    #[arg(long, conflicts_with = "motion")]
+    pub drive: Option<galerkin::fluid::reduced::CompressionSchedule>,
     /// Snapshot directory to write, lifted to the full space (for `fluid render`).
     #[arg(long, default_value = "out/fluid-reduced")]
     pub out: PathBuf,
@@ -270,10 +276,18 @@ pub fn reduced(args: &ReducedArgs) -> Result<()> {
     let model = ReducedFluidModel::load(&args.model)?;
     let fluid = ReducedFluid::new(&model)?;
     let k = args.motion.run();
-    let available = model.trajectories.get(k).map_or(0, |t| t.g.shape()[0].saturating_sub(1));
+    let available = match &args.drive {
+        Some(schedule) => schedule.last_frame(),
+        None => model.trajectories.get(k).map_or(0, |t| t.g.shape()[0].saturating_sub(1)),
+    };
     let frames = args.frames.unwrap_or(available);
     let bar = crate::progress_bar(frames as u64, "reduced steps");
-    let run = run_reduced(&model, &fluid, args.motion, frames, &mut |_| bar.inc(1))?;
+    let run = match &args.drive {
+        Some(schedule) => {
+            galerkin::fluid::reduced::run_driven(&model, &fluid, schedule, frames, &mut |_| bar.inc(1))?
+        }
+        None => run_reduced(&model, &fluid, args.motion, frames, &mut |_| bar.inc(1))?,
+    };
     bar.finish_and_clear();
     let mut step: Vec<f64> = run.reports.iter().map(|r| r.total_seconds()).collect();
     let (mu, mf, mg, mh) = fluid.dims();

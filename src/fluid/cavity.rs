@@ -180,13 +180,19 @@ impl Cavity {
     /// volume is the rest volume: λ by the secant method on the volume (a cubic in λ) to
     /// 1e-13 relative, bisecting whenever the secant step leaves the bracket.
     pub fn mapped_for(&self, a: [f64; 3]) -> Vec<f64> {
+        self.mapped(a, self.inflation_for(a))
+    }
+
+    /// The central cavity's factor λ that restores the rest volume under compressions `a`
+    /// (see [`Self::mapped_for`]; 1 when no factor in [1, 2] brackets it).
+    pub fn inflation_for(&self, a: [f64; 3]) -> f64 {
         let target = self.rest_volume;
         let residual =
             |lambda: f64| enclosed_volume(&self.mesh, &self.topology, &self.mapped(a, lambda)) - target;
         let (mut lo, mut hi) = (1.0, 2.0);
         let (r_lo, r_hi) = (residual(lo), residual(hi));
         if r_lo >= 0.0 || r_hi <= 0.0 {
-            return self.mapped(a, 1.0);
+            return 1.0;
         }
         let (mut x0, mut x1, mut r0, mut r1) = (lo, hi, r_lo, r_hi);
         for _ in 0..100 {
@@ -196,7 +202,7 @@ impl Cavity {
             }
             let r = residual(x);
             if r.abs() <= 1e-13 * target || hi - lo < 1e-15 {
-                return self.mapped(a, x);
+                return x;
             }
             if r < 0.0 {
                 lo = x;
@@ -205,7 +211,21 @@ impl Cavity {
             }
             (x0, r0, x1, r1) = (x1, r1, x, r);
         }
-        self.mapped(a, 0.5 * (lo + hi))
+        0.5 * (lo + hi)
+    }
+
+    /// The map's motion fields: the geometry is exactly
+    /// `g₀ + a₁D₁ + a₂D₂ + a₃D₃ + (λ − 1)D₀` (every displacement is linear in its amount, see
+    /// the module docs); returns `[g₀, D₁, D₂, D₃, D₀]`.
+    pub fn motion_fields(&self) -> [Vec<f64>; 5] {
+        let g0 = self.mapped([0.0; 3], 1.0);
+        let field = |a: [f64; 3], lambda: f64| -> Vec<f64> {
+            self.mapped(a, lambda).iter().zip(&g0).map(|(x, x0)| x - x0).collect()
+        };
+        let (d1, d2, d3) =
+            (field([1.0, 0.0, 0.0], 1.0), field([0.0, 1.0, 0.0], 1.0), field([0.0, 0.0, 1.0], 1.0));
+        let d0 = field([0.0; 3], 2.0);
+        [g0, d1, d2, d3, d0]
     }
 
     /// The whole mesh's geometry for compressions `a` at `frame` (the map of the module docs);

@@ -6,6 +6,7 @@
 //! - [`bases`]: `B_f`, `B_u = B_p`, `B_g`, `B_h` by streamed PCA, `B_d` by constraint reduction;
 //! - [`example`]: the small tunnel's training runs, for the demo, benchmarks and tests;
 //! - [`induced`]: the induced flux as a tensor in the stacked geometry, for driven motions;
+//! - [`cavity_motion`]: the cavity's reduced geometry from its compressions, at run time;
 //! - [`model`]: §6.2's reduced tensors premultiplied by the core, and the model file;
 //! - [`pipeline`]: a scene to a model in one resumable command (runs, bases, tensors);
 //! - [`particles`]: marker particles from the reduced state (Eq. 13), never the full one;
@@ -19,10 +20,12 @@
 //! where the two differ.
 
 pub mod bases;
+pub mod cavity_motion;
 mod dense;
 pub mod example;
 pub mod induced;
 pub mod model;
+mod model_file;
 pub mod particles;
 pub mod pipeline;
 pub mod plot;
@@ -32,9 +35,10 @@ pub mod study;
 pub mod training;
 
 pub use bases::{BasisReport, BasisSizes, FluidBases};
+pub use cavity_motion::{CavityMotion, CompressionSchedule};
 pub use model::{MeshFingerprint, MeshOf, ReducedFluidModel, Trajectory};
 pub use pipeline::{train_scene, SceneTraining, TrainingEvent};
-pub use run::{run_reduced, write_lifted, ReducedMotion, ReducedRun};
+pub use run::{run_driven, run_reduced, write_lifted, ReducedMotion, ReducedRun};
 pub use step::{Exponential, FluxCombination, ReducedFluid, ReducedState, ReducedStepReport};
 pub use study::{one_step_errors, ErrorStudy, SizeErrors};
 pub use training::TrainingSet;

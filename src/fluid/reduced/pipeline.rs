@@ -11,6 +11,9 @@
 //! Nothing of size cells × frames is held in memory: runs stream to disk frame by frame, and
 //! the bases and trajectories stream from it ([`super::training`]).
 //!
+//! A cavity's model also gets its motion model ([`super::cavity_motion`]), so it can be
+//! driven by compressions at run time.
+//!
 //! Each stage reports its wall time and the process's peak memory during it.
 
 use std::path::{Path, PathBuf};
@@ -26,6 +29,7 @@ use crate::fluid::FluidError;
 use crate::process::{peak_memory_mb, reset_peak_memory};
 
 use super::bases::{BasisSizes, FluidBases};
+use super::cavity_motion::CavityMotion;
 use super::model::ReducedFluidModel;
 use super::training::TrainingSet;
 
@@ -193,9 +197,14 @@ pub fn train_scene(
 
     // The trajectories and the premultiplied tensors: the model.
     let stage = Stage::start();
-    let model = ReducedFluidModel::train(&set, bases, &options.sizes, &mut |p| {
+    let mut model = ReducedFluidModel::train(&set, bases, &options.sizes, &mut |p| {
         on_event(TrainingEvent::Part(p.into()))
     })?;
+    // The cavity is driven at run time by its compressions: its reduced motion model.
+    if let Motion::Cavity { cavity, .. } = &FluidScene::parse(&scene_text, scene_path)?.motion {
+        let b_g = model.basis("g").ok_or_else(|| FluidError::State("the model has no basis g".into()))?;
+        model.cavity = Some(CavityMotion::new(cavity, b_g));
+    }
     model.save(model_path)?;
     on_event(stage.done("tensors".into(), false));
     Ok(model)

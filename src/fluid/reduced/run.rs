@@ -13,6 +13,7 @@ use crate::fluid::FluidError;
 use crate::mesh::SimplexMesh;
 use crate::reduce::Basis;
 
+use super::cavity_motion::CompressionSchedule;
 use super::model::ReducedFluidModel;
 use super::step::{ReducedFluid, ReducedState, ReducedStepReport};
 
@@ -86,16 +87,56 @@ pub fn run_reduced(
     }
     let (mg, mh) = (traj.g.shape()[1], traj.h.shape()[1]);
     let row = |t: &crate::tensor::Tensor, m: usize, i: usize| t.data()[i * m..(i + 1) * m].to_vec();
-    let mut state = ReducedState { u: traj.u0.clone(), f: traj.f0.clone(), g: row(&traj.g, mg, 0) };
+    let start = ReducedState { u: traj.u0.clone(), f: traj.f0.clone(), g: row(&traj.g, mg, 0) };
+    let replay = |t: usize| -> Option<Vec<f64>> {
+        matches!(motion, ReducedMotion::Replay(_)).then(|| row(&traj.h, mh, t))
+    };
+    step_through(fluid, start, frames, &mut |t| Ok((row(&traj.g, mg, t), replay(t))), on_frame)
+}
+
+/// Runs `frames` reduced steps of the cavity model `model` driven by `schedule` (its
+/// compressions per frame, [`super::cavity_motion`]) from rest: each frame's ĝ from the
+/// cavity's motion model, its ĥ from the reduced induced-flux tensor — a motion no training run
+/// needs to have made.
+pub fn run_driven(
+    model: &ReducedFluidModel,
+    fluid: &ReducedFluid,
+    schedule: &CompressionSchedule,
+    frames: usize,
+    on_frame: &mut dyn FnMut(usize),
+) -> Result<ReducedRun, FluidError> {
+    let motion = model.cavity.as_ref().ok_or_else(|| {
+        FluidError::State("the model has no cavity motion model (train it from a cavity scene)".into())
+    })?;
+    let g0 = motion.geometry(schedule.at(0))?;
+    let (mu, mf) = (model.dim_of("u"), model.dim_of("f"));
+    let start = ReducedState { u: vec![0.0; mu], f: vec![0.0; mf], g: g0 };
+    step_through(fluid, start, frames, &mut |t| Ok((motion.geometry(schedule.at(t))?, None)), on_frame)
+}
+
+/// A frame's ĝ and, when replayed, its ĥ.
+type FrameMotion = (Vec<f64>, Option<Vec<f64>>);
+
+/// The reduced steps from `start`: `motion(t)` gives frame t's ĝ and, when replayed, its ĥ
+/// (otherwise ĥ comes from the reduced induced-flux tensor).
+fn step_through(
+    fluid: &ReducedFluid,
+    start: ReducedState,
+    frames: usize,
+    motion: &mut dyn FnMut(usize) -> Result<FrameMotion, FluidError>,
+    on_frame: &mut dyn FnMut(usize),
+) -> Result<ReducedRun, FluidError> {
+    let (_, _, _, mh) = fluid.dims();
+    let mut state = start;
     let mut run = ReducedRun { states: vec![state.clone()], h: vec![vec![0.0; mh]], reports: Vec::new() };
     for t in 0..frames {
-        let g1 = row(&traj.g, mg, t + 1);
-        let h1 = match motion {
-            ReducedMotion::Replay(_) => row(&traj.h, mh, t + 1),
-            ReducedMotion::Computed(_) if mh == 0 => Vec::new(),
-            ReducedMotion::Computed(_) => fluid.induced_flux(&state.g, &g1).ok_or_else(|| {
+        let (g1, replayed) = motion(t + 1)?;
+        let h1 = match replayed {
+            Some(h) => h,
+            None if mh == 0 => Vec::new(),
+            None => fluid.induced_flux(&state.g, &g1).ok_or_else(|| {
                 FluidError::State(
-                    "computed motion: the model has no induced-flux tensor H (retrain it)".into(),
+                    "a computed motion: the model has no induced-flux tensor H (retrain it)".into(),
                 )
             })?,
         };
