@@ -422,7 +422,7 @@ fn view(
     resize_to: Option<(u32, u32)>,
 ) -> Result<()> {
     let scene = DemoScene::load(scene_path)?;
-    let options = galerkin::render::viewer::ViewOptions { frames, screenshot, resize_to };
+    let options = galerkin::render::viewer::ViewOptions { frames, screenshot, resize_to, keys: Vec::new() };
     galerkin::render::viewer::run(desc, Box::new(galerkin::demo::viewer::DemoContent::new(scene)), options)
 }
 

@@ -324,3 +324,96 @@ fn the_fluid_viewer_plays_a_reduced_model() {
     let drawn = drawn_pixels(&rgba);
     assert!(drawn as f64 > 0.6 * f64::from(w * h), "only {drawn} of {} pixels drawn", w * h);
 }
+
+/// A small cavity model (the three single-cavity runs of the small cavity, a few frames each)
+/// trained by `fluid train-scene`, for the cavity viewer's tests.
+fn small_cavity_model(dir: &Path) -> std::path::PathBuf {
+    let model = dir.join("cavity.safetensors");
+    let out = Command::new(env!("CARGO_BIN_EXE_galerkin"))
+        .args(["fluid", "train-scene", "scenes/fluid/cavity_small.toml", "--frames", "4", "--runs", "0,1,2"])
+        .args(["--m-f", "6", "--m-u", "8", "--m-g", "5", "--m-h", "6", "--out"])
+        .arg(&model)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "train-scene: {}", String::from_utf8_lossy(&out.stderr));
+    model
+}
+
+/// The cavity viewer's keys, without a window: 1–3 compress and release, space pauses, r
+/// resets; the compressions move towards their targets a little per frame.
+#[test]
+fn the_cavity_viewer_compresses_the_cavities_the_keys_choose() {
+    use galerkin::fluid::reduced::ReducedFluidModel;
+    use galerkin::fluid::viewer_cavity::CavityContent;
+    use galerkin::render::viewer::ViewerContent;
+    let scratch = tempfile::tempdir().expect("a scratch directory");
+    let model = ReducedFluidModel::load(&small_cavity_model(scratch.path())).unwrap();
+    let mut content = CavityContent::new(model, 100, (320, 240), false).unwrap();
+    assert!(content.key("1") && content.key("3"), "the cavity keys are the content's");
+    assert_eq!(content.targets(), [0.5, 0.0, 0.5]);
+    for _ in 0..5 {
+        content.step().unwrap();
+    }
+    let a = content.compressions();
+    assert!((a[0] - 0.1).abs() < 1e-12 && a[1] == 0.0 && (a[2] - 0.1).abs() < 1e-12, "{a:?}");
+    assert!(content.title().contains("compressions 0.10/0.00/0.10"), "{}", content.title());
+    assert!(content.state().u.iter().any(|&u| u != 0.0), "the compression moved the fluid");
+    assert!(content.key("1"), "pressed again: released");
+    assert_eq!(content.targets(), [0.0, 0.0, 0.5]);
+    assert!(content.key("r"));
+    assert_eq!((content.compressions(), content.targets()), ([0.0; 3], [0.0; 3]));
+    assert!(content.state().u.iter().all(|&u| u == 0.0), "reset to rest");
+    assert!(!content.key("x"), "not a key of the cavity viewer");
+}
+
+/// `galerkin fluid view MODEL` on a cavity model under Xvfb, keys scripted: cavities 1 and 3
+/// compressed by the keys, the reduced particles drawn over the walls, validation on.
+#[test]
+fn the_cavity_viewer_runs_a_driven_reduced_cavity() {
+    let x = Xvfb::start();
+    let scratch = tempfile::tempdir().expect("a scratch directory");
+    let model = small_cavity_model(scratch.path());
+    let shot = scratch.path().join("shot.png");
+    let out = Command::new(env!("CARGO_BIN_EXE_galerkin"))
+        .args(["--validation", "fluid", "view"])
+        .arg(&model)
+        .args([
+            "--frames",
+            "12",
+            "--keys",
+            "1@1,3@4",
+            "--size",
+            "320x240",
+            "--particles",
+            "3000",
+            "--screenshot",
+        ])
+        .arg(&shot)
+        .env("DISPLAY", &x.display)
+        .env_remove("WAYLAND_DISPLAY")
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "galerkin fluid view failed: {}", String::from_utf8_lossy(&out.stderr));
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(stdout.contains("reduced cavity, 3000 particles, stopped at frame"), "{stdout}");
+    // Cavity 1 was pressed before frame 1 and cavity 3 before frame 4; both compress at 0.02 a
+    // frame, cavity 2 never.
+    let line = stdout.lines().find(|l| l.contains("compressions")).expect("summary");
+    let amounts: Vec<f64> = line
+        .split("compressions ")
+        .nth(1)
+        .and_then(|s| s.split_whitespace().next())
+        .map(|s| s.split('/').filter_map(|x| x.parse().ok()).collect())
+        .unwrap_or_default();
+    assert_eq!(amounts.len(), 3, "{line}");
+    assert!(amounts[0] > amounts[2] && amounts[2] > 0.0 && amounts[1] == 0.0, "{line}");
+    let (w, h, rgba) = read_png_rgba8(&shot).unwrap();
+    assert_eq!((w, h), (320, 240));
+    // The walls (grey shades) cover part of the window, seen from outside; some particles
+    // (coloured) are drawn on them.
+    let drawn = drawn_pixels(&rgba);
+    assert!((0.05..0.95).contains(&(drawn as f64 / f64::from(w * h))), "{drawn} of the pixels drawn");
+    let coloured = rgba.chunks(4).filter(|p| p[0].abs_diff(p[1]) > 24 || p[1].abs_diff(p[2]) > 24).count();
+    assert!(coloured > 50, "only {coloured} coloured (particle) pixels");
+}

@@ -34,6 +34,8 @@ layout(std430, set = 0, binding = 8) readonly buffer GridCells { uint grid_cells
 layout(std430, set = 0, binding = 9) buffer Counts { uint counts[]; };
 // …and the rest here (B_f may exceed one storage binding). Full: unused.
 layout(std430, set = 0, binding = 10) readonly buffer FluxHigh { float flux_high[]; };
+// Each particle's speed at the end of the frame (its cell's, Eq. 13), for colouring sprites.
+layout(std430, set = 0, binding = 11) writeonly buffer Speeds { float particle_speed[]; };
 
 layout(push_constant) uniform Push {
     uint dim;
@@ -206,6 +208,7 @@ void main() {
         tally[locate(x, c, t1)] += 1u;
     }
     particles[i] = vec4(x, uintBitsToFloat(c));
+    particle_speed[i] = length(cell_velocity(c, 1.0));
     for (uint k = 0u; k < 3u; ++k) {
         if (tally[k] != 0u) {
             atomicAdd(counts[k], tally[k]);

@@ -71,7 +71,8 @@ pub struct SurfaceArgs {
 /// Arguments of `galerkin fluid view`.
 #[derive(Args)]
 pub struct ViewArgs {
-    /// Scene file (TOML), 2D, e.g. scenes/fluid/tunnel_small.toml (or --model instead).
+    /// Scene file (TOML), 2D, e.g. scenes/fluid/tunnel_small.toml — or a model file
+    /// (.safetensors): a 2D model replays a training run, a 3D cavity model is driven by keys.
     #[arg(required_unless_present = "model")]
     pub scene: Option<PathBuf>,
     /// Play a reduced model (written by `galerkin fluid train`) instead of a scene.
@@ -95,6 +96,10 @@ pub struct ViewArgs {
     /// Where S (and, with --frames, the last frame) saves a screenshot.
     #[arg(long, default_value = "out/fluid-screenshot.png")]
     pub screenshot: PathBuf,
+    /// Keys pressed at frames in a scripted run, KEY@FRAME comma-separated (a cavity model:
+    /// 1, 2, 3 compress or release a small cavity, space pauses, r resets, p reseeds).
+    #[arg(long, default_value = "")]
+    pub keys: galerkin::render::viewer::ScriptedKeys,
 }
 
 /// Arguments of `galerkin fluid simulate`.
@@ -191,19 +196,32 @@ fn surface(args: &SurfaceArgs) -> Result<()> {
 #[cfg(feature = "viewer")]
 fn view(desc: &GpuDesc, args: &ViewArgs) -> Result<()> {
     use galerkin::fluid::viewer::FluidContent;
-    use galerkin::render::viewer::{run, ViewOptions};
-    let content = match (&args.scene, &args.model) {
+    use galerkin::fluid::viewer_cavity::CavityContent;
+    use galerkin::render::viewer::{run, ViewOptions, ViewerContent};
+    // A model file given in the scene's place is a model.
+    let is_model = |p: &std::path::Path| p.extension().is_some_and(|e| e == "safetensors");
+    let model = args.model.clone().or_else(|| args.scene.clone().filter(|p| is_model(p)));
+    let content: Box<dyn ViewerContent> = match (&args.scene, model) {
         (_, Some(model)) => {
-            let model = galerkin::fluid::reduced::ReducedFluidModel::load(model)?;
-            FluidContent::reduced(model, args.motion, args.particles, args.size, args.play)?
+            let model = galerkin::fluid::reduced::ReducedFluidModel::load(&model)?;
+            if model.cavity.is_some() {
+                Box::new(CavityContent::new(model, args.particles, args.size, args.play)?)
+            } else {
+                Box::new(FluidContent::reduced(model, args.motion, args.particles, args.size, args.play)?)
+            }
         }
         (Some(scene), None) => {
-            FluidContent::new(FluidScene::load(scene)?, args.particles, args.size, args.play)?
+            Box::new(FluidContent::new(FluidScene::load(scene)?, args.particles, args.size, args.play)?)
         }
-        (None, None) => bail!("give a scene file or --model"),
+        (None, None) => bail!("give a scene file or a model"),
     };
-    let options = ViewOptions { frames: args.frames, screenshot: args.screenshot.clone(), resize_to: None };
-    run(desc.clone(), Box::new(content), options)
+    let options = ViewOptions {
+        frames: args.frames,
+        screenshot: args.screenshot.clone(),
+        keys: args.keys.0.clone(),
+        ..ViewOptions::default()
+    };
+    run(desc.clone(), content, options)
 }
 
 #[cfg(not(feature = "viewer"))]

@@ -757,7 +757,8 @@ fn view(desc: &GpuDesc, args: &ViewArgs) -> Result<()> {
         playing: args.play,
     };
     let content = RadiosityContent::new(scene, model, settings)?;
-    let options = ViewOptions { frames: args.frames, screenshot: args.screenshot.clone(), resize_to: None };
+    let options =
+        ViewOptions { frames: args.frames, screenshot: args.screenshot.clone(), ..ViewOptions::default() };
     run(desc.clone(), Box::new(content), options)
 }
 

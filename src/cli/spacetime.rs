@@ -503,7 +503,8 @@ fn open_viewer(desc: &GpuDesc, data: SpacetimeData, view: SpacetimeView, args: &
         args.size,
         args.play,
     );
-    let options = ViewOptions { frames: args.frames, screenshot: args.screenshot.clone(), resize_to: None };
+    let options =
+        ViewOptions { frames: args.frames, screenshot: args.screenshot.clone(), ..ViewOptions::default() };
     run(desc.clone(), Box::new(content), options)
 }
 

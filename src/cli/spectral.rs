@@ -129,7 +129,8 @@ fn open_viewer(desc: &GpuDesc, mesh: Arc<SpectralMesh>, view: SpectralView, args
     use galerkin::render::viewer::{run, ViewOptions};
     let content =
         galerkin::spectral::viewer::SpectralContent::new(mesh, view, &args.palette, args.size, args.play);
-    let options = ViewOptions { frames: args.frames, screenshot: args.screenshot.clone(), resize_to: None };
+    let options =
+        ViewOptions { frames: args.frames, screenshot: args.screenshot.clone(), ..ViewOptions::default() };
     run(desc.clone(), Box::new(content), options)
 }
 

@@ -92,6 +92,8 @@ pub struct GpuParticles {
     faces: Buffer<u32>,
     links: Buffer<u32>,
     particles: Buffer<[f32; 4]>,
+    /// Each particle's speed after the last advection (its cell's velocity, Eq. 13).
+    speeds: Buffer<f32>,
     counts: Buffer<u32>,
     /// Full: the frame's geometries and fluxes (f32), rewritten per frame. Reduced: `B_g`, the
     /// reduced coordinates (rewritten per frame) and `B_f` (two buffers when it exceeds one
@@ -121,7 +123,7 @@ fn pipeline(gpu: &Gpu, reduced: bool) -> Result<ComputePipeline, FluidError> {
         &ComputePipelineDesc {
             name: if reduced { "fluid particles (reduced state)" } else { "fluid particles" },
             spirv: crate::fluid::shaders::PARTICLES,
-            bindings: &[BindingKind::StorageBuffer; 11],
+            bindings: &[BindingKind::StorageBuffer; 12],
             push: crate::gpu::PushLayout::of::<Push>(),
             specialization: &[u32::from(reduced)],
         },
@@ -165,6 +167,7 @@ impl GpuParticles {
             faces: storage(gpu, "fluid cell faces", &face_info(mesh, topo))?,
             links: storage(gpu, "fluid walk links", &links)?,
             particles: storage(gpu, "fluid particles", &pack(particles))?,
+            speeds: storage(gpu, "fluid particle speeds", &vec![0f32; particles.len().max(1)])?,
             counts: storage(gpu, "fluid particle counts", &[0u32; 3])?,
             g0: storage(gpu, "fluid g0", &vec![0f32; mesh.g().len()])?,
             g1: storage(gpu, "fluid g1", &vec![0f32; mesh.g().len()])?,
@@ -214,6 +217,7 @@ impl GpuParticles {
             faces: storage(gpu, "fluid cell faces", &face_info(mesh, topo))?,
             links: storage(gpu, "fluid walk links", &links)?,
             particles: storage(gpu, "fluid particles", &pack(particles))?,
+            speeds: storage(gpu, "fluid particle speeds", &vec![0f32; particles.len().max(1)])?,
             counts: storage(gpu, "fluid particle counts", &[0u32; 3])?,
             g0: storage(gpu, "fluid B_g", &narrow(b_g.data()))?,
             g1: storage(gpu, "fluid reduced coordinates", &vec![0f32; 2 * m_g + m_f])?,
@@ -255,6 +259,7 @@ impl GpuParticles {
                     bind(&cb)?,
                     bind(&self.counts)?,
                     bind(self.flux_high.as_ref().unwrap_or(&self.flux))?,
+                    bind(&self.speeds)?,
                 ],
             )
             .map_err(gpu_err)?;
@@ -271,6 +276,12 @@ impl GpuParticles {
     /// The particle buffer (xyz position, w the cell's bits) for drawing.
     pub fn buffer(&self) -> &Buffer<[f32; 4]> {
         &self.particles
+    }
+
+    /// Each particle's speed after the last recorded advection (for colouring sprites without
+    /// the full flux).
+    pub fn speeds(&self) -> &Buffer<f32> {
+        &self.speeds
     }
 
     /// Replaces the particles.

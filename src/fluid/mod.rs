@@ -37,6 +37,8 @@ pub mod snapshots;
 pub mod solver;
 #[cfg(feature = "viewer")]
 pub mod viewer;
+#[cfg(feature = "viewer")]
+pub mod viewer_cavity;
 
 pub use error::FluidError;
 pub use solver::{FluidParams, FluidSolver, FluidState, StepReport};

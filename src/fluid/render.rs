@@ -176,6 +176,13 @@ crate::push_constants! {
     }
 }
 
+/// The sprites' resources for one particle buffer: coloured by their cells' speeds
+/// ([`FluidRenderer::particle_set`]) or their own ([`FluidRenderer::own_speed_set`]).
+pub struct ParticleSet {
+    set: DescriptorSet,
+    own_speeds: bool,
+}
+
 /// What the fragment stages write.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Output {
@@ -211,6 +218,8 @@ pub struct FluidRenderer {
     cells: GraphicsPipeline,
     surface: GraphicsPipeline,
     sprites: GraphicsPipeline,
+    /// Sprites coloured by each particle's own speed.
+    sprites_own: GraphicsPipeline,
     colormap: ColormapTexture,
     cell_set: DescriptorSet,
     vertices: Buffer<CellVertex>,
@@ -261,6 +270,10 @@ impl FluidRenderer {
         desc.bindings = &[BindingKind::Texture, BindingKind::StorageBuffer, BindingKind::StorageBuffer];
         desc.specialization = &spec;
         let sprites = GraphicsPipeline::new(gpu, &desc).map_err(gpu_err)?;
+        let per_particle_spec = [spec[0], 1];
+        desc.name = "fluid particles (their own speeds)";
+        desc.specialization = &per_particle_spec;
+        let sprites_own = GraphicsPipeline::new(gpu, &desc).map_err(gpu_err)?;
         let colormap = colormap.upload(gpu).map_err(gpu_err)?;
         let cell_set = cell_pipeline.bind(gpu, &[colormap.resource()]).map_err(gpu_err)?;
         let vertices = Buffer::new(
@@ -279,7 +292,17 @@ impl FluidRenderer {
             MemoryKind::CpuToGpu,
         )
         .map_err(gpu_err)?;
-        Ok(Self { cells: cell_pipeline, surface, sprites, colormap, cell_set, vertices, speeds, count: 0 })
+        Ok(Self {
+            cells: cell_pipeline,
+            surface,
+            sprites,
+            sprites_own,
+            colormap,
+            cell_set,
+            vertices,
+            speeds,
+            count: 0,
+        })
     }
 
     /// Replaces the cells and their speeds (no draw of the previous ones may be in flight).
@@ -297,8 +320,9 @@ impl FluidRenderer {
     }
 
     /// The sprite pipeline's resources for `particles` (bind once per particle buffer).
-    pub fn particle_set(&self, gpu: &Gpu, particles: &GpuParticles) -> Result<DescriptorSet, FluidError> {
-        self.sprites
+    pub fn particle_set(&self, gpu: &Gpu, particles: &GpuParticles) -> Result<ParticleSet, FluidError> {
+        let set = self
+            .sprites
             .bind(
                 gpu,
                 &[
@@ -307,7 +331,25 @@ impl FluidRenderer {
                     Resource::Storage(self.speeds.binding().map_err(gpu_err)?),
                 ],
             )
-            .map_err(gpu_err)
+            .map_err(gpu_err)?;
+        Ok(ParticleSet { set, own_speeds: false })
+    }
+
+    /// The sprite resources for `particles` coloured by their own speeds (the particle pass
+    /// writes them; for a reduced state, whose cells' speeds would need the full flux).
+    pub fn own_speed_set(&self, gpu: &Gpu, particles: &GpuParticles) -> Result<ParticleSet, FluidError> {
+        let set = self
+            .sprites_own
+            .bind(
+                gpu,
+                &[
+                    self.colormap.resource(),
+                    Resource::Storage(particles.buffer().binding().map_err(gpu_err)?),
+                    Resource::Storage(particles.speeds().binding().map_err(gpu_err)?),
+                ],
+            )
+            .map_err(gpu_err)?;
+        Ok(ParticleSet { set, own_speeds: true })
     }
 
     /// Records the cells (2D) or the surface (3D: what `update` was given, from
@@ -318,7 +360,7 @@ impl FluidRenderer {
         extent: vk::Extent2D,
         projection: &Projection,
         style: &DrawStyle,
-        particles: Option<(&DescriptorSet, usize)>,
+        particles: Option<(&ParticleSet, usize)>,
     ) {
         let half = [
             (2.0 * style.sprite_px / f64::from(extent.width.max(1))) as f32,
@@ -340,7 +382,8 @@ impl FluidRenderer {
         pipeline.record_draw(rec, extent, &self.cell_set, &push, Some(self.vertices.whole()), self.count);
         if let Some((set, count)) = particles {
             if style.sprite_px > 0.0 && count > 0 {
-                self.sprites.record_draw(rec, extent, set, &push, None, (6 * count) as u32);
+                let pipeline = if set.own_speeds { &self.sprites_own } else { &self.sprites };
+                pipeline.record_draw(rec, extent, &set.set, &push, None, (6 * count) as u32);
             }
         }
     }

@@ -12,10 +12,12 @@ use anyhow::{bail, Result};
 use super::gpu::GpuParticles;
 use super::particles::seed_particles;
 use super::reduced::{ReducedFluid, ReducedFluidModel, ReducedMotion, ReducedState};
-use super::render::{cell_speeds, cell_vertices, DrawStyle, FluidRenderer, Output, Projection, View2d};
+use super::render::{
+    cell_speeds, cell_vertices, DrawStyle, FluidRenderer, Output, ParticleSet, Projection, View2d,
+};
 use super::scene::FluidScene;
 use super::{FluidSolver, FluidState};
-use crate::gpu::{DescriptorSet, Gpu, Recorder};
+use crate::gpu::{Gpu, Recorder};
 use crate::mesh::{SimplexMesh, Topology};
 use crate::render::viewer::ViewerContent;
 use crate::render::{Camera, Colormap, RenderTarget};
@@ -40,7 +42,7 @@ pub struct FluidContent {
     particle_count: usize,
     particles: Option<GpuParticles>,
     renderer: Option<FluidRenderer>,
-    particle_set: Option<DescriptorSet>,
+    particle_set: Option<ParticleSet>,
     gpu: Option<Gpu>,
     style: DrawStyle,
     size: (u32, u32),

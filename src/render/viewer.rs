@@ -71,12 +71,41 @@ pub struct ViewOptions {
     pub screenshot: PathBuf,
     /// In a scripted run, ask for this window size (width, height) halfway through.
     pub resize_to: Option<(u32, u32)>,
+    /// In a scripted run, keys given to the content as if pressed: `(frame, key)`, each before
+    /// that many frames have been presented ([`ScriptedKeys`]).
+    pub keys: Vec<(u64, String)>,
+}
+
+/// Keys pressed at frames, written `KEY@FRAME` comma-separated (`1@3,3@20, @40`: a space
+/// is the space bar), for scripted viewer runs and their tests.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ScriptedKeys(pub Vec<(u64, String)>);
+
+impl std::str::FromStr for ScriptedKeys {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        let mut keys = Vec::new();
+        for part in s.split(',').filter(|p| !p.is_empty()) {
+            let (key, frame) =
+                part.rsplit_once('@').ok_or_else(|| format!("`{part}`: expected KEY@FRAME"))?;
+            if key.chars().count() != 1 {
+                return Err(format!("`{part}`: a key is one character"));
+            }
+            let frame: u64 = frame.parse().map_err(|e| format!("`{part}`: frame: {e}"))?;
+            keys.push((frame, key.to_string()));
+        }
+        if keys.len() > 10_000 {
+            return Err(format!("{} scripted keys: at most 10,000", keys.len()));
+        }
+        keys.sort_by_key(|k| k.0);
+        Ok(Self(keys))
+    }
 }
 
 /// Opens the window on `content` and runs until Esc, the window closes, or `options.frames`
 /// frames have been presented.
 pub fn run(desc: GpuDesc, content: Box<dyn ViewerContent>, options: ViewOptions) -> Result<()> {
-    let ViewOptions { frames, screenshot, resize_to } = options;
+    let ViewOptions { frames, screenshot, resize_to, keys } = options;
     let event_loop = EventLoop::new().context("cannot open a window (is DISPLAY or WAYLAND_DISPLAY set?)")?;
     let mut app = App {
         desc,
@@ -88,6 +117,7 @@ pub fn run(desc: GpuDesc, content: Box<dyn ViewerContent>, options: ViewOptions)
         error: None,
         presented: 0,
         save_next: false,
+        keys,
     };
     event_loop.run_app(&mut app).context("window event loop")?;
     match app.error {
@@ -113,6 +143,8 @@ struct App {
     state: Option<State>,
     error: Option<anyhow::Error>,
     presented: u64,
+    /// Scripted keys not yet given, in frame order.
+    keys: Vec<(u64, String)>,
     save_next: bool,
 }
 
@@ -462,6 +494,10 @@ impl ApplicationHandler for App {
                 Ok(())
             }
             WindowEvent::RedrawRequested => {
+                while self.keys.first().is_some_and(|(frame, _)| *frame <= self.presented) {
+                    let (_, key) = self.keys.remove(0);
+                    state.content.key(&key);
+                }
                 let save = self.save_next || self.frames.is_some_and(|n| self.presented + 1 >= n);
                 match state.frame(save) {
                     Ok(true) => {
