@@ -202,13 +202,21 @@ void main() {
     uint c = floatBitsToUint(particles[i].w);
     float dt = pc.frame_time / float(pc.substeps);
     uint tally[3] = uint[3](0u, 0u, 0u);
+    // The velocity is the frame's end state's, one per cell: evaluated again only when the
+    // particle changed cell (the flux rows cost m_f per face on the reduced state).
+    uint velocity_cell = 0xffffffffu;
+    vec3 velocity = vec3(0.0);
     for (uint s = 0u; s < pc.substeps; ++s) {
-        x += dt * cell_velocity(c, 1.0);
+        if (c != velocity_cell) {
+            velocity = cell_velocity(c, 1.0);
+            velocity_cell = c;
+        }
+        x += dt * velocity;
         float t1 = float(s + 1u) / float(pc.substeps);
         tally[locate(x, c, t1)] += 1u;
     }
     particles[i] = vec4(x, uintBitsToFloat(c));
-    particle_speed[i] = length(cell_velocity(c, 1.0));
+    particle_speed[i] = length(c == velocity_cell ? velocity : cell_velocity(c, 1.0));
     for (uint k = 0u; k < 3u; ++k) {
         if (tally[k] != 0u) {
             atomicAdd(counts[k], tally[k]);

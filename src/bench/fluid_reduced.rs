@@ -217,3 +217,117 @@ pub fn energy_run(
         step_seconds: super::median_f64(&mut times),
     })
 }
+
+/// Table 1's reduced rows measured on a trained cavity model, side by side with the full step
+/// at the same size under the same motion.
+#[derive(Clone, Debug)]
+pub struct ModelBench {
+    /// Cells of the mesh.
+    pub cells: usize,
+    /// Basis sizes (m_u, m_f, m_g, m_h).
+    pub dims: (usize, usize, usize, usize),
+    /// Median seconds of a full frame (deformation, advection, projection) and its stages.
+    pub full: [f64; 4],
+    /// Median seconds of a reduced step (t_s).
+    pub reduced: f64,
+    /// Median seconds of the particles' frame on the CPU (f64) and on the device (f32,
+    /// timestamps around the pass), 10 Euler substeps each.
+    pub particles: (f64, Option<f64>),
+    /// Particles advected.
+    pub particle_count: usize,
+    /// Bytes the run-time model holds (reduced tensors and the bases the step and particles use).
+    pub model_bytes: usize,
+}
+
+/// Measures `model` (a cavity model) driven by `schedule`: `full_frames` frames of the full
+/// solver on `scene` under the same compressions, `frames` reduced steps, and `particles`
+/// particles advected from the reduced state every reduced frame (on `gpu` too, if given).
+pub fn cavity_model(
+    model: &ReducedFluidModel,
+    scene: &Path,
+    schedule: &crate::fluid::reduced::CompressionSchedule,
+    (frames, full_frames): (usize, usize),
+    particles: usize,
+    gpu: Option<&crate::gpu::Gpu>,
+    stage: &mut dyn FnMut(&str),
+) -> Result<ModelBench, FluidError> {
+    use crate::fluid::particles::seed_particles;
+    use crate::fluid::reduced::particles::ReducedParticles;
+    use crate::fluid::scene::Motion;
+    let motion = model.cavity.as_ref().ok_or_else(|| FluidError::State("not a cavity model".into()))?;
+    stage("the full step");
+    let scene = FluidScene::load(scene)?;
+    let Motion::Cavity { cavity, .. } = &scene.motion else {
+        return Err(FluidError::State("the benchmark's scene must be the model's cavity".into()));
+    };
+    let mut solver =
+        crate::fluid::FluidSolver::new(scene.mesh.clone(), scene.topology.clone(), scene.params)?;
+    let mut state = solver.initial_state(scene.mesh.g().to_vec(), &scene.initial_velocity)?;
+    let mut full = vec![Vec::new(); 4];
+    for t in 1..=full_frames {
+        let start = Instant::now();
+        let g = cavity.mapped_for(schedule.at(t));
+        let td = start.elapsed().as_secs_f64();
+        let (next, r) = solver.step(&state, &g, t)?;
+        for (v, x) in full.iter_mut().zip([
+            td,
+            r.advection_seconds,
+            r.projection_seconds,
+            start.elapsed().as_secs_f64(),
+        ]) {
+            v.push(x);
+        }
+        state = next;
+    }
+    let cells = scene.mesh.cell_count();
+    drop(scene.motion);
+    stage("the reduced steps and particles");
+    let fluid = ReducedFluid::new(model)?;
+    let reference = ReducedParticles::new(model)?;
+    let seeds = seed_particles(reference.mesh(), particles);
+    let mut cpu = seeds.clone();
+    let mut device = match gpu {
+        Some(g) => Some((crate::fluid::gpu::GpuParticles::new_reduced(g, &reference, &seeds)?, g)),
+        None => None,
+    };
+    let mut profiler = gpu
+        .map(|g| crate::gpu::Profiler::new(g, 1))
+        .transpose()
+        .map_err(|e| FluidError::State(e.to_string()))?;
+    let (mut reduced, mut particles_cpu, mut particles_gpu) = (Vec::new(), Vec::new(), Vec::new());
+    let (mu, mf) = (model.dim_of("u"), model.dim_of("f"));
+    let mut s = ReducedState { u: vec![0.0; mu], f: vec![0.0; mf], g: motion.geometry(schedule.at(0))? };
+    for t in 1..=frames {
+        let g1 = motion.geometry(schedule.at(t))?;
+        let h1 = fluid.induced_flux(&s.g, &g1).ok_or_else(|| FluidError::State("no tensor H".into()))?;
+        let (next, r) = fluid.step(&s, &g1, &h1)?;
+        reduced.push(r.total_seconds());
+        let start = Instant::now();
+        reference.advect(&s.g, &next.g, &next.f, model.frame_time, 10, &mut cpu)?;
+        particles_cpu.push(start.elapsed().as_secs_f64());
+        if let (Some((p, g)), Some(prof)) = (&mut device, &mut profiler) {
+            g.run(|rec| {
+                prof.record_reset(rec);
+                prof.scope(rec, "particles", |rec| {
+                    p.record_reduced_frame(rec, &s.g, &next.g, &next.f)?;
+                    p.record_advect(rec, model.frame_time, 10)
+                })
+            })
+            .map_err(|e| FluidError::State(e.to_string()))??;
+            let r = prof.results().map_err(|e| FluidError::State(e.to_string()))?;
+            particles_gpu.push(r.first().map_or(0.0, |x| x.1 * 1e-3));
+        }
+        s = next;
+    }
+    let med = |v: &mut Vec<f64>| super::median_f64(v);
+    let bases: usize = ["f", "g"].iter().filter_map(|b| model.basis(b)).map(|b| 8 * b.matrix().len()).sum();
+    Ok(ModelBench {
+        cells,
+        dims: (mu, mf, model.dim_of("g"), model.dim_of("h")),
+        full: [med(&mut full[0]), med(&mut full[1]), med(&mut full[2]), med(&mut full[3])],
+        reduced: med(&mut reduced),
+        particles: (med(&mut particles_cpu), (!particles_gpu.is_empty()).then(|| med(&mut particles_gpu))),
+        particle_count: particles,
+        model_bytes: model.tensor_bytes() + bases,
+    })
+}

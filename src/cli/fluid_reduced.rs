@@ -319,10 +319,71 @@ pub struct BenchArgs {
     /// Basis sizes m_u,m_f,m_g,m_h of the cavity step (Table 1's cavity: 128,64,5; m_h ours).
     #[arg(long, value_delimiter = ',', default_value = "128,64,5,16")]
     pub sizes: Vec<usize>,
+    /// Measure a trained cavity model instead (Table 1's reduced rows): the full step on
+    /// --scene and the reduced step under the same driven motion, and reduced particles on
+    /// the CPU and the device.
+    #[arg(long)]
+    pub model: Option<std::path::PathBuf>,
+    /// With --model: the cavity scene the model was trained on.
+    #[arg(long, default_value = "scenes/fluid/cavity.toml")]
+    pub scene: std::path::PathBuf,
+    /// With --model: particles advected every frame.
+    #[arg(long, default_value_t = 10_000)]
+    pub particles: usize,
+    /// With --model: the motion (compression keyframes, see `fluid reduced --drive`).
+    #[arg(long, default_value = "0=0/0/0,30=0.5/0/0,60=0.5/0/0.4,90=0/0/0.4")]
+    pub drive: galerkin::fluid::reduced::CompressionSchedule,
+}
+
+/// Table 1's reduced rows on a trained cavity model (`bench fluid-reduced --model`).
+fn bench_model(args: &BenchArgs, model_path: &std::path::Path) -> Result<()> {
+    let model = ReducedFluidModel::load(model_path)?;
+    let gpu = galerkin::gpu::Gpu::new(&galerkin::gpu::GpuDesc::default()).ok();
+    let start = Instant::now();
+    let frames = args.drive.last_frame().max(1);
+    let b = galerkin::bench::fluid_reduced::cavity_model(
+        &model,
+        &args.scene,
+        &args.drive,
+        (frames, 8),
+        args.particles,
+        gpu.as_ref(),
+        &mut |s| eprintln!("[{:6.1} s] {s}", start.elapsed().as_secs_f64()),
+    )?;
+    let (mu, mf, mg, mh) = b.dims;
+    let [td, ta, tp, total] = b.full;
+    println!(
+        "cavity model {} ({} cells; m_u {mu}, m_f {mf}, m_g {mg}, m_h {mh}), driven by {} frames of compressions:",
+        model_path.display(),
+        b.cells,
+        frames
+    );
+    println!(
+        "  full step (median of 8 frames): t_d {td:.3} s, t_a {ta:.3} s, t_p {tp:.3} s, total {total:.3} s"
+    );
+    println!(
+        "  reduced step t_s (median of {frames}): {:.3} ms — {:.0}× the full step",
+        1e3 * b.reduced,
+        total / b.reduced
+    );
+    let device = b.particles.1.map_or("no device".into(), |s| format!("{:.2} ms", 1e3 * s));
+    println!(
+        "  particles t_pa, {} from the reduced state, 10 substeps a frame: CPU {:.2} ms, device {device}",
+        b.particle_count,
+        1e3 * b.particles.0
+    );
+    println!("  run-time model (reduced tensors, B_f and B_g): {:.1} MB", b.model_bytes as f64 / 1e6);
+    if let Some(g) = gpu {
+        crate::check_validation(g)?;
+    }
+    Ok(())
 }
 
 pub fn bench(args: &BenchArgs) -> Result<()> {
     use galerkin::bench::fluid_reduced::{cavity_step, energy_run};
+    if let Some(model) = &args.model {
+        return bench_model(args, model);
+    }
     let [mu, mf, mg, mh] = args.sizes[..] else {
         anyhow::bail!("--sizes needs four numbers m_u,m_f,m_g,m_h");
     };

@@ -424,9 +424,18 @@ pub fn advect_through(
         .par_iter_mut()
         .map(|p| {
             let mut report = AdvectReport::default();
+            // The velocity of the frame's end state (f belongs to g1), one per cell: evaluated
+            // again only when the particle changed cell.
+            let mut velocity: Option<(u32, Point)> = None;
             for s in 0..substeps {
-                // The velocity of the frame's end state (f belongs to g1), then the mesh moves on.
-                let u = cell_velocity_at(&end, topo, flux, p.cell as usize);
+                let u = match velocity {
+                    Some((cell, u)) if cell == p.cell => u,
+                    _ => {
+                        let u = cell_velocity_at(&end, topo, flux, p.cell as usize);
+                        velocity = Some((p.cell, u));
+                        u
+                    }
+                };
                 for k in 0..d {
                     p.position[k] += dt * u[k];
                 }
