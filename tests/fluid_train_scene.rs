@@ -190,3 +190,40 @@ fn the_cavity_is_driven_by_any_compressions_exactly_as_its_full_deformation() {
         assert!(e.contains("compression"), "{e}");
     }
 }
+
+#[test]
+fn a_reduced_cavity_run_is_compared_with_the_full_run_of_the_same_motion() {
+    use galerkin::fluid::reduced::compare::{compare, ComparedMotion};
+    use galerkin::fluid::scene::FluidScene;
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut opts = options(&dir.path().join("work"));
+    opts.runs = Some(vec![0, 1, 2]);
+    opts.sizes = BasisSizes { energy: 1.0 - 1e-12, m_f: Some(12), m_u: Some(16), m_g: Some(5), m_h: Some(8) };
+    let model = train_scene(Path::new(SCENE), &dir.path().join("m.safetensors"), &opts, &mut |_| {}).unwrap();
+    let mut scene = FluidScene::load(Path::new(SCENE)).unwrap();
+    scene.frames = 6;
+    let replay = compare(&model, &scene, &ComparedMotion::Training(0), 6, &mut |_| {}).unwrap();
+    let driven = compare(
+        &model,
+        &scene,
+        &ComparedMotion::Driven("0=0/0/0,6=0.2/0.2/0".parse().unwrap()),
+        6,
+        &mut |_| {},
+    )
+    .unwrap();
+    for c in [&replay, &driven] {
+        assert_eq!((c.energy_full.len(), c.energy_reduced.len(), c.error.len()), (7, 7, 7));
+        assert_eq!(c.energy_full[0], 0.0, "both start at rest");
+        assert!(c.energy_full[6] > 0.0 && c.energy_reduced[6] > 0.0, "the compression moved both");
+        assert!(c.error.iter().all(|e| e.is_finite()));
+        assert_eq!(c.cell_error.len(), scene.mesh.cell_count());
+        assert!(c.csv().lines().count() == 8 && c.csv().starts_with("frame,time,"));
+    }
+    // A training run, its snapshots in the bases, is followed closer than a motion none made.
+    let (replay_mean, _) = replay.error_summary();
+    let (driven_mean, _) = driven.error_summary();
+    eprintln!(
+        "mean relative velocity error: training run {replay_mean:.3}, outside the training {driven_mean:.3}"
+    );
+    assert!(replay_mean < driven_mean, "{replay_mean} vs {driven_mean}");
+}

@@ -49,6 +49,10 @@ pub enum Action {
     /// (the cavity's 14, or the bird's animation), build the bases, premultiply the tensors.
     /// Run it again to resume: finished runs and bases are kept in the work directory.
     TrainScene(crate::cli::fluid_reduced::TrainSceneArgs),
+    /// Compare a cavity model's reduced run with the full run of the same motion (a training
+    /// run or compressions no run made): energy and velocity error over time, plots, and the
+    /// last frame's error on the plane of the cavities.
+    Compare(crate::cli::fluid_reduced::CompareArgs),
     /// The one-step error study of seed 000 §7.1 (Fig. 5 d, e): train on RUNS at the largest
     /// basis size, then for every size step the test run's projected frames once in the full
     /// and once in the reduced space; writes CSV and labelled PNG plots.
@@ -173,6 +177,7 @@ pub fn run(desc: &GpuDesc, action: &Action) -> Result<()> {
         Action::Train(args) => crate::cli::fluid_reduced::train(args),
         Action::Reduced(args) => crate::cli::fluid_reduced::reduced(args),
         Action::TrainScene(args) => crate::cli::fluid_reduced::train_scene(args),
+        Action::Compare(args) => crate::cli::fluid_reduced::compare(args),
         Action::ErrorStudy(args) => crate::cli::fluid_reduced::error_study(args),
     }
 }

@@ -74,6 +74,28 @@ pub struct TrainSceneArgs {
     pub m_h: Option<usize>,
 }
 
+/// Arguments of `galerkin fluid compare`.
+#[derive(Args)]
+pub struct CompareArgs {
+    /// A cavity model written by `galerkin fluid train-scene`.
+    pub model: PathBuf,
+    /// The cavity scene it was trained on.
+    #[arg(long, default_value = "scenes/fluid/cavity.toml")]
+    pub scene: PathBuf,
+    /// Compare on training run K (replayed) …
+    #[arg(long, conflicts_with = "drive")]
+    pub run: Option<usize>,
+    /// … or on compressions no run made (keyframes, see `fluid reduced --drive`).
+    #[arg(long, default_value = "0=0/0/0,30=0.5/0/0,60=0.5/0/0.4,90=0/0/0.4")]
+    pub drive: galerkin::fluid::reduced::CompressionSchedule,
+    /// Frames (default: the motion's).
+    #[arg(long)]
+    pub frames: Option<usize>,
+    /// Directory for comparison.csv, energy.png, error.png and error-section.png.
+    #[arg(long, default_value = "out/fluid-compare")]
+    pub out: PathBuf,
+}
+
 /// Arguments of `galerkin fluid reduced`.
 #[derive(Args)]
 pub struct ReducedArgs {
@@ -270,6 +292,45 @@ pub fn train_scene(args: &TrainSceneArgs) -> Result<()> {
         model.tensor_bytes() as f64 / 1e6
     );
     Ok(())
+}
+
+pub fn compare(args: &CompareArgs) -> Result<()> {
+    use galerkin::fluid::reduced::compare::{compare, error_section, ComparedMotion};
+    use galerkin::fluid::reduced::plot::plot_comparison;
+    let model = ReducedFluidModel::load(&args.model)?;
+    let scene = galerkin::fluid::scene::FluidScene::load(&args.scene)?;
+    let (motion, frames, title) = match args.run {
+        Some(k) => {
+            (ComparedMotion::Training(k), args.frames.unwrap_or(scene.frames), format!("training run {k}"))
+        }
+        None => (
+            ComparedMotion::Driven(args.drive.clone()),
+            args.frames.unwrap_or(args.drive.last_frame()),
+            "a motion outside the training set".to_string(),
+        ),
+    };
+    let bar = crate::progress_bar(frames as u64, "full run");
+    let c = compare(&model, &scene, &motion, frames, &mut |k| bar.set_position(k as u64))?;
+    bar.finish_and_clear();
+    std::fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
+    std::fs::write(args.out.join("comparison.csv"), c.csv())?;
+    plot_comparison(&c, &title, &args.out.join("energy.png"), &args.out.join("error.png"))?;
+    let gpu = galerkin::gpu::Gpu::new(&galerkin::gpu::GpuDesc::default())?;
+    let picture = error_section(&gpu, &scene.mesh, &c, (900, 700))?;
+    galerkin::render::write_png_rgba8(&args.out.join("error-section.png"), 900, 700, &picture.rgba)?;
+    let (mean, worst) = c.error_summary();
+    println!(
+        "fluid compare: {title}, {frames} frames: relative velocity error in the energy norm mean {:.2} %, worst {:.2} %; energy at the end full {:.4e}, reduced {:.4e}; full frame {:.3} s, reduced step {:.3} ms ({:.0}×) → {}",
+        100.0 * mean,
+        100.0 * worst,
+        c.energy_full.last().copied().unwrap_or(0.0),
+        c.energy_reduced.last().copied().unwrap_or(0.0),
+        c.seconds.0,
+        1e3 * c.seconds.1,
+        c.seconds.0 / c.seconds.1.max(1e-12),
+        args.out.display()
+    );
+    crate::check_validation(gpu)
 }
 
 pub fn reduced(args: &ReducedArgs) -> Result<()> {

@@ -424,6 +424,69 @@ pub fn draw_picture(
             )))
         }
     };
+    draw_triangles(gpu, &vertices, speeds, particles, style, projection, (width, height))
+}
+
+/// The cross-section of a 3D mesh at geometry `g` by the plane `x_axis = level`: each cell the
+/// plane cuts gives a triangle or a quadrilateral (two triangles), carrying the cell's value,
+/// in the plane's two other coordinates (z = 0) — a 2D picture of per-cell values inside the
+/// domain (e.g. where an error sits).
+pub fn plane_section(
+    mesh: &SimplexMesh,
+    g: &[f64],
+    values: &[f64],
+    axis: usize,
+    level: f64,
+) -> Vec<CellVertex> {
+    let (a, b) = ((axis + 1) % 3, (axis + 2) % 3);
+    let mut out = Vec::new();
+    for c in 0..mesh.cell_count() {
+        let p = mesh.cell_points_at(g, c);
+        let side: Vec<f64> = p.iter().map(|q| q[axis] - level).collect();
+        let mut points = Vec::new();
+        for i in 0..p.len() {
+            for j in i + 1..p.len() {
+                if (side[i] < 0.0) != (side[j] < 0.0) {
+                    let t = side[i] / (side[i] - side[j]);
+                    points.push([p[i][a] + t * (p[j][a] - p[i][a]), p[i][b] + t * (p[j][b] - p[i][b])]);
+                }
+            }
+        }
+        if points.len() < 3 {
+            continue;
+        }
+        // Order the section's corners around their centre (a convex polygon).
+        let n = points.len() as f64;
+        let centre =
+            [points.iter().map(|q| q[0]).sum::<f64>() / n, points.iter().map(|q| q[1]).sum::<f64>() / n];
+        points.sort_by(|q, r| {
+            let angle = |x: &[f64; 2]| (x[1] - centre[1]).atan2(x[0] - centre[0]);
+            angle(q).total_cmp(&angle(r))
+        });
+        for k in 1..points.len() - 1 {
+            for q in [points[0], points[k], points[k + 1]] {
+                out.push(CellVertex {
+                    position: [q[0] as f32, q[1] as f32, 0.0],
+                    value: values[c] as f32,
+                    cell: c as u32,
+                });
+            }
+        }
+    }
+    out
+}
+
+/// Draws a triangle stream (2D cells or a 3D surface, with per-cell `values`) and optionally
+/// the particles, into a colour and a raw picture.
+pub fn draw_triangles(
+    gpu: &Gpu,
+    vertices: &[CellVertex],
+    speeds: &[f64],
+    particles: Option<&GpuParticles>,
+    style: &DrawStyle,
+    projection: &Projection,
+    (width, height): (u32, u32),
+) -> Result<FluidPicture, FluidError> {
     let colour =
         RenderTarget::new(gpu, "fluid colour", width, height, ColorFormat::Rgba8).map_err(gpu_err)?;
     let raw = RenderTarget::new(gpu, "fluid raw", width, height, ColorFormat::Rgba32F).map_err(gpu_err)?;
@@ -439,7 +502,7 @@ pub fn draw_picture(
             vertices.len() / 3,
             speeds.len(),
         )?;
-        r.update(&vertices, speeds)?;
+        r.update(vertices, speeds)?;
         let set = particles.map(|p| r.particle_set(gpu, p)).transpose()?;
         let pset = set.as_ref().zip(particles.map(GpuParticles::count));
         out.push(

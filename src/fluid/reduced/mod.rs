@@ -6,6 +6,7 @@
 //! - [`bases`]: `B_f`, `B_u = B_p`, `B_g`, `B_h` by streamed PCA, `B_d` by constraint reduction;
 //! - [`example`]: the small tunnel's training runs, for the demo, benchmarks and tests;
 //! - [`induced`]: the induced flux as a tensor in the stacked geometry, for driven motions;
+//! - [`compare`]: a reduced run against the full run of the same motion (energy, error);
 //! - [`cavity_motion`]: the cavity's reduced geometry from its compressions, at run time;
 //! - [`model`]: §6.2's reduced tensors premultiplied by the core, and the model file;
 //! - [`pipeline`]: a scene to a model in one resumable command (runs, bases, tensors);
@@ -21,6 +22,7 @@
 
 pub mod bases;
 pub mod cavity_motion;
+pub mod compare;
 mod dense;
 pub mod example;
 pub mod induced;

@@ -177,3 +177,88 @@ pub fn plot_by_size(study: &ErrorStudy, path: &Path) -> Result<(), FluidError> {
     }
     save(path, w, h, &buf)
 }
+
+/// A comparison's kinetic energy over time, full and reduced runs (`energy_path`), and the
+/// relative velocity error in the energy norm over time, log scale (`error_path`).
+pub fn plot_comparison(
+    c: &super::compare::Comparison,
+    title: &str,
+    energy_path: &Path,
+    error_path: &Path,
+) -> Result<(), FluidError> {
+    font()?;
+    let (w, h) = (1100u32, 600u32);
+    let t_end = (c.energy_full.len().saturating_sub(1)).max(1) as f64 * c.frame_time;
+    let times = |v: &[f64]| -> Vec<(f64, f64)> {
+        v.iter().enumerate().map(|(k, e)| (k as f64 * c.frame_time, *e)).collect()
+    };
+    // Energy.
+    let mut buf = vec![0u8; 3 * (w * h) as usize];
+    {
+        let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| plot_err(energy_path, e))?;
+        let top = c.energy_full.iter().chain(&c.energy_reduced).fold(0.0f64, |m, v| m.max(*v)).max(1e-300);
+        let mut chart = ChartBuilder::on(&root)
+            .caption(format!("Kinetic energy, full and reduced — {title}"), ("sans-serif", 26))
+            .margin(20)
+            .x_label_area_size(50)
+            .y_label_area_size(90)
+            .build_cartesian_2d(0.0..t_end, 0.0..1.1 * top)
+            .map_err(|e| plot_err(energy_path, e))?;
+        chart
+            .configure_mesh()
+            .x_desc("simulated time (s)")
+            .y_desc("kinetic energy ½ Σ vol |u|²")
+            .label_style(("sans-serif", 18))
+            .axis_desc_style(("sans-serif", 20))
+            .y_label_formatter(&|v| format!("{v:.2e}"))
+            .draw()
+            .map_err(|e| plot_err(energy_path, e))?;
+        for (k, (series, label)) in
+            [(&c.energy_full, "full space"), (&c.energy_reduced, "reduced, lifted")].into_iter().enumerate()
+        {
+            let colour = SERIES[k];
+            chart
+                .draw_series(LineSeries::new(times(series), colour.stroke_width(2)))
+                .map_err(|e| plot_err(energy_path, e))?
+                .label(label)
+                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 24, y)], colour.stroke_width(3)));
+        }
+        draw_legend(&mut chart, energy_path)?;
+        root.present().map_err(|e| plot_err(energy_path, e))?;
+    }
+    save(energy_path, w, h, &buf)?;
+    // Error.
+    let mut buf = vec![0u8; 3 * (w * h) as usize];
+    {
+        let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| plot_err(error_path, e))?;
+        let points: Vec<(f64, f64)> = times(&c.error).into_iter().filter(|(_, e)| *e > 0.0).collect();
+        let (lo, hi) = log_range(points.iter().map(|p| p.1));
+        let mut chart = ChartBuilder::on(&root)
+            .caption(format!("Velocity error of the reduced run — {title}"), ("sans-serif", 26))
+            .margin(20)
+            .x_label_area_size(50)
+            .y_label_area_size(90)
+            .build_cartesian_2d(0.0..t_end, (lo..hi).log_scale())
+            .map_err(|e| plot_err(error_path, e))?;
+        chart
+            .configure_mesh()
+            .x_desc("simulated time (s)")
+            .y_desc("‖u_full − u_reduced‖_V / ‖u_full‖_V")
+            .label_style(("sans-serif", 18))
+            .axis_desc_style(("sans-serif", 20))
+            .y_label_formatter(&|v| format!("{v:.0e}"))
+            .draw()
+            .map_err(|e| plot_err(error_path, e))?;
+        let colour = SERIES[3];
+        chart
+            .draw_series(LineSeries::new(points, colour.stroke_width(2)))
+            .map_err(|e| plot_err(error_path, e))?
+            .label("relative error in the energy norm")
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 24, y)], colour.stroke_width(3)));
+        draw_legend(&mut chart, error_path)?;
+        root.present().map_err(|e| plot_err(error_path, e))?;
+    }
+    save(error_path, w, h, &buf)
+}

@@ -1,0 +1,153 @@
+//! A reduced run against the full run of the same motion (seed 000 §7.2, its video's
+//! comparisons): both start from rest and follow the same geometry — a training run replayed,
+//! or the cavity driven by compressions no training run made — the full solver stepping in the
+//! full space, the reduced model in its own, lifted `u = B_u û` to be compared. Per frame: the
+//! kinetic energy of both, `E(u) = ½ Σ_c vol_c(g) |u_c|²` at the full run's geometry, and the
+//! relative velocity error in that energy norm, `‖u_full − u_reduced‖_V / ‖u_full‖_V`; at the
+//! last frame, the error of every cell (where it sits), for a picture.
+
+use std::time::Instant;
+
+use crate::fluid::scene::{FluidScene, Motion};
+use crate::fluid::{FluidError, FluidSolver};
+
+use super::cavity_motion::CompressionSchedule;
+use super::model::ReducedFluidModel;
+use super::run::{run_driven, run_reduced, ReducedMotion};
+use super::step::ReducedFluid;
+
+/// The motion both runs follow.
+#[derive(Clone, Debug)]
+pub enum ComparedMotion {
+    /// Training run K of the cavity (the full run simulated again; the reduced run replays
+    /// its ĝ and ĥ).
+    Training(usize),
+    /// The cavity driven by compressions (the reduced run's ĥ from the induced-flux tensor).
+    Driven(CompressionSchedule),
+}
+
+/// What [`compare`] measured.
+#[derive(Clone, Debug, Default)]
+pub struct Comparison {
+    /// Time between frames.
+    pub frame_time: f64,
+    /// Kinetic energy of the full run per frame (frame 0 first).
+    pub energy_full: Vec<f64>,
+    /// Kinetic energy of the lifted reduced run per frame.
+    pub energy_reduced: Vec<f64>,
+    /// Relative velocity error in the energy norm per frame (0 where the full run is at rest).
+    pub error: Vec<f64>,
+    /// Each cell's error |u_full − u_reduced| at the last frame.
+    pub cell_error: Vec<f64>,
+    /// The full run's geometry at the last frame.
+    pub last_geometry: Vec<f64>,
+    /// Median seconds of a full frame and of a reduced step.
+    pub seconds: (f64, f64),
+}
+
+impl Comparison {
+    /// Frame, time, both energies and the error, as CSV with a header.
+    pub fn csv(&self) -> String {
+        let mut out = String::from("frame,time,energy_full,energy_reduced,relative_error\n");
+        for (k, ((ef, er), e)) in
+            self.energy_full.iter().zip(&self.energy_reduced).zip(&self.error).enumerate()
+        {
+            out += &format!("{k},{},{ef:e},{er:e},{e:e}\n", k as f64 * self.frame_time);
+        }
+        out
+    }
+
+    /// The mean and largest relative error over the frames where the full run moves.
+    pub fn error_summary(&self) -> (f64, f64) {
+        let moving: Vec<f64> = self.error.iter().copied().skip(1).collect();
+        let mean = moving.iter().sum::<f64>() / moving.len().max(1) as f64;
+        (mean, moving.iter().copied().fold(0.0, f64::max))
+    }
+}
+
+/// Runs both `frames` frames on `scene` (the model's cavity) under `motion` and compares them;
+/// `on_frame(k)` hears the full run's progress.
+pub fn compare(
+    model: &ReducedFluidModel,
+    scene: &FluidScene,
+    motion: &ComparedMotion,
+    frames: usize,
+    on_frame: &mut dyn FnMut(usize),
+) -> Result<Comparison, FluidError> {
+    let Motion::Cavity { cavity, .. } = &scene.motion else {
+        return Err(FluidError::State("the comparison runs a cavity scene (the model's)".into()));
+    };
+    let fingerprint = super::model::MeshFingerprint::of(&scene.mesh, &scene.topology, scene.periodic_axis);
+    model.check_mesh(&fingerprint)?;
+    let fluid = ReducedFluid::new(model)?;
+    let reduced = match motion {
+        ComparedMotion::Training(k) => {
+            run_reduced(model, &fluid, ReducedMotion::Replay(*k), frames, &mut |_| {})?
+        }
+        ComparedMotion::Driven(schedule) => run_driven(model, &fluid, schedule, frames, &mut |_| {})?,
+    };
+    let compressions = |t: usize| match motion {
+        ComparedMotion::Training(k) => crate::fluid::cavity::training_run(*k)
+            .map(|amounts| crate::fluid::cavity::Cavity::compression(amounts, t, scene.frames))
+            .ok_or_else(|| FluidError::State(format!("training run {k}: the cavity has runs 0 to 13"))),
+        ComparedMotion::Driven(schedule) => Ok(schedule.at(t)),
+    };
+    let bu = model.basis("u").ok_or_else(|| FluidError::State("the model has no basis u".into()))?;
+    let mut solver = FluidSolver::new(scene.mesh.clone(), scene.topology.clone(), scene.params)?;
+    let mut state = solver.initial_state(cavity.mapped_for(compressions(0)?), &scene.initial_velocity)?;
+    let d = scene.mesh.dim();
+    let mut out = Comparison { frame_time: model.frame_time, ..Comparison::default() };
+    let mut full_seconds = Vec::new();
+    for t in 0..=frames {
+        if t > 0 {
+            let start = Instant::now();
+            let g = cavity.mapped_for(compressions(t)?);
+            state = solver.step(&state, &g, t)?.0;
+            full_seconds.push(start.elapsed().as_secs_f64());
+            on_frame(t);
+        }
+        let vols = scene.mesh.volumes_at(&state.g);
+        let u_reduced = bu.lift(&reduced.states[t].u);
+        let energy = |u: &[f64]| {
+            0.5 * u.chunks(d).zip(&vols).map(|(v, w)| w * v.iter().map(|x| x * x).sum::<f64>()).sum::<f64>()
+        };
+        let diff: Vec<f64> = state.u.iter().zip(&u_reduced).map(|(a, b)| a - b).collect();
+        let (ef, er, ed) = (energy(&state.u), energy(&u_reduced), energy(&diff));
+        out.energy_full.push(ef);
+        out.energy_reduced.push(er);
+        out.error.push(if ef > 0.0 { (ed / ef).sqrt() } else { 0.0 });
+        if t == frames {
+            out.cell_error = diff.chunks(d).map(|v| v.iter().map(|x| x * x).sum::<f64>().sqrt()).collect();
+            out.last_geometry = state.g.clone();
+        }
+    }
+    let mut reduced_seconds: Vec<f64> = reduced.reports.iter().map(|r| r.total_seconds()).collect();
+    out.seconds =
+        (crate::bench::median_f64(&mut full_seconds), crate::bench::median_f64(&mut reduced_seconds));
+    Ok(out)
+}
+
+/// The last frame's cell errors on the section of the domain by the plane z = 0 (the plane of
+/// the cavity's centres), coloured on a ramp from 0 to the largest error: where the error
+/// sits.
+pub fn error_section(
+    gpu: &crate::gpu::Gpu,
+    mesh: &crate::mesh::SimplexMesh,
+    c: &Comparison,
+    size: (u32, u32),
+) -> Result<crate::fluid::render::FluidPicture, FluidError> {
+    use crate::fluid::render::{draw_triangles, plane_section, DrawStyle, Projection, View2d};
+    let triangles = plane_section(mesh, &c.last_geometry, &c.cell_error, 2, 0.0);
+    let (lo, hi) = mesh.bounds();
+    let top = c.cell_error.iter().fold(0.0f64, |m, v| m.max(*v)).max(1e-300);
+    let style = DrawStyle {
+        colormap: crate::render::Colormap::by_name("viridis")
+            .map_err(|e| FluidError::State(e.to_string()))?,
+        range: (0.0, top),
+        log: false,
+        colour_cells: true,
+        sprite_px: 0.0,
+    };
+    let view = View2d::fit([lo[0], lo[1]], [hi[0], hi[1]], size, 0.03);
+    draw_triangles(gpu, &triangles, &c.cell_error, None, &style, &Projection::Plane(view), size)
+}
