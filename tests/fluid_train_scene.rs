@@ -156,7 +156,26 @@ fn the_cavity_is_driven_by_any_compressions_exactly_as_its_full_deformation() {
         let lifted = b_g.lift(&ghat);
         let err = lifted.iter().zip(&g_full).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max);
         assert!(err < 1e-9, "{a:?}: the lifted geometry is {err:e} off the full one");
+        // … and the compressions are read back from ĝ (B_g resolves the four motions).
+        let back = motion.compressions_of(&ghat).expect("m_g = 5 resolves the compressions");
+        assert!((0..3).all(|i| (back[i] - a[i]).abs() < 1e-8), "{a:?} read back as {back:?}");
     }
+    // What the model was trained on, read back from its trajectories: each run compresses
+    // one cavity over the 6 frames of the training schedule.
+    let mut want = [0.0f64; 3];
+    for k in [0, 1, 2] {
+        let amounts = galerkin::fluid::cavity::training_run(k).unwrap();
+        for t in 0..=6 {
+            let a = galerkin::fluid::cavity::Cavity::compression(amounts, t, 6);
+            (0..3).for_each(|i| want[i] = want[i].max(a[i]));
+        }
+    }
+    let trained = model.trained_compressions().expect("a cavity model");
+    assert!((0..3).all(|i| (trained[i] - want[i]).abs() < 1e-8), "trained {trained:?}, runs made {want:?}");
+    assert!(want.iter().all(|&x| x > 0.0) && model.warn_beyond_training(want).is_none());
+    let beyond = [want[0] + 0.1, want[1], 0.0];
+    let w = model.warn_beyond_training(beyond).expect("a warning beyond the training");
+    assert!(w.contains("cavity 1") && !w.contains("cavity 2"), "{w}");
     // Driven at run time by a schedule no training run made (two cavities together, one
     // re-inflating while the other holds): each frame's ĝ is the motion model's, the boundary
     // constraint holds, the compression sets the fluid moving.
@@ -219,6 +238,25 @@ fn a_reduced_cavity_run_is_compared_with_the_full_run_of_the_same_motion() {
         assert_eq!(c.cell_error.len(), scene.mesh.cell_count());
         assert!(c.csv().lines().count() == 8 && c.csv().starts_with("frame,time,"));
     }
+    // The training's own snapshots of run 0 read back instead of simulated again: the same
+    // full run (the solver is deterministic; 1e-9 leaves room for summation order only).
+    let full = dir.path().join("work/run-00");
+    let recorded =
+        compare(&model, &scene, &ComparedMotion::Recorded { full: full.clone(), run: 0 }, 6, &mut |_| {})
+            .unwrap();
+    for (a, b) in recorded.energy_full.iter().zip(&replay.energy_full) {
+        assert!((a - b).abs() <= 1e-9 * b.abs().max(1e-300), "{a} vs {b}");
+    }
+    for (a, b) in recorded.error.iter().zip(&replay.error) {
+        assert!((a - b).abs() <= 1e-9, "{a} vs {b}");
+    }
+    assert!(recorded.seconds.0.is_nan(), "nothing was simulated on the full side");
+    let e = compare(&model, &scene, &ComparedMotion::Recorded { full, run: 0 }, 7, &mut |_| {}).unwrap_err();
+    assert!(e.to_string().contains("7 frames"), "{e}");
+    let missing = dir.path().join("work/run-07");
+    let e = compare(&model, &scene, &ComparedMotion::Recorded { full: missing, run: 0 }, 6, &mut |_| {})
+        .unwrap_err();
+    assert!(e.to_string().contains("run-07"), "{e}");
     // A training run, its snapshots in the bases, is followed closer than a motion none made.
     let (replay_mean, _) = replay.error_summary();
     let (driven_mean, _) = driven.error_summary();
@@ -226,4 +264,45 @@ fn a_reduced_cavity_run_is_compared_with_the_full_run_of_the_same_motion() {
         "mean relative velocity error: training run {replay_mean:.3}, outside the training {driven_mean:.3}"
     );
     assert!(replay_mean < driven_mean, "{replay_mean} vs {driven_mean}");
+}
+
+#[test]
+fn a_training_motion_is_replayed_faster_or_slower() {
+    use galerkin::fluid::reduced::{run_paced, run_reduced, ReducedMotion};
+    let dir = tempfile::tempdir().expect("temp dir");
+    let (model, _, _) = train(&dir.path().join("work"), &dir.path().join("m.safetensors"));
+    let fluid = ReducedFluid::new(&model).unwrap();
+    let traj = &model.trajectories[0];
+    let mg = traj.g.shape()[1];
+    let g = |k: usize| traj.g.data()[k * mg..(k + 1) * mg].to_vec();
+    // At its own pace the paced run is the computed-flux replay, bit for bit.
+    let same = run_paced(&model, &fluid, 0, 1.0, 6, &mut |_| {}).unwrap();
+    let computed = run_reduced(&model, &fluid, ReducedMotion::Computed(0), 6, &mut |_| {}).unwrap();
+    assert_eq!(same.states, computed.states);
+    // Half speed: every other frame is a training frame, the ones between are midpoints.
+    let slow = run_paced(&model, &fluid, 0, 0.5, 12, &mut |_| {}).unwrap();
+    for t in 0..=12 {
+        let want: Vec<f64> = if t % 2 == 0 {
+            g(t / 2)
+        } else {
+            g(t / 2).iter().zip(g(t / 2 + 1)).map(|(a, b)| 0.5 * a + 0.5 * b).collect()
+        };
+        let err = slow.states[t].g.iter().zip(&want).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+        assert!(err <= 1e-15 * want.iter().fold(1.0f64, |m, x| m.max(x.abs())), "frame {t}: {err:e}");
+    }
+    // Twice the speed: frame t is training frame 2t; the fluid moves faster, so more energy.
+    let fast = run_paced(&model, &fluid, 0, 2.0, 3, &mut |_| {}).unwrap();
+    for t in 0..=3 {
+        assert_eq!(fast.states[t].g, g(2 * t), "frame {t}");
+    }
+    let energy =
+        |r: &galerkin::fluid::reduced::ReducedRun, t: usize| fluid.energy(&r.states[t].u, &r.states[t].g);
+    assert!(energy(&fast, 3) > energy(&same, 6), "{} vs {}", energy(&fast, 3), energy(&same, 6));
+    // Past the run's last frame, or a pace out of range, is refused.
+    let e = run_paced(&model, &fluid, 0, 2.0, 4, &mut |_| {}).unwrap_err().to_string();
+    assert!(e.contains("at most 3 frames"), "{e}");
+    for bad in [0.0, -1.0, f64::NAN, 1e3] {
+        assert!(run_paced(&model, &fluid, 0, bad, 1, &mut |_| {}).is_err(), "pace {bad} accepted");
+    }
+    assert!(run_paced(&model, &fluid, 5, 1.0, 1, &mut |_| {}).unwrap_err().to_string().contains("run 5"));
 }

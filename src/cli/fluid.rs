@@ -29,9 +29,11 @@ pub enum Action {
     /// or EXR (EXR: the raw value, cell index and kind — 0 cell, 1 particle, 2 wall — beside
     /// the colour).
     Render(RenderArgs),
-    /// Play a 2D scene in a window: the full simulation steps every frame and the particles
-    /// are advected on the device. Keys: space plays/pauses, c colours cells by speed, r
-    /// restarts, Esc quits, S saves a screenshot.
+    /// Play a 2D scene in a window (the full simulation steps every frame, the particles are
+    /// advected on the device; keys: space plays/pauses, c colours cells by speed, r
+    /// restarts), a 2D reduced model replaying a training run, or a 3D cavity model driven
+    /// live (keys 1-3 compress or release a small cavity, space pauses, r resets, p reseeds
+    /// the particles, arrows orbit). Esc quits, S saves a screenshot.
     View(ViewArgs),
     /// Write the surface animation of a [bird] or [surface] scene as an OBJ sequence
     /// (DIR/{stem}_0000.obj, …: one object per closed part, the same topology every frame),
@@ -49,9 +51,10 @@ pub enum Action {
     /// (the cavity's 14, or the bird's animation), build the bases, premultiply the tensors.
     /// Run it again to resume: finished runs and bases are kept in the work directory.
     TrainScene(crate::cli::fluid_reduced::TrainSceneArgs),
-    /// Compare a cavity model's reduced run with the full run of the same motion (a training
-    /// run or compressions no run made): energy and velocity error over time, plots, and the
-    /// last frame's error on the plane of the cavities.
+    /// Compare a model's reduced run with the full run of the same motion (a training run —
+    /// the cavity's simulated again, or any scene's read from its training snapshots with
+    /// --full — or cavity compressions no run made): energy and velocity error over time,
+    /// plots, and the last frame's error on the plane z = 0.
     Compare(crate::cli::fluid_reduced::CompareArgs),
     /// The one-step error study of seed 000 §7.1 (Fig. 5 d, e): train on RUNS at the largest
     /// basis size, then for every size step the test run's projected frames once in the full

@@ -77,14 +77,19 @@ pub struct TrainSceneArgs {
 /// Arguments of `galerkin fluid compare`.
 #[derive(Args)]
 pub struct CompareArgs {
-    /// A cavity model written by `galerkin fluid train-scene`.
+    /// A model written by `galerkin fluid train-scene`.
     pub model: PathBuf,
-    /// The cavity scene it was trained on.
+    /// The scene it was trained on.
     #[arg(long, default_value = "scenes/fluid/cavity.toml")]
     pub scene: PathBuf,
-    /// Compare on training run K (replayed) …
+    /// Compare on training run K (replayed; the cavity's full run is simulated again) …
     #[arg(long, conflicts_with = "drive")]
     pub run: Option<usize>,
+    /// … reading the full run from this snapshot directory instead of simulating it (the
+    /// training's own, e.g. out/cavity.work/run-00; any scene, the bird's too). Implies
+    /// --run 0 unless --run is given.
+    #[arg(long, conflicts_with = "drive")]
+    pub full: Option<PathBuf>,
     /// … or on compressions no run made (keyframes, see `fluid reduced --drive`).
     #[arg(long, default_value = "0=0/0/0,30=0.5/0/0,60=0.5/0/0.4,90=0/0/0.4")]
     pub drive: galerkin::fluid::reduced::CompressionSchedule,
@@ -116,6 +121,11 @@ pub struct ReducedArgs {
     /// induced-flux tensor.
     #[arg(long, conflicts_with = "motion")]
     pub drive: Option<galerkin::fluid::reduced::CompressionSchedule>,
+    /// Follow the --motion run's geometry this many times as fast (0.5 half speed, 2 twice;
+    /// 1/64 to 64): the geometry interpolated between its frames, the induced flux from the
+    /// reduced tensor (the bird's wingbeat slowed down or sped up).
+    #[arg(long, conflicts_with = "drive")]
+    pub pace: Option<f64>,
     /// Snapshot directory to write, lifted to the full space (for `fluid render`).
     #[arg(long, default_value = "out/fluid-reduced")]
     pub out: PathBuf,
@@ -294,22 +304,39 @@ pub fn train_scene(args: &TrainSceneArgs) -> Result<()> {
     Ok(())
 }
 
+/// The schedule, after a warning on stderr if it compresses beyond the model's training.
+fn warn_beyond(
+    model: &ReducedFluidModel,
+    schedule: &galerkin::fluid::reduced::CompressionSchedule,
+) -> galerkin::fluid::reduced::CompressionSchedule {
+    if let Some(w) = model.warn_beyond_training(schedule.largest()) {
+        eprintln!("warning: {w}");
+    }
+    schedule.clone()
+}
+
 pub fn compare(args: &CompareArgs) -> Result<()> {
     use galerkin::fluid::reduced::compare::{compare, error_section, ComparedMotion};
     use galerkin::fluid::reduced::plot::plot_comparison;
     let model = ReducedFluidModel::load(&args.model)?;
     let scene = galerkin::fluid::scene::FluidScene::load(&args.scene)?;
-    let (motion, frames, title) = match args.run {
-        Some(k) => {
+    let (motion, frames, title) = match (args.run, &args.full) {
+        (run, Some(full)) => {
+            let k = run.unwrap_or(0);
+            let motion = ComparedMotion::Recorded { full: full.clone(), run: k };
+            (motion, args.frames.unwrap_or(scene.frames), format!("training run {k}"))
+        }
+        (Some(k), None) => {
             (ComparedMotion::Training(k), args.frames.unwrap_or(scene.frames), format!("training run {k}"))
         }
-        None => (
-            ComparedMotion::Driven(args.drive.clone()),
+        (None, None) => (
+            ComparedMotion::Driven(warn_beyond(&model, &args.drive)),
             args.frames.unwrap_or(args.drive.last_frame()),
             "a motion outside the training set".to_string(),
         ),
     };
-    let bar = crate::progress_bar(frames as u64, "full run");
+    let bar =
+        crate::progress_bar(frames as u64, if args.full.is_some() { "full run (read)" } else { "full run" });
     let c = compare(&model, &scene, &motion, frames, &mut |k| bar.set_position(k as u64))?;
     bar.finish_and_clear();
     std::fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
@@ -319,15 +346,22 @@ pub fn compare(args: &CompareArgs) -> Result<()> {
     let picture = error_section(&gpu, &scene.mesh, &c, (900, 700))?;
     galerkin::render::write_png_rgba8(&args.out.join("error-section.png"), 900, 700, &picture.rgba)?;
     let (mean, worst) = c.error_summary();
+    let speed = if c.seconds.0.is_finite() {
+        format!(
+            "full frame {:.3} s, reduced step {:.3} ms ({:.0}×)",
+            c.seconds.0,
+            1e3 * c.seconds.1,
+            c.seconds.0 / c.seconds.1.max(1e-12)
+        )
+    } else {
+        format!("reduced step {:.3} ms (the full run read back)", 1e3 * c.seconds.1)
+    };
     println!(
-        "fluid compare: {title}, {frames} frames: relative velocity error in the energy norm mean {:.2} %, worst {:.2} %; energy at the end full {:.4e}, reduced {:.4e}; full frame {:.3} s, reduced step {:.3} ms ({:.0}×) → {}",
+        "fluid compare: {title}, {frames} frames: relative velocity error in the energy norm mean {:.2} %, worst {:.2} %; energy at the end full {:.4e}, reduced {:.4e}; {speed} → {}",
         100.0 * mean,
         100.0 * worst,
         c.energy_full.last().copied().unwrap_or(0.0),
         c.energy_reduced.last().copied().unwrap_or(0.0),
-        c.seconds.0,
-        1e3 * c.seconds.1,
-        c.seconds.0 / c.seconds.1.max(1e-12),
         args.out.display()
     );
     crate::check_validation(gpu)
@@ -339,15 +373,24 @@ pub fn reduced(args: &ReducedArgs) -> Result<()> {
     let k = args.motion.run();
     let available = match &args.drive {
         Some(schedule) => schedule.last_frame(),
-        None => model.trajectories.get(k).map_or(0, |t| t.g.shape()[0].saturating_sub(1)),
+        None => {
+            let frames = model.trajectories.get(k).map_or(0, |t| t.g.shape()[0].saturating_sub(1));
+            (frames as f64 / args.pace.unwrap_or(1.0) + 1e-9).floor() as usize
+        }
     };
     let frames = args.frames.unwrap_or(available);
     let bar = crate::progress_bar(frames as u64, "reduced steps");
     let run = match &args.drive {
         Some(schedule) => {
-            galerkin::fluid::reduced::run_driven(&model, &fluid, schedule, frames, &mut |_| bar.inc(1))?
+            let schedule = warn_beyond(&model, schedule);
+            galerkin::fluid::reduced::run_driven(&model, &fluid, &schedule, frames, &mut |_| bar.inc(1))?
         }
-        None => run_reduced(&model, &fluid, args.motion, frames, &mut |_| bar.inc(1))?,
+        None => match args.pace {
+            Some(pace) => {
+                galerkin::fluid::reduced::run_paced(&model, &fluid, k, pace, frames, &mut |_| bar.inc(1))?
+            }
+            None => run_reduced(&model, &fluid, args.motion, frames, &mut |_| bar.inc(1))?,
+        },
     };
     bar.finish_and_clear();
     let mut step: Vec<f64> = run.reports.iter().map(|r| r.total_seconds()).collect();
@@ -402,10 +445,11 @@ fn bench_model(args: &BenchArgs, model_path: &std::path::Path) -> Result<()> {
     let gpu = galerkin::gpu::Gpu::new(&galerkin::gpu::GpuDesc::default()).ok();
     let start = Instant::now();
     let frames = args.drive.last_frame().max(1);
+    let drive = warn_beyond(&model, &args.drive);
     let b = galerkin::bench::fluid_reduced::cavity_model(
         &model,
         &args.scene,
-        &args.drive,
+        &drive,
         (frames, 8),
         args.particles,
         gpu.as_ref(),

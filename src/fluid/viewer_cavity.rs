@@ -39,6 +39,8 @@ pub struct CavityContent {
     rest: ReducedState,
     amounts: [f64; 3],
     targets: [f64; 3],
+    /// Each cavity's largest trained compression (the title says when the user goes beyond).
+    trained: Option<[f64; 3]>,
     particle_count: usize,
     /// The frame to advect the particles through (ĝ_t, ĝ_{t+1}, f̂_{t+1}), recorded next.
     pending: Option<(Vec<f64>, Vec<f64>, Vec<f64>)>,
@@ -89,7 +91,9 @@ impl CavityContent {
             colour_cells: false,
             sprite_px: 1.5,
         };
+        let trained = model.trained_compressions();
         Ok(Self {
+            trained,
             model,
             fluid,
             motion,
@@ -170,14 +174,16 @@ impl CavityContent {
 impl ViewerContent for CavityContent {
     fn title(&self) -> String {
         let a = self.amounts;
+        let beyond = self.trained.and_then(|t| super::reduced::cavity_motion::beyond_training(t, a));
         format!(
-            "galerkin fluid — reduced cavity (m_u {}, m_f {}) — frame {}, compressions {:.2}/{:.2}/{:.2} — step {:.2} ms, {} particles {:.2} ms — {:.0} FPS{}",
+            "galerkin fluid — reduced cavity (m_u {}, m_f {}) — frame {}, compressions {:.2}/{:.2}/{:.2}{} — step {:.2} ms, {} particles {:.2} ms — {:.0} FPS{}",
             self.model.dim_of("u"),
             self.model.dim_of("f"),
             self.frame,
             a[0],
             a[1],
             a[2],
+            if beyond.is_some() { " (beyond the training)" } else { "" },
             self.step_ms,
             self.particle_count,
             self.particle_ms,

@@ -143,6 +143,66 @@ impl CavityMotion {
     }
 }
 
+impl CavityMotion {
+    /// The compressions whose reduced geometry is `g`: the inverse of [`Self::geometry`], by
+    /// least squares in `ĝ = M c` with `c₀ = 1` (the normal equations of M's last four
+    /// columns). `None` where the geometry basis does not resolve the four motions (m_g < 5,
+    /// or a training that never moved a cavity) or `g` has another length.
+    pub fn compressions_of(&self, g: &[f64]) -> Option<[f64; 3]> {
+        let m = self.map.shape()[0];
+        if g.len() != m || m < 5 {
+            return None;
+        }
+        let rows: Vec<&[f64]> = self.map.data().chunks(5).collect();
+        let mut normal = vec![0.0; 16];
+        let mut rhs = vec![0.0; 4];
+        for (row, gj) in rows.iter().zip(g) {
+            for p in 0..4 {
+                rhs[p] += row[p + 1] * (gj - row[0]);
+                for q in 0..4 {
+                    normal[p * 4 + q] += row[p + 1] * row[q + 1];
+                }
+            }
+        }
+        let scale = (0..4).map(|p| normal[p * 5]).fold(0.0f64, f64::max);
+        let normal = Tensor::from_vec(&[4, 4], normal).ok()?;
+        let (values, _) = crate::tensor::symmetric_eigen("cavity motion", &normal).ok()?;
+        let smallest = values.iter().copied().fold(f64::INFINITY, f64::min);
+        if smallest.is_nan() || smallest <= 1e-10 * scale {
+            return None;
+        }
+        let c = crate::tensor::solve("cavity motion", &normal, &rhs).ok()?;
+        Some([c[0], c[1], c[2]])
+    }
+
+    /// The largest compression of each cavity over the reduced geometries `frames` (e.g. every
+    /// frame of a model's training trajectories): what the model was trained on. `None` where
+    /// [`Self::compressions_of`] cannot tell.
+    pub fn trained_compressions<'a>(&self, frames: impl IntoIterator<Item = &'a [f64]>) -> Option<[f64; 3]> {
+        let mut top = [0.0f64; 3];
+        for g in frames {
+            let a = self.compressions_of(g)?;
+            for i in 0..3 {
+                top[i] = top[i].max(a[i]);
+            }
+        }
+        Some(top)
+    }
+}
+
+/// A warning when compressions `a` go beyond the trained ones (by more than 1e-6): the bases
+/// hold no snapshot of that geometry, so the reduced flow extrapolates (the geometry itself
+/// stays exact, [`CavityMotion`]).
+pub fn beyond_training(trained: [f64; 3], a: [f64; 3]) -> Option<String> {
+    let over: Vec<String> = (0..3)
+        .filter(|&i| a[i] > trained[i] + 1e-6)
+        .map(|i| format!("cavity {} at {:.3} (trained up to {:.3})", i + 1, a[i], trained[i]))
+        .collect();
+    (!over.is_empty()).then(|| {
+        format!("compressions beyond the training: {}; the reduced flow extrapolates there", over.join(", "))
+    })
+}
+
 /// The cavity's compressions over time: keyframes `(frame, [a₁, a₂, a₃])`, linearly
 /// interpolated between them and held after the last. Written `FRAME=A1/A2/A3,…`, e.g.
 /// `0=0/0/0,30=0.5/0/0,60=0.5/0/0.4,90=0/0/0.4` (cavity 1 compresses, then cavity 3 while 1
@@ -194,6 +254,17 @@ impl CompressionSchedule {
     /// The last keyframe's frame.
     pub fn last_frame(&self) -> usize {
         self.keys.last().map_or(0, |k| k.0)
+    }
+
+    /// Each cavity's largest compression over the schedule (a keyframe's: linear between).
+    pub fn largest(&self) -> [f64; 3] {
+        let mut top = [0.0f64; 3];
+        for (_, a) in &self.keys {
+            for i in 0..3 {
+                top[i] = top[i].max(a[i]);
+            }
+        }
+        top
     }
 }
 

@@ -5,7 +5,12 @@
 //! kinetic energy of both, `E(u) = ½ Σ_c vol_c(g) |u_c|²` at the full run's geometry, and the
 //! relative velocity error in that energy norm, `‖u_full − u_reduced‖_V / ‖u_full‖_V`; at the
 //! last frame, the error of every cell (where it sits), for a picture.
+//!
+//! The full run is simulated again (the cavity, whose motion is a function of its
+//! compressions) or read back from the snapshot directory a training wrote (any scene — the
+//! bird — without simulating it again).
 
+use std::path::PathBuf;
 use std::time::Instant;
 
 use crate::fluid::scene::{FluidScene, Motion};
@@ -15,6 +20,7 @@ use super::cavity_motion::CompressionSchedule;
 use super::model::ReducedFluidModel;
 use super::run::{run_driven, run_reduced, ReducedMotion};
 use super::step::ReducedFluid;
+use crate::fluid::snapshots::SnapshotReader;
 
 /// The motion both runs follow.
 #[derive(Clone, Debug)]
@@ -24,6 +30,14 @@ pub enum ComparedMotion {
     Training(usize),
     /// The cavity driven by compressions (the reduced run's ĥ from the induced-flux tensor).
     Driven(CompressionSchedule),
+    /// Training run `run` of any scene, the full run read from its snapshot directory `full`
+    /// (e.g. `run-00` of the training's work directory) instead of simulated again.
+    Recorded {
+        /// The full run's snapshot directory.
+        full: PathBuf,
+        /// The model's training run it holds (replayed by the reduced run).
+        run: usize,
+    },
 }
 
 /// What [`compare`] measured.
@@ -41,7 +55,8 @@ pub struct Comparison {
     pub cell_error: Vec<f64>,
     /// The full run's geometry at the last frame.
     pub last_geometry: Vec<f64>,
-    /// Median seconds of a full frame and of a reduced step.
+    /// Median seconds of a full frame (NaN where the full run was read back, not simulated)
+    /// and of a reduced step.
     pub seconds: (f64, f64),
 }
 
@@ -74,57 +89,133 @@ pub fn compare(
     frames: usize,
     on_frame: &mut dyn FnMut(usize),
 ) -> Result<Comparison, FluidError> {
-    let Motion::Cavity { cavity, .. } = &scene.motion else {
-        return Err(FluidError::State("the comparison runs a cavity scene (the model's)".into()));
-    };
     let fingerprint = super::model::MeshFingerprint::of(&scene.mesh, &scene.topology, scene.periodic_axis);
     model.check_mesh(&fingerprint)?;
     let fluid = ReducedFluid::new(model)?;
     let reduced = match motion {
-        ComparedMotion::Training(k) => {
+        ComparedMotion::Training(k) | ComparedMotion::Recorded { run: k, .. } => {
             run_reduced(model, &fluid, ReducedMotion::Replay(*k), frames, &mut |_| {})?
         }
         ComparedMotion::Driven(schedule) => run_driven(model, &fluid, schedule, frames, &mut |_| {})?,
     };
-    let compressions = |t: usize| match motion {
-        ComparedMotion::Training(k) => crate::fluid::cavity::training_run(*k)
-            .map(|amounts| crate::fluid::cavity::Cavity::compression(amounts, t, scene.frames))
-            .ok_or_else(|| FluidError::State(format!("training run {k}: the cavity has runs 0 to 13"))),
-        ComparedMotion::Driven(schedule) => Ok(schedule.at(t)),
-    };
     let bu = model.basis("u").ok_or_else(|| FluidError::State("the model has no basis u".into()))?;
-    let mut solver = FluidSolver::new(scene.mesh.clone(), scene.topology.clone(), scene.params)?;
-    let mut state = solver.initial_state(cavity.mapped_for(compressions(0)?), &scene.initial_velocity)?;
+    let mut full = FullRun::new(scene, motion, frames)?;
     let d = scene.mesh.dim();
     let mut out = Comparison { frame_time: model.frame_time, ..Comparison::default() };
     let mut full_seconds = Vec::new();
     for t in 0..=frames {
+        let start = Instant::now();
+        let (u_full, g_full) = full.frame(t)?;
         if t > 0 {
-            let start = Instant::now();
-            let g = cavity.mapped_for(compressions(t)?);
-            state = solver.step(&state, &g, t)?.0;
-            full_seconds.push(start.elapsed().as_secs_f64());
+            if !full.is_recorded() {
+                full_seconds.push(start.elapsed().as_secs_f64());
+            }
             on_frame(t);
         }
-        let vols = scene.mesh.volumes_at(&state.g);
+        let vols = scene.mesh.volumes_at(&g_full);
         let u_reduced = bu.lift(&reduced.states[t].u);
         let energy = |u: &[f64]| {
             0.5 * u.chunks(d).zip(&vols).map(|(v, w)| w * v.iter().map(|x| x * x).sum::<f64>()).sum::<f64>()
         };
-        let diff: Vec<f64> = state.u.iter().zip(&u_reduced).map(|(a, b)| a - b).collect();
-        let (ef, er, ed) = (energy(&state.u), energy(&u_reduced), energy(&diff));
+        let diff: Vec<f64> = u_full.iter().zip(&u_reduced).map(|(a, b)| a - b).collect();
+        let (ef, er, ed) = (energy(&u_full), energy(&u_reduced), energy(&diff));
         out.energy_full.push(ef);
         out.energy_reduced.push(er);
         out.error.push(if ef > 0.0 { (ed / ef).sqrt() } else { 0.0 });
         if t == frames {
             out.cell_error = diff.chunks(d).map(|v| v.iter().map(|x| x * x).sum::<f64>().sqrt()).collect();
-            out.last_geometry = state.g.clone();
+            out.last_geometry = g_full;
         }
     }
     let mut reduced_seconds: Vec<f64> = reduced.reports.iter().map(|r| r.total_seconds()).collect();
     out.seconds =
         (crate::bench::median_f64(&mut full_seconds), crate::bench::median_f64(&mut reduced_seconds));
     Ok(out)
+}
+
+/// The full side of a comparison, frame by frame: simulated (the cavity) or read back.
+enum FullRun<'a> {
+    Simulated {
+        scene: &'a FluidScene,
+        cavity: &'a crate::fluid::cavity::Cavity,
+        solver: Box<FluidSolver>,
+        state: Option<crate::fluid::FluidState>,
+        schedule: Box<dyn Fn(usize) -> Result<[f64; 3], FluidError> + 'a>,
+    },
+    Recorded(SnapshotReader),
+}
+
+impl<'a> FullRun<'a> {
+    fn new(scene: &'a FluidScene, motion: &'a ComparedMotion, frames: usize) -> Result<Self, FluidError> {
+        if let ComparedMotion::Recorded { full, .. } = motion {
+            return Self::recorded(full, scene, frames);
+        }
+        let Motion::Cavity { cavity, .. } = &scene.motion else {
+            return Err(FluidError::State(
+                "only the cavity's full run is simulated again; give the full run's snapshot directory (--full)"
+                    .into(),
+            ));
+        };
+        let schedule: Box<dyn Fn(usize) -> Result<[f64; 3], FluidError>> = match motion {
+            ComparedMotion::Training(k) => {
+                let amounts = crate::fluid::cavity::training_run(*k).ok_or_else(|| {
+                    FluidError::State(format!("training run {k}: the cavity has runs 0 to 13"))
+                })?;
+                let total = scene.frames;
+                Box::new(move |t| Ok(crate::fluid::cavity::Cavity::compression(amounts, t, total)))
+            }
+            ComparedMotion::Driven(schedule) => Box::new(move |t| Ok(schedule.at(t))),
+            ComparedMotion::Recorded { full, .. } => return Self::recorded(full, scene, frames),
+        };
+        let solver = FluidSolver::new(scene.mesh.clone(), scene.topology.clone(), scene.params)?;
+        Ok(Self::Simulated { scene, cavity, solver: Box::new(solver), state: None, schedule })
+    }
+
+    /// The full run read from the snapshot directory `full`, checked against the scene's mesh
+    /// and the frames compared.
+    fn recorded(full: &std::path::Path, scene: &FluidScene, frames: usize) -> Result<Self, FluidError> {
+        let reader = SnapshotReader::open(full)?;
+        let (meta, mesh) = (reader.meta(), &scene.mesh);
+        if meta.cells != mesh.cell_count() || meta.dim != mesh.dim() {
+            return Err(FluidError::State(format!(
+                "{}: a run of {} cells in {}D, the scene has {} in {}D",
+                full.display(),
+                meta.cells,
+                meta.dim,
+                mesh.cell_count(),
+                mesh.dim()
+            )));
+        }
+        if meta.frames <= frames {
+            return Err(FluidError::State(format!(
+                "{}: the run holds frames 0 to {}, the comparison needs {frames}",
+                full.display(),
+                meta.frames.saturating_sub(1)
+            )));
+        }
+        Ok(Self::Recorded(reader))
+    }
+
+    fn is_recorded(&self) -> bool {
+        matches!(self, Self::Recorded(_))
+    }
+
+    /// Frame `t`'s velocity and geometry; frames are asked for in order from 0.
+    fn frame(&mut self, t: usize) -> Result<(Vec<f64>, Vec<f64>), FluidError> {
+        match self {
+            Self::Recorded(reader) => Ok((reader.frame("u", t)?, reader.frame("g", t)?)),
+            Self::Simulated { scene, cavity, solver, state, schedule } => {
+                let g = cavity.mapped_for(schedule(t)?);
+                let next = match state.take() {
+                    None => solver.initial_state(g, &scene.initial_velocity)?,
+                    Some(s) => solver.step(&s, &g, t)?.0,
+                };
+                let out = (next.u.clone(), next.g.clone());
+                *state = Some(next);
+                Ok(out)
+            }
+        }
+    }
 }
 
 /// The last frame's cell errors on the section of the domain by the plane z = 0 (the plane of

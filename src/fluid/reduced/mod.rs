@@ -40,7 +40,7 @@ pub use bases::{BasisReport, BasisSizes, FluidBases};
 pub use cavity_motion::{CavityMotion, CompressionSchedule};
 pub use model::{MeshFingerprint, MeshOf, ReducedFluidModel, Trajectory};
 pub use pipeline::{train_scene, SceneTraining, TrainingEvent};
-pub use run::{run_driven, run_reduced, write_lifted, ReducedMotion, ReducedRun};
+pub use run::{run_driven, run_paced, run_reduced, write_lifted, ReducedMotion, ReducedRun, PACE_RANGE};
 pub use step::{Exponential, FluxCombination, ReducedFluid, ReducedState, ReducedStepReport};
 pub use study::{one_step_errors, ErrorStudy, SizeErrors};
 pub use training::TrainingSet;

@@ -340,6 +340,21 @@ impl ReducedFluidModel {
         8 * self.core.tensors().map(|(_, _, t)| t.len()).sum::<usize>()
     }
 
+    /// A cavity model's largest trained compression of each cavity, read back from its
+    /// training trajectories' reduced geometries ([`CavityMotion::compressions_of`]); `None`
+    /// for other models or where the geometry basis cannot tell.
+    pub fn trained_compressions(&self) -> Option<[f64; 3]> {
+        let motion = self.cavity.as_ref()?;
+        let m = motion.map.shape()[0];
+        motion.trained_compressions(self.trajectories.iter().flat_map(|t| t.g.data().chunks(m)))
+    }
+
+    /// A warning when the compressions `largest` go beyond what a cavity model was trained on
+    /// (see [`super::cavity_motion::beyond_training`]); `None` within it or for other models.
+    pub fn warn_beyond_training(&self, largest: [f64; 3]) -> Option<String> {
+        super::cavity_motion::beyond_training(self.trained_compressions()?, largest)
+    }
+
     /// A basis of the model (`u f g h d`).
     pub fn basis(&self, name: &str) -> Option<&Basis> {
         self.core.basis(name)

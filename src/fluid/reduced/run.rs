@@ -94,6 +94,58 @@ pub fn run_reduced(
     step_through(fluid, start, frames, &mut |t| Ok((row(&traj.g, mg, t), replay(t))), on_frame)
 }
 
+/// Most a paced replay may speed up or slow down a training motion.
+pub const PACE_RANGE: (f64, f64) = (1.0 / 64.0, 64.0);
+
+/// Runs `frames` reduced steps following training run K's motion `pace` times as fast (0.5:
+/// half speed, 2: twice; seed 000 §7.2's bird "can be sped up or slowed down"): frame t's ĝ is
+/// the run's reduced geometry at training frame `t·pace`, linear between its frames — exactly
+/// the projection of the linearly interpolated full geometries, B_g being linear — and ĥ comes
+/// from the reduced induced-flux tensor, since the replayed ĥ belongs to the run's own pace.
+/// From the run's initial state; `t·pace` may not pass the run's last frame.
+pub fn run_paced(
+    model: &ReducedFluidModel,
+    fluid: &ReducedFluid,
+    run: usize,
+    pace: f64,
+    frames: usize,
+    on_frame: &mut dyn FnMut(usize),
+) -> Result<ReducedRun, FluidError> {
+    if !(pace.is_finite() && (PACE_RANGE.0..=PACE_RANGE.1).contains(&pace)) {
+        return Err(FluidError::State(format!(
+            "pace {pace}: give a factor from {} to {}",
+            PACE_RANGE.0, PACE_RANGE.1
+        )));
+    }
+    let traj = model.trajectories.get(run).ok_or_else(|| {
+        FluidError::State(format!(
+            "run {run}: the model has training runs 0 to {}",
+            model.trajectories.len().saturating_sub(1)
+        ))
+    })?;
+    let available = traj.g.shape()[0].saturating_sub(1);
+    let end = frames as f64 * pace;
+    if end > available as f64 + 1e-9 {
+        return Err(FluidError::State(format!(
+            "run {run} at pace {pace}: {frames} frames reach its frame {end:.1}, it has {available}; give at most {} frames",
+            (available as f64 / pace + 1e-9).floor()
+        )));
+    }
+    let mg = traj.g.shape()[1];
+    let row = |i: usize| &traj.g.data()[i * mg..(i + 1) * mg];
+    let at = |t: usize| -> Vec<f64> {
+        let s = (t as f64 * pace).min(available as f64);
+        let i = (s.floor() as usize).min(available.saturating_sub(1));
+        let w = s - i as f64;
+        if available == 0 {
+            return row(0).to_vec();
+        }
+        row(i).iter().zip(row(i + 1)).map(|(a, b)| (1.0 - w) * a + w * b).collect()
+    };
+    let start = ReducedState { u: traj.u0.clone(), f: traj.f0.clone(), g: at(0) };
+    step_through(fluid, start, frames, &mut |t| Ok((at(t), None)), on_frame)
+}
+
 /// Runs `frames` reduced steps of the cavity model `model` driven by `schedule` (its
 /// compressions per frame, [`super::cavity_motion`]) from rest: each frame's ĝ from the
 /// cavity's motion model, its ĥ from the reduced induced-flux tensor — a motion no training run
