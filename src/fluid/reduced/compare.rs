@@ -51,6 +51,9 @@ pub struct Comparison {
     pub energy_reduced: Vec<f64>,
     /// Relative velocity error in the energy norm per frame (0 where the full run is at rest).
     pub error: Vec<f64>,
+    /// The same error of the full run's best fit in the velocity basis, `B_u B_uᵀ u_full`:
+    /// what truncation alone costs, whatever the reduced dynamics do.
+    pub projection_error: Vec<f64>,
     /// Each cell's error |u_full − u_reduced| at the last frame.
     pub cell_error: Vec<f64>,
     /// The full run's geometry at the last frame.
@@ -61,23 +64,42 @@ pub struct Comparison {
 }
 
 impl Comparison {
-    /// Frame, time, both energies and the error, as CSV with a header.
+    /// Frame, time, both energies, the error and the best fit's, as CSV with a header.
     pub fn csv(&self) -> String {
-        let mut out = String::from("frame,time,energy_full,energy_reduced,relative_error\n");
-        for (k, ((ef, er), e)) in
-            self.energy_full.iter().zip(&self.energy_reduced).zip(&self.error).enumerate()
+        let mut out = String::from("frame,time,energy_full,energy_reduced,relative_error,projection_error\n");
+        for (k, (((ef, er), e), p)) in self
+            .energy_full
+            .iter()
+            .zip(&self.energy_reduced)
+            .zip(&self.error)
+            .zip(&self.projection_error)
+            .enumerate()
         {
-            out += &format!("{k},{},{ef:e},{er:e},{e:e}\n", k as f64 * self.frame_time);
+            out += &format!("{k},{},{ef:e},{er:e},{e:e},{p:e}\n", k as f64 * self.frame_time);
         }
         out
     }
 
-    /// The mean and largest relative error over the frames where the full run moves.
+    /// The mean and largest relative error over the frames after the first.
     pub fn error_summary(&self) -> (f64, f64) {
-        let moving: Vec<f64> = self.error.iter().copied().skip(1).collect();
-        let mean = moving.iter().sum::<f64>() / moving.len().max(1) as f64;
-        (mean, moving.iter().copied().fold(0.0, f64::max))
+        summary(&self.error)
     }
+
+    /// The colour range of [`error_section`]: 0 to the largest cell error.
+    pub fn cell_error_range(&self) -> (f64, f64) {
+        (0.0, self.cell_error.iter().fold(0.0f64, |m, v| m.max(*v)).max(1e-300))
+    }
+
+    /// [`Self::error_summary`] of the best fit in `B_u` ([`Self::projection_error`]).
+    pub fn projection_summary(&self) -> (f64, f64) {
+        summary(&self.projection_error)
+    }
+}
+
+fn summary(errors: &[f64]) -> (f64, f64) {
+    let moving = &errors[errors.len().min(1)..];
+    let mean = moving.iter().sum::<f64>() / moving.len().max(1) as f64;
+    (mean, moving.iter().copied().fold(0.0, f64::max))
 }
 
 /// Runs both `frames` frames on `scene` (the model's cavity) under `motion` and compares them;
@@ -118,10 +140,14 @@ pub fn compare(
             0.5 * u.chunks(d).zip(&vols).map(|(v, w)| w * v.iter().map(|x| x * x).sum::<f64>()).sum::<f64>()
         };
         let diff: Vec<f64> = u_full.iter().zip(&u_reduced).map(|(a, b)| a - b).collect();
+        let fit = bu.lift(&bu.project(&u_full));
+        let fit_diff: Vec<f64> = u_full.iter().zip(&fit).map(|(a, b)| a - b).collect();
         let (ef, er, ed) = (energy(&u_full), energy(&u_reduced), energy(&diff));
+        let relative = |e: f64| if ef > 0.0 { (e / ef).sqrt() } else { 0.0 };
         out.energy_full.push(ef);
         out.energy_reduced.push(er);
-        out.error.push(if ef > 0.0 { (ed / ef).sqrt() } else { 0.0 });
+        out.error.push(relative(ed));
+        out.projection_error.push(relative(energy(&fit_diff)));
         if t == frames {
             out.cell_error = diff.chunks(d).map(|v| v.iter().map(|x| x * x).sum::<f64>().sqrt()).collect();
             out.last_geometry = g_full;
@@ -230,11 +256,9 @@ pub fn error_section(
     use crate::fluid::render::{draw_triangles, plane_section, DrawStyle, Projection, View2d};
     let triangles = plane_section(mesh, &c.last_geometry, &c.cell_error, 2, 0.0);
     let (lo, hi) = mesh.bounds();
-    let top = c.cell_error.iter().fold(0.0f64, |m, v| m.max(*v)).max(1e-300);
     let style = DrawStyle {
-        colormap: crate::render::Colormap::by_name("viridis")
-            .map_err(|e| FluidError::State(e.to_string()))?,
-        range: (0.0, top),
+        colormap: crate::render::Colormap::viridis(),
+        range: c.cell_error_range(),
         log: false,
         colour_cells: true,
         sprite_px: 0.0,
