@@ -156,6 +156,11 @@ fn merged_bases_span_both_and_stay_orthonormal() {
     // A non-orthonormal matrix is refused with the measured error.
     let skew = Tensor::from_vec(&[2, 2], vec![1.0, 0.5, 0.0, 1.0]).unwrap();
     assert!(Basis::new("skew", skew, 1e-12).unwrap_err().to_string().contains("not orthonormal"));
+    // … and so is one holding a NaN (whose error is NaN, not the largest finite entry).
+    let mut data = orthonormal(n, 3, 23).data().to_vec();
+    data[7] = f64::NAN;
+    let nan = Tensor::from_vec(&[n, 3], data).unwrap();
+    assert!(Basis::new("nan", nan, 1e-12).unwrap_err().to_string().contains("NaN"));
 }
 
 #[test]

@@ -115,16 +115,25 @@ impl Basis {
         &self.matrix
     }
 
-    /// max |BᵀB − I| over all entries.
+    /// max |BᵀB − I| over all entries (BᵀB by faer's blocked product on every core: a strided
+    /// loop over column pairs took most of a minute for the cavity's B_u, 281,871 × 128).
     pub fn orthonormality_error(&self) -> f64 {
+        use faer::linalg::matmul::matmul;
+        use faer::{Accum, Mat, MatRef, Par};
         let (n, m) = (self.full_dim(), self.reduced_dim());
-        let d = self.matrix.data();
+        let b = MatRef::from_row_major_slice(self.matrix.data(), n, m);
+        let mut gram = Mat::<f64>::zeros(m, m);
+        matmul(gram.as_mut(), Accum::Replace, b.transpose(), b, 1.0, Par::rayon(0));
         let mut worst = 0f64;
         for a in 0..m {
-            for b in a..m {
-                let dot: f64 = (0..n).map(|i| d[i * m + a] * d[i * m + b]).sum();
-                let want = if a == b { 1.0 } else { 0.0 };
-                worst = worst.max((dot - want).abs());
+            for c in a..m {
+                let want = if a == c { 1.0 } else { 0.0 };
+                let e = (gram[(a, c)] - want).abs();
+                // NaN propagates: max would drop it.
+                if e.is_nan() {
+                    return f64::NAN;
+                }
+                worst = worst.max(e);
             }
         }
         worst
