@@ -57,6 +57,8 @@ pub struct CavityContent {
     step_ms: f64,
     particle_ms: f64,
     fps: f64,
+    /// Frames presented and their seconds, for the summary's mean rate.
+    shown: (usize, f64),
     walls_dirty: bool,
 }
 
@@ -117,6 +119,7 @@ impl CavityContent {
             step_ms: 0.0,
             particle_ms: 0.0,
             fps: 0.0,
+            shown: (0, 0.0),
             walls_dirty: true,
         })
     }
@@ -217,6 +220,7 @@ impl ViewerContent for CavityContent {
     fn update(&mut self, _: &RenderTarget, seconds: f64) -> Result<bool> {
         if seconds > 0.0 {
             self.fps = 0.9 * self.fps + 0.1 / seconds.max(1e-6);
+            self.shown = (self.shown.0 + 1, self.shown.1 + seconds);
         }
         if let Some(ms) =
             self.profiler.as_ref().and_then(|p| p.results().ok()).and_then(|r| r.first().map(|s| s.1))
@@ -291,8 +295,16 @@ impl ViewerContent for CavityContent {
     fn summary(&self) -> Option<String> {
         let a = self.amounts;
         Some(format!(
-            "fluid: reduced cavity, {} particles, stopped at frame {} with compressions {:.2}/{:.2}/{:.2} (last step {:.2} ms, particles {:.2} ms)",
-            self.particle_count, self.frame, a[0], a[1], a[2], self.step_ms, self.particle_ms
+            "fluid: reduced cavity, {} particles, stopped at frame {} with compressions {:.2}/{:.2}/{:.2} (last step {:.2} ms, particles {:.2} ms; {:.1} frames per second over {} frames)",
+            self.particle_count,
+            self.frame,
+            a[0],
+            a[1],
+            a[2],
+            self.step_ms,
+            self.particle_ms,
+            self.shown.0 as f64 / self.shown.1.max(1e-9),
+            self.shown.0
         ))
     }
 }
