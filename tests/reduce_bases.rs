@@ -180,3 +180,30 @@ fn pca_with_the_gram_matrix_on_the_gpu_finds_the_same_subspace() {
     }
     assert!(on_gpu.basis.orthonormality_error() < 1e-12, "the basis itself is formed in f64");
 }
+
+#[test]
+fn orthonormalizing_at_most_m_columns_gives_the_whole_basis_first_m() {
+    // Eight columns, the third a combination of the first two (dropped either way).
+    let (n, k) = (30, 8);
+    let mut data = random_vec(n * k, 31);
+    for i in 0..n {
+        data[i * k + 2] = 2.0 * data[i * k] - 0.5 * data[i * k + 1];
+    }
+    let columns = Tensor::from_vec(&[n, k], data).unwrap();
+    let whole = Basis::orthonormalize("w", &columns).unwrap();
+    assert_eq!(whole.reduced_dim(), 7, "the dependent column is dropped");
+    for cap in [1, 4, 7, 100] {
+        let part = Basis::orthonormalize_at_most("p", &columns, cap).unwrap();
+        let m = cap.min(7);
+        assert_eq!(part.reduced_dim(), m);
+        for i in 0..n {
+            for j in 0..m {
+                assert_eq!(
+                    part.matrix().get(&[i, j]),
+                    whole.matrix().get(&[i, j]),
+                    "({i}, {j}) with cap {cap}"
+                );
+            }
+        }
+    }
+}

@@ -36,6 +36,13 @@ impl Basis {
     /// ("twice is enough": the second pass removes what rounding left of the first). Columns
     /// whose remainder falls below `1e-12` of their norm are dependent and dropped.
     pub fn orthonormalize(name: &str, columns: &Tensor) -> Result<Self, ReduceError> {
+        Self::orthonormalize_at_most(name, columns, usize::MAX)
+    }
+
+    /// [`Self::orthonormalize`] stopped once `cap` columns are kept: the same columns as the
+    /// whole basis's first `cap` (Gram–Schmidt keeps each column against the ones before it
+    /// only), for a fraction of the work when most columns would be cut anyway.
+    pub fn orthonormalize_at_most(name: &str, columns: &Tensor, cap: usize) -> Result<Self, ReduceError> {
         let bad = |detail: String| ReduceError::BadBasis { basis: name.to_string(), detail };
         if columns.order() != 2 {
             return Err(bad(format!("needs a matrix, got shape {:?}", columns.shape())));
@@ -43,6 +50,9 @@ impl Basis {
         let (n, k) = (columns.shape()[0], columns.shape()[1]);
         let mut kept: Vec<Vec<f64>> = Vec::new();
         for j in 0..k {
+            if kept.len() >= cap {
+                break;
+            }
             let mut v: Vec<f64> = (0..n).map(|i| columns.data()[i * k + j]).collect();
             let norm0 = v.iter().map(|x| x * x).sum::<f64>().sqrt();
             if !norm0.is_finite() {

@@ -336,16 +336,9 @@ fn interleave_merge(name: &str, a: &Basis, b: &Basis, cap: Option<usize>) -> Res
             data[i * k + c] = src[i * m + j];
         }
     }
-    let merged =
-        Basis::orthonormalize(name, &Tensor::from_vec(&[n, k], data).expect("n×k")).map_err(reduce_err)?;
-    let m = merged.reduced_dim().min(cap.unwrap_or(usize::MAX));
-    if m == merged.reduced_dim() {
-        return Ok(merged);
-    }
-    let src = merged.matrix().data();
-    let mm = merged.reduced_dim();
-    let cut: Vec<f64> = (0..n).flat_map(|i| src[i * mm..i * mm + m].iter().copied()).collect();
-    Basis::new(name, Tensor::from_vec(&[n, m], cut).expect("n×m"), 1e-10).map_err(reduce_err)
+    // Gram–Schmidt stops at the cap: the first m columns of the whole merged basis.
+    let columns = Tensor::from_vec(&[n, k], data).expect("n×k");
+    Basis::orthonormalize_at_most(name, &columns, cap.unwrap_or(usize::MAX)).map_err(reduce_err)
 }
 
 /// Refuses a geometry basis under which a training frame's projected geometry `B_g B_gᵀ g`
