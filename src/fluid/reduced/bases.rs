@@ -177,6 +177,17 @@ impl FluidBases {
         let mut reports = Vec::new();
         let (mesh, topo) = (set.mesh(), set.topology());
 
+        // The geometry first: the cheapest basis, and the one whose check (no projected
+        // training frame may fold a cell) can refuse the training before the costly ones.
+        stage("g");
+        let pg = pca("g", &mut set.source("g")?, truncation(sizes, sizes.m_g, true)).map_err(reduce_err)?;
+        let geometry_error = check_projected_volumes(set, mesh, &pg.basis)?;
+        reports.push(report(
+            "g",
+            &pg,
+            format!("mean first; worst projected-geometry error {geometry_error:.1e} relative"),
+        ));
+
         stage("f");
         let mut pf =
             pca("f", &mut set.source("f")?, truncation(sizes, sizes.m_f, false)).map_err(reduce_err)?;
@@ -212,15 +223,6 @@ impl FluidBases {
                 pp.energy
             ),
         });
-
-        stage("g");
-        let pg = pca("g", &mut set.source("g")?, truncation(sizes, sizes.m_g, true)).map_err(reduce_err)?;
-        let geometry_error = check_projected_volumes(set, mesh, &pg.basis)?;
-        reports.push(report(
-            "g",
-            &pg,
-            format!("mean first; worst projected-geometry error {geometry_error:.1e} relative"),
-        ));
 
         stage("h");
         let h = if any_nonzero(&mut set.source("h")?)? {
