@@ -97,9 +97,9 @@ pub struct ViewArgs {
     /// Quit after presenting this many frames (scripted runs and tests).
     #[arg(long)]
     pub frames: Option<u64>,
-    /// Window size.
-    #[arg(long, default_value = "1200x400", value_parser = crate::parse_size)]
-    pub size: (u32, u32),
+    /// Window size (default 1200x400 for 2D, 1024x768 for a 3D cavity model).
+    #[arg(long, value_parser = crate::parse_size)]
+    pub size: Option<(u32, u32)>,
     /// Where S (and, with --frames, the last frame) saves a screenshot.
     #[arg(long, default_value = "out/fluid-screenshot.png")]
     pub screenshot: PathBuf,
@@ -213,14 +213,28 @@ fn view(desc: &GpuDesc, args: &ViewArgs) -> Result<()> {
         (_, Some(model)) => {
             let model = galerkin::fluid::reduced::ReducedFluidModel::load(&model)?;
             if model.cavity.is_some() {
-                Box::new(CavityContent::new(model, args.particles, args.size, args.play)?)
+                Box::new(CavityContent::new(
+                    model,
+                    args.particles,
+                    args.size.unwrap_or((1024, 768)),
+                    args.play,
+                )?)
             } else {
-                Box::new(FluidContent::reduced(model, args.motion, args.particles, args.size, args.play)?)
+                Box::new(FluidContent::reduced(
+                    model,
+                    args.motion,
+                    args.particles,
+                    args.size.unwrap_or((1200, 400)),
+                    args.play,
+                )?)
             }
         }
-        (Some(scene), None) => {
-            Box::new(FluidContent::new(FluidScene::load(scene)?, args.particles, args.size, args.play)?)
-        }
+        (Some(scene), None) => Box::new(FluidContent::new(
+            FluidScene::load(scene)?,
+            args.particles,
+            args.size.unwrap_or((1200, 400)),
+            args.play,
+        )?),
         (None, None) => bail!("give a scene file or a model"),
     };
     let options = ViewOptions {
