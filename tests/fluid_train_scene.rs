@@ -221,12 +221,13 @@ fn a_reduced_cavity_run_is_compared_with_the_full_run_of_the_same_motion() {
     let model = train_scene(Path::new(SCENE), &dir.path().join("m.safetensors"), &opts, &mut |_| {}).unwrap();
     let mut scene = FluidScene::load(Path::new(SCENE)).unwrap();
     scene.frames = 6;
-    let replay = compare(&model, &scene, &ComparedMotion::Training(0), 6, &mut |_| {}).unwrap();
+    let replay = compare(&model, &scene, &ComparedMotion::Training(0), 6, 1, &mut |_| {}).unwrap();
     let driven = compare(
         &model,
         &scene,
         &ComparedMotion::Driven("0=0/0/0,6=0.2/0.2/0".parse().unwrap()),
         6,
+        1,
         &mut |_| {},
     )
     .unwrap();
@@ -251,7 +252,7 @@ fn a_reduced_cavity_run_is_compared_with_the_full_run_of_the_same_motion() {
     // full run (the solver is deterministic; 1e-9 leaves room for summation order only).
     let full = dir.path().join("work/run-00");
     let recorded =
-        compare(&model, &scene, &ComparedMotion::Recorded { full: full.clone(), run: 0 }, 6, &mut |_| {})
+        compare(&model, &scene, &ComparedMotion::Recorded { full: full.clone(), run: 0 }, 6, 1, &mut |_| {})
             .unwrap();
     for (a, b) in recorded.energy_full.iter().zip(&replay.energy_full) {
         assert!((a - b).abs() <= 1e-9 * b.abs().max(1e-300), "{a} vs {b}");
@@ -260,12 +261,24 @@ fn a_reduced_cavity_run_is_compared_with_the_full_run_of_the_same_motion() {
         assert!((a - b).abs() <= 1e-9, "{a} vs {b}");
     }
     assert!(recorded.seconds.0.is_nan(), "nothing was simulated on the full side");
-    let e = compare(&model, &scene, &ComparedMotion::Recorded { full, run: 0 }, 7, &mut |_| {}).unwrap_err();
+    let e =
+        compare(&model, &scene, &ComparedMotion::Recorded { full, run: 0 }, 7, 1, &mut |_| {}).unwrap_err();
     assert!(e.to_string().contains("7 frames"), "{e}");
     let missing = dir.path().join("work/run-07");
-    let e = compare(&model, &scene, &ComparedMotion::Recorded { full: missing, run: 0 }, 6, &mut |_| {})
+    let e = compare(&model, &scene, &ComparedMotion::Recorded { full: missing, run: 0 }, 6, 1, &mut |_| {})
         .unwrap_err();
     assert!(e.to_string().contains("run-07"), "{e}");
+    // The full run with 4× its substeps: another full run (its time integration refined), the
+    // same reduced one; a recorded run cannot be refined, nor a run by 0.
+    let refined = compare(&model, &scene, &ComparedMotion::Training(0), 6, 4, &mut |_| {}).unwrap();
+    assert_eq!(refined.energy_reduced, replay.energy_reduced);
+    assert!(refined.energy_full[6] != replay.energy_full[6] && refined.error.iter().all(|e| e.is_finite()));
+    let recorded_run = ComparedMotion::Recorded { full: dir.path().join("work/run-00"), run: 0 };
+    assert!(compare(&model, &scene, &recorded_run, 6, 2, &mut |_| {})
+        .unwrap_err()
+        .to_string()
+        .contains("refined"));
+    assert!(compare(&model, &scene, &ComparedMotion::Training(0), 6, 0, &mut |_| {}).is_err());
     // A training run, its snapshots in the bases, is followed closer than a motion none made.
     let (replay_mean, _) = replay.error_summary();
     let (driven_mean, _) = driven.error_summary();

@@ -22,6 +22,9 @@ use super::run::{run_driven, run_reduced, ReducedMotion};
 use super::step::ReducedFluid;
 use crate::fluid::snapshots::SnapshotReader;
 
+/// Most a simulated full run's substeps may be refined.
+pub const MAX_REFINE: usize = 64;
+
 /// The motion both runs follow.
 #[derive(Clone, Debug)]
 pub enum ComparedMotion {
@@ -103,14 +106,26 @@ fn summary(errors: &[f64]) -> (f64, f64) {
 }
 
 /// Runs both `frames` frames on `scene` (the model's cavity) under `motion` and compares them;
-/// `on_frame(k)` hears the full run's progress.
+/// `on_frame(k)` hears the full run's progress. A simulated full run takes `refine` times the
+/// RK4 substeps its stability needs (1: the solver as it trains; more separates the full
+/// solver's own time-integration error from the reduced model's); a recorded one is as it was
+/// simulated, so `refine` must be 1 there.
 pub fn compare(
     model: &ReducedFluidModel,
     scene: &FluidScene,
     motion: &ComparedMotion,
     frames: usize,
+    refine: usize,
     on_frame: &mut dyn FnMut(usize),
 ) -> Result<Comparison, FluidError> {
+    if refine == 0 || refine > MAX_REFINE {
+        return Err(FluidError::State(format!("refine {refine}: give 1 to {MAX_REFINE}")));
+    }
+    if refine > 1 && matches!(motion, ComparedMotion::Recorded { .. }) {
+        return Err(FluidError::State(
+            "a recorded full run cannot be refined: it was simulated as it was (leave out --full)".into(),
+        ));
+    }
     let fingerprint = super::model::MeshFingerprint::of(&scene.mesh, &scene.topology, scene.periodic_axis);
     model.check_mesh(&fingerprint)?;
     let fluid = ReducedFluid::new(model)?;
@@ -121,7 +136,7 @@ pub fn compare(
         ComparedMotion::Driven(schedule) => run_driven(model, &fluid, schedule, frames, &mut |_| {})?,
     };
     let bu = model.basis("u").ok_or_else(|| FluidError::State("the model has no basis u".into()))?;
-    let mut full = FullRun::new(scene, motion, frames)?;
+    let mut full = FullRun::new(scene, motion, frames, refine)?;
     let d = scene.mesh.dim();
     let mut out = Comparison { frame_time: model.frame_time, ..Comparison::default() };
     let mut full_seconds = Vec::new();
@@ -172,7 +187,12 @@ enum FullRun<'a> {
 }
 
 impl<'a> FullRun<'a> {
-    fn new(scene: &'a FluidScene, motion: &'a ComparedMotion, frames: usize) -> Result<Self, FluidError> {
+    fn new(
+        scene: &'a FluidScene,
+        motion: &'a ComparedMotion,
+        frames: usize,
+        refine: usize,
+    ) -> Result<Self, FluidError> {
         if let ComparedMotion::Recorded { full, .. } = motion {
             return Self::recorded(full, scene, frames);
         }
@@ -193,7 +213,8 @@ impl<'a> FullRun<'a> {
             ComparedMotion::Driven(schedule) => Box::new(move |t| Ok(schedule.at(t))),
             ComparedMotion::Recorded { full, .. } => return Self::recorded(full, scene, frames),
         };
-        let solver = FluidSolver::new(scene.mesh.clone(), scene.topology.clone(), scene.params)?;
+        let solver = FluidSolver::new(scene.mesh.clone(), scene.topology.clone(), scene.params)?
+            .with_substep_refinement(refine);
         Ok(Self::Simulated { scene, cavity, solver: Box::new(solver), state: None, schedule })
     }
 
