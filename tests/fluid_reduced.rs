@@ -53,16 +53,7 @@ fn tunnel_run(dir: &Path, scale: f64, frames: usize) -> PathBuf {
 
 /// Two waving-channel runs (different flows) in `dim` dimensions.
 fn wavy_runs(dir: &Path, dim: usize) -> Vec<PathBuf> {
-    let n = if dim == 2 { 8 } else { 3 };
-    [[1.0, 0.0, 0.0], [0.5, 0.2, 0.1]]
-        .iter()
-        .enumerate()
-        .map(|(k, u0)| {
-            let out = dir.join(format!("wavy{dim}-{k}"));
-            common::wavy::simulate(dim, n, 0.08, 20.0, *u0, 30, &out);
-            out
-        })
-        .collect()
+    common::wavy::two_runs(dir, dim)
 }
 
 fn train(runs: &[PathBuf], sizes: BasisSizes) -> (TrainingSet, ReducedFluidModel) {

@@ -6,7 +6,7 @@
 
 mod common;
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use galerkin::fluid::gpu::GpuParticles;
 use galerkin::fluid::particles::{advect_particles, seed_particles, Particle};
@@ -23,16 +23,7 @@ const PERIOD: f64 = 2.0;
 
 /// A model of two waving-channel runs in `dim` dimensions and its replay of run 1.
 fn model_and_run(dir: &Path, dim: usize) -> (ReducedFluidModel, ReducedRun) {
-    let n = if dim == 2 { 8 } else { 3 };
-    let runs: Vec<PathBuf> = [[1.0, 0.0, 0.0], [0.5, 0.2, 0.1]]
-        .iter()
-        .enumerate()
-        .map(|(k, u0)| {
-            let out = dir.join(format!("wavy{dim}-{k}"));
-            common::wavy::simulate(dim, n, 0.08, 20.0, *u0, 30, &out);
-            out
-        })
-        .collect();
+    let runs = common::wavy::two_runs(dir, dim);
     let set = TrainingSet::open(&runs).expect("training set");
     let sizes = BasisSizes { energy: 1.0 - 1e-8, ..BasisSizes::default() };
     let model = ReducedFluidModel::fit(&set, &sizes, &mut |_| {}).expect("model");

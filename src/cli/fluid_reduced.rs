@@ -20,22 +20,43 @@ pub struct TrainArgs {
     /// Model file to write (safetensors).
     #[arg(long, default_value = "out/fluid-model.safetensors")]
     pub out: PathBuf,
+    #[command(flatten)]
+    pub sizes: SizeArgs,
+}
+
+/// Basis sizes, shared by `fluid train` and `fluid train-scene`.
+#[derive(Args)]
+pub struct SizeArgs {
     /// Captured-energy threshold of every basis: the fewest modes whose σ² reach this
     /// fraction of the snapshots' (the caps below still apply).
     #[arg(long, default_value_t = 0.9999)]
     pub energy: f64,
-    /// Cap on the flux basis B_f.
+    /// Cap on the flux basis B_f (Table 1: cavity 64, eagle 70).
     #[arg(long)]
     pub m_f: Option<usize>,
-    /// Cap on the velocity–momentum basis B_u = B_p (after merging).
+    /// Cap on the velocity–momentum basis B_u = B_p, after merging (Table 1: cavity 128,
+    /// eagle 193).
     #[arg(long)]
     pub m_u: Option<usize>,
-    /// Cap on the geometry basis B_g (the mean geometry included).
+    /// Cap on the geometry basis B_g, the mean geometry included (Table 1: cavity 5, eagle 7).
     #[arg(long)]
     pub m_g: Option<usize>,
     /// Cap on the induced-flux basis B_h.
     #[arg(long)]
     pub m_h: Option<usize>,
+}
+
+impl SizeArgs {
+    fn sizes(&self) -> BasisSizes {
+        BasisSizes { energy: self.energy, m_f: self.m_f, m_u: self.m_u, m_g: self.m_g, m_h: self.m_h }
+    }
+}
+
+/// Prints a trained model's bases, one line each.
+fn print_bases(model: &ReducedFluidModel) {
+    for r in &model.provenance.bases {
+        println!("  B_{:<2} {:>8} × {:<4} energy {:.6}  {}", r.name, r.full, r.columns, r.energy, r.note);
+    }
 }
 
 /// Arguments of `galerkin fluid train-scene`.
@@ -57,21 +78,8 @@ pub struct TrainSceneArgs {
     /// The cavity's training runs to use, comma-separated (default: all, 0 to 13).
     #[arg(long, value_delimiter = ',')]
     pub runs: Option<Vec<usize>>,
-    /// Captured-energy threshold of every basis (the caps below still apply).
-    #[arg(long, default_value_t = 0.9999)]
-    pub energy: f64,
-    /// Cap on the flux basis B_f (Table 1: cavity 64, eagle 70).
-    #[arg(long)]
-    pub m_f: Option<usize>,
-    /// Cap on B_u = B_p (Table 1: cavity 128, eagle 193).
-    #[arg(long)]
-    pub m_u: Option<usize>,
-    /// Cap on B_g, the mean included (Table 1: cavity 5, eagle 7).
-    #[arg(long)]
-    pub m_g: Option<usize>,
-    /// Cap on B_h.
-    #[arg(long)]
-    pub m_h: Option<usize>,
+    #[command(flatten)]
+    pub sizes: SizeArgs,
 }
 
 /// Arguments of `galerkin fluid compare`.
@@ -238,9 +246,9 @@ pub fn train(args: &TrainArgs) -> Result<()> {
         set.mesh().cell_count(),
         set.topology().face_count()
     );
-    let sizes =
-        BasisSizes { energy: args.energy, m_f: args.m_f, m_u: args.m_u, m_g: args.m_g, m_h: args.m_h };
-    let stages = ["f", "u", "g", "h", "d", "trajectories", "premultiply"];
+    let sizes = args.sizes.sizes();
+    // FluidBases::build's order (the geometry first), then the model's.
+    let stages = ["g", "f", "u", "h", "d", "trajectories", "premultiply"];
     let bar = crate::progress_bar(stages.len() as u64, "training");
     let mut stage = |name: &str| {
         bar.set_message(format!("{name} ({:.0} s)", start.elapsed().as_secs_f64()));
@@ -249,9 +257,7 @@ pub fn train(args: &TrainArgs) -> Result<()> {
     let model = ReducedFluidModel::fit(&set, &sizes, &mut stage)?;
     bar.finish_and_clear();
     model.save(&args.out)?;
-    for r in &model.provenance.bases {
-        println!("  B_{:<2} {:>8} × {:<4} energy {:.6}  {}", r.name, r.full, r.columns, r.energy, r.note);
-    }
+    print_bases(&model);
     println!("trained in {:.1} s → {}", start.elapsed().as_secs_f64(), args.out.display());
     Ok(())
 }
@@ -264,7 +270,7 @@ pub fn train_scene(args: &TrainSceneArgs) -> Result<()> {
         args.out.with_file_name(format!("{name}.work"))
     });
     let options = SceneTraining {
-        sizes: BasisSizes { energy: args.energy, m_f: args.m_f, m_u: args.m_u, m_g: args.m_g, m_h: args.m_h },
+        sizes: args.sizes.sizes(),
         frames: args.frames,
         runs: args.runs.clone(),
         work: work.clone(),
@@ -297,9 +303,7 @@ pub fn train_scene(args: &TrainSceneArgs) -> Result<()> {
         }
     };
     let model = galerkin::fluid::reduced::train_scene(&args.scene, &args.out, &options, &mut on_event)?;
-    for r in &model.provenance.bases {
-        println!("  B_{:<2} {:>8} × {:<4} energy {:.6}  {}", r.name, r.full, r.columns, r.energy, r.note);
-    }
+    print_bases(&model);
     println!(
         "trained in {:.1} s → {} ({:.1} MB of reduced tensors)",
         start.elapsed().as_secs_f64(),

@@ -321,35 +321,36 @@ impl FluidRenderer {
 
     /// The sprite pipeline's resources for `particles` (bind once per particle buffer).
     pub fn particle_set(&self, gpu: &Gpu, particles: &GpuParticles) -> Result<ParticleSet, FluidError> {
-        let set = self
-            .sprites
-            .bind(
-                gpu,
-                &[
-                    self.colormap.resource(),
-                    Resource::Storage(particles.buffer().binding().map_err(gpu_err)?),
-                    Resource::Storage(self.speeds.binding().map_err(gpu_err)?),
-                ],
-            )
-            .map_err(gpu_err)?;
-        Ok(ParticleSet { set, own_speeds: false })
+        self.bind_particles(gpu, particles, false)
     }
 
     /// The sprite resources for `particles` coloured by their own speeds (the particle pass
     /// writes them; for a reduced state, whose cells' speeds would need the full flux).
     pub fn own_speed_set(&self, gpu: &Gpu, particles: &GpuParticles) -> Result<ParticleSet, FluidError> {
-        let set = self
-            .sprites_own
+        self.bind_particles(gpu, particles, true)
+    }
+
+    /// The colour map, the particles and the speeds they are coloured by: the cells' or, with
+    /// `own_speeds`, each particle's.
+    fn bind_particles(
+        &self,
+        gpu: &Gpu,
+        particles: &GpuParticles,
+        own_speeds: bool,
+    ) -> Result<ParticleSet, FluidError> {
+        let (pipeline, speeds) =
+            if own_speeds { (&self.sprites_own, particles.speeds()) } else { (&self.sprites, &self.speeds) };
+        let set = pipeline
             .bind(
                 gpu,
                 &[
                     self.colormap.resource(),
                     Resource::Storage(particles.buffer().binding().map_err(gpu_err)?),
-                    Resource::Storage(particles.speeds().binding().map_err(gpu_err)?),
+                    Resource::Storage(speeds.binding().map_err(gpu_err)?),
                 ],
             )
             .map_err(gpu_err)?;
-        Ok(ParticleSet { set, own_speeds: true })
+        Ok(ParticleSet { set, own_speeds })
     }
 
     /// Records the cells (2D) or the surface (3D: what `update` was given, from

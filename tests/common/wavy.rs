@@ -52,3 +52,18 @@ pub fn simulate(dim: usize, n: usize, a: f64, period: f64, u0: [f64; 3], frames:
     )
     .expect("simulated");
 }
+
+/// Two waving-channel runs (different flows) in `dim` dimensions, 30 frames each, written
+/// below `dir`: the training set of the reduced fluid's moving-mesh tests.
+pub fn two_runs(dir: &Path, dim: usize) -> Vec<std::path::PathBuf> {
+    let n = if dim == 2 { 8 } else { 3 };
+    [[1.0, 0.0, 0.0], [0.5, 0.2, 0.1]]
+        .iter()
+        .enumerate()
+        .map(|(k, u0)| {
+            let out = dir.join(format!("wavy{dim}-{k}"));
+            simulate(dim, n, 0.08, 20.0, *u0, 30, &out);
+            out
+        })
+        .collect()
+}

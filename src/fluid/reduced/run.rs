@@ -14,7 +14,7 @@ use crate::mesh::SimplexMesh;
 use crate::reduce::Basis;
 
 use super::cavity_motion::CompressionSchedule;
-use super::model::ReducedFluidModel;
+use super::model::{ReducedFluidModel, Trajectory};
 use super::step::{ReducedFluid, ReducedState, ReducedStepReport};
 
 /// Where a reduced run's motion comes from.
@@ -73,12 +73,7 @@ pub fn run_reduced(
     on_frame: &mut dyn FnMut(usize),
 ) -> Result<ReducedRun, FluidError> {
     let k = motion.run();
-    let traj = model.trajectories.get(k).ok_or_else(|| {
-        FluidError::State(format!(
-            "replay:{k}: the model has training runs 0 to {}",
-            model.trajectories.len().saturating_sub(1)
-        ))
-    })?;
+    let traj = trajectory(model, k, &format!("replay:{k}"))?;
     let available = traj.g.shape()[0].saturating_sub(1);
     if frames > available {
         return Err(FluidError::State(format!(
@@ -117,12 +112,7 @@ pub fn run_paced(
             PACE_RANGE.0, PACE_RANGE.1
         )));
     }
-    let traj = model.trajectories.get(run).ok_or_else(|| {
-        FluidError::State(format!(
-            "run {run}: the model has training runs 0 to {}",
-            model.trajectories.len().saturating_sub(1)
-        ))
-    })?;
+    let traj = trajectory(model, run, &format!("run {run}"))?;
     let available = traj.g.shape()[0].saturating_sub(1);
     let end = frames as f64 * pace;
     if end > available as f64 + 1e-9 {
@@ -164,6 +154,16 @@ pub fn run_driven(
     let (mu, mf) = (model.dim_of("u"), model.dim_of("f"));
     let start = ReducedState { u: vec![0.0; mu], f: vec![0.0; mf], g: g0 };
     step_through(fluid, start, frames, &mut |t| Ok((motion.geometry(schedule.at(t))?, None)), on_frame)
+}
+
+/// Training run `k`'s trajectory; `what` names the request in the error.
+fn trajectory<'a>(model: &'a ReducedFluidModel, k: usize, what: &str) -> Result<&'a Trajectory, FluidError> {
+    model.trajectories.get(k).ok_or_else(|| {
+        FluidError::State(format!(
+            "{what}: the model has training runs 0 to {}",
+            model.trajectories.len().saturating_sub(1)
+        ))
+    })
 }
 
 /// A frame's ĝ and, when replayed, its ĥ.
