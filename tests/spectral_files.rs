@@ -14,7 +14,8 @@ use galerkin::spectral::{vtu, NodeSet, Shape, SpectralRenderer, SpectralView, Vi
 /// The reference points of a VTK Lagrange quadrilateral (k = None) or hexahedron of order n in
 /// VTK's documented order: corners counter-clockwise (bottom then top layer), edge interiors
 /// (bottom: (0,0)→(1,0), (1,0)→(1,1), (0,1)→(1,1), (0,0)→(0,1); top likewise; then the
-/// vertical edges at (0,0), (1,0), (0,1), (1,1)), face interiors (ξ = 0, ξ = 1, η = 0, η = 1,
+/// vertical edges at (0,0), (1,0), (0,1), (1,1): the order of files before version 2.2, as
+/// these declare), face interiors (ξ = 0, ξ = 1, η = 0, η = 1,
 /// ζ = 0, ζ = 1, each with its first free axis fastest), then the body, ξ fastest.
 fn vtk_points(n: usize, hex: bool) -> Vec<[usize; 3]> {
     let inner = || 1..n;

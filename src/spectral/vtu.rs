@@ -4,7 +4,9 @@
 //! them. VTK's Lagrange cells are isoparametric on equispaced nodes of [0, 1]; their points are
 //! ordered corners, then edge interiors, then face interiors, then the body
 //! (`vtkHigherOrderQuadrilateral::PointIndexFromIJK` and `vtkHigherOrderHexahedron::…`, VTK 9),
-//! reproduced by [`vtk_point_index`].
+//! reproduced by [`vtk_point_index`]. Files of version 2.2 and later order a hexahedron's
+//! vertical edges 0–4, 1–5, 2–6, 3–7; earlier ones 0–4, 1–5, 3–7, 2–6
+//! ([`HexEdgeOrder`], chosen by the file's `version` as VTK's reader does). We write 2.2.
 //!
 //! Every one-component point-data array is a field. Arrays named `NAME_t0`, `NAME_t1`, … are
 //! the time steps of field `NAME` (this is how [`fn@write`] stores several steps; ParaView shows
@@ -34,9 +36,31 @@ impl From<VtkError> for SpectralError {
     }
 }
 
+/// The order of a Lagrange hexahedron's vertical edges (those joining the bottom face's
+/// corners 0–3 to the top face's 4–7) in its point list.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum HexEdgeOrder {
+    /// VTK XML files of version 2.2 and later (VTK ≥ 9.1): 0–4, 1–5, 2–6, 3–7.
+    Current,
+    /// Earlier files: 0–4, 1–5, 3–7, 2–6.
+    Legacy,
+}
+
+impl HexEdgeOrder {
+    /// The order a file of `version` (major, minor) uses.
+    pub fn of_version(version: (u32, u32)) -> Self {
+        if version >= (2, 2) {
+            Self::Current
+        } else {
+            Self::Legacy
+        }
+    }
+}
+
 /// The position in a VTK Lagrange cell's point list of node (i, j, k) of a cell of order `n`
-/// (k = 0 for quadrilaterals): corners, edges, faces, body, as VTK 9 orders them.
-pub fn vtk_point_index(shape: Shape, n: usize, i: usize, j: usize, k: usize) -> usize {
+/// (k = 0 for quadrilaterals): corners, edges, faces, body, as VTK 9 orders them, the
+/// hexahedron's vertical edges in `edges` order.
+pub fn vtk_point_index(shape: Shape, n: usize, i: usize, j: usize, k: usize, edges: HexEdgeOrder) -> usize {
     let bdy = |c: usize| c == 0 || c == n;
     let (ib, jb) = (bdy(i), bdy(j));
     let corner = |i: usize, j: usize| match (i > 0, j > 0) {
@@ -68,11 +92,11 @@ pub fn vtk_point_index(shape: Shape, n: usize, i: usize, j: usize, k: usize) -> 
             return (j - 1) + if i > 0 { e } else { 3 * e } + if k > 0 { 4 * e } else { 0 } + offset;
         }
         offset += 8 * e;
-        let vertical = match (i > 0, j > 0) {
-            (false, false) => 0,
-            (true, false) => 1,
-            (false, true) => 2,
-            (true, true) => 3,
+        let vertical = match (i > 0, j > 0, edges) {
+            (false, false, _) => 0,
+            (true, false, _) => 1,
+            (true, true, HexEdgeOrder::Current) | (false, true, HexEdgeOrder::Legacy) => 2,
+            (false, true, HexEdgeOrder::Current) | (true, true, HexEdgeOrder::Legacy) => 3,
         };
         return (k - 1) + e * vertical + offset;
     }
@@ -150,11 +174,12 @@ pub fn read(path: &Path) -> Result<SpectralMesh, SpectralError> {
         )));
     }
     // Our lexicographic node (i, j, k) of cell e ← VTK's point at vtk_point_index.
+    let edges = HexEdgeOrder::of_version(grid.version);
     let mut order = Vec::with_capacity(cells * per_cell);
     for e in 0..cells {
         for flat in 0..per_cell {
             let (i, j, k) = (flat % m, (flat / m) % m, flat / (m * m));
-            let c = conn.values[e * per_cell + vtk_point_index(shape, n, i, j, k)];
+            let c = conn.values[e * per_cell + vtk_point_index(shape, n, i, j, k, edges)];
             if !(c >= 0.0 && c < grid.points as f64 && c.fract() == 0.0) {
                 return Err(file(format!(
                     "element {e}: point index {c} is out of range ({} points)",
@@ -222,7 +247,7 @@ pub fn write(path: &Path, mesh: &SpectralMesh) -> Result<(), SpectralError> {
     let mut refs = vec![[0.0; 3]; per_cell];
     for flat in 0..per_cell {
         let (i, j, k) = (flat % m, (flat / m) % m, flat / (m * m));
-        refs[vtk_point_index(mesh.shape, n, i, j, k)] =
+        refs[vtk_point_index(mesh.shape, n, i, j, k, HexEdgeOrder::Current)] =
             [nodes[i], nodes[j], if dim == 3 { nodes[k] } else { 0.0 }];
     }
     let mut points = Vec::with_capacity(3 * cells * per_cell);
@@ -298,20 +323,30 @@ mod tests {
                 let mut seen = vec![false; count];
                 for flat in 0..count {
                     let (i, j, k) = (flat % m, (flat / m) % m, flat / (m * m));
-                    let p = vtk_point_index(shape, n, i, j, k);
+                    let p = vtk_point_index(shape, n, i, j, k, HexEdgeOrder::Current);
                     assert!(!seen[p], "{shape:?} order {n}: {p} twice");
                     seen[p] = true;
                 }
-                assert_eq!(vtk_point_index(shape, n, n, n, 0), 2);
-                assert_eq!(vtk_point_index(shape, n, 0, n, 0), 3);
+                assert_eq!(vtk_point_index(shape, n, n, n, 0, HexEdgeOrder::Current), 2);
+                assert_eq!(vtk_point_index(shape, n, 0, n, 0, HexEdgeOrder::Current), 3);
             }
         }
         // VTK's order-2 quadrilateral: corners, edge midpoints (bottom, right, top, left), centre.
-        let q = |i, j| vtk_point_index(Shape::Quadrilateral, 2, i, j, 0);
+        let q = |i, j| vtk_point_index(Shape::Quadrilateral, 2, i, j, 0, HexEdgeOrder::Current);
         assert_eq!([q(1, 0), q(2, 1), q(1, 2), q(0, 1), q(1, 1)], [4, 5, 6, 7, 8]);
-        // The order-2 hexahedron's vertical edges 16–19 join corners 0–4, 1–5, 3–7, 2–6.
-        let h = |i, j, k| vtk_point_index(Shape::Hexahedron, 2, i, j, k);
-        assert_eq!([h(0, 0, 1), h(2, 0, 1), h(0, 2, 1), h(2, 2, 1)], [16, 17, 18, 19]);
-        assert_eq!(h(1, 1, 1), 26);
+        // The order-2 hexahedron's vertical edges 16–19 join corners 0–4, 1–5, 2–6, 3–7 (VTK
+        // 9.7's vtkLagrangeHexahedron::PointIndexFromIJK gives 16, 17, 19, 18 for the nodes
+        // above corners 0, 1, 3, 2), and 0–4, 1–5, 3–7, 2–6 in files before version 2.2.
+        let h = |i, j, k, e| vtk_point_index(Shape::Hexahedron, 2, i, j, k, e);
+        let vertical = |e| [h(0, 0, 1, e), h(2, 0, 1, e), h(0, 2, 1, e), h(2, 2, 1, e)];
+        assert_eq!(vertical(HexEdgeOrder::Current), [16, 17, 19, 18]);
+        assert_eq!(vertical(HexEdgeOrder::Legacy), [16, 17, 18, 19]);
+        assert_eq!(h(1, 1, 1, HexEdgeOrder::Current), 26);
+        // Order 3, against the same VTK function: face and body nodes.
+        let h3 = |i, j, k| vtk_point_index(Shape::Hexahedron, 3, i, j, k, HexEdgeOrder::Current);
+        assert_eq!(
+            [h3(1, 0, 0), h3(0, 1, 1), h3(1, 1, 0), h3(1, 0, 1), h3(0, 1, 2), h3(1, 2, 1)],
+            [8, 32, 48, 40, 34, 58]
+        );
     }
 }

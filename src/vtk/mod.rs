@@ -1,15 +1,28 @@
 //! VTK XML unstructured grids (`.vtu`): the container, shared by the spacetime and spectral
 //! data sets (each module maps its own cells and arrays onto it).
 //!
-//! Writing uses appended raw binary (`header_type="UInt64"`), to `NAME.partial` renamed when
-//! complete. Reading accepts what VTK and ParaView write: `ascii`, inline `binary` (base64) and
-//! `appended` data (raw or base64), with UInt32 or UInt64 block headers, uncompressed or
-//! zlib-compressed (`vtkZLibDataCompressor`); one `<Piece>`. Every error names the file and,
-//! for data errors, the array.
+//! Writing uses file version 2.2 and appended raw binary (`header_type="UInt64"`), to `NAME.partial` renamed when
+//! complete. Reading accepts everything `vtkXMLUnstructuredGridWriter` (VTK 9) writes:
+//! `ascii`, inline `binary` (base64) and `appended` data (raw or base64), UInt32 or UInt64
+//! block headers, uncompressed or compressed with zlib, LZ4 or LZMA ([`encoding`]; tested on
+//! files VTK itself wrote, `scripts/vtk-fixtures.py`); one `<Piece>`. Counts are checked
+//! against [`MAX_COUNT`] and every compressed array against the size its `<Piece>` gives it
+//! before anything is inflated. Every error names the file and, for data errors, the array.
+
+pub mod encoding;
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
+use encoding::{base64_runs, numbers, type_size, Compressor, Framing};
+
+/// The largest `NumberOfPoints` or `NumberOfCells` read (2³¹): a larger count is refused
+/// before anything is allocated for it.
+pub const MAX_COUNT: usize = 1 << 31;
+
+/// The most nodes per cell a `connectivity` array may average (VTK's Lagrange hexahedra of
+/// order 9 have 1,000): bounds that array's size before it is inflated.
+pub const MAX_NODES_PER_CELL: usize = 1000;
 /// A problem with a `.vtu` file: the file and what is wrong.
 #[derive(Debug, thiserror::Error)]
 #[error("{path}: {detail}")]
@@ -48,6 +61,9 @@ pub struct UnstructuredGrid {
     pub cells: usize,
     /// Every data array of the piece.
     pub arrays: Vec<DataArray>,
+    /// The `<VTKFile>`'s `version` as (major, minor) (`(0, 1)` when absent): VTK changed the
+    /// node order of Lagrange hexahedra at 2.2.
+    pub version: (u32, u32),
 }
 
 impl UnstructuredGrid {
@@ -158,7 +174,7 @@ pub fn write(
 ) -> Result<(), VtkError> {
     let blobs: Vec<Vec<u8>> = arrays.iter().map(|a| a.values.bytes()).collect();
     let mut xml = format!(
-        "<?xml version=\"1.0\"?>\n<!-- {comment} -->\n<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n  <UnstructuredGrid>\n    <Piece NumberOfPoints=\"{points}\" NumberOfCells=\"{cells}\">\n"
+        "<?xml version=\"1.0\"?>\n<!-- {comment} -->\n<VTKFile type=\"UnstructuredGrid\" version=\"2.2\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n  <UnstructuredGrid>\n    <Piece NumberOfPoints=\"{points}\" NumberOfCells=\"{cells}\">\n"
     );
     let mut offset = 0u64;
     for section in ["Points", "Cells", "PointData", "CellData"] {
@@ -205,108 +221,6 @@ pub fn write(
     std::fs::rename(&partial, path).map_err(|e| err(path, e.to_string()))
 }
 
-/// How the binary blocks of a file are framed.
-struct Framing {
-    header_u64: bool,
-    zlib: bool,
-}
-
-fn base64_decode(text: &str) -> Option<Vec<u8>> {
-    let mut out = Vec::with_capacity(text.len() * 3 / 4);
-    let (mut acc, mut bits) = (0u32, 0u32);
-    for c in text.bytes().filter(|c| !c.is_ascii_whitespace()) {
-        let v = match c {
-            b'A'..=b'Z' => c - b'A',
-            b'a'..=b'z' => c - b'a' + 26,
-            b'0'..=b'9' => c - b'0' + 52,
-            b'+' => 62,
-            b'/' => 63,
-            b'=' => continue,
-            _ => return None,
-        };
-        acc = (acc << 6) | u32::from(v);
-        bits += 6;
-        if bits >= 8 {
-            bits -= 8;
-            out.push((acc >> bits) as u8);
-        }
-    }
-    Some(out)
-}
-
-impl Framing {
-    fn header_bytes(&self) -> usize {
-        if self.header_u64 {
-            8
-        } else {
-            4
-        }
-    }
-
-    fn word(&self, b: &[u8], k: usize) -> Option<usize> {
-        let h = self.header_bytes();
-        let w = b.get(k * h..(k + 1) * h)?;
-        Some(if self.header_u64 {
-            u64::from_le_bytes(w.try_into().ok()?) as usize
-        } else {
-            u32::from_le_bytes(w.try_into().ok()?) as usize
-        })
-    }
-
-    /// Decodes one block (its header and data) from `b`; returns the data and the bytes used.
-    fn block(&self, b: &[u8]) -> Result<(Vec<u8>, usize), String> {
-        let h = self.header_bytes();
-        if !self.zlib {
-            let n = self.word(b, 0).ok_or("truncated block header")?;
-            let data =
-                b.get(h..h + n).ok_or_else(|| format!("truncated: a block of {n} bytes is cut short"))?;
-            return Ok((data.to_vec(), h + n));
-        }
-        // [blocks, block size, last block size, compressed sizes…], then the zlib streams.
-        let blocks = self.word(b, 0).ok_or("truncated compression header")?;
-        let mut at = h * (3 + blocks);
-        if b.len() < at {
-            return Err("truncated compression header".into());
-        }
-        let mut out = Vec::new();
-        for k in 0..blocks {
-            let size = self.word(b, 3 + k).ok_or("truncated compression header")?;
-            let z = b.get(at..at + size).ok_or("truncated compressed block")?;
-            let d = miniz_oxide::inflate::decompress_to_vec_zlib(z)
-                .map_err(|e| format!("bad zlib data: {e:?}"))?;
-            out.extend_from_slice(&d);
-            at += size;
-        }
-        Ok((out, at))
-    }
-}
-
-/// Numbers of a DataArray of VTK type `ty` from little-endian bytes.
-fn numbers(ty: &str, b: &[u8]) -> Result<Vec<f64>, String> {
-    macro_rules! conv {
-        ($t:ty) => {{
-            const N: usize = std::mem::size_of::<$t>();
-            if !b.len().is_multiple_of(N) {
-                return Err(format!("{} bytes is not a whole number of {ty} values", b.len()));
-            }
-            b.chunks_exact(N).map(|c| <$t>::from_le_bytes(c.try_into().expect("N bytes")) as f64).collect()
-        }};
-    }
-    Ok(match ty {
-        "Float64" => conv!(f64),
-        "Float32" => conv!(f32),
-        "Int64" => conv!(i64),
-        "UInt64" => conv!(u64),
-        "Int32" => conv!(i32),
-        "UInt32" => conv!(u32),
-        "Int16" => conv!(i16),
-        "UInt16" => conv!(u16),
-        "Int8" => conv!(i8),
-        "UInt8" => conv!(u8),
-        other => return Err(format!("unsupported type {other}")),
-    })
-}
-
 /// Reads the one piece of the unstructured grid in `path`, with every data array.
 pub fn read(path: &Path) -> Result<UnstructuredGrid, VtkError> {
     let bytes = std::fs::read(path).map_err(|e| err(path, e.to_string()))?;
@@ -329,11 +243,18 @@ pub fn read(path: &Path) -> Result<UnstructuredGrid, VtkError> {
     }
     let framing = Framing {
         header_u64: root.attribute("header_type") == Some("UInt64"),
-        zlib: match root.attribute("compressor") {
-            None | Some("") => false,
-            Some("vtkZLibDataCompressor") => true,
-            Some(other) => return Err(err(path, format!("compressor {other} is not supported (only zlib)"))),
-        },
+        compressor: Compressor::from_attribute(root.attribute("compressor")).map_err(|e| err(path, e))?,
+    };
+    let version = match root.attribute("version") {
+        None => (0, 1),
+        Some(v) => {
+            let mut parts = v.trim().split('.').map(|p| p.parse::<u32>());
+            match (parts.next(), parts.next(), parts.next()) {
+                (Some(Ok(major)), Some(Ok(minor)), None) => (major, minor),
+                (Some(Ok(major)), None, None) => (major, 0),
+                _ => return Err(err(path, format!("<VTKFile> version {v:?} is not MAJOR.MINOR"))),
+            }
+        }
     };
     // The appended section: after the '_' that follows the opening tag.
     let appended = match appended_at {
@@ -361,6 +282,18 @@ pub fn read(path: &Path) -> Result<UnstructuredGrid, VtkError> {
             .ok_or_else(|| err(path, format!("<Piece> lacks a valid {name}")))
     };
     let (n_points, n_cells) = (count("NumberOfPoints")?, count("NumberOfCells")?);
+    for (name, n) in [("NumberOfPoints", n_points), ("NumberOfCells", n_cells)] {
+        if n > MAX_COUNT {
+            return Err(err(path, format!("<Piece> {name} = {n} is over the limit of {MAX_COUNT}")));
+        }
+    }
+    // Appended arrays end where the next one starts (base64 runs are decoded up to there).
+    let mut offsets: Vec<usize> = piece
+        .descendants()
+        .filter(|n| n.has_tag_name("DataArray") && n.attribute("format") == Some("appended"))
+        .filter_map(|n| n.attribute("offset").and_then(|o| o.trim().parse().ok()))
+        .collect();
+    offsets.sort_unstable();
     let mut arrays = Vec::new();
     for section in piece.children().filter(|n| n.is_element()) {
         for node in section.children().filter(|n| n.has_tag_name("DataArray")) {
@@ -369,6 +302,13 @@ pub fn read(path: &Path) -> Result<UnstructuredGrid, VtkError> {
             let ty = node.attribute("type").unwrap_or("Float32");
             let comps: usize = node.attribute("NumberOfComponents").and_then(|c| c.parse().ok()).unwrap_or(1);
             let what = |d: String| err(path, format!("array {name}: {d}"));
+            // The most bytes this array can hold, from the piece's counts.
+            let tuples = match (section_name, name) {
+                ("Points" | "PointData", _) => n_points,
+                ("CellData", _) | ("Cells", "offsets" | "types" | "faceoffsets") => n_cells,
+                _ => n_cells.saturating_mul(MAX_NODES_PER_CELL),
+            };
+            let limit = tuples.saturating_mul(comps).saturating_mul(type_size(ty).unwrap_or(8));
             let values = match node.attribute("format").unwrap_or("ascii") {
                 "ascii" => node
                     .text()
@@ -377,9 +317,8 @@ pub fn read(path: &Path) -> Result<UnstructuredGrid, VtkError> {
                     .map(|w| w.parse::<f64>().map_err(|_| what(format!("{w:?} is not a number"))))
                     .collect::<Result<Vec<f64>, _>>()?,
                 "binary" => {
-                    let raw =
-                        base64_decode(node.text().unwrap_or("")).ok_or_else(|| what("bad base64".into()))?;
-                    let (data, _) = framing.block(&raw).map_err(what)?;
+                    let raw = base64_runs(node.text().unwrap_or("").as_bytes()).map_err(what)?;
+                    let (data, _) = framing.block(&raw, limit).map_err(what)?;
                     numbers(ty, &data).map_err(what)?
                 }
                 "appended" => {
@@ -389,23 +328,19 @@ pub fn read(path: &Path) -> Result<UnstructuredGrid, VtkError> {
                         .attribute("offset")
                         .and_then(|o| o.trim().parse().ok())
                         .ok_or_else(|| what("appended without an offset".into()))?;
+                    let rest = bytes
+                        .get(start.saturating_add(offset)..)
+                        .ok_or_else(|| what("offset past the end of the file".into()))?;
                     let data = if base64 {
-                        // Each array is its own base64 run, up to the next array's offset.
-                        let rest = bytes
-                            .get(start + offset..)
-                            .ok_or_else(|| what("offset past the end of the file".into()))?;
-                        let end = rest
-                            .iter()
-                            .position(|&c| c == b'<' || c.is_ascii_whitespace())
-                            .unwrap_or(rest.len());
-                        let raw = base64_decode(&String::from_utf8_lossy(&rest[..end]))
-                            .ok_or_else(|| what("bad base64".into()))?;
-                        framing.block(&raw).map_err(what)?.0
+                        // This array's base64 runs: up to the next array's offset, or to the
+                        // end of the appended text.
+                        let next = offsets.iter().find(|&&o| o > offset).map_or(rest.len(), |&o| o - offset);
+                        let text = &rest[..next.min(rest.len())];
+                        let end = text.iter().position(|&c| c == b'<').unwrap_or(text.len());
+                        let raw = base64_runs(&text[..end]).map_err(what)?;
+                        framing.block(&raw, limit).map_err(what)?.0
                     } else {
-                        let rest = bytes
-                            .get(start + offset..)
-                            .ok_or_else(|| what("offset past the end of the file".into()))?;
-                        framing.block(rest).map_err(what)?.0
+                        framing.block(rest, limit).map_err(what)?.0
                     };
                     numbers(ty, &data).map_err(what)?
                 }
@@ -419,24 +354,9 @@ pub fn read(path: &Path) -> Result<UnstructuredGrid, VtkError> {
             });
         }
     }
-    Ok(UnstructuredGrid { path: path.to_path_buf(), points: n_points, cells: n_cells, arrays })
+    Ok(UnstructuredGrid { path: path.to_path_buf(), points: n_points, cells: n_cells, arrays, version })
 }
 
 fn find(haystack: &[u8], needle: &[u8]) -> Option<usize> {
     haystack.windows(needle.len()).position(|w| w == needle)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn base64_decodes_the_rfc_4648_vectors() {
-        for (text, plain) in
-            [("", ""), ("Zg==", "f"), ("Zm8=", "fo"), ("Zm9v", "foo"), ("Zm9vYmFy", "foobar")]
-        {
-            assert_eq!(base64_decode(text).unwrap(), plain.as_bytes());
-        }
-        assert!(base64_decode("Zm9v!").is_none());
-    }
 }

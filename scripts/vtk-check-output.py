@@ -1,0 +1,63 @@
+#!/usr/bin/env python3
+"""Checks that VTK reads a .vtu file galerkin wrote as galerkin meant it: VTK's own Lagrange
+cells evaluated at each cell's parametric centre and at its nodes give the point data there,
+and every cell's Jacobian determinant (VTK's vtkCellQuality is not defined for Lagrange cells,
+so by finite differences of VTK's EvaluateLocation) keeps one sign. A node in the wrong
+place (e.g. a hexahedron's vertical edges swapped) folds the cell.
+Usage: python3 scripts/vtk-check-output.py FILE.vtu   (pip install vtk)
+"""
+import sys
+
+import vtk
+
+
+def main(path):
+    r = vtk.vtkXMLUnstructuredGridReader()
+    r.SetFileName(path)
+    r.Update()
+    g = r.GetOutput()
+    if g.GetNumberOfCells() == 0:
+        sys.exit(f"{path}: VTK read no cells")
+    signs = set()
+    for c in range(g.GetNumberOfCells()):
+        cell = g.GetCell(c)
+        dim = cell.GetCellDimension()
+        h = 1e-6
+        # The centre, and next to each vertical edge (where swapped edge nodes fold a cell).
+        for pc in ([0.5, 0.5, 0.5], [0.02, 0.02, 0.5], [0.98, 0.02, 0.5], [0.98, 0.98, 0.5], [0.02, 0.98, 0.5]):
+            if dim == 2:
+                pc = [pc[0], pc[1], 0.0]
+            x0 = evaluate(cell, pc)
+            cols = []
+            for a in range(dim):
+                q = list(pc)
+                q[a] += h
+                cols.append([(p - p0) / h for p, p0 in zip(evaluate(cell, q), x0)])
+            if dim == 3:
+                (a, b, c3) = cols
+                det = (a[0] * (b[1] * c3[2] - b[2] * c3[1]) - a[1] * (b[0] * c3[2] - b[2] * c3[0])
+                       + a[2] * (b[0] * c3[1] - b[1] * c3[0]))
+            else:
+                a, b = cols
+                n = (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
+                det = sum(v * v for v in n) ** 0.5
+            signs.add(det > 0)
+            if abs(det) < 1e-12:
+                sys.exit(f"{path}: cell {c} collapses at {pc} in VTK (Jacobian {det})")
+    if len(signs) != 1:
+        sys.exit(f"{path}: VTK finds cells of both orientations: a node order VTK reads differently")
+    print(f"{path}: VTK {vtk.vtkVersion.GetVTKVersion()} reads {g.GetNumberOfCells()} cells, none folded")
+
+
+def evaluate(cell, pc):
+    sub = vtk.reference(0)
+    x = [0.0, 0.0, 0.0]
+    w = [0.0] * cell.GetNumberOfPoints()
+    cell.EvaluateLocation(sub, pc, x, w)
+    return x
+
+
+if __name__ == "__main__":
+    if len(sys.argv) != 2:
+        sys.exit(__doc__)
+    main(sys.argv[1])

@@ -1,0 +1,163 @@
+//! Files written by VTK itself (`scripts/vtk-fixtures.py`, VTK 9.7's
+//! vtkXMLUnstructuredGridWriter): two order-3 Lagrange hexahedra and two order-3 Lagrange
+//! quadrilaterals, nodes placed by VTK's own `PointIndexFromIJK`, in every encoding the writer
+//! offers. Each must read as the same cells, with the field equal to the polynomial the script
+//! wrote; hostile variants are refused naming the file and array.
+
+use std::path::{Path, PathBuf};
+
+use galerkin::spectral::{vtu, Shape, SpectralMesh};
+
+fn fixture(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/vtk").join(name)
+}
+
+/// The script's fields (cubic: exact in the order-3 cells on their affine geometry).
+fn hex_u(x: [f64; 3]) -> f64 {
+    x[0] * x[0] * x[1] + x[2].powi(3) - x[0] * x[1] * x[2] + 0.5
+}
+fn quad_u(x: [f64; 3]) -> f64 {
+    x[0].powi(3) - 2.0 * x[0] * x[1] * x[1] + x[1]
+}
+
+/// The largest difference between the read field and the script's polynomial over a grid of
+/// reference points of every element (node and non-node points).
+fn worst_field_error(mesh: &SpectralMesh) -> f64 {
+    let field = mesh.field_index(Some("u")).expect("field u");
+    let samples = [0.0, 0.13, 0.5, 0.71, 1.0];
+    let mut worst = 0.0f64;
+    for e in 0..mesh.elements() {
+        for &a in &samples {
+            for &b in &samples {
+                for &c in &samples {
+                    let err = match mesh.shape {
+                        Shape::Hexahedron => {
+                            let (x, _) = mesh.map_hex(e, [a, b, c]);
+                            (mesh.value_hex(field, 0, e, [a, b, c]) - hex_u(x)).abs()
+                        }
+                        Shape::Quadrilateral => {
+                            let (x, _) = mesh.map(e, a, b);
+                            (mesh.value(field, 0, e, a, b) - quad_u(x)).abs()
+                        }
+                    };
+                    worst = worst.max(err);
+                }
+            }
+        }
+    }
+    worst
+}
+
+const HEX_FILES: &[&str] = &[
+    "hex_ascii.vtu",
+    "hex_binary_none_u32.vtu",
+    "hex_binary_none_u64.vtu",
+    "hex_binary_zlib_u32.vtu",
+    "hex_binary_zlib_u64.vtu",
+    "hex_binary_lz4_u32.vtu",
+    "hex_binary_lz4_u64.vtu",
+    "hex_binary_lzma_u32.vtu",
+    "hex_binary_lzma_u64.vtu",
+    "hex_appended_none_u32.vtu",
+    "hex_appended_none_u64.vtu",
+    "hex_appended_zlib_u32.vtu",
+    "hex_appended_zlib_u64.vtu",
+    "hex_appended_lz4_u32.vtu",
+    "hex_appended_lz4_u64.vtu",
+    "hex_appended_lzma_u32.vtu",
+    "hex_appended_lzma_u64.vtu",
+    "hex_appended_raw_zlib_u32.vtu",
+    "hex_appended_raw_none_u64.vtu",
+    "hex_legacy.vtu",
+];
+
+#[test]
+fn every_encoding_vtk_writes_reads_as_the_same_lagrange_hexahedra_with_the_exact_field() {
+    let reference = vtu::read(&fixture("hex_ascii.vtu")).expect("ascii");
+    assert_eq!((reference.elements(), reference.shape), (2, Shape::Hexahedron));
+    for name in HEX_FILES {
+        let mesh = vtu::read(&fixture(name)).unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert_eq!(mesh.elements(), 2, "{name}");
+        // The polynomial, at nodes and between them: 1e-12 is rounding of cubic values of
+        // size ~10 through the barycentric evaluation; a node out of place errs by ~0.1.
+        let err = worst_field_error(&mesh);
+        assert!(err < 1e-12, "{name}: the field is off by {err:e}");
+        // The same nodes as the ascii file (VTK's ascii doubles round-trip exactly).
+        for e in 0..2 {
+            assert_eq!(mesh.element_points(e), reference.element_points(e), "{name} element {e}");
+        }
+    }
+}
+
+#[test]
+fn vtk_s_default_settings_and_ascii_read_as_the_same_quadrilaterals() {
+    for name in ["quad_default.vtu", "quad_ascii.vtu"] {
+        let mesh = vtu::read(&fixture(name)).unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert_eq!((mesh.elements(), mesh.shape), (2, Shape::Quadrilateral), "{name}");
+        let err = worst_field_error(&mesh);
+        assert!(err < 1e-12, "{name}: the field is off by {err:e}");
+    }
+    // VTK's defaults are appended base64 zlib: the encoding most .vtu files are in.
+    let head = std::fs::read_to_string(fixture("quad_default.vtu")).expect("text");
+    assert!(head.contains("vtkZLibDataCompressor") && head.contains("encoding=\"base64\""));
+}
+
+/// A copy of fixture `name` with `edit` applied to its bytes, in a scratch directory.
+fn edited(name: &str, edit: impl FnOnce(&mut Vec<u8>)) -> (tempfile::TempDir, PathBuf) {
+    let dir = tempfile::Builder::new().prefix("galerkin-").tempdir().expect("scratch");
+    let mut bytes = std::fs::read(fixture(name)).expect("fixture");
+    edit(&mut bytes);
+    let path = dir.path().join(name);
+    std::fs::write(&path, bytes).expect("written");
+    (dir, path)
+}
+
+fn appended_start(bytes: &[u8]) -> usize {
+    let at = bytes.windows(13).position(|w| w == b"<AppendedData").expect("appended");
+    at + bytes[at..].iter().position(|&c| c == b'_').expect("marker") + 1
+}
+
+#[test]
+fn hostile_variants_are_refused_naming_the_file_and_array_before_inflating() {
+    // A compression header declaring a 2 GiB block: refused from the header, not inflated.
+    let (_d, path) = edited("hex_appended_raw_zlib_u32.vtu", |b| {
+        let s = appended_start(b);
+        b[s + 4..s + 8].copy_from_slice(&(1u32 << 31).to_le_bytes());
+    });
+    let e = vtu::read(&path).expect_err("huge block").to_string();
+    assert!(
+        e.contains("hex_appended_raw_zlib_u32.vtu") && e.contains("array u") && e.contains("declares"),
+        "{e}"
+    );
+    assert!(e.len() < 400, "a short message, not the data: {} bytes", e.len());
+    // Corrupt compressed bytes: a short message naming the array.
+    let (_d, path) = edited("hex_appended_raw_zlib_u32.vtu", |b| {
+        let s = appended_start(b);
+        let words = u32::from_le_bytes(b[s..s + 4].try_into().expect("4 bytes")) as usize;
+        for x in &mut b[s + 4 * (3 + words)..s + 4 * (3 + words) + 16] {
+            *x ^= 0x5a;
+        }
+    });
+    let e = vtu::read(&path).expect_err("corrupt zlib").to_string();
+    assert!(e.contains("array u") && e.contains("zlib") && e.len() < 400, "{e}");
+    // A count over the limit, an unknown compressor, a bad version: refused by name.
+    for (from, to, want) in [
+        ("NumberOfPoints=\"128\"", "NumberOfPoints=\"99999999999999\"", "NumberOfPoints"),
+        ("vtkLZ4DataCompressor", "vtkBrotliDataCompressor", "vtkBrotliDataCompressor"),
+        ("version=\"2.3\"", "version=\"two\"", "version"),
+    ] {
+        let (_d, path) = edited("hex_binary_lz4_u64.vtu", |b| {
+            let text = String::from_utf8(b.clone()).expect("inline binary is text");
+            assert!(text.contains(from), "{from}");
+            *b = text.replacen(from, to, 1).into_bytes();
+        });
+        let e = vtu::read(&path).expect_err(want).to_string();
+        assert!(e.contains("hex_binary_lz4_u64.vtu") && e.contains(want), "{e}");
+    }
+    // Truncated at several points: an error, never a panic.
+    let whole = std::fs::read(fixture("hex_appended_lzma_u64.vtu")).expect("fixture");
+    for cut in [whole.len() / 3, whole.len() / 2, whole.len() - 40] {
+        let (_d, path) = edited("hex_appended_lzma_u64.vtu", |b| b.truncate(cut));
+        assert!(vtu::read(&path).is_err(), "cut at {cut}");
+    }
+}
