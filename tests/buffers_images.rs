@@ -4,7 +4,7 @@
 mod common;
 
 use galerkin::gpu::{chunk_elements, vk, Buffer, MemoryKind, STAGING_CHUNK_BYTES};
-use galerkin::render::{read_png_rgba8, write_exr_rgba, write_png_rgba8, Colormap};
+use galerkin::render::{read_png_rgba8, write_exr_channels, write_exr_rgba, write_png_rgba8, Colormap};
 
 #[test]
 fn staged_round_trip_over_several_chunks_is_exact() {
@@ -116,6 +116,14 @@ fn png_and_exr_files_round_trip_without_leftovers() {
     .unwrap();
     let back: Vec<f32> = image.layer_data.channel_data.pixels.concat();
     assert_eq!(back, values);
+    // Compressed: a constant 1920 × 1080 image (33 MB of floats) is a few hundred kB at most.
+    let (w, h) = (1920u32, 1080u32);
+    write_exr_rgba(&dir.join("flat.exr"), w, h, &vec![0.5f32; 4 * (w * h) as usize]).unwrap();
+    let size = std::fs::metadata(dir.join("flat.exr")).unwrap().len();
+    assert!(size < 1 << 20, "a constant EXR of {size} bytes");
+    write_exr_channels(&dir.join("c.exr"), w, h, vec![("U", vec![f32::NAN; (w * h) as usize])]).unwrap();
+    let size = std::fs::metadata(dir.join("c.exr")).unwrap().len();
+    assert!(size < 1 << 20, "a constant one-channel EXR of {size} bytes");
     let names: Vec<_> =
         std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().file_name().into_string().unwrap()).collect();
     assert!(names.iter().all(|n| !n.ends_with(".tmp")), "temporary files left: {names:?}");

@@ -73,7 +73,8 @@ pub fn read_png_rgba8(path: &Path) -> Result<(u32, u32, Vec<u8>), RenderError> {
 }
 
 /// Writes `rgba` (row-major from the top, 4 floats per pixel) as a 32-bit float RGBA EXR:
-/// the raw field values, for analysis without colour-map quantisation.
+/// the raw field values, for analysis without colour-map quantisation. ZIP-compressed
+/// (lossless, 16 scan lines per block: every EXR reader supports it).
 pub fn write_exr_rgba(path: &Path, width: u32, height: u32, rgba: &[f32]) -> Result<(), RenderError> {
     assert_eq!(rgba.len(), 4 * width as usize * height as usize, "EXR pixel buffer size");
     if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
@@ -81,12 +82,16 @@ pub fn write_exr_rgba(path: &Path, width: u32, height: u32, rgba: &[f32]) -> Res
     }
     let tmp = temp_beside(path).with_extension("exr");
     let w = width as usize;
-    let result = exr::prelude::write_rgba_file(&tmp, w, height as usize, |x, y| {
+    use exr::prelude::*;
+    let channels = SpecificChannels::rgba(|Vec2(x, y): Vec2<usize>| {
         let i = 4 * (y * w + x);
         (rgba[i], rgba[i + 1], rgba[i + 2], rgba[i + 3])
-    })
-    .map_err(|e| RenderError::Image { path: path.to_path_buf(), detail: e.to_string() })
-    .and_then(|()| std::fs::rename(&tmp, path).map_err(io(path)));
+    });
+    let result = Image::from_encoded_channels((w, height as usize), Encoding::SMALL_LOSSLESS, channels)
+        .write()
+        .to_file(&tmp)
+        .map_err(|e| RenderError::Image { path: path.to_path_buf(), detail: e.to_string() })
+        .and_then(|()| std::fs::rename(&tmp, path).map_err(io(path)));
     if result.is_err() {
         let _ = std::fs::remove_file(&tmp);
     }
@@ -95,7 +100,7 @@ pub fn write_exr_rgba(path: &Path, width: u32, height: u32, rgba: &[f32]) -> Res
 
 /// Writes named 32-bit float channels (each row-major from the top, `width × height` values)
 /// as one EXR layer: raw values beside or instead of colour, for analysis (e.g. a spacetime
-/// slice's `U`, `speed` and normal). Written to a temporary name and renamed.
+/// slice's `U`, `speed` and normal). ZIP-compressed; written to a temporary name and renamed.
 pub fn write_exr_channels(
     path: &Path,
     width: u32,
@@ -116,7 +121,7 @@ pub fn write_exr_channels(
     let layer = Layer::new(
         (width as usize, height as usize),
         LayerAttributes::default(),
-        Encoding::FAST_LOSSLESS,
+        Encoding::SMALL_LOSSLESS,
         AnyChannels::sort(list),
     );
     let result = Image::from_layer(layer)
