@@ -4,7 +4,8 @@ cells evaluated at each cell's parametric centre and at its nodes give the point
 and every cell's Jacobian determinant (VTK's vtkCellQuality is not defined for Lagrange cells,
 so by finite differences of VTK's EvaluateLocation) keeps one sign. A node in the wrong
 place (e.g. a hexahedron's vertical edges swapped) folds the cell.
-Usage: python3 scripts/vtk-check-output.py FILE.vtu   (pip install vtk)
+A .pvd collection is checked file by file (each dataset it lists must exist and read).
+Usage: python3 scripts/vtk-check-output.py FILE.vtu|FILE.pvd   (pip install vtk)
 """
 import sys
 
@@ -57,7 +58,25 @@ def evaluate(cell, pc):
     return x
 
 
+def collection(path):
+    import os
+    import xml.etree.ElementTree as ET
+    sets = ET.parse(path).getroot().iter("DataSet")
+    files = [(float(s.get("timestep", "nan")), os.path.join(os.path.dirname(path), s.get("file"))) for s in sets]
+    if not files:
+        sys.exit(f"{path}: no DataSet")
+    times = [t for t, _ in files]
+    if times != sorted(times):
+        sys.exit(f"{path}: time steps out of order")
+    for _, f in files:
+        main(f)
+    print(f"{path}: {len(files)} time steps from {times[0]} to {times[-1]}")
+
+
 if __name__ == "__main__":
     if len(sys.argv) != 2:
         sys.exit(__doc__)
-    main(sys.argv[1])
+    if sys.argv[1].endswith(".pvd"):
+        collection(sys.argv[1])
+    else:
+        main(sys.argv[1])

@@ -4,7 +4,9 @@ written with VTK 9.7): two order-3 Lagrange hexahedra and two order-3 Lagrange
 quadrilaterals, their nodes placed and ordered by VTK's own PointIndexFromIJK, with the point
 field u given below, in every encoding vtkXMLUnstructuredGridWriter offers: ascii, inline
 binary and appended (raw and base64), uncompressed and zlib/LZ4/LZMA, UInt32 and UInt64
-headers. Also `hex_legacy.vtu`: the same hexahedra with the node order VTK used before file
+headers; `quad_series.pvd`, a ParaView collection (written as ParaView's vtkPVDWriter
+writes it: VTK has no writer of its own for it) of three VTK-written files whose field is
+(1 + k) times the quadrilaterals' field at times 0, 0.5, 1. Also `hex_legacy.vtu`: the same hexahedra with the node order VTK used before file
 version 2.2 (vertical edges 2-6 and 3-7 swapped) and the version attribute set to 1.0, checked
 by reading it back with VTK. Run from the repository root: python3 scripts/vtk-fixtures.py
 """
@@ -94,6 +96,19 @@ def main():
     w.SetFileName(os.path.join(OUT, "quad_default.vtu"))
     w.Write()
     write(quads, "quad_ascii.vtu", "ascii", "none", False)
+
+    # A time series: three files, the field scaled by 1 + k, and the collection naming them.
+    lines = ['<?xml version="1.0"?>', '<VTKFile type="Collection" version="0.1" byte_order="LittleEndian">', "  <Collection>"]
+    for k, t in enumerate([0.0, 0.5, 1.0]):
+        step = vtk.vtkUnstructuredGrid()
+        step.DeepCopy(quads)
+        u = step.GetPointData().GetArray("u")
+        for i in range(u.GetNumberOfTuples()):
+            u.SetValue(i, (1 + k) * u.GetValue(i))
+        write(step, f"quad_series_{k}.vtu", "appended", "zlib", False)
+        lines.append(f'    <DataSet timestep="{t}" group="" part="0" file="quad_series_{k}.vtu"/>')
+    lines += ["  </Collection>", "</VTKFile>", ""]
+    open(os.path.join(OUT, "quad_series.pvd"), "w").write("\n".join(lines))
 
     # The legacy order: vertical edges 2-6 and 3-7 swapped, version 1.0.
     legacy = vtk.vtkUnstructuredGrid()

@@ -161,3 +161,43 @@ fn hostile_variants_are_refused_naming_the_file_and_array_before_inflating() {
         assert!(vtu::read(&path).is_err(), "cut at {cut}");
     }
 }
+
+#[test]
+fn a_paraview_collection_reads_as_time_steps_at_its_times() {
+    let mesh = galerkin::spectral::load(&fixture("quad_series.pvd"), &[]).expect("the collection");
+    let field = mesh.field_index(Some("u")).expect("u");
+    assert_eq!(mesh.fields[field].times, vec![0.0, 0.5, 1.0]);
+    for step in 0..3 {
+        for e in 0..mesh.elements() {
+            for (a, b) in [(0.3, 0.6), (1.0, 0.0), (0.77, 0.12)] {
+                let (x, _) = mesh.map(e, a, b);
+                let want = (1.0 + step as f64) * quad_u(x);
+                let got = mesh.value(field, step, e, a, b);
+                assert!((got - want).abs() < 1e-12, "step {step} element {e}: {got} vs {want}");
+            }
+        }
+    }
+    // Hostile collections: a missing file, other cells, several parts at one time.
+    let dir = tempfile::Builder::new().prefix("galerkin-").tempdir().expect("scratch");
+    for f in ["quad_series_0.vtu", "hex_ascii.vtu"] {
+        std::fs::copy(fixture(f), dir.path().join(f)).expect("copied");
+    }
+    let collection = |sets: &[(&str, &str)]| {
+        let mut text = String::from("<VTKFile type=\"Collection\" version=\"0.1\"><Collection>\n");
+        for (t, f) in sets {
+            text.push_str(&format!("<DataSet timestep=\"{t}\" part=\"0\" file=\"{f}\"/>\n"));
+        }
+        text.push_str("</Collection></VTKFile>\n");
+        let path = dir.path().join("c.pvd");
+        std::fs::write(&path, text).expect("written");
+        galerkin::spectral::load(&path, &[]).expect_err("refused").to_string()
+    };
+    let e = collection(&[("0", "quad_series_0.vtu"), ("1", "gone.vtu")]);
+    assert!(e.contains("gone.vtu"), "{e}");
+    let e = collection(&[("0", "quad_series_0.vtu"), ("1", "hex_ascii.vtu")]);
+    assert!(e.contains("hex_ascii.vtu") && e.contains("elements"), "{e}");
+    let e = collection(&[("0", "quad_series_0.vtu"), ("0", "quad_series_0.vtu")]);
+    assert!(e.contains("c.pvd") && e.contains("time 0"), "{e}");
+    let e = collection(&[]);
+    assert!(e.contains("no data set"), "{e}");
+}

@@ -13,7 +13,7 @@ use galerkin::fluid::scene::FluidScene;
 use galerkin::fluid::snapshots::SnapshotReader;
 use galerkin::fluid::FluidSolver;
 use galerkin::gpu::{Gpu, GpuDesc};
-use galerkin::mesh::{Periodic, SimplexMesh, Topology};
+use galerkin::mesh::{SimplexMesh, Topology};
 use galerkin::render::{rgba32f_channel, rgba8_channel, write_exr_channels, write_png_rgba8, Colormap};
 
 /// `galerkin fluid` subcommands.
@@ -60,6 +60,24 @@ pub enum Action {
     /// basis size, then for every size step the test run's projected frames once in the full
     /// and once in the reduced space; writes CSV and labelled PNG plots.
     ErrorStudy(crate::cli::fluid_reduced::StudyArgs),
+    /// Write a snapshot directory (a full run, or a reduced run lifted by `fluid reduced`) as
+    /// a ParaView time series: RUN.pvd listing RUN/RUN_000000.vtu, … with each frame's time;
+    /// per cell velocity, speed, the outward flux through each face and the divergence (the
+    /// format in src/fluid/export.rs).
+    Export(ExportArgs),
+}
+
+/// Arguments of `galerkin fluid export`.
+#[derive(Args)]
+pub struct ExportArgs {
+    /// Snapshot directory (written by `fluid simulate`, `fluid reduced` or `fluid train-scene`).
+    pub dir: PathBuf,
+    /// The collection to write (.pvd); the frames go to a directory of the same name.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Export every N-th frame (and the last).
+    #[arg(long, default_value_t = 1)]
+    pub every: usize,
 }
 
 /// Arguments of `galerkin fluid surface`.
@@ -177,12 +195,32 @@ pub fn run(desc: &GpuDesc, action: &Action) -> Result<()> {
         Action::Render(args) => render(desc, args),
         Action::View(args) => view(desc, args),
         Action::Surface(args) => surface(args),
+        Action::Export(args) => export(args),
         Action::Train(args) => crate::cli::fluid_reduced::train(args),
         Action::Reduced(args) => crate::cli::fluid_reduced::reduced(args),
         Action::TrainScene(args) => crate::cli::fluid_reduced::train_scene(args),
         Action::Compare(args) => crate::cli::fluid_reduced::compare(args),
         Action::ErrorStudy(args) => crate::cli::fluid_reduced::error_study(args),
     }
+}
+
+fn export(args: &ExportArgs) -> Result<()> {
+    let frames = SnapshotReader::open(&args.dir)?.meta().frames;
+    let bar = crate::progress_bar(frames.div_ceil(args.every.max(1)) as u64 + 1, "exporting frames");
+    let out = galerkin::fluid::export::export_run(&args.dir, &args.out, args.every, &mut |done, _| {
+        bar.set_position(done as u64)
+    });
+    bar.finish_and_clear();
+    let out = out?;
+    println!(
+        "{}: {} frames of {} (relative divergence at most {:.1e}), in {}",
+        out.pvd.display(),
+        out.frames.len(),
+        args.dir.display(),
+        out.relative_divergence,
+        args.out.with_extension("").display()
+    );
+    Ok(())
 }
 
 fn surface(args: &SurfaceArgs) -> Result<()> {
@@ -294,18 +332,6 @@ fn simulate(args: &SimulateArgs) -> Result<()> {
     Ok(())
 }
 
-/// The mesh and topology of a snapshot directory at frame `k`.
-fn snapshot_mesh(reader: &SnapshotReader, k: usize) -> Result<(SimplexMesh, Topology)> {
-    let meta = reader.meta();
-    let g = reader.frame("g", k)?;
-    let mesh = SimplexMesh::new(meta.dim, g, reader.cells().to_vec())?;
-    let topo = Topology::new(&mesh, meta.periodic_axis.map(|axis| Periodic { axis }))?;
-    if topo.face_count() != meta.faces {
-        bail!("the snapshot mesh has {} faces, its header says {}", topo.face_count(), meta.faces);
-    }
-    Ok((mesh, topo))
-}
-
 fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
     let ext = args.out.extension().and_then(|e| e.to_str()).unwrap_or_default().to_ascii_lowercase();
     if ext != "png" && ext != "exr" {
@@ -321,7 +347,7 @@ fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
         bail!("{}: frame {frame} asked, the run has frames 0 to {}", args.dir.display(), meta.frames - 1);
     }
     let colormap = Colormap::by_name(&args.colormap)?;
-    let (mesh, topo) = snapshot_mesh(&reader, 0)?;
+    let (mesh, topo) = reader.mesh_at(0)?;
     let gpu = Gpu::new(desc)?;
     let start = Instant::now();
     let particles = if args.particles > 0 {

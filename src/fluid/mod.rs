@@ -25,6 +25,7 @@ pub mod bird;
 pub mod cavity;
 pub mod embedded;
 mod error;
+pub mod export;
 pub mod gpu;
 pub mod operators;
 pub mod particles;

@@ -255,6 +255,25 @@ impl SnapshotReader {
         read_f64(&mut file, (8 * len * k) as u64, len).map_err(|e| io(&path, e))
     }
 
+    /// The mesh at frame `k`'s geometry and its topology (refused if its face count is not
+    /// the header's).
+    pub fn mesh_at(&self, k: usize) -> Result<(SimplexMesh, Topology), FluidError> {
+        let g = self.frame("g", k)?;
+        let mesh = SimplexMesh::new(self.meta.dim, g, self.cells.clone())?;
+        let topo = Topology::new(&mesh, self.meta.periodic_axis.map(|axis| crate::mesh::Periodic { axis }))?;
+        if topo.face_count() != self.meta.faces {
+            return Err(io(
+                &self.dir.join("mesh.json"),
+                format!(
+                    "the snapshot mesh has {} faces, its header says {}",
+                    topo.face_count(),
+                    self.meta.faces
+                ),
+            ));
+        }
+        Ok((mesh, topo))
+    }
+
     /// One quantity as rows × frames snapshots for the streaming PCA.
     pub fn source(&self, quantity: &str) -> Result<FrameSnapshots, FluidError> {
         let path = self.dir.join(format!("{quantity}.f64"));

@@ -22,6 +22,7 @@ pub mod shaders {
     include!(concat!(env!("OUT_DIR"), "/shaders_spectral.rs"));
 }
 pub mod basis;
+pub mod collection;
 pub mod error;
 pub mod generate;
 pub mod mesh;
@@ -38,20 +39,26 @@ pub use error::SpectralError;
 pub use mesh::{Field, Shape, SpectralMesh};
 pub use render::{fit_camera, SpectralRenderer, SpectralView, View2d, INSIDE_TOLERANCE, MAX_TESSELLATION};
 
-/// Loads a data set: a `.vtu` file (VTK Lagrange cells), a GLVis "solution" stream (a file
+/// Loads a data set: a `.vtu` file (VTK Lagrange cells), a `.pvd` collection of them (a time
+/// series, [`collection`]), a GLVis "solution" stream (a file
 /// starting with `solution`), or an MFEM mesh with `grid_functions` as the time steps of one
 /// field named after the first GridFunction file's stem.
 pub fn load(
     path: &std::path::Path,
     grid_functions: &[std::path::PathBuf],
 ) -> Result<SpectralMesh, SpectralError> {
-    if path.extension().and_then(|e| e.to_str()).is_some_and(|e| e.eq_ignore_ascii_case("vtu")) {
+    let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+    if matches!(ext.as_deref(), Some("vtu" | "pvd")) {
         if !grid_functions.is_empty() {
             return Err(SpectralError::Missing(
-                "GridFunction files go with MFEM meshes, not .vtu files".into(),
+                "GridFunction files go with MFEM meshes, not .vtu or .pvd files".into(),
             ));
         }
-        return vtu::read(path);
+        return if ext.as_deref() == Some("pvd") {
+            collection::read_collection(path)
+        } else {
+            vtu::read(path)
+        };
     }
     let head = std::fs::read(path)
         .map_err(|e| SpectralError::File { path: path.to_path_buf(), detail: e.to_string() })?;
@@ -80,7 +87,7 @@ pub fn load(
     Err(SpectralError::File {
         path: path.to_path_buf(),
         detail:
-            "not a .vtu file, an MFEM mesh (\"MFEM mesh v1.0\") or a GLVis solution stream (\"solution\")"
+            "not a .vtu or .pvd file, an MFEM mesh (\"MFEM mesh v1.0\") or a GLVis solution stream (\"solution\")"
                 .into(),
     })
 }

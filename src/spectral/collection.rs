@@ -1,0 +1,114 @@
+//! ParaView's time series (`.pvd`, a VTK `Collection`): `<DataSet timestep="t" file="F.vtu"/>`
+//! entries, each a `.vtu` of the same cells ([`super::vtu`]); their fields become the time
+//! steps of one data set, at the collection's times, in time order. This is how ParaView
+//! writes an animated data set (File ▸ Save Data with all time steps) and how solvers that
+//! write VTK hand ParaView a run.
+
+use std::path::Path;
+
+use super::error::SpectralError;
+use super::mesh::SpectralMesh;
+use super::vtu;
+
+/// The most data sets a collection may list (each is a file read in turn).
+pub const MAX_DATASETS: usize = 100_000;
+
+/// Reads the collection at `path` (see the module docs). Refused, naming the file: no data
+/// set, more than [`MAX_DATASETS`], several parts at one time, a listed file that is missing or
+/// unreadable, cells that differ from the first file's (naming the element), a field missing
+/// from a file, a file that itself holds several time steps.
+pub fn read_collection(path: &Path) -> Result<SpectralMesh, SpectralError> {
+    let bad = |detail: String| SpectralError::File { path: path.to_path_buf(), detail };
+    let text = std::fs::read_to_string(path).map_err(|e| bad(e.to_string()))?;
+    let doc = roxmltree::Document::parse(&text).map_err(|e| bad(format!("XML: {e}")))?;
+    let root = doc.root_element();
+    if root.tag_name().name() != "VTKFile" || root.attribute("type") != Some("Collection") {
+        return Err(bad("not a VTK collection (<VTKFile type=\"Collection\">)".into()));
+    }
+    let mut sets = Vec::new();
+    for (k, node) in doc.descendants().filter(|n| n.has_tag_name("DataSet")).enumerate() {
+        if k >= MAX_DATASETS {
+            return Err(bad(format!("more than {MAX_DATASETS} data sets")));
+        }
+        let line = doc.text_pos_at(node.range().start).row;
+        let time: f64 = node
+            .attribute("timestep")
+            .unwrap_or("0")
+            .trim()
+            .parse()
+            .ok()
+            .filter(|t: &f64| t.is_finite())
+            .ok_or_else(|| {
+                bad(format!("line {line}: timestep {:?} is not a number", node.attribute("timestep")))
+            })?;
+        let file =
+            node.attribute("file").ok_or_else(|| bad(format!("line {line}: a DataSet without a file")))?;
+        sets.push((time, node.attribute("part").unwrap_or("0").to_string(), file.to_string()));
+    }
+    if sets.is_empty() {
+        return Err(bad("the collection lists no data set".into()));
+    }
+    sets.sort_by(|a, b| a.0.total_cmp(&b.0));
+    if let Some(w) = sets.windows(2).find(|w| w[0].0 == w[1].0) {
+        return Err(bad(format!(
+            "two data sets at time {} (parts {:?} and {:?}): multi-part collections are not read",
+            w[0].0, w[0].1, w[1].1
+        )));
+    }
+    let base = path.parent().unwrap_or(Path::new(""));
+    let mut mesh: Option<SpectralMesh> = None;
+    let mut times = Vec::with_capacity(sets.len());
+    for (time, _, file) in &sets {
+        let step = vtu::read(&base.join(file))?;
+        let step_file = |detail: String| SpectralError::File { path: base.join(file), detail };
+        if let Some(f) = step.fields.iter().find(|f| f.steps.len() != 1) {
+            return Err(step_file(format!(
+                "field {:?} has {} time steps in one file of a collection (one each)",
+                f.name,
+                f.steps.len()
+            )));
+        }
+        match &mut mesh {
+            None => mesh = Some(step),
+            Some(first) => {
+                same_cells(first, &step).map_err(step_file)?;
+                for field in &mut first.fields {
+                    let values = step.fields.iter().find(|f| f.name == field.name).ok_or_else(|| {
+                        step_file(format!("no field {:?} (the first file has it)", field.name))
+                    })?;
+                    field.steps.push(values.steps[0].clone());
+                }
+            }
+        }
+        times.push(*time);
+    }
+    let mut mesh = mesh.ok_or_else(|| bad("no data set read".into()))?;
+    for field in &mut mesh.fields {
+        field.times = times.clone();
+    }
+    Ok(mesh)
+}
+
+/// Whether `b` has the cells of `a`: shape, orders and every control point (to 1e-12 of the
+/// data set's extent, what writing doubles as text can move).
+fn same_cells(a: &SpectralMesh, b: &SpectralMesh) -> Result<(), String> {
+    if a.shape != b.shape || a.elements() != b.elements() || a.basis.order != b.basis.order {
+        return Err(format!(
+            "{} {:?} elements of order {}, the first file has {} of order {}",
+            b.elements(),
+            b.shape,
+            b.basis.order,
+            a.elements(),
+            a.basis.order
+        ));
+    }
+    let (lo, hi) = a.bounds();
+    let extent = (0..3).map(|k| hi[k] - lo[k]).fold(0.0, f64::max);
+    let per = a.points_per_element();
+    for (i, (p, q)) in a.points.iter().zip(&b.points).enumerate() {
+        if (0..3).any(|k| (p[k] - q[k]).abs() > 1e-12 * extent) {
+            return Err(format!("element {}: its points differ from the first file's", i / per));
+        }
+    }
+    Ok(())
+}
