@@ -1,0 +1,63 @@
+//! Files written by MFEM itself (`scripts/mfem-fixtures.py`, PyMFEM 4.10): curved
+//! quadrilateral and hexahedral meshes with GridFunctions in the H1 (Gauss–Lobatto), H1Pos
+//! (Bernstein) and L2 (Gauss–Legendre) collections, and MFEM's own evaluation of geometry and
+//! field at reference points of every element. Our reader must agree with MFEM at each.
+
+use std::path::{Path, PathBuf};
+
+use galerkin::spectral::Shape;
+
+fn fixture(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/mfem").join(name)
+}
+
+#[derive(serde::Deserialize)]
+struct Record {
+    element: usize,
+    #[serde(rename = "ref")]
+    reference: Vec<f64>,
+    x: Vec<f64>,
+    value: f64,
+}
+
+#[derive(serde::Deserialize)]
+struct Evaluations {
+    collection: String,
+    records: Vec<Record>,
+}
+
+#[test]
+fn meshes_and_fields_mfem_wrote_evaluate_as_mfem_evaluates_them() {
+    for name in ["quad_h1_p4", "quad_h1pos_p3", "quad_l2_p3", "hex_h1_p3"] {
+        let mesh =
+            galerkin::spectral::load(&fixture(&format!("{name}.mesh")), &[fixture(&format!("{name}.gf"))])
+                .unwrap_or_else(|e| panic!("{name}: {e}"));
+        let json = std::fs::read_to_string(fixture(&format!("{name}.json"))).expect("evaluations");
+        let evaluations: Evaluations = serde_json::from_str(&json).expect("JSON");
+        let gf = std::fs::read_to_string(fixture(&format!("{name}.gf"))).expect("gf");
+        assert!(gf.contains(&evaluations.collection), "{name}: {}", evaluations.collection);
+        assert!(evaluations.records.len() >= 5 * mesh.elements(), "{name}");
+        let (mut worst_x, mut worst_u) = (0.0f64, 0.0f64);
+        for r in &evaluations.records {
+            let (x, u) = match mesh.shape {
+                Shape::Quadrilateral => {
+                    let (x, _) = mesh.map(r.element, r.reference[0], r.reference[1]);
+                    (x, mesh.value(0, 0, r.element, r.reference[0], r.reference[1]))
+                }
+                Shape::Hexahedron => {
+                    let at = [r.reference[0], r.reference[1], r.reference[2]];
+                    (mesh.map_hex(r.element, at).0, mesh.value_hex(0, 0, r.element, at))
+                }
+            };
+            for (k, xk) in r.x.iter().enumerate() {
+                worst_x = worst_x.max((x[k] - xk).abs());
+            }
+            worst_u = worst_u.max((u - r.value).abs());
+        }
+        // 17 digits in the files; evaluation rounding of order-4 polynomials of size ~1:
+        // 1e-12 is a thousand times the rounding, a misplaced DOF errs by ~1e-2.
+        eprintln!("{name}: geometry {worst_x:e}, field {worst_u:e}");
+        assert!(worst_x < 1e-12, "{name}: geometry off by {worst_x:e}");
+        assert!(worst_u < 1e-12, "{name}: field off by {worst_u:e}");
+    }
+}
