@@ -10,6 +10,8 @@ writes it: VTK has no writer of its own for it) of three VTK-written files whose
 version 2.2 (vertical edges 2-6 and 3-7 swapped) and the version attribute set to 1.0, checked
 by reading it back with VTK. Run from the repository root: python3 scripts/vtk-fixtures.py
 """
+import json
+import math
 import os
 import re
 import sys
@@ -66,6 +68,59 @@ def grid(shape):
     return g
 
 
+def bezier(shape, rational=False):
+    """Two order-3 Bezier cells: control points at the affine map's equispaced values (linear
+    precision) with the interior ones moved (curved cells), coefficients sin(i + 2j + 3k) as
+    point data; with `rational`, RationalWeights not all 1 (which we refuse)."""
+    g = vtk.vtkUnstructuredGrid()
+    pts = vtk.vtkPoints()
+    pts.SetDataTypeToDouble()
+    u = vtk.vtkDoubleArray()
+    u.SetName("u")
+    w = vtk.vtkDoubleArray()
+    w.SetName("RationalWeights")
+    if shape == "hex":
+        cell, ctype, n3 = vtk.vtkBezierHexahedron(), vtk.VTK_BEZIER_HEXAHEDRON, 3
+    else:
+        cell, ctype, n3 = vtk.vtkBezierQuadrilateral(), vtk.VTK_BEZIER_QUADRILATERAL, 2
+    per = (ORDER + 1) ** n3
+    for c in range(2):
+        ids = [0] * per
+        for k in range(ORDER + 1 if n3 == 3 else 1):
+            for j in range(ORDER + 1):
+                for i in range(ORDER + 1):
+                    at = cell.PointIndexFromIJK(i, j, k, [ORDER] * 3) if n3 == 3 else cell.PointIndexFromIJK(i, j, [ORDER] * 2)
+                    x = list(affine(i / ORDER + c, j / ORDER, k / ORDER, 0))
+                    if 0 < i < ORDER and 0 < j < ORDER:
+                        x[2 if n3 == 3 else 0] += 0.07 * math.sin(i + j + c)
+                    if n3 == 2:
+                        x[2] = 0.0
+                    ids[at] = pts.InsertNextPoint(*x)
+                    u.InsertNextValue(math.sin(i + 2 * j + 3 * k + 5 * c))
+                    w.InsertNextValue(1.0 + (0.5 if rational and i == 1 else 0.0))
+        g.InsertNextCell(ctype, per, ids)
+    g.SetPoints(pts)
+    g.GetPointData().AddArray(u)
+    g.GetPointData().SetRationalWeights(w)
+    return g
+
+
+def evaluations(g, points):
+    """VTK's own evaluation of each cell's geometry and of u at parametric `points`."""
+    u = g.GetPointData().GetArray("u")
+    records = []
+    for c in range(g.GetNumberOfCells()):
+        cell = g.GetCell(c)
+        for pc in points:
+            pc = list(pc) + [0.0] * (3 - len(pc))
+            x = [0.0, 0.0, 0.0]
+            weights = [0.0] * cell.GetNumberOfPoints()
+            cell.EvaluateLocation(vtk.reference(0), pc, x, weights)
+            value = sum(wt * u.GetValue(cell.GetPointId(i)) for i, wt in enumerate(weights))
+            records.append({"element": c, "ref": pc[: cell.GetCellDimension()], "x": x, "value": value})
+    return records
+
+
 def write(g, name, mode, compressor, header64, encode=True):
     w = vtk.vtkXMLUnstructuredGridWriter()
     w.SetInputData(g)
@@ -109,6 +164,15 @@ def main():
         lines.append(f'    <DataSet timestep="{t}" group="" part="0" file="quad_series_{k}.vtu"/>')
     lines += ["  </Collection>", "</VTKFile>", ""]
     open(os.path.join(OUT, "quad_series.pvd"), "w").write("\n".join(lines))
+
+    # Bezier cells, and VTK's evaluation of them at parametric points.
+    for shape, pts in [("quad", [(0.5, 0.5), (0.1, 0.8), (0.93, 0.27), (0.0, 1.0)]),
+                       ("hex", [(0.5, 0.5, 0.5), (0.1, 0.8, 0.3), (0.93, 0.27, 0.61), (1.0, 0.0, 1.0)])]:
+        cells = bezier(shape)
+        write(cells, f"bezier_{shape}.vtu", "appended", "zlib", False)
+        with open(os.path.join(OUT, f"bezier_{shape}.json"), "w") as f:
+            json.dump(evaluations(cells, pts), f)
+    write(bezier("quad", rational=True), "bezier_quad_rational.vtu", "ascii", "none", False)
 
     # The legacy order: vertical edges 2-6 and 3-7 swapped, version 1.0.
     legacy = vtk.vtkUnstructuredGrid()

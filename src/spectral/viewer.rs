@@ -233,7 +233,12 @@ impl ViewerContent for SpectralContent {
             "j" | "k" if self.selected < self.view.cuts.len() => {
                 let c = &mut self.view.cuts[self.selected];
                 let n = (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt();
-                c[3] += if key == "k" { 1.0 } else { -1.0 } * self.extent / 50.0 * n;
+                let moved = c[3] + if key == "k" { 1.0 } else { -1.0 } * self.extent / 50.0 * n;
+                // The plane stops where it would leave the mesh.
+                let (lo, hi) = super::render::plane_span(&self.mesh, [c[0], c[1], c[2], moved]);
+                if (lo..=hi).contains(&(moved / n)) {
+                    c[3] = moved;
+                }
             }
             "o" => self.turn(15f64.to_radians(), false),
             "O" => self.turn(-15f64.to_radians(), false),
@@ -283,5 +288,15 @@ mod tests {
         assert!((d - after[3]).abs() < 1e-12, "kept its point: {d} vs {}", after[3]);
         assert!(c.key("x") && c.view.cuts.len() == 1 && c.selected == 0);
         assert!(!c.key("x"), "the last plane stays");
+        // Moving a plane stops where it would leave the mesh (the renderer refuses such a plane).
+        for _ in 0..200 {
+            c.key("k");
+        }
+        let (_, hi) = crate::spectral::render::plane_span(&c.mesh, c.view.cuts[0]);
+        assert!(
+            c.view.cuts[0][3] <= hi && c.view.cuts[0][3] > hi - 2.0 / 50.0,
+            "{:?} within {hi}",
+            c.view.cuts[0]
+        );
     }
 }

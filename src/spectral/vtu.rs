@@ -1,7 +1,10 @@
 //! Spectral elements in VTK XML unstructured grids (`.vtu`): Lagrange cells
 //! (`VTK_LAGRANGE_QUADRILATERAL` = 70, `VTK_LAGRANGE_HEXAHEDRON` = 72; also the linear
-//! `VTK_QUAD` = 9 and `VTK_HEXAHEDRON` = 12) with point data, as ParaView and solvers write
-//! them. VTK's Lagrange cells are isoparametric on equispaced nodes of [0, 1]; their points are
+//! `VTK_QUAD` = 9 and `VTK_HEXAHEDRON` = 12) and Bézier cells (`VTK_BEZIER_QUADRILATERAL` =
+//! 77, `VTK_BEZIER_HEXAHEDRON` = 79: the points and point data are Bernstein coefficients;
+//! `RationalWeights` other than 1 make a rational cell, which is refused) with point data, as
+//! ParaView and solvers write them. VTK's Lagrange cells are isoparametric on equispaced nodes
+//! of [0, 1]; their points are
 //! ordered corners, then edge interiors, then face interiors, then the body
 //! (`vtkHigherOrderQuadrilateral::PointIndexFromIJK` and `vtkHigherOrderHexahedron::…`, VTK 9),
 //! reproduced by [`vtk_point_index`]. Files of version 2.2 and later order a hexahedron's
@@ -21,6 +24,10 @@ use super::error::SpectralError;
 use super::mesh::{Field, Shape, SpectralMesh};
 use crate::vtk::{self, OutArray, Values, VtkError};
 
+/// `VTK_BEZIER_QUADRILATERAL`.
+pub const VTK_BEZIER_QUADRILATERAL: u8 = 77;
+/// `VTK_BEZIER_HEXAHEDRON`.
+pub const VTK_BEZIER_HEXAHEDRON: u8 = 79;
 /// `VTK_QUAD`.
 pub const VTK_QUAD: u8 = 9;
 /// `VTK_HEXAHEDRON`.
@@ -130,12 +137,13 @@ pub fn read(path: &Path) -> Result<SpectralMesh, SpectralError> {
     let conn =
         grid.array("Cells", "connectivity").ok_or_else(|| file("no Cells array \"connectivity\"".into()))?;
     let first = types[0];
+    let bezier = matches!(first as u8, VTK_BEZIER_QUADRILATERAL | VTK_BEZIER_HEXAHEDRON);
     let shape = match first as u8 {
-        VTK_QUAD | VTK_LAGRANGE_QUADRILATERAL => Shape::Quadrilateral,
-        VTK_HEXAHEDRON | VTK_LAGRANGE_HEXAHEDRON => Shape::Hexahedron,
+        VTK_QUAD | VTK_LAGRANGE_QUADRILATERAL | VTK_BEZIER_QUADRILATERAL => Shape::Quadrilateral,
+        VTK_HEXAHEDRON | VTK_LAGRANGE_HEXAHEDRON | VTK_BEZIER_HEXAHEDRON => Shape::Hexahedron,
         _ => {
             return Err(file(format!(
-                "element 0: cell type {first} (spectral elements are VTK_LAGRANGE_QUADRILATERAL = 70, VTK_LAGRANGE_HEXAHEDRON = 72, VTK_QUAD = 9 or VTK_HEXAHEDRON = 12)"
+                "element 0: cell type {first} (spectral elements are VTK_LAGRANGE_QUADRILATERAL = 70, VTK_LAGRANGE_HEXAHEDRON = 72, VTK_BEZIER_QUADRILATERAL = 77, VTK_BEZIER_HEXAHEDRON = 79, VTK_QUAD = 9 or VTK_HEXAHEDRON = 12)"
             )))
         }
     };
@@ -149,9 +157,12 @@ pub fn read(path: &Path) -> Result<SpectralMesh, SpectralError> {
     })?;
     let m = n + 1;
     for e in 0..cells {
-        let same_shape = match shape {
-            Shape::Quadrilateral => [VTK_QUAD, VTK_LAGRANGE_QUADRILATERAL],
-            Shape::Hexahedron => [VTK_HEXAHEDRON, VTK_LAGRANGE_HEXAHEDRON],
+        // Bézier cells do not mix with the others (their points mean something else).
+        let same_shape: &[u8] = match (shape, bezier) {
+            (Shape::Quadrilateral, false) => &[VTK_QUAD, VTK_LAGRANGE_QUADRILATERAL],
+            (Shape::Hexahedron, false) => &[VTK_HEXAHEDRON, VTK_LAGRANGE_HEXAHEDRON],
+            (Shape::Quadrilateral, true) => &[VTK_BEZIER_QUADRILATERAL],
+            (Shape::Hexahedron, true) => &[VTK_BEZIER_HEXAHEDRON],
         };
         if !same_shape.contains(&(types[e] as u8)) || types[e].fract() != 0.0 {
             return Err(file(format!(
@@ -193,7 +204,16 @@ pub fn read(path: &Path) -> Result<SpectralMesh, SpectralError> {
         order.iter().map(|&p| [points[3 * p], points[3 * p + 1], points[3 * p + 2]]).collect();
     // Fields: one-component point data, NAME_t<k> grouped into steps.
     let mut grouped: BTreeMap<String, Vec<(usize, &[f64])>> = BTreeMap::new();
-    for a in grid.arrays.iter().filter(|a| a.section == "PointData") {
+    if let Some(w) = grid.optional("PointData", "RationalWeights", 1, grid.points)? {
+        if let Some(k) = order.iter().position(|&p| w[p] != 1.0) {
+            return Err(file(format!(
+                "element {}: RationalWeights {} (a rational Bézier cell is not a polynomial; only weights of 1 are drawn)",
+                k / per_cell,
+                w[order[k]]
+            )));
+        }
+    }
+    for a in grid.arrays.iter().filter(|a| a.section == "PointData" && a.name != "RationalWeights") {
         if a.components != 1 {
             continue;
         }
@@ -228,7 +248,8 @@ pub fn read(path: &Path) -> Result<SpectralMesh, SpectralError> {
             steps: steps.iter().map(|(_, v)| order.iter().map(|&p| v[p]).collect()).collect(),
         });
     }
-    let basis = Basis1d::new(NodeSet::Equispaced, n)?;
+    let nodes = if bezier { NodeSet::Bernstein } else { NodeSet::Equispaced };
+    let basis = Basis1d::new(nodes, n)?;
     SpectralMesh::new(shape, basis.clone(), basis, geometry, fields).map_err(|e| file(e.to_string()))
 }
 

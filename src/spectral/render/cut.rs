@@ -85,6 +85,20 @@ impl Cutter {
     }
 }
 
+/// The offsets `d` (for the unit normal of plane `c` = (n, d)) between which a cut plane can
+/// meet `mesh`: the range of n·x over the control points, widened by a twentieth of the data
+/// set's size (a curved Lagrange element can bulge past its nodes; Bernstein ones cannot).
+pub fn plane_span(mesh: &crate::spectral::SpectralMesh, c: [f64; 4]) -> (f64, f64) {
+    let n = (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt();
+    let (lo, hi) = mesh.points.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
+        let d = (c[0] * p[0] + c[1] * p[1] + c[2] * p[2]) / n;
+        (a.min(d), b.max(d))
+    });
+    let (blo, bhi) = mesh.bounds();
+    let margin = 0.05 * (0..3).map(|a| bhi[a] - blo[a]).fold(0.0, f64::max);
+    (lo - margin, hi + margin)
+}
+
 impl SpectralRenderer {
     /// The cut planes of `view`, unit normals, as `cut.comp` reads them (default: z through the
     /// middle of the mesh).
@@ -104,6 +118,15 @@ impl SpectralRenderer {
                 let n = (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt();
                 if !(n.is_finite() && n > 0.0 && c[3].is_finite()) {
                     return Err(SpectralError::Missing(format!("cut plane {k}: {c:?} has no direction")));
+                }
+                // A plane that misses every element would draw nothing: refused.
+                let (lo_d, hi_d) = plane_span(&self.mesh, *c);
+                let d = c[3] / n;
+                if d < lo_d || d > hi_d {
+                    return Err(SpectralError::Missing(format!(
+                        "cut plane {k} ({}x + {}y + {}z = {}) misses the mesh: along its normal the mesh spans {lo_d:.6} to {hi_d:.6}",
+                        c[0], c[1], c[2], c[3]
+                    )));
                 }
                 Ok([(c[0] / n) as f32, (c[1] / n) as f32, (c[2] / n) as f32, (c[3] / n) as f32])
             })

@@ -46,6 +46,7 @@ mod tessellate;
 mod view;
 
 pub use crate::render::camera_for_box;
+pub use cut::plane_span;
 pub use view::{fit_camera, SpectralView, View2d};
 
 type Result<T> = std::result::Result<T, SpectralError>;
