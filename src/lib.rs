@@ -23,6 +23,7 @@ pub mod demo;
 pub mod fluid;
 pub mod gpu;
 pub mod mesh;
+pub mod plot;
 pub mod process;
 pub mod radiosity;
 pub mod reduce;

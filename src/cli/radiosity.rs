@@ -469,7 +469,22 @@ fn compare(args: &CompareArgs) -> Result<()> {
         series.push(errors);
     }
     let plot = args.out.join("compare.png");
-    write_error_plot(&plot, &series)?;
+    let lines: Vec<galerkin::plot::Line> = series
+        .iter()
+        .enumerate()
+        .map(|(which, errors)| galerkin::plot::Line {
+            label: format!("sequence {} ({} frames)", which + 1, errors.len()),
+            points: errors.iter().enumerate().map(|(f, e)| (f as f64, *e)).collect(),
+        })
+        .collect();
+    galerkin::plot::line_chart(
+        &plot,
+        &format!("Reduced against full radiosity: {}", args.scene.display()),
+        "frame of the animation sequence",
+        "relative error of the radiosity, area-weighted over faces and channels (%)",
+        &lines,
+        &|v| format!("{:.2} %", 100.0 * v),
+    )?;
     let median = |v: &mut Vec<f64>| {
         v.sort_by(f64::total_cmp);
         v[v.len() / 2]
@@ -536,50 +551,6 @@ fn keep_full_frames(args: &CompareArgs, scene: &AnyScene) -> Result<()> {
 }
 
 /// Relative error per frame as a line plot (one colour per sequence) with a grid every 1 %.
-fn write_error_plot(path: &std::path::Path, series: &[Vec<f64>]) -> Result<()> {
-    let (w, h) = (900u32, 360u32);
-    let (left, bottom, top, right) = (40.0, 20.0, 10.0, 10.0);
-    let mut rgba = vec![255u8; (w * h * 4) as usize];
-    let top_error = series.iter().flatten().fold(0.01f64, |m, v| m.max(*v)) * 1.1;
-    let mut put = |x: i64, y: i64, c: [u8; 3]| {
-        if x >= 0 && y >= 0 && (x as u32) < w && (y as u32) < h {
-            let k = ((y as u32 * w + x as u32) * 4) as usize;
-            rgba[k..k + 3].copy_from_slice(&c);
-        }
-    };
-    let plot_w = f64::from(w) - left - right;
-    let plot_h = f64::from(h) - top - bottom;
-    let to_y = |e: f64| (top + plot_h * (1.0 - e / top_error)) as i64;
-    let mut level = 0.0;
-    while level <= top_error {
-        for x in left as i64..(f64::from(w) - right) as i64 {
-            put(x, to_y(level), if level == 0.0 { [0, 0, 0] } else { [220, 220, 220] });
-        }
-        level += 0.01;
-    }
-    for y in top as i64..(f64::from(h) - bottom) as i64 {
-        put(left as i64, y, [0, 0, 0]);
-    }
-    let colours = [[31u8, 119, 180], [214, 39, 40], [44, 160, 44]];
-    for (s, errors) in series.iter().enumerate() {
-        let n = errors.len().max(2);
-        let mut last: Option<(i64, i64)> = None;
-        for (f, e) in errors.iter().enumerate() {
-            let x = (left + plot_w * f as f64 / (n - 1) as f64) as i64;
-            let y = to_y(*e);
-            if let Some((x0, y0)) = last {
-                let steps = (x - x0).abs().max((y - y0).abs()).max(1);
-                for k in 0..=steps {
-                    put(x0 + (x - x0) * k / steps, y0 + (y - y0) * k / steps, colours[s % 3]);
-                }
-            }
-            last = Some((x, y));
-        }
-    }
-    write_png_rgba8(path, w, h, &rgba)?;
-    Ok(())
-}
-
 /// Arguments of `galerkin bench radiosity`.
 #[derive(Args)]
 pub struct BenchArgs {

@@ -28,6 +28,9 @@ pub enum FluidError {
     /// The projection's linear system failed.
     #[error("pressure projection: {0}")]
     Projection(String),
+    /// A plot that could not be drawn or written.
+    #[error(transparent)]
+    Plot(#[from] crate::plot::PlotError),
     /// A snapshot directory that cannot be written or read.
     #[error("{path}: {message}")]
     File {

@@ -1,67 +1,20 @@
-//! Fig. 5 (d) and (e) of seed 000 as labelled PNG plots (axes, units, legend), drawn by the
-//! `plotters` crate into a pixel buffer and written by our PNG writer. Text uses the DejaVu
-//! Sans TrueType font from the system (Debian's fonts-dejavu-core).
+//! Fig. 5 (d) and (e) of seed 000 and the reduced-against-full comparisons as labelled PNG
+//! plots (axes, units, legend), on the shared basics of [`crate::plot`].
 
 use std::path::Path;
-use std::sync::OnceLock;
 
 use plotters::prelude::*;
-use plotters::style::{register_font, FontStyle};
+
+use crate::plot::{log_range, SERIES};
 
 use crate::fluid::FluidError;
 
 use super::study::ErrorStudy;
 
-/// Where the plots' font is read from.
-pub const FONT_PATHS: [&str; 2] =
-    ["/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf", "/usr/share/fonts/dejavu/DejaVuSans.ttf"];
-
-static FONT: OnceLock<Result<(), String>> = OnceLock::new();
-
-fn font() -> Result<(), FluidError> {
-    FONT.get_or_init(|| {
-        for p in FONT_PATHS {
-            if let Ok(bytes) = std::fs::read(p) {
-                let bytes: &'static [u8] = Box::leak(bytes.into_boxed_slice());
-                return register_font("sans-serif", FontStyle::Normal, bytes)
-                    .map_err(|_| format!("{p}: not a usable TrueType font"));
-            }
-        }
-        Err(format!("no plot font: install fonts-dejavu-core (looked for {})", FONT_PATHS.join(", ")))
-    })
-    .clone()
-    .map_err(FluidError::State)
-}
-
 fn plot_err(path: &Path, e: impl std::fmt::Display) -> FluidError {
-    FluidError::File { path: path.to_path_buf(), message: format!("plot: {e}") }
+    crate::plot::plot_err(path, e).into()
 }
 
-/// Colours of the sizes' series, cycled.
-const SERIES: [RGBColor; 8] = [
-    RGBColor(31, 119, 180),
-    RGBColor(255, 127, 14),
-    RGBColor(44, 160, 44),
-    RGBColor(214, 39, 40),
-    RGBColor(148, 103, 189),
-    RGBColor(140, 86, 75),
-    RGBColor(227, 119, 194),
-    RGBColor(23, 190, 207),
-];
-
-fn log_range(values: impl Iterator<Item = f64>) -> (f64, f64) {
-    let (mut lo, mut hi) = (f64::INFINITY, 0.0f64);
-    for v in values.filter(|v| *v > 0.0 && v.is_finite()) {
-        lo = lo.min(v);
-        hi = hi.max(v);
-    }
-    if !(lo.is_finite() && hi > 0.0) {
-        return (1e-12, 1.0);
-    }
-    (10f64.powf(lo.log10().floor()), 10f64.powf(hi.log10().ceil().max(lo.log10().floor() + 1.0)))
-}
-
-/// The legend, in one style for both plots.
 fn draw_legend<'a, X, Y>(
     chart: &mut ChartContext<'a, BitMapBackend<'a>, Cartesian2d<X, Y>>,
     path: &Path,
@@ -70,24 +23,16 @@ where
     X: plotters::coord::ranged1d::Ranged,
     Y: plotters::coord::ranged1d::Ranged,
 {
-    chart
-        .configure_series_labels()
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK)
-        .label_font(("sans-serif", 18))
-        .position(SeriesLabelPosition::UpperRight)
-        .draw()
-        .map_err(|e| plot_err(path, e))
+    Ok(crate::plot::draw_legend(chart, path)?)
 }
 
 fn save(path: &Path, w: u32, h: u32, rgb: &[u8]) -> Result<(), FluidError> {
-    let rgba: Vec<u8> = rgb.chunks_exact(3).flat_map(|p| [p[0], p[1], p[2], 255]).collect();
-    crate::render::write_png_rgba8(path, w, h, &rgba).map_err(|e| plot_err(path, e))
+    Ok(crate::plot::save(path, w, h, rgb)?)
 }
 
 /// Fig. 5 (d): the one-step error of every basis size over simulated time (log scale).
 pub fn plot_over_time(study: &ErrorStudy, path: &Path) -> Result<(), FluidError> {
-    font()?;
+    crate::plot::font(path)?;
     let (w, h) = (1200u32, 700u32);
     let mut buf = vec![0u8; 3 * (w * h) as usize];
     {
@@ -135,7 +80,7 @@ pub fn plot_over_time(study: &ErrorStudy, path: &Path) -> Result<(), FluidError>
 
 /// Fig. 5 (e): the time-integrated (mean) one-step error against the basis size (log–log).
 pub fn plot_by_size(study: &ErrorStudy, path: &Path) -> Result<(), FluidError> {
-    font()?;
+    crate::plot::font(path)?;
     let (w, h) = (900u32, 650u32);
     let mut buf = vec![0u8; 3 * (w * h) as usize];
     {
@@ -186,7 +131,7 @@ pub fn plot_comparison(
     energy_path: &Path,
     error_path: &Path,
 ) -> Result<(), FluidError> {
-    font()?;
+    crate::plot::font(energy_path)?;
     let (w, h) = (1100u32, 600u32);
     let t_end = (c.energy_full.len().saturating_sub(1)).max(1) as f64 * c.frame_time;
     let times = |v: &[f64]| -> Vec<(f64, f64)> {
@@ -284,7 +229,7 @@ pub fn plot_picture_with_colour_bar(
     (title, label): (&str, &str),
     path: &Path,
 ) -> Result<(), FluidError> {
-    font()?;
+    crate::plot::font(path)?;
     let (pw, ph) = size;
     if rgba.len() != 4 * (pw * ph) as usize {
         return Err(plot_err(

@@ -1,0 +1,195 @@
+//! Labelled PNG plots (axes with units, ticks, a legend, a title), drawn by the `plotters`
+//! crate into a pixel buffer and written by our PNG writer: the shared basics of every plot
+//! the engine writes (the fluid error studies and comparisons, `radiosity compare`). Text uses
+//! the DejaVu Sans TrueType font from the system (Debian's fonts-dejavu-core).
+
+use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
+
+use plotters::prelude::*;
+use plotters::style::{register_font, FontStyle};
+
+/// A plot that could not be drawn or written: the file and why.
+#[derive(Debug, thiserror::Error)]
+#[error("{path}: plot: {message}")]
+pub struct PlotError {
+    /// The plot's file.
+    pub path: PathBuf,
+    /// What went wrong.
+    pub message: String,
+}
+
+/// A [`PlotError`] for `path`.
+pub fn plot_err(path: &Path, e: impl std::fmt::Display) -> PlotError {
+    PlotError { path: path.to_path_buf(), message: e.to_string() }
+}
+
+/// Where the plots' font is read from.
+pub const FONT_PATHS: [&str; 2] =
+    ["/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf", "/usr/share/fonts/dejavu/DejaVuSans.ttf"];
+
+static FONT: OnceLock<Result<(), String>> = OnceLock::new();
+
+/// Registers the font as "sans-serif" (once); refused, naming the paths tried, if none is there.
+pub fn font(path: &Path) -> Result<(), PlotError> {
+    FONT.get_or_init(|| {
+        for p in FONT_PATHS {
+            if let Ok(bytes) = std::fs::read(p) {
+                let bytes: &'static [u8] = Box::leak(bytes.into_boxed_slice());
+                return register_font("sans-serif", FontStyle::Normal, bytes)
+                    .map_err(|_| format!("{p}: not a usable TrueType font"));
+            }
+        }
+        Err(format!("no plot font: install fonts-dejavu-core (looked for {})", FONT_PATHS.join(", ")))
+    })
+    .clone()
+    .map_err(|m| plot_err(path, m))
+}
+
+/// Colours of series, cycled.
+pub const SERIES: [RGBColor; 8] = [
+    RGBColor(31, 119, 180),
+    RGBColor(255, 127, 14),
+    RGBColor(44, 160, 44),
+    RGBColor(214, 39, 40),
+    RGBColor(148, 103, 189),
+    RGBColor(140, 86, 75),
+    RGBColor(227, 119, 194),
+    RGBColor(23, 190, 207),
+];
+
+/// A log axis's range: the decades around the positive finite `values` (1e-12..1 if none).
+pub fn log_range(values: impl Iterator<Item = f64>) -> (f64, f64) {
+    let (mut lo, mut hi) = (f64::INFINITY, 0.0f64);
+    for v in values.filter(|v| *v > 0.0 && v.is_finite()) {
+        lo = lo.min(v);
+        hi = hi.max(v);
+    }
+    if !(lo.is_finite() && hi > 0.0) {
+        return (1e-12, 1.0);
+    }
+    (10f64.powf(lo.log10().floor()), 10f64.powf(hi.log10().ceil().max(lo.log10().floor() + 1.0)))
+}
+
+/// The legend, in one style for every plot.
+pub fn draw_legend<'a, X, Y>(
+    chart: &mut ChartContext<'a, BitMapBackend<'a>, Cartesian2d<X, Y>>,
+    path: &Path,
+) -> Result<(), PlotError>
+where
+    X: plotters::coord::ranged1d::Ranged,
+    Y: plotters::coord::ranged1d::Ranged,
+{
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .label_font(("sans-serif", 18))
+        .position(SeriesLabelPosition::UpperRight)
+        .draw()
+        .map_err(|e| plot_err(path, e))
+}
+
+/// Writes an RGB buffer as the PNG `path`.
+pub fn save(path: &Path, w: u32, h: u32, rgb: &[u8]) -> Result<(), PlotError> {
+    let rgba: Vec<u8> = rgb.chunks_exact(3).flat_map(|p| [p[0], p[1], p[2], 255]).collect();
+    crate::render::write_png_rgba8(path, w, h, &rgba).map_err(|e| plot_err(path, e))
+}
+
+/// One line of a [`line_chart`]: its legend label and its (x, y) points.
+pub struct Line {
+    /// The legend's label.
+    pub label: String,
+    /// The points, in x order.
+    pub points: Vec<(f64, f64)>,
+}
+
+/// A line chart on linear axes from 0: title, axis descriptions (with units), one coloured
+/// line per series with a legend; y ticks formatted by `y_format`. Refused: no point at all,
+/// a non-finite coordinate.
+pub fn line_chart(
+    path: &Path,
+    title: &str,
+    x_desc: &str,
+    y_desc: &str,
+    lines: &[Line],
+    y_format: &dyn Fn(&f64) -> String,
+) -> Result<(), PlotError> {
+    font(path)?;
+    let all = || lines.iter().flat_map(|l| l.points.iter());
+    if all().next().is_none() {
+        return Err(plot_err(path, "nothing to plot"));
+    }
+    if let Some(p) = all().find(|p| !(p.0.is_finite() && p.1.is_finite())) {
+        return Err(plot_err(path, format!("a point is not finite: {p:?}")));
+    }
+    let x_hi = all().map(|p| p.0).fold(0.0f64, f64::max).max(1.0);
+    let y_hi = all().map(|p| p.1).fold(0.0f64, f64::max);
+    let y_hi = if y_hi > 0.0 { 1.1 * y_hi } else { 1.0 };
+    let (w, h) = (1200u32, 600u32);
+    let mut buf = vec![0u8; 3 * (w * h) as usize];
+    {
+        let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| plot_err(path, e))?;
+        let mut chart = ChartBuilder::on(&root)
+            .caption(title, ("sans-serif", 26))
+            .margin(20)
+            .x_label_area_size(50)
+            .y_label_area_size(90)
+            .build_cartesian_2d(0.0..x_hi, 0.0..y_hi)
+            .map_err(|e| plot_err(path, e))?;
+        chart
+            .configure_mesh()
+            .x_desc(x_desc)
+            .y_desc(y_desc)
+            .label_style(("sans-serif", 18))
+            .axis_desc_style(("sans-serif", 20))
+            .y_label_formatter(y_format)
+            .draw()
+            .map_err(|e| plot_err(path, e))?;
+        for (k, line) in lines.iter().enumerate() {
+            let colour = SERIES[k % SERIES.len()];
+            chart
+                .draw_series(LineSeries::new(line.points.iter().copied(), colour.stroke_width(2)))
+                .map_err(|e| plot_err(path, e))?
+                .label(line.label.clone())
+                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 24, y)], colour.stroke_width(3)));
+        }
+        draw_legend(&mut chart, path)?;
+        root.present().map_err(|e| plot_err(path, e))?;
+    }
+    save(path, w, h, &buf)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_line_chart_has_its_lines_and_refuses_nothing_or_nan() {
+        let dir = tempfile_dir();
+        let path = dir.join("chart.png");
+        let lines = [
+            Line { label: "one".into(), points: vec![(0.0, 0.01), (1.0, 0.02), (2.0, 0.015)] },
+            Line { label: "two".into(), points: vec![(0.0, 0.005), (2.0, 0.03)] },
+        ];
+        line_chart(&path, "title", "frame", "error (%)", &lines, &|v| format!("{:.1} %", 100.0 * v))
+            .expect("drawn");
+        let (w, h, rgba) = crate::render::read_png_rgba8(&path).expect("a PNG");
+        assert_eq!((w, h), (1200, 600));
+        // Both series' colours appear (lines drawn), and black (axes and text).
+        for c in [SERIES[0], SERIES[1], RGBColor(0, 0, 0)] {
+            assert!(rgba.chunks_exact(4).any(|p| p[..3] == [c.0, c.1, c.2]), "{c:?} missing");
+        }
+        assert!(line_chart(&path, "t", "x", "y", &[], &|v| v.to_string()).is_err());
+        let nan = [Line { label: "nan".into(), points: vec![(0.0, f64::NAN)] }];
+        assert!(line_chart(&path, "t", "x", "y", &nan, &|v| v.to_string()).is_err());
+        let _ = std::fs::remove_dir_all(dir);
+    }
+
+    fn tempfile_dir() -> PathBuf {
+        let dir = std::env::temp_dir().join(format!("galerkin-plot-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("scratch");
+        dir
+    }
+}
