@@ -161,6 +161,107 @@ pub fn line_chart(
     save(path, w, h, &buf)
 }
 
+/// What a picture's colours mean: the colour map from `range.0` to `range.1` (on a log
+/// scale when `log`), for the quantity `label`.
+pub struct ColourBar<'a> {
+    /// The colour map the picture was drawn with.
+    pub colormap: &'a crate::render::Colormap,
+    /// The values at the map's two ends.
+    pub range: (f64, f64),
+    /// Values mapped by their logarithm (the range must be positive).
+    pub log: bool,
+    /// The quantity (and its unit), written along the bar.
+    pub label: &'a str,
+}
+
+/// Width of the colour-bar panel beside a picture, and height of the title above it.
+pub const BAR_WIDTH: u32 = 240;
+/// Height of the title strip above a picture.
+pub const TITLE_HEIGHT: u32 = 50;
+
+/// A rendered picture (RGBA, `size`) with `title` above it and a colour bar beside it (as
+/// ParaView's and GLVis's scalar bars show: the map, tick values, the quantity, "log" when
+/// logarithmic), placed outside the picture so it hides no data; written as the PNG `path`.
+pub fn picture_with_colour_bar(
+    rgba: &[u8],
+    size: (u32, u32),
+    bar: &ColourBar<'_>,
+    title: &str,
+    path: &Path,
+) -> Result<(), PlotError> {
+    font(path)?;
+    let (pw, ph) = size;
+    if rgba.len() != 4 * (pw as usize) * (ph as usize) {
+        return Err(plot_err(
+            path,
+            format!("a {pw}×{ph} picture needs {} bytes, got {}", 4 * pw * ph, rgba.len()),
+        ));
+    }
+    let (lo, hi) = bar.range;
+    if !(lo.is_finite() && hi.is_finite()) || (bar.log && !(lo > 0.0 && hi > lo)) {
+        return Err(plot_err(path, format!("colour range [{lo}, {hi}] (log: {})", bar.log)));
+    }
+    let hi = if hi > lo { hi } else { lo + 1.0 };
+    let (w, h) = (pw + BAR_WIDTH, ph.max(300) + TITLE_HEIGHT);
+    let mut buf = vec![255u8; 3 * (w as usize) * (h as usize)];
+    for y in 0..ph as usize {
+        for x in 0..pw as usize {
+            let (s, d) = (4 * (y * pw as usize + x), 3 * ((y + TITLE_HEIGHT as usize) * w as usize + x));
+            buf[d..d + 3].copy_from_slice(&rgba[s..s + 3]);
+        }
+    }
+    {
+        let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
+        root.draw_text(title, &("sans-serif", 22).into_text_style(&root), (16, 14))
+            .map_err(|e| plot_err(path, e))?;
+        let (_, right) = root.split_horizontally(pw);
+        let label = if bar.log { format!("{} (log scale)", bar.label) } else { bar.label.to_string() };
+        let mut builder = ChartBuilder::on(&right);
+        builder
+            .margin_top(TITLE_HEIGHT + 20)
+            .margin_left(24)
+            .margin_bottom(30)
+            .margin_right(20)
+            .y_label_area_size(110);
+        const STEPS: usize = 256;
+        let colour = |t: f64| {
+            let c = bar.colormap.sample(t);
+            RGBColor((255.0 * c[0]) as u8, (255.0 * c[1]) as u8, (255.0 * c[2]) as u8)
+        };
+        macro_rules! finish {
+            ($chart:expr, $at:expr) => {{
+                let mut chart = $chart.map_err(|e| plot_err(path, e))?;
+                chart
+                    .configure_mesh()
+                    .disable_x_mesh()
+                    .disable_y_mesh()
+                    .x_labels(0)
+                    .y_desc(label.as_str())
+                    .label_style(("sans-serif", 16))
+                    .axis_desc_style(("sans-serif", 18))
+                    .y_label_formatter(&|v: &f64| format!("{v:.3e}"))
+                    .draw()
+                    .map_err(|e| plot_err(path, e))?;
+                chart
+                    .draw_series((0..STEPS).map(|k| {
+                        let (a, b) = (k as f64 / STEPS as f64, (k + 1) as f64 / STEPS as f64);
+                        Rectangle::new([(0.0, $at(a)), (1.0, $at(b))], colour(0.5 * (a + b)).filled())
+                    }))
+                    .map_err(|e| plot_err(path, e))?;
+            }};
+        }
+        if bar.log {
+            let at = |t: f64| lo * (hi / lo).powf(t);
+            finish!(builder.build_cartesian_2d(0.0..1.0, (lo..hi).log_scale()), at);
+        } else {
+            let at = |t: f64| lo + t * (hi - lo);
+            finish!(builder.build_cartesian_2d(0.0..1.0, lo..hi), at);
+        }
+        root.present().map_err(|e| plot_err(path, e))?;
+    }
+    save(path, w, h, &buf)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -187,9 +288,39 @@ mod tests {
         let _ = std::fs::remove_dir_all(dir);
     }
 
+    #[test]
+    fn a_picture_gets_a_colour_bar_beside_it_and_keeps_its_pixels() {
+        let dir = tempfile_dir();
+        let path = dir.join("bar.png");
+        let (pw, ph) = (64u32, 400u32);
+        let rgba: Vec<u8> = (0..pw * ph).flat_map(|i| [(i % 251) as u8, 7, 9, 255]).collect();
+        let map = crate::render::Colormap::by_name("viridis").expect("viridis");
+        for log in [false, true] {
+            let bar = ColourBar { colormap: &map, range: (0.5, 20.0), log, label: "u" };
+            picture_with_colour_bar(&rgba, (pw, ph), &bar, "title", &path).expect("drawn");
+            let (w, h, out) = crate::render::read_png_rgba8(&path).expect("a PNG");
+            assert_eq!((w, h), (pw + BAR_WIDTH, ph + TITLE_HEIGHT));
+            // The picture is untouched, below the title.
+            for y in [0, ph / 2, ph - 1] {
+                for x in [0, pw / 3, pw - 1] {
+                    let (s, d) = (4 * (y * pw + x) as usize, 4 * ((y + TITLE_HEIGHT) * w + x) as usize);
+                    assert_eq!(out[d..d + 3], rgba[s..s + 3], "pixel ({x}, {y})");
+                }
+            }
+            // The bar shows both ends of the map.
+            for t in [0.0, 1.0] {
+                let c = map.sample((t + 0.5 / 256.0f64).min(1.0 - 0.5 / 256.0));
+                let want = [(255.0 * c[0]) as u8, (255.0 * c[1]) as u8, (255.0 * c[2]) as u8];
+                assert!(out.chunks_exact(4).any(|p| p[..3] == want), "log {log}: end {t} of the map missing");
+            }
+        }
+        let bad = ColourBar { colormap: &map, range: (-1.0, 1.0), log: true, label: "u" };
+        assert!(picture_with_colour_bar(&rgba, (pw, ph), &bad, "t", &path).is_err());
+        let _ = std::fs::remove_dir_all(dir);
+    }
+
+    /// A scratch directory of this test's own (the tests run in parallel).
     fn tempfile_dir() -> PathBuf {
-        let dir = std::env::temp_dir().join(format!("galerkin-plot-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).expect("scratch");
-        dir
+        tempfile::Builder::new().prefix("galerkin-plot-").tempdir().expect("scratch").keep()
     }
 }

@@ -481,7 +481,7 @@ fn compare(args: &CompareArgs) -> Result<()> {
         &plot,
         &format!("Reduced against full radiosity: {}", args.scene.display()),
         "frame of the animation sequence",
-        "relative error of the radiosity, area-weighted over faces and channels (%)",
+        "relative error, area-weighted (%)",
         &lines,
         &|v| format!("{:.2} %", 100.0 * v),
     )?;

@@ -102,11 +102,15 @@ pub struct RenderArgs {
     /// Image size.
     #[arg(long, value_name = "WxH", value_parser = crate::parse_size, default_value = "1024x768")]
     pub size: (u32, u32),
-    /// Output image: .png (colour) or .exr (R, G, B of the picture and the raw value, xi, eta
-    /// and element of every pixel as float channels — for cut planes value, plane, zeta and
-    /// element; NaN where no element, element −(e + 1) where only edge overdraw drew).
+    /// Output image: .png (colour, with a title and a colour legend beside the picture) or .exr
+    /// (R, G, B of the picture and the raw value, xi, eta and element of every pixel as float
+    /// channels — for cut planes value, plane, zeta and element; NaN where no element, element
+    /// −(e + 1) where only edge overdraw drew; data only, no legend).
     #[arg(long, default_value = "out/spectral.png")]
     pub out: PathBuf,
+    /// A PNG of the picture alone (--size exactly), without the title and colour legend.
+    #[arg(long)]
+    pub no_legend: bool,
     /// Open the interactive viewer instead of writing an image: space plays/pauses the time
     /// steps, `.`/`,` step, l log scale, p palette, i/I more/fewer iso-lines, e edges, v
     /// per-vertex colour, h height field (planar meshes), r narrows the range to its middle half, R restores it; cut planes: n
@@ -227,6 +231,10 @@ pub fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
     if args.view {
         return open_viewer(desc, mesh, view, args);
     }
+    let ext = args.out.extension().and_then(|e| e.to_str()).unwrap_or_default().to_ascii_lowercase();
+    if ext != "png" && ext != "exr" {
+        bail!("{}: unknown image format {ext:?}: expected .png or .exr", args.out.display());
+    }
     let gpu = Gpu::new(desc)?;
     let colormap = Colormap::by_name(&args.palette)?;
     let mut renderer = SpectralRenderer::new(&gpu, mesh.clone(), &colormap)?;
@@ -240,9 +248,25 @@ pub fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
     if let Some(dir) = args.out.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     }
-    let ext = args.out.extension().and_then(|e| e.to_str()).unwrap_or_default().to_ascii_lowercase();
+    let (lo, hi) = renderer.range(&view);
     match ext.as_str() {
-        "png" => write_png_rgba8(&args.out, w, h, &rgba)?,
+        "png" if args.no_legend => write_png_rgba8(&args.out, w, h, &rgba)?,
+        "png" => {
+            let name = &mesh.fields[field].name;
+            let source = args
+                .file
+                .as_ref()
+                .map_or_else(|| format!("generated {}", args.source.generate), |f| f.display().to_string());
+            let time = mesh.fields[field].times.get(args.step).copied().unwrap_or(0.0);
+            let title = format!("{source}: {name}, step {} (t = {time})", args.step);
+            let bar = galerkin::plot::ColourBar {
+                colormap: &colormap,
+                range: (lo, hi),
+                log: args.log,
+                label: name,
+            };
+            galerkin::plot::picture_with_colour_bar(&rgba, (w, h), &bar, &title, &args.out)?;
+        }
         "exr" => {
             let hex = mesh.shape == galerkin::spectral::Shape::Hexahedron;
             let data = RenderTarget::new(&gpu, "spectral values", w, h, ColorFormat::Rgba32F)?;
@@ -266,9 +290,8 @@ pub fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
                 ],
             )?;
         }
-        other => bail!("{}: unknown image format {other:?}: expected .png or .exr", args.out.display()),
+        other => bail!("{}: unknown image format {other:?}", args.out.display()),
     }
-    let (lo, hi) = renderer.range(&view);
     let [proxies, grids, lines] = renderer.primitive_counts();
     println!(
         "spectral: {} {} elements of order {} ({} geometry of order {}), field {:?} step {}, range [{lo:.4}, {hi:.4}]; {} triangles ({}), {lines} edge lines; load {load_ms:.1} ms, render {draw_ms:.1} ms → {}",

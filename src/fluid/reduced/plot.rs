@@ -229,59 +229,6 @@ pub fn plot_picture_with_colour_bar(
     (title, label): (&str, &str),
     path: &Path,
 ) -> Result<(), FluidError> {
-    crate::plot::font(path)?;
-    let (pw, ph) = size;
-    if rgba.len() != 4 * (pw * ph) as usize {
-        return Err(plot_err(
-            path,
-            format!("a {pw}×{ph} picture needs {} bytes, got {}", 4 * pw * ph, rgba.len()),
-        ));
-    }
-    const TOP: u32 = 50;
-    const BAR: u32 = 240;
-    let (w, h) = (pw + BAR, ph + TOP);
-    let mut buf = vec![255u8; 3 * (w * h) as usize];
-    for y in 0..ph {
-        for x in 0..pw {
-            let (s, d) = (4 * (y * pw + x) as usize, 3 * ((y + TOP) * w + x) as usize);
-            buf[d..d + 3].copy_from_slice(&rgba[s..s + 3]);
-        }
-    }
-    {
-        let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
-        root.draw_text(title, &("sans-serif", 22).into_text_style(&root), (16, 14))
-            .map_err(|e| plot_err(path, e))?;
-        let (_, right) = root.split_horizontally(pw);
-        let (lo, hi) = (range.0, if range.1 > range.0 { range.1 } else { range.0 + 1.0 });
-        let mut chart = ChartBuilder::on(&right)
-            .margin_top(TOP + 20)
-            .margin_left(24)
-            .margin_bottom(30)
-            .margin_right(20)
-            .y_label_area_size(110)
-            .build_cartesian_2d(0.0..1.0, lo..hi)
-            .map_err(|e| plot_err(path, e))?;
-        chart
-            .configure_mesh()
-            .disable_x_mesh()
-            .disable_y_mesh()
-            .x_labels(0)
-            .y_desc(label)
-            .label_style(("sans-serif", 16))
-            .axis_desc_style(("sans-serif", 18))
-            .y_label_formatter(&|v| format!("{v:.2e}"))
-            .draw()
-            .map_err(|e| plot_err(path, e))?;
-        const STEPS: usize = 256;
-        chart
-            .draw_series((0..STEPS).map(|k| {
-                let (a, b) = (k as f64 / STEPS as f64, (k + 1) as f64 / STEPS as f64);
-                let c = colormap.sample(0.5 * (a + b));
-                let colour = RGBColor((255.0 * c[0]) as u8, (255.0 * c[1]) as u8, (255.0 * c[2]) as u8);
-                Rectangle::new([(0.0, lo + a * (hi - lo)), (1.0, lo + b * (hi - lo))], colour.filled())
-            }))
-            .map_err(|e| plot_err(path, e))?;
-        root.present().map_err(|e| plot_err(path, e))?;
-    }
-    save(path, w, h, &buf)
+    let bar = crate::plot::ColourBar { colormap, range, log: false, label };
+    Ok(crate::plot::picture_with_colour_bar(rgba, size, &bar, title, path)?)
 }
