@@ -162,7 +162,8 @@ pub fn line_chart(
 }
 
 /// What a picture's colours mean: the colour map from `range.0` to `range.1` (on a log
-/// scale when `log`), for the quantity `label`.
+/// scale when `log`), for the quantity `label`; tick values are shown less `shift` (the
+/// spacetime ramp is logarithmic in U + 1 and labelled in U).
 pub struct ColourBar<'a> {
     /// The colour map the picture was drawn with.
     pub colormap: &'a crate::render::Colormap,
@@ -172,6 +173,8 @@ pub struct ColourBar<'a> {
     pub log: bool,
     /// The quantity (and its unit), written along the bar.
     pub label: &'a str,
+    /// Subtracted from the values for the tick labels (0 for most fields).
+    pub shift: f64,
 }
 
 /// Width of the colour-bar panel beside a picture, and height of the title above it.
@@ -228,35 +231,32 @@ pub fn picture_with_colour_bar(
             let c = bar.colormap.sample(t);
             RGBColor((255.0 * c[0]) as u8, (255.0 * c[1]) as u8, (255.0 * c[2]) as u8)
         };
-        macro_rules! finish {
-            ($chart:expr, $at:expr) => {{
-                let mut chart = $chart.map_err(|e| plot_err(path, e))?;
-                chart
-                    .configure_mesh()
-                    .disable_x_mesh()
-                    .disable_y_mesh()
-                    .x_labels(0)
-                    .y_desc(label.as_str())
-                    .label_style(("sans-serif", 16))
-                    .axis_desc_style(("sans-serif", 18))
-                    .y_label_formatter(&|v: &f64| format!("{v:.3e}"))
-                    .draw()
-                    .map_err(|e| plot_err(path, e))?;
-                chart
-                    .draw_series((0..STEPS).map(|k| {
-                        let (a, b) = (k as f64 / STEPS as f64, (k + 1) as f64 / STEPS as f64);
-                        Rectangle::new([(0.0, $at(a)), (1.0, $at(b))], colour(0.5 * (a + b)).filled())
-                    }))
-                    .map_err(|e| plot_err(path, e))?;
-            }};
-        }
-        if bar.log {
-            let at = |t: f64| lo * (hi / lo).powf(t);
-            finish!(builder.build_cartesian_2d(0.0..1.0, (lo..hi).log_scale()), at);
-        } else {
-            let at = |t: f64| lo + t * (hi - lo);
-            finish!(builder.build_cartesian_2d(0.0..1.0, lo..hi), at);
-        }
+        // The bar's axis is linear in the ramp's coordinate: the value, or its logarithm
+        // (so a log range of less than a decade still gets ticks); labels show the value.
+        let (a, b) = if bar.log { (lo.log10(), hi.log10()) } else { (lo, hi) };
+        let (log, shift) = (bar.log, bar.shift);
+        let value = move |y: f64| if log { 10f64.powf(y) } else { y };
+        let mut chart = builder.build_cartesian_2d(0.0..1.0, a..b).map_err(|e| plot_err(path, e))?;
+        chart
+            .configure_mesh()
+            .disable_x_mesh()
+            .disable_y_mesh()
+            .x_labels(0)
+            .y_desc(label.as_str())
+            .label_style(("sans-serif", 16))
+            .axis_desc_style(("sans-serif", 18))
+            .y_label_formatter(&|y: &f64| format!("{:.3e}", value(*y) - shift))
+            .draw()
+            .map_err(|e| plot_err(path, e))?;
+        chart
+            .draw_series((0..STEPS).map(|k| {
+                let (s0, s1) = (k as f64 / STEPS as f64, (k + 1) as f64 / STEPS as f64);
+                Rectangle::new(
+                    [(0.0, a + s0 * (b - a)), (1.0, a + s1 * (b - a))],
+                    colour(0.5 * (s0 + s1)).filled(),
+                )
+            }))
+            .map_err(|e| plot_err(path, e))?;
         root.present().map_err(|e| plot_err(path, e))?;
     }
     save(path, w, h, &buf)
@@ -296,7 +296,7 @@ mod tests {
         let rgba: Vec<u8> = (0..pw * ph).flat_map(|i| [(i % 251) as u8, 7, 9, 255]).collect();
         let map = crate::render::Colormap::by_name("viridis").expect("viridis");
         for log in [false, true] {
-            let bar = ColourBar { colormap: &map, range: (0.5, 20.0), log, label: "u" };
+            let bar = ColourBar { colormap: &map, range: (0.5, 20.0), log, label: "u", shift: 0.0 };
             picture_with_colour_bar(&rgba, (pw, ph), &bar, "title", &path).expect("drawn");
             let (w, h, out) = crate::render::read_png_rgba8(&path).expect("a PNG");
             assert_eq!((w, h), (pw + BAR_WIDTH, ph + TITLE_HEIGHT));
@@ -314,7 +314,7 @@ mod tests {
                 assert!(out.chunks_exact(4).any(|p| p[..3] == want), "log {log}: end {t} of the map missing");
             }
         }
-        let bad = ColourBar { colormap: &map, range: (-1.0, 1.0), log: true, label: "u" };
+        let bad = ColourBar { colormap: &map, range: (-1.0, 1.0), log: true, label: "u", shift: 0.0 };
         assert!(picture_with_colour_bar(&rgba, (pw, ph), &bad, "t", &path).is_err());
         let _ = std::fs::remove_dir_all(dir);
     }

@@ -56,10 +56,13 @@ pub struct RenderArgs {
     /// Image size.
     #[arg(long, value_name = "WxH", value_parser = crate::parse_size, default_value = "1280x720")]
     pub size: (u32, u32),
-    /// Output image: .png (lit colour) or .exr (channels U, speed, normal.x/y/z; NaN where
-    /// no surface).
+    /// Output image: .png (lit colour, with a title and a colour legend beside the picture) or
+    /// .exr (channels U, speed, normal.x/y/z; NaN where no surface; data only).
     #[arg(long, default_value = "out/spacetime.png")]
     pub out: PathBuf,
+    /// A PNG of the picture alone (--size exactly), without the title and colour legend.
+    #[arg(long)]
+    pub no_legend: bool,
     /// Open the interactive viewer instead of writing an image: space plays/pauses t, `.`/`,`
     /// step, `]`/`[` speed ×2/÷2, h height, e edges, v per-vertex colour, d subdivision, arrows
     /// orbit, +/- zoom, S screenshot, Esc quits.
@@ -259,7 +262,7 @@ pub fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
         bail!("--time {time} is outside the data set's time span [{t0}, {t1}]");
     }
     let base = SpacetimeView::looking_at(data.summary(), time);
-    let view = SpacetimeView {
+    let mut view = SpacetimeView {
         height: !args.flat,
         height_scale: args.height_scale,
         edges: !args.no_edges,
@@ -284,23 +287,51 @@ pub fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
     let format = if exr { ColorFormat::Rgba32F } else { ColorFormat::Rgba8 };
     let target = RenderTarget::new(&gpu, "spacetime", w, h, format)?;
     let start = Instant::now();
+    // The legend needs the ramp's U_max: resolved once here, and the render uses the same.
+    let legend = !exr && !args.no_legend;
+    if legend && view.u_max.is_none() {
+        view.u_max = Some(renderer.u_max_for(&target, &view)?);
+    }
     let pixels = renderer.render(&target, &view)?;
     let draw_ms = start.elapsed().as_secs_f64() * 1e3;
+    let pixels = match (legend, pixels, view.u_max) {
+        (true, Pixels::Rgba8(rgba), Some(u_max)) if u_max > 0.0 => {
+            if let Some(dir) = args.out.parent().filter(|d| !d.as_os_str().is_empty()) {
+                std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+            }
+            let bar = galerkin::plot::ColourBar {
+                colormap: &colormap,
+                range: (1.0, u_max + 1.0),
+                log: true,
+                label: "U, strain energy density (ramp log(U + 1))",
+                shift: 1.0,
+            };
+            let title = format!(
+                "{}: t = {time:.4}",
+                args.file.as_ref().map_or_else(|| "generated".to_string(), |f| f.display().to_string())
+            );
+            galerkin::plot::picture_with_colour_bar(&rgba, (w, h), &bar, &title, &args.out)?;
+            None
+        }
+        (_, pixels, _) => Some(pixels),
+    };
     // EXR channels: U, |v| and the normal (n_z from the unit length; NaN where no surface).
     let nz =
         |p: &[f32]| if p[2].is_nan() { f32::NAN } else { (1.0 - p[2] * p[2] - p[3] * p[3]).max(0.0).sqrt() };
-    write_image(
-        &args.out,
-        (w, h),
-        pixels,
-        &[
-            ("U", |p| p[0]),
-            ("speed", |p| p[1]),
-            ("normal.x", |p| p[2]),
-            ("normal.y", |p| p[3]),
-            ("normal.z", nz),
-        ],
-    )?;
+    if let Some(pixels) = pixels {
+        write_image(
+            &args.out,
+            (w, h),
+            pixels,
+            &[
+                ("U", |p| p[0]),
+                ("speed", |p| p[1]),
+                ("normal.x", |p| p[2]),
+                ("normal.y", |p| p[3]),
+                ("normal.z", nz),
+            ],
+        )?;
+    }
     println!(
         "spacetime: {elements} elements, t = {time:.4}: {} active ({} streamed to the device), {} triangles, {} edge lines; load {open_ms:.1} ms, slice {slice_ms:.1} ms, render + readback {draw_ms:.1} ms, peak RSS {} → {}",
         stats.active,

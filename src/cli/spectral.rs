@@ -264,6 +264,7 @@ pub fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
                 range: (lo, hi),
                 log: args.log,
                 label: name,
+                shift: 0.0,
             };
             galerkin::plot::picture_with_colour_bar(&rgba, (w, h), &bar, &title, &args.out)?;
         }

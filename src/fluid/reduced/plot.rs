@@ -229,6 +229,6 @@ pub fn plot_picture_with_colour_bar(
     (title, label): (&str, &str),
     path: &Path,
 ) -> Result<(), FluidError> {
-    let bar = crate::plot::ColourBar { colormap, range, log: false, label };
+    let bar = crate::plot::ColourBar { colormap, range, log: false, label, shift: 0.0 };
     Ok(crate::plot::picture_with_colour_bar(rgba, size, &bar, title, path)?)
 }
