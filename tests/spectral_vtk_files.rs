@@ -4,9 +4,14 @@
 //! offers. Each must read as the same cells, with the field equal to the polynomial the script
 //! wrote; hostile variants are refused naming the file and array.
 
-use std::path::{Path, PathBuf};
+mod common;
 
-use galerkin::spectral::{vtu, Shape, SpectralMesh};
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use galerkin::render::{ColorFormat, Colormap, Pixels, RenderTarget};
+use galerkin::spectral::reference::{check_pixels, rounding_bound};
+use galerkin::spectral::{vtu, Shape, SpectralMesh, SpectralRenderer, SpectralView, View2d};
 
 fn fixture(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/vtk").join(name)
@@ -262,4 +267,48 @@ fn a_cut_plane_that_misses_the_mesh_is_an_error_not_an_empty_image() {
     let err = String::from_utf8_lossy(&run.stderr);
     assert!(err.contains("cut plane 0") && err.contains("misses the mesh"), "{err}");
     assert!(!out.exists(), "an image was written");
+}
+
+/// VTK's default-encoded quadrilaterals rendered: every covered pixel shows the script's
+/// polynomial at its centre (closed form) within the pixel's f32 rounding bound; the Bézier
+/// quadrilaterals (whose reference is VTK's evaluation, matched above to 1e-12) pass the
+/// f64 per-pixel check with no pixel missing.
+#[test]
+fn vtk_written_quadrilaterals_render_pixel_exact() {
+    let gpu = common::gpu();
+    let (w, h) = (256, 128);
+    let render = |mesh: &Arc<SpectralMesh>| {
+        let mut r = SpectralRenderer::new(&gpu, mesh.clone(), &Colormap::viridis()).expect("renderer");
+        let target = RenderTarget::new(&gpu, "vtk fixture", w, h, ColorFormat::Rgba32F).expect("target");
+        let Pixels::Rgba32F(px) = r.render(&target, &SpectralView::default()).expect("rendered") else {
+            panic!("a float target returned bytes")
+        };
+        px
+    };
+    let mesh = Arc::new(vtu::read(&fixture("quad_default.vtu")).expect("VTK's default file"));
+    let px = render(&mesh);
+    let view = View2d::fit(&mesh, w, h);
+    let mut covered = 0;
+    for y in 0..h {
+        for x in 0..w {
+            let t = &px[4 * (y * w + x) as usize..][..4];
+            if t[3].is_nan() || t[3] < 0.0 {
+                continue;
+            }
+            covered += 1;
+            let p = view.pixel_centre(x, y, w, h);
+            let e = t[3] as usize;
+            let q = mesh.inverse_map(e, p, [0.5, 0.5]).expect("inside").map(|c| c.clamp(0.0, 1.0));
+            // The f32 evaluation's bound at this point, plus 1e-9 for the f64 reference's own
+            // rounding of a cubic of size ~10.
+            let bound = rounding_bound(&mesh, 0, 0, e, q) + 1e-9;
+            let exact = quad_u([p[0], p[1], 0.0]);
+            assert!((f64::from(t[0]) - exact).abs() <= bound, "pixel ({x}, {y}): {} vs {exact}", t[0]);
+        }
+    }
+    assert!(covered > 10_000, "{covered} pixels covered");
+    let bezier = Arc::new(vtu::read(&fixture("bezier_quad.vtu")).expect("Bézier"));
+    let px = render(&bezier);
+    let report = check_pixels(&bezier, 0, 0, &View2d::fit(&bezier, w, h), (w, h), &px);
+    assert!(report.passed() && report.covered > 10_000, "{report:?}");
 }
