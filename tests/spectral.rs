@@ -224,6 +224,54 @@ fn edge_overdraw_leaves_no_crack_in_discontinuous_data() {
     }
 }
 
+/// Ownership at element edges: a pixel centre just inside one element (3e-6 of its width from
+/// the edge, inside the neighbour's acceptance tolerance of 1e-5) is drawn by that element,
+/// whichever of the two is drawn last — on a discontinuous field a stolen pixel shows the
+/// neighbour's value.
+#[test]
+fn a_pixel_centre_near_an_edge_belongs_to_the_element_that_contains_it() {
+    let gpu = common::gpu();
+    let mesh = Arc::new(quad_grid(2, 1, 0.0, 3, NodeSet::GaussLobatto).unwrap());
+    let cells = mesh.field_index(Some("cells")).unwrap();
+    let bounds = |e: usize| {
+        let p = mesh.element_points(e);
+        let fold = |k: usize, f: fn(f64, f64) -> f64, init: f64| p.iter().map(|q| q[k]).fold(init, f);
+        (
+            fold(0, f64::min, f64::INFINITY),
+            fold(0, f64::max, f64::NEG_INFINITY),
+            fold(1, f64::min, f64::INFINITY),
+            fold(1, f64::max, f64::NEG_INFINITY),
+        )
+    };
+    let (left, right) = if bounds(0).0 < bounds(1).0 { (0, 1) } else { (1, 0) };
+    let (x0, edge, y0, y1) = bounds(left);
+    let width = edge - x0;
+    let (w, h) = (64u32, 32u32);
+    let pixel = width / 20.0;
+    let delta = 3e-6 * width;
+    for (owner, offset) in [(left, -delta), (right, delta)] {
+        // Pixel column 32's centre is at centre.x + pixel / 2: put it at edge + offset.
+        let centre = [edge + offset - 0.5 * pixel, 0.5 * (y0 + y1)];
+        let view = SpectralView {
+            field: cells,
+            overdraw: false,
+            view: Some(View2d { centre, pixel_size: pixel }),
+            ..SpectralView::default()
+        };
+        let pixels = render_data(&gpu, &mesh, &view, (w, h));
+        let mut checked = 0;
+        for py in 0..h {
+            let t = &pixels[4 * (py * w + 32) as usize..][..4];
+            if t[3].is_nan() {
+                continue;
+            }
+            checked += 1;
+            assert_eq!(t[3] as usize, owner, "row {py}: the pixel at {:e} of the edge went to the neighbour ({t:?}, edge {edge}, width {width})", offset);
+        }
+        assert!(checked >= 10, "{checked} pixels of the column covered");
+    }
+}
+
 /// The colour output maps the value through the colour ramp (and shows the background
 /// outside), and the mesh lines darken the edge pixels.
 #[test]

@@ -22,18 +22,27 @@ layout(location = 3) in vec3 world;
 layout(location = 4) flat in vec4 coefficients[SPECTRAL_FLAT_VEC4S];
 layout(set = 0, binding = 2) uniform sampler1D colormap;
 layout(location = 0) out vec4 out_colour;
+// Ownership at element edges: a planar fragment lies deeper by how far its reference point is
+// outside [0, 1]² (at most the inside tolerance, 1e-5: far less than the edge passes' offsets
+// of 0.25), so where two elements both accept a pixel centre the one that contains it wins
+// whatever the draw order; exact ties (a centre on the edge to f32 rounding) go to the later.
+// Only ever deeper: depth tests may still run early.
+layout(depth_greater) out float gl_FragDepth;
 
 void main() {
     uint mode = pc.flags.z;
     bool surface = pc.flags.w == SPECTRAL_SURFACE;
     vec2 r = in_reference;
     bool inside = true;
+    float outside = 0.0;
     if (mode == SPECTRAL_MODE_PER_PIXEL && !surface) {
         vec2 p = pc.pixel_to_world.xy + (gl_FragCoord.xy - pc.misc.zw) * pc.pixel_to_world.zw;
         float tol = pc.misc.y;
         inside = spectral_inverse_map(element, p, r)
               && all(greaterThanEqual(r, vec2(-tol))) && all(lessThanEqual(r, vec2(1.0 + tol)));
+        outside = max(0.0, max(max(-r.x, r.x - 1.0), max(-r.y, r.y - 1.0)));
     }
+    gl_FragDepth = gl_FragCoord.z + outside;
     r = clamp(r, 0.0, 1.0);
     // A surface fragment is lit with the geometry's tangents, evaluated with the value (the
     // data output takes the same path, so the tests check the code that draws the colours).

@@ -6,8 +6,11 @@
 //!   B_k, has |c″| ≤ g (g − 1) max_k |B_{k+2} − 2 B_{k+1} + B_k| (the hodograph's convex hull),
 //!   so a chord over a parameter interval of length h is within h² |c″|max / 8 of the curve.
 //!   Fragments of the proxy whose inverse map leaves the reference square are discarded, so the
-//!   element's true edge is drawn, not the proxy's. Straight-sided (bilinear) elements are not
-//!   moved: their proxies tile the plane exactly.
+//!   element's true edge is drawn, not the proxy's. Every proxy, straight-sided ones too, is
+//!   also moved out by [`OWNERSHIP_MARGIN`] of the element's size: neighbours' proxies then
+//!   overlap along shared edges, so a pixel centre near an edge reaches both elements' fragment
+//!   stages and the one that contains it wins by depth (`element.frag`), instead of whichever
+//!   the rasteriser's tie rule (at 1/256 of a pixel) handed it to.
 //! - **Node grids** (per-vertex mode, the seed's baseline): the element's nodes joined into an
 //!   n × n grid of quads (two triangles each), the field evaluated at the vertices and
 //!   interpolated across.
@@ -98,6 +101,11 @@ fn edge_curvature_bound(mesh: &SpectralMesh, bernstein: &Basis1d, e: usize, k: u
     (g * (g - 1)) as f64 * second
 }
 
+/// How far every proxy reaches past its element, as a fraction of the element's size (see the
+/// module docs): far above the rasteriser's snapping for elements of a pixel or more, and a
+/// few per cent more fragments to discard.
+pub const OWNERSHIP_MARGIN: f64 = 0.01;
+
 fn proxy(mesh: &SpectralMesh, bernstein: &Basis1d, e: usize, out: &mut Vec<DrawVertex>) {
     let g = mesh.geometry.order;
     let per_edge = g.max(1);
@@ -114,6 +122,10 @@ fn proxy(mesh: &SpectralMesh, bernstein: &Basis1d, e: usize, out: &mut Vec<DrawV
         })
         .collect();
     let n = points.len();
+    let (lo, hi) = points.iter().fold(([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]), |(lo, hi), p| {
+        ([lo[0].min(p[0]), lo[1].min(p[1])], [hi[0].max(p[0]), hi[1].max(p[1])])
+    });
+    dilation = dilation.max(OWNERSHIP_MARGIN * (hi[0] - lo[0]).hypot(hi[1] - lo[1]));
     if dilation > 0.0 {
         // Plus f32 rounding of the vertices (relative 2⁻²³ of the coordinates).
         let size = points.iter().flatten().fold(0.0f64, |a, c| a.max(c.abs()));
