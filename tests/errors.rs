@@ -101,3 +101,18 @@ fn requests_over_device_limits_are_errors_naming_the_resource() {
     assert!(err.to_string().contains("wide binding") && err.to_string().contains("chunks"), "{err}");
     assert_eq!(b.binding_chunks().len(), 2);
 }
+
+#[test]
+fn radiosity_compare_refuses_empty_sequences_before_any_work() {
+    let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/radiosity/two_rooms_small.toml");
+    for frames in ["0,0", "5,0"] {
+        let out = galerkin()
+            .args(["radiosity", "compare", scene, "--model", "/nonexistent/model", "--frames", frames])
+            .output()
+            .expect("ran");
+        assert!(!out.status.success(), "--frames {frames}: exit 0");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains("--frames") && err.contains("1 to"), "{err}");
+        assert!(!err.contains("panicked"), "{err}");
+    }
+}

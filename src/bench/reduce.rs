@@ -245,10 +245,7 @@ pub fn report(
             gpu_out = Some(result);
         }
         let gpu_out = gpu_out.expect("three runs");
-        let median = |mut v: Vec<f64>| {
-            v.sort_by(f64::total_cmp);
-            v[v.len() / 2]
-        };
+        let median = |mut v: Vec<f64>| super::median_f64(&mut v);
         let gpu_seconds = median(pairs.iter().map(|(r, _)| r.time.as_secs_f64()).collect());
         let gpu_gflops = median(pairs.iter().map(|(r, _)| r.gflops()).collect());
         let ceiling = median(pairs.iter().map(|&(_, c)| c).collect());

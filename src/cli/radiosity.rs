@@ -360,6 +360,12 @@ fn sequence(ranges: &[[f64; 2]], which: usize, f: usize, frames: usize) -> Vec<f
 const KEPT_FRAME_TOLERANCE: f64 = 1e-9;
 
 fn compare(args: &CompareArgs) -> Result<()> {
+    if args.frames.is_empty()
+        || args.frames.iter().any(|&f| f == 0)
+        || args.frames.iter().any(|&f| f > MAX_FRAMES)
+    {
+        bail!("--frames {:?}: each sequence needs 1 to {MAX_FRAMES} frames", args.frames);
+    }
     let scene = AnyScene::load(&args.scene, light_mode(args.lights.as_deref()))?;
     let spec = scene.space();
     if args.full_only {
@@ -485,10 +491,7 @@ fn compare(args: &CompareArgs) -> Result<()> {
         &lines,
         &|v| format!("{:.2} %", 100.0 * v),
     )?;
-    let median = |v: &mut Vec<f64>| {
-        v.sort_by(f64::total_cmp);
-        v[v.len() / 2]
-    };
+    let median = |v: &mut Vec<f64>| galerkin::bench::median_f64(v);
     let full_count = full_times.len();
     let (full_med, reduced_med) = (median(&mut full_times), median(&mut reduced_times));
     let all: Vec<f64> = series.iter().flatten().copied().collect();
@@ -551,6 +554,9 @@ fn keep_full_frames(args: &CompareArgs, scene: &AnyScene) -> Result<()> {
 }
 
 /// Relative error per frame as a line plot (one colour per sequence) with a grid every 1 %.
+/// The most frames a compared sequence may have (each is a full solve: hours at this count).
+const MAX_FRAMES: usize = 100_000;
+
 /// Arguments of `galerkin bench radiosity`.
 #[derive(Args)]
 pub struct BenchArgs {

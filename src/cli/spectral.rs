@@ -335,8 +335,7 @@ pub struct BenchArgs {
 }
 
 fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
+    galerkin::bench::median_f64(&mut v)
 }
 
 /// Covered pixels of `view` (a data pass): the fragments the per-pixel path shades.

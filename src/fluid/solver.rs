@@ -35,6 +35,11 @@ use super::FluidError;
 /// RK4's stable radius used for the substep count (see the module docs).
 pub const RK4_RADIUS: f64 = 2.5;
 
+/// The most RK4 substeps one frame may take (before `refine`): a frame asking for more (a
+/// velocity, viscosity or frame time far beyond the mesh's scale) is refused naming the count,
+/// rather than running for days.
+pub const MAX_SUBSTEPS: usize = 100_000;
+
 /// Physical parameters of a simulation.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FluidParams {
@@ -255,7 +260,7 @@ impl FluidSolver {
         let ops = CellOperators::new(&self.mesh, &self.topo, &state.g);
         let rel: Vec<f64> = state.f.iter().zip(&h).map(|(f, h)| f - h).collect();
         let vdot = divergence(&self.topo, &h);
-        let substeps = self.substeps(&ops, &rel, &vdot);
+        let substeps = self.substeps(&ops, &rel, &vdot, frame)?;
         let dt = self.params.frame_time / substeps as f64;
         let mu = self.params.viscosity;
         let forcing = self.params.forcing;
@@ -294,8 +299,15 @@ impl FluidSolver {
         Ok((next, StepReport { h, substeps, advection_seconds, projection_seconds, projection }))
     }
 
-    /// ⌈Δt ρ / 2.5⌉ with ρ the Gershgorin radius of the advection–diffusion operator.
-    fn substeps(&self, ops: &CellOperators, rel: &[f64], vdot: &[f64]) -> usize {
+    /// ⌈Δt ρ / 2.5⌉ with ρ the Gershgorin radius of the advection–diffusion operator, times
+    /// the refinement; refused above [`MAX_SUBSTEPS`] (or for a non-finite ρ).
+    fn substeps(
+        &self,
+        ops: &CellOperators,
+        rel: &[f64],
+        vdot: &[f64],
+        frame: usize,
+    ) -> Result<usize, FluidError> {
         let d = self.mesh.dim();
         let mu = self.params.viscosity;
         let mut rho = 0.0f64;
@@ -313,7 +325,13 @@ impl FluidSolver {
             }
             rho = rho.max(self_term / vc + row);
         }
-        ((self.params.frame_time * rho / RK4_RADIUS).ceil() as usize).max(1) * self.refinement
+        let needed = (self.params.frame_time * rho / RK4_RADIUS).ceil();
+        if !(needed <= MAX_SUBSTEPS as f64) {
+            return Err(FluidError::State(format!(
+                "frame {frame}: the stability bound asks for {needed:e} RK4 substeps (at most {MAX_SUBSTEPS}): the velocity, viscosity or frame time is far beyond the mesh's scale"
+            )));
+        }
+        Ok((needed as usize).max(1) * self.refinement)
     }
 
     fn check_len(&self, what: &str, got: usize, want: usize) -> Result<(), FluidError> {
@@ -359,6 +377,20 @@ mod tests {
                 let want = (plain[3 * c + k] - vdot[c] * u[3 * c + k]) / vols[c] + forcing[k];
                 assert!((fused[3 * c + k] - want).abs() < 1e-12, "cell {c} axis {k}");
             }
+        }
+    }
+
+    #[test]
+    fn a_frame_asking_for_more_substeps_than_the_cap_is_refused_naming_the_count() {
+        let mesh = kuhn_box(2, [4, 2, 0], [2.0, 1.0, 1.0]).expect("box");
+        let topo = Topology::new(&mesh, Some(Periodic { axis: 0 })).expect("topology");
+        for (speed, viscosity) in [(1e300, 1e-3), (1.0, 1e12)] {
+            let params = FluidParams { viscosity, forcing: [0.0; 3], frame_time: 0.02 };
+            let mut solver = FluidSolver::new(mesh.clone(), topo.clone(), params).expect("solver");
+            let u: Vec<f64> = (0..mesh.cell_count()).flat_map(|_| [speed, 0.0]).collect();
+            let state = solver.initial_state(mesh.g().to_vec(), &u).expect("state");
+            let err = solver.step(&state, mesh.g(), 1).expect_err("refused").to_string();
+            assert!(err.contains("frame 1") && err.contains("RK4 substeps"), "{err}");
         }
     }
 }
