@@ -326,7 +326,7 @@ impl FluidSolver {
             rho = rho.max(self_term / vc + row);
         }
         let needed = (self.params.frame_time * rho / RK4_RADIUS).ceil();
-        if !(needed <= MAX_SUBSTEPS as f64) {
+        if needed.is_nan() || needed > MAX_SUBSTEPS as f64 {
             return Err(FluidError::State(format!(
                 "frame {frame}: the stability bound asks for {needed:e} RK4 substeps (at most {MAX_SUBSTEPS}): the velocity, viscosity or frame time is far beyond the mesh's scale"
             )));
