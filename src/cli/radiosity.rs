@@ -360,10 +360,7 @@ fn sequence(ranges: &[[f64; 2]], which: usize, f: usize, frames: usize) -> Vec<f
 const KEPT_FRAME_TOLERANCE: f64 = 1e-9;
 
 fn compare(args: &CompareArgs) -> Result<()> {
-    if args.frames.is_empty()
-        || args.frames.iter().any(|&f| f == 0)
-        || args.frames.iter().any(|&f| f > MAX_FRAMES)
-    {
+    if args.frames.is_empty() || args.frames.contains(&0) || args.frames.iter().any(|&f| f > MAX_FRAMES) {
         bail!("--frames {:?}: each sequence needs 1 to {MAX_FRAMES} frames", args.frames);
     }
     let scene = AnyScene::load(&args.scene, light_mode(args.lights.as_deref()))?;
