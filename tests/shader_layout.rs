@@ -106,8 +106,9 @@ fn push_constant_members_and_shared_memory_are_read_from_the_spirv() {
     );
     // The spectral draws' block: mat4, three vec4, a uvec4 (spectral_push.glsl).
     let frag = reflect("spectral", galerkin::spectral::shaders::ELEMENT_FRAG).unwrap();
+    let planar = reflect("spectral", galerkin::spectral::shaders::ELEMENT_PLANAR_FRAG).unwrap();
     let vert = reflect("spectral", galerkin::spectral::shaders::ELEMENT_VERT).unwrap();
-    let merged = galerkin::gpu::reflect::merge("spectral", &[vert, frag]).unwrap();
+    let merged = galerkin::gpu::reflect::merge("spectral", &[vert, frag, planar]).unwrap();
     let mut members = merged.push_members.clone();
     members.sort_by_key(|m| m.offset);
     assert_eq!(members.first(), Some(&BlockMember { offset: 0, size: 64, scalar: Scalar::F32 }));

@@ -359,7 +359,12 @@ impl SpectralRenderer {
             let mut desc = self.draw_desc(
                 name,
                 crate::spectral::shaders::ELEMENT_VERT,
-                crate::spectral::shaders::ELEMENT_FRAG,
+                // Planar meshes: the variant with the ownership rule at element edges.
+                if self.planar {
+                    crate::spectral::shaders::ELEMENT_PLANAR_FRAG
+                } else {
+                    crate::spectral::shaders::ELEMENT_FRAG
+                },
                 target,
             );
             if lines {
