@@ -312,3 +312,27 @@ fn vtk_written_quadrilaterals_render_pixel_exact() {
     let report = check_pixels(&bezier, 0, 0, &View2d::fit(&bezier, w, h), (w, h), &px);
     assert!(report.passed() && report.covered > 10_000, "{report:?}");
 }
+
+#[test]
+fn a_paraview_file_series_reads_as_the_same_time_steps_as_the_collection() {
+    let dir = tempfile::Builder::new().prefix("galerkin-").tempdir().expect("scratch");
+    for k in 0..3 {
+        let f = format!("quad_series_{k}.vtu");
+        std::fs::copy(fixture(&f), dir.path().join(&f)).expect("copied");
+    }
+    let series = dir.path().join("quad.vtu.series");
+    std::fs::write(
+        &series,
+        r#"{ "file-series-version" : "1.0", "files" : [
+            { "name" : "quad_series_2.vtu", "time" : 1.0 },
+            { "name" : "quad_series_0.vtu", "time" : 0 },
+            { "name" : "quad_series_1.vtu", "time" : 0.5 } ] }"#,
+    )
+    .expect("written");
+    let from_series = galerkin::spectral::load(&series, &[]).expect("the series");
+    let from_pvd = galerkin::spectral::load(&fixture("quad_series.pvd"), &[]).expect("the collection");
+    assert_eq!(from_series.fields, from_pvd.fields, "the same steps at the same times");
+    std::fs::write(&series, r#"{ "file-series-version" : "2.0", "files" : [] }"#).expect("written");
+    let e = galerkin::spectral::load(&series, &[]).expect_err("version").to_string();
+    assert!(e.contains("quad.vtu.series") && e.contains("2.0"), "{e}");
+}

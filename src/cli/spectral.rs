@@ -50,7 +50,7 @@ impl Source {
 pub struct RenderArgs {
     /// Data set: a VTK `.vtu` file of Lagrange quadrilaterals (planar or a surface in 3D) or
     /// hexahedra (shown by cut planes), in any encoding VTK writes; a ParaView `.pvd`
-    /// collection of such files (its files are the time steps); an MFEM mesh ("MFEM mesh v1.0", straight or with a
+    /// collection or `.vtu.series` of such files (its files are the time steps); an MFEM mesh ("MFEM mesh v1.0", straight or with a
     /// curved `nodes` section) with --gf; or a GLVis "solution" stream saved to a file. Without
     /// it, a data set is generated (--generate).
     pub file: Option<PathBuf>,

@@ -1,8 +1,9 @@
-//! ParaView's time series (`.pvd`, a VTK `Collection`): `<DataSet timestep="t" file="F.vtu"/>`
-//! entries, each a `.vtu` of the same cells ([`super::vtu`]); their fields become the time
-//! steps of one data set, at the collection's times, in time order. This is how ParaView
-//! writes an animated data set (File ▸ Save Data with all time steps) and how solvers that
-//! write VTK hand ParaView a run.
+//! ParaView's time series: a `.pvd` (a VTK `Collection`: `<DataSet timestep="t"
+//! file="F.vtu"/>` entries) or a `.vtu.series` (ParaView's JSON file series: `{"file-series-
+//! version": "1.0", "files": [{"name": "F.vtu", "time": t}, …]}`), each file a `.vtu` of the
+//! same cells ([`super::vtu`]); their fields become the time steps of one data set, at the
+//! series' times, in time order. This is how ParaView writes an animated data set (File ▸
+//! Save Data with all time steps) and how solvers that write VTK hand ParaView a run.
 
 use std::path::Path;
 
@@ -20,15 +21,25 @@ pub const MAX_DATASETS: usize = 100_000;
 pub fn read_collection(path: &Path) -> Result<SpectralMesh, SpectralError> {
     let bad = |detail: String| SpectralError::File { path: path.to_path_buf(), detail };
     let text = std::fs::read_to_string(path).map_err(|e| bad(e.to_string()))?;
-    let doc = roxmltree::Document::parse(&text).map_err(|e| bad(format!("XML: {e}")))?;
+    let sets = if path.to_string_lossy().to_ascii_lowercase().ends_with(".series") {
+        series_entries(&text).map_err(bad)?
+    } else {
+        pvd_entries(&text).map_err(bad)?
+    };
+    read_entries(path, sets)
+}
+
+/// The `(time, part, file)` entries of a `.pvd`'s text.
+fn pvd_entries(text: &str) -> Result<Vec<(f64, String, String)>, String> {
+    let doc = roxmltree::Document::parse(text).map_err(|e| format!("XML: {e}"))?;
     let root = doc.root_element();
     if root.tag_name().name() != "VTKFile" || root.attribute("type") != Some("Collection") {
-        return Err(bad("not a VTK collection (<VTKFile type=\"Collection\">)".into()));
+        return Err("not a VTK collection (<VTKFile type=\"Collection\">)".into());
     }
     let mut sets = Vec::new();
     for (k, node) in doc.descendants().filter(|n| n.has_tag_name("DataSet")).enumerate() {
         if k >= MAX_DATASETS {
-            return Err(bad(format!("more than {MAX_DATASETS} data sets")));
+            return Err(format!("more than {MAX_DATASETS} data sets"));
         }
         let line = doc.text_pos_at(node.range().start).row;
         let time: f64 = node
@@ -39,14 +50,53 @@ pub fn read_collection(path: &Path) -> Result<SpectralMesh, SpectralError> {
             .ok()
             .filter(|t: &f64| t.is_finite())
             .ok_or_else(|| {
-                bad(format!("line {line}: timestep {:?} is not a number", node.attribute("timestep")))
+                format!("line {line}: timestep {:?} is not a number", node.attribute("timestep"))
             })?;
-        let file =
-            node.attribute("file").ok_or_else(|| bad(format!("line {line}: a DataSet without a file")))?;
+        let file = node.attribute("file").ok_or_else(|| format!("line {line}: a DataSet without a file"))?;
         sets.push((time, node.attribute("part").unwrap_or("0").to_string(), file.to_string()));
     }
+    Ok(sets)
+}
+
+/// The `(time, part, file)` entries of a `.vtu.series`' JSON text.
+fn series_entries(text: &str) -> Result<Vec<(f64, String, String)>, String> {
+    #[derive(serde::Deserialize)]
+    struct Entry {
+        name: String,
+        time: f64,
+    }
+    #[derive(serde::Deserialize)]
+    struct Series {
+        #[serde(rename = "file-series-version")]
+        version: String,
+        files: Vec<Entry>,
+    }
+    let series: Series = serde_json::from_str(text).map_err(|e| format!("JSON file series: {e}"))?;
+    if series.version != "1.0" {
+        return Err(format!("file-series-version {:?} (1.0 is read)", series.version));
+    }
+    if series.files.len() > MAX_DATASETS {
+        return Err(format!("more than {MAX_DATASETS} files"));
+    }
+    series
+        .files
+        .into_iter()
+        .enumerate()
+        .map(|(k, e)| {
+            if e.time.is_finite() {
+                Ok((e.time, "0".to_string(), e.name))
+            } else {
+                Err(format!("files[{k}]: time {} is not finite", e.time))
+            }
+        })
+        .collect()
+}
+
+/// Reads the entries' files (see [`read_collection`]).
+fn read_entries(path: &Path, mut sets: Vec<(f64, String, String)>) -> Result<SpectralMesh, SpectralError> {
+    let bad = |detail: String| SpectralError::File { path: path.to_path_buf(), detail };
     if sets.is_empty() {
-        return Err(bad("the collection lists no data set".into()));
+        return Err(bad("the series lists no data set".into()));
     }
     sets.sort_by(|a, b| a.0.total_cmp(&b.0));
     if let Some(w) = sets.windows(2).find(|w| w[0].0 == w[1].0) {

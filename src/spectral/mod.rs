@@ -39,8 +39,8 @@ pub use error::SpectralError;
 pub use mesh::{Field, Shape, SpectralMesh};
 pub use render::{fit_camera, SpectralRenderer, SpectralView, View2d, INSIDE_TOLERANCE, MAX_TESSELLATION};
 
-/// Loads a data set: a `.vtu` file (VTK Lagrange cells), a `.pvd` collection of them (a time
-/// series, [`collection`]), a GLVis "solution" stream (a file
+/// Loads a data set: a `.vtu` file (VTK Lagrange cells), a `.pvd` collection or `.vtu.series`
+/// of them (a time series, [`collection`]), a GLVis "solution" stream (a file
 /// starting with `solution`), or an MFEM mesh with `grid_functions` as the time steps of one
 /// field named after the first GridFunction file's stem.
 pub fn load(
@@ -48,6 +48,8 @@ pub fn load(
     grid_functions: &[std::path::PathBuf],
 ) -> Result<SpectralMesh, SpectralError> {
     let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+    let series = path.to_string_lossy().to_ascii_lowercase().ends_with(".vtu.series");
+    let ext = if series { Some("pvd".to_string()) } else { ext };
     if matches!(ext.as_deref(), Some("vtu" | "pvd")) {
         if !grid_functions.is_empty() {
             return Err(SpectralError::Missing(
