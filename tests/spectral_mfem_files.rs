@@ -10,25 +10,16 @@ use std::sync::Arc;
 
 use galerkin::render::{ColorFormat, Colormap, Pixels, RenderTarget};
 use galerkin::spectral::reference::check_pixels;
-use galerkin::spectral::{Shape, SpectralRenderer, SpectralView, View2d};
+use galerkin::spectral::{SpectralRenderer, SpectralView, View2d};
 
 fn fixture(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/mfem").join(name)
 }
 
 #[derive(serde::Deserialize)]
-struct Record {
-    element: usize,
-    #[serde(rename = "ref")]
-    reference: Vec<f64>,
-    x: Vec<f64>,
-    value: f64,
-}
-
-#[derive(serde::Deserialize)]
 struct Evaluations {
     collection: String,
-    records: Vec<Record>,
+    records: Vec<common::evaluations::Record>,
 }
 
 #[test]
@@ -42,23 +33,7 @@ fn meshes_and_fields_mfem_wrote_evaluate_as_mfem_evaluates_them() {
         let gf = std::fs::read_to_string(fixture(&format!("{name}.gf"))).expect("gf");
         assert!(gf.contains(&evaluations.collection), "{name}: {}", evaluations.collection);
         assert!(evaluations.records.len() >= 5 * mesh.elements(), "{name}");
-        let (mut worst_x, mut worst_u) = (0.0f64, 0.0f64);
-        for r in &evaluations.records {
-            let (x, u) = match mesh.shape {
-                Shape::Quadrilateral => {
-                    let (x, _) = mesh.map(r.element, r.reference[0], r.reference[1]);
-                    (x, mesh.value(0, 0, r.element, r.reference[0], r.reference[1]))
-                }
-                Shape::Hexahedron => {
-                    let at = [r.reference[0], r.reference[1], r.reference[2]];
-                    (mesh.map_hex(r.element, at).0, mesh.value_hex(0, 0, r.element, at))
-                }
-            };
-            for (k, xk) in r.x.iter().enumerate() {
-                worst_x = worst_x.max((x[k] - xk).abs());
-            }
-            worst_u = worst_u.max((u - r.value).abs());
-        }
+        let (worst_x, worst_u) = common::evaluations::worst_differences(&mesh, 0, &evaluations.records);
         // 17 digits in the files; evaluation rounding of order-4 polynomials of size ~1:
         // 1e-12 is a thousand times the rounding, a misplaced DOF errs by ~1e-2.
         eprintln!("{name}: geometry {worst_x:e}, field {worst_u:e}");

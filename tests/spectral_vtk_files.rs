@@ -207,41 +207,15 @@ fn a_paraview_collection_reads_as_time_steps_at_its_times() {
     assert!(e.contains("no data set"), "{e}");
 }
 
-/// VTK's evaluation of a cell at a parametric point (scripts/vtk-fixtures.py).
-#[derive(serde::Deserialize)]
-struct Record {
-    element: usize,
-    #[serde(rename = "ref")]
-    reference: Vec<f64>,
-    x: Vec<f64>,
-    value: f64,
-}
-
 #[test]
 fn bezier_cells_evaluate_as_vtk_evaluates_them_and_rational_ones_are_refused() {
     for name in ["bezier_quad", "bezier_hex"] {
         let mesh = vtu::read(&fixture(&format!("{name}.vtu"))).unwrap_or_else(|e| panic!("{name}: {e}"));
         let json = std::fs::read_to_string(fixture(&format!("{name}.json"))).expect("evaluations");
-        let records: Vec<Record> = serde_json::from_str(&json).expect("JSON");
+        let records: Vec<common::evaluations::Record> = serde_json::from_str(&json).expect("JSON");
         assert_eq!(records.len(), 4 * mesh.elements(), "{name}");
         let field = mesh.field_index(Some("u")).expect("u");
-        let (mut worst_x, mut worst_u) = (0.0f64, 0.0f64);
-        for r in &records {
-            let (x, u) = match mesh.shape {
-                Shape::Quadrilateral => {
-                    let (x, _) = mesh.map(r.element, r.reference[0], r.reference[1]);
-                    (x, mesh.value(field, 0, r.element, r.reference[0], r.reference[1]))
-                }
-                Shape::Hexahedron => {
-                    let at = [r.reference[0], r.reference[1], r.reference[2]];
-                    (mesh.map_hex(r.element, at).0, mesh.value_hex(field, 0, r.element, at))
-                }
-            };
-            for (k, xk) in r.x.iter().enumerate() {
-                worst_x = worst_x.max((x[k] - xk).abs());
-            }
-            worst_u = worst_u.max((u - r.value).abs());
-        }
+        let (worst_x, worst_u) = common::evaluations::worst_differences(&mesh, field, &records);
         // Both sides evaluate Bernstein sums of values of size ~1 in f64.
         assert!(worst_x < 1e-12 && worst_u < 1e-12, "{name}: geometry {worst_x:e}, field {worst_u:e}");
     }

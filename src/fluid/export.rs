@@ -54,10 +54,15 @@ pub struct FrameArrays {
     pub relative_divergence: f64,
 }
 
-/// The cell arrays of frame `k` of `reader`.
-pub fn frame_arrays(reader: &SnapshotReader, k: usize) -> Result<FrameArrays, FluidError> {
+/// The cell arrays of frame `k` of `reader`, whose mesh and topology at that frame are
+/// `mesh` and `topo` ([`SnapshotReader::mesh_at`]).
+pub fn frame_arrays(
+    reader: &SnapshotReader,
+    k: usize,
+    mesh: &crate::mesh::SimplexMesh,
+    topo: &crate::mesh::Topology,
+) -> Result<FrameArrays, FluidError> {
     let meta = reader.meta();
-    let (mesh, topo) = reader.mesh_at(k)?;
     let (d, cells) = (meta.dim, meta.cells);
     let (u, f) = (reader.frame("u", k)?, reader.frame("f", k)?);
     let volumes = mesh.volumes();
@@ -119,8 +124,8 @@ pub fn export_run(
     let cell_type = if meta.dim == 3 { VTK_TETRA } else { VTK_TRIANGLE };
     let (mut files, mut worst) = (Vec::new(), 0.0f64);
     for (done, &k) in chosen.iter().enumerate() {
-        let (mesh, _) = reader.mesh_at(k)?;
-        let arrays = frame_arrays(&reader, k)?;
+        let (mesh, topo) = reader.mesh_at(k)?;
+        let arrays = frame_arrays(&reader, k, &mesh, &topo)?;
         worst = worst.max(arrays.relative_divergence);
         let d = meta.dim;
         let mut points = vec![0.0; 3 * meta.vertices];

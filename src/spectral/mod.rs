@@ -47,20 +47,15 @@ pub fn load(
     path: &std::path::Path,
     grid_functions: &[std::path::PathBuf],
 ) -> Result<SpectralMesh, SpectralError> {
-    let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
-    let series = path.to_string_lossy().to_ascii_lowercase().ends_with(".vtu.series");
-    let ext = if series { Some("pvd".to_string()) } else { ext };
-    if matches!(ext.as_deref(), Some("vtu" | "pvd")) {
+    let name = path.to_string_lossy().to_ascii_lowercase();
+    let series = name.ends_with(".pvd") || name.ends_with(".vtu.series");
+    if series || name.ends_with(".vtu") {
         if !grid_functions.is_empty() {
             return Err(SpectralError::Missing(
-                "GridFunction files go with MFEM meshes, not .vtu or .pvd files".into(),
+                "GridFunction files go with MFEM meshes, not .vtu, .pvd or .vtu.series files".into(),
             ));
         }
-        return if ext.as_deref() == Some("pvd") {
-            collection::read_collection(path)
-        } else {
-            vtu::read(path)
-        };
+        return if series { collection::read_collection(path) } else { vtu::read(path) };
     }
     let head = std::fs::read(path)
         .map_err(|e| SpectralError::File { path: path.to_path_buf(), detail: e.to_string() })?;

@@ -3,6 +3,7 @@
 //! leaked-object reports made when the device and instance are destroyed at the end.
 #![allow(dead_code)]
 
+pub mod evaluations;
 pub mod host;
 pub mod obj_box;
 pub mod wavy;

@@ -5,30 +5,11 @@ use std::path::Path;
 
 use plotters::prelude::*;
 
-use crate::plot::{log_range, SERIES};
+use crate::plot::{draw_legend, log_range, plot_err, save, SERIES};
 
 use crate::fluid::FluidError;
 
 use super::study::ErrorStudy;
-
-fn plot_err(path: &Path, e: impl std::fmt::Display) -> FluidError {
-    crate::plot::plot_err(path, e).into()
-}
-
-fn draw_legend<'a, X, Y>(
-    chart: &mut ChartContext<'a, BitMapBackend<'a>, Cartesian2d<X, Y>>,
-    path: &Path,
-) -> Result<(), FluidError>
-where
-    X: plotters::coord::ranged1d::Ranged,
-    Y: plotters::coord::ranged1d::Ranged,
-{
-    Ok(crate::plot::draw_legend(chart, path)?)
-}
-
-fn save(path: &Path, w: u32, h: u32, rgb: &[u8]) -> Result<(), FluidError> {
-    Ok(crate::plot::save(path, w, h, rgb)?)
-}
 
 /// Fig. 5 (d): the one-step error of every basis size over simulated time (log scale).
 pub fn plot_over_time(study: &ErrorStudy, path: &Path) -> Result<(), FluidError> {
@@ -75,7 +56,7 @@ pub fn plot_over_time(study: &ErrorStudy, path: &Path) -> Result<(), FluidError>
         draw_legend(&mut chart, path)?;
         root.present().map_err(|e| plot_err(path, e))?;
     }
-    save(path, w, h, &buf)
+    Ok(save(path, w, h, &buf)?)
 }
 
 /// Fig. 5 (e): the time-integrated (mean) one-step error against the basis size (log–log).
@@ -120,7 +101,7 @@ pub fn plot_by_size(study: &ErrorStudy, path: &Path) -> Result<(), FluidError> {
         draw_legend(&mut chart, path)?;
         root.present().map_err(|e| plot_err(path, e))?;
     }
-    save(path, w, h, &buf)
+    Ok(save(path, w, h, &buf)?)
 }
 
 /// A comparison's kinetic energy over time, full and reduced runs (`energy_path`), and the
@@ -215,7 +196,7 @@ pub fn plot_comparison(
         draw_legend(&mut chart, error_path)?;
         root.present().map_err(|e| plot_err(error_path, e))?;
     }
-    save(error_path, w, h, &buf)
+    Ok(save(error_path, w, h, &buf)?)
 }
 
 /// A rendered field picture (RGBA, `size`) with a title above it and a colour bar beside it:
