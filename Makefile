@@ -1,12 +1,13 @@
 # galerkin — two commands:
 #   make demo   install what is missing, build, run every demo (writes out/*.png)
 #   make test   install what is missing, run every test on Mesa lavapipe with validation on
-# Also: make bench (the device's ceilings, the BENCHMARKS.md table), make lint.
+# Also: make bench (the device's ceilings), make bench-all (every benchmark in one run;
+# QUICK=1 for the quick sizes), make lint.
 
 CARGO ?= cargo
 LAVAPIPE_ICD ?= /usr/share/vulkan/icd.d/lvp_icd.json
 
-.PHONY: deps build demo test bench lint
+.PHONY: deps build demo test bench bench-all lint
 
 deps:
 	@scripts/install-deps.sh
@@ -25,6 +26,9 @@ test: deps
 
 bench: deps
 	$(CARGO) run --release --quiet -- bench gpu
+
+bench-all: deps
+	$(CARGO) run --release --quiet -- bench all $(if $(QUICK),--quick,)
 
 lint:
 	$(CARGO) fmt --check

@@ -1,6 +1,7 @@
-//! `galerkin`: the command-line front end. `galerkin demo` runs every capability's demo and
-//! writes `out/*.png`; `galerkin info` describes the device; `galerkin view` opens a window;
-//! `galerkin bench gpu` measures the device's ceilings next to the CPU.
+//! `galerkin`: the command-line front end, `galerkin <capability> <verb> [args]`: `spectral`,
+//! `spacetime`, `radiosity` and `fluid` with their verbs (`render`, `view`, `gen`, `bench`, …),
+//! plus `info`, `demo` and `bench gpu|reduce|all`. It parses and prints; the work is the
+//! library's. Old spellings are rewritten by `cli::legacy` with a deprecation note.
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -8,9 +9,11 @@ use std::time::Instant;
 use anyhow::{bail, Context, Result};
 
 mod cli {
+    pub mod args;
     pub mod fluid;
     pub mod fluid_reduced;
     pub mod full_frames;
+    pub mod legacy;
     pub mod radiosity;
     pub mod spacetime;
     pub mod spectral;
@@ -45,87 +48,61 @@ struct Cli {
 enum Command {
     /// Describe the device: name, driver, Vulkan version, limits, memory, and compiled shaders.
     Info,
-    /// Run the demos, check each against its CPU reference, and write images to --out.
-    Demo {
-        /// Scene file (TOML).
-        #[arg(long, default_value = "scenes/demo.toml")]
-        scene: PathBuf,
-        /// Output directory.
-        #[arg(long, default_value = "out")]
-        out: PathBuf,
+    /// Run every capability's demo, check each against its CPU reference, and write images to
+    /// --out (`make demo`); with --view, open the demo scene in a window instead (Esc quits, S
+    /// saves a screenshot PNG, arrow keys orbit the camera).
+    Demo(DemoArgs),
+    /// Spectral elements drawn per pixel (seed 002): VTK Lagrange/Bézier cells, MFEM and GLVis
+    /// files or generated data sets, planar, surfaces in 3D, hexahedra by cut planes.
+    Spectral {
+        #[command(subcommand)]
+        verb: cli::spectral::Verb,
     },
-    /// Open a window showing the demo scene (Esc quits, S saves a screenshot PNG,
-    /// arrow keys orbit the camera).
-    View {
-        /// Scene file (TOML).
-        #[arg(long, default_value = "scenes/demo.toml")]
-        scene: PathBuf,
-        /// Quit after presenting this many frames (for scripted runs and tests).
-        #[arg(long)]
-        frames: Option<u64>,
-        /// Where S saves the screenshot; with --frames, also saved just before quitting.
-        #[arg(long, default_value = "out/screenshot.png")]
-        screenshot: PathBuf,
-        /// With --frames: ask for this window size (WIDTHxHEIGHT) halfway through the run.
-        #[arg(long, value_name = "WxH", value_parser = parse_size)]
-        resize_to: Option<(u32, u32)>,
+    /// Time slices of spacetime discontinuous-Galerkin data sets (seed 003): .gst and .vtu.
+    Spacetime {
+        #[command(subcommand)]
+        verb: cli::spacetime::Verb,
     },
-    /// Render a time slice of a spacetime DG data set (seed 003): height |v|, colour by strain
-    /// energy density on the seed's log ramp, exact per-pixel normals, edge overdraw. Reads
-    /// .gst (memory-mapped, streamed) and .vtu files, or generates a data set (the fields are
-    /// analytic elastodynamic pulses projected per element, not solved).
-    Spacetime(cli::spacetime::RenderArgs),
-    /// Generate a spacetime data set to a .gst or .vtu file (analytic fields, not solved).
-    SpacetimeGen(cli::spacetime::GenArgs),
-    /// Convert a spacetime data set between .gst and .vtu.
-    SpacetimeConvert(cli::spacetime::ConvertArgs),
-    /// Render spectral elements per pixel (seed 002): a .vtu file of VTK Lagrange cells or a
-    /// generated data set, planar or a surface in 3D, to PNG or EXR.
-    Spectral(cli::spectral::RenderArgs),
-    /// Generate a spectral-element data set to a .vtu file (analytic fields, not solved).
-    SpectralGen(cli::spectral::GenArgs),
-    /// Radiosity on the deforming two-room scene (seed 000 §8–9): full radiosity of a
-    /// configuration, drawn to PNG or EXR.
+    /// Radiosity on deforming scenes (seed 000 §8–9): full and reduced, pictures, a viewer,
+    /// training, the reduced model's error and speed.
     Radiosity {
         #[command(subcommand)]
         action: cli::radiosity::Action,
     },
-    /// Fluids on deforming simplicial meshes (seed 000 §5–7): simulate a scene in the full
-    /// space to a snapshot directory, draw its frames with marker particles.
+    /// Fluids on deforming simplicial meshes (seed 000 §5–7): the full-space solver, reduced
+    /// models (training, runs, comparisons), pictures, viewers, ParaView export.
     Fluid {
         #[command(subcommand)]
         action: cli::fluid::Action,
     },
-    /// Benchmarks.
+    /// The engine's own benchmarks (the device's ceilings, the reduction core) and `all`,
+    /// which runs every capability's benchmark in one go. Each capability's benchmark is its
+    /// `bench` verb, e.g. `galerkin spectral bench`.
     Bench {
         #[command(subcommand)]
         what: BenchWhat,
     },
 }
 
+/// Arguments of `galerkin demo`.
+#[derive(clap::Args)]
+#[command(mut_arg("screenshot", |a| a.default_value("out/screenshot.png")))]
+struct DemoArgs {
+    /// Scene file (TOML).
+    #[arg(long, default_value = "scenes/demo.toml")]
+    scene: PathBuf,
+    /// Output directory.
+    #[arg(long, default_value = "out")]
+    out: PathBuf,
+    #[command(flatten)]
+    viewer: cli::args::ViewerArgs,
+    /// With --view and --quit-after: ask for this window size (WIDTHxHEIGHT) halfway through.
+    #[arg(long, value_name = "WxH", value_parser = cli::args::parse_size)]
+    resize_to: Option<(u32, u32)>,
+}
+
 #[derive(Subcommand)]
 enum BenchWhat {
-    /// Seed 003's spacetime renderer: frame time (wall and per stage: slice, subdivide, draw)
-    /// at 1280×720 on generated data sets of 10^5 to 5·10^6 elements, growth with pixels, and
-    /// the out-of-core first frame of a 2·10^7-element file (generated on first use into
-    /// --data-dir).
-    Spacetime(cli::spacetime::BenchArgs),
-    /// Seed 002's table: FPS of orders 1–8 on the artery (704) and coil (3332) at 1024×768,
-    /// per pixel against per vertex in the same run; frame time against pixels and elements.
-    Spectral(cli::spectral::BenchArgs),
-    /// Full radiosity (seed 000 §8): form factors with visibility and the Jacobi solve of
-    /// Eq. 14, on the CPU and the device, for the small and the full two-room scene. The
-    /// reduced model's rate is measured by `galerkin radiosity compare`.
-    Radiosity(cli::radiosity::BenchArgs),
-    /// Full-space fluid (seed 000 §5, Table 1): seconds per step for deformation, advection
-    /// and projection on the deforming cavity from 10³ to 3·10⁵ cells next to the paper's,
-    /// and particle advection (10,000 particles) on the CPU and the device.
-    Fluid(cli::fluid::BenchArgs),
-    /// The reduced fluid (seed 000 §6): the reduced step at Table 1's cavity basis sizes
-    /// (m_f 64, m_u 128, m_g 5, m_h 16) on synthetic bases of the cavity mesh, stage by stage
-    /// with the Krylov and Padé exponentials; and 10⁶ reduced steps of a small tunnel model
-    /// watching the energy (trained first into out/bench-fluid-reduced/).
-    FluidReduced(cli::fluid_reduced::BenchArgs),
     /// The reduction core: premultiplication of the fluid volume tensor at the paper's cavity
     /// size (88,671 cells, m = 128, m_g = 5) next to faer's GEMM of its final stage, reduced
     /// evaluation per call and per batch, and premultiplication time against cells and m.
@@ -141,14 +118,32 @@ enum BenchWhat {
         #[arg(long)]
         quick: bool,
     },
+    /// Every benchmark in one run, one after another, each under its command line as a
+    /// heading (the commands BENCHMARKS.md gives): gpu, reduce, spectral, spacetime, radiosity,
+    /// fluid and fluid's reduced step. With --quick, each at its quick sizes (minutes instead
+    /// of hours); without, the full-size runs take several hours on two cores.
+    All {
+        /// Each benchmark at its quick sizes.
+        #[arg(long)]
+        quick: bool,
+    },
 }
 
 fn main() {
     let filter = tracing_subscriber::EnvFilter::try_from_env("GALERKIN_LOG")
         .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("warn,winit=error"));
     tracing_subscriber::fmt().with_env_filter(filter).with_writer(std::io::stderr).init();
-    let cli = Cli::parse();
-    if let Err(e) = run(cli) {
+    let (args, notes) = cli::legacy::translate(std::env::args_os().collect());
+    for note in notes {
+        eprintln!("note: {note}");
+    }
+    let cli = Cli::parse_from(args);
+    let desc = desc(&cli);
+    let result = run(&desc, cli.command);
+    // Validation is checked once, here, after every device of the command is dropped (their
+    // leak reports are in the log too).
+    let result = result.and(validation_result(&desc));
+    if let Err(e) = result {
         eprintln!("error: {e:#}");
         std::process::exit(1);
     }
@@ -160,32 +155,71 @@ fn desc(cli: &Cli) -> GpuDesc {
         d.device_name = Some(name.clone());
     }
     d.validation |= cli.validation;
+    if d.validation {
+        d.validation_log = Some(std::sync::Arc::default());
+    }
     d
 }
 
-fn run(cli: Cli) -> Result<()> {
-    let desc = desc(&cli);
-    match cli.command {
-        Command::Info => info(&desc),
-        Command::Demo { scene, out } => demo(&desc, &scene, &out),
-        Command::View { scene, frames, screenshot, resize_to } => {
-            view(desc, &scene, frames, screenshot, resize_to)
-        }
-        Command::Spacetime(args) => cli::spacetime::render(&desc, &args),
-        Command::SpacetimeGen(args) => cli::spacetime::generate_file(&args),
-        Command::SpacetimeConvert(args) => cli::spacetime::convert(&args),
-        Command::Spectral(args) => cli::spectral::render(&desc, &args),
-        Command::Radiosity { action } => cli::radiosity::run(&desc, &action),
-        Command::Fluid { action } => cli::fluid::run(&desc, &action),
-        Command::SpectralGen(args) => cli::spectral::generate_file(&args),
-        Command::Bench { what: BenchWhat::Gpu { quick } } => bench_gpu(&desc, quick),
-        Command::Bench { what: BenchWhat::Reduce { quick } } => bench_reduce(&desc, quick),
-        Command::Bench { what: BenchWhat::Spacetime(args) } => cli::spacetime::bench(&desc, &args),
-        Command::Bench { what: BenchWhat::Spectral(args) } => cli::spectral::bench(&desc, &args),
-        Command::Bench { what: BenchWhat::Radiosity(args) } => cli::radiosity::bench(&desc, &args),
-        Command::Bench { what: BenchWhat::Fluid(args) } => cli::fluid::bench(&desc, &args),
-        Command::Bench { what: BenchWhat::FluidReduced(args) } => cli::fluid_reduced::bench(&args),
+/// Fails if validation was on and reported errors.
+fn validation_result(desc: &GpuDesc) -> Result<()> {
+    let errors = desc.validation_log.as_ref().map(|log| log.errors()).unwrap_or_default();
+    match errors.first() {
+        Some(first) => bail!("{} Vulkan validation error(s); the first: {first}", errors.len()),
+        None => Ok(()),
     }
+}
+
+fn run(desc: &GpuDesc, command: Command) -> Result<()> {
+    match command {
+        Command::Info => info(desc),
+        Command::Demo(args) if args.viewer.view => view(desc.clone(), &args),
+        Command::Demo(args) => demo(desc, &args.scene, &args.out),
+        Command::Spacetime { verb } => cli::spacetime::run(desc, &verb),
+        Command::Spectral { verb } => cli::spectral::run(desc, &verb),
+        Command::Radiosity { action } => cli::radiosity::run(desc, &action),
+        Command::Fluid { action } => cli::fluid::run(desc, &action),
+        Command::Bench { what: BenchWhat::Gpu { quick } } => bench_gpu(desc, quick),
+        Command::Bench { what: BenchWhat::Reduce { quick } } => bench_reduce(desc, quick),
+        Command::Bench { what: BenchWhat::All { quick } } => bench_all(desc, quick),
+    }
+}
+
+/// The command lines `galerkin bench all` runs, quick or full.
+fn bench_all_commands(quick: bool) -> Vec<&'static str> {
+    if quick {
+        vec![
+            "bench gpu --quick",
+            "bench reduce --quick",
+            "spectral bench --quick",
+            "spacetime bench --quick",
+            "radiosity bench scenes/radiosity/two_rooms_small.toml",
+            "fluid bench --quick",
+            "fluid bench-reduced --quick",
+        ]
+    } else {
+        vec![
+            "bench gpu",
+            "bench reduce",
+            "spectral bench",
+            "spacetime bench",
+            "radiosity bench",
+            "fluid bench",
+            "fluid bench-reduced",
+        ]
+    }
+}
+
+fn bench_all(desc: &GpuDesc, quick: bool) -> Result<()> {
+    let commands = bench_all_commands(quick);
+    for (k, line) in commands.iter().enumerate() {
+        println!("\n## `galerkin {line}` ({} of {})\n", k + 1, commands.len());
+        let cli = Cli::try_parse_from(std::iter::once("galerkin").chain(line.split_whitespace()))?;
+        let start = Instant::now();
+        run(desc, cli.command).with_context(|| format!("galerkin {line}"))?;
+        println!("\n(`galerkin {line}`: {:.0} s)", start.elapsed().as_secs_f64());
+    }
+    Ok(())
 }
 
 /// A progress bar with an ETA for long work (`what` on the left, a message after the ETA);
@@ -199,19 +233,6 @@ pub(crate) fn progress_bar(len: u64, what: &str) -> indicatif::ProgressBar {
         .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
     );
     bar
-}
-
-/// After the work: fail if validation was on and reported errors.
-pub(crate) fn check_validation(gpu: Gpu) -> Result<()> {
-    let log = gpu.validation_log();
-    drop(gpu);
-    if let Some(log) = log {
-        let errors = log.errors();
-        if !errors.is_empty() {
-            bail!("{} Vulkan validation error(s); the first: {}", errors.len(), errors[0]);
-        }
-    }
-    Ok(())
 }
 
 fn info(desc: &GpuDesc) -> Result<()> {
@@ -257,7 +278,8 @@ fn info(desc: &GpuDesc) -> Result<()> {
     for (name, words) in shaders::ALL {
         println!("  {name:<32} {:>6} words", words.len());
     }
-    check_validation(gpu)
+    drop(gpu);
+    Ok(())
 }
 
 fn demo(desc: &GpuDesc, scene_path: &Path, out: &Path) -> Result<()> {
@@ -410,35 +432,25 @@ fn demo(desc: &GpuDesc, scene_path: &Path, out: &Path) -> Result<()> {
     cli::radiosity::demo(&gpu, (w, h), out)?;
     cli::fluid::demo(&gpu, (w, h), out)?;
     cli::fluid_reduced::demo(&gpu, (w, h), out)?;
-    check_validation(gpu)
+    drop(gpu);
+    Ok(())
 }
 
 #[cfg(feature = "viewer")]
-fn view(
-    desc: GpuDesc,
-    scene_path: &Path,
-    frames: Option<u64>,
-    screenshot: PathBuf,
-    resize_to: Option<(u32, u32)>,
-) -> Result<()> {
-    let scene = DemoScene::load(scene_path)?;
-    let options = galerkin::render::viewer::ViewOptions { frames, screenshot, resize_to, keys: Vec::new() };
+fn view(desc: GpuDesc, args: &DemoArgs) -> Result<()> {
+    let scene = DemoScene::load(&args.scene)?;
+    let options = galerkin::render::viewer::ViewOptions {
+        frames: args.viewer.quit_after,
+        screenshot: args.viewer.screenshot.clone(),
+        resize_to: args.resize_to,
+        keys: Vec::new(),
+    };
     galerkin::render::viewer::run(desc, Box::new(galerkin::demo::viewer::DemoContent::new(scene)), options)
 }
 
 #[cfg(not(feature = "viewer"))]
-fn view(_: GpuDesc, _: &Path, _: Option<u64>, _: PathBuf, _: Option<(u32, u32)>) -> Result<()> {
+fn view(_: GpuDesc, _: &DemoArgs) -> Result<()> {
     bail!("this build has no viewer: rebuild with the default `viewer` feature")
-}
-
-/// Parses `WIDTHxHEIGHT`.
-pub(crate) fn parse_size(s: &str) -> Result<(u32, u32), String> {
-    let (w, h) = s.split_once(['x', 'X']).ok_or_else(|| format!("{s:?} is not WIDTHxHEIGHT"))?;
-    let n = |v: &str| v.trim().parse::<u32>().ok().filter(|&v| (1..=16384).contains(&v));
-    match (n(w), n(h)) {
-        (Some(w), Some(h)) => Ok((w, h)),
-        _ => Err(format!("{s:?}: width and height must be 1 to 16384")),
-    }
 }
 
 fn bench_gpu(desc: &GpuDesc, quick: bool) -> Result<()> {
@@ -464,7 +476,8 @@ fn bench_gpu(desc: &GpuDesc, quick: bool) -> Result<()> {
     );
     println!("cpu peers: {} threads; medians of {} runs\n", galerkin::bench::cpu::threads(), config.reps);
     print!("{}", galerkin::bench::table(&rows));
-    check_validation(gpu)
+    drop(gpu);
+    Ok(())
 }
 
 fn bench_reduce(desc: &GpuDesc, quick: bool) -> Result<()> {
@@ -480,8 +493,6 @@ fn bench_reduce(desc: &GpuDesc, quick: bool) -> Result<()> {
     };
     galerkin::bench::reduce::report(quick, gpu.as_ref(), Some(&progress), &mut emit)?;
     bar.finish_and_clear();
-    match gpu {
-        Some(g) => check_validation(g),
-        None => Ok(()),
-    }
+    drop(gpu);
+    Ok(())
 }

@@ -219,6 +219,10 @@ pub fn picture_with_colour_bar(
             .map_err(|e| plot_err(path, e))?;
         let (_, right) = root.split_horizontally(pw);
         let label = if bar.log { format!("{} (log scale)", bar.label) } else { bar.label.to_string() };
+        // The label runs along the bar: a smaller font where it would not fit (a sans-serif
+        // character is about 0.55 of the font size wide).
+        let along = f64::from(h.saturating_sub(TITLE_HEIGHT + 50));
+        let desc_size = (along / (0.55 * label.chars().count().max(1) as f64)).clamp(10.0, 18.0) as u32;
         let mut builder = ChartBuilder::on(&right);
         builder
             .margin_top(TITLE_HEIGHT + 20)
@@ -244,7 +248,7 @@ pub fn picture_with_colour_bar(
             .x_labels(0)
             .y_desc(label.as_str())
             .label_style(("sans-serif", 16))
-            .axis_desc_style(("sans-serif", 18))
+            .axis_desc_style(("sans-serif", desc_size))
             .y_label_formatter(&|y: &f64| format!("{:.3e}", value(*y) - shift))
             .draw()
             .map_err(|e| plot_err(path, e))?;

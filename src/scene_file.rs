@@ -17,13 +17,44 @@ pub struct SceneFileError {
     pub message: String,
 }
 
-/// The file's text.
+/// The file's text. A file of another kind (a Wavefront OBJ, VTK XML, a binary file) is
+/// refused saying what it is and what a scene file is, instead of a TOML parse error.
 pub fn read(path: &Path) -> Result<String, SceneFileError> {
-    std::fs::read_to_string(path).map_err(|e| SceneFileError {
-        path: path.to_path_buf(),
-        line: 0,
-        message: e.to_string(),
+    let fail = |line, message: String| SceneFileError { path: path.to_path_buf(), line, message };
+    let bytes = std::fs::read(path).map_err(|e| fail(0, e.to_string()))?;
+    if let Some(kind) = other_kind(path, &bytes) {
+        return Err(fail(1, kind));
+    }
+    String::from_utf8(bytes).map_err(|e| {
+        let line = e.as_bytes()[..e.utf8_error().valid_up_to()].iter().filter(|&&b| b == b'\n').count() + 1;
+        fail(line, "not UTF-8 text: scene files are TOML".into())
     })
+}
+
+/// What a file that is not a scene is, judged by its name and first lines, with what to do.
+fn other_kind(path: &Path, bytes: &[u8]) -> Option<String> {
+    let ext = path.extension().and_then(|e| e.to_str()).unwrap_or_default().to_ascii_lowercase();
+    let head = String::from_utf8_lossy(&bytes[..bytes.len().min(4096)]);
+    let code = head.lines().map(str::trim).filter(|l| !l.is_empty() && !l.starts_with('#'));
+    let obj_line = |l: &str| {
+        ["v ", "vn ", "vt ", "f ", "o ", "g ", "mtllib ", "usemtl "].iter().any(|k| l.starts_with(k))
+    };
+    let scene_help = "scene files are TOML: a radiosity scene names its OBJ geometry with `base = \"FILE.obj\"` and its deformation targets (see `galerkin radiosity render --help` and docs/radiosity.md); a fluid scene gives a [surface] section";
+    if ext == "obj" || (code.clone().take(8).any(obj_line) && !head.contains('=')) {
+        return Some(format!("this is a Wavefront OBJ file, not a scene: {scene_help}"));
+    }
+    if head.trim_start().starts_with("<?xml") || head.contains("<VTKFile") {
+        return Some(format!(
+            "this is an XML (VTK) file, not a scene: data sets are drawn by `galerkin spectral render FILE` or `galerkin spacetime render FILE`; {scene_help}"
+        ));
+    }
+    if ext == "safetensors" {
+        return Some("this is a model file (.safetensors), not a scene: pass it with --model".into());
+    }
+    if bytes.iter().take(4096).any(|&b| b == 0) {
+        return Some(format!("this is a binary file, not a scene: {scene_help}"));
+    }
+    None
 }
 
 fn line_of(text: &str, offset: usize) -> usize {

@@ -346,12 +346,12 @@ fn the_cli_generates_converts_and_refuses_bad_input_naming_it() {
     let vtu_path = scratch.file("cli.vtu");
     let back = scratch.file("cli-back.gst");
     let s = |p: &Path| p.to_string_lossy().to_string();
-    // spacetime-gen streams a scenario to .gst; convert to .vtu and back: the same records.
+    // spacetime gen streams a scenario to .gst; convert to .vtu and back: the same records.
     let (code, err) =
-        run(&["spacetime-gen", "--scenario", "booster", "--elements", "3000", "--out", &s(&gst_path)]);
+        run(&["spacetime", "gen", "--generate", "booster", "--elements", "3000", "--out", &s(&gst_path)]);
     assert_eq!(code, Some(0), "{err}");
-    assert_eq!(run(&["spacetime-convert", &s(&gst_path), &s(&vtu_path)]).0, Some(0));
-    assert_eq!(run(&["spacetime-convert", &s(&vtu_path), &s(&back)]).0, Some(0));
+    assert_eq!(run(&["spacetime", "convert", &s(&gst_path), &s(&vtu_path)]).0, Some(0));
+    assert_eq!(run(&["spacetime", "convert", &s(&vtu_path), &s(&back)]).0, Some(0));
     let (a, b) = (gst::open(&gst_path).unwrap(), gst::open(&back).unwrap());
     assert_eq!(a.len(), b.len());
     // .vtu holds f64; records are f32 of the same values, so the round trip is exact. The
@@ -364,21 +364,22 @@ fn the_cli_generates_converts_and_refuses_bad_input_naming_it() {
     assert!(ra == rb, "records changed in the .gst → .vtu → .gst round trip");
     // Bad input: each error names the file (or lists what exists) and exits 1.
     let missing = scratch.file("missing.gst");
-    let (code, err) = run(&["spacetime", &s(&missing)]);
+    let (code, err) = run(&["spacetime", "render", &s(&missing)]);
     assert_eq!(code, Some(1));
     assert!(err.contains(&s(&missing)), "{err}");
-    let (code, err) = run(&["spacetime-gen", "--scenario", "volcano", "--out", &s(&gst_path)]);
+    let (code, err) = run(&["spacetime", "gen", "--generate", "volcano", "--out", &s(&gst_path)]);
     assert_eq!(code, Some(1));
     assert!(err.contains("volcano") && err.contains("crack"), "{err}");
-    let (code, err) = run(&["spacetime-gen", "--scenario", "bar1d", "--out", &s(&gst_path)]);
+    let (code, err) = run(&["spacetime", "gen", "--generate", "bar1d", "--out", &s(&gst_path)]);
     assert_eq!(code, Some(1));
     assert!(err.contains("--generate bar1d"), "{err}");
-    let (code, err) = run(&["spacetime", &s(&gst_path), "--time", "99"]);
+    let (code, err) = run(&["spacetime", "render", &s(&gst_path), "--time", "99"]);
     assert_eq!(code, Some(1));
     assert!(err.contains("outside the data set's time span"), "{err}");
     let text = scratch.file("notes.txt");
     std::fs::write(&text, "not spacetime data").unwrap();
-    let (code, err) = run(&["spacetime-convert", &s(&text), &s(&vtu_path)]);
-    assert_eq!(code, Some(1));
+    // A file of another kind is an argument error (exit 2), refused before any work.
+    let (code, err) = run(&["spacetime", "convert", &s(&text), &s(&vtu_path)]);
+    assert_eq!(code, Some(2));
     assert!(err.contains(&s(&text)) && err.contains(".gst or .vtu"), "{err}");
 }

@@ -231,7 +231,7 @@ fn a_cut_plane_that_misses_the_mesh_is_an_error_not_an_empty_image() {
     let dir = tempfile::Builder::new().prefix("galerkin-").tempdir().expect("scratch");
     let out = dir.path().join("miss.png");
     let run = std::process::Command::new(env!("CARGO_BIN_EXE_galerkin"))
-        .arg("spectral")
+        .args(["spectral", "render"])
         .arg(fixture("bezier_hex.vtu"))
         .args(["--cut", "z=5", "--size", "64x48", "--out"])
         .arg(&out)

@@ -42,7 +42,7 @@ impl Drop for Xvfb {
     }
 }
 
-/// Runs `galerkin view --frames frames [extra…]` on display `x` and returns the screenshot.
+/// Runs `galerkin demo --view --quit-after frames [extra…]` on display `x` and returns the screenshot.
 fn run_viewer(x: &Xvfb, name: &str, frames: u32, extra: &[&str]) -> (u32, u32, Vec<u8>) {
     let scratch = tempfile::Builder::new()
         .prefix(&format!("galerkin-viewer-{name}-"))
@@ -52,7 +52,7 @@ fn run_viewer(x: &Xvfb, name: &str, frames: u32, extra: &[&str]) -> (u32, u32, V
     let shot = dir.join("shot.png");
     let scene_path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/demo.toml");
     let out = Command::new(env!("CARGO_BIN_EXE_galerkin"))
-        .args(["view", "--validation", "--frames", &frames.to_string(), "--scene"])
+        .args(["demo", "--view", "--validation", "--quit-after", &frames.to_string(), "--scene"])
         .arg(&scene_path)
         .args(extra)
         .arg("--screenshot")
@@ -116,8 +116,18 @@ fn the_spacetime_viewer_animates_t() {
     let dir = scratch.path().to_path_buf();
     let shot = dir.join("shot.png");
     let out = Command::new(env!("CARGO_BIN_EXE_galerkin"))
-        .args(["spacetime", "--validation", "--generate", "pulses", "--elements", "6000", "--time", "0.2"])
-        .args(["--view", "--play", "--frames", "6", "--size", "320x200", "--screenshot"])
+        .args([
+            "spacetime",
+            "view",
+            "--validation",
+            "--generate",
+            "pulses",
+            "--elements",
+            "6000",
+            "--time",
+            "0.2",
+        ])
+        .args(["--play", "--quit-after", "6", "--size", "320x200", "--screenshot"])
         .arg(&shot)
         .env("DISPLAY", &x.display)
         .env_remove("WAYLAND_DISPLAY")
@@ -141,7 +151,7 @@ fn the_spacetime_viewer_animates_t() {
     assert!(drawn > (w * h / 10) as usize, "only {drawn} pixels drawn");
 }
 
-/// Runs `galerkin spectral --validation … --view --frames N --size 320x200 --screenshot …`
+/// Runs `galerkin spectral view --validation … --quit-after N --size 320x200 --screenshot …`
 /// on display `x`; returns its stdout and the screenshot's share of drawn pixels.
 fn run_spectral_viewer(x: &Xvfb, name: &str, args: &[&str], frames: u32) -> (String, f64) {
     let scratch = tempfile::Builder::new()
@@ -151,9 +161,9 @@ fn run_spectral_viewer(x: &Xvfb, name: &str, args: &[&str], frames: u32) -> (Str
     let dir = scratch.path().to_path_buf();
     let shot = dir.join("shot.png");
     let out = Command::new(env!("CARGO_BIN_EXE_galerkin"))
-        .args(["spectral", "--validation"])
+        .args(["spectral", "view", "--validation"])
         .args(args)
-        .args(["--view", "--frames", &frames.to_string(), "--size", "320x200", "--screenshot"])
+        .args(["--quit-after", &frames.to_string(), "--size", "320x200", "--screenshot"])
         .arg(&shot)
         .env("DISPLAY", &x.display)
         .env_remove("WAYLAND_DISPLAY")
@@ -201,7 +211,7 @@ fn run_radiosity_viewer(x: &Xvfb, scene: &Path, shot: &Path) -> (String, f64) {
     let out = Command::new(env!("CARGO_BIN_EXE_galerkin"))
         .args(["--validation", "radiosity", "view"])
         .arg(scene)
-        .args(["--play", "--frames", "4", "--size", "320x200", "--screenshot"])
+        .args(["--play", "--quit-after", "4", "--size", "320x200", "--screenshot"])
         .arg(shot)
         .env("DISPLAY", &x.display)
         .env_remove("WAYLAND_DISPLAY")
@@ -253,7 +263,7 @@ fn the_fluid_viewer_plays_the_tunnel() {
     let out = Command::new(env!("CARGO_BIN_EXE_galerkin"))
         .args(["--validation", "fluid", "view"])
         .arg(&scene)
-        .args(["--play", "--frames", "5", "--size", "360x120", "--particles", "2000", "--screenshot"])
+        .args(["--play", "--quit-after", "5", "--size", "360x120", "--particles", "2000", "--screenshot"])
         .arg(&shot)
         .env("DISPLAY", &x.display)
         .env_remove("WAYLAND_DISPLAY")
@@ -306,7 +316,17 @@ fn the_fluid_viewer_plays_a_reduced_model() {
     let out = Command::new(bin)
         .args(["--validation", "fluid", "view", "--model"])
         .arg(&model)
-        .args(["--motion", "replay:1", "--play", "--frames", "5", "--size", "360x120", "--particles", "1000"])
+        .args([
+            "--motion",
+            "replay:1",
+            "--play",
+            "--quit-after",
+            "5",
+            "--size",
+            "360x120",
+            "--particles",
+            "1000",
+        ])
         .arg("--screenshot")
         .arg(&shot)
         .env("DISPLAY", &x.display)
@@ -379,7 +399,7 @@ fn the_cavity_viewer_runs_a_driven_reduced_cavity() {
         .args(["--validation", "fluid", "view"])
         .arg(&model)
         .args([
-            "--frames",
+            "--quit-after",
             "12",
             "--keys",
             "1@1,3@4",

@@ -1,4 +1,4 @@
-//! `galerkin bench fluid-reduced`: the reduced fluid step (seed 000 Fig. 2 right) at Table 1's
+//! `galerkin fluid bench-reduced`: the reduced fluid step (seed 000 Fig. 2 right) at Table 1's
 //! cavity basis sizes on synthetic bases of the cavity mesh, stage by stage, with both
 //! exponentials; and a long run of reduced steps watching the energy (§A.1–A.2).
 //!

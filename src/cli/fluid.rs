@@ -3,6 +3,7 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+use crate::cli::args::ImageFormat;
 use anyhow::{bail, Context, Result};
 use clap::{Args, Subcommand};
 use galerkin::fluid::gpu::GpuParticles;
@@ -28,12 +29,14 @@ pub enum Action {
     /// advected from frame 0 on the device (Eq. 13, 10 Euler substeps per frame) on top; to PNG
     /// or EXR (EXR: the raw value, cell index and kind — 0 cell, 1 particle, 2 wall — beside
     /// the colour).
+    #[command(mut_arg("out", |a| a.default_value("out/fluid.png")), mut_arg("size", |a| a.help("Image size, WIDTHxHEIGHT [default: 1600x500 for 2D runs, 1024x768 for 3D]")))]
     Render(RenderArgs),
     /// Play a 2D scene in a window (the full simulation steps every frame, the particles are
     /// advected on the device; keys: space plays/pauses, c colours cells by speed, r
     /// restarts), a 2D reduced model replaying a training run, or a 3D cavity model driven
     /// live (keys 1-3 compress or release a small cavity, space pauses, r resets, p reseeds
     /// the particles, arrows orbit). Esc quits, S saves a screenshot.
+    #[command(mut_arg("screenshot", |a| a.default_value("out/fluid-screenshot.png")))]
     View(ViewArgs),
     /// Write the surface animation of a [bird] or [surface] scene as an OBJ sequence
     /// (DIR/{stem}_0000.obj, …: one object per closed part, the same topology every frame),
@@ -65,6 +68,15 @@ pub enum Action {
     /// per cell velocity, speed, the outward flux through each face and the divergence (the
     /// format in src/fluid/export.rs).
     Export(ExportArgs),
+    /// The full-space solver (seed 000 §5, Table 1): seconds per step for deformation,
+    /// advection and projection on the deforming cavity from 10³ to 3·10⁵ cells next to the
+    /// paper's, and particle advection (10,000 particles) on the CPU and the device.
+    Bench(BenchArgs),
+    /// The reduced fluid (seed 000 §6): the reduced step at Table 1's cavity basis sizes
+    /// (m_f 64, m_u 128, m_g 5, m_h 16) on synthetic bases of the cavity mesh, stage by stage
+    /// with the Krylov and Padé exponentials; and 10⁶ reduced steps of a small tunnel model
+    /// watching the energy (trained first into out/bench-fluid-reduced/).
+    BenchReduced(crate::cli::fluid_reduced::BenchArgs),
 }
 
 /// Arguments of `galerkin fluid export`.
@@ -109,18 +121,12 @@ pub struct ViewArgs {
     /// Marker particles.
     #[arg(long, default_value_t = 8000)]
     pub particles: usize,
-    /// Start playing.
-    #[arg(long)]
-    pub play: bool,
-    /// Quit after presenting this many frames (scripted runs and tests).
-    #[arg(long)]
-    pub frames: Option<u64>,
     /// Window size (default 1200x400 for 2D, 1024x768 for a 3D cavity model).
-    #[arg(long, value_parser = crate::parse_size)]
+    #[arg(long, value_name = "WxH", value_parser = crate::cli::args::parse_size)]
     pub size: Option<(u32, u32)>,
-    /// Where S (and, with --frames, the last frame) saves a screenshot.
-    #[arg(long, default_value = "out/fluid-screenshot.png")]
-    pub screenshot: PathBuf,
+    /// --play starts the simulation or the motion.
+    #[command(flatten)]
+    pub viewer: crate::cli::args::ViewerArgs,
     /// Keys pressed at frames in a scripted run, KEY@FRAME comma-separated (a cavity model:
     /// 1, 2, 3 compress or release a small cavity, space pauses, r resets, p reseeds).
     #[arg(long, default_value = "")]
@@ -154,9 +160,6 @@ pub struct RenderArgs {
     /// Frame to draw (default: the last).
     #[arg(long)]
     pub frame: Option<usize>,
-    /// Output image (.png or .exr).
-    #[arg(long, default_value = "out/fluid.png")]
-    pub out: PathBuf,
     /// Marker particles, seeded at frame 0 (0: none).
     #[arg(long, default_value_t = 4000)]
     pub particles: usize,
@@ -164,28 +167,14 @@ pub struct RenderArgs {
     /// grey and the particles carry the speed colours.
     #[arg(long)]
     pub cells: bool,
-    /// Colour map: a built-in name (viridis, cool-warm, grey) or a ramp image file.
-    #[arg(long, default_value = "viridis")]
-    pub colormap: String,
-    /// Speed range of the ramp, LO,HI (default: 0 to the frame's largest cell speed).
-    #[arg(long, value_name = "LO,HI", value_parser = parse_range)]
-    pub range: Option<(f64, f64)>,
-    /// Image size (default 1600x500 for 2D runs, 1024x768 for 3D).
-    #[arg(long, value_parser = crate::parse_size)]
-    pub size: Option<(u32, u32)>,
+    /// The speed's colours (range default: 0 to the frame's largest cell speed).
+    #[command(flatten)]
+    pub colour: crate::cli::args::ColourArgs,
+    #[command(flatten)]
+    pub image: crate::cli::args::ImageArgs,
     /// Particle sprite radius in pixels.
     #[arg(long, default_value_t = 1.6)]
     pub sprite: f64,
-}
-
-fn parse_range(s: &str) -> Result<(f64, f64), String> {
-    let (a, b) = s.split_once(',').ok_or("expected LO,HI")?;
-    let lo: f64 = a.trim().parse().map_err(|e| format!("{a}: {e}"))?;
-    let hi: f64 = b.trim().parse().map_err(|e| format!("{b}: {e}"))?;
-    if !(lo.is_finite() && hi.is_finite() && hi > lo) {
-        return Err(format!("{s}: need finite LO < HI"));
-    }
-    Ok((lo, hi))
 }
 
 /// Runs a `galerkin fluid` action.
@@ -201,6 +190,8 @@ pub fn run(desc: &GpuDesc, action: &Action) -> Result<()> {
         Action::TrainScene(args) => crate::cli::fluid_reduced::train_scene(args),
         Action::Compare(args) => crate::cli::fluid_reduced::compare(args),
         Action::ErrorStudy(args) => crate::cli::fluid_reduced::error_study(args),
+        Action::Bench(args) => bench(desc, args),
+        Action::BenchReduced(args) => crate::cli::fluid_reduced::bench(args),
     }
 }
 
@@ -255,7 +246,7 @@ fn view(desc: &GpuDesc, args: &ViewArgs) -> Result<()> {
                     model,
                     args.particles,
                     args.size.unwrap_or((1024, 768)),
-                    args.play,
+                    args.viewer.play,
                 )?)
             } else {
                 Box::new(FluidContent::reduced(
@@ -263,7 +254,7 @@ fn view(desc: &GpuDesc, args: &ViewArgs) -> Result<()> {
                     args.motion,
                     args.particles,
                     args.size.unwrap_or((1200, 400)),
-                    args.play,
+                    args.viewer.play,
                 )?)
             }
         }
@@ -271,13 +262,13 @@ fn view(desc: &GpuDesc, args: &ViewArgs) -> Result<()> {
             FluidScene::load(scene)?,
             args.particles,
             args.size.unwrap_or((1200, 400)),
-            args.play,
+            args.viewer.play,
         )?),
         (None, None) => bail!("give a scene file or a model"),
     };
     let options = ViewOptions {
-        frames: args.frames,
-        screenshot: args.screenshot.clone(),
+        frames: args.viewer.quit_after,
+        screenshot: args.viewer.screenshot.clone(),
         keys: args.keys.0.clone(),
         ..ViewOptions::default()
     };
@@ -333,10 +324,6 @@ fn simulate(args: &SimulateArgs) -> Result<()> {
 }
 
 fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
-    let ext = args.out.extension().and_then(|e| e.to_str()).unwrap_or_default().to_ascii_lowercase();
-    if ext != "png" && ext != "exr" {
-        bail!("{}: unknown image format {ext:?}: expected .png or .exr", args.out.display());
-    }
     let reader = SnapshotReader::open(&args.dir)?;
     let meta = reader.meta().clone();
     if meta.frames == 0 {
@@ -346,7 +333,7 @@ fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
     if frame >= meta.frames {
         bail!("{}: frame {frame} asked, the run has frames 0 to {}", args.dir.display(), meta.frames - 1);
     }
-    let colormap = Colormap::by_name(&args.colormap)?;
+    let colormap = Colormap::by_name(&args.colour.colormap)?;
     let (mesh, topo) = reader.mesh_at(0)?;
     let gpu = Gpu::new(desc)?;
     let start = Instant::now();
@@ -370,10 +357,10 @@ fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
     let g = reader.frame("g", frame)?;
     let f = reader.frame("f", frame)?;
     let speeds = cell_speeds(&mesh, &topo, &g, &f);
-    let range = args.range.unwrap_or((0.0, speeds.iter().fold(0.0f64, |m, v| m.max(*v)).max(1e-12)));
+    let range = args.colour.range.unwrap_or((0.0, speeds.iter().fold(0.0f64, |m, v| m.max(*v)).max(1e-12)));
     let style = DrawStyle { colormap, range, log: false, colour_cells: args.cells, sprite_px: args.sprite };
     let (lo, hi) = mesh.bounds();
-    let size = args.size.unwrap_or(if meta.dim == 2 { (1600, 500) } else { (1024, 768) });
+    let size = args.image.size.unwrap_or(if meta.dim == 2 { (1600, 500) } else { (1024, 768) });
     let projection = if meta.dim == 2 {
         Projection::Plane(View2d::fit([lo[0], lo[1]], [hi[0], hi[1]], size, 0.02))
     } else {
@@ -382,7 +369,8 @@ fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
     let picture =
         draw_picture(&gpu, (&mesh, &topo), &g, &speeds, particles.as_ref(), &style, &projection, size)?;
     let (w, h) = size;
-    write_image(&args.out, &ext, w, h, &picture.rgba, &picture.raw)?;
+    args.image.create_parent()?;
+    write_image(&args.image.out, args.image.format(), w, h, &picture.rgba, &picture.raw)?;
     println!(
         "fluid render: frame {frame} of {} ({} cells, {} particles), speed range {:.3}..{:.3}, {:.2} s → {}",
         args.dir.display(),
@@ -391,14 +379,15 @@ fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
         range.0,
         range.1,
         start.elapsed().as_secs_f64(),
-        args.out.display()
+        args.image.out.display()
     );
     drop(particles);
-    crate::check_validation(gpu)
+    drop(gpu);
+    Ok(())
 }
 
-fn write_image(path: &Path, ext: &str, w: u32, h: u32, rgba: &[u8], raw: &[f32]) -> Result<()> {
-    if ext == "png" {
+fn write_image(path: &Path, format: ImageFormat, w: u32, h: u32, rgba: &[u8], raw: &[f32]) -> Result<()> {
+    if format == ImageFormat::Png {
         write_png_rgba8(path, w, h, rgba)?;
     } else {
         let byte = |c: usize| rgba8_channel(rgba, c);
@@ -421,7 +410,7 @@ fn write_image(path: &Path, ext: &str, w: u32, h: u32, rgba: &[u8], raw: &[f32])
     Ok(())
 }
 
-/// Arguments of `galerkin bench fluid`.
+/// Arguments of `galerkin fluid bench`.
 #[derive(Args)]
 pub struct BenchArgs {
     /// Smaller sizes and fewer frames: a minute instead of several.
@@ -501,7 +490,7 @@ fn bench_row(
     Ok(row)
 }
 
-/// `galerkin bench fluid`: per-stage times of the full-space step on the deforming cavity and
+/// `galerkin fluid bench`: per-stage times of the full-space step on the deforming cavity and
 /// on the flying bird at sizes from 10³ to 3·10⁵ cells, next to Table 1, and particle
 /// advection (CPU and device).
 pub fn bench(desc: &GpuDesc, args: &BenchArgs) -> Result<()> {
@@ -590,7 +579,8 @@ pub fn bench(desc: &GpuDesc, args: &BenchArgs) -> Result<()> {
         );
     }
     drop((rows, bird_rows));
-    crate::check_validation(gpu)
+    drop(gpu);
+    Ok(())
 }
 
 /// The `galerkin demo` part: the small tunnel (seed 000 §7.1) simulated for 20 frames, 3,000

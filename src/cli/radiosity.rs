@@ -24,13 +24,20 @@ use super::full_frames::{save_due, FullFrame, FullFramesFile};
 pub enum Action {
     /// Solve the radiosity of a scene at one parameter vector — full (Eq. 14 with the form
     /// factors of Eq. 15, visibility by ray casting) or, with --model, reduced — and draw it
-    /// to PNG or EXR (EXR: the raw radiance R, G, B and the face index beside the colour).
+    /// to PNG (tone-mapped sRGB) or EXR (the raw radiance R, G, B and the face index beside
+    /// the colour). With --view, open the viewer at this configuration instead.
+    #[command(
+        mut_arg("out", |a| a.default_value("out/radiosity.png")),
+        mut_arg("size", |a| a.default_value("1024x768")),
+        mut_arg("screenshot", |a| a.default_value("out/radiosity-screenshot.png"))
+    )]
     Render(RenderArgs),
     /// Open the scene (the two rooms or an OBJ scene) in a window: keys change the design
     /// parameters (1–9 choose one, [/] lower/raise it; in the two rooms also w/W window, k/K
     /// skylight, d/D door, t/T tilt), f switches reduced/full (with --model), m flat/smooth
     /// shading, e/E exposure, space sweeps the parameters; the title shows the mode, the
     /// parameters, the solve's time and the frame rate.
+    #[command(mut_arg("screenshot", |a| a.default_value("out/radiosity-screenshot.png")))]
     View(ViewArgs),
     /// Train the reduced radiosity of a scene (seed 000 §8.2–8.3, §9): sample the design
     /// space, solve every sample in full, PCA every quantity of Table 2, premultiply, learn
@@ -40,6 +47,10 @@ pub enum Action {
     /// configurations not trained on) reduced and full, and report the per-frame relative
     /// error, the frame rates and their ratio: a table (CSV) and a plot (PNG).
     Compare(CompareArgs),
+    /// Full radiosity (seed 000 §8): form factors with visibility and the Jacobi solve of
+    /// Eq. 14, on the CPU and the device, for the small and the full two-room scene. The
+    /// reduced model's rate is measured by `galerkin radiosity compare`.
+    Bench(BenchArgs),
 }
 
 /// Arguments of `galerkin radiosity train`.
@@ -70,7 +81,7 @@ pub struct TrainArgs {
 }
 
 /// Arguments of `galerkin radiosity view`.
-#[derive(Args)]
+#[derive(Args, Clone)]
 pub struct ViewArgs {
     /// Scene file (TOML).
     pub scene: PathBuf,
@@ -80,15 +91,12 @@ pub struct ViewArgs {
     /// The starting configuration and view (arrow keys orbit, m toggles the shading).
     #[command(flatten)]
     pub look: Look,
-    /// Start sweeping the parameters (space toggles).
-    #[arg(long)]
-    pub play: bool,
-    /// Quit after this many frames (scripted runs), saving the screenshot.
-    #[arg(long)]
-    pub frames: Option<u64>,
-    /// Where S (and a scripted run's last frame) saves the screenshot.
-    #[arg(long, default_value = "out/radiosity-screenshot.png")]
-    pub screenshot: PathBuf,
+    /// Window size, WIDTHxHEIGHT.
+    #[arg(long, value_name = "WxH", value_parser = crate::cli::args::parse_size, default_value = "1024x768")]
+    pub size: (u32, u32),
+    /// --play sweeps the parameters (space toggles).
+    #[command(flatten)]
+    pub viewer: crate::cli::args::ViewerArgs,
 }
 
 /// Arguments of `galerkin radiosity compare`.
@@ -125,7 +133,7 @@ pub struct CompareArgs {
 }
 
 /// What a picture or window shows: the configuration and how it is looked at.
-#[derive(Args)]
+#[derive(Args, Clone)]
 pub struct Look {
     /// Design parameters as NAME=VALUE, comma-separated or repeated: the two rooms' are
     /// window_width, skylight_size, door_width (metres), ceiling_tilt (degrees); an OBJ scene's
@@ -135,23 +143,23 @@ pub struct Look {
     pub params: Vec<(String, f64)>,
     /// Viewpoint in the two rooms (an OBJ scene is seen from outside its bounds).
     #[arg(long, value_enum, default_value_t = Viewpoint::Living)]
-    pub view: Viewpoint,
+    pub viewpoint: Viewpoint,
     /// Flat (each face's radiosity) or smooth (averaged to the vertices) shading.
     #[arg(long, value_enum, default_value_t = Shading::Flat)]
     pub shading: Shading,
     /// Exposure (1 / radiance shown at 63 % of white); default: automatic from the solution.
     #[arg(long)]
     pub exposure: Option<f64>,
-    /// Image or window size.
-    #[arg(long, value_name = "WxH", value_parser = crate::parse_size, default_value = "1024x768")]
-    pub size: (u32, u32),
 }
 
 /// Arguments of `galerkin radiosity render`.
 #[derive(Args)]
 pub struct RenderArgs {
-    /// Scene file (TOML), e.g. scenes/radiosity/two_rooms.toml (4,974 faces) or
-    /// two_rooms_small.toml (496 faces).
+    /// Scene file (TOML): the two rooms (scenes/radiosity/two_rooms.toml, 4,974 faces;
+    /// two_rooms_small.toml, 496) or an OBJ scene — a TOML file naming its base OBJ
+    /// (`base = "room.obj"`), its deformation targets (one OBJ per parameter), albedos,
+    /// openings (the objects light enters through) and lights; the format is in
+    /// docs/radiosity.md. An OBJ file itself is not a scene.
     pub scene: PathBuf,
     /// A trained model's directory (`galerkin radiosity train`): draw the reduced radiosity.
     #[arg(long)]
@@ -162,9 +170,11 @@ pub struct RenderArgs {
     /// The configuration and the view.
     #[command(flatten)]
     pub look: Look,
-    /// Output image: .png (tone-mapped sRGB) or .exr (colour and raw radiance and face index).
-    #[arg(long, default_value = "out/radiosity.png")]
-    pub out: PathBuf,
+    #[command(flatten)]
+    pub image: crate::cli::args::ImageArgs,
+    /// --view opens the viewer at this configuration; --play sweeps the parameters.
+    #[command(flatten)]
+    pub viewer: crate::cli::args::ViewerArgs,
 }
 
 fn parse_param(s: &str) -> Result<(String, f64), String> {
@@ -184,13 +194,24 @@ pub fn run(desc: &GpuDesc, action: &Action) -> Result<()> {
         Action::Train(args) => train(args),
         Action::View(args) => view(desc, args),
         Action::Compare(args) => compare(args),
+        Action::Bench(args) => bench(desc, args),
     }
 }
 
 fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
-    let ext = args.out.extension().and_then(|e| e.to_str()).unwrap_or_default().to_ascii_lowercase();
-    if ext != "png" && ext != "exr" {
-        bail!("{}: unknown image format {ext:?}: expected .png or .exr", args.out.display());
+    let size = args.image.size_or((1024, 768));
+    if args.viewer.view {
+        if args.lights.is_some() {
+            bail!("--lights applies to pictures; the viewer takes the scene's (or the model's) lighting");
+        }
+        let view_args = ViewArgs {
+            scene: args.scene.clone(),
+            model: args.model.clone(),
+            look: args.look.clone(),
+            size,
+            viewer: args.viewer.clone(),
+        };
+        return view(desc, &view_args);
     }
     let scene = AnyScene::load(&args.scene, light_mode(args.lights.as_deref()))?;
     let p = scene.parameters_from(&args.look.params).with_context(|| format!("{}", args.scene.display()))?;
@@ -226,16 +247,18 @@ fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
     }
     let gpu = Gpu::new(desc)?;
     let vertices = scene_vertices(&mesh, &geometry, &radiance, args.look.shading);
-    let camera = scene.camera(&mesh, args.look.view);
-    let picture = draw_picture(&gpu, &vertices, &camera, exposure, args.look.size)?;
-    let (w, h) = args.look.size;
-    if ext == "png" {
-        write_png_rgba8(&args.out, w, h, &picture.rgba)?;
+    let camera = scene.camera(&mesh, args.look.viewpoint);
+    let picture = draw_picture(&gpu, &vertices, &camera, exposure, size)?;
+    let (w, h) = size;
+    let out = &args.image.out;
+    args.image.create_parent()?;
+    if args.image.format() == crate::cli::args::ImageFormat::Png {
+        write_png_rgba8(out, w, h, &picture.rgba)?;
     } else {
         let byte = |c: usize| galerkin::render::rgba8_channel(&picture.rgba, c);
         let float = |c: usize| galerkin::render::rgba32f_channel(&picture.raw, c);
         write_exr_channels(
-            &args.out,
+            out,
             w,
             h,
             vec![
@@ -255,10 +278,11 @@ fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
         mesh.len(),
         if lights.mode == LightMode::Sky { "sky" } else { "area" },
         p_text.join(" "),
-        args.out.display()
+        out.display()
     );
     drop(picture);
-    crate::check_validation(gpu)
+    drop(gpu);
+    Ok(())
 }
 
 /// Refuses a model trained on a scene with another number of faces, naming its directory.
@@ -554,7 +578,7 @@ fn keep_full_frames(args: &CompareArgs, scene: &AnyScene) -> Result<()> {
 /// The most frames a compared sequence may have (each is a full solve: hours at this count).
 const MAX_FRAMES: usize = 100_000;
 
-/// Arguments of `galerkin bench radiosity`.
+/// Arguments of `galerkin radiosity bench`.
 #[derive(Args)]
 pub struct BenchArgs {
     /// Scene files to measure.
@@ -568,7 +592,7 @@ pub struct BenchArgs {
     pub cpu_only: bool,
 }
 
-/// `galerkin bench radiosity`: the full radiosity's stages on the CPU (f64) and the device
+/// `galerkin radiosity bench`: the full radiosity's stages on the CPU (f64) and the device
 /// (f32), medians of `--runs`.
 pub fn bench(desc: &GpuDesc, args: &BenchArgs) -> Result<()> {
     use galerkin::radiosity::form_factor::{form_factors, NearField};
@@ -627,7 +651,7 @@ pub fn bench(desc: &GpuDesc, args: &BenchArgs) -> Result<()> {
     }
     if let Some(gpu) = gpu {
         drop(device);
-        crate::check_validation(gpu)?;
+        drop(gpu);
     }
     Ok(())
 }
@@ -724,15 +748,18 @@ fn view(desc: &GpuDesc, args: &ViewArgs) -> Result<()> {
     };
     let settings = ViewSettings {
         params: p,
-        view: args.look.view,
+        view: args.look.viewpoint,
         shading: args.look.shading,
         exposure,
-        size: args.look.size,
-        playing: args.play,
+        size: args.size,
+        playing: args.viewer.play,
     };
     let content = RadiosityContent::new(scene, model, settings)?;
-    let options =
-        ViewOptions { frames: args.frames, screenshot: args.screenshot.clone(), ..ViewOptions::default() };
+    let options = ViewOptions {
+        frames: args.viewer.quit_after,
+        screenshot: args.viewer.screenshot.clone(),
+        ..ViewOptions::default()
+    };
     run(desc.clone(), Box::new(content), options)
 }
 

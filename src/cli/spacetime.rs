@@ -1,10 +1,10 @@
-//! `galerkin spacetime`, `galerkin spacetime-gen` and `galerkin spacetime-convert`: render a
-//! time slice of a spacetime DG data set (seed 003), generate data sets, convert between the
-//! `.gst` binary and VTK `.vtu`.
+//! `galerkin spacetime render|view|gen|convert|bench`: render a time slice of a spacetime DG
+//! data set (seed 003), generate data sets, convert between the `.gst` binary and VTK `.vtu`.
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+use crate::cli::args::ImageFormat;
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use galerkin::gpu::{Gpu, GpuDesc};
@@ -12,15 +12,72 @@ use galerkin::render::{write_png_rgba8, ColorFormat, Colormap, Pixels, RenderTar
 use galerkin::spacetime::scenario::{self, Scenario};
 use galerkin::spacetime::{generate, gst, vtu, ElementRecord, SpacetimeData, SpacetimeError, SpacetimeView};
 
-/// Arguments of `galerkin spacetime`.
-#[derive(Args)]
+/// `galerkin spacetime VERB`.
+#[derive(clap::Subcommand)]
+pub enum Verb {
+    /// Render a time slice of a spacetime DG data set (seed 003): height |v|, colour by strain
+    /// energy density on the seed's log ramp, exact per-pixel normals, edge overdraw; to PNG
+    /// (lit colour, with a title and a colour legend beside the picture) or EXR (channels U,
+    /// speed, normal.x/y/z; NaN where no surface; data only). Reads .gst (memory-mapped,
+    /// streamed) and .vtu files, or generates a data set (analytic elastodynamic pulses
+    /// projected per element, not solved). With --view, open the viewer instead.
+    #[command(
+        mut_arg("out", |a| a.default_value("out/spacetime.png")),
+        mut_arg("size", |a| a.default_value("1280x720"))
+    )]
+    Render(RenderArgs),
+    /// Open the interactive viewer: space plays/pauses t, `.`/`,` step, `]`/`[` speed ×2/÷2,
+    /// h height, e edges, v per-vertex colour, d subdivision, arrows orbit, +/- zoom, S
+    /// screenshot, Esc quits.
+    #[command(
+        mut_arg("out", |a| a.default_value("out/spacetime.png").hide(true)),
+        mut_arg("size", |a| a.default_value("1280x720").help("Window size, WIDTHxHEIGHT"))
+    )]
+    View(RenderArgs),
+    /// Generate a spacetime data set to a .gst or .vtu file (analytic fields, not solved).
+    Gen(GenArgs),
+    /// Convert a spacetime data set between .gst and .vtu.
+    Convert(ConvertArgs),
+    /// Seed 003's renderer: frame time (wall and per stage: slice, subdivide, draw) at
+    /// 1280×720 on generated data sets of 10^5 to 5·10^6 elements, growth with pixels, and the
+    /// out-of-core first frame of a 2·10^7-element file (generated on first use into
+    /// --data-dir).
+    Bench(BenchArgs),
+}
+
+/// Runs a `galerkin spacetime` verb.
+pub fn run(desc: &GpuDesc, verb: &Verb) -> Result<()> {
+    match verb {
+        Verb::Render(args) => render(desc, args),
+        Verb::View(args) => {
+            let mut args = args.clone();
+            args.viewer.view = true;
+            render(desc, &args)
+        }
+        Verb::Gen(args) => generate_file(args),
+        Verb::Convert(args) => convert(args),
+        Verb::Bench(args) => bench(desc, args),
+    }
+}
+
+/// A spacetime data file: `.gst` or `.vtu`, checked when the arguments are parsed.
+fn data_path(s: &str) -> Result<PathBuf, String> {
+    match extension(Path::new(s)).as_str() {
+        "gst" | "vtu" => Ok(PathBuf::from(s)),
+        _ => Err(format!("{s:?}: spacetime data sets are .gst or .vtu files")),
+    }
+}
+
+/// Arguments of `galerkin spacetime render` and `view`.
+#[derive(Args, Clone)]
 pub struct RenderArgs {
     /// Data set: a `.gst` file (memory-mapped: only the elements near --time are read) or a
     /// VTK `.vtu` file (read whole). Without it, a data set is generated (--generate).
+    #[arg(value_parser = data_path)]
     pub file: Option<PathBuf>,
     /// Without FILE: the generated data set: `pulses` (a pressure and a shear pulse crossing
     /// the unit square; structured mesh) or a scenario of seed 003 on a tent-pitched,
-    /// non-conforming mesh: `crack`, `inclusions`, `booster` (see `spacetime-gen --help`); or
+    /// non-conforming mesh: `crack`, `inclusions`, `booster` (see `spacetime gen --help`); or
     /// `bar1d`, the seed's Fig. 3: a 1D bar fixed at its left end over (x, t) triangles, the
     /// whole spacetime shown as one image (x to the right, t upwards; EXR channels U, speed, u
     /// and s, the colour coordinate shown).
@@ -53,33 +110,16 @@ pub struct RenderArgs {
     /// Colour map: viridis, cool-warm, grey, or a ramp PNG file.
     #[arg(long, default_value = "viridis")]
     pub colormap: String,
-    /// Image size.
-    #[arg(long, value_name = "WxH", value_parser = crate::parse_size, default_value = "1280x720")]
-    pub size: (u32, u32),
-    /// Output image: .png (lit colour, with a title and a colour legend beside the picture) or
-    /// .exr (channels U, speed, normal.x/y/z; NaN where no surface; data only).
-    #[arg(long, default_value = "out/spacetime.png")]
-    pub out: PathBuf,
+    #[command(flatten)]
+    pub image: crate::cli::args::ImageArgs,
     /// A PNG of the picture alone (--size exactly), without the title and colour legend.
     #[arg(long)]
     pub no_legend: bool,
-    /// Open the interactive viewer instead of writing an image: space plays/pauses t, `.`/`,`
-    /// step, `]`/`[` speed ×2/÷2, h height, e edges, v per-vertex colour, d subdivision, arrows
-    /// orbit, +/- zoom, S screenshot, Esc quits.
-    #[arg(long)]
-    pub view: bool,
-    /// With --view: start playing.
-    #[arg(long)]
-    pub play: bool,
-    /// With --view: quit after this many frames (scripted runs), saving --screenshot.
-    #[arg(long)]
-    pub frames: Option<u64>,
-    /// With --view: where S (and a scripted run's last frame) saves the screenshot.
-    #[arg(long, default_value = "out/screenshot.png")]
-    pub screenshot: PathBuf,
+    #[command(flatten)]
+    pub viewer: crate::cli::args::ViewerArgs,
 }
 
-/// Arguments of `galerkin spacetime-gen`.
+/// Arguments of `galerkin spacetime gen`.
 #[derive(Args)]
 pub struct GenArgs {
     /// The data set. `pulses`: the unit square, a structured conforming mesh, crossing
@@ -90,21 +130,23 @@ pub struct GenArgs {
     /// section with a star-shaped bore). All fields are analytic travelling and reflecting
     /// pulses L2-projected per element — not solved.
     #[arg(long, default_value = "pulses")]
-    pub scenario: String,
+    pub generate: String,
     /// About this many tetrahedra.
     #[arg(long, default_value_t = 100_000)]
     pub elements: usize,
     /// Output: `.gst` (streamed to disk: any size) or `.vtu` (built in memory).
-    #[arg(long)]
+    #[arg(long, value_parser = data_path)]
     pub out: PathBuf,
 }
 
-/// Arguments of `galerkin spacetime-convert`.
+/// Arguments of `galerkin spacetime convert`.
 #[derive(Args)]
 pub struct ConvertArgs {
     /// Input `.gst` or `.vtu`.
+    #[arg(value_parser = data_path)]
     pub input: PathBuf,
     /// Output `.gst` or `.vtu`.
+    #[arg(value_parser = data_path)]
     pub output: PathBuf,
 }
 
@@ -131,29 +173,20 @@ pub fn load(path: &Path) -> Result<SpacetimeData, SpacetimeError> {
     }
 }
 
-fn progress_bar(len: u64, what: &str) -> indicatif::ProgressBar {
-    let bar = indicatif::ProgressBar::new(len);
-    bar.set_style(
-        indicatif::ProgressStyle::with_template(&format!("{what} {{bar:30}} {{percent}}% eta {{eta}}"))
-            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
-    );
-    bar
-}
-
-/// `galerkin spacetime-gen`.
+/// `galerkin spacetime gen`.
 pub fn generate_file(args: &GenArgs) -> Result<()> {
     if args.elements == 0 {
         bail!("--elements must be positive");
     }
     let start = Instant::now();
-    if args.scenario == "bar1d" {
-        bail!("bar1d is a 1D bar over (x, t) triangles, not a tetrahedral data set: render it with `galerkin spacetime --generate bar1d`");
+    if args.generate == "bar1d" {
+        bail!("bar1d is a 1D bar over (x, t) triangles, not a tetrahedral data set: render it with `galerkin spacetime render --generate bar1d`");
     }
-    if let Ok(scenario) = args.scenario.parse::<Scenario>() {
+    if let Ok(scenario) = args.generate.parse::<Scenario>() {
         match extension(&args.out).as_str() {
             "gst" => {
                 let mut writer = gst::GstWriter::create(&args.out, &scenario::materials(scenario))?;
-                let bar = progress_bar(args.elements as u64, &format!("generating {scenario}"));
+                let bar = crate::progress_bar(args.elements as u64, &format!("generating {scenario}"));
                 let mut failed: Option<SpacetimeError> = None;
                 scenario::generate_streaming(scenario, args.elements, &mut |g| {
                     if failed.is_none() {
@@ -181,10 +214,10 @@ pub fn generate_file(args: &GenArgs) -> Result<()> {
         }
         return Ok(());
     }
-    match (args.scenario.as_str(), extension(&args.out).as_str()) {
+    match (args.generate.as_str(), extension(&args.out).as_str()) {
         ("pulses", "gst") => {
             let mut writer = gst::GstWriter::create(&args.out, &[generate::PULSES_MATERIAL])?;
-            let bar = progress_bar(args.elements as u64, "generating");
+            let bar = crate::progress_bar(args.elements as u64, "generating");
             generate::stream_pulses(args.elements, &mut |r| writer.push(r), &mut |done| {
                 bar.set_position(done)
             })?;
@@ -216,7 +249,7 @@ fn report(path: &Path, elements: usize, start: Instant) {
     );
 }
 
-/// `galerkin spacetime-convert`.
+/// `galerkin spacetime convert`.
 pub fn convert(args: &ConvertArgs) -> Result<()> {
     let data = load(&args.input)?;
     match extension(&args.output).as_str() {
@@ -233,7 +266,7 @@ pub fn convert(args: &ConvertArgs) -> Result<()> {
     Ok(())
 }
 
-/// `galerkin spacetime`.
+/// `galerkin spacetime render`.
 pub fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
     for (name, v) in
         [("--subdivide", args.subdivide), ("--umax", args.umax), ("--height-scale", args.height_scale)]
@@ -271,7 +304,7 @@ pub fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
         per_vertex: args.per_vertex,
         ..base
     };
-    if args.view {
+    if args.viewer.view {
         return open_viewer(desc, data, view, args);
     }
     let elements = data.len();
@@ -282,8 +315,9 @@ pub fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
     let start = Instant::now();
     let stats = renderer.slice(view.time, view.subdivide)?;
     let slice_ms = start.elapsed().as_secs_f64() * 1e3;
-    let (w, h) = args.size;
-    let exr = extension(&args.out) == "exr";
+    let (w, h) = args.image.size_or((1280, 720));
+    let out = &args.image.out;
+    let exr = args.image.format() == ImageFormat::Exr;
     let format = if exr { ColorFormat::Rgba32F } else { ColorFormat::Rgba8 };
     let target = RenderTarget::new(&gpu, "spacetime", w, h, format)?;
     let start = Instant::now();
@@ -296,9 +330,7 @@ pub fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
     let draw_ms = start.elapsed().as_secs_f64() * 1e3;
     let pixels = match (legend, pixels, view.u_max) {
         (true, Pixels::Rgba8(rgba), Some(u_max)) if u_max > 0.0 => {
-            if let Some(dir) = args.out.parent().filter(|d| !d.as_os_str().is_empty()) {
-                std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-            }
+            args.image.create_parent()?;
             let bar = galerkin::plot::ColourBar {
                 colormap: &colormap,
                 range: (1.0, u_max + 1.0),
@@ -308,9 +340,11 @@ pub fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
             };
             let title = format!(
                 "{}: t = {time:.4}",
-                args.file.as_ref().map_or_else(|| "generated".to_string(), |f| f.display().to_string())
+                args.file
+                    .as_ref()
+                    .map_or_else(|| format!("generated {}", args.generate), |f| f.display().to_string())
             );
-            galerkin::plot::picture_with_colour_bar(&rgba, (w, h), &bar, &title, &args.out)?;
+            galerkin::plot::picture_with_colour_bar(&rgba, (w, h), &bar, &title, out)?;
             None
         }
         (_, pixels, _) => Some(pixels),
@@ -320,7 +354,7 @@ pub fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
         |p: &[f32]| if p[2].is_nan() { f32::NAN } else { (1.0 - p[2] * p[2] - p[3] * p[3]).max(0.0).sqrt() };
     if let Some(pixels) = pixels {
         write_image(
-            &args.out,
+            out,
             (w, h),
             pixels,
             &[
@@ -339,13 +373,14 @@ pub fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
         stats.triangles,
         stats.lines,
         galerkin::process::peak_memory_mb().map_or("unknown".into(), |mb| format!("{mb:.0} MB")),
-        args.out.display()
+        out.display()
     );
     drop((target, renderer));
-    crate::check_validation(gpu)
+    drop(gpu);
+    Ok(())
 }
 
-/// Arguments of `galerkin bench spacetime`.
+/// Arguments of `galerkin spacetime bench`.
 #[derive(Args)]
 pub struct BenchArgs {
     /// 10^5 and 10^6 elements only, no out-of-core run (a minute instead of ten).
@@ -358,10 +393,10 @@ pub struct BenchArgs {
     /// Frames per configuration (the median is reported).
     #[arg(long, default_value_t = 30)]
     pub frames: usize,
-    /// The data sets: `pulses` (structured) or a tent-pitched scenario (`crack`, `inclusions`,
-    /// `booster`); the out-of-core file is always `pulses`.
+    /// The data sets to generate: `pulses` (structured) or a tent-pitched scenario (`crack`,
+    /// `inclusions`, `booster`); the out-of-core file is always `pulses`.
     #[arg(long, default_value = "pulses")]
-    pub scenario: String,
+    pub generate: String,
     /// Only these data-set sizes (comma-separated element counts), no out-of-core run: for
     /// A/B runs at one size, e.g. `--elements 5000000 --frames 21`.
     #[arg(long, value_delimiter = ',', value_name = "N")]
@@ -373,12 +408,12 @@ fn bench_data(dir: &Path, scenario: &str, elements: usize) -> Result<PathBuf> {
     std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     let path = dir.join(format!("{scenario}-{elements}.gst"));
     if gst::open(&path).is_err() {
-        generate_file(&GenArgs { scenario: scenario.into(), elements, out: path.clone() })?;
+        generate_file(&GenArgs { generate: scenario.into(), elements, out: path.clone() })?;
     }
     Ok(path)
 }
 
-/// `galerkin bench spacetime`: frame times of seed 003's renderer on generated data (the
+/// `galerkin spacetime bench`: frame times of seed 003's renderer on generated data (the
 /// issue's goal: ≥ 30 FPS at 1280×720 on 5·10^6 elements), their growth with active elements
 /// and with pixels, and the out-of-core first frame of a 2·10^7-element file.
 pub fn bench(desc: &GpuDesc, args: &BenchArgs) -> Result<()> {
@@ -418,7 +453,7 @@ pub fn bench(desc: &GpuDesc, args: &BenchArgs) -> Result<()> {
     println!("\nFrames at an advancing t (0.3 → 0.7 of the span), height and edges on, U_max 0.05; medians of {} frames:\n\n{header}", args.frames);
     let mut largest = None;
     for &n in sizes {
-        let path = bench_data(&args.data_dir, &args.scenario, n)?;
+        let path = bench_data(&args.data_dir, &args.generate, n)?;
         let data = gst::open(&path)?;
         let [t0, t1] = data.summary().time;
         let view = SpacetimeView { u_max: Some(0.05), ..SpacetimeView::looking_at(data.summary(), t0) };
@@ -455,8 +490,8 @@ pub fn bench(desc: &GpuDesc, args: &BenchArgs) -> Result<()> {
         row(n, size, None, &rep);
     }
     drop(r);
-    crate::check_validation(gpu)?;
-    if !args.quick && args.elements.is_empty() && args.scenario == "pulses" {
+    drop(gpu);
+    if !args.quick && args.elements.is_empty() && args.generate == "pulses" {
         let path = bench_data(&args.data_dir, "pulses", 20_000_000)?;
         println!("\nOut of core: the first frame of {} in a fresh process:", path.display());
         let exe = std::env::current_exe().context("finding this executable")?;
@@ -465,6 +500,7 @@ pub fn bench(desc: &GpuDesc, args: &BenchArgs) -> Result<()> {
         let status = std::process::Command::new(exe)
             .args([
                 "spacetime",
+                "render",
                 &path.to_string_lossy(),
                 "--time",
                 "0.2",
@@ -483,15 +519,16 @@ pub fn bench(desc: &GpuDesc, args: &BenchArgs) -> Result<()> {
     Ok(())
 }
 
-/// `galerkin spacetime --generate bar1d`: seed 003's Fig. 3, the whole (x, t) spacetime of a
+/// `galerkin spacetime render --generate bar1d`: seed 003's Fig. 3, the whole (x, t) spacetime of a
 /// bar, per pixel (or per vertex with --per-vertex).
 fn render_bar(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
     use galerkin::spacetime::bar::{bar1d, BarRenderer};
     let mesh = bar1d(args.elements);
     let gpu = Gpu::new(desc)?;
     let mut renderer = BarRenderer::new(&gpu, &mesh, &Colormap::by_name(&args.colormap)?)?;
-    let (w, h) = args.size;
-    let exr = extension(&args.out) == "exr";
+    let (w, h) = args.image.size_or((1280, 720));
+    let out = &args.image.out;
+    let exr = args.image.format() == ImageFormat::Exr;
     let u_max = match args.umax {
         Some(u) => u,
         None => {
@@ -507,7 +544,7 @@ fn render_bar(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
         RenderTarget::new(&gpu, "bar", w, h, if exr { ColorFormat::Rgba32F } else { ColorFormat::Rgba8 })?;
     let pixels = renderer.render(&target, u_max, args.per_vertex)?;
     write_image(
-        &args.out,
+        out,
         (w, h),
         pixels,
         &[("U", |p| p[0]), ("speed", |p| p[1]), ("u", |p| p[2]), ("s", |p| p[3])],
@@ -518,10 +555,11 @@ fn render_bar(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
         renderer.window()[2],
         renderer.window()[3],
         if args.per_vertex { "per-vertex colour" } else { "per-pixel colour" },
-        args.out.display()
+        out.display()
     );
     drop((target, renderer));
-    crate::check_validation(gpu)
+    drop(gpu);
+    Ok(())
 }
 
 #[cfg(feature = "viewer")]
@@ -531,11 +569,14 @@ fn open_viewer(desc: &GpuDesc, data: SpacetimeData, view: SpacetimeView, args: &
         data,
         view,
         Colormap::by_name(&args.colormap)?,
-        args.size,
-        args.play,
+        args.image.size_or((1280, 720)),
+        args.viewer.play,
     );
-    let options =
-        ViewOptions { frames: args.frames, screenshot: args.screenshot.clone(), ..ViewOptions::default() };
+    let options = ViewOptions {
+        frames: args.viewer.quit_after,
+        screenshot: args.viewer.screenshot.clone(),
+        ..ViewOptions::default()
+    };
     run(desc.clone(), Box::new(content), options)
 }
 

@@ -1,18 +1,19 @@
-//! `galerkin spectral` and `galerkin spectral-gen`: render spectral elements per pixel (seed
-//! 002) from a file or a generated data set; write generated data sets to `.vtu`.
+//! `galerkin spectral render|view|gen|bench`: render spectral elements per pixel (seed 002)
+//! from a file or a generated data set; write generated data sets to `.vtu`.
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::Instant;
 
+use crate::cli::args::ImageFormat;
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use galerkin::gpu::{Gpu, GpuDesc};
 use galerkin::render::{write_exr_channels, write_png_rgba8, ColorFormat, Colormap, Pixels, RenderTarget};
 use galerkin::spectral::{generate, NodeSet, SpectralMesh, SpectralRenderer, SpectralView};
 
-/// Where a data set comes from, shared by `spectral` and `spectral-gen`.
-#[derive(Args)]
+/// Where a data set comes from, shared by `spectral render` and `spectral gen`.
+#[derive(Args, Clone)]
 pub struct Source {
     /// Without FILE: the generated data set: `grid` (8 × 4 straight, skewed quadrilaterals;
     /// fields `waves` and the discontinuous `cells`), `annulus` (4 × 12 curved quadrilaterals,
@@ -45,14 +46,58 @@ impl Source {
     }
 }
 
-/// Arguments of `galerkin spectral`.
-#[derive(Args)]
+/// `galerkin spectral VERB`.
+#[derive(clap::Subcommand)]
+pub enum Verb {
+    /// Render a data set per pixel to PNG (colour, with a title and a colour legend beside the
+    /// picture) or EXR (R, G, B of the picture and the raw value, xi, eta and element of every
+    /// pixel as float channels — for cut planes value, plane, zeta and element; NaN where no
+    /// element, element −(e + 1) where only edge overdraw drew; data only, no legend). With
+    /// --view, open the viewer instead.
+    #[command(
+        mut_arg("out", |a| a.default_value("out/spectral.png")),
+        mut_arg("size", |a| a.default_value("1024x768"))
+    )]
+    Render(RenderArgs),
+    /// Open the interactive viewer: space plays/pauses the time steps, `.`/`,` step, l log
+    /// scale, p colour map, i/I more/fewer iso-lines, e edges, v per-vertex colour, h height
+    /// field (planar meshes), r narrows the range to its middle half, R restores it; cut
+    /// planes: n adds, c selects, j/k move, o/O turn about z, u/U tilt, x deletes; arrows
+    /// orbit (surfaces, cut planes), +/- zoom, S screenshot, Esc quits.
+    #[command(
+        mut_arg("out", |a| a.default_value("out/spectral.png").hide(true)),
+        mut_arg("size", |a| a.default_value("1024x768").help("Window size, WIDTHxHEIGHT"))
+    )]
+    View(RenderArgs),
+    /// Generate a spectral-element data set to a .vtu file (analytic fields, not solved).
+    Gen(GenArgs),
+    /// Seed 002's table: FPS of orders 1–8 on the artery (704) and coil (3332) at 1024×768,
+    /// per pixel against per vertex in the same run; frame time against pixels and elements.
+    Bench(BenchArgs),
+}
+
+/// Runs a `galerkin spectral` verb.
+pub fn run(desc: &GpuDesc, verb: &Verb) -> Result<()> {
+    match verb {
+        Verb::Render(args) => render(desc, args),
+        Verb::View(args) => {
+            let mut args = args.clone();
+            args.viewer.view = true;
+            render(desc, &args)
+        }
+        Verb::Gen(args) => generate_file(args),
+        Verb::Bench(args) => bench(desc, args),
+    }
+}
+
+/// Arguments of `galerkin spectral render` and `view`.
+#[derive(Args, Clone)]
 pub struct RenderArgs {
-    /// Data set: a VTK `.vtu` file of Lagrange quadrilaterals (planar or a surface in 3D) or
-    /// hexahedra (shown by cut planes), in any encoding VTK writes; a ParaView `.pvd`
-    /// collection or `.vtu.series` of such files (its files are the time steps); an MFEM mesh ("MFEM mesh v1.0", straight or with a
-    /// curved `nodes` section) with --gf; or a GLVis "solution" stream saved to a file. Without
-    /// it, a data set is generated (--generate).
+    /// Data set: a VTK `.vtu` file of Lagrange or Bézier quadrilaterals (planar or a surface in
+    /// 3D) or hexahedra (shown by cut planes), in any encoding VTK writes; a ParaView `.pvd`
+    /// collection or `.vtu.series` of such files (its files are the time steps); an MFEM mesh
+    /// ("MFEM mesh v1.0", straight or with a curved `nodes` section) with --gf; or a GLVis
+    /// "solution" stream saved to a file. Without it, a data set is generated (--generate).
     pub file: Option<PathBuf>,
     /// With an MFEM mesh (or after a solution stream): a GridFunction file (H1 or L2
     /// collection); repeat for the time steps of one field, named after the first file.
@@ -66,16 +111,11 @@ pub struct RenderArgs {
     /// Its time step (0 = first).
     #[arg(long, default_value_t = 0)]
     pub step: usize,
-    /// Colour range (default: the field's range at this step) — narrow it to look at one
-    /// region in detail, as the seed does.
-    #[arg(long, num_args = 2, value_names = ["LO", "HI"], allow_negative_numbers = true)]
-    pub range: Option<Vec<f64>>,
+    #[command(flatten)]
+    pub colour: crate::cli::args::ColourArgs,
     /// Logarithmic colour scale (needs a positive range).
     #[arg(long)]
     pub log: bool,
-    /// Colour map: viridis, cool-warm, grey, or a ramp PNG file.
-    #[arg(long, default_value = "viridis")]
-    pub palette: String,
     /// Iso-lines: this many levels across the colour range, one pixel wide.
     #[arg(long, default_value_t = 0)]
     pub isolines: u32,
@@ -90,7 +130,7 @@ pub struct RenderArgs {
     pub per_vertex: bool,
     /// Planar meshes: show the field as a height field z = SCALE · f, lit with its exact
     /// normals (`--height` alone: the field's range becomes a quarter of the mesh's width).
-    #[arg(long, value_name = "SCALE", num_args = 0..=1, default_missing_value = "0", allow_negative_numbers = true)]
+    #[arg(long, value_name = "SCALE", num_args = 0..=1, default_missing_value = "0", allow_negative_numbers = true, value_parser = finite)]
     pub height: Option<f64>,
     /// Hexahedral meshes: a cut plane, `x=V`, `y=V`, `z=V` or `A,B,C,D` (the plane
     /// A x + B y + C z = D); repeat for several (at most 8). Default: z through the middle.
@@ -99,43 +139,38 @@ pub struct RenderArgs {
     /// Surfaces: the tessellation's screen-space error budget in pixels.
     #[arg(long, default_value_t = 0.5)]
     pub max_error: f64,
-    /// Image size.
-    #[arg(long, value_name = "WxH", value_parser = crate::parse_size, default_value = "1024x768")]
-    pub size: (u32, u32),
-    /// Output image: .png (colour, with a title and a colour legend beside the picture) or .exr
-    /// (R, G, B of the picture and the raw value, xi, eta and element of every pixel as float
-    /// channels — for cut planes value, plane, zeta and element; NaN where no element, element
-    /// −(e + 1) where only edge overdraw drew; data only, no legend).
-    #[arg(long, default_value = "out/spectral.png")]
-    pub out: PathBuf,
+    #[command(flatten)]
+    pub image: crate::cli::args::ImageArgs,
     /// A PNG of the picture alone (--size exactly), without the title and colour legend.
     #[arg(long)]
     pub no_legend: bool,
-    /// Open the interactive viewer instead of writing an image: space plays/pauses the time
-    /// steps, `.`/`,` step, l log scale, p palette, i/I more/fewer iso-lines, e edges, v
-    /// per-vertex colour, h height field (planar meshes), r narrows the range to its middle half, R restores it; cut planes: n
-    /// adds, c selects, j/k move, o/O turn about z, u/U tilt, x deletes; arrows orbit
-    /// (surfaces, cut planes), +/- zoom, S screenshot, Esc quits.
-    #[arg(long)]
-    pub view: bool,
-    /// With --view: start playing the time steps.
-    #[arg(long)]
-    pub play: bool,
-    /// With --view: quit after this many frames (scripted runs), saving --screenshot.
-    #[arg(long)]
-    pub frames: Option<u64>,
-    /// With --view: where S (and a scripted run's last frame) saves the screenshot.
-    #[arg(long, default_value = "out/screenshot.png")]
-    pub screenshot: PathBuf,
+    #[command(flatten)]
+    pub viewer: crate::cli::args::ViewerArgs,
+}
+
+/// A finite number.
+fn finite(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() => Ok(v),
+        _ => Err(format!("{s:?} is not a finite number")),
+    }
 }
 
 #[cfg(feature = "viewer")]
 fn open_viewer(desc: &GpuDesc, mesh: Arc<SpectralMesh>, view: SpectralView, args: &RenderArgs) -> Result<()> {
     use galerkin::render::viewer::{run, ViewOptions};
-    let content =
-        galerkin::spectral::viewer::SpectralContent::new(mesh, view, &args.palette, args.size, args.play);
-    let options =
-        ViewOptions { frames: args.frames, screenshot: args.screenshot.clone(), ..ViewOptions::default() };
+    let content = galerkin::spectral::viewer::SpectralContent::new(
+        mesh,
+        view,
+        &args.colour.colormap,
+        args.image.size_or((1024, 768)),
+        args.viewer.play,
+    );
+    let options = ViewOptions {
+        frames: args.viewer.quit_after,
+        screenshot: args.viewer.screenshot.clone(),
+        ..ViewOptions::default()
+    };
     run(desc.clone(), Box::new(content), options)
 }
 
@@ -165,7 +200,7 @@ fn parse_plane(s: &str) -> Result<[f64; 4], String> {
     }
 }
 
-/// Arguments of `galerkin spectral-gen`.
+/// Arguments of `galerkin spectral gen`.
 #[derive(Args)]
 pub struct GenArgs {
     #[command(flatten)]
@@ -175,7 +210,7 @@ pub struct GenArgs {
     pub out: PathBuf,
 }
 
-/// `galerkin spectral-gen`.
+/// `galerkin spectral gen`.
 pub fn generate_file(args: &GenArgs) -> Result<()> {
     let mesh = args.source.mesh(None, &[])?;
     galerkin::spectral::vtu::write(&args.out, &mesh)?;
@@ -188,7 +223,7 @@ pub fn generate_file(args: &GenArgs) -> Result<()> {
     Ok(())
 }
 
-/// `galerkin spectral`.
+/// `galerkin spectral render`.
 pub fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
     let loaded = Instant::now();
     let mesh = Arc::new(args.source.mesh(args.file.as_deref(), &args.grid_functions)?);
@@ -203,11 +238,7 @@ pub fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
             steps - 1
         );
     }
-    let range = match args.range.as_deref() {
-        Some(&[lo, hi]) if lo.is_finite() && hi.is_finite() && lo < hi => Some((lo, hi)),
-        Some(r) => bail!("--range {r:?}: needs two finite numbers LO < HI"),
-        None => None,
-    };
+    let range = args.colour.range;
     if args.log && range.is_some_and(|(lo, _)| lo <= 0.0) {
         bail!("--log needs a positive range (LO > 0)");
     }
@@ -228,30 +259,25 @@ pub fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
         height: args.height,
         ..SpectralView::default()
     };
-    if args.view {
+    if args.viewer.view {
         return open_viewer(desc, mesh, view, args);
     }
-    let ext = args.out.extension().and_then(|e| e.to_str()).unwrap_or_default().to_ascii_lowercase();
-    if ext != "png" && ext != "exr" {
-        bail!("{}: unknown image format {ext:?}: expected .png or .exr", args.out.display());
-    }
     let gpu = Gpu::new(desc)?;
-    let colormap = Colormap::by_name(&args.palette)?;
+    let colormap = Colormap::by_name(&args.colour.colormap)?;
     let mut renderer = SpectralRenderer::new(&gpu, mesh.clone(), &colormap)?;
-    let (w, h) = args.size;
+    let (w, h) = args.image.size_or((1024, 768));
+    let out = &args.image.out;
     let start = Instant::now();
     let colour = RenderTarget::new(&gpu, "spectral", w, h, ColorFormat::Rgba8)?;
     let Pixels::Rgba8(rgba) = renderer.render(&colour, &view)? else {
         bail!("an RGBA8 target returned floats")
     };
     let draw_ms = start.elapsed().as_secs_f64() * 1e3;
-    if let Some(dir) = args.out.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-    }
+    args.image.create_parent()?;
     let (lo, hi) = renderer.range(&view);
-    match ext.as_str() {
-        "png" if args.no_legend => write_png_rgba8(&args.out, w, h, &rgba)?,
-        "png" => {
+    match args.image.format() {
+        ImageFormat::Png if args.no_legend => write_png_rgba8(out, w, h, &rgba)?,
+        ImageFormat::Png => {
             let name = &mesh.fields[field].name;
             let source = args
                 .file
@@ -266,9 +292,9 @@ pub fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
                 label: name,
                 shift: 0.0,
             };
-            galerkin::plot::picture_with_colour_bar(&rgba, (w, h), &bar, &title, &args.out)?;
+            galerkin::plot::picture_with_colour_bar(&rgba, (w, h), &bar, &title, out)?;
         }
-        "exr" => {
+        ImageFormat::Exr => {
             let hex = mesh.shape == galerkin::spectral::Shape::Hexahedron;
             let data = RenderTarget::new(&gpu, "spectral values", w, h, ColorFormat::Rgba32F)?;
             let Pixels::Rgba32F(v) = renderer.render(&data, &view)? else {
@@ -277,7 +303,7 @@ pub fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
             let byte = |c: usize| galerkin::render::rgba8_channel(&rgba, c);
             let float = |c: usize| galerkin::render::rgba32f_channel(&v, c);
             write_exr_channels(
-                &args.out,
+                out,
                 w,
                 h,
                 vec![
@@ -291,7 +317,6 @@ pub fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
                 ],
             )?;
         }
-        other => bail!("{}: unknown image format {other:?}", args.out.display()),
     }
     let [proxies, grids, lines] = renderer.primitive_counts();
     println!(
@@ -317,13 +342,14 @@ pub fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
         } else {
             "tessellated on the device"
         },
-        args.out.display()
+        out.display()
     );
     drop((colour, renderer));
-    crate::check_validation(gpu)
+    drop(gpu);
+    Ok(())
 }
 
-/// Arguments of `galerkin bench spectral`.
+/// Arguments of `galerkin spectral bench`.
 #[derive(Args)]
 pub struct BenchArgs {
     /// Orders 1, 3 and 8 only, fewer frames.
@@ -400,7 +426,7 @@ fn timed(
     Ok(median(ms))
 }
 
-/// `galerkin bench spectral`: seed 002's table on this device.
+/// `galerkin spectral bench`: seed 002's table on this device.
 pub fn bench(desc: &GpuDesc, args: &BenchArgs) -> Result<()> {
     let gpu = Gpu::new(desc)?;
     let mut profiler = galerkin::gpu::Profiler::new(&gpu, 1)?;
@@ -463,7 +489,8 @@ pub fn bench(desc: &GpuDesc, args: &BenchArgs) -> Result<()> {
         println!("| {} | {ms:.1} | {f} | {tris} |", mesh.elements());
     }
     drop((target, profiler));
-    crate::check_validation(gpu)
+    drop(gpu);
+    Ok(())
 }
 
 /// The demo's spectral part (seed 002): a curved planar annulus of order 8 (12 large elements) drawn per pixel and

@@ -48,6 +48,10 @@ pub struct GpuDesc {
     pub max_binding_bytes: Option<u64>,
     /// Load the Vulkan loader from this path instead of the system's `libvulkan.so.1`.
     pub loader_path: Option<PathBuf>,
+    /// With validation: record its messages into this log (shared by every [`Gpu`] made from
+    /// this description) instead of a new one per `Gpu`, so that a caller can check once,
+    /// after all of them are dropped and their leak reports are in (the command line does).
+    pub validation_log: Option<Arc<ValidationLog>>,
 }
 
 impl Default for GpuDesc {
@@ -63,6 +67,7 @@ impl Default for GpuDesc {
             fence_timeout: Duration::from_secs(600),
             max_binding_bytes: None,
             loader_path: std::env::var_os("GALERKIN_VULKAN_LIBRARY").map(PathBuf::from),
+            validation_log: None,
         }
     }
 }
@@ -200,7 +205,7 @@ impl Gpu {
     /// choices and the environment variables that set them.
     pub fn new(desc: &GpuDesc) -> GpuResult<Self> {
         let entry = instance::load_entry(desc)?;
-        let log = desc.validation.then(|| Arc::new(ValidationLog::default()));
+        let log = desc.validation.then(|| desc.validation_log.clone().unwrap_or_default());
         let created = instance::create_instance(&entry, desc, log.as_ref().unwrap_or(&Arc::default()))?;
         // From here on a failure must destroy what was created: wrap in a guard.
         struct InstanceGuard(Option<instance::CreatedInstance>);

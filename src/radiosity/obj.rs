@@ -20,12 +20,15 @@
 //! [openings]
 //! windows = ["window"]
 //! skylights = []
-//! [lights]
+//! [lights]                 # optional, as is each key (defaults: the two-room scene's)
 //! mode = "area"
 //! window_exitance = [10.0, 10.0, 10.0]
 //! sky_zenith = [4.0, 4.0, 4.0]
 //! ground_albedo = 0.2
 //! ```
+//!
+//! Light enters only through the openings: a scene without window or skylight objects is
+//! dark (every radiosity 0), and loading it warns.
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -86,6 +89,7 @@ struct ObjSceneFile {
     materials: ObjMaterials,
     #[serde(default)]
     openings: ObjOpenings,
+    #[serde(default)]
     lights: Lights,
 }
 
@@ -171,6 +175,12 @@ impl ObjScene {
         }
         base.validate()
             .map_err(|e| RadiosityError::File { path: base_path.clone(), message: e.to_string() })?;
+        if !base.kind.iter().any(|k| *k != FaceKind::Surface) {
+            tracing::warn!(
+                "{}: no window or skylight objects, so no light enters and every face's radiosity is 0: name the objects light comes through under [openings] (windows = [\"…\"], skylights = [\"…\"])",
+                path.display()
+            );
+        }
         let mut targets = Vec::new();
         for t in spec.targets {
             let [lo, hi] = t.range;

@@ -87,9 +87,11 @@ pub enum LightMode {
     Sky,
 }
 
-/// The lights.
+/// The lights. Every key is optional: the defaults are the two-room scene's (area mode,
+/// window exitance [10, 10, 10.5] W/m², zenith radiance [4, 4, 4.3] W/m²/sr, ground albedo
+/// 0.2), so an area-lit scene need not give the sky's keys and the other way round.
 #[derive(Clone, Debug, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(deny_unknown_fields, default)]
 pub struct Lights {
     /// `area` or `sky`.
     pub mode: LightMode,
@@ -99,6 +101,17 @@ pub struct Lights {
     pub sky_zenith: [f64; 3],
     /// Sky mode: albedo of the ground outside (light from below the horizon).
     pub ground_albedo: f64,
+}
+
+impl Default for Lights {
+    fn default() -> Self {
+        Self {
+            mode: LightMode::Area,
+            window_exitance: [10.0, 10.0, 10.5],
+            sky_zenith: [4.0, 4.0, 4.3],
+            ground_albedo: 0.2,
+        }
+    }
 }
 
 /// A whole radiosity scene.

@@ -194,7 +194,7 @@ fn pulses_cells(elements: usize) -> usize {
     ((elements as f64 / 6.0).cbrt().round() as usize).max(1)
 }
 
-/// The data set of `galerkin spacetime-gen --scenario pulses`: the unit square over a time
+/// The data set of `galerkin spacetime gen --generate pulses`: the unit square over a time
 /// span that lets both pulses cross it, with about `elements` tetrahedra.
 pub fn pulses(elements: usize) -> SpacetimeMesh {
     let k = pulses_cells(elements);

@@ -81,7 +81,7 @@ impl View2d {
     }
 }
 
-/// What to show and how (`galerkin spectral` options).
+/// What to show and how (`galerkin spectral render` options).
 #[derive(Clone, Debug, PartialEq)]
 pub struct SpectralView {
     /// The field (index into the mesh's fields).

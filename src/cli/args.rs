@@ -1,0 +1,163 @@
+//! The argument groups every capability shares, flattened into its verbs so that one option
+//! means one thing everywhere: image output (`--out`, `--size`), colour maps (`--colormap`,
+//! `--range LO,HI`), the viewer (`--view`, `--play`, `--quit-after`, `--screenshot`). Device
+//! options (`--device`, `--validation`) are global, on [`crate::Cli`].
+//!
+//! A verb gives a group's options its own defaults with `mut_arg` (e.g. `out/spectral.png`),
+//! so `--help` shows them; values are checked when the arguments are parsed, before any work.
+
+use std::path::PathBuf;
+
+use clap::Args;
+
+/// `--out FILE` for a picture: the format comes from the extension, `.png` or `.exr`, and is
+/// checked here, before any work (a typo must not cost a render).
+pub fn image_path(s: &str) -> Result<PathBuf, String> {
+    let path = PathBuf::from(s);
+    match ImageFormat::of(&path) {
+        Some(_) => Ok(path),
+        None => Err(format!("{s:?}: the image format comes from the extension: .png or .exr")),
+    }
+}
+
+/// An output picture's format, from its file name.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ImageFormat {
+    /// 8-bit sRGB colour (with a legend where the command draws one).
+    Png,
+    /// Float channels: the colour and the raw values the command lists.
+    Exr,
+}
+
+impl ImageFormat {
+    /// The format of `path` by its extension (case-insensitive), if it is one we write.
+    pub fn of(path: &std::path::Path) -> Option<Self> {
+        let ext = path.extension().and_then(|e| e.to_str())?.to_ascii_lowercase();
+        match ext.as_str() {
+            "png" => Some(Self::Png),
+            "exr" => Some(Self::Exr),
+            _ => None,
+        }
+    }
+}
+
+/// Parses `WIDTHxHEIGHT` (1 to 16384 each).
+pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
+    let (w, h) = s.split_once(['x', 'X']).ok_or_else(|| format!("{s:?} is not WIDTHxHEIGHT"))?;
+    let n = |v: &str| v.trim().parse::<u32>().ok().filter(|&v| (1..=16384).contains(&v));
+    match (n(w), n(h)) {
+        (Some(w), Some(h)) => Ok((w, h)),
+        _ => Err(format!("{s:?}: width and height must be 1 to 16384")),
+    }
+}
+
+/// Parses a colour range `LO,HI`: two finite numbers with LO < HI.
+pub fn parse_range(s: &str) -> Result<(f64, f64), String> {
+    let (lo, hi) = s.split_once(',').ok_or_else(|| format!("{s:?} is not LO,HI"))?;
+    let num = |v: &str| v.trim().parse::<f64>().ok().filter(|v| v.is_finite());
+    match (num(lo), num(hi)) {
+        (Some(lo), Some(hi)) if lo < hi => Ok((lo, hi)),
+        (Some(_), Some(_)) => Err(format!("{s:?}: LO must be below HI")),
+        _ => Err(format!("{s:?}: LO and HI must be finite numbers")),
+    }
+}
+
+/// Image output: where the picture goes and how large it is.
+#[derive(Args, Clone, Debug)]
+pub struct ImageArgs {
+    /// Output image; its format comes from the extension: .png or .exr (checked before any
+    /// work). The verb's description says what each holds.
+    #[arg(long, required = false, value_parser = image_path)]
+    pub out: PathBuf,
+    /// Image size, WIDTHxHEIGHT.
+    #[arg(long, value_name = "WxH", value_parser = parse_size)]
+    pub size: Option<(u32, u32)>,
+}
+
+impl ImageArgs {
+    /// The output's format (always known: `--out` was checked when parsed).
+    pub fn format(&self) -> ImageFormat {
+        ImageFormat::of(&self.out).unwrap_or(ImageFormat::Png)
+    }
+
+    /// The size, or the verb's default where it has none fixed.
+    pub fn size_or(&self, default: (u32, u32)) -> (u32, u32) {
+        self.size.unwrap_or(default)
+    }
+
+    /// Creates the output's directory.
+    pub fn create_parent(&self) -> anyhow::Result<()> {
+        if let Some(dir) = self.out.parent().filter(|d| !d.as_os_str().is_empty()) {
+            std::fs::create_dir_all(dir).map_err(|e| anyhow::anyhow!("creating {}: {e}", dir.display()))?;
+        }
+        Ok(())
+    }
+}
+
+/// Colour mapping of a scalar field.
+#[derive(Args, Clone, Debug)]
+pub struct ColourArgs {
+    /// Colour map: viridis, cool-warm, grey, or a ramp PNG file (its first row, left to right).
+    #[arg(long, default_value = "viridis", value_name = "NAME|FILE")]
+    pub colormap: String,
+    /// Colour range (default: the field's range) — narrow it to look at one region in detail.
+    #[arg(long, value_name = "LO,HI", value_parser = parse_range, allow_hyphen_values = true)]
+    pub range: Option<(f64, f64)>,
+}
+
+/// The interactive viewer: a window instead of a file, and scripted runs for tests.
+#[derive(Args, Clone, Debug)]
+pub struct ViewerArgs {
+    /// Open the interactive viewer instead of writing an image (the `view` verb implies it).
+    #[arg(long)]
+    pub view: bool,
+    /// Start playing (time steps, a motion or a sweep — the verb's description says which).
+    #[arg(long)]
+    pub play: bool,
+    /// Quit after presenting this many frames (scripted runs and tests), saving --screenshot.
+    #[arg(long, value_name = "FRAMES")]
+    pub quit_after: Option<u64>,
+    /// Where S (and a scripted run's last frame) saves the screenshot.
+    #[arg(long, default_value = "out/screenshot.png", value_parser = screenshot_path)]
+    pub screenshot: PathBuf,
+}
+
+/// A screenshot is a PNG.
+fn screenshot_path(s: &str) -> Result<PathBuf, String> {
+    match ImageFormat::of(std::path::Path::new(s)) {
+        Some(ImageFormat::Png) => Ok(PathBuf::from(s)),
+        _ => Err(format!("{s:?}: screenshots are PNG files (.png)")),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn image_paths_are_png_or_exr_by_extension() {
+        assert!(image_path("out/a.png").is_ok());
+        assert!(image_path("out/a.EXR").is_ok());
+        assert!(image_path("out/a.txt").is_err());
+        assert!(image_path("out/a").is_err());
+        assert_eq!(ImageFormat::of(std::path::Path::new("x.Png")), Some(ImageFormat::Png));
+    }
+
+    #[test]
+    fn ranges_need_two_ordered_finite_numbers() {
+        assert_eq!(parse_range("-1,2.5"), Ok((-1.0, 2.5)));
+        assert!(parse_range("2,1").is_err());
+        assert!(parse_range("1,1").is_err());
+        assert!(parse_range("0,inf").is_err());
+        assert!(parse_range("NaN,1").is_err());
+        assert!(parse_range("1 2").is_err());
+    }
+
+    #[test]
+    fn sizes_are_bounded() {
+        assert_eq!(parse_size("640x480"), Ok((640, 480)));
+        assert!(parse_size("0x480").is_err());
+        assert!(parse_size("16385x2").is_err());
+        assert!(parse_size("640").is_err());
+    }
+}

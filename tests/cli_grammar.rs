@@ -1,0 +1,150 @@
+//! The command line's grammar, `galerkin <capability> <verb> [args]`: every capability lists
+//! its verbs, the old spellings still run with a deprecation note, image outputs are checked
+//! before any work, and a file of the wrong kind is named as such.
+
+use std::process::{Command, Output};
+
+fn galerkin(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_galerkin")).args(args).output().expect("ran galerkin")
+}
+
+fn stderr(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stderr).to_string()
+}
+
+#[test]
+fn every_capability_lists_its_verbs() {
+    let cases: [(&str, &[&str]); 5] = [
+        ("spectral", &["render", "view", "gen", "bench"]),
+        ("spacetime", &["render", "view", "gen", "convert", "bench"]),
+        ("radiosity", &["render", "view", "train", "compare", "bench"]),
+        ("fluid", &["simulate", "render", "view", "export", "train", "reduced", "bench"]),
+        ("bench", &["gpu", "reduce", "all"]),
+    ];
+    for (capability, verbs) in cases {
+        let out = galerkin(&[capability, "--help"]);
+        assert!(out.status.success(), "{capability} --help: {}", stderr(&out));
+        let help = String::from_utf8_lossy(&out.stdout);
+        let listed: Vec<&str> =
+            help.lines().filter_map(|l| l.strip_prefix("  ")?.split_whitespace().next()).collect();
+        for verb in verbs {
+            assert!(listed.contains(verb), "`galerkin {capability} --help` does not list {verb}:\n{help}");
+        }
+        assert!(stderr(&out).is_empty(), "a deprecation note for a current spelling: {}", stderr(&out));
+    }
+}
+
+#[test]
+fn old_spellings_run_with_a_deprecation_note() {
+    let dir = tempfile::Builder::new().prefix("galerkin-").tempdir().expect("scratch");
+    let vtu = dir.path().join("grid.vtu");
+    let vtu_text = vtu.to_string_lossy();
+    let out = galerkin(&["spectral-gen", "--generate", "grid", "--order", "2", "--out", &vtu_text]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(vtu.exists(), "the old spelling wrote nothing");
+    let err = stderr(&out);
+    assert!(err.contains("deprecated") && err.contains("galerkin spectral gen"), "{err}");
+    // The current spelling writes the same file, without a note.
+    let again = dir.path().join("again.vtu");
+    let out = galerkin(&[
+        "spectral",
+        "gen",
+        "--generate",
+        "grid",
+        "--order",
+        "2",
+        "--out",
+        &again.to_string_lossy(),
+    ]);
+    assert!(out.status.success() && stderr(&out).is_empty(), "{}", stderr(&out));
+    assert_eq!(std::fs::read(&vtu).expect("old"), std::fs::read(&again).expect("new"));
+}
+
+#[test]
+fn an_image_output_of_unknown_format_is_refused_before_any_work() {
+    let dir = tempfile::Builder::new().prefix("galerkin-").tempdir().expect("scratch");
+    let cases: [&[&str]; 4] = [
+        &["spectral", "render", "--generate", "coil", "--out"],
+        &["spacetime", "render", "--elements", "100000000", "--out"],
+        &["radiosity", "render", "scenes/radiosity/two_rooms.toml", "--out"],
+        &["fluid", "render", "/nonexistent/run", "--out"],
+    ];
+    for args in cases {
+        let target = dir.path().join("picture.txt");
+        let mut all = args.to_vec();
+        let t = target.to_string_lossy().to_string();
+        all.push(&t);
+        let start = std::time::Instant::now();
+        let out = galerkin(&all);
+        let err = stderr(&out);
+        // Exit 2: an argument error, from the parser — so before anything was loaded or drawn.
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.contains(".png or .exr") && err.contains("picture.txt"), "{args:?}: {err}");
+        assert!(!target.exists(), "{args:?} wrote {}", target.display());
+        assert!(start.elapsed().as_secs() < 20, "{args:?} took {:?}", start.elapsed());
+    }
+}
+
+#[test]
+fn a_file_of_the_wrong_kind_is_named_as_such() {
+    let dir = tempfile::Builder::new().prefix("galerkin-").tempdir().expect("scratch");
+    let obj = dir.path().join("room.obj");
+    std::fs::write(&obj, "o floor\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").expect("obj");
+    let out = galerkin(&["radiosity", "render", &obj.to_string_lossy(), "--out", "unused.png"]);
+    let err = stderr(&out);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(err.contains("room.obj") && err.contains("Wavefront OBJ") && err.contains("base ="), "{err}");
+    assert!(!err.contains("key with no value"), "parsed as TOML: {err}");
+    // A VTK file passed where a scene belongs.
+    let vtu = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/vtk/quad_default.vtu");
+    let out = galerkin(&["fluid", "simulate", vtu, "--out", &dir.path().join("run").to_string_lossy()]);
+    let err = stderr(&out);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(err.contains("quad_default.vtu") && err.contains("XML (VTK)"), "{err}");
+    assert!(!dir.path().join("run").exists(), "a run directory was made");
+}
+
+#[test]
+fn a_scene_without_openings_warns_that_it_is_dark() {
+    let dir = tempfile::Builder::new().prefix("galerkin-").tempdir().expect("scratch");
+    // A closed box (two triangles per side), no window or skylight objects, no [lights].
+    let corners = ["0 0 0", "1 0 0", "1 1 0", "0 1 0", "0 0 1", "1 0 1", "1 1 1", "0 1 1"];
+    let mut text = String::from("o box\n");
+    for c in corners {
+        text += &format!("v {c}\n");
+    }
+    for f in [
+        [1, 3, 2],
+        [1, 4, 3],
+        [5, 6, 7],
+        [5, 7, 8],
+        [1, 2, 6],
+        [1, 6, 5],
+        [2, 3, 7],
+        [2, 7, 6],
+        [3, 4, 8],
+        [3, 8, 7],
+        [4, 1, 5],
+        [4, 5, 8],
+    ] {
+        text += &format!("f {} {} {}\n", f[0], f[1], f[2]);
+    }
+    std::fs::write(dir.path().join("box.obj"), text).expect("obj");
+    let scene = dir.path().join("box.toml");
+    std::fs::write(&scene, "base = \"box.obj\"\n[materials]\ndefault = [0.5, 0.5, 0.5]\n").expect("scene");
+    let png = dir.path().join("box.png");
+    let out = galerkin(&[
+        "radiosity",
+        "render",
+        &scene.to_string_lossy(),
+        "--size",
+        "32x24",
+        "--out",
+        &png.to_string_lossy(),
+    ]);
+    let err = stderr(&out);
+    // The lights' keys are optional; the picture is made, and the user told why it is black.
+    assert!(out.status.success(), "{err}");
+    assert!(err.contains("no window or skylight") && err.contains("[openings]"), "{err}");
+    assert!(png.exists());
+}
