@@ -19,11 +19,8 @@ mod cli {
     pub mod spectral;
 }
 use clap::{Parser, Subcommand};
-use galerkin::demo::axpy::{axpy_error_ratio, Axpy};
-use galerkin::demo::field::{check_colours, check_values, FieldOutput, FieldPass};
 use galerkin::demo::scene::DemoScene;
-use galerkin::gpu::{shaders, vk, Buffer, Gpu, GpuDesc, Profiler};
-use galerkin::render::{write_exr_rgba, write_png_rgba8, ColorFormat, Colormap, Pixels, RenderTarget};
+use galerkin::gpu::{shaders, Gpu, GpuDesc};
 
 /// galerkin: reduced simulation by non-polynomial Galerkin projection and pixel-exact
 /// rendering of high-order solutions, on Vulkan.
@@ -88,9 +85,10 @@ enum Command {
 #[derive(clap::Args)]
 #[command(mut_arg("screenshot", |a| a.default_value("out/screenshot.png")))]
 struct DemoArgs {
-    /// Scene file (TOML).
-    #[arg(long, default_value = "scenes/demo.toml")]
-    scene: PathBuf,
+    /// Scene file (TOML; default: the built-in copy of scenes/demo.toml, so the demo runs from
+    /// any directory).
+    #[arg(long)]
+    scene: Option<PathBuf>,
     /// Output directory.
     #[arg(long, default_value = "out")]
     out: PathBuf,
@@ -174,7 +172,7 @@ fn run(desc: &GpuDesc, command: Command) -> Result<()> {
     match command {
         Command::Info => info(desc),
         Command::Demo(args) if args.viewer.view => view(desc.clone(), &args),
-        Command::Demo(args) => demo(desc, &args.scene, &args.out),
+        Command::Demo(args) => demo(desc, args.scene.as_deref(), &args.out),
         Command::Spacetime { verb } => cli::spacetime::run(desc, &verb),
         Command::Spectral { verb } => cli::spectral::run(desc, &verb),
         Command::Radiosity { action } => cli::radiosity::run(desc, &action),
@@ -282,163 +280,27 @@ fn info(desc: &GpuDesc) -> Result<()> {
     Ok(())
 }
 
-fn demo(desc: &GpuDesc, scene_path: &Path, out: &Path) -> Result<()> {
-    let scene = DemoScene::load(scene_path)?;
+/// The demo scene: the file given, or the built-in copy of scenes/demo.toml.
+fn demo_scene(path: Option<&Path>) -> Result<DemoScene> {
+    Ok(match path {
+        Some(path) => DemoScene::load(path)?,
+        None => DemoScene::parse(include_str!("../scenes/demo.toml"), Path::new("scenes/demo.toml"))?,
+    })
+}
+
+fn demo(desc: &GpuDesc, scene_path: Option<&Path>, out: &Path) -> Result<()> {
+    let scene = demo_scene(scene_path)?;
+    std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
     let gpu = Gpu::new(desc)?;
     let caps = gpu.caps();
     println!("device: {} — {}", caps.device_name, caps.driver);
-
-    // Compute: y <- a x + y, every element against the CPU f64 reference.
-    let n = usize::try_from(scene.axpy.n).context("axpy.n does not fit in memory")?;
-    let a = scene.axpy.a;
-    let x: Vec<f32> = (0..n).map(|i| ((i % 1013) as f32 - 506.0) / 506.0).collect();
-    let y: Vec<f32> = (0..n).map(|i| ((i % 977) as f32) / 977.0).collect();
-    let xb = Buffer::from_slice(&gpu, "demo x", &x, vk::BufferUsageFlags::STORAGE_BUFFER)?;
-    let yb = Buffer::from_slice(&gpu, "demo y", &y, vk::BufferUsageFlags::STORAGE_BUFFER)?;
-    let axpy = Axpy::new(&gpu)?;
-    let binding = axpy.bind(&gpu, &xb, &yb)?;
-    let mut profiler = Profiler::new(&gpu, 1).ok();
-    let t = Instant::now();
-    gpu.run(|rec| match profiler.as_mut() {
-        Some(p) => {
-            p.record_reset(rec);
-            p.scope(rec, "axpy", |rec| axpy.record(&gpu, rec, &binding, a as f32));
-        }
-        None => axpy.record(&gpu, rec, &binding, a as f32),
-    })?;
-    let wall = t.elapsed();
-    let kernel_ms = profiler.as_ref().and_then(|p| p.results().ok()).and_then(|r| r.first().map(|s| s.1));
-    let result = yb.download(&gpu)?;
-    let (ratio, at) = axpy_error_ratio(a, &x, &y, &result);
-    println!(
-        "axpy: {n} floats in {} binding(s), {} (kernel) / {:.1} ms (submit + wait); worst error {ratio:.2} of the f32 bound at element {at}",
-        binding.chunk_count(),
-        kernel_ms.map_or("n/a".to_string(), |ms| format!("{ms:.1} ms")),
-        wall.as_secs_f64() * 1e3
-    );
-    if ratio > 1.0 {
-        bail!("axpy differs from its CPU reference beyond the f32 bound");
-    }
-    drop((xb, yb, binding, axpy));
-
-    // Graphics: the field, values (checked, EXR) and colours (checked, PNG).
-    let (w, h) = (scene.image.width, scene.image.height);
-    let colormap = Colormap::by_name(&scene.colormap_name())?;
-    let p = scene.field.coefficients;
-    let values = RenderTarget::new(&gpu, "demo field values", w, h, ColorFormat::Rgba32F)?;
-    let pass = FieldPass::new(
-        &gpu,
-        values.render_pass(),
-        &p,
-        scene.field.tessellation,
-        &colormap,
-        scene.ramp(),
-        FieldOutput::Value,
-    )?;
-    let Pixels::Rgba32F(v) =
-        values.render(&gpu, [0.0; 4], |rec| pass.record(rec, values.extent(), &scene.camera))?
-    else {
-        bail!("float target returned bytes");
-    };
-    let check = check_values(&scene.camera, &p, w, h, &v);
-    write_exr_rgba(&out.join("field.exr"), w, h, &v)?;
-    println!(
-        "field values: {w}×{h}, {} covered pixels checked (worst {:.3} of tolerance), {} background, {} on the outline → {}",
-        check.checked,
-        check.worst,
-        check.background,
-        check.outline,
-        out.join("field.exr").display()
-    );
-    if !check.passed() {
-        bail!(
-            "{} pixels differ from the CPU reference; first: {}",
-            check.failures,
-            check.first_failure.unwrap_or_default()
-        );
-    }
-    let colours = RenderTarget::new(&gpu, "demo field colours", w, h, ColorFormat::Rgba8)?;
-    let pass = FieldPass::new(
-        &gpu,
-        colours.render_pass(),
-        &p,
-        scene.field.tessellation,
-        &colormap,
-        scene.ramp(),
-        FieldOutput::Colour,
-    )?;
-    let background = galerkin::render::BACKGROUND;
-    let Pixels::Rgba8(c) =
-        colours.render(&gpu, background, |rec| pass.record(rec, colours.extent(), &scene.camera))?
-    else {
-        bail!("RGBA8 target returned floats");
-    };
-    let bg = background.map(|v| (v * 255.0f32).round() as u8);
-    let check = check_colours(&scene.camera, &p, &colormap, scene.ramp(), w, h, &c, bg);
-    write_png_rgba8(&out.join("field.png"), w, h, &c)?;
-    println!(
-        "field colours ({}): {} covered pixels checked (worst {:.3} of tolerance) → {}",
-        colormap.name(),
-        check.checked,
-        check.worst,
-        out.join("field.png").display()
-    );
-    if !check.passed() {
-        bail!(
-            "{} pixels differ from the CPU reference; first: {}",
-            check.failures,
-            check.first_failure.unwrap_or_default()
-        );
-    }
-    drop((pass, colours, values));
-
-    // Spacetime DG (seed 003): one lit frame (PNG) and its raw fields (EXR) of generated pulses.
-    let mesh = galerkin::spacetime::generate::pulses(20_000);
-    let mut renderer = galerkin::spacetime::SpacetimeRenderer::from_mesh(&gpu, &mesh, &colormap)?;
-    let t = 0.5 * mesh.time_range().1;
-    let view = galerkin::spacetime::SpacetimeView::looking_at(renderer.data().summary(), t);
-    let stats = renderer.slice(t, None)?;
-    let colours = RenderTarget::new(&gpu, "demo spacetime", w, h, ColorFormat::Rgba8)?;
-    let Pixels::Rgba8(c) = renderer.render(&colours, &view)? else { bail!("RGBA8 target returned floats") };
-    write_png_rgba8(&out.join("spacetime.png"), w, h, &c)?;
-    let values = RenderTarget::new(&gpu, "demo spacetime fields", w, h, ColorFormat::Rgba32F)?;
-    let Pixels::Rgba32F(v) = renderer.render(&values, &view)? else { bail!("float target returned bytes") };
-    write_exr_rgba(&out.join("spacetime.exr"), w, h, &v)?;
-    // Its own check: a flat view from above against the CPU f64 fields at every 4th pixel.
-    let flat = galerkin::spacetime::SpacetimeView::from_above(renderer.data().summary(), t);
-    let Pixels::Rgba32F(d) = renderer.render(&values, &flat)? else { bail!("float target returned bytes") };
-    let hs = renderer.default_height_scale();
-    let check = galerkin::spacetime::reference::check_flat_pixels(&mesh, &flat, hs, (w, h), &d, 4, 1e-4);
-    if !check.passed() {
-        bail!(
-            "spacetime: {} of {} pixels differ from the CPU reference; first: {}",
-            check.failures,
-            check.checked,
-            check.first_failure.unwrap_or_default()
-        );
-    }
-    println!(
-        "spacetime: {} elements (analytic pulses, L2-projected per element), t = {t:.3}: {} triangles → {}, {} (U, |v|, n_x, n_y); flat view checked at {} pixels against f64: worst U {:.1e}, |v| {:.1e} of max",
-        mesh.tets.len(),
-        stats.triangles,
-        out.join("spacetime.png").display(),
-        out.join("spacetime.exr").display(),
-        check.checked,
-        check.worst_u,
-        check.worst_speed
-    );
-    drop((renderer, colours, values));
-    cli::spectral::demo(&gpu, (w, h), out)?;
-    cli::radiosity::demo(&gpu, (w, h), out)?;
-    cli::fluid::demo(&gpu, (w, h), out)?;
-    cli::fluid_reduced::demo(&gpu, (w, h), out)?;
-    drop(gpu);
+    galerkin::demo::run::run(&gpu, &scene, out, &mut |part| println!("{part}"))?;
     Ok(())
 }
 
 #[cfg(feature = "viewer")]
 fn view(desc: GpuDesc, args: &DemoArgs) -> Result<()> {
-    let scene = DemoScene::load(&args.scene)?;
+    let scene = demo_scene(args.scene.as_deref())?;
     let options = galerkin::render::viewer::ViewOptions {
         frames: args.viewer.quit_after,
         screenshot: args.viewer.screenshot.clone(),

@@ -9,12 +9,12 @@ use galerkin::gpu::{Gpu, GpuDesc};
 use galerkin::radiosity::any_scene::AnyScene;
 use galerkin::radiosity::reduced::{relative_error, ReducedRadiosity};
 use galerkin::radiosity::render::{
-    camera_for, default_exposure, display_radiance, draw_picture, scene_vertices, Shading, Viewpoint,
+    default_exposure, display_radiance, draw_picture, scene_vertices, Shading, Viewpoint,
 };
 use galerkin::radiosity::train::{
     sample_parameters, solve_configurations, train as train_model, TrainOptions,
 };
-use galerkin::radiosity::{full_radiosity, LightMode, SceneSpec};
+use galerkin::radiosity::{LightMode, SceneSpec};
 use galerkin::render::{write_exr_channels, write_png_rgba8};
 
 use super::full_frames::{save_due, FullFrame, FullFramesFile};
@@ -653,74 +653,6 @@ pub fn bench(desc: &GpuDesc, args: &BenchArgs) -> Result<()> {
         drop(device);
         drop(gpu);
     }
-    Ok(())
-}
-
-/// The radiosity part of `galerkin demo`: the full radiosity of the small two-room scene,
-/// solved on the CPU (f64) and on the device (f32) and compared, drawn from the living room,
-/// every pixel whose neighbourhood sees one face checked against an f64 ray cast.
-pub fn demo(gpu: &Gpu, size: (u32, u32), out: &std::path::Path) -> Result<()> {
-    use galerkin::radiosity::form_factor::{bvh_of, NearField};
-    use galerkin::radiosity::gpu::GpuRadiosity;
-    let scene = std::path::Path::new("scenes/radiosity/two_rooms_small.toml");
-    let spec = SceneSpec::load(scene)?;
-    let p = spec.defaults();
-    let start = Instant::now();
-    let s = full_radiosity(&spec, &p)?;
-    let cpu_s = start.elapsed().as_secs_f64();
-    let device = GpuRadiosity::new(gpu)?;
-    let start = Instant::now();
-    let f = device.form_factors(gpu, &s.mesh, NearField::Regularised)?;
-    let (b, _) = device.solve(gpu, &f, &s.mesh.albedo, &s.emission, 1e-6, 2000)?;
-    let gpu_s = start.elapsed().as_secs_f64();
-    let top = s.radiosity.iter().flatten().fold(0.0f64, |m, v| m.max(*v));
-    let worst = b
-        .iter()
-        .zip(&s.radiosity)
-        .flat_map(|(x, y)| (0..3).map(move |c| (x[c] - y[c]).abs()))
-        .fold(0.0f64, f64::max)
-        / top;
-    if worst > 1e-5 {
-        bail!("radiosity: the device's solution differs from the CPU's by {worst:.2e} of the largest value");
-    }
-    let radiance = display_radiance(&s.mesh, &s.geometry, &spec.lights, &s.radiosity);
-    let exposure = default_exposure(&s.mesh, &s.geometry, &radiance);
-    let camera = camera_for(&spec, Viewpoint::Living);
-    let vertices = scene_vertices(&s.mesh, &s.geometry, &radiance, Shading::Flat);
-    let picture = draw_picture(gpu, &vertices, &camera, exposure, size)?;
-    let (w, h) = size;
-    let bvh = bvh_of(&s.mesh);
-    let (mut checked, mut wrong) = (0, 0);
-    for py in (0..h).step_by(3) {
-        for px in (0..w).step_by(3) {
-            let hit = |dx: f64, dy: f64| {
-                let (o, d) = camera.ray_through(f64::from(px) + 0.5 + dx, f64::from(py) + 0.5 + dy, w, h);
-                bvh.closest_front_hit(o, d).map(|h| h.0)
-            };
-            let Some(face) = hit(0.0, 0.0) else { continue };
-            if [(-0.75, -0.75), (0.75, -0.75), (-0.75, 0.75), (0.75, 0.75)]
-                .iter()
-                .all(|&(x, y)| hit(x, y) == Some(face))
-            {
-                checked += 1;
-                let k = ((py * w + px) * 4) as usize;
-                let r = radiance[face as usize];
-                let ok = picture.raw[k + 3] == face as f32
-                    && (0..3).all(|c| (f64::from(picture.raw[k + c]) - r[c]).abs() <= 1e-6 * top);
-                wrong += usize::from(!ok);
-            }
-        }
-    }
-    if wrong > 0 {
-        bail!("radiosity: {wrong} of {checked} checked pixels do not show their face's radiance");
-    }
-    let path = out.join("radiosity.png");
-    write_png_rgba8(&path, w, h, &picture.rgba)?;
-    println!(
-        "radiosity: the two-room scene ({} faces, area lights), full radiosity on the CPU (f64) in {cpu_s:.2} s and on the device (f32) in {gpu_s:.2} s, agreeing to {worst:.1e} of the largest value; {checked} pixels checked against f64 ray casting → {}",
-        s.mesh.len(),
-        path.display()
-    );
     Ok(())
 }
 
