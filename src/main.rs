@@ -12,7 +12,6 @@ mod cli {
     pub mod args;
     pub mod fluid;
     pub mod fluid_reduced;
-    pub mod full_frames;
     pub mod legacy;
     pub mod radiosity;
     pub mod spacetime;

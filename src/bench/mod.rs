@@ -12,6 +12,7 @@ pub mod shaders {
 pub mod cpu;
 pub mod fluid_reduced;
 pub mod kernels;
+pub mod radiosity;
 pub mod reduce;
 pub mod spacetime;
 

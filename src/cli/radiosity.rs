@@ -7,17 +7,15 @@ use anyhow::{bail, Context, Result};
 use clap::{Args, Subcommand};
 use galerkin::gpu::{Gpu, GpuDesc};
 use galerkin::radiosity::any_scene::AnyScene;
-use galerkin::radiosity::reduced::{relative_error, ReducedRadiosity};
+use galerkin::radiosity::reduced::ReducedRadiosity;
 use galerkin::radiosity::render::{
     default_exposure, display_radiance, draw_picture, scene_vertices, Shading, Viewpoint,
 };
 use galerkin::radiosity::train::{
     sample_parameters, solve_configurations, train as train_model, TrainOptions,
 };
-use galerkin::radiosity::{LightMode, SceneSpec};
+use galerkin::radiosity::LightMode;
 use galerkin::render::{write_exr_channels, write_png_rgba8};
-
-use super::full_frames::{save_due, FullFrame, FullFramesFile};
 
 /// `galerkin radiosity` subcommands.
 #[derive(Subcommand)]
@@ -172,9 +170,23 @@ pub struct RenderArgs {
     pub look: Look,
     #[command(flatten)]
     pub image: crate::cli::args::ImageArgs,
+    /// Also write the per-face result as a table (CSV: face, part, kind, area, centroid,
+    /// radiosity R, G, B — f64 that reads back to the same bits), to check it outside the
+    /// engine.
+    #[arg(long, value_name = "FILE.csv", value_parser = csv_path)]
+    pub faces: Option<PathBuf>,
     /// --view opens the viewer at this configuration; --play sweeps the parameters.
     #[command(flatten)]
     pub viewer: crate::cli::args::ViewerArgs,
+}
+
+/// A `.csv` path, checked when the arguments are parsed.
+fn csv_path(s: &str) -> Result<PathBuf, String> {
+    let path = PathBuf::from(s);
+    match path.extension().and_then(|e| e.to_str()) {
+        Some(e) if e.eq_ignore_ascii_case("csv") => Ok(path),
+        _ => Err(format!("{s:?}: the face table is written as CSV (.csv)")),
+    }
 }
 
 fn parse_param(s: &str) -> Result<(String, f64), String> {
@@ -272,6 +284,10 @@ fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
             ],
         )?;
     }
+    if let Some(table) = &args.faces {
+        galerkin::radiosity::face_table::write(table, &mesh, &geometry, &radiosity)?;
+        println!("per-face table ({} faces, f64) → {}", mesh.len(), table.display());
+    }
     let p_text: Vec<String> = scene.names().iter().zip(&p).map(|(n, v)| format!("{n}={v}")).collect();
     println!(
         "radiosity: {} faces, {} lights, {}; {how} {solve_s:.3} s, exposure {exposure:.3} → {}",
@@ -359,224 +375,97 @@ fn train(args: &TrainArgs) -> Result<()> {
     Ok(())
 }
 
-/// A smooth closed path through the parameter box: parameter `a` at frame `f` of `frames`.
-fn sequence(ranges: &[[f64; 2]], which: usize, f: usize, frames: usize) -> Vec<f64> {
-    let t = f as f64 / frames as f64;
-    let (freq, phase): ([f64; 4], [f64; 4]) = if which == 0 {
-        ([1.0, 2.0, 1.0, 1.5], [0.0, 1.0, 2.5, 0.5])
-    } else {
-        ([2.0, 1.0, 3.0, 1.0], [1.3, 0.2, 0.7, 2.9])
-    };
-    ranges
-        .iter()
-        .enumerate()
-        .map(|(a, r)| {
-            let u = 0.5
-                + 0.47 * (2.0 * std::f64::consts::PI * freq[a % 4] * t + phase[a % 4] + (a / 4) as f64).sin();
-            r[0] + u * (r[1] - r[0])
-        })
-        .collect()
-}
-
-/// How far a kept full frame may be from a fresh solve of the same frame (relative, area
-/// weighted): the solve is deterministic (each face's sums in a fixed order), so anything above
-/// rounding means the file is stale.
-const KEPT_FRAME_TOLERANCE: f64 = 1e-9;
-
 fn compare(args: &CompareArgs) -> Result<()> {
-    if args.frames.is_empty() || args.frames.contains(&0) || args.frames.iter().any(|&f| f > MAX_FRAMES) {
-        bail!("--frames {:?}: each sequence needs 1 to {MAX_FRAMES} frames", args.frames);
-    }
+    use galerkin::radiosity::compare::{self, CompareOptions, Progress};
+    compare::check_frames(&args.frames)?;
     let scene = AnyScene::load(&args.scene, light_mode(args.lights.as_deref()))?;
-    let spec = scene.space();
+    let mut bar: Option<indicatif::ProgressBar> = None;
+    let mut progress = |p: Progress| match p {
+        Progress::Sequence(_, frames, label) => bar = Some(crate::progress_bar(frames as u64, label)),
+        Progress::Frame => {
+            if let Some(b) = &bar {
+                b.inc(1);
+            }
+        }
+        Progress::SequenceDone(which, report, groups) => {
+            if let Some(b) = bar.take() {
+                b.finish();
+            }
+            let (mean, worst) = report.group(0);
+            let (all_mean, all_worst) = report.all_faces();
+            eprintln!(
+                "sequence {}: {} frames; {}: mean {:.2} %, worst {:.2} % (all faces: {:.2} %, {:.2} %)",
+                which + 1,
+                report.errors.len(),
+                groups.names[0],
+                100.0 * mean,
+                100.0 * worst,
+                100.0 * all_mean,
+                100.0 * all_worst
+            );
+        }
+    };
     if args.full_only {
-        return keep_full_frames(args, &scene);
+        let dir = args.full_frames.as_ref().context("--full-only needs --full-frames DIR")?;
+        for path in compare::keep_full_frames(&scene, &args.scene, &args.frames, dir, &mut progress)? {
+            eprintln!("full frames kept in {}", path.display());
+        }
+        return Ok(());
     }
     let model = ReducedRadiosity::load(&args.model)?;
-    if model.light_mode() != spec.lights().mode {
-        bail!(
-            "{}: the model was trained with {:?} lighting; pass --lights to match",
-            args.model.display(),
-            model.light_mode()
-        );
-    }
-    std::fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
-    let mut rows =
-        vec![format!("sequence,frame,{},relative_error,full_ms,reduced_ms", scene.names().join(","))];
-    let ranges = spec.ranges();
-    let mut series: Vec<Vec<f64>> = Vec::new();
-    let (mut full_times, mut reduced_times) = (Vec::new(), Vec::new());
-    let mut parts = [0.0f64; 4];
-    let lighting = format!("{:?}", spec.lights().mode);
-    let csv = args.out.join("compare.csv");
-    for (which, &frames) in args.frames.iter().enumerate() {
-        let params: Vec<Vec<f64>> = (0..frames).map(|f| sequence(&ranges, which % 2, f, frames)).collect();
-        let file = match &args.full_frames {
-            Some(dir) => Some(FullFramesFile::new(dir, &args.scene, &lighting, which, frames)?),
-            None => None,
-        };
-        let mut kept = file.as_ref().map_or_else(Vec::new, |file| file.load_or_none(model.faces(), &params));
-        // Kept frames are read back, and every stride-th of them solved again (timed, and
-        // checked); the others are solved, timed, and kept.
-        let reused = kept.len();
-        let stride = (frames / args.timed_full as usize).max(1);
-        let label = match &file {
-            Some(file) if reused > 0 => format!(
-                "sequence {} (reduced; {reused} full frames from {})",
-                which + 1,
-                file.path().display()
-            ),
-            _ => format!("sequence {} (full and reduced)", which + 1),
-        };
-        let bar = crate::progress_bar(frames as u64, &label);
-        let mut errors = Vec::with_capacity(frames);
-        for (f, p) in params.iter().enumerate() {
-            let from_file = f < reused;
-            let fresh = if !from_file || f % stride == 0 {
-                let frame = FullFrame::solve(spec, p)?;
-                full_times.push(frame.seconds);
-                if from_file {
-                    // Solved again, the kept frame must be what the solver gives now.
-                    let d = relative_error(&kept[f].radiosity, &frame.radiosity, &frame.areas);
-                    if d > KEPT_FRAME_TOLERANCE {
-                        bail!(
-                            "{}: frame {f} differs from a fresh full solve by {d:.2e} (relative); delete the file",
-                            file.as_ref().map_or(PathBuf::new(), |file| file.path().to_path_buf()).display()
-                        );
-                    }
-                }
-                Some(frame)
-            } else {
-                None
-            };
-            let t = Instant::now();
-            let mesh = spec.mesh(p)?;
-            let (b, times) = model.evaluate(&mesh)?;
-            let reduced_s = t.elapsed().as_secs_f64();
-            parts[0] += times.project;
-            parts[1] += times.visibility + times.direct;
-            parts[2] += times.chain;
-            parts[3] += times.lift;
-            let full_ms = fresh.as_ref().map_or(String::new(), |frame| format!("{:.3}", frame.seconds * 1e3));
-            let reference = match (&fresh, from_file) {
-                (_, true) => &kept[f],
-                (Some(frame), false) => frame,
-                (None, false) => unreachable!("a frame not kept is solved"),
-            };
-            let e = relative_error(&b, &reference.radiosity, &reference.areas);
-            errors.push(e);
-            reduced_times.push(reduced_s);
-            let values: Vec<String> = p.iter().map(|v| v.to_string()).collect();
-            rows.push(format!(
-                "{},{f},{},{e:.6},{full_ms},{:.4}",
-                which + 1,
-                values.join(","),
-                reduced_s * 1e3
-            ));
-            if let (false, Some(frame), Some(file)) = (from_file, fresh, &file) {
-                kept.push(frame);
-                if save_due(kept.len() - reused, kept.len(), frames) {
-                    file.save(model.faces(), &kept)?;
-                }
-            }
-            bar.inc(1);
-        }
-        bar.finish();
-        // Each sequence's summary and rows as soon as it is done: a long comparison stopped
-        // in the second sequence still leaves the first.
-        let mean = errors.iter().sum::<f64>() / errors.len().max(1) as f64;
-        let worst = errors.iter().fold(0.0f64, |m, v| m.max(*v));
-        eprintln!(
-            "sequence {}: {frames} frames, mean {:.2} %, worst {:.2} %",
-            which + 1,
-            100.0 * mean,
-            100.0 * worst
-        );
-        std::fs::write(&csv, rows.join("\n") + "\n").with_context(|| format!("writing {}", csv.display()))?;
-        series.push(errors);
-    }
-    let plot = args.out.join("compare.png");
-    let lines: Vec<galerkin::plot::Line> = series
-        .iter()
-        .enumerate()
-        .map(|(which, errors)| galerkin::plot::Line {
-            label: format!("sequence {} ({} frames)", which + 1, errors.len()),
-            points: errors.iter().enumerate().map(|(f, e)| (f as f64, *e)).collect(),
-        })
-        .collect();
-    galerkin::plot::line_chart(
-        &plot,
-        &format!("Reduced against full radiosity: {}", args.scene.display()),
-        "frame of the animation sequence",
-        "relative error, area-weighted (%)",
-        &lines,
-        &|v| format!("{:.2} %", 100.0 * v),
-    )?;
-    let median = |v: &mut Vec<f64>| galerkin::bench::median_f64(v);
-    let full_count = full_times.len();
-    let (full_med, reduced_med) = (median(&mut full_times), median(&mut reduced_times));
-    let all: Vec<f64> = series.iter().flatten().copied().collect();
-    let total: f64 = parts.iter().sum();
-    println!("| sequence | frames | mean relative error | worst frame |\n|---|---:|---:|---:|");
-    for (which, e) in series.iter().enumerate() {
-        let mean = e.iter().sum::<f64>() / e.len().max(1) as f64;
-        let worst = e.iter().fold(0.0f64, |m, v| m.max(*v));
-        println!("| {} | {} | {:.2} % | {:.2} % |", which + 1, e.len(), 100.0 * mean, 100.0 * worst);
+    let options = CompareOptions {
+        frames: args.frames.clone(),
+        full_frames: args.full_frames.clone(),
+        timed_full: args.timed_full as usize,
+        out: args.out.clone(),
+    };
+    let r = compare::compare(&scene, &args.scene, &model, &options, &mut progress)
+        .with_context(|| format!("comparing {} with {}", args.model.display(), args.scene.display()))?;
+    let pct = |(m, w): (f64, f64)| format!("{:.2} % | {:.2} %", 100.0 * m, 100.0 * w);
+    println!(
+        "Relative error, area-weighted over faces and channels (emitters: the window and skylight faces)"
+    );
+    println!(
+        "| sequence | frames | receiving surfaces: mean | worst frame | all faces, emitters included: mean | worst frame |\n|---|---:|---:|---:|---:|---:|"
+    );
+    for (which, s) in r.sequences.iter().enumerate() {
+        println!("| {} | {} | {} | {} |", which + 1, s.errors.len(), pct(s.group(0)), pct(s.all_faces()));
     }
     println!(
-        "all frames: mean {:.2} %, worst {:.2} %; median frame: full {:.1} ms ({:.2} FPS, {} frames solved in this run), reduced {:.3} ms ({:.0} FPS, mesh build and lift included): {:.0}× faster",
-        100.0 * all.iter().sum::<f64>() / all.len().max(1) as f64,
-        100.0 * all.iter().fold(0.0f64, |m, v| m.max(*v)),
-        full_med * 1e3,
-        1.0 / full_med,
-        full_count,
-        reduced_med * 1e3,
-        1.0 / reduced_med,
-        full_med / reduced_med
+        "| all | {} | {} | {} |",
+        r.sequences.iter().map(|s| s.errors.len()).sum::<usize>(),
+        pct(r.overall(Some(0))),
+        pct(r.overall(None))
     );
+    for (k, name) in r.groups.names.iter().enumerate().skip(1) {
+        println!(
+            "receiving surfaces of the {name} ({} faces): mean {}",
+            r.groups.faces[k].len(),
+            pct(r.overall(Some(k))).replace(" | ", ", worst ")
+        );
+    }
+    let (full, reduced) = (r.full_median_s, r.reduced_median_s);
+    println!(
+        "median frame: full {:.1} ms ({:.2} FPS, {} frames solved in this run), reduced {:.3} ms ({:.0} FPS, mesh build and lift included): {:.0}× faster",
+        full * 1e3,
+        1.0 / full,
+        r.full_solved,
+        reduced * 1e3,
+        1.0 / reduced,
+        full / reduced
+    );
+    let total: f64 = r.stage_seconds.iter().sum();
+    let share = |k: usize| 100.0 * r.stage_seconds[k] / total;
     println!(
         "reduced frame: project g {:.0} %, learned visibility (Eq. 17, and the sky's direct light in sky mode) {:.0} %, Table 2 chain {:.0} %, lift b {:.0} % (of the model's own time)",
-        100.0 * parts[0] / total,
-        100.0 * parts[1] / total,
-        100.0 * parts[2] / total,
-        100.0 * parts[3] / total
+        share(0),
+        share(1),
+        share(2),
+        share(3)
     );
-    println!("→ {} and {}", csv.display(), plot.display());
+    println!("→ {} and {}", r.csv.display(), r.plot.display());
     Ok(())
 }
-
-/// `compare --full-only`: solve every frame of both sequences not yet kept in the
-/// `--full-frames` directory and keep it (saved as [`save_due`] says), without a model.
-fn keep_full_frames(args: &CompareArgs, scene: &AnyScene) -> Result<()> {
-    let spec = scene.space();
-    let dir = args.full_frames.as_ref().context("--full-only needs --full-frames DIR")?;
-    let lighting = format!("{:?}", spec.lights().mode);
-    let ranges = spec.ranges();
-    for (which, &frames) in args.frames.iter().enumerate() {
-        let params: Vec<Vec<f64>> = (0..frames).map(|f| sequence(&ranges, which % 2, f, frames)).collect();
-        let Some(first) = params.first() else { continue };
-        let faces = spec.mesh(first)?.len();
-        let file = FullFramesFile::new(dir, &args.scene, &lighting, which, frames)?;
-        let mut kept = file.load_or_none(faces, &params);
-        let bar = crate::progress_bar(frames as u64, &format!("sequence {} (full frames)", which + 1));
-        bar.set_position(kept.len() as u64);
-        let reused = kept.len();
-        for p in &params[reused..] {
-            kept.push(FullFrame::solve(spec, p)?);
-            if save_due(kept.len() - reused, kept.len(), frames) {
-                file.save(faces, &kept)?;
-            }
-            bar.inc(1);
-        }
-        bar.finish();
-        eprintln!("sequence {}: {frames} full frames kept in {}", which + 1, file.path().display());
-    }
-    Ok(())
-}
-
-/// Relative error per frame as a line plot (one colour per sequence) with a grid every 1 %.
-/// The most frames a compared sequence may have (each is a full solve: hours at this count).
-const MAX_FRAMES: usize = 100_000;
 
 /// Arguments of `galerkin radiosity bench`.
 #[derive(Args)]
@@ -595,64 +484,12 @@ pub struct BenchArgs {
 /// `galerkin radiosity bench`: the full radiosity's stages on the CPU (f64) and the device
 /// (f32), medians of `--runs`.
 pub fn bench(desc: &GpuDesc, args: &BenchArgs) -> Result<()> {
-    use galerkin::radiosity::form_factor::{form_factors, NearField};
-    use galerkin::radiosity::gpu::GpuRadiosity;
-    use galerkin::radiosity::lighting::emission;
-    use galerkin::radiosity::solve::solve_jacobi;
     let gpu = if args.cpu_only { None } else { Some(Gpu::new(desc)?) };
-    let device = gpu.as_ref().map(GpuRadiosity::new).transpose()?;
     if let Some(g) = &gpu {
         println!("device: {}", g.caps().device_name);
     }
-    println!("| scene | faces | pairs | path | form factors (s) | solve (s) | sweeps | frame (s) |");
-    println!("|---|---:|---:|---|---:|---:|---:|---:|");
-    for scene in &args.scenes {
-        let spec = SceneSpec::load(scene)?;
-        let mesh = galerkin::radiosity::architecture::build(&spec, &spec.defaults())?;
-        let n = mesh.len();
-        let name = scene.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
-        let (mut ff, mut sv, mut sweeps, mut e) = (Vec::new(), Vec::new(), 0, Vec::new());
-        for _ in 0..args.runs.max(1) {
-            let t = Instant::now();
-            let f = form_factors(&mesh, NearField::Regularised);
-            ff.push(t.elapsed().as_secs_f64());
-            e = emission(&mesh, &mesh.geometry(), &spec.lights, &f);
-            let t = Instant::now();
-            let (_, k) = solve_jacobi(&f, &mesh.albedo, &e, galerkin::radiosity::JACOBI_TOLERANCE, 2000)?;
-            sv.push(t.elapsed().as_secs_f64());
-            sweeps = k;
-        }
-        let (a, b) = (galerkin::bench::median_f64(&mut ff), galerkin::bench::median_f64(&mut sv));
-        println!(
-            "| {name} | {n} | {} | CPU f64 (rayon, 2 threads) | {a:.3} | {b:.3} | {sweeps} | {:.3} |",
-            n * n,
-            a + b
-        );
-        if let (Some(gpu), Some(device)) = (&gpu, &device) {
-            let (mut ff, mut sv, mut sweeps) = (Vec::new(), Vec::new(), 0);
-            let runs = if n > 2000 { 1 } else { args.runs.max(1) };
-            for _ in 0..runs {
-                let t = Instant::now();
-                let f = device.form_factors(gpu, &mesh, NearField::Regularised)?;
-                ff.push(t.elapsed().as_secs_f64());
-                let t = Instant::now();
-                let (_, k) = device.solve(gpu, &f, &mesh.albedo, &e, 1e-6, 2000)?;
-                sv.push(t.elapsed().as_secs_f64());
-                sweeps = k;
-            }
-            let (a, b) = (galerkin::bench::median_f64(&mut ff), galerkin::bench::median_f64(&mut sv));
-            println!(
-                "| {name} | {n} | {} | device f32{} | {a:.3} | {b:.3} | {sweeps} | {:.3} |",
-                n * n,
-                if runs == 1 { " (1 run)" } else { "" },
-                a + b
-            );
-        }
-    }
-    if let Some(gpu) = gpu {
-        drop(device);
-        drop(gpu);
-    }
+    let rows = galerkin::bench::radiosity::run(&args.scenes, args.runs, gpu.as_ref())?;
+    print!("{}", galerkin::bench::radiosity::table(&rows));
     Ok(())
 }
 

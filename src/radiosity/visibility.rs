@@ -7,10 +7,11 @@
 //! ```
 //!
 //! with `B_gᵀ G` and `B_vᵀ V` precomputed (their sizes do not depend on the mesh). The second
-//! term (μ = [`LOCALITY`]) is ours: the two-room scene's vertex positions are affine in the
-//! design parameters (the ceiling in `tan(tilt)`), so every interior sample is *exactly* a
-//! convex combination of others and Eq. 17 alone has many minimisers; the term breaks the tie
-//! towards nearby samples, so a training configuration gets its own visibility back.
+//! term (μ = [`LOCALITY`]) is ours: the two-room scene's vertex positions are affine in a few
+//! functions of the design parameters (`[1, w, s, d, tan θ, s·tan θ, d·tan θ]`), so ĝ lives in
+//! a six-dimensional space, interior samples are (nearly) convex combinations of others and
+//! Eq. 17 alone has many (near-)minimisers; the term breaks the tie towards nearby samples, so
+//! a training configuration gets its own visibility back.
 //!
 //! The solver is exact: since `Σx = 1`, the residual is `(B_gᵀG − ĝ 1ᵀ) x`, homogeneous in
 //! `x`, so with `M` the stacked residual and locality rows, `y = argmin_{y ≥ 0} ‖[M; 1ᵀ] y −

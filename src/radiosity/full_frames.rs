@@ -16,8 +16,9 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
-use galerkin::radiosity::train::DesignSpace;
-use galerkin::radiosity::Rgb;
+
+use super::train::DesignSpace;
+use super::Rgb;
 
 const MAGIC: &[u8; 8] = b"GLKFULL1";
 
@@ -41,7 +42,7 @@ impl FullFrame {
     /// Solves the full radiosity at `params` in `space` (mesh build included), timed.
     pub fn solve(space: &dyn DesignSpace, params: &[f64]) -> Result<Self> {
         let t = std::time::Instant::now();
-        let full = galerkin::radiosity::full_radiosity_of(space.mesh(params)?, space.lights())?;
+        let full = super::full_radiosity_of(space.mesh(params)?, space.lights())?;
         Ok(Self {
             params: params.to_vec(),
             seconds: t.elapsed().as_secs_f64(),
@@ -86,7 +87,7 @@ impl FullFramesFile {
     pub fn load_or_none(&self, faces: usize, params: &[Vec<f64>]) -> Vec<FullFrame> {
         self.load(faces, params).unwrap_or_else(|why| {
             if self.path.exists() {
-                eprintln!("{}: {why}; solving every full frame again", self.path.display());
+                tracing::warn!("{}: {why}; solving every full frame again", self.path.display());
             }
             Vec::new()
         })
