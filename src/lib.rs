@@ -22,6 +22,7 @@ pub mod bench;
 pub mod demo;
 pub mod fluid;
 pub mod gpu;
+pub mod limits;
 pub mod mesh;
 pub mod plot;
 pub mod process;

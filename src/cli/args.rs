@@ -62,6 +62,23 @@ pub fn parse_range(s: &str) -> Result<(f64, f64), String> {
     }
 }
 
+/// The most marker particles a command seeds (about 0.5 GB of particle state on the host).
+pub const MAX_PARTICLES: usize = 10_000_000;
+/// The most frames (or steps, or samples) a command runs: each is a solve.
+pub const MAX_FRAMES: usize = 1_000_000;
+/// The most spacetime elements generated (streamed to `.gst`: about 50 GB at this count).
+pub const MAX_ELEMENTS: usize = 200_000_000;
+
+/// A parser for a count of at most `max` (a typo of 2⁴⁰ must be an argument error, not an
+/// allocation that aborts the process).
+pub fn count_up_to(max: usize) -> impl Fn(&str) -> Result<usize, String> + Clone + Send + Sync + 'static {
+    move |s: &str| match s.trim().parse::<usize>() {
+        Ok(n) if n <= max => Ok(n),
+        Ok(n) => Err(format!("{n} is over the limit of {max}")),
+        Err(_) => Err(format!("{s:?} is not a non-negative whole number")),
+    }
+}
+
 /// Image output: where the picture goes and how large it is.
 #[derive(Args, Clone, Debug)]
 pub struct ImageArgs {
@@ -151,6 +168,15 @@ mod tests {
         assert!(parse_range("0,inf").is_err());
         assert!(parse_range("NaN,1").is_err());
         assert!(parse_range("1 2").is_err());
+    }
+
+    #[test]
+    fn counts_are_bounded() {
+        let parse = count_up_to(10);
+        assert_eq!(parse("10"), Ok(10));
+        assert!(parse("11").unwrap_err().contains("limit of 10"));
+        assert!(parse("1099511627776").is_err());
+        assert!(parse("-1").is_err());
     }
 
     #[test]

@@ -119,7 +119,7 @@ pub struct ViewArgs {
     #[arg(long, default_value = "replay:0")]
     pub motion: galerkin::fluid::reduced::ReducedMotion,
     /// Marker particles.
-    #[arg(long, default_value_t = 8000)]
+    #[arg(long, default_value_t = 8000, value_parser = crate::cli::args::count_up_to(crate::cli::args::MAX_PARTICLES))]
     pub particles: usize,
     /// Window size (default 1200x400 for 2D, 1024x768 for a 3D cavity model).
     #[arg(long, value_name = "WxH", value_parser = crate::cli::args::parse_size)]
@@ -139,7 +139,7 @@ pub struct SimulateArgs {
     /// Scene file (TOML), e.g. scenes/fluid/tunnel_small.toml.
     pub scene: PathBuf,
     /// Frames to simulate (default: the scene's `flow.frames`).
-    #[arg(long)]
+    #[arg(long, value_parser = crate::cli::args::count_up_to(crate::cli::args::MAX_FRAMES))]
     pub frames: Option<usize>,
     /// Snapshot directory to write.
     #[arg(long, default_value = "out/fluid")]
@@ -161,7 +161,7 @@ pub struct RenderArgs {
     #[arg(long)]
     pub frame: Option<usize>,
     /// Marker particles, seeded at frame 0 (0: none).
-    #[arg(long, default_value_t = 4000)]
+    #[arg(long, default_value_t = 4000, value_parser = crate::cli::args::count_up_to(crate::cli::args::MAX_PARTICLES))]
     pub particles: usize,
     /// Colour the cells by speed (the particles then draw white); otherwise the cells are
     /// grey and the particles carry the speed colours.
@@ -417,7 +417,7 @@ pub struct BenchArgs {
     #[arg(long)]
     pub quick: bool,
     /// Frames measured per size (medians are reported).
-    #[arg(long, default_value_t = 5)]
+    #[arg(long, default_value_t = 5, value_parser = crate::cli::args::count_up_to(crate::cli::args::MAX_FRAMES))]
     pub frames: usize,
 }
 

@@ -73,7 +73,7 @@ pub struct TrainSceneArgs {
     #[arg(long)]
     pub work: Option<PathBuf>,
     /// Frames per run (default: the scene's).
-    #[arg(long)]
+    #[arg(long, value_parser = crate::cli::args::count_up_to(crate::cli::args::MAX_FRAMES))]
     pub frames: Option<usize>,
     /// The cavity's training runs to use, comma-separated (default: all, 0 to 13).
     #[arg(long, value_delimiter = ',')]
@@ -102,7 +102,7 @@ pub struct CompareArgs {
     #[arg(long, default_value = "0=0/0/0,30=0.5/0/0,60=0.5/0/0.4,90=0/0/0.4")]
     pub drive: galerkin::fluid::reduced::CompressionSchedule,
     /// Frames (default: the motion's).
-    #[arg(long)]
+    #[arg(long, value_parser = crate::cli::args::count_up_to(crate::cli::args::MAX_FRAMES))]
     pub frames: Option<usize>,
     /// Simulate the full run with this many times the RK4 substeps its stability needs (the
     /// reduced exponential is exact; refining shows how much of the difference is the full
@@ -120,7 +120,7 @@ pub struct ReducedArgs {
     /// Model file written by `galerkin fluid train`.
     pub model: PathBuf,
     /// Frames to run (default: the replayed run's whole motion).
-    #[arg(long)]
+    #[arg(long, value_parser = crate::cli::args::count_up_to(crate::cli::args::MAX_FRAMES))]
     pub frames: Option<usize>,
     /// The motion: replay:K replays training run K's reduced geometry and induced flux
     /// (runs numbered from 0 in the order given to `train`), starting from its initial state;
@@ -160,7 +160,7 @@ pub struct StudyArgs {
     #[arg(long, value_delimiter = ',', default_value = "8,16,32,64,128")]
     pub sizes: Vec<usize>,
     /// Frames of the test run to step from (at most its last but one).
-    #[arg(long, default_value_t = 1000)]
+    #[arg(long, default_value_t = 1000, value_parser = crate::cli::args::count_up_to(crate::cli::args::MAX_FRAMES))]
     pub frames: usize,
     /// Study every STRIDE-th frame (the full step from each frame dominates the time).
     #[arg(long, default_value_t = 1)]
@@ -438,10 +438,10 @@ pub struct BenchArgs {
     #[arg(long)]
     pub quick: bool,
     /// Reduced steps timed per exponential.
-    #[arg(long, default_value_t = 200)]
+    #[arg(long, default_value_t = 200, value_parser = crate::cli::args::count_up_to(crate::cli::args::MAX_FRAMES))]
     pub steps: usize,
     /// Reduced steps of the energy run (default 10⁶; 10⁴ with --quick).
-    #[arg(long)]
+    #[arg(long, value_parser = crate::cli::args::count_up_to(crate::cli::args::MAX_FRAMES))]
     pub energy_steps: Option<usize>,
     /// Basis sizes m_u,m_f,m_g,m_h of the cavity step (Table 1's cavity: 128,64,5; m_h ours).
     #[arg(long, value_delimiter = ',', default_value = "128,64,5,16")]
@@ -455,7 +455,7 @@ pub struct BenchArgs {
     #[arg(long, default_value = "scenes/fluid/cavity.toml")]
     pub scene: std::path::PathBuf,
     /// With --model: particles advected every frame.
-    #[arg(long, default_value_t = 10_000)]
+    #[arg(long, default_value_t = 10_000, value_parser = crate::cli::args::count_up_to(crate::cli::args::MAX_PARTICLES))]
     pub particles: usize,
     /// With --model: the motion (compression keyframes, see `fluid reduced --drive`).
     #[arg(long, default_value = "0=0/0/0,30=0.5/0/0,60=0.5/0/0.4,90=0/0/0.4")]

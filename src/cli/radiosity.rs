@@ -61,7 +61,7 @@ pub struct TrainArgs {
     pub out: PathBuf,
     /// Number of sampled configurations (the paper: 540): every axis's extremes, the corners
     /// of the parameter box, then a Latin hypercube.
-    #[arg(long, default_value_t = 540)]
+    #[arg(long, default_value_t = 540, value_parser = crate::cli::args::count_up_to(crate::cli::args::MAX_FRAMES))]
     pub samples: usize,
     /// Fraction of each quantity's variance its basis keeps (the paper: 0.999).
     #[arg(long, default_value_t = 0.999)]

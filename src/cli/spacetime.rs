@@ -83,8 +83,8 @@ pub struct RenderArgs {
     /// and s, the colour coordinate shown).
     #[arg(long, default_value = "pulses")]
     pub generate: String,
-    /// Without FILE: about this many tetrahedra.
-    #[arg(long, default_value_t = 60_000)]
+    /// Without FILE: about this many tetrahedra (built in memory: at most 50,000,000).
+    #[arg(long, default_value_t = 60_000, value_parser = crate::cli::args::count_up_to(crate::cli::args::MAX_ELEMENTS))]
     pub elements: usize,
     /// Time of the slice (default: the middle of the data set's time span).
     #[arg(long)]
@@ -131,8 +131,9 @@ pub struct GenArgs {
     /// pulses L2-projected per element — not solved.
     #[arg(long, default_value = "pulses")]
     pub generate: String,
-    /// About this many tetrahedra.
-    #[arg(long, default_value_t = 100_000)]
+    /// About this many tetrahedra (at most 200,000,000 streamed to .gst, 50,000,000 to .vtu,
+    /// which is built in memory).
+    #[arg(long, default_value_t = 100_000, value_parser = crate::cli::args::count_up_to(crate::cli::args::MAX_ELEMENTS))]
     pub elements: usize,
     /// Output: `.gst` (streamed to disk: any size) or `.vtu` (built in memory).
     #[arg(long, value_parser = data_path)]
@@ -174,9 +175,18 @@ pub fn load(path: &Path) -> Result<SpacetimeData, SpacetimeError> {
 }
 
 /// `galerkin spacetime gen`.
+/// The most elements a data set built in memory may have (a `.vtu`, a rendered `--generate`).
+const MAX_IN_MEMORY: usize = 50_000_000;
+
 pub fn generate_file(args: &GenArgs) -> Result<()> {
     if args.elements == 0 {
         bail!("--elements must be positive");
+    }
+    if extension(&args.out) == "vtu" && args.elements > MAX_IN_MEMORY {
+        bail!(
+            "--elements {}: a .vtu is built in memory, at most {MAX_IN_MEMORY} elements; write a .gst (streamed) instead",
+            args.elements
+        );
     }
     let start = Instant::now();
     if args.generate == "bar1d" {
@@ -274,6 +284,12 @@ pub fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
         if let Some(v) = v.filter(|v| !(v.is_finite() && *v > 0.0)) {
             bail!("{name} must be a positive number, got {v}");
         }
+    }
+    if args.file.is_none() && args.elements > MAX_IN_MEMORY {
+        bail!(
+            "--elements {}: a generated data set is built in memory, at most {MAX_IN_MEMORY}; generate a .gst with `galerkin spacetime gen` and render that",
+            args.elements
+        );
     }
     if args.file.is_none() && args.generate == "bar1d" {
         return render_bar(desc, args);
@@ -391,7 +407,7 @@ pub struct BenchArgs {
     #[arg(long, default_value = "out/bench-data")]
     pub data_dir: PathBuf,
     /// Frames per configuration (the median is reported).
-    #[arg(long, default_value_t = 30)]
+    #[arg(long, default_value_t = 30, value_parser = crate::cli::args::count_up_to(crate::cli::args::MAX_FRAMES))]
     pub frames: usize,
     /// The data sets to generate: `pulses` (structured) or a tent-pitched scenario (`crack`,
     /// `inclusions`, `booster`); the out-of-core file is always `pulses`.

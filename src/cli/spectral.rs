@@ -356,7 +356,7 @@ pub struct BenchArgs {
     #[arg(long)]
     pub quick: bool,
     /// Frames per measurement (the median is reported).
-    #[arg(long, default_value_t = 15)]
+    #[arg(long, default_value_t = 15, value_parser = crate::cli::args::count_up_to(crate::cli::args::MAX_FRAMES))]
     pub frames: usize,
 }
 

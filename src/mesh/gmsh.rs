@@ -132,11 +132,20 @@ impl<'a> Reader<'a> {
     /// A `$Nodes`/`$Elements` header: the number of entity blocks (then the total count and
     /// the tag range, not needed).
     fn blocks(&mut self) -> Result<u64, MeshError> {
-        let blocks = self.size()?;
+        // Each block header holds four numbers: at least 8 bytes.
+        let blocks = self.count("the entity block count", 8)? as u64;
         for _ in 0..3 {
             self.size()?;
         }
         Ok(blocks)
+    }
+
+    /// A count the file declares, checked against the limit and the bytes left
+    /// ([`crate::limits::declared_count`]) before anything is allocated from it.
+    fn count(&mut self, what: &str, min_bytes: usize) -> Result<usize, MeshError> {
+        let n = self.size()?;
+        let remaining = self.bytes.len().saturating_sub(self.pos);
+        crate::limits::declared_count(what, n, remaining, min_bytes).map_err(|e| self.fail(e))
     }
 
     fn expect_end(&mut self, name: &str) -> Result<(), MeshError> {
@@ -206,7 +215,9 @@ pub fn parse_msh(bytes: &[u8], path: &Path) -> Result<SimplexMesh, MeshError> {
                     let _dim = r.int()?;
                     let _tag = r.int()?;
                     let parametric = r.int()?;
-                    let n = r.size()? as usize;
+                    // Each node takes at least a tag and three coordinates: 8 bytes in text
+                    // ("1\n0 0 0\n"), 32 in binary.
+                    let n = r.count("a node block's node count", if r.binary { 32 } else { 8 })?;
                     let mut tags = Vec::with_capacity(n);
                     for _ in 0..n {
                         tags.push(r.size()?);
@@ -229,7 +240,8 @@ pub fn parse_msh(bytes: &[u8], path: &Path) -> Result<SimplexMesh, MeshError> {
                     let _dim = r.int()?;
                     let _entity = r.int()?;
                     let kind = r.int()?;
-                    let n = r.size()?;
+                    // Each element takes at least a tag and one node: 4 bytes in text, 16 in binary.
+                    let n = r.count("an element block's element count", if r.binary { 16 } else { 4 })?;
                     let per = match kind {
                         2 => 3,
                         4 => 4,

@@ -124,6 +124,15 @@ impl<'a> Lines<'a> {
         Ok(())
     }
 
+    /// A count of items that follow one per line, checked against the limit and the lines
+    /// left ([`crate::limits::declared_count`]) before anything is allocated from it.
+    fn count(&mut self, what: &str) -> Result<usize, SpectralError> {
+        let n: u64 = self.number(what)?;
+        let remaining = self.lines.len().saturating_sub(self.at);
+        crate::limits::declared_count(what, n, remaining, 1)
+            .map_err(|e| err(self.path, self.line_number(), e))
+    }
+
     fn number<T: std::str::FromStr>(&mut self, what: &str) -> Result<T, SpectralError> {
         let (n, l) = self.next(what)?;
         l.parse().map_err(|_| err(self.path, n, format!("{what}: {l:?} is not a number")))
@@ -241,7 +250,7 @@ fn read_mesh_lines(path: &Path, lines: &mut Lines<'_>) -> Result<MfemMesh, Spect
         ));
     }
     lines.expect("elements")?;
-    let count: usize = lines.number("the element count")?;
+    let count = lines.count("the element count")?;
     let (want_geometry, corners) = if dim == 2 { (GEOMETRY_SQUARE, 4) } else { (GEOMETRY_CUBE, 8) };
     let mut elements = Vec::with_capacity(count);
     for e in 0..count {
@@ -265,13 +274,17 @@ fn read_mesh_lines(path: &Path, lines: &mut Lines<'_>) -> Result<MfemMesh, Spect
     // Skip the boundary.
     if lines.peek() == Some("boundary") {
         lines.next("boundary")?;
-        let b: usize = lines.number("the boundary count")?;
+        let b = lines.count("the boundary count")?;
         for _ in 0..b {
             lines.next("a boundary element")?;
         }
     }
     lines.expect("vertices")?;
-    let vertex_count: usize = lines.number("the vertex count")?;
+    let vertex_count: u64 = lines.number("the vertex count")?;
+    // With a `nodes` section no vertex lines follow: only the absolute limit applies here;
+    // otherwise the count is checked against the lines left below.
+    let vertex_count = crate::limits::declared_count("the vertex count", vertex_count, usize::MAX, 1)
+        .map_err(|e| err(path, lines.line_number(), e))?;
     for (e, el) in elements.iter().enumerate() {
         if let Some(&v) = el.iter().find(|&&v| v >= vertex_count) {
             return Err(SpectralError::File {
@@ -292,6 +305,9 @@ fn read_mesh_lines(path: &Path, lines: &mut Lines<'_>) -> Result<MfemMesh, Spect
         if !(1..=3).contains(&sdim) {
             return Err(err(path, lines.line_number(), format!("space dimension {sdim}")));
         }
+        let remaining = lines.lines.len().saturating_sub(lines.at);
+        crate::limits::declared_count("the vertex count", vertex_count as u64, remaining, 1)
+            .map_err(|e| err(path, lines.line_number(), e))?;
         for v in 0..vertex_count {
             let (n, l) = lines.next("a vertex")?;
             let c: Vec<f64> = l

@@ -18,7 +18,7 @@ use encoding::{base64_runs, numbers, type_size, Compressor, Framing};
 
 /// The largest `NumberOfPoints` or `NumberOfCells` read (2³¹): a larger count is refused
 /// before anything is allocated for it.
-pub const MAX_COUNT: usize = 1 << 31;
+pub const MAX_COUNT: usize = crate::limits::MAX_COUNT as usize;
 
 /// The most nodes per cell a `connectivity` array may average (VTK's Lagrange hexahedra of
 /// order 9 have 1,000): bounds that array's size before it is inflated.

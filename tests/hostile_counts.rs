@@ -1,0 +1,93 @@
+//! Counts that input declares are checked before anything is allocated from them (issue 24):
+//! a Gmsh node or element count of 2⁴⁰, an MFEM element or vertex count of 2⁴⁰, and command
+//! line counts of 2⁴⁰ (`--particles`, `--samples`, `--frames`, `--elements`) each give an
+//! error naming the count — quickly, without the allocation that used to abort the process.
+
+use std::path::Path;
+use std::process::Command;
+use std::time::{Duration, Instant};
+
+const HUGE: &str = "1099511627776"; // 2^40
+
+/// Runs `f`, which must fail quickly with an error containing every one of `words`.
+fn refused<E: std::fmt::Display>(what: &str, f: impl FnOnce() -> Result<(), E>, words: &[&str]) {
+    let start = Instant::now();
+    let e = match f() {
+        Ok(()) => panic!("{what}: accepted"),
+        Err(e) => e.to_string(),
+    };
+    assert!(start.elapsed() < Duration::from_secs(5), "{what}: took {:?}", start.elapsed());
+    for w in words {
+        assert!(e.contains(w), "{what}: {e:?} does not mention {w:?}");
+    }
+}
+
+#[test]
+fn gmsh_counts_are_checked_against_the_file() {
+    let dir = tempfile::Builder::new().prefix("galerkin-hostile-").tempdir().expect("scratch");
+    let header = "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n";
+    let cases = [
+        ("nodes.msh", format!("{header}$Nodes\n1 {HUGE} 1 {HUGE}\n2 1 0 {HUGE}\n1\n0 0 0\n$EndNodes\n"), "node count"),
+        ("blocks.msh", format!("{header}$Nodes\n{HUGE} 1 1 1\n2 1 0 1\n1\n0 0 0\n$EndNodes\n"), "block count"),
+        (
+            "elements.msh",
+            format!("{header}$Nodes\n1 1 1 1\n2 1 0 1\n1\n0 0 0\n$EndNodes\n$Elements\n1 {HUGE} 1 {HUGE}\n2 1 2 {HUGE}\n1 1 1 1\n$EndElements\n"),
+            "element count",
+        ),
+    ];
+    for (name, text, what) in cases {
+        let path = dir.path().join(name);
+        std::fs::write(&path, &text).expect("write");
+        refused(name, || galerkin::mesh::gmsh::read_msh(&path).map(|_| ()), &[name, what, HUGE]);
+    }
+}
+
+#[test]
+fn mfem_counts_are_checked_against_the_file() {
+    let dir = tempfile::Builder::new().prefix("galerkin-hostile-").tempdir().expect("scratch");
+    let cases = [
+        ("elements.mesh", format!("MFEM mesh v1.0\ndimension\n2\nelements\n{HUGE}\n1 3 0 1 2 3\n"), "element count"),
+        (
+            "vertices.mesh",
+            format!("MFEM mesh v1.0\ndimension\n2\nelements\n1\n1 3 0 1 2 3\nvertices\n{HUGE}\n2\n0 0\n1 0\n1 1\n0 1\n"),
+            "vertex count",
+        ),
+        (
+            "boundary.mesh",
+            format!("MFEM mesh v1.0\ndimension\n2\nelements\n1\n1 3 0 1 2 3\nboundary\n{HUGE}\n1 1 0 1\n"),
+            "boundary count",
+        ),
+    ];
+    for (name, text, what) in cases {
+        let path = dir.path().join(name);
+        std::fs::write(&path, &text).expect("write");
+        refused(name, || galerkin::spectral::mfem::read_mesh(&path).map(|_| ()), &[name, what, HUGE]);
+    }
+}
+
+#[test]
+fn command_line_counts_are_bounded_before_any_work() {
+    let dir = tempfile::Builder::new().prefix("galerkin-hostile-").tempdir().expect("scratch");
+    let gst = dir.path().join("huge.gst");
+    let gst_text = gst.to_string_lossy().to_string();
+    let radiosity = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/radiosity/two_rooms_small.toml");
+    let fluid = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/fluid/tunnel_small.toml");
+    let run_dir = dir.path().join("run").to_string_lossy().to_string();
+    let cases: [&[&str]; 5] = [
+        &["spacetime", "gen", "--elements", HUGE, "--out", &gst_text],
+        &["radiosity", "train", radiosity, "--samples", HUGE, "--out", &run_dir],
+        &["fluid", "simulate", fluid, "--frames", HUGE, "--out", &run_dir],
+        &["fluid", "render", "/nonexistent", "--particles", HUGE],
+        &["spacetime", "render", "--elements", HUGE],
+    ];
+    for args in cases {
+        let start = Instant::now();
+        let out = Command::new(env!("CARGO_BIN_EXE_galerkin")).args(args).output().expect("ran");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.contains(HUGE) && err.contains("over the limit"), "{args:?}: {err}");
+        assert!(start.elapsed() < Duration::from_secs(10), "{args:?} took {:?}", start.elapsed());
+    }
+    assert!(!gst.exists() && !Path::new(&format!("{gst_text}.partial")).exists(), "a file was left");
+    assert!(!Path::new(&run_dir).exists(), "a run directory was made");
+}
