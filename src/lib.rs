@@ -18,6 +18,7 @@
 //! (seed 003), [`spectral`] (seed 002),
 //! [`radiosity`] (seed 000 §8–9).
 
+pub mod atomic_file;
 pub mod bench;
 pub mod demo;
 pub mod fluid;

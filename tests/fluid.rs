@@ -417,7 +417,18 @@ fn snapshots_stream_back_by_frame_and_by_rows() {
         w.push(&u, &u, &f, &mesh.g()[..ng], &f).expect("push");
     }
     assert!(w.push(&[1.0], &[1.0], &[1.0], &[1.0], &[1.0]).is_err(), "wrong lengths refused");
-    assert!(SnapshotWriter::create(&dir, meta, mesh.cells(), false).is_err(), "no silent overwrite");
+    assert!(SnapshotWriter::create(&dir, meta.clone(), mesh.cells(), false).is_err(), "no silent overwrite");
+    // A second writer of the same directory while this one lives (two `fluid simulate --force`
+    // at once) is refused before it truncates anything; after this one is gone it may.
+    let e = SnapshotWriter::create(&dir, meta.clone(), mesh.cells(), true).expect_err("a second writer");
+    assert!(e.to_string().contains("another run is writing"), "{e}");
+    drop(w);
+    let r = SnapshotReader::open(&dir).expect("open");
+    assert_eq!(r.meta().frames, 4, "the refused writer truncated the run");
+    drop(r);
+    let second =
+        SnapshotWriter::create(&scratch.path().join("other"), meta, mesh.cells(), true).expect("free");
+    drop(second);
     let r = SnapshotReader::open(&dir).expect("open");
     assert_eq!(r.meta().frames, 4);
     assert_eq!(r.frame("u", 2).expect("frame")[5], 2005.0);

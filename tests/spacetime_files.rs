@@ -95,7 +95,11 @@ fn malformed_gst_files_are_refused_naming_file_and_element() {
     file_error(w.push(&data.records()[0]).err().unwrap(), &out, "element 1: lowest time");
     drop(w);
     assert!(!out.exists());
-    assert!(!scratch.file("unfinished.gst.partial").exists());
+    let left = std::fs::read_dir(out.parent().unwrap()).unwrap().flatten();
+    assert!(
+        !left.into_iter().any(|e| e.file_name().to_string_lossy().contains("unfinished.gst")),
+        "a temporary was left"
+    );
 }
 
 #[test]
@@ -382,4 +386,33 @@ fn the_cli_generates_converts_and_refuses_bad_input_naming_it() {
     let (code, err) = run(&["spacetime", "convert", &s(&text), &s(&vtu_path)]);
     assert_eq!(code, Some(2));
     assert!(err.contains(&s(&text)) && err.contains(".gst or .vtu"), "{err}");
+}
+
+/// Two writers of one `.gst` name at once (two `spacetime gen --out x.gst`): each writes its own
+/// temporary, both finish, and the file is the complete output of one of them — never a mix.
+#[test]
+fn concurrent_writers_of_one_file_never_mix() {
+    let scratch = common::Scratch::new();
+    let out = scratch.file("both.gst");
+    let small = SpacetimeData::from_mesh(&pulses(1000)).unwrap();
+    let large = SpacetimeData::from_mesh(&pulses(3000)).unwrap();
+    let mut a = gst::GstWriter::create(&out, small.materials()).unwrap();
+    let mut b = gst::GstWriter::create(&out, large.materials()).unwrap();
+    for (ra, rb) in small.records().iter().zip(large.records()) {
+        a.push(ra).unwrap();
+        b.push(rb).unwrap();
+    }
+    for rb in &large.records()[small.len()..] {
+        b.push(rb).unwrap();
+    }
+    a.finish().unwrap();
+    b.finish().unwrap();
+    let back = gst::open(&out).unwrap();
+    assert_eq!(back.len(), large.len(), "the last writer to finish wins, whole");
+    let left: Vec<_> = std::fs::read_dir(out.parent().unwrap())
+        .unwrap()
+        .flatten()
+        .filter(|e| e.file_name().to_string_lossy().ends_with(".partial"))
+        .collect();
+    assert!(left.is_empty(), "temporaries left: {left:?}");
 }

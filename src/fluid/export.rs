@@ -201,9 +201,6 @@ pub fn export_run(
         ));
     }
     xml.push_str("  </Collection>\n</VTKFile>\n");
-    let partial = pvd.with_extension("pvd.partial");
-    std::fs::write(&partial, xml)
-        .and_then(|()| std::fs::rename(&partial, pvd))
-        .map_err(|e| bad(e.to_string()))?;
+    crate::atomic_file::write(pvd, xml.as_bytes()).map_err(|e| bad(e.to_string()))?;
     Ok(Export { pvd: pvd.to_path_buf(), frames: files, relative_divergence: worst })
 }

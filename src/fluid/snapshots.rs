@@ -120,6 +120,10 @@ pub struct SnapshotWriter {
     dir: PathBuf,
     meta: SnapshotMeta,
     files: Vec<File>,
+    /// `DIR/.lock`, locked exclusively while this writer lives: a second writer of the same
+    /// directory is refused instead of interleaving its frames with ours (the lock goes with
+    /// the process, so a killed run leaves no stale lock).
+    _lock: File,
 }
 
 impl SnapshotWriter {
@@ -135,6 +139,23 @@ impl SnapshotWriter {
             return Err(io(dir, "already holds snapshots (pass --force to overwrite)"));
         }
         std::fs::create_dir_all(dir).map_err(|e| io(dir, e))?;
+        let lock_path = dir.join(".lock");
+        let lock = File::options()
+            .create(true)
+            .truncate(false)
+            .write(true)
+            .open(&lock_path)
+            .map_err(|e| io(&lock_path, e))?;
+        match lock.try_lock() {
+            Ok(()) => {}
+            Err(std::fs::TryLockError::WouldBlock) => {
+                return Err(io(
+                    dir,
+                    "another run is writing snapshots here; wait for it or choose another directory",
+                ))
+            }
+            Err(std::fs::TryLockError::Error(e)) => return Err(io(&lock_path, e)),
+        }
         let mesh =
             serde_json::to_vec(&MeshFile { dim: meta.dim, cells: cells.to_vec() }).map_err(|e| io(dir, e))?;
         std::fs::write(dir.join("mesh.json"), mesh).map_err(|e| io(&dir.join("mesh.json"), e))?;
@@ -143,7 +164,8 @@ impl SnapshotWriter {
             let path = dir.join(format!("{q}.f64"));
             files.push(File::create(&path).map_err(|e| io(&path, e))?);
         }
-        let mut writer = Self { dir: dir.to_path_buf(), meta: SnapshotMeta { frames: 0, ..meta }, files };
+        let mut writer =
+            Self { dir: dir.to_path_buf(), meta: SnapshotMeta { frames: 0, ..meta }, files, _lock: lock };
         writer.write_meta()?;
         Ok(writer)
     }

@@ -1,8 +1,8 @@
 //! The per-face result of a radiosity solve as a table for other tools (`galerkin radiosity
 //! render --faces FILE.csv`): one row per face with its part, kind, area, centroid and the
 //! radiosity b (Eq. 14) per channel, every number in f64 printed so that it reads back to the
-//! same bits (Rust's shortest round-trip form). Written to a temporary name and renamed, so a
-//! reader never sees half a table.
+//! same bits (Rust's shortest round-trip form). Written whole or not at all
+//! ([`crate::atomic_file`]).
 
 use std::io::Write;
 use std::path::Path;
@@ -69,10 +69,5 @@ pub fn write(
     if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).map_err(fail)?;
     }
-    let tmp = path.with_extension(format!("csv.{}.tmp", std::process::id()));
-    std::fs::write(&tmp, &text).map_err(fail)?;
-    std::fs::rename(&tmp, path).map_err(|e| {
-        let _ = std::fs::remove_file(&tmp);
-        fail(e)
-    })
+    crate::atomic_file::write(path, &text).map_err(fail)
 }

@@ -138,7 +138,7 @@ impl FullFramesFile {
     }
 
     /// Writes `frames` (the first frames of one sequence, each with `faces` faces) to the file,
-    /// through a temporary name so that a reader never sees half a file.
+    /// whole or not at all ([`crate::atomic_file`]).
     pub fn save(&self, faces: usize, frames: &[FullFrame]) -> Result<()> {
         let k = frames.first().map_or(0, |f| f.params.len());
         let mut out = Vec::with_capacity(40 + frames.len() * 8 * (k + 1 + 4 * faces));
@@ -160,9 +160,8 @@ impl FullFramesFile {
         if let Some(dir) = self.path.parent() {
             std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
         }
-        let tmp = self.path.with_extension("bin.tmp");
-        std::fs::write(&tmp, &out).with_context(|| format!("writing {}", tmp.display()))?;
-        std::fs::rename(&tmp, &self.path).with_context(|| format!("renaming {}", tmp.display()))
+        crate::atomic_file::write(&self.path, &out)
+            .with_context(|| format!("writing {}", self.path.display()))
     }
 }
 

@@ -21,8 +21,8 @@
 //! The file ends right after the index. Opening checks the header, the size and that the index
 //! is sorted and finite; records are checked when the renderer first reads them (an error names
 //! the file and the element), so opening a 2·10⁷-element file reads 4096 + 4n bytes.
-//! Writing goes to `NAME.partial`, renamed when complete: a failed write leaves nothing under
-//! the final name.
+//! Writing goes to a uniquely named temporary beside the file ([`crate::atomic_file`]), renamed
+//! when complete: a failed write leaves nothing, and two writers of one name never mix.
 
 use std::fs::File;
 use std::io::{BufWriter, Read, Seek, SeekFrom, Write};
@@ -86,14 +86,15 @@ fn header(materials: &[Material], s: &DataSummary) -> Vec<u8> {
 pub struct GstWriter {
     path: PathBuf,
     partial: PathBuf,
-    out: Option<BufWriter<File>>,
+    out: Option<BufWriter<crate::atomic_file::AtomicFile>>,
     materials: Vec<Material>,
     lowest: Vec<f32>,
     summary: DataSummary,
 }
 
 impl GstWriter {
-    /// Starts `path` (written as `path.partial` until finished) for data with `materials`.
+    /// Starts `path` (written to a temporary beside it until finished) for data with
+    /// `materials`.
     pub fn create(path: &Path, materials: &[Material]) -> Result<Self, SpacetimeError> {
         if materials.is_empty() || materials.len() > MAX_MATERIALS {
             return Err(file_error(
@@ -106,10 +107,9 @@ impl GstWriter {
                 return Err(file_error(path, format!("material {i} {what}")));
             }
         }
-        let mut partial = path.as_os_str().to_owned();
-        partial.push(".partial");
-        let partial = PathBuf::from(partial);
-        let file = File::create(&partial).map_err(|e| file_error(&partial, e.to_string()))?;
+        let file =
+            crate::atomic_file::AtomicFile::create(path).map_err(|e| file_error(path, e.to_string()))?;
+        let partial = file.temp_path().to_path_buf();
         let mut out = BufWriter::with_capacity(1 << 20, file);
         out.write_all(&vec![0u8; HEADER_BYTES]).map_err(|e| file_error(&partial, e.to_string()))?;
         Ok(Self {
@@ -163,18 +163,8 @@ impl GstWriter {
         out.seek(SeekFrom::Start(0)).map_err(io)?;
         out.write_all(&header(&self.materials, &self.summary)).map_err(io)?;
         let file = out.into_inner().map_err(|e| file_error(&self.partial, e.to_string()))?;
-        file.sync_all().map_err(io)?;
-        std::fs::rename(&self.partial, &self.path).map_err(|e| file_error(&self.path, e.to_string()))?;
+        file.commit().map_err(|e| file_error(&self.path, e.to_string()))?;
         Ok(self.summary)
-    }
-}
-
-impl Drop for GstWriter {
-    fn drop(&mut self) {
-        if self.out.take().is_some() {
-            // Not finished: leave nothing half-written behind.
-            let _ = std::fs::remove_file(&self.partial);
-        }
     }
 }
 

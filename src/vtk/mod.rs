@@ -1,7 +1,7 @@
 //! VTK XML unstructured grids (`.vtu`): the container, shared by the spacetime and spectral
 //! data sets (each module maps its own cells and arrays onto it).
 //!
-//! Writing uses file version 2.2 and appended raw binary (`header_type="UInt64"`), to `NAME.partial` renamed when
+//! Writing uses file version 2.2 and appended raw binary (`header_type="UInt64"`), to a unique temporary renamed when
 //! complete. Reading accepts everything `vtkXMLUnstructuredGridWriter` (VTK 9) writes:
 //! `ascii`, inline `binary` (base64) and `appended` data (raw or base64), UInt32 or UInt64
 //! block headers, uncompressed or compressed with zlib, LZ4 or LZMA ([`encoding`]; tested on
@@ -163,7 +163,8 @@ pub struct OutArray {
 
 /// Writes an unstructured grid of `points` points and `cells` cells with `arrays` (the
 /// `Points` array, the `Cells` arrays `connectivity`, `offsets`, `types`, and any point and
-/// cell data) to `path` as appended raw binary, via `path.partial` renamed when complete;
+/// cell data) to `path` as appended raw binary, whole or not at all
+/// ([`crate::atomic_file`]);
 /// `comment` goes into an XML comment at the top.
 pub fn write(
     path: &Path,
@@ -196,16 +197,14 @@ pub fn write(
         xml.push_str(&format!("      </{section}>\n"));
     }
     xml.push_str("    </Piece>\n  </UnstructuredGrid>\n  <AppendedData encoding=\"raw\">\n   _");
-    let mut partial = path.as_os_str().to_owned();
-    partial.push(".partial");
-    let partial = PathBuf::from(partial);
     // Blocks in section order, as the offsets were assigned.
     let order: Vec<usize> = ["Points", "Cells", "PointData", "CellData"]
         .iter()
         .flat_map(|s| (0..arrays.len()).filter(move |&k| arrays[k].section == *s))
         .collect();
+    let mut file = crate::atomic_file::AtomicFile::create(path).map_err(|e| err(path, e.to_string()))?;
     let result = (|| -> std::io::Result<()> {
-        let mut out = std::io::BufWriter::new(std::fs::File::create(&partial)?);
+        let mut out = std::io::BufWriter::new(file.file());
         out.write_all(xml.as_bytes())?;
         for k in order {
             out.write_all(&(blobs[k].len() as u64).to_le_bytes())?;
@@ -214,11 +213,9 @@ pub fn write(
         out.write_all(b"\n  </AppendedData>\n</VTKFile>\n")?;
         out.flush()
     })();
-    if let Err(e) = result {
-        let _ = std::fs::remove_file(&partial);
-        return Err(err(&partial, e.to_string()));
-    }
-    std::fs::rename(&partial, path).map_err(|e| err(path, e.to_string()))
+    // An error drops the file, which removes its temporary.
+    result.map_err(|e| err(path, e.to_string()))?;
+    file.commit().map_err(|e| err(path, e.to_string()))
 }
 
 /// Reads the one piece of the unstructured grid in `path`, with every data array.
