@@ -148,3 +148,22 @@ fn a_scene_without_openings_warns_that_it_is_dark() {
     assert!(err.contains("no window or skylight") && err.contains("[openings]"), "{err}");
     assert!(png.exists());
 }
+
+#[test]
+fn a_log_scale_over_a_range_reaching_zero_and_a_directory_as_output_are_refused_up_front() {
+    let dir = tempfile::Builder::new().prefix("galerkin-").tempdir().expect("scratch");
+    // The generated annulus's field takes negative values: a log scale would draw nothing.
+    let png = dir.path().join("log.png");
+    let out = galerkin(&["spectral", "render", "--log", "--size", "32x24", "--out", &png.to_string_lossy()]);
+    let err = stderr(&out);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(err.contains("--log") && err.contains("--range"), "{err}");
+    assert!(!png.exists());
+    // An output that is a directory: an argument error before any work.
+    let folder = dir.path().join("folder.png");
+    std::fs::create_dir(&folder).expect("a directory named like an image");
+    let out = galerkin(&["spectral", "render", "--out", &folder.to_string_lossy()]);
+    let err = stderr(&out);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains("is a directory"), "{err}");
+}

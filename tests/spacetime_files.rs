@@ -416,3 +416,25 @@ fn concurrent_writers_of_one_file_never_mix() {
         .collect();
     assert!(left.is_empty(), "temporaries left: {left:?}");
 }
+
+/// A mesh the reader would refuse (a NaN corner, a degenerate tetrahedron) is not written as
+/// `.vtu` either (`spacetime convert` from a bad `.gst` used to write one): the error names the
+/// element and no file appears.
+#[test]
+fn a_bad_mesh_is_not_written() {
+    let scratch = common::Scratch::new();
+    let good = pulses(1000);
+    let mut nan = good.clone();
+    let corner = nan.tets[7][2] as usize;
+    nan.vertices[corner][0] = f64::NAN;
+    let mut flat = good.clone();
+    let t = flat.tets[3];
+    flat.tets[3] = [t[0], t[1], t[1], t[3]];
+    for (name, mesh) in [("nan.vtu", &nan), ("flat.vtu", &flat)] {
+        let out = scratch.file(name);
+        let e = vtu::write(&out, mesh).expect_err(name).to_string();
+        assert!(e.contains(name) && e.contains("element"), "{name}: {e}");
+        assert!(!out.exists(), "{name} was written");
+    }
+    vtu::write(&scratch.file("good.vtu"), &good).expect("a good mesh is written");
+}

@@ -14,6 +14,9 @@ use clap::Args;
 /// checked here, before any work (a typo must not cost a render).
 pub fn image_path(s: &str) -> Result<PathBuf, String> {
     let path = PathBuf::from(s);
+    if path.is_dir() {
+        return Err(format!("{s:?} is a directory: give the image file's name"));
+    }
     match ImageFormat::of(&path) {
         Some(_) => Ok(path),
         None => Err(format!("{s:?}: the image format comes from the extension: .png or .exr")),

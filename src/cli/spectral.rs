@@ -242,6 +242,16 @@ pub fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
     if args.log && range.is_some_and(|(lo, _)| lo <= 0.0) {
         bail!("--log needs a positive range (LO > 0)");
     }
+    if args.log && range.is_none() {
+        let (lo, hi) = mesh.value_range(field, args.step);
+        if lo.is_nan() || lo <= 0.0 {
+            bail!(
+                "--log: field {:?} at step {} spans [{lo}, {hi}], not above 0; give --range LO,HI with LO > 0",
+                mesh.fields[field].name,
+                args.step
+            );
+        }
+    }
     if !(args.max_error.is_finite() && args.max_error > 0.0) {
         bail!("--max-error must be a positive number of pixels");
     }

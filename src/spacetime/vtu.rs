@@ -30,8 +30,14 @@ impl From<VtkError> for SpacetimeError {
     }
 }
 
-/// Writes `mesh` to `path` (written as `path.partial`, renamed when complete).
+/// Writes `mesh` to `path` (whole or not at all, [`crate::atomic_file`]). A mesh the reader
+/// would refuse (a NaN, a degenerate tetrahedron: [`SpacetimeMesh::validate`]) is refused here
+/// too, naming the element, instead of being written.
 pub fn write(path: &Path, mesh: &SpacetimeMesh) -> Result<(), SpacetimeError> {
+    mesh.validate().map_err(|e| SpacetimeError::File {
+        path: path.to_path_buf(),
+        detail: format!("not written: {e}"),
+    })?;
     let n_cells = mesh.tets.len();
     let fields = &mesh.fields;
     let f64s = |section, name: &str, components, v: Vec<f64>| OutArray {
