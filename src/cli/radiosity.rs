@@ -124,6 +124,11 @@ pub struct CompareArgs {
     /// With kept full frames: how many full frames per sequence are solved again.
     #[arg(long, default_value_t = 8, value_parser = clap::value_parser!(u64).range(1..))]
     pub timed_full: u64,
+    /// Eq. 17's form: `local` (ours: the 48 nearest training configurations and a locality
+    /// term, so a training configuration gets its own visibility back) or `printed` (every
+    /// training configuration, no locality term).
+    #[arg(long, value_parser = ["local", "printed"], default_value = "local")]
+    pub eq17: String,
     /// Only solve and keep the full frames in --full-frames DIR (resuming), without a model:
     /// they depend on the scene alone, so they can be made before or while a model trains.
     #[arg(long, requires = "full_frames")]
@@ -412,7 +417,10 @@ fn compare(args: &CompareArgs) -> Result<()> {
         }
         return Ok(());
     }
-    let model = ReducedRadiosity::load(&args.model)?;
+    let mut model = ReducedRadiosity::load(&args.model)?;
+    if args.eq17 == "printed" {
+        model.set_eq17(galerkin::radiosity::visibility::Eq17::Printed);
+    }
     let options = CompareOptions {
         frames: args.frames.clone(),
         full_frames: args.full_frames.clone(),

@@ -138,6 +138,11 @@ impl ReducedRadiosity {
         &self.visibility
     }
 
+    /// Solves Eq. 17 in `form` from now on ([`super::visibility::Eq17`]).
+    pub fn set_eq17(&mut self, form: super::visibility::Eq17) {
+        self.visibility.set_form(form);
+    }
+
     /// Number of faces.
     pub fn faces(&self) -> usize {
         self.faces

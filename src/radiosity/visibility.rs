@@ -29,6 +29,17 @@ pub const LOCALITY: f64 = 1e-2;
 /// than the reduction's own error while cutting Eq. 17's time.
 pub const CANDIDATES: usize = 48;
 
+/// Which form of Eq. 17 the weights come from.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Eq17 {
+    /// Ours: the [`CANDIDATES`] training geometries nearest to ĝ, with the locality term
+    /// μ = [`LOCALITY`] (a training configuration gets its own visibility back).
+    #[default]
+    Local,
+    /// As printed: every training configuration, no locality term.
+    Printed,
+}
+
 /// The learned visibility model: `B_gᵀ G` (m_g × T) and `B_vᵀ V` (m_v × T).
 #[derive(Clone, Debug, PartialEq)]
 pub struct LearnedVisibility {
@@ -36,6 +47,8 @@ pub struct LearnedVisibility {
     visibility: Tensor,
     /// `(B_gᵀG)ᵀ(B_gᵀG)`, T × T.
     gram: Vec<f64>,
+    /// The form of Eq. 17 the weights are solved in (a run-time choice, not stored).
+    form: Eq17,
 }
 
 impl LearnedVisibility {
@@ -51,9 +64,19 @@ impl LearnedVisibility {
                 ),
             });
         }
-        let mut v = Self { geometry, visibility, gram: Vec::new() };
+        let mut v = Self { geometry, visibility, gram: Vec::new(), form: Eq17::default() };
         v.gram = v.compute_gram();
         Ok(v)
+    }
+
+    /// Solves Eq. 17 in `form` from now on.
+    pub fn set_form(&mut self, form: Eq17) {
+        self.form = form;
+    }
+
+    /// The form of Eq. 17 in use.
+    pub fn form(&self) -> Eq17 {
+        self.form
     }
 
     /// `B_gᵀ G`.
@@ -82,10 +105,14 @@ impl LearnedVisibility {
         // Q = MᵀM + 11ᵀ with M = [B_gᵀG − ĝ1ᵀ; √(μ d)]: (ĝ_i − ĝ)·(ĝ_j − ĝ) + μ d_i δ_ij + 1.
         // Candidates: the CANDIDATES training geometries nearest to ĝ (all when fewer).
         let d: Vec<f64> = (0..t).map(|i| (gram[i * t + i] - 2.0 * c[i] + gg).max(0.0)).collect();
+        let (candidates, locality) = match self.form {
+            Eq17::Local => (CANDIDATES, LOCALITY),
+            Eq17::Printed => (t, 0.0),
+        };
         let mut order: Vec<usize> = (0..t).collect();
-        if t > CANDIDATES {
-            order.select_nth_unstable_by(CANDIDATES, |&p, &q| d[p].total_cmp(&d[q]));
-            order.truncate(CANDIDATES);
+        if t > candidates {
+            order.select_nth_unstable_by(candidates, |&p, &q| d[p].total_cmp(&d[q]));
+            order.truncate(candidates);
         }
         let k = order.len();
         let mut q = vec![0.0; k * k];
@@ -93,7 +120,7 @@ impl LearnedVisibility {
             for (b, &j) in order.iter().enumerate() {
                 q[a * k + b] = gram[i * t + j] - c[i] - c[j] + gg + 1.0;
             }
-            q[a * k + a] += LOCALITY * d[i];
+            q[a * k + a] += locality * d[i];
         }
         let y = nnls_normal(&q, &vec![1.0; k], k);
         let sum: f64 = y.iter().sum();
@@ -328,5 +355,41 @@ mod tests {
         assert!(x[1] + x[2] > 0.9 && x[1] > x[2], "{x:?}");
         let g: f64 = x.iter().enumerate().map(|(t, v)| t as f64 * v).sum();
         assert!((g - 1.25).abs() < 0.01, "{g}");
+    }
+
+    #[test]
+    fn the_printed_form_fits_the_geometry_at_least_as_well_over_all_samples() {
+        // 60 samples of a 3-parameter geometry; the printed form minimises the geometric
+        // residual over every sample, ours over the 48 nearest with a locality penalty.
+        let t = 60;
+        let mut data = vec![0.0; 4 * t];
+        for j in 0..t {
+            let (a, b, c) =
+                ((j * 7 % 11) as f64 / 10.0, (j * 5 % 13) as f64 / 12.0, (j * 3 % 7) as f64 / 6.0);
+            for (i, v) in [a, b, c, 1.0].iter().enumerate() {
+                data[i * t + j] = *v;
+            }
+        }
+        let g = Tensor::from_vec(&[4, t], data.clone()).unwrap();
+        let v = Tensor::from_vec(&[1, t], (0..t).map(|j| j as f64).collect()).unwrap();
+        let mut model = LearnedVisibility::new(g, v).unwrap();
+        let query = [0.43, 0.61, 0.29, 1.0];
+        let residual = |x: &[f64]| -> f64 {
+            (0..4).map(|i| ((0..t).map(|j| data[i * t + j] * x[j]).sum::<f64>() - query[i]).powi(2)).sum()
+        };
+        let local = model.weights(&query);
+        model.set_form(Eq17::Printed);
+        assert_eq!(model.form(), Eq17::Printed);
+        let printed = model.weights(&query);
+        for x in [&local, &printed] {
+            assert!((x.iter().sum::<f64>() - 1.0).abs() < 1e-12 && x.iter().all(|&v| v >= 0.0), "{x:?}");
+        }
+        assert!(local.iter().filter(|&&v| v > 0.0).count() <= CANDIDATES);
+        assert!(
+            residual(&printed) <= residual(&local) + 1e-12,
+            "{} > {}",
+            residual(&printed),
+            residual(&local)
+        );
     }
 }
