@@ -15,6 +15,7 @@ pub mod kernels;
 pub mod radiosity;
 pub mod reduce;
 pub mod spacetime;
+pub mod spectral;
 
 use std::time::{Duration, Instant};
 

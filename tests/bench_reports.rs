@@ -1,0 +1,50 @@
+//! The capabilities' benchmarks are library functions returning reports (the command line
+//! prints them): run here at their smallest sizes with validation on, each must produce its
+//! tables with a row per configuration and finite, positive times. (What the times are is for
+//! BENCHMARKS.md, never asserted.)
+
+mod common;
+
+use std::path::PathBuf;
+
+#[test]
+fn the_spectral_benchmark_reports_every_order_and_size() {
+    let gpu = common::gpu();
+    let mut text = String::new();
+    galerkin::bench::spectral::report(&gpu, true, 1, &mut |s| text.push_str(s)).expect("the benchmark ran");
+    let rows: Vec<&str> =
+        text.lines().filter(|l| l.starts_with("| artery") || l.starts_with("| coil")).collect();
+    assert_eq!(rows.len(), 6, "orders 1, 3, 8 of the artery and the coil:\n{text}");
+    for row in &rows {
+        let ms: f64 = row
+            .split('|')
+            .nth(3)
+            .and_then(|c| c.split_whitespace().next())
+            .and_then(|v| v.parse().ok())
+            .expect(row);
+        assert!(ms.is_finite() && ms > 0.0, "{row}");
+    }
+    for size in ["512×384", "1024×768", "2048×1536"] {
+        assert!(text.contains(&format!("| {size} |")), "no row for {size}:\n{text}");
+    }
+    for elements in ["840", "1666", "3332", "6664"] {
+        assert!(
+            text.lines().any(|l| l.starts_with(&format!("| {elements} |"))),
+            "no row for {elements}:\n{text}"
+        );
+    }
+}
+
+#[test]
+fn the_radiosity_benchmark_reports_both_paths() {
+    let gpu = common::gpu();
+    let scene = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/radiosity/two_rooms_small.toml"));
+    let rows = galerkin::bench::radiosity::run(&[scene], 1, Some(&gpu)).expect("the benchmark ran");
+    assert_eq!(rows.len(), 2, "{rows:?}");
+    for r in &rows {
+        assert_eq!(r.faces, 496);
+        assert!(r.form_factors_s > 0.0 && r.solve_s > 0.0 && r.sweeps > 0, "{r:?}");
+    }
+    let table = galerkin::bench::radiosity::table(&rows);
+    assert_eq!(table.lines().count(), 4, "{table}");
+}
