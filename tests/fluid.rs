@@ -584,3 +584,35 @@ fn the_streaming_pca_reads_velocity_snapshots_from_disk() {
         assert!(err <= 1e-4 * norm, "frame {k}: relative error² {}", err / norm);
     }
 }
+
+/// A snapshot frame after the first with a NaN, or with a cell folded over, is refused when it
+/// is read, naming the file, the frame and the value or cell (only frame 0 used to be checked).
+#[test]
+fn bad_frames_after_the_first_are_refused_naming_the_frame() {
+    let scratch = tempfile::Builder::new().prefix("galerkin-").tempdir().expect("a scratch directory");
+    let dir = scratch.path().to_path_buf();
+    let (mesh, topo) = channel(2, 3);
+    let meta = SnapshotMeta::new(&mesh, &topo, 0.1, Some(0));
+    let mut w = SnapshotWriter::create(&dir, meta, mesh.cells(), false).expect("create");
+    let (nu, nf) = (2 * mesh.cell_count(), topo.face_count());
+    let (u, f) = (vec![0.5; nu], vec![0.0; nf]);
+    let g = mesh.g().to_vec();
+    w.push(&u, &u, &f, &g, &f).expect("frame 0");
+    let mut nan = u.clone();
+    nan[3] = f64::NAN;
+    w.push(&nan, &u, &f, &g, &f).expect("frame 1");
+    // Frame 2: the first cell's first two corners swap places, so it is inverted.
+    let c = &mesh.cells()[..3];
+    let mut folded = g.clone();
+    for axis in 0..2 {
+        folded.swap(2 * c[0] as usize + axis, 2 * c[1] as usize + axis);
+    }
+    w.push(&u, &u, &f, &folded, &f).expect("frame 2");
+    drop(w);
+    let r = SnapshotReader::open(&dir).expect("open");
+    assert!(r.frame("u", 0).is_ok() && r.mesh_at(0).is_ok());
+    let e = r.frame("u", 1).expect_err("a NaN").to_string();
+    assert!(e.contains("u.f64") && e.contains("frame 1") && e.contains("value 3"), "{e}");
+    let e = r.mesh_at(2).expect_err("a folded cell").to_string();
+    assert!(e.contains("g.f64") && e.contains("frame 2") && e.contains("inverted"), "{e}");
+}

@@ -274,14 +274,28 @@ impl SnapshotReader {
             return Err(io(&path, format!("frame {k}: the run has {} frames", self.meta.frames)));
         }
         let mut file = File::open(&path).map_err(|e| io(&path, e))?;
-        read_f64(&mut file, (8 * len * k) as u64, len).map_err(|e| io(&path, e))
+        let values = read_f64(&mut file, (8 * len * k) as u64, len).map_err(|e| io(&path, e))?;
+        if let Some(i) = values.iter().position(|v| !v.is_finite()) {
+            return Err(io(&path, format!("frame {k}: value {i} is {} (not finite)", values[i])));
+        }
+        Ok(values)
     }
 
     /// The mesh at frame `k`'s geometry and its topology (refused if its face count is not
     /// the header's).
     pub fn mesh_at(&self, k: usize) -> Result<(SimplexMesh, Topology), FluidError> {
         let g = self.frame("g", k)?;
-        let mesh = SimplexMesh::new(self.meta.dim, g, self.cells.clone())?;
+        let g_path = self.dir.join("g.f64");
+        let mesh = SimplexMesh::new(self.meta.dim, g, self.cells.clone())
+            .map_err(|e| io(&g_path, format!("frame {k}: {e}")))?;
+        // The cells keep frame 0's orientation; `SimplexMesh::new` turns an inverted cell the
+        // right way round, so a cell it turned has folded over in this frame.
+        let corners = self.meta.dim + 1;
+        if let Some(c) = (0..self.cells.len() / corners).find(|&c| {
+            mesh.cells()[c * corners..(c + 1) * corners] != self.cells[c * corners..(c + 1) * corners]
+        }) {
+            return Err(io(&g_path, format!("frame {k}: cell {c} is inverted (the mesh folds over)")));
+        }
         let topo = Topology::new(&mesh, self.meta.periodic_axis.map(|axis| crate::mesh::Periodic { axis }))?;
         if topo.face_count() != self.meta.faces {
             return Err(io(
