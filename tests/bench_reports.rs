@@ -48,3 +48,27 @@ fn the_radiosity_benchmark_reports_both_paths() {
     let table = galerkin::bench::radiosity::table(&rows);
     assert_eq!(table.lines().count(), 4, "{table}");
 }
+
+#[test]
+fn the_fluid_benchmark_reports_every_size_table_1_and_the_particles() {
+    let gpu = common::gpu();
+    let mut text = String::new();
+    galerkin::bench::fluid::report(&gpu, true, 2, &mut |s| text.push_str(s)).expect("the benchmark ran");
+    // Three cavity sizes and one bird size, each with positive stage times.
+    let rows: Vec<Vec<&str>> = text
+        .lines()
+        .filter(|l| {
+            l.starts_with("| ") && l.split('|').nth(1).is_some_and(|c| c.trim().parse::<usize>().is_ok())
+        })
+        .map(|l| l.split('|').map(str::trim).collect())
+        .collect();
+    assert_eq!(rows.len(), 4, "{text}");
+    for r in &rows {
+        for col in [5, 6, 7] {
+            let v: f64 = r[col].split_whitespace().next().and_then(|v| v.parse().ok()).expect("a time");
+            assert!(v.is_finite() && v >= 0.0, "{r:?}");
+        }
+    }
+    assert!(text.contains("| cavity | 88671 |") && text.contains("| eagle | 300217 |"), "{text}");
+    assert!(text.contains("Particles: 10,000 in"), "{text}");
+}

@@ -10,6 +10,7 @@ pub mod shaders {
     include!(concat!(env!("OUT_DIR"), "/shaders_bench.rs"));
 }
 pub mod cpu;
+pub mod fluid;
 pub mod fluid_reduced;
 pub mod kernels;
 pub mod radiosity;
