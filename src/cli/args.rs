@@ -104,14 +104,6 @@ impl ImageArgs {
     pub fn size_or(&self, default: (u32, u32)) -> (u32, u32) {
         self.size.unwrap_or(default)
     }
-
-    /// Creates the output's directory.
-    pub fn create_parent(&self) -> anyhow::Result<()> {
-        if let Some(dir) = self.out.parent().filter(|d| !d.as_os_str().is_empty()) {
-            std::fs::create_dir_all(dir).map_err(|e| anyhow::anyhow!("creating {}: {e}", dir.display()))?;
-        }
-        Ok(())
-    }
 }
 
 /// Colour mapping of a scalar field.

@@ -367,7 +367,6 @@ fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
     let picture =
         draw_picture(&gpu, (&mesh, &topo), &g, &speeds, particles.as_ref(), &style, &projection, size)?;
     let (w, h) = size;
-    args.image.create_parent()?;
     write_image(&args.image.out, args.image.format(), w, h, &picture.rgba, &picture.raw)?;
     println!(
         "fluid render: frame {frame} of {} ({} cells, {} particles), speed range {:.3}..{:.3}, {:.2} s → {}",

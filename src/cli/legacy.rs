@@ -15,6 +15,14 @@ const GLOBAL_WITH_VALUE: &[&str] = &["--device"];
 const SPECTRAL_VERBS: &[&str] = &["render", "view", "gen", "bench", "help"];
 const SPACETIME_VERBS: &[&str] = &["render", "view", "gen", "convert", "bench", "help"];
 
+/// Commands renamed as a whole: the old word and the words that replace it.
+const RENAMED: &[(&str, &[&str])] = &[
+    ("spacetime-gen", &["spacetime", "gen"]),
+    ("spectral-gen", &["spectral", "gen"]),
+    ("spacetime-convert", &["spacetime", "convert"]),
+    ("view", &["demo", "--view"]),
+];
+
 /// The radiosity viewpoints (`--view NAME` before `--viewpoint`).
 const VIEWPOINTS: &[&str] = &["living", "bedroom", "overview"];
 
@@ -48,26 +56,11 @@ fn translate_strings(mut a: Vec<String>) -> (Vec<String>, Vec<String>) {
     let mut note = |old: &str, new: &str| {
         notes.push(format!("`{old}` is deprecated and will be removed in the next release: write `{new}`"))
     };
-    let replace = |a: &mut Vec<String>, at: usize, with: &[&str]| {
-        a.splice(at..at + 1, with.iter().map(|s| s.to_string()));
-    };
+    if let Some((old, new)) = RENAMED.iter().find(|(old, _)| a[i] == *old) {
+        note(&format!("galerkin {old}"), &format!("galerkin {}", new.join(" ")));
+        a.splice(i..i + 1, new.iter().map(|s| s.to_string()));
+    }
     match a[i].as_str() {
-        "spacetime-gen" => {
-            note("galerkin spacetime-gen", "galerkin spacetime gen");
-            replace(&mut a, i, &["spacetime", "gen"]);
-        }
-        "spectral-gen" => {
-            note("galerkin spectral-gen", "galerkin spectral gen");
-            replace(&mut a, i, &["spectral", "gen"]);
-        }
-        "spacetime-convert" => {
-            note("galerkin spacetime-convert", "galerkin spacetime convert");
-            replace(&mut a, i, &["spacetime", "convert"]);
-        }
-        "view" => {
-            note("galerkin view", "galerkin demo --view");
-            replace(&mut a, i, &["demo", "--view"]);
-        }
         "bench" => {
             let moved: Option<&[&str]> = match a.get(i + 1).map(String::as_str) {
                 Some("spectral") => Some(&["spectral", "bench"]),

@@ -268,7 +268,6 @@ fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
     let picture = draw_picture(&gpu, &vertices, &camera, exposure, size)?;
     let (w, h) = size;
     let out = &args.image.out;
-    args.image.create_parent()?;
     if args.image.format() == crate::cli::args::ImageFormat::Png {
         write_png_rgba8(out, w, h, &picture.rgba)?;
     } else {

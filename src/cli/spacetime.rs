@@ -346,7 +346,6 @@ pub fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
     let draw_ms = start.elapsed().as_secs_f64() * 1e3;
     let pixels = match (legend, pixels, view.u_max) {
         (true, Pixels::Rgba8(rgba), Some(u_max)) if u_max > 0.0 => {
-            args.image.create_parent()?;
             let bar = galerkin::plot::ColourBar {
                 colormap: &colormap,
                 range: (1.0, u_max + 1.0),

@@ -283,7 +283,6 @@ pub fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
         bail!("an RGBA8 target returned floats")
     };
     let draw_ms = start.elapsed().as_secs_f64() * 1e3;
-    args.image.create_parent()?;
     let (lo, hi) = renderer.range(&view);
     match args.image.format() {
         ImageFormat::Png if args.no_legend => write_png_rgba8(out, w, h, &rgba)?,

@@ -10,6 +10,7 @@ use std::time::Instant;
 use anyhow::{bail, Context, Result};
 
 use super::run::DemoPart;
+use crate::fluid::render::{cell_speeds, draw_picture, DrawStyle, Projection, View2d};
 use crate::gpu::Gpu;
 use crate::render::{write_png_rgba8, ColorFormat, Colormap, Pixels, RenderTarget};
 
@@ -166,6 +167,33 @@ pub fn radiosity(gpu: &Gpu, size: (u32, u32), out: &Path) -> Result<DemoPart> {
     })
 }
 
+/// The 2D tunnel at geometry `g` coloured by cell speed (cells, or the device's particles
+/// over grey cells), fitted to `size`, written as a PNG to `path`.
+fn draw_tunnel(
+    gpu: &Gpu,
+    (mesh, topo): (&crate::mesh::SimplexMesh, &crate::mesh::Topology),
+    (g, f): (&[f64], &[f64]),
+    particles: Option<&crate::fluid::gpu::GpuParticles>,
+    size: (u32, u32),
+    path: &Path,
+) -> Result<()> {
+    let speeds = cell_speeds(mesh, topo, g, f);
+    let top = speeds.iter().fold(0.0f64, |m, v| m.max(*v)).max(1e-12);
+    let style = DrawStyle {
+        colormap: Colormap::by_name("viridis")?,
+        range: (0.0, top),
+        log: false,
+        colour_cells: particles.is_none(),
+        sprite_px: 1.5,
+    };
+    let (lo, hi) = mesh.bounds();
+    let view = View2d::fit([lo[0], lo[1]], [hi[0], hi[1]], size, 0.02);
+    let picture =
+        draw_picture(gpu, (mesh, topo), g, &speeds, particles, &style, &Projection::Plane(view), size)?;
+    write_png_rgba8(path, size.0, size.1, &picture.rgba)?;
+    Ok(())
+}
+
 /// Fluids: the small tunnel (seed 000 §7.1) simulated for 20 frames (divergence ≤ 1e-10),
 /// 3,000 particles advected on the device and on the CPU (95 % within 1e-4: a particle that
 /// straddles a face in one of the frames takes the neighbour's velocity for a substep and
@@ -173,7 +201,6 @@ pub fn radiosity(gpu: &Gpu, size: (u32, u32), out: &Path) -> Result<DemoPart> {
 pub fn fluid(gpu: &Gpu, (w, h): (u32, u32), out: &Path) -> Result<DemoPart> {
     use crate::fluid::gpu::GpuParticles;
     use crate::fluid::particles::{advect_particles, seed_particles};
-    use crate::fluid::render::{cell_speeds, draw_picture, DrawStyle, Projection, View2d};
     use crate::fluid::scene::FluidScene;
     use crate::fluid::FluidSolver;
     // Built in, so the demo runs from any directory.
@@ -213,29 +240,8 @@ pub fn fluid(gpu: &Gpu, (w, h): (u32, u32), out: &Path) -> Result<DemoPart> {
             cpu.len()
         );
     }
-    let speeds = cell_speeds(mesh, topo, &state.g, &state.f);
-    let top = speeds.iter().fold(0.0f64, |m, v| m.max(*v));
-    let style = DrawStyle {
-        colormap: Colormap::by_name("viridis")?,
-        range: (0.0, top),
-        log: false,
-        colour_cells: false,
-        sprite_px: 1.5,
-    };
-    let (lo, hi) = mesh.bounds();
-    let view = View2d::fit([lo[0], lo[1]], [hi[0], hi[1]], (w, h), 0.02);
-    let picture = draw_picture(
-        gpu,
-        (mesh, topo),
-        &state.g,
-        &speeds,
-        Some(&device),
-        &style,
-        &Projection::Plane(view),
-        (w, h),
-    )?;
     let path = out.join("fluid.png");
-    write_png_rgba8(&path, w, h, &picture.rgba)?;
+    draw_tunnel(gpu, (mesh, topo), (&state.g, &state.f), Some(&device), (w, h), &path)?;
     Ok(DemoPart {
         name: "fluid",
         summary: format!(
@@ -256,7 +262,6 @@ pub fn fluid_reduced(gpu: &Gpu, (w, h): (u32, u32), out: &Path) -> Result<DemoPa
     use crate::fluid::reduced::{
         run_reduced, BasisSizes, ReducedFluid, ReducedFluidModel, ReducedMotion, TrainingSet,
     };
-    use crate::fluid::render::{cell_speeds, draw_picture, DrawStyle, Projection, View2d};
     let frames = 60;
     let (runs, summaries) = small_tunnel_runs(&out.join("demo-fluid-reduced"), frames)?;
     let mut full_seconds: Vec<f64> =
@@ -281,21 +286,8 @@ pub fn fluid_reduced(gpu: &Gpu, (w, h): (u32, u32), out: &Path) -> Result<DemoPa
     let (mesh, topo) = model.mesh_and_topology()?;
     let g = model.basis("g").context("the model has no geometry basis")?.lift(&last.g);
     let f = model.basis("f").context("the model has no flux basis")?.lift(&last.f);
-    let speeds = cell_speeds(&mesh, &topo, &g, &f);
-    let top = speeds.iter().fold(0.0f64, |m, v| m.max(*v)).max(1e-12);
-    let style = DrawStyle {
-        colormap: Colormap::by_name("viridis")?,
-        range: (0.0, top),
-        log: false,
-        colour_cells: true,
-        sprite_px: 1.5,
-    };
-    let (lo, hi) = mesh.bounds();
-    let view = View2d::fit([lo[0], lo[1]], [hi[0], hi[1]], (w, h), 0.02);
-    let picture =
-        draw_picture(gpu, (&mesh, &topo), &g, &speeds, None, &style, &Projection::Plane(view), (w, h))?;
     let path = out.join("fluid-reduced.png");
-    write_png_rgba8(&path, w, h, &picture.rgba)?;
+    draw_tunnel(gpu, (&mesh, &topo), (&g, &f), None, (w, h), &path)?;
     Ok(DemoPart {
         name: "fluid reduced",
         summary: format!(
