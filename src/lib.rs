@@ -25,6 +25,7 @@ pub mod fluid;
 pub mod gpu;
 pub mod limits;
 pub mod mesh;
+pub mod picture;
 pub mod plot;
 pub mod process;
 pub mod radiosity;

@@ -23,26 +23,7 @@ pub fn image_path(s: &str) -> Result<PathBuf, String> {
     }
 }
 
-/// An output picture's format, from its file name.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum ImageFormat {
-    /// 8-bit sRGB colour (with a legend where the command draws one).
-    Png,
-    /// Float channels: the colour and the raw values the command lists.
-    Exr,
-}
-
-impl ImageFormat {
-    /// The format of `path` by its extension (case-insensitive), if it is one we write.
-    pub fn of(path: &std::path::Path) -> Option<Self> {
-        let ext = path.extension().and_then(|e| e.to_str())?.to_ascii_lowercase();
-        match ext.as_str() {
-            "png" => Some(Self::Png),
-            "exr" => Some(Self::Exr),
-            _ => None,
-        }
-    }
-}
+pub use galerkin::picture::ImageFormat;
 
 /// Parses `WIDTHxHEIGHT` (1 to 16384 each).
 pub fn parse_size(s: &str) -> Result<(u32, u32), String> {

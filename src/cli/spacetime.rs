@@ -4,13 +4,11 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use crate::cli::args::ImageFormat;
-use anyhow::{bail, Context, Result};
+use anyhow::{Context, Result};
 use clap::Args;
 use galerkin::gpu::{Gpu, GpuDesc};
-use galerkin::render::{write_png_rgba8, ColorFormat, Colormap, Pixels, RenderTarget};
-use galerkin::spacetime::scenario::{self, Scenario};
-use galerkin::spacetime::{generate, gst, vtu, ElementRecord, SpacetimeData, SpacetimeError, SpacetimeView};
+use galerkin::render::Colormap;
+use galerkin::spacetime::{dataset, picture, SpacetimeData, SpacetimeView};
 
 /// `galerkin spacetime VERB`.
 #[derive(clap::Subcommand)]
@@ -62,9 +60,9 @@ pub fn run(desc: &GpuDesc, verb: &Verb) -> Result<()> {
 
 /// A spacetime data file: `.gst` or `.vtu`, checked when the arguments are parsed.
 fn data_path(s: &str) -> Result<PathBuf, String> {
-    match extension(Path::new(s)).as_str() {
-        "gst" | "vtu" => Ok(PathBuf::from(s)),
-        _ => Err(format!("{s:?}: spacetime data sets are .gst or .vtu files")),
+    match dataset::format_of(Path::new(s)) {
+        Some(_) => Ok(PathBuf::from(s)),
+        None => Err(format!("{s:?}: spacetime data sets are .gst or .vtu files")),
     }
 }
 
@@ -151,175 +149,52 @@ pub struct ConvertArgs {
     pub output: PathBuf,
 }
 
-fn extension(path: &Path) -> String {
-    path.extension().and_then(|e| e.to_str()).unwrap_or_default().to_ascii_lowercase()
-}
-
-/// Loads `.gst` (mapped) or `.vtu` (read, sorted by lowest time).
-pub fn load(path: &Path) -> Result<SpacetimeData, SpacetimeError> {
-    match extension(path).as_str() {
-        "gst" => gst::open(path),
-        "vtu" => {
-            let mut mesh = vtu::read(path)?;
-            mesh.sort_by_lowest_time();
-            SpacetimeData::from_mesh(&mesh).map_err(|e| SpacetimeError::File {
-                path: path.to_path_buf(),
-                detail: format!("{e} (element numbers after sorting by lowest time)"),
-            })
-        }
-        _ => Err(SpacetimeError::File {
-            path: path.to_path_buf(),
-            detail: "unknown extension: expected .gst or .vtu".into(),
-        }),
-    }
-}
-
-/// `galerkin spacetime gen`.
-/// The most elements a data set built in memory may have (a `.vtu`, a rendered `--generate`).
-const MAX_IN_MEMORY: usize = 50_000_000;
-
+/// `galerkin spacetime gen` ([`dataset::generate_file`]).
 pub fn generate_file(args: &GenArgs) -> Result<()> {
-    if args.elements == 0 {
-        bail!("--elements must be positive");
-    }
-    if extension(&args.out) == "vtu" && args.elements > MAX_IN_MEMORY {
-        bail!(
-            "--elements {}: a .vtu is built in memory, at most {MAX_IN_MEMORY} elements; write a .gst (streamed) instead",
-            args.elements
-        );
-    }
-    let start = Instant::now();
-    if args.generate == "bar1d" {
-        bail!("bar1d is a 1D bar over (x, t) triangles, not a tetrahedral data set: render it with `galerkin spacetime render --generate bar1d`");
-    }
-    if let Ok(scenario) = args.generate.parse::<Scenario>() {
-        match extension(&args.out).as_str() {
-            "gst" => {
-                let mut writer = gst::GstWriter::create(&args.out, &scenario::materials(scenario))?;
-                let bar = crate::progress_bar(args.elements as u64, &format!("generating {scenario}"));
-                let mut failed: Option<SpacetimeError> = None;
-                scenario::generate_streaming(scenario, args.elements, &mut |g| {
-                    if failed.is_none() {
-                        let r = ElementRecord::new(g.corners, &g.frame, g.material, &g.coefficients);
-                        failed = writer.push(&r).err();
-                        if writer.len() % 4096 == 0 {
-                            bar.set_position(writer.len() as u64);
-                        }
-                    }
-                });
-                bar.finish_and_clear();
-                if let Some(e) = failed {
-                    return Err(e.into());
-                }
-                let n = writer.len();
-                writer.finish()?;
-                report(&args.out, n, start);
-            }
-            "vtu" => {
-                let mesh = scenario::generate(scenario, args.elements);
-                vtu::write(&args.out, &mesh)?;
-                report(&args.out, mesh.tets.len(), start);
-            }
-            other => bail!("{}: unknown extension {other:?}: expected .gst or .vtu", args.out.display()),
-        }
-        return Ok(());
-    }
-    match (args.generate.as_str(), extension(&args.out).as_str()) {
-        ("pulses", "gst") => {
-            let mut writer = gst::GstWriter::create(&args.out, &[generate::PULSES_MATERIAL])?;
-            let bar = crate::progress_bar(args.elements as u64, "generating");
-            generate::stream_pulses(args.elements, &mut |r| writer.push(r), &mut |done| {
-                bar.set_position(done)
-            })?;
-            bar.finish_and_clear();
-            let n = writer.len();
-            writer.finish()?;
-            report(&args.out, n, start);
-        }
-        ("pulses", "vtu") => {
-            let mesh = generate::pulses(args.elements);
-            vtu::write(&args.out, &mesh)?;
-            report(&args.out, mesh.tets.len(), start);
-        }
-        ("pulses", other) => {
-            bail!("{}: unknown extension {other:?}: expected .gst or .vtu", args.out.display())
-        }
-        (other, _) => bail!("unknown scenario {other:?} (available: pulses, crack, inclusions, booster)"),
-    }
-    Ok(())
-}
-
-fn report(path: &Path, elements: usize, start: Instant) {
-    let bytes = std::fs::metadata(path).map(|m| m.len()).unwrap_or(0);
+    let bar = crate::progress_bar(args.elements as u64, &format!("generating {}", args.generate));
+    let written =
+        dataset::generate_file(&args.generate, args.elements, &args.out, &mut |done| bar.set_position(done));
+    bar.finish_and_clear();
+    let w = written?;
     println!(
-        "{}: {elements} elements, {:.1} MB, {:.1} s (fields are analytic, L2-projected per element — not solved)",
-        path.display(),
-        bytes as f64 / 1e6,
-        start.elapsed().as_secs_f64()
+        "{}: {} elements, {:.1} MB, {:.1} s (fields are analytic, L2-projected per element — not solved)",
+        args.out.display(),
+        w.elements,
+        w.bytes as f64 / 1e6,
+        w.seconds
     );
-}
-
-/// `galerkin spacetime convert`.
-pub fn convert(args: &ConvertArgs) -> Result<()> {
-    let data = load(&args.input)?;
-    match extension(&args.output).as_str() {
-        "gst" => {
-            gst::write(&args.output, &data)?;
-        }
-        "vtu" => {
-            let mesh = data.to_mesh();
-            vtu::write(&args.output, &mesh)?;
-        }
-        other => bail!("{}: unknown extension {other:?}: expected .gst or .vtu", args.output.display()),
-    }
-    println!("{} → {}: {} elements", args.input.display(), args.output.display(), data.len());
     Ok(())
 }
 
-/// `galerkin spacetime render`.
+/// `galerkin spacetime convert` ([`dataset::convert`]).
+pub fn convert(args: &ConvertArgs) -> Result<()> {
+    let w = dataset::convert(&args.input, &args.output)?;
+    println!("{} → {}: {} elements", args.input.display(), args.output.display(), w.elements);
+    Ok(())
+}
+
+/// `galerkin spacetime render` ([`galerkin::spacetime::picture::write_slice`]).
 pub fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
-    for (name, v) in
-        [("--subdivide", args.subdivide), ("--umax", args.umax), ("--height-scale", args.height_scale)]
-    {
-        if let Some(v) = v.filter(|v| !(v.is_finite() && *v > 0.0)) {
-            bail!("{name} must be a positive number, got {v}");
-        }
-    }
-    if args.file.is_none() && args.elements > MAX_IN_MEMORY {
-        bail!(
-            "--elements {}: a generated data set is built in memory, at most {MAX_IN_MEMORY}; generate a .gst with `galerkin spacetime gen` and render that",
-            args.elements
-        );
-    }
     if args.file.is_none() && args.generate == "bar1d" {
         return render_bar(desc, args);
     }
     let opened = Instant::now();
     let data = match &args.file {
-        Some(path) => load(path)?,
-        None => match args.generate.as_str() {
-            "pulses" => SpacetimeData::from_mesh(&generate::pulses(args.elements))?,
-            other => match other.parse::<Scenario>() {
-                Ok(scenario) => SpacetimeData::from_mesh(&scenario::generate(scenario, args.elements))?,
-                Err(_) => bail!("unknown data set {other:?} (available: pulses, crack, inclusions, booster)"),
-            },
-        },
+        Some(path) => dataset::load(path)?,
+        None => dataset::generated(&args.generate, args.elements)?,
     };
     let [t0, t1] = data.summary().time;
     let time = args.time.unwrap_or(0.5 * (t0 + t1));
-    if !(t0..=t1).contains(&time) {
-        bail!("--time {time} is outside the data set's time span [{t0}, {t1}]");
-    }
-    let base = SpacetimeView::looking_at(data.summary(), time);
-    let mut view = SpacetimeView {
+    let view = SpacetimeView {
         height: !args.flat,
         height_scale: args.height_scale,
         edges: !args.no_edges,
         subdivide: args.subdivide,
         u_max: args.umax,
         per_vertex: args.per_vertex,
-        ..base
+        ..SpacetimeView::looking_at(data.summary(), time)
     };
+    picture::check_view(&data, &view)?;
     if args.viewer.view {
         return open_viewer(desc, data, view, args);
     }
@@ -327,70 +202,25 @@ pub fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
     let open_ms = opened.elapsed().as_secs_f64() * 1e3;
     let gpu = Gpu::new(desc)?;
     let colormap = Colormap::by_name(&args.colormap)?;
-    let mut renderer = galerkin::spacetime::SpacetimeRenderer::new(&gpu, data, &colormap)?;
-    let start = Instant::now();
-    let stats = renderer.slice(view.time, view.subdivide)?;
-    let slice_ms = start.elapsed().as_secs_f64() * 1e3;
-    let (w, h) = args.image.size_or((1280, 720));
     let out = &args.image.out;
-    let exr = args.image.format() == ImageFormat::Exr;
-    let format = if exr { ColorFormat::Rgba32F } else { ColorFormat::Rgba8 };
-    let target = RenderTarget::new(&gpu, "spacetime", w, h, format)?;
-    let start = Instant::now();
-    // The legend needs the ramp's U_max: resolved once here, and the render uses the same.
-    let legend = !exr && !args.no_legend;
-    if legend && view.u_max.is_none() {
-        view.u_max = Some(renderer.u_max_for(&target, &view)?);
-    }
-    let pixels = renderer.render(&target, &view)?;
-    let draw_ms = start.elapsed().as_secs_f64() * 1e3;
-    let pixels = match (legend, pixels, view.u_max) {
-        (true, Pixels::Rgba8(rgba), Some(u_max)) if u_max > 0.0 => {
-            let bar = galerkin::plot::ColourBar {
-                colormap: &colormap,
-                range: (1.0, u_max + 1.0),
-                log: true,
-                label: "U, strain energy density (ramp log(U + 1))",
-                shift: 1.0,
-            };
-            let title = format!(
-                "{}: t = {time:.4}",
-                args.file
-                    .as_ref()
-                    .map_or_else(|| format!("generated {}", args.generate), |f| f.display().to_string())
-            );
-            galerkin::plot::picture_with_colour_bar(&rgba, (w, h), &bar, &title, out)?;
-            None
-        }
-        (_, pixels, _) => Some(pixels),
-    };
-    // EXR channels: U, |v| and the normal (n_z from the unit length; NaN where no surface).
-    let nz =
-        |p: &[f32]| if p[2].is_nan() { f32::NAN } else { (1.0 - p[2] * p[2] - p[3] * p[3]).max(0.0).sqrt() };
-    if let Some(pixels) = pixels {
-        write_image(
-            out,
-            (w, h),
-            pixels,
-            &[
-                ("U", |p| p[0]),
-                ("speed", |p| p[1]),
-                ("normal.x", |p| p[2]),
-                ("normal.y", |p| p[3]),
-                ("normal.z", nz),
-            ],
-        )?;
-    }
+    let source = args
+        .file
+        .as_ref()
+        .map_or_else(|| format!("generated {}", args.generate), |f| f.display().to_string());
+    let title = format!("{source}: t = {time:.4}");
+    let title = (!args.no_legend).then_some(title.as_str());
+    let r = picture::write_slice(&gpu, data, &view, &colormap, args.image.size_or((1280, 720)), out, title)?;
     println!(
-        "spacetime: {elements} elements, t = {time:.4}: {} active ({} streamed to the device), {} triangles, {} edge lines; load {open_ms:.1} ms, slice {slice_ms:.1} ms, render + readback {draw_ms:.1} ms, peak RSS {} → {}",
-        stats.active,
-        stats.streamed,
-        stats.triangles,
-        stats.lines,
+        "spacetime: {elements} elements, t = {time:.4}: {} active ({} streamed to the device), {} triangles, {} edge lines; load {open_ms:.1} ms, slice {:.1} ms, render + readback {:.1} ms, peak RSS {} → {}",
+        r.stats.active,
+        r.stats.streamed,
+        r.stats.triangles,
+        r.stats.lines,
+        r.slice_ms,
+        r.render_ms,
         galerkin::process::peak_memory_mb().map_or("unknown".into(), |mb| format!("{mb:.0} MB")),
         out.display()
     );
-    drop((target, renderer));
     drop(gpu);
     Ok(())
 }
@@ -418,161 +248,48 @@ pub struct BenchArgs {
     pub elements: Vec<usize>,
 }
 
-/// The data set `scenario` of about `elements` elements in `dir`, generated if missing.
-fn bench_data(dir: &Path, scenario: &str, elements: usize) -> Result<PathBuf> {
-    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-    let path = dir.join(format!("{scenario}-{elements}.gst"));
-    if gst::open(&path).is_err() {
-        generate_file(&GenArgs { generate: scenario.into(), elements, out: path.clone() })?;
-    }
-    Ok(path)
-}
-
-/// `galerkin spacetime bench`: frame times of seed 003's renderer on generated data (the
-/// issue's goal: ≥ 30 FPS at 1280×720 on 5·10^6 elements), their growth with active elements
-/// and with pixels, and the out-of-core first frame of a 2·10^7-element file.
+/// `galerkin spacetime bench` ([`galerkin::bench::spacetime::report`]).
 pub fn bench(desc: &GpuDesc, args: &BenchArgs) -> Result<()> {
-    use galerkin::bench::spacetime::{measure_frames, FrameReport};
-    if args.frames == 0 {
-        bail!("--frames must be positive");
+    use galerkin::bench::spacetime::{report, SpacetimeBench};
+    let exe = std::env::current_exe().context("finding this executable")?;
+    let mut bench = SpacetimeBench::new(args.quick, &args.data_dir, Some(&exe));
+    bench.frames = args.frames;
+    bench.data_set = args.generate.clone();
+    if !args.elements.is_empty() {
+        bench.sizes = args.elements.clone();
     }
-    let sizes: &[usize] = match (args.elements.as_slice(), args.quick) {
-        ([], true) => &[100_000, 1_000_000],
-        ([], false) => &[100_000, 1_000_000, 5_000_000],
-        (chosen, _) => chosen,
-    };
-    if let Some(&n) = sizes.iter().find(|&&n| n < 1000) {
-        bail!("--elements {n}: data sets start at 1000 elements");
+    if !args.elements.is_empty() || args.generate != "pulses" {
+        bench.out_of_core = None;
     }
     let gpu = Gpu::new(desc)?;
-    println!("device: {} ({})", gpu.caps().device_name, gpu.caps().driver);
-    let colormap = Colormap::viridis();
-    let header = "| elements | active | triangles | size | subdivide | frame (wall) | FPS | slice | subdivide | draw | frames streaming |\n|---:|---:|---:|---|---|---:|---:|---:|---:|---:|---:|";
-    let row = |n: usize, size: (u32, u32), sub: Option<f64>, r: &FrameReport| {
-        println!(
-            "| {n} | {:.0} | {:.0} | {}×{} | {} | {:.1} ms | {:.1} | {:.2} ms | {:.2} ms | {:.1} ms | {}/{} |",
-            r.active,
-            r.triangles,
-            size.0,
-            size.1,
-            sub.map_or("off".into(), |a| format!("{a:.1e}")),
-            r.wall_ms,
-            r.fps(),
-            r.slice_ms,
-            r.subdivide_ms,
-            r.draw_ms,
-            r.streaming_frames,
-            r.frames
-        )
-    };
-    println!("\nFrames at an advancing t (0.3 → 0.7 of the span), height and edges on, U_max 0.05; medians of {} frames:\n\n{header}", args.frames);
-    let mut largest = None;
-    for &n in sizes {
-        let path = bench_data(&args.data_dir, &args.generate, n)?;
-        let data = gst::open(&path)?;
-        let [t0, t1] = data.summary().time;
-        let view = SpacetimeView { u_max: Some(0.05), ..SpacetimeView::looking_at(data.summary(), t0) };
-        let times = [t0 + 0.3 * (t1 - t0), t0 + 0.7 * (t1 - t0)];
-        let mut r = galerkin::spacetime::SpacetimeRenderer::new(&gpu, data, &colormap)?;
-        let report = measure_frames(&gpu, &mut r, &view, (1280, 720), times, args.frames, 3)?;
-        row(n, (1280, 720), None, &report);
-        largest = Some((n, r, view, times, report));
-    }
-    let (n, mut r, view, times, base) = largest.expect("at least one size");
-    // Subdivision: triangles larger than the mean slice triangle (over the bounding box) are
-    // quadrisected.
-    let area = r.data().summary().size().powi(2) / base.triangles.max(1.0);
-    let sub = SpacetimeView { subdivide: Some(area), ..view };
-    row(n, (1280, 720), Some(area), &measure_frames(&gpu, &mut r, &sub, (1280, 720), times, args.frames, 2)?);
-    let no_edges = SpacetimeView { edges: false, ..view };
-    let rep = measure_frames(&gpu, &mut r, &no_edges, (1280, 720), times, args.frames, 2)?;
-    println!("(the same without edge overdraw: {:.1} ms per frame, draw {:.1} ms)", rep.wall_ms, rep.draw_ms);
-    // The floor: the same triangles with nothing evaluated per pixel and no edges — what the
-    // slicing and the rasteriser cost by themselves, before any shading.
-    let floor = SpacetimeView { unshaded: true, ..no_edges };
-    let rep = measure_frames(&gpu, &mut r, &floor, (1280, 720), times, args.frames, 2)?;
-    println!(
-        "(the floor — one constant colour per pixel, nothing evaluated, no edges: {:.1} ms per frame, slice {:.2} ms, subdivide {:.2} ms, draw {:.1} ms)",
-        rep.wall_ms, rep.slice_ms, rep.subdivide_ms, rep.draw_ms
+    let bar = indicatif::ProgressBar::new_spinner();
+    let result = report(
+        &gpu,
+        &bench,
+        &mut |done| bar.set_message(format!("generating a data set: {done} elements")),
+        &mut |s| bar.suspend(|| print!("{s}")),
     );
-    println!("\nGrowth with pixels ({n} elements):\n\n{header}");
-    for size in [(320, 180), (640, 360), (1280, 720), (1920, 1080)] {
-        let rep = if size == (1280, 720) {
-            base
-        } else {
-            measure_frames(&gpu, &mut r, &view, size, times, args.frames, 2)?
-        };
-        row(n, size, None, &rep);
-    }
-    drop(r);
+    bar.finish_and_clear();
     drop(gpu);
-    if !args.quick && args.elements.is_empty() && args.generate == "pulses" {
-        let path = bench_data(&args.data_dir, "pulses", 20_000_000)?;
-        println!("\nOut of core: the first frame of {} in a fresh process:", path.display());
-        let exe = std::env::current_exe().context("finding this executable")?;
-        let start = Instant::now();
-        let out = args.data_dir.join("out-of-core.png");
-        let status = std::process::Command::new(exe)
-            .args([
-                "spacetime",
-                "render",
-                &path.to_string_lossy(),
-                "--time",
-                "0.2",
-                "--umax",
-                "0.05",
-                "--out",
-                &out.to_string_lossy(),
-            ])
-            .status()
-            .context("running the out-of-core frame")?;
-        if !status.success() {
-            bail!("the out-of-core frame failed ({status})");
-        }
-        println!("process wall time (Vulkan start-up included): {:.2} s", start.elapsed().as_secs_f64());
-    }
-    Ok(())
+    result
 }
 
-/// `galerkin spacetime render --generate bar1d`: seed 003's Fig. 3, the whole (x, t) spacetime of a
-/// bar, per pixel (or per vertex with --per-vertex).
+/// `galerkin spacetime render --generate bar1d` ([`picture::write_bar`]): seed 003's Fig. 3.
 fn render_bar(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
-    use galerkin::spacetime::bar::{bar1d, BarRenderer};
-    let mesh = bar1d(args.elements);
     let gpu = Gpu::new(desc)?;
-    let mut renderer = BarRenderer::new(&gpu, &mesh, &Colormap::by_name(&args.colormap)?)?;
-    let (w, h) = args.image.size_or((1280, 720));
+    let colormap = Colormap::by_name(&args.colormap)?;
     let out = &args.image.out;
-    let exr = args.image.format() == ImageFormat::Exr;
-    let u_max = match args.umax {
-        Some(u) => u,
-        None => {
-            // The largest U over the image's pixels, from a data pass.
-            let data = RenderTarget::new(&gpu, "bar U_max", w, h, ColorFormat::Rgba32F)?;
-            let Pixels::Rgba32F(v) = renderer.render(&data, 1.0, false)? else {
-                bail!("float target returned bytes")
-            };
-            v.chunks_exact(4).map(|p| f64::from(p[0])).filter(|u| u.is_finite()).fold(0.0, f64::max)
-        }
-    };
-    let target =
-        RenderTarget::new(&gpu, "bar", w, h, if exr { ColorFormat::Rgba32F } else { ColorFormat::Rgba8 })?;
-    let pixels = renderer.render(&target, u_max, args.per_vertex)?;
-    write_image(
-        out,
-        (w, h),
-        pixels,
-        &[("U", |p| p[0]), ("speed", |p| p[1]), ("u", |p| p[2]), ("s", |p| p[3])],
-    )?;
+    let size = args.image.size_or((1280, 720));
+    let r = picture::write_bar(&gpu, args.elements, &colormap, args.umax, args.per_vertex, size, out)?;
     println!(
-        "bar1d (seed 003 Fig. 3): {} triangles over x ∈ [0, 1], t ∈ [{:.3}, {:.3}], U_max {u_max:.3e}, {} → {}",
-        mesh.triangles.len(),
-        renderer.window()[2],
-        renderer.window()[3],
+        "bar1d (seed 003 Fig. 3): {} triangles over x ∈ [0, 1], t ∈ [{:.3}, {:.3}], U_max {:.3e}, {} → {}",
+        r.triangles,
+        r.time[0],
+        r.time[1],
+        r.u_max,
         if args.per_vertex { "per-vertex colour" } else { "per-pixel colour" },
         out.display()
     );
-    drop((target, renderer));
     drop(gpu);
     Ok(())
 }
@@ -598,25 +315,4 @@ fn open_viewer(desc: &GpuDesc, data: SpacetimeData, view: SpacetimeView, args: &
 #[cfg(not(feature = "viewer"))]
 fn open_viewer(_: &GpuDesc, _: SpacetimeData, _: SpacetimeView, _: &RenderArgs) -> Result<()> {
     bail!("this build has no viewer: rebuild with the default `viewer` feature")
-}
-
-/// A pixel channel of an EXR file: its name and its value from a pixel's four floats.
-type Channel = (&'static str, fn(&[f32]) -> f32);
-
-/// Writes colour pixels as PNG, float pixels as EXR with `channels`, creating the folder.
-fn write_image(out: &Path, (w, h): (u32, u32), pixels: Pixels, channels: &[Channel]) -> Result<()> {
-    if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-    }
-    match pixels {
-        Pixels::Rgba8(c) => write_png_rgba8(out, w, h, &c)?,
-        Pixels::Rgba32F(v) => {
-            let named = channels
-                .iter()
-                .map(|(name, f)| (*name, v.chunks_exact(4).map(f).collect::<Vec<f32>>()))
-                .collect();
-            galerkin::render::write_exr_channels(out, w, h, named)?;
-        }
-    }
-    Ok(())
 }

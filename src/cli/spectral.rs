@@ -5,12 +5,11 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::Instant;
 
-use crate::cli::args::ImageFormat;
-use anyhow::{bail, Context, Result};
+use anyhow::{Context, Result};
 use clap::Args;
 use galerkin::gpu::{Gpu, GpuDesc};
-use galerkin::render::{write_exr_channels, write_png_rgba8, ColorFormat, Colormap, Pixels, RenderTarget};
-use galerkin::spectral::{generate, NodeSet, SpectralMesh, SpectralRenderer, SpectralView};
+use galerkin::render::Colormap;
+use galerkin::spectral::{generate, NodeSet, SpectralMesh, SpectralView};
 
 /// Where a data set comes from, shared by `spectral render` and `spectral gen`.
 #[derive(Args, Clone)]
@@ -223,42 +222,17 @@ pub fn generate_file(args: &GenArgs) -> Result<()> {
     Ok(())
 }
 
-/// `galerkin spectral render`.
+/// `galerkin spectral render` ([`galerkin::spectral::picture::write_picture`]).
 pub fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
+    use galerkin::spectral::picture::{check_view, kind, write_picture};
     let loaded = Instant::now();
     let mesh = Arc::new(args.source.mesh(args.file.as_deref(), &args.grid_functions)?);
     let load_ms = loaded.elapsed().as_secs_f64() * 1e3;
     let field = mesh.field_index(args.field.as_deref())?;
-    let steps = mesh.fields[field].steps.len();
-    if args.step >= steps {
-        bail!(
-            "--step {}: field {:?} has {steps} time steps (0 to {})",
-            args.step,
-            mesh.fields[field].name,
-            steps - 1
-        );
-    }
-    let range = args.colour.range;
-    if args.log && range.is_some_and(|(lo, _)| lo <= 0.0) {
-        bail!("--log needs a positive range (LO > 0)");
-    }
-    if args.log && range.is_none() {
-        let (lo, hi) = mesh.value_range(field, args.step);
-        if lo.is_nan() || lo <= 0.0 {
-            bail!(
-                "--log: field {:?} at step {} spans [{lo}, {hi}], not above 0; give --range LO,HI with LO > 0",
-                mesh.fields[field].name,
-                args.step
-            );
-        }
-    }
-    if !(args.max_error.is_finite() && args.max_error > 0.0) {
-        bail!("--max-error must be a positive number of pixels");
-    }
     let view = SpectralView {
         field,
         step: args.step,
-        range,
+        range: args.colour.range,
         log: args.log,
         isolines: args.isolines,
         edges: args.edges,
@@ -269,91 +243,45 @@ pub fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
         height: args.height,
         ..SpectralView::default()
     };
+    check_view(&mesh, &view)?;
     if args.viewer.view {
         return open_viewer(desc, mesh, view, args);
     }
     let gpu = Gpu::new(desc)?;
     let colormap = Colormap::by_name(&args.colour.colormap)?;
-    let mut renderer = SpectralRenderer::new(&gpu, mesh.clone(), &colormap)?;
-    let (w, h) = args.image.size_or((1024, 768));
+    let name = &mesh.fields[field].name;
+    let source = args
+        .file
+        .as_ref()
+        .map_or_else(|| format!("generated {}", args.source.generate), |f| f.display().to_string());
+    let time = mesh.fields[field].times.get(args.step).copied().unwrap_or(0.0);
+    let title = format!("{source}: {name}, step {} (t = {time})", args.step);
     let out = &args.image.out;
-    let start = Instant::now();
-    let colour = RenderTarget::new(&gpu, "spectral", w, h, ColorFormat::Rgba8)?;
-    let Pixels::Rgba8(rgba) = renderer.render(&colour, &view)? else {
-        bail!("an RGBA8 target returned floats")
-    };
-    let draw_ms = start.elapsed().as_secs_f64() * 1e3;
-    let (lo, hi) = renderer.range(&view);
-    match args.image.format() {
-        ImageFormat::Png if args.no_legend => write_png_rgba8(out, w, h, &rgba)?,
-        ImageFormat::Png => {
-            let name = &mesh.fields[field].name;
-            let source = args
-                .file
-                .as_ref()
-                .map_or_else(|| format!("generated {}", args.source.generate), |f| f.display().to_string());
-            let time = mesh.fields[field].times.get(args.step).copied().unwrap_or(0.0);
-            let title = format!("{source}: {name}, step {} (t = {time})", args.step);
-            let bar = galerkin::plot::ColourBar {
-                colormap: &colormap,
-                range: (lo, hi),
-                log: args.log,
-                label: name,
-                shift: 0.0,
-            };
-            galerkin::plot::picture_with_colour_bar(&rgba, (w, h), &bar, &title, out)?;
-        }
-        ImageFormat::Exr => {
-            let hex = mesh.shape == galerkin::spectral::Shape::Hexahedron;
-            let data = RenderTarget::new(&gpu, "spectral values", w, h, ColorFormat::Rgba32F)?;
-            let Pixels::Rgba32F(v) = renderer.render(&data, &view)? else {
-                bail!("a float target returned bytes")
-            };
-            let byte = |c: usize| galerkin::render::rgba8_channel(&rgba, c);
-            let float = |c: usize| galerkin::render::rgba32f_channel(&v, c);
-            write_exr_channels(
-                out,
-                w,
-                h,
-                vec![
-                    ("R", byte(0)),
-                    ("G", byte(1)),
-                    ("B", byte(2)),
-                    ("value", float(0)),
-                    (if hex { "plane" } else { "xi" }, float(1)),
-                    (if hex { "zeta" } else { "eta" }, float(2)),
-                    ("element", float(3)),
-                ],
-            )?;
-        }
-    }
-    let [proxies, grids, lines] = renderer.primitive_counts();
+    let size = args.image.size_or((1024, 768));
+    let r = write_picture(
+        &gpu,
+        mesh.clone(),
+        &view,
+        &colormap,
+        size,
+        out,
+        (!args.no_legend).then_some(title.as_str()),
+    )?;
+    let (lo, hi) = r.range;
     println!(
-        "spectral: {} {} elements of order {} ({} geometry of order {}), field {:?} step {}, range [{lo:.4}, {hi:.4}]; {} triangles ({}), {lines} edge lines; load {load_ms:.1} ms, render {draw_ms:.1} ms → {}",
+        "spectral: {} {} elements of order {} ({} geometry of order {}), field {name:?} step {}, range [{lo:.4}, {hi:.4}]; {} triangles ({}), {} edge lines; load {load_ms:.1} ms, render {:.1} ms → {}",
         mesh.elements(),
-        match (mesh.shape, mesh.is_planar()) {
-            (galerkin::spectral::Shape::Hexahedron, _) => "hexahedral",
-            (_, true) => "planar",
-            (_, false) => "surface",
-        },
+        kind(&mesh),
         mesh.basis.order,
         mesh.basis.set.name(),
         mesh.geometry.order,
-        mesh.fields[field].name,
         args.step,
-        if args.per_vertex { grids } else { proxies },
-        if mesh.shape == galerkin::spectral::Shape::Hexahedron {
-            "cut planes: section rectangles cut out per pixel"
-        } else if args.per_vertex {
-            "node grids"
-        } else if mesh.is_planar() && args.height.is_none() {
-            "proxies"
-        } else {
-            "tessellated on the device"
-        },
+        r.triangles,
+        r.triangle_kind,
+        r.lines,
+        r.render_ms,
         out.display()
     );
-    drop((colour, renderer));
     drop(gpu);
     Ok(())
 }

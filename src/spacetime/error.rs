@@ -77,6 +77,13 @@ pub enum SpacetimeError {
         /// Rounds tried.
         rounds: usize,
     },
+    /// A request the data sets cannot satisfy (an unknown data set, a count out of range, a
+    /// time outside the span), in words the user can act on.
+    #[error("{0}")]
+    Request(String),
+    /// Writing a picture failed (the message names the file).
+    #[error(transparent)]
+    Picture(#[from] crate::picture::PictureError),
     /// A device failure.
     #[error("{context}: {source}")]
     Device {

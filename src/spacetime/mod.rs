@@ -21,10 +21,12 @@ pub mod shaders {
 pub mod bar;
 pub mod cubic;
 pub mod data;
+pub mod dataset;
 mod error;
 pub mod generate;
 pub mod gst;
 pub mod mesh;
+pub mod picture;
 pub mod record;
 pub mod reference;
 mod render;

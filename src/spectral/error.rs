@@ -52,6 +52,9 @@ pub enum SpectralError {
         /// What went wrong.
         detail: String,
     },
+    /// Writing a picture failed (the message names the file).
+    #[error(transparent)]
+    Picture(#[from] crate::picture::PictureError),
     /// A Vulkan failure while rendering.
     #[error("{context}: {source}")]
     Device {

@@ -27,6 +27,7 @@ pub mod error;
 pub mod generate;
 pub mod mesh;
 pub mod mfem;
+pub mod picture;
 pub mod proxy;
 pub mod reference;
 pub mod render;

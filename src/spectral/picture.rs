@@ -1,0 +1,144 @@
+//! `galerkin spectral render`'s picture (seed 002): a view checked against its data set, drawn
+//! per pixel and written as PNG (with a title and a colour bar beside it) or EXR (the colour,
+//! then the raw value, the reference coordinates ξ, η — for cut planes the plane and ζ — and
+//! the element of every pixel; NaN where no element, −(e + 1) where only edge overdraw drew).
+
+use std::path::Path;
+use std::sync::Arc;
+use std::time::Instant;
+
+use super::{Shape, SpectralError, SpectralMesh, SpectralRenderer, SpectralView};
+use crate::gpu::Gpu;
+use crate::picture::{self, ImageFormat, Legend};
+use crate::plot::ColourBar;
+use crate::render::{ColorFormat, Colormap, Pixels, RenderTarget};
+
+/// What [`write_picture`] drew.
+#[derive(Clone, Debug)]
+pub struct PictureReport {
+    /// The colour range used (the field's own unless the view fixed one).
+    pub range: (f64, f64),
+    /// Render and readback time, ms.
+    pub render_ms: f64,
+    /// Triangles drawn.
+    pub triangles: u64,
+    /// What the triangles are (proxies, node grids, device tessellation, cut sections).
+    pub triangle_kind: &'static str,
+    /// Edge lines drawn.
+    pub lines: u64,
+}
+
+/// Checks `view` against `mesh` before any work: the step exists, a log scale has a positive
+/// range (given, or the field's own), the tessellation budget is a positive number of pixels.
+pub fn check_view(mesh: &SpectralMesh, view: &SpectralView) -> Result<(), SpectralError> {
+    let field = mesh.fields.get(view.field).ok_or_else(|| SpectralError::Missing("no such field".into()))?;
+    let steps = field.steps.len();
+    if view.step >= steps {
+        return Err(SpectralError::Missing(format!(
+            "step {}: field {:?} has {steps} time steps (0 to {})",
+            view.step,
+            field.name,
+            steps.saturating_sub(1)
+        )));
+    }
+    if view.log {
+        match view.range {
+            Some((lo, _)) if lo <= 0.0 => {
+                return Err(SpectralError::Missing("a log scale needs a positive range (LO > 0)".into()))
+            }
+            Some(_) => {}
+            None => {
+                let (lo, hi) = mesh.value_range(view.field, view.step);
+                if lo.is_nan() || lo <= 0.0 {
+                    return Err(SpectralError::Missing(format!(
+                        "a log scale: field {:?} at step {} spans [{lo}, {hi}], not above 0; give a range LO,HI with LO > 0",
+                        field.name, view.step
+                    )));
+                }
+            }
+        }
+    }
+    if !(view.max_error_px.is_finite() && view.max_error_px > 0.0) {
+        return Err(SpectralError::Missing(
+            "the tessellation's error budget must be a positive number of pixels".into(),
+        ));
+    }
+    Ok(())
+}
+
+/// "hexahedral", "planar" or "surface": how `mesh` is shown.
+pub fn kind(mesh: &SpectralMesh) -> &'static str {
+    match (mesh.shape, mesh.is_planar()) {
+        (Shape::Hexahedron, _) => "hexahedral",
+        (_, true) => "planar",
+        (_, false) => "surface",
+    }
+}
+
+/// Renders `view` of `mesh` at `size` and writes it to `out` (format by extension): a PNG with
+/// `title` and a colour bar beside it, or the bare picture when `title` is `None`; an EXR with
+/// the raw channels.
+pub fn write_picture(
+    gpu: &Gpu,
+    mesh: Arc<SpectralMesh>,
+    view: &SpectralView,
+    colormap: &Colormap,
+    size: (u32, u32),
+    out: &Path,
+    title: Option<&str>,
+) -> Result<PictureReport, SpectralError> {
+    check_view(&mesh, view)?;
+    let format = ImageFormat::of(out).ok_or_else(|| SpectralError::File {
+        path: out.to_path_buf(),
+        detail: "the image format comes from the extension: .png or .exr".into(),
+    })?;
+    let dev = SpectralError::device;
+    let mut renderer = SpectralRenderer::new(gpu, mesh.clone(), colormap)?;
+    let (w, h) = size;
+    let start = Instant::now();
+    let colour =
+        RenderTarget::new(gpu, "spectral", w, h, ColorFormat::Rgba8).map_err(dev("the colour target"))?;
+    let Pixels::Rgba8(rgba) = renderer.render(&colour, view)? else {
+        return Err(SpectralError::Missing("an RGBA8 target returned floats".into()));
+    };
+    let render_ms = start.elapsed().as_secs_f64() * 1e3;
+    let range = renderer.range(view);
+    let field = &mesh.fields[view.field];
+    match format {
+        ImageFormat::Png => {
+            let legend = title.map(|title| Legend {
+                title: title.to_string(),
+                bar: ColourBar { colormap, range, log: view.log, label: &field.name, shift: 0.0 },
+            });
+            picture::write_png(out, size, &rgba, legend.as_ref())?;
+        }
+        ImageFormat::Exr => {
+            let hex = mesh.shape == Shape::Hexahedron;
+            let data = RenderTarget::new(gpu, "spectral values", w, h, ColorFormat::Rgba32F)
+                .map_err(dev("the data target"))?;
+            let Pixels::Rgba32F(v) = renderer.render(&data, view)? else {
+                return Err(SpectralError::Missing("a float target returned bytes".into()));
+            };
+            let names =
+                if hex { ["value", "plane", "zeta", "element"] } else { ["value", "xi", "eta", "element"] };
+            picture::write_exr(out, size, Some(&rgba), picture::float_channels(&v, &names))?;
+        }
+    }
+    let [proxies, grids, lines] = renderer.primitive_counts();
+    let triangle_kind = if mesh.shape == Shape::Hexahedron {
+        "cut planes: section rectangles cut out per pixel"
+    } else if view.per_vertex {
+        "node grids"
+    } else if mesh.is_planar() && view.height.is_none() {
+        "proxies"
+    } else {
+        "tessellated on the device"
+    };
+    Ok(PictureReport {
+        range,
+        render_ms,
+        triangles: if view.per_vertex { grids } else { proxies },
+        triangle_kind,
+        lines,
+    })
+}
