@@ -76,11 +76,6 @@ pub struct ImageArgs {
 }
 
 impl ImageArgs {
-    /// The output's format (always known: `--out` was checked when parsed).
-    pub fn format(&self) -> ImageFormat {
-        ImageFormat::of(&self.out).unwrap_or(ImageFormat::Png)
-    }
-
     /// The size, or the verb's default where it has none fixed.
     pub fn size_or(&self, default: (u32, u32)) -> (u32, u32) {
         self.size.unwrap_or(default)

@@ -1,19 +1,15 @@
 //! `galerkin fluid …`: seed 000 §5–7's full-space fluid on deforming simplicial meshes.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::time::Instant;
 
-use crate::cli::args::ImageFormat;
-use anyhow::{bail, Context, Result};
+use anyhow::{bail, Result};
 use clap::{Args, Subcommand};
-use galerkin::fluid::gpu::GpuParticles;
-use galerkin::fluid::particles::seed_particles;
-use galerkin::fluid::render::{cell_speeds, draw_picture, DrawStyle, Projection, View2d};
 use galerkin::fluid::run::simulate_run;
 use galerkin::fluid::scene::FluidScene;
 use galerkin::fluid::snapshots::SnapshotReader;
 use galerkin::gpu::{Gpu, GpuDesc};
-use galerkin::render::{rgba32f_channel, rgba8_channel, write_exr_channels, write_png_rgba8, Colormap};
+use galerkin::render::Colormap;
 
 /// `galerkin fluid` subcommands.
 #[derive(Subcommand)]
@@ -301,18 +297,15 @@ fn simulate(args: &SimulateArgs) -> Result<()> {
         bar.inc(1);
     })?;
     bar.finish_and_clear();
-    let stage = |i: usize| {
-        let mut v: Vec<f64> = summary.stage_seconds.iter().map(|s| s[i]).collect();
-        galerkin::bench::median_f64(&mut v)
-    };
+    let [td, ta, tp] = summary.stage_medians();
     println!(
         "{frames} frames (setup {:.2} s): t_d {:.4} s (deformation), t_a {:.4} s (advection + diffusion, {} RK4 substeps), t_p {:.4} s (projection: {:.1} multigrid-preconditioned CG steps per frame) per frame (medians); energy {:.5} → {:.5}; worst relative divergence {:.1e} → {}",
         summary.setup_seconds,
-        stage(0),
-        stage(1),
+        td,
+        ta,
         summary.substeps,
-        stage(2),
-        summary.cg_steps as f64 / frames.max(1) as f64,
+        tp,
+        summary.cg_steps_per_frame(),
         summary.energy.0,
         summary.energy.1,
         summary.worst_divergence,
@@ -321,89 +314,39 @@ fn simulate(args: &SimulateArgs) -> Result<()> {
     Ok(())
 }
 
+/// `galerkin fluid render` ([`galerkin::fluid::picture::write_frame`]).
 fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
-    let reader = SnapshotReader::open(&args.dir)?;
-    let meta = reader.meta().clone();
-    if meta.frames == 0 {
-        bail!("{}: no frames", args.dir.display());
-    }
-    let frame = args.frame.unwrap_or(meta.frames - 1);
-    if frame >= meta.frames {
-        bail!("{}: frame {frame} asked, the run has frames 0 to {}", args.dir.display(), meta.frames - 1);
-    }
-    let colormap = Colormap::by_name(&args.colour.colormap)?;
-    let (mesh, topo) = reader.mesh_at(0)?;
+    use galerkin::fluid::picture::{write_frame, FrameRequest};
+    let request = FrameRequest {
+        frame: args.frame,
+        particles: args.particles,
+        colormap: Colormap::by_name(&args.colour.colormap)?,
+        range: args.colour.range,
+        colour_cells: args.cells,
+        sprite_px: args.sprite,
+        size: args.image.size,
+    };
     let gpu = Gpu::new(desc)?;
     let start = Instant::now();
-    let particles = if args.particles > 0 {
-        let seeds = seed_particles(&mesh, args.particles);
-        let mut device = GpuParticles::new(&gpu, &mesh, &topo, &seeds)?;
-        let bar = crate::progress_bar(frame as u64, "advecting particles");
-        let mut g0 = reader.frame("g", 0)?;
-        for k in 1..=frame {
-            let g1 = reader.frame("g", k)?;
-            let f = reader.frame("f", k)?;
-            device.advect(&gpu, &mesh, &g0, &g1, &f, meta.frame_time, 10)?;
-            g0 = g1;
-            bar.inc(1);
-        }
-        bar.finish_and_clear();
-        Some(device)
-    } else {
-        None
-    };
-    let g = reader.frame("g", frame)?;
-    let f = reader.frame("f", frame)?;
-    let speeds = cell_speeds(&mesh, &topo, &g, &f);
-    let range = args.colour.range.unwrap_or((0.0, speeds.iter().fold(0.0f64, |m, v| m.max(*v)).max(1e-12)));
-    let style = DrawStyle { colormap, range, log: false, colour_cells: args.cells, sprite_px: args.sprite };
-    let (lo, hi) = mesh.bounds();
-    let size = args.image.size.unwrap_or(if meta.dim == 2 { (1600, 500) } else { (1024, 768) });
-    let projection = if meta.dim == 2 {
-        Projection::Plane(View2d::fit([lo[0], lo[1]], [hi[0], hi[1]], size, 0.02))
-    } else {
-        Projection::Perspective(galerkin::render::camera_for_box(lo, hi))
-    };
-    let picture =
-        draw_picture(&gpu, (&mesh, &topo), &g, &speeds, particles.as_ref(), &style, &projection, size)?;
-    let (w, h) = size;
-    write_image(&args.image.out, args.image.format(), w, h, &picture.rgba, &picture.raw)?;
+    let bar = crate::progress_bar(0, "advecting particles");
+    let r = write_frame(&gpu, &args.dir, &request, &args.image.out, &mut |done, total| {
+        bar.set_length(total as u64);
+        bar.set_position(done as u64);
+    });
+    bar.finish_and_clear();
+    let r = r?;
     println!(
-        "fluid render: frame {frame} of {} ({} cells, {} particles), speed range {:.3}..{:.3}, {:.2} s → {}",
+        "fluid render: frame {} of {} ({} cells, {} particles), speed range {:.3}..{:.3}, {:.2} s → {}",
+        r.frame,
         args.dir.display(),
-        mesh.cell_count(),
+        r.cells,
         args.particles,
-        range.0,
-        range.1,
+        r.range.0,
+        r.range.1,
         start.elapsed().as_secs_f64(),
         args.image.out.display()
     );
-    drop(particles);
     drop(gpu);
-    Ok(())
-}
-
-fn write_image(path: &Path, format: ImageFormat, w: u32, h: u32, rgba: &[u8], raw: &[f32]) -> Result<()> {
-    if format == ImageFormat::Png {
-        write_png_rgba8(path, w, h, rgba)?;
-    } else {
-        let byte = |c: usize| rgba8_channel(rgba, c);
-        let float = |c: usize| rgba32f_channel(raw, c);
-        write_exr_channels(
-            path,
-            w,
-            h,
-            vec![
-                ("R", byte(0)),
-                ("G", byte(1)),
-                ("B", byte(2)),
-                ("speed", float(0)),
-                ("cell", float(1)),
-                ("kind", float(2)),
-            ],
-        )
-        .with_context(|| format!("writing {}", path.display()))?;
-    }
     Ok(())
 }
 

@@ -7,15 +7,13 @@ use anyhow::{bail, Context, Result};
 use clap::{Args, Subcommand};
 use galerkin::gpu::{Gpu, GpuDesc};
 use galerkin::radiosity::any_scene::AnyScene;
+use galerkin::radiosity::picture::{write_picture, PictureRequest};
 use galerkin::radiosity::reduced::ReducedRadiosity;
-use galerkin::radiosity::render::{
-    default_exposure, display_radiance, draw_picture, scene_vertices, Shading, Viewpoint,
-};
+use galerkin::radiosity::render::{default_exposure, display_radiance, Shading, Viewpoint};
 use galerkin::radiosity::train::{
     sample_parameters, solve_configurations, train as train_model, TrainOptions,
 };
 use galerkin::radiosity::LightMode;
-use galerkin::render::{write_exr_channels, write_png_rgba8};
 
 /// `galerkin radiosity` subcommands.
 #[derive(Subcommand)]
@@ -232,75 +230,36 @@ fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
     }
     let scene = AnyScene::load(&args.scene, light_mode(args.lights.as_deref()))?;
     let p = scene.parameters_from(&args.look.params).with_context(|| format!("{}", args.scene.display()))?;
-    let space = scene.space();
-    let lights = space.lights().clone();
-    let start = Instant::now();
-    let mesh = space.mesh(&p)?;
-    let (mesh, geometry, radiosity, how) = match &args.model {
-        None => {
-            let s = galerkin::radiosity::full_radiosity_of(mesh, &lights)?;
-            (s.mesh, s.geometry, s.radiosity, format!("full solve ({} Jacobi sweeps)", s.sweeps))
-        }
-        Some(dir) => {
-            let model = ReducedRadiosity::load(dir)?;
-            if model.light_mode() != lights.mode {
-                bail!(
-                    "{}: the model was trained with {:?} lighting; pass --lights to match",
-                    dir.display(),
-                    model.light_mode()
-                );
-            }
-            check_model_faces(dir, &model, mesh.len())?;
-            let (b, _) = model.evaluate(&mesh)?;
-            let geometry = mesh.geometry();
-            (mesh, geometry, b, "reduced model loaded and evaluated in".to_string())
-        }
+    let model = args.model.as_deref().map(ReducedRadiosity::load).transpose()?;
+    let request = PictureRequest {
+        params: p.clone(),
+        viewpoint: args.look.viewpoint,
+        shading: args.look.shading,
+        exposure: args.look.exposure,
+        size,
+        faces_csv: args.faces.clone(),
     };
-    let solve_s = start.elapsed().as_secs_f64();
-    let radiance = display_radiance(&mesh, &geometry, &lights, &radiosity);
-    let exposure = args.look.exposure.unwrap_or_else(|| default_exposure(&mesh, &geometry, &radiance));
-    if !(exposure.is_finite() && exposure > 0.0) {
-        bail!("--exposure must be positive, got {exposure}");
-    }
     let gpu = Gpu::new(desc)?;
-    let vertices = scene_vertices(&mesh, &geometry, &radiance, args.look.shading);
-    let camera = scene.camera(&mesh, args.look.viewpoint);
-    let picture = draw_picture(&gpu, &vertices, &camera, exposure, size)?;
-    let (w, h) = size;
     let out = &args.image.out;
-    if args.image.format() == crate::cli::args::ImageFormat::Png {
-        write_png_rgba8(out, w, h, &picture.rgba)?;
-    } else {
-        let byte = |c: usize| galerkin::render::rgba8_channel(&picture.rgba, c);
-        let float = |c: usize| galerkin::render::rgba32f_channel(&picture.raw, c);
-        write_exr_channels(
-            out,
-            w,
-            h,
-            vec![
-                ("R", byte(0)),
-                ("G", byte(1)),
-                ("B", byte(2)),
-                ("radiance.R", float(0)),
-                ("radiance.G", float(1)),
-                ("radiance.B", float(2)),
-                ("face", float(3)),
-            ],
-        )?;
-    }
+    let r =
+        write_picture(&gpu, &scene, model.as_ref(), &request, out).with_context(|| match &args.model {
+            Some(dir) => format!("{} with the model {}", args.scene.display(), dir.display()),
+            None => args.scene.display().to_string(),
+        })?;
     if let Some(table) = &args.faces {
-        galerkin::radiosity::face_table::write(table, &mesh, &geometry, &radiosity)?;
-        println!("per-face table ({} faces, f64) → {}", mesh.len(), table.display());
+        println!("per-face table ({} faces, f64) → {}", r.faces, table.display());
     }
     let p_text: Vec<String> = scene.names().iter().zip(&p).map(|(n, v)| format!("{n}={v}")).collect();
     println!(
-        "radiosity: {} faces, {} lights, {}; {how} {solve_s:.3} s, exposure {exposure:.3} → {}",
-        mesh.len(),
-        if lights.mode == LightMode::Sky { "sky" } else { "area" },
+        "radiosity: {} faces, {} lights, {}; {} {:.3} s, exposure {:.3} → {}",
+        r.faces,
+        if r.lights == LightMode::Sky { "sky" } else { "area" },
         p_text.join(" "),
+        r.how,
+        r.solve_seconds,
+        r.exposure,
         out.display()
     );
-    drop(picture);
     drop(gpu);
     Ok(())
 }

@@ -39,4 +39,7 @@ pub enum FluidError {
         /// What is wrong.
         message: String,
     },
+    /// Writing a picture failed (the message names the file).
+    #[error(transparent)]
+    Picture(#[from] crate::picture::PictureError),
 }

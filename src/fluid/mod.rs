@@ -29,6 +29,7 @@ pub mod export;
 pub mod gpu;
 pub mod operators;
 pub mod particles;
+pub mod picture;
 pub mod projection;
 pub mod reduced;
 pub mod render;

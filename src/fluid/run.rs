@@ -28,6 +28,21 @@ pub struct RunSummary {
     pub cg_steps: usize,
 }
 
+impl RunSummary {
+    /// Medians over the frames of t_d, t_a and t_p, seconds (Table 1's stage columns).
+    pub fn stage_medians(&self) -> [f64; 3] {
+        [0, 1, 2].map(|i| {
+            let mut v: Vec<f64> = self.stage_seconds.iter().map(|s| s[i]).collect();
+            crate::bench::median_f64(&mut v)
+        })
+    }
+
+    /// Conjugate-gradient steps per projection, on average.
+    pub fn cg_steps_per_frame(&self) -> f64 {
+        self.cg_steps as f64 / self.frames.max(1) as f64
+    }
+}
+
 /// The momentum `p = V(g) u` of a state (the snapshot's `p`).
 pub fn momentum(solver: &FluidSolver, state: &FluidState) -> Vec<f64> {
     let d = solver.mesh().dim();

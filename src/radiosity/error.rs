@@ -47,6 +47,9 @@ pub enum RadiosityError {
     /// The linear solve failed (a singular `I − ρF`: albedo ≥ 1 in a closed scene).
     #[error("radiosity solve: {0}")]
     Solve(String),
+    /// Writing a picture failed (the message names the file).
+    #[error(transparent)]
+    Picture(#[from] crate::picture::PictureError),
     /// A device error.
     #[error(transparent)]
     Gpu(#[from] crate::gpu::GpuError),

@@ -27,6 +27,7 @@ pub mod gpu;
 pub mod lighting;
 pub mod mesh;
 pub mod obj;
+pub mod picture;
 pub mod reduced;
 pub mod render;
 pub mod scene;

@@ -1,0 +1,105 @@
+//! `galerkin radiosity render`'s picture: a scene's radiosity at one design-parameter vector —
+//! the full solve (Eq. 14 with Eq. 15's form factors, visibility by ray casting) or a trained
+//! model's reduced evaluation (Table 2) — drawn with flat or smooth shading and written as
+//! PNG (tone-mapped sRGB) or EXR (the colour, then the raw radiance R, G, B and the face index
+//! of every pixel); optionally the per-face result as a CSV table ([`super::face_table`]).
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use super::any_scene::AnyScene;
+use super::reduced::ReducedRadiosity;
+use super::render::{default_exposure, display_radiance, draw_picture, scene_vertices, Shading, Viewpoint};
+use super::{LightMode, RadiosityError};
+use crate::gpu::Gpu;
+use crate::picture::{self, ImageFormat};
+
+/// What to draw.
+#[derive(Clone, Debug)]
+pub struct PictureRequest {
+    /// The design parameters (in the scene's order; [`AnyScene::parameters_from`]).
+    pub params: Vec<f64>,
+    /// The viewpoint (the two rooms; an OBJ scene is seen from outside its bounds).
+    pub viewpoint: Viewpoint,
+    /// Flat or smooth shading.
+    pub shading: Shading,
+    /// Exposure (`None`: automatic from the solution, [`default_exposure`]).
+    pub exposure: Option<f64>,
+    /// Image size.
+    pub size: (u32, u32),
+    /// Also write the per-face radiosity here (CSV, f64).
+    pub faces_csv: Option<PathBuf>,
+}
+
+/// What [`write_picture`] drew.
+#[derive(Clone, Debug)]
+pub struct PictureReport {
+    /// Faces of the scene at these parameters.
+    pub faces: usize,
+    /// The lighting.
+    pub lights: LightMode,
+    /// How the radiosity was found: the full solve with its Jacobi sweeps, or the model.
+    pub how: String,
+    /// Seconds of the solve or the reduced evaluation (mesh build included).
+    pub solve_seconds: f64,
+    /// The exposure used.
+    pub exposure: f64,
+}
+
+/// Solves `scene` at `request.params` — with `model` when given (its lighting must match the
+/// scene's) — draws it and writes `out` (format by extension).
+pub fn write_picture(
+    gpu: &Gpu,
+    scene: &AnyScene,
+    model: Option<&ReducedRadiosity>,
+    request: &PictureRequest,
+    out: &Path,
+) -> Result<PictureReport, RadiosityError> {
+    let format = ImageFormat::of(out).ok_or_else(|| RadiosityError::File {
+        path: out.to_path_buf(),
+        message: "the image format comes from the extension: .png or .exr".into(),
+    })?;
+    if let Some(e) = request.exposure.filter(|e| !(e.is_finite() && *e > 0.0)) {
+        return Err(RadiosityError::Mesh(format!("the exposure must be positive, got {e}")));
+    }
+    let space = scene.space();
+    let lights = space.lights().clone();
+    let start = Instant::now();
+    let mesh = space.mesh(&request.params)?;
+    let (mesh, geometry, radiosity, how) = match model {
+        None => {
+            let s = super::full_radiosity_of(mesh, &lights)?;
+            (s.mesh, s.geometry, s.radiosity, format!("full solve ({} Jacobi sweeps)", s.sweeps))
+        }
+        Some(model) => {
+            if model.light_mode() != lights.mode {
+                return Err(RadiosityError::Mesh(format!(
+                    "the model was trained with {:?} lighting, the scene is lit by {:?}",
+                    model.light_mode(),
+                    lights.mode
+                )));
+            }
+            let (b, _) = model.evaluate(&mesh)?;
+            let geometry = mesh.geometry();
+            (mesh, geometry, b, "reduced model loaded and evaluated in".to_string())
+        }
+    };
+    let solve_seconds = start.elapsed().as_secs_f64();
+    let radiance = display_radiance(&mesh, &geometry, &lights, &radiosity);
+    let exposure = request.exposure.unwrap_or_else(|| default_exposure(&mesh, &geometry, &radiance));
+    let vertices = scene_vertices(&mesh, &geometry, &radiance, request.shading);
+    let camera = scene.camera(&mesh, request.viewpoint);
+    let picture = draw_picture(gpu, &vertices, &camera, exposure, request.size)?;
+    match format {
+        ImageFormat::Png => picture::write_png(out, request.size, &picture.rgba, None)?,
+        ImageFormat::Exr => {
+            let channels =
+                picture::float_channels(&picture.raw, &["radiance.R", "radiance.G", "radiance.B", "face"]);
+            picture::write_exr(out, request.size, Some(&picture.rgba), channels)?;
+        }
+    }
+    if let Some(table) = &request.faces_csv {
+        super::face_table::write(table, &mesh, &geometry, &radiosity)?;
+    }
+    Ok(PictureReport { faces: mesh.len(), lights: lights.mode, how, solve_seconds, exposure })
+}
