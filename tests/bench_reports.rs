@@ -72,3 +72,57 @@ fn the_fluid_benchmark_reports_every_size_table_1_and_the_particles() {
     assert!(text.contains("| cavity | 88671 |") && text.contains("| eagle | 300217 |"), "{text}");
     assert!(text.contains("Particles: 10,000 in"), "{text}");
 }
+
+/// The number in column `k` of a Markdown row (units after it ignored).
+fn column(row: &str, k: usize) -> f64 {
+    row.split('|').nth(k).and_then(|c| c.split_whitespace().next()).and_then(|v| v.parse().ok()).expect(row)
+}
+
+#[test]
+fn the_spacetime_benchmark_reports_every_size_and_pixel_count() {
+    use galerkin::bench::spacetime::{report, SpacetimeBench};
+    let gpu = common::gpu();
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut bench = SpacetimeBench::new(true, dir.path(), None);
+    bench.sizes = vec![2000, 5000];
+    bench.frames = 2;
+    let mut text = String::new();
+    report(&gpu, &bench, &mut |_| {}, &mut |s| text.push_str(s)).expect("the benchmark ran");
+    let rows: Vec<&str> =
+        text.lines().filter(|l| l.starts_with("| 2000 |") || l.starts_with("| 5000 |")).collect();
+    // One row for 2000; for 5000 the plain row, the subdivided row and four pixel counts.
+    assert_eq!(rows.len(), 7, "{text}");
+    for row in &rows {
+        let ms = column(row, 6);
+        assert!(ms.is_finite() && ms > 0.0, "{row}");
+    }
+    for size in ["320×180", "640×360", "1280×720", "1920×1080"] {
+        assert!(text.contains(&format!("| {size} |")), "no row for {size}:\n{text}");
+    }
+    assert!(text.contains("The floor"), "{text}");
+    // The data sets were generated into the folder and are reused.
+    assert!(dir.path().join("pulses-5000.gst").is_file());
+}
+
+#[test]
+fn the_reduced_fluid_benchmark_reports_both_exponentials_and_the_energy() {
+    use galerkin::bench::fluid_reduced::{step_report, StepBench};
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut bench = StepBench::new(true);
+    bench.scene = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/fluid/cavity_small.toml"));
+    bench.sizes = (16, 8, 3, 4);
+    bench.steps = 3;
+    bench.energy_steps = 50;
+    bench.work = dir.path().to_path_buf();
+    let mut text = String::new();
+    step_report(&bench, &mut |_| {}, &mut |_, _| {}, &mut |s| text.push_str(s)).expect("the benchmark ran");
+    let rows: Vec<&str> =
+        text.lines().filter(|l| l.starts_with("| Krylov") || l.starts_with("| Padé")).collect();
+    assert_eq!(rows.len(), 2, "{text}");
+    for row in &rows {
+        assert_eq!(column(row, 2), 16.0, "{row}");
+        let ms = column(row, 11);
+        assert!(ms.is_finite() && ms > 0.0, "{row}");
+    }
+    assert!(text.contains("Energy over 50 reduced steps"), "{text}");
+}

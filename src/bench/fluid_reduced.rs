@@ -331,3 +331,126 @@ pub fn cavity_model(
         model_bytes: model.tensor_bytes() + bases,
     })
 }
+
+/// What [`step_report`] measures.
+#[derive(Clone, Debug)]
+pub struct StepBench {
+    /// The cavity scene whose mesh carries the synthetic bases.
+    pub scene: std::path::PathBuf,
+    /// Basis sizes (m_u, m_f, m_g, m_h).
+    pub sizes: (usize, usize, usize, usize),
+    /// Reduced steps timed per exponential.
+    pub steps: usize,
+    /// Reduced steps of the energy run.
+    pub energy_steps: usize,
+    /// Where the small tunnel's training runs are kept between runs.
+    pub work: std::path::PathBuf,
+}
+
+impl StepBench {
+    /// Table 1's cavity sizes (128, 64, 5; m_h 16) on the cavity (`quick`: the small cavity
+    /// and 10⁴ energy steps instead of 10⁶).
+    pub fn new(quick: bool) -> Self {
+        Self {
+            scene: if quick { "scenes/fluid/cavity_small.toml" } else { "scenes/fluid/cavity.toml" }.into(),
+            sizes: (128, 64, 5, 16),
+            steps: 200,
+            energy_steps: if quick { 10_000 } else { 1_000_000 },
+            work: "out/bench-fluid-reduced".into(),
+        }
+    }
+}
+
+/// The reduced step at Table 1's cavity sizes on synthetic bases of the cavity mesh, stage by
+/// stage with both exponentials ([`cavity_step`]), and the energy over many reduced steps of a
+/// small tunnel model trained here ([`energy_run`]), as Markdown through `emit`. `log` reports
+/// stages, `progress` the energy run's steps.
+pub fn step_report(
+    bench: &StepBench,
+    log: &mut dyn FnMut(&str),
+    progress: &mut dyn FnMut(usize, usize),
+    emit: &mut dyn FnMut(&str),
+) -> Result<(), FluidError> {
+    let b = cavity_step(&bench.scene, bench.sizes, bench.steps, log)?;
+    emit(&format!(
+        "Reduced step on {} ({} cells, synthetic bases; premultiplied in {:.1} s; reduced tensors {:.1} MB, with the bases {:.1} MB), medians of {} steps:\n\n",
+        bench.scene.display(),
+        b.cells,
+        b.premultiply_seconds,
+        b.tensor_bytes as f64 / 1e6,
+        b.model_bytes as f64 / 1e6,
+        bench.steps
+    ));
+    emit("| exponential | m_u | m_f | m_g | m_h | m_d | K̂ (ms) | V̂ (ms) | exp (ms) | projection (ms) | step (ms) | Krylov products |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+    for t in &b.timings {
+        let (a, f, g, h, d) = t.dims;
+        emit(&format!(
+            "| {} | {a} | {f} | {g} | {h} | {d} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {} |\n",
+            t.exponential,
+            1e3 * t.stages[0],
+            1e3 * t.stages[1],
+            1e3 * t.stages[2],
+            1e3 * t.stages[3],
+            1e3 * t.total,
+            t.products
+        ));
+    }
+    log("training the small tunnel for the energy run");
+    let (runs, _) = crate::fluid::reduced::example::small_tunnel_runs(&bench.work, 100)?;
+    let model = ReducedFluidModel::fit(
+        &crate::fluid::reduced::TrainingSet::open(&runs)?,
+        &BasisSizes::default(),
+        &mut |_| {},
+    )?;
+    let total = bench.energy_steps;
+    let e = energy_run(&model, total, &mut |k| progress(k, total))?;
+    emit(&format!(
+        "\nEnergy over {} reduced steps of the small tunnel (m_u {}, m_f {}, static geometry): start {:.9}, maximum {:.9}, final {:.9}; {:.4} ms per step.\n",
+        e.steps,
+        model.dim_of("u"),
+        model.dim_of("f"),
+        e.initial,
+        e.maximum,
+        e.last,
+        1e3 * e.step_seconds
+    ));
+    Ok(())
+}
+
+/// Table 1's reduced rows on a trained cavity `model` ([`cavity_model`]): the full step on
+/// `scene` (median of 8 frames) and the reduced step under the same `schedule`, and
+/// `particles` particles from the reduced state on the CPU and `gpu`, as Markdown.
+pub fn model_report(
+    model: &ReducedFluidModel,
+    scene: &Path,
+    schedule: &crate::fluid::reduced::CompressionSchedule,
+    particles: usize,
+    gpu: Option<&crate::gpu::Gpu>,
+    log: &mut dyn FnMut(&str),
+    emit: &mut dyn FnMut(&str),
+) -> Result<(), FluidError> {
+    let frames = schedule.last_frame().max(1);
+    let b = cavity_model(model, scene, schedule, (frames, 8), particles, gpu, log)?;
+    let (mu, mf, mg, mh) = b.dims;
+    let [td, ta, tp, total] = b.full;
+    let device = b.particles.1.map_or("no device".into(), |s| format!("{:.2} ms", 1e3 * s));
+    emit(&format!(
+        "Cavity model ({} cells; m_u {mu}, m_f {mf}, m_g {mg}, m_h {mh}), driven by {frames} frames of compressions:\n\n\
+         | quantity | time |\n|---|---:|\n\
+         | full step t_d (median of 8 frames) | {td:.3} s |\n\
+         | full step t_a | {ta:.3} s |\n\
+         | full step t_p | {tp:.3} s |\n\
+         | full step, total | {total:.3} s |\n\
+         | reduced step t_s (median of {frames}) | {:.3} ms ({:.0}× the full step) |\n\
+         | particles t_pa, {} from the reduced state, 10 substeps a frame, CPU | {:.2} ms |\n\
+         | the same on the device | {device} |\n\
+         | run-time model (reduced tensors, B_f and B_g) | {:.1} MB |\n",
+        b.cells,
+        1e3 * b.reduced,
+        total / b.reduced,
+        b.particle_count,
+        1e3 * b.particles.0,
+        b.model_bytes as f64 / 1e6
+    ));
+    Ok(())
+}

@@ -182,10 +182,10 @@ pub fn run(desc: &GpuDesc, action: &Action) -> Result<()> {
         Action::Train(args) => crate::cli::fluid_reduced::train(args),
         Action::Reduced(args) => crate::cli::fluid_reduced::reduced(args),
         Action::TrainScene(args) => crate::cli::fluid_reduced::train_scene(args),
-        Action::Compare(args) => crate::cli::fluid_reduced::compare(args),
+        Action::Compare(args) => crate::cli::fluid_reduced::compare(desc, args),
         Action::ErrorStudy(args) => crate::cli::fluid_reduced::error_study(args),
         Action::Bench(args) => bench(desc, args),
-        Action::BenchReduced(args) => crate::cli::fluid_reduced::bench(args),
+        Action::BenchReduced(args) => crate::cli::fluid_reduced::bench(desc, args),
     }
 }
 

@@ -4,9 +4,8 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use clap::Args;
-use galerkin::fluid::reduced::example::small_tunnel_runs;
 use galerkin::fluid::reduced::{
     run_reduced, write_lifted, BasisSizes, ReducedFluid, ReducedFluidModel, ReducedMotion, TrainingSet,
 };
@@ -175,7 +174,6 @@ pub struct StudyArgs {
 }
 
 pub fn error_study(args: &StudyArgs) -> Result<()> {
-    use galerkin::fluid::reduced::plot::{plot_by_size, plot_over_time};
     use galerkin::fluid::snapshots::SnapshotReader;
     let start = Instant::now();
     let largest = args.sizes.iter().copied().max().unwrap_or(0);
@@ -207,11 +205,7 @@ pub fn error_study(args: &StudyArgs) -> Result<()> {
         },
     )?;
     bar.finish_and_clear();
-    std::fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
-    std::fs::write(args.out.join("errors.csv"), study.csv())?;
-    std::fs::write(args.out.join("summary.csv"), study.summary_csv())?;
-    plot_over_time(&study, &args.out.join("fig5d.png"))?;
-    plot_by_size(&study, &args.out.join("fig5e.png"))?;
+    study.write_outputs(&args.out)?;
     println!("  m_u  m_f  mean one-step error  reduced step  full step  speedup  reduced tensors");
     for s in &study.sizes {
         println!(
@@ -324,9 +318,8 @@ fn warn_beyond(
     schedule.clone()
 }
 
-pub fn compare(args: &CompareArgs) -> Result<()> {
-    use galerkin::fluid::reduced::compare::{compare, error_section, ComparedMotion};
-    use galerkin::fluid::reduced::plot::plot_comparison;
+pub fn compare(desc: &galerkin::gpu::GpuDesc, args: &CompareArgs) -> Result<()> {
+    use galerkin::fluid::reduced::compare::{compare, ComparedMotion};
     let model = ReducedFluidModel::load(&args.model)?;
     let scene = galerkin::fluid::scene::FluidScene::load(&args.scene)?;
     let (motion, frames, title) = match (args.run, &args.full) {
@@ -348,22 +341,8 @@ pub fn compare(args: &CompareArgs) -> Result<()> {
         crate::progress_bar(frames as u64, if args.full.is_some() { "full run (read)" } else { "full run" });
     let c = compare(&model, &scene, &motion, frames, args.refine, &mut |k| bar.set_position(k as u64))?;
     bar.finish_and_clear();
-    std::fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
-    std::fs::write(args.out.join("comparison.csv"), c.csv())?;
-    plot_comparison(&c, &title, &args.out.join("energy.png"), &args.out.join("error.png"))?;
-    let gpu = galerkin::gpu::Gpu::new(&galerkin::gpu::GpuDesc::default())?;
-    let picture = error_section(&gpu, &scene.mesh, &c, (900, 700))?;
-    galerkin::fluid::reduced::plot::plot_picture_with_colour_bar(
-        &picture.rgba,
-        (900, 700),
-        &galerkin::render::Colormap::viridis(),
-        c.cell_error_range(),
-        (
-            &format!("Velocity error at frame {frames} on the plane z = 0 — {title}"),
-            "|u_full − u_reduced| per cell",
-        ),
-        &args.out.join("error-section.png"),
-    )?;
+    let gpu = galerkin::gpu::Gpu::new(desc)?;
+    c.write_outputs(&gpu, &scene.mesh, &title, frames, &args.out)?;
     let (mean, worst) = c.error_summary();
     let (best_mean, best_worst) = c.projection_summary();
     let speed = if c.seconds.0.is_finite() {
@@ -416,13 +395,12 @@ pub fn reduced(args: &ReducedArgs) -> Result<()> {
         },
     };
     bar.finish_and_clear();
-    let mut step: Vec<f64> = run.reports.iter().map(|r| r.total_seconds()).collect();
     let (mu, mf, mg, mh) = fluid.dims();
     let first = &run.states[0];
     let last = &run.states[run.states.len() - 1];
     println!(
         "fluid reduced: {frames} frames (m_u {mu}, m_f {mf}, m_g {mg}, m_h {mh}), {:.3} ms per step (median); energy {:.5} → {:.5}",
-        1e3 * galerkin::bench::median_f64(&mut step),
+        1e3 * run.median_step_seconds(),
         fluid.energy(&first.u, &first.g),
         fluid.energy(&last.u, &last.g)
     );
@@ -462,103 +440,32 @@ pub struct BenchArgs {
     pub drive: galerkin::fluid::reduced::CompressionSchedule,
 }
 
-/// Table 1's reduced rows on a trained cavity model (`fluid bench-reduced --model`).
-fn bench_model(args: &BenchArgs, model_path: &std::path::Path) -> Result<()> {
-    let model = ReducedFluidModel::load(model_path)?;
-    let gpu = galerkin::gpu::Gpu::new(&galerkin::gpu::GpuDesc::default()).ok();
+/// `galerkin fluid bench-reduced` ([`galerkin::bench::fluid_reduced::step_report`], or with
+/// --model [`galerkin::bench::fluid_reduced::model_report`]).
+pub fn bench(desc: &galerkin::gpu::GpuDesc, args: &BenchArgs) -> Result<()> {
+    use galerkin::bench::fluid_reduced::{model_report, step_report, StepBench};
     let start = Instant::now();
-    let frames = args.drive.last_frame().max(1);
-    let drive = warn_beyond(&model, &args.drive);
-    let b = galerkin::bench::fluid_reduced::cavity_model(
-        &model,
-        &args.scene,
-        &drive,
-        (frames, 8),
-        args.particles,
-        gpu.as_ref(),
-        &mut |s| eprintln!("[{:6.1} s] {s}", start.elapsed().as_secs_f64()),
-    )?;
-    let (mu, mf, mg, mh) = b.dims;
-    let [td, ta, tp, total] = b.full;
-    println!(
-        "cavity model {} ({} cells; m_u {mu}, m_f {mf}, m_g {mg}, m_h {mh}), driven by {} frames of compressions:",
-        model_path.display(),
-        b.cells,
-        frames
-    );
-    println!(
-        "  full step (median of 8 frames): t_d {td:.3} s, t_a {ta:.3} s, t_p {tp:.3} s, total {total:.3} s"
-    );
-    println!(
-        "  reduced step t_s (median of {frames}): {:.3} ms — {:.0}× the full step",
-        1e3 * b.reduced,
-        total / b.reduced
-    );
-    let device = b.particles.1.map_or("no device".into(), |s| format!("{:.2} ms", 1e3 * s));
-    println!(
-        "  particles t_pa, {} from the reduced state, 10 substeps a frame: CPU {:.2} ms, device {device}",
-        b.particle_count,
-        1e3 * b.particles.0
-    );
-    println!("  run-time model (reduced tensors, B_f and B_g): {:.1} MB", b.model_bytes as f64 / 1e6);
-    if let Some(g) = gpu {
-        drop(g);
-    }
-    Ok(())
-}
-
-pub fn bench(args: &BenchArgs) -> Result<()> {
-    use galerkin::bench::fluid_reduced::{cavity_step, energy_run};
-    if let Some(model) = &args.model {
-        return bench_model(args, model);
+    let mut log = |s: &str| eprintln!("[{:6.1} s] {s}", start.elapsed().as_secs_f64());
+    let mut emit = |s: &str| print!("{s}");
+    if let Some(path) = &args.model {
+        let model = ReducedFluidModel::load(path)?;
+        let gpu = galerkin::gpu::Gpu::new(desc).ok();
+        let drive = warn_beyond(&model, &args.drive);
+        model_report(&model, &args.scene, &drive, args.particles, gpu.as_ref(), &mut log, &mut emit)?;
+        drop(gpu);
+        return Ok(());
     }
     let [mu, mf, mg, mh] = args.sizes[..] else {
         anyhow::bail!("--sizes needs four numbers m_u,m_f,m_g,m_h");
     };
-    let scene = if args.quick { "scenes/fluid/cavity_small.toml" } else { "scenes/fluid/cavity.toml" };
-    let start = Instant::now();
-    let b = cavity_step(std::path::Path::new(scene), (mu, mf, mg, mh), args.steps, &mut |s| {
-        eprintln!("[{:6.1} s] {s}", start.elapsed().as_secs_f64())
-    })?;
-    println!(
-        "reduced step on {scene} ({} cells, synthetic bases; premultiplied in {:.1} s; reduced tensors {:.1} MB, with the bases {:.1} MB):",
-        b.cells,
-        b.premultiply_seconds,
-        b.tensor_bytes as f64 / 1e6,
-        b.model_bytes as f64 / 1e6
-    );
-    println!(
-        "  exponential  m_u  m_f  m_g  m_h  m_d   K̂ (ms)  V̂ (ms)  exp (ms)  proj (ms)  step (ms)  products"
-    );
-    for t in &b.timings {
-        let (a, f, g, h, d) = t.dims;
-        println!(
-            "  {:<11} {a:>4} {f:>4} {g:>4} {h:>4} {d:>4}  {:>7.3}  {:>6.3}  {:>8.3}  {:>9.3}  {:>9.3}  {:>8}",
-            t.exponential,
-            1e3 * t.stages[0],
-            1e3 * t.stages[1],
-            1e3 * t.stages[2],
-            1e3 * t.stages[3],
-            1e3 * t.total,
-            t.products
-        );
+    let mut bench = StepBench::new(args.quick);
+    bench.sizes = (mu, mf, mg, mh);
+    bench.steps = args.steps;
+    if let Some(n) = args.energy_steps {
+        bench.energy_steps = n;
     }
-    // The energy run: a small tunnel model trained here.
-    let (runs, _) = small_tunnel_runs(std::path::Path::new("out/bench-fluid-reduced"), 100)?;
-    let model = ReducedFluidModel::fit(&TrainingSet::open(&runs)?, &BasisSizes::default(), &mut |_| {})?;
-    let steps = args.energy_steps.unwrap_or(if args.quick { 10_000 } else { 1_000_000 });
-    let bar = crate::progress_bar(steps as u64, "reduced steps (energy)");
-    let e = energy_run(&model, steps, &mut |k| bar.set_position(k as u64))?;
+    let bar = crate::progress_bar(bench.energy_steps as u64, "reduced steps (energy)");
+    let result = step_report(&bench, &mut log, &mut |k, _| bar.set_position(k as u64), &mut emit);
     bar.finish_and_clear();
-    println!(
-        "energy over {} reduced steps of the small tunnel (m_u {}, m_f {}, static geometry): start {:.9}, maximum {:.9}, final {:.9}; {:.4} ms per step",
-        e.steps,
-        model.dim_of("u"),
-        model.dim_of("f"),
-        e.initial,
-        e.maximum,
-        e.last,
-        1e3 * e.step_seconds
-    );
-    Ok(())
+    Ok(result?)
 }

@@ -1,7 +1,6 @@
 //! `galerkin radiosity …`: seed 000 §8–9's radiosity on the deforming two-room scene.
 
 use std::path::PathBuf;
-use std::time::Instant;
 
 use anyhow::{bail, Context, Result};
 use clap::{Args, Subcommand};
@@ -10,9 +9,7 @@ use galerkin::radiosity::any_scene::AnyScene;
 use galerkin::radiosity::picture::{write_picture, PictureRequest};
 use galerkin::radiosity::reduced::ReducedRadiosity;
 use galerkin::radiosity::render::{default_exposure, display_radiance, Shading, Viewpoint};
-use galerkin::radiosity::train::{
-    sample_parameters, solve_configurations, train as train_model, TrainOptions,
-};
+use galerkin::radiosity::train::{train_and_save, TrainOptions};
 use galerkin::radiosity::LightMode;
 
 /// `galerkin radiosity` subcommands.
@@ -277,12 +274,9 @@ fn light_mode(lights: Option<&str>) -> Option<LightMode> {
     lights.map(|l| if l == "sky" { LightMode::Sky } else { LightMode::Area })
 }
 
+/// `galerkin radiosity train` ([`galerkin::radiosity::train::train_and_save`]).
 fn train(args: &TrainArgs) -> Result<()> {
     let scene = AnyScene::load(&args.scene, light_mode(args.lights.as_deref()))?;
-    let spec = scene.space();
-    if !(args.energy > 0.0 && args.energy <= 1.0) || args.cap == 0 || args.samples < 2 {
-        bail!("--energy must be in (0, 1], --cap at least 1, --samples at least 2");
-    }
     let options = TrainOptions {
         samples: args.samples,
         energy: args.energy,
@@ -291,17 +285,11 @@ fn train(args: &TrainArgs) -> Result<()> {
         seed: args.seed,
         ..TrainOptions::default()
     };
-    let start = Instant::now();
-    let params = sample_parameters(&spec.ranges(), &spec.defaults(), args.samples, args.seed);
-    let bar = crate::progress_bar(params.len() as u64, "full radiosity of samples");
-    let configurations =
-        solve_configurations(spec, &params, options.near, &|done| bar.set_position(done as u64))?;
-    bar.finish();
-    let solve_s = start.elapsed().as_secs_f64();
     let bars = std::sync::Mutex::new(std::collections::BTreeMap::<String, indicatif::ProgressBar>::new());
-    let (model, report) = train_model(spec, &configurations, &options, &|stage, done, total| {
+    let trained = train_and_save(scene.space(), &options, &args.out, &|stage, done, total| {
         let mut bars = bars.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
         let label = match stage {
+            "solve" => "full radiosity of samples",
             "gram" => "Gram matrices of the pair quantities (pairs)",
             "pca" => "PCA of Table 2's quantities",
             "orthonormalise" => "orthonormalising the pair bases (pairs)",
@@ -310,31 +298,27 @@ fn train(args: &TrainArgs) -> Result<()> {
         let bar = bars.entry(stage.to_string()).or_insert_with(|| crate::progress_bar(total, label));
         bar.set_length(total);
         bar.set_position(done);
-    })?;
+    });
     for bar in bars.into_inner().unwrap_or_else(std::sync::PoisonError::into_inner).values() {
         bar.finish();
     }
-    model.save(&args.out)?;
+    let t = trained?;
     println!(
-        "radiosity train: {} faces, {} samples solved in {solve_s:.1} s, trained in {:.1} s → {}",
-        model.faces(),
-        configurations.len(),
-        start.elapsed().as_secs_f64() - solve_s,
+        "radiosity train: {} faces, {} samples solved in {:.1} s, trained in {:.1} s → {}",
+        t.model.faces(),
+        t.configurations,
+        t.solve_seconds,
+        t.train_seconds,
         args.out.display()
     );
     println!("| quantity | full dimension | vectors | variance kept |\n|---|---:|---:|---:|");
-    for (name, dim, m, energy) in &report.bases {
+    for (name, dim, m, energy) in &t.report.bases {
         println!("| {name} | {dim} | {m} | {:.4} % |", 100.0 * energy);
     }
-    for (name, m) in &report.merged {
+    for (name, m) in &t.report.merged {
         println!("merged basis {name}: {m} vectors");
     }
-    let bytes: u64 = ["model.safetensors", "visibility.safetensors"]
-        .iter()
-        .filter_map(|f| std::fs::metadata(args.out.join(f)).ok())
-        .map(|m| m.len())
-        .sum();
-    println!("model size on disk: {:.1} MB", bytes as f64 / 1e6);
+    println!("model size on disk: {:.1} MB", t.bytes_on_disk as f64 / 1e6);
     Ok(())
 }
 

@@ -15,6 +15,7 @@
 //! energy of each quantity with at most 60 vectors, one 120-vector basis for `e` and `b`.
 
 use std::ops::Range;
+use std::path::Path;
 
 use rayon::prelude::*;
 
@@ -507,4 +508,71 @@ pub fn train(
         SkyLight { lights: space.lights().clone(), openings, bits, near: options.near }
     });
     Ok((ReducedRadiosity::new(reduced, learned, emission_hat, n, sky)?, report))
+}
+
+impl TrainOptions {
+    /// Refuses options no training can use: an energy fraction outside (0, 1], a cap of 0,
+    /// fewer than 2 samples.
+    pub fn check(&self) -> Result<(), RadiosityError> {
+        let energy_ok = |e: f64| e > 0.0 && e <= 1.0;
+        if !energy_ok(self.energy) || !energy_ok(self.geometry_energy) {
+            return Err(RadiosityError::Mesh("the energy fraction must be in (0, 1]".into()));
+        }
+        if self.cap == 0 || self.radiosity_cap == 0 {
+            return Err(RadiosityError::Mesh("the basis cap must be at least 1".into()));
+        }
+        if self.samples < 2 {
+            return Err(RadiosityError::Mesh("training needs at least 2 samples".into()));
+        }
+        Ok(())
+    }
+}
+
+/// A model trained and saved by [`train_and_save`].
+pub struct TrainedScene {
+    /// The model.
+    pub model: ReducedRadiosity,
+    /// Its bases.
+    pub report: TrainingReport,
+    /// Configurations solved in full.
+    pub configurations: usize,
+    /// Seconds of the full solves.
+    pub solve_seconds: f64,
+    /// Seconds of the PCA, premultiplication and visibility learning.
+    pub train_seconds: f64,
+    /// The saved model's size on disk, bytes.
+    pub bytes_on_disk: u64,
+}
+
+/// The whole precompute of §8.2–8.3 and §9: samples the design space of `space`
+/// ([`sample_parameters`]), solves every sample in full ([`solve_configurations`]; progress
+/// stage `"solve"`), trains ([`train`]) and saves the model to `out`.
+pub fn train_and_save(
+    space: &dyn DesignSpace,
+    options: &TrainOptions,
+    out: &Path,
+    progress: Progress<'_>,
+) -> Result<TrainedScene, RadiosityError> {
+    options.check()?;
+    let start = std::time::Instant::now();
+    let params = sample_parameters(&space.ranges(), &space.defaults(), options.samples, options.seed);
+    let total = params.len() as u64;
+    let configurations =
+        solve_configurations(space, &params, options.near, &|done| progress("solve", done as u64, total))?;
+    let solve_seconds = start.elapsed().as_secs_f64();
+    let (model, report) = train(space, &configurations, options, progress)?;
+    model.save(out)?;
+    let bytes_on_disk = ["model.safetensors", "visibility.safetensors"]
+        .iter()
+        .filter_map(|f| std::fs::metadata(out.join(f)).ok())
+        .map(|m| m.len())
+        .sum();
+    Ok(TrainedScene {
+        model,
+        report,
+        configurations: configurations.len(),
+        solve_seconds,
+        train_seconds: start.elapsed().as_secs_f64() - solve_seconds,
+        bytes_on_disk,
+    })
 }

@@ -287,3 +287,39 @@ pub fn error_section(
     let view = View2d::fit([lo[0], lo[1]], [hi[0], hi[1]], size, 0.03);
     draw_triangles(gpu, &triangles, &c.cell_error, None, &style, &Projection::Plane(view), size)
 }
+
+impl Comparison {
+    /// Writes the comparison of `frames` frames titled `title` into `dir`: comparison.csv,
+    /// the plots energy.png and error.png, and error-section.png (the last frame's cell
+    /// errors on the plane z = 0 with its colour bar, drawn on `gpu`).
+    pub fn write_outputs(
+        &self,
+        gpu: &crate::gpu::Gpu,
+        mesh: &crate::mesh::SimplexMesh,
+        title: &str,
+        frames: usize,
+        dir: &std::path::Path,
+    ) -> Result<(), FluidError> {
+        let file = |path: &std::path::Path| {
+            let path = path.to_path_buf();
+            move |e: std::io::Error| FluidError::File { path: path.clone(), message: e.to_string() }
+        };
+        std::fs::create_dir_all(dir).map_err(file(dir))?;
+        let csv = dir.join("comparison.csv");
+        crate::atomic_file::write(&csv, self.csv().as_bytes()).map_err(file(&csv))?;
+        super::plot::plot_comparison(self, title, &dir.join("energy.png"), &dir.join("error.png"))?;
+        let size = (900, 700);
+        let picture = error_section(gpu, mesh, self, size)?;
+        super::plot::plot_picture_with_colour_bar(
+            &picture.rgba,
+            size,
+            &crate::render::Colormap::viridis(),
+            self.cell_error_range(),
+            (
+                &format!("Velocity error at frame {frames} on the plane z = 0 — {title}"),
+                "|u_full − u_reduced| per cell",
+            ),
+            &dir.join("error-section.png"),
+        )
+    }
+}

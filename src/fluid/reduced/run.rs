@@ -63,6 +63,14 @@ pub struct ReducedRun {
     pub reports: Vec<ReducedStepReport>,
 }
 
+impl ReducedRun {
+    /// The median step's seconds (Table 1's t_s).
+    pub fn median_step_seconds(&self) -> f64 {
+        let mut step: Vec<f64> = self.reports.iter().map(|r| r.total_seconds()).collect();
+        crate::bench::median_f64(&mut step)
+    }
+}
+
 /// Runs `frames` reduced steps of `model` under `motion` from the motion's initial state;
 /// `on_frame(k)` is called after each.
 pub fn run_reduced(
