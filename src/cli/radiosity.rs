@@ -8,7 +8,7 @@ use galerkin::gpu::{Gpu, GpuDesc};
 use galerkin::radiosity::any_scene::AnyScene;
 use galerkin::radiosity::picture::{write_picture, PictureRequest};
 use galerkin::radiosity::reduced::ReducedRadiosity;
-use galerkin::radiosity::render::{default_exposure, display_radiance, Shading, Viewpoint};
+use galerkin::radiosity::render::{Shading, Viewpoint};
 use galerkin::radiosity::train::{train_and_save, TrainOptions};
 use galerkin::radiosity::LightMode;
 
@@ -261,14 +261,6 @@ fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
     Ok(())
 }
 
-/// Refuses a model trained on a scene with another number of faces, naming its directory.
-fn check_model_faces(dir: &std::path::Path, model: &ReducedRadiosity, faces: usize) -> Result<()> {
-    if faces != model.faces() {
-        bail!("{}: the model has {} faces, the scene {faces}", dir.display(), model.faces());
-    }
-    Ok(())
-}
-
 /// The `--lights` choice as a light mode (`None`: the scene file's own).
 fn light_mode(lights: Option<&str>) -> Option<LightMode> {
     lights.map(|l| if l == "sky" { LightMode::Sky } else { LightMode::Area })
@@ -445,6 +437,7 @@ pub fn bench(desc: &GpuDesc, args: &BenchArgs) -> Result<()> {
 
 #[cfg(feature = "viewer")]
 fn view(desc: &GpuDesc, args: &ViewArgs) -> Result<()> {
+    use galerkin::radiosity::picture::{automatic_exposure, check_model_faces};
     use galerkin::radiosity::viewer::{RadiosityContent, ViewSettings};
     use galerkin::render::viewer::{run, ViewOptions};
     let model = args.model.as_deref().map(ReducedRadiosity::load).transpose()?;
@@ -453,17 +446,12 @@ fn view(desc: &GpuDesc, args: &ViewArgs) -> Result<()> {
     let p = scene.parameters_from(&args.look.params).with_context(|| format!("{}", args.scene.display()))?;
     let mesh = scene.space().mesh(&p)?;
     if let (Some(m), Some(dir)) = (&model, &args.model) {
-        check_model_faces(dir, m, mesh.len())?;
+        check_model_faces(m, mesh.len()).with_context(|| dir.display().to_string())?;
     }
     let exposure = match args.look.exposure {
         Some(e) if e.is_finite() && e > 0.0 => e,
         Some(e) => bail!("--exposure must be positive, got {e}"),
-        None => {
-            let lights = scene.space().lights().clone();
-            let s = galerkin::radiosity::full_radiosity_of(mesh, &lights)?;
-            let radiance = display_radiance(&s.mesh, &s.geometry, &lights, &s.radiosity);
-            default_exposure(&s.mesh, &s.geometry, &radiance)
-        }
+        None => automatic_exposure(&scene, &p)?,
     };
     let settings = ViewSettings {
         params: p,

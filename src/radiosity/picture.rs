@@ -103,3 +103,24 @@ pub fn write_picture(
     }
     Ok(PictureReport { faces: mesh.len(), lights: lights.mode, how, solve_seconds, exposure })
 }
+
+/// The exposure a picture of `scene` at `params` gets by default: [`default_exposure`] of its
+/// full solution (the viewer's starting exposure, so full and reduced frames share one).
+pub fn automatic_exposure(scene: &AnyScene, params: &[f64]) -> Result<f64, RadiosityError> {
+    let space = scene.space();
+    let lights = space.lights().clone();
+    let s = super::full_radiosity_of(space.mesh(params)?, &lights)?;
+    let radiance = display_radiance(&s.mesh, &s.geometry, &lights, &s.radiosity);
+    Ok(default_exposure(&s.mesh, &s.geometry, &radiance))
+}
+
+/// Refuses a model trained on a scene with another number of faces than `faces`.
+pub fn check_model_faces(model: &ReducedRadiosity, faces: usize) -> Result<(), RadiosityError> {
+    if faces != model.faces() {
+        return Err(RadiosityError::Mesh(format!(
+            "the model has {} faces, the scene {faces}",
+            model.faces()
+        )));
+    }
+    Ok(())
+}
