@@ -1,8 +1,8 @@
 # galerkin — two commands:
 #   make demo   install what is missing, build, run every demo (writes out/*.png)
 #   make test   install what is missing, run every test on Mesa lavapipe with validation on
-# Also: make bench (the device's ceilings), make bench-all (every benchmark in one run;
-# QUICK=1 for the quick sizes), make lint.
+# Also: make bench (the device's ceilings), make bench-all (every benchmark in one run, its
+# tables also written to out/benchmarks.md; QUICK=1 for the quick sizes), make lint.
 
 CARGO ?= cargo
 LAVAPIPE_ICD ?= /usr/share/vulkan/icd.d/lvp_icd.json
@@ -28,7 +28,9 @@ bench: deps
 	$(CARGO) run --release --quiet -- bench gpu
 
 bench-all: deps
-	$(CARGO) run --release --quiet -- bench all $(if $(QUICK),--quick,)
+	@mkdir -p out
+	bash -o pipefail -c '$(CARGO) run --release --quiet -- bench all $(if $(QUICK),--quick,) | tee out/benchmarks.md'
+	@echo "tables written to out/benchmarks.md"
 
 lint:
 	$(CARGO) fmt --check

@@ -210,7 +210,7 @@ fn bench_all_commands(quick: bool) -> Vec<&'static str> {
 fn bench_all(desc: &GpuDesc, quick: bool) -> Result<()> {
     let commands = bench_all_commands(quick);
     for (k, line) in commands.iter().enumerate() {
-        println!("\n## `galerkin {line}` ({} of {})\n", k + 1, commands.len());
+        println!("\n# `galerkin {line}` ({} of {})\n", k + 1, commands.len());
         let cli = Cli::try_parse_from(std::iter::once("galerkin").chain(line.split_whitespace()))?;
         let start = Instant::now();
         run(desc, cli.command).with_context(|| format!("galerkin {line}"))?;

@@ -90,8 +90,11 @@ pub fn float_channels(raw: &[f32], names: &[&'static str]) -> Vec<Channel> {
     names.iter().enumerate().map(|(c, name)| (*name, rgba32f_channel(raw, c))).collect()
 }
 
+/// A named channel computed from each pixel's four floats.
+pub type PixelChannel = (&'static str, fn(&[f32]) -> f32);
+
 /// The channels of float RGBA pixels computed by `channels`' functions of each pixel.
-pub fn mapped_channels(raw: &[f32], channels: &[(&'static str, fn(&[f32]) -> f32)]) -> Vec<Channel> {
+pub fn mapped_channels(raw: &[f32], channels: &[PixelChannel]) -> Vec<Channel> {
     channels.iter().map(|(name, f)| (*name, raw.chunks_exact(4).map(f).collect())).collect()
 }
 

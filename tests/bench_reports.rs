@@ -88,10 +88,18 @@ fn the_spacetime_benchmark_reports_every_size_and_pixel_count() {
     bench.frames = 2;
     let mut text = String::new();
     report(&gpu, &bench, &mut |_| {}, &mut |s| text.push_str(s)).expect("the benchmark ran");
-    let rows: Vec<&str> =
-        text.lines().filter(|l| l.starts_with("| 2000 |") || l.starts_with("| 5000 |")).collect();
-    // One row for 2000; for 5000 the plain row, the subdivided row and four pixel counts.
+    let rows: Vec<&str> = text
+        .lines()
+        .filter(|l| l.starts_with("| ") && l[2..].starts_with(|c: char| c.is_ascii_digit()))
+        .collect();
+    // One row for the smaller data set; for the larger the plain row, the subdivided row and
+    // four pixel counts. Rows name the elements the data sets have, near the sizes asked for.
     assert_eq!(rows.len(), 7, "{text}");
+    let elements: Vec<f64> = rows.iter().map(|r| column(r, 1)).collect();
+    assert!(
+        (1500.0..3000.0).contains(&elements[0]) && (4000.0..7000.0).contains(&elements[1]),
+        "{elements:?}"
+    );
     for row in &rows {
         let ms = column(row, 6);
         assert!(ms.is_finite() && ms > 0.0, "{row}");

@@ -172,12 +172,14 @@ pub fn report(
         let times = [t0 + 0.3 * (t1 - t0), t0 + 0.7 * (t1 - t0)];
         Ok((SpacetimeRenderer::new(gpu, data, &colormap)?, view, times))
     };
+    // Rows name the elements the data set has (the generators round the size asked for).
     for &n in rest {
         let (mut r, view, times) = open(n, progress)?;
-        emit(&row(n, hd, None, &measure_frames(gpu, &mut r, &view, hd, times, bench.frames, 3)?));
+        let elements = r.data().len();
+        emit(&row(elements, hd, None, &measure_frames(gpu, &mut r, &view, hd, times, bench.frames, 3)?));
     }
-    let n = *largest_n;
-    let (mut r, view, times) = open(n, progress)?;
+    let (mut r, view, times) = open(*largest_n, progress)?;
+    let n = r.data().len();
     let base = measure_frames(gpu, &mut r, &view, hd, times, bench.frames, 3)?;
     emit(&row(n, hd, None, &base));
     // Subdivision: triangles larger than the mean slice triangle (over the bounding box) are

@@ -194,7 +194,7 @@ pub fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
         per_vertex: args.per_vertex,
         ..SpacetimeView::looking_at(data.summary(), time)
     };
-    picture::check_view(&data, &view)?;
+    picture::check_view(&data, &view).context("--time, --umax, --subdivide, --height-scale")?;
     if args.viewer.view {
         return open_viewer(desc, data, view, args);
     }

@@ -243,7 +243,7 @@ pub fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
         height: args.height,
         ..SpectralView::default()
     };
-    check_view(&mesh, &view)?;
+    check_view(&mesh, &view).context("--step, --log, --range, --max-error")?;
     if args.viewer.view {
         return open_viewer(desc, mesh, view, args);
     }
