@@ -39,7 +39,8 @@ fn the_spectral_benchmark_reports_every_order_and_size() {
 fn the_radiosity_benchmark_reports_both_paths() {
     let gpu = common::gpu();
     let scene = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/radiosity/two_rooms_small.toml"));
-    let rows = galerkin::bench::radiosity::run(&[scene], 1, Some(&gpu)).expect("the benchmark ran");
+    let rows = galerkin::bench::radiosity::run(std::slice::from_ref(&scene), 1, Some(&gpu))
+        .expect("the benchmark ran");
     assert_eq!(rows.len(), 2, "{rows:?}");
     for r in &rows {
         assert_eq!(r.faces, 496);
@@ -47,6 +48,14 @@ fn the_radiosity_benchmark_reports_both_paths() {
     }
     let table = galerkin::bench::radiosity::table(&rows);
     assert_eq!(table.lines().count(), 4, "{table}");
+    // The near-field comparison: some pairs integrated exactly, a finite difference between
+    // the two ground truths (its size is for BENCHMARKS.md).
+    let near = galerkin::bench::radiosity::near_field(&[scene], 4.0).expect("the comparison ran");
+    assert_eq!(near.len(), 1);
+    let r = &near[0];
+    assert!(r.exact_pairs > 0 && r.exact_pairs < r.faces * r.faces, "{r:?}");
+    assert!(r.receiving_difference.is_finite() && r.receiving_difference > 0.0, "{r:?}");
+    assert_eq!(galerkin::bench::radiosity::near_field_table(&near, 4.0).lines().count(), 3);
 }
 
 #[test]

@@ -6,6 +6,7 @@ use anyhow::{bail, Context, Result};
 use clap::{Args, Subcommand};
 use galerkin::gpu::{Gpu, GpuDesc};
 use galerkin::radiosity::any_scene::AnyScene;
+use galerkin::radiosity::near_field::FormFactorMethod;
 use galerkin::radiosity::picture::{write_picture, PictureRequest};
 use galerkin::radiosity::reduced::ReducedRadiosity;
 use galerkin::radiosity::render::{Shading, Viewpoint};
@@ -175,6 +176,11 @@ pub struct RenderArgs {
     /// engine.
     #[arg(long, value_name = "FILE.csv", value_parser = csv_path)]
     pub faces: Option<PathBuf>,
+    /// The full solve's form factors for near pairs: `centroid` (Eq. 15 with the regularised
+    /// near field: what training and the reduced model use) or `exact` (exact polygon form
+    /// factors for pairs within 4 face diameters: the accurate ground truth, about 8× slower).
+    #[arg(long, value_parser = ["centroid", "exact"], default_value = "centroid")]
+    pub near_field: String,
     /// --view opens the viewer at this configuration; --play sweeps the parameters.
     #[command(flatten)]
     pub viewer: crate::cli::args::ViewerArgs,
@@ -235,7 +241,14 @@ fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
         exposure: args.look.exposure,
         size,
         faces_csv: args.faces.clone(),
+        form_factors: match args.near_field.as_str() {
+            "exact" => FormFactorMethod::ExactNear { reach: galerkin::radiosity::near_field::DEFAULT_REACH },
+            _ => FormFactorMethod::Centroid,
+        },
     };
+    if model.is_some() && args.near_field == "exact" {
+        bail!("--near-field exact applies to the full solve; a model evaluates its own form factors");
+    }
     let gpu = Gpu::new(desc)?;
     let out = &args.image.out;
     let r =
@@ -432,6 +445,10 @@ pub fn bench(desc: &GpuDesc, args: &BenchArgs) -> Result<()> {
     }
     let rows = galerkin::bench::radiosity::run(&args.scenes, args.runs, gpu.as_ref())?;
     print!("{}", galerkin::bench::radiosity::table(&rows));
+    let reach = galerkin::radiosity::near_field::DEFAULT_REACH;
+    let near = galerkin::bench::radiosity::near_field(&args.scenes, reach)?;
+    println!("\nThe near field: the full radiosity with centroid form factors (regularised, the default) against exact polygon form factors for near pairs, CPU f64, one run:\n");
+    print!("{}", galerkin::bench::radiosity::near_field_table(&near, reach));
     Ok(())
 }
 

@@ -149,7 +149,7 @@ pub fn form_factors(mesh: &SceneMesh, near: NearField) -> FormFactors {
 
 /// The visible pairs `i < j`, row by row (rows in parallel; each unordered pair's segment
 /// is cast once).
-fn visible_pairs(mesh: &SceneMesh, g: &FaceGeometry) -> Vec<Vec<u32>> {
+pub fn visible_pairs(mesh: &SceneMesh, g: &FaceGeometry) -> Vec<Vec<u32>> {
     let n = mesh.len();
     let bvh = bvh_of(mesh);
     (0..n)

@@ -26,6 +26,7 @@ pub mod full_frames;
 pub mod gpu;
 pub mod lighting;
 pub mod mesh;
+pub mod near_field;
 pub mod obj;
 pub mod picture;
 pub mod reduced;
@@ -73,11 +74,29 @@ pub fn full_radiosity(spec: &SceneSpec, p: &Parameters) -> Result<FullSolution, 
     full_radiosity_of(mesh, &spec.lights)
 }
 
-/// Full radiosity of a given mesh under `lights` (CPU, f64).
+/// Full radiosity of a given mesh under `lights` (CPU, f64), the form factors by centroid
+/// sampling with the default near field (what the reduced model's chain computes).
 pub fn full_radiosity_of(mesh: SceneMesh, lights: &Lights) -> Result<FullSolution, RadiosityError> {
+    full_radiosity_with(mesh, lights, near_field::FormFactorMethod::Centroid)
+}
+
+/// Full radiosity of a given mesh under `lights` (CPU, f64) with the form factors of `method`
+/// ([`near_field::FormFactorMethod::ExactNear`]: exact polygon form factors for near pairs).
+pub fn full_radiosity_with(
+    mesh: SceneMesh,
+    lights: &Lights,
+    method: near_field::FormFactorMethod,
+) -> Result<FullSolution, RadiosityError> {
     mesh.validate()?;
     let geometry = mesh.geometry();
-    let form_factors = form_factor::form_factors(&mesh, form_factor::NearField::default());
+    let form_factors = match method {
+        near_field::FormFactorMethod::Centroid => {
+            form_factor::form_factors(&mesh, form_factor::NearField::default())
+        }
+        near_field::FormFactorMethod::ExactNear { reach } => {
+            near_field::form_factors_exact_near(&mesh, reach).0
+        }
+    };
     let emission = lighting::emission(&mesh, &geometry, lights, &form_factors);
     let (radiosity, sweeps) =
         solve::solve_jacobi(&form_factors, &mesh.albedo, &emission, JACOBI_TOLERANCE, JACOBI_MAX_SWEEPS)?;

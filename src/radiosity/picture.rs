@@ -29,6 +29,8 @@ pub struct PictureRequest {
     pub size: (u32, u32),
     /// Also write the per-face radiosity here (CSV, f64).
     pub faces_csv: Option<PathBuf>,
+    /// The full solve's form factors (ignored with a model).
+    pub form_factors: super::near_field::FormFactorMethod,
 }
 
 /// What [`write_picture`] drew.
@@ -68,8 +70,12 @@ pub fn write_picture(
     let mesh = space.mesh(&request.params)?;
     let (mesh, geometry, radiosity, how) = match model {
         None => {
-            let s = super::full_radiosity_of(mesh, &lights)?;
-            (s.mesh, s.geometry, s.radiosity, format!("full solve ({} Jacobi sweeps)", s.sweeps))
+            let s = super::full_radiosity_with(mesh, &lights, request.form_factors)?;
+            let near = match request.form_factors {
+                super::near_field::FormFactorMethod::Centroid => "",
+                super::near_field::FormFactorMethod::ExactNear { .. } => ", exact near field",
+            };
+            (s.mesh, s.geometry, s.radiosity, format!("full solve ({} Jacobi sweeps{near})", s.sweeps))
         }
         Some(model) => {
             if model.light_mode() != lights.mode {

@@ -264,6 +264,23 @@ pub fn gauss_nodes(m: usize) -> Vec<f64> {
     x.iter().map(|&t| 0.5 * (t + 1.0)).collect()
 }
 
+/// The m-point Gauss–Legendre rule on [0, 1]: its nodes ([`gauss_nodes`]) and weights
+/// `1 / ((1 − x²) P′_m(x)²)` at the nodes' images `x` in [−1, 1] (summing to 1; exact for
+/// polynomials of degree 2m − 1).
+pub fn gauss_rule(m: usize) -> (Vec<f64>, Vec<f64>) {
+    let nodes = gauss_nodes(m);
+    let weights = nodes
+        .iter()
+        .map(|&t| {
+            let x = 2.0 * t - 1.0;
+            let (pm, pm1) = legendre(m, x);
+            let dp = m as f64 * (x * pm - pm1) / (x * x - 1.0);
+            1.0 / ((1.0 - x * x) * dp * dp)
+        })
+        .collect();
+    (nodes, weights)
+}
+
 /// Solves the dense m × m system `a` x = b by Gaussian elimination with partial pivoting (f64;
 /// the small interpolation systems of a basis).
 fn solve_dense(a: &mut [f64], mut b: Vec<f64>, m: usize) -> Vec<f64> {
@@ -293,6 +310,18 @@ fn solve_dense(a: &mut [f64], mut b: Vec<f64>, m: usize) -> Vec<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The m-point rule integrates monomials up to degree 2m − 1 exactly (∫₀¹ xᵏ = 1/(k+1)).
+    #[test]
+    fn gauss_rules_integrate_polynomials_of_degree_2m_minus_1() {
+        for m in [1, 2, 5, 8, 16] {
+            let (x, w) = gauss_rule(m);
+            for k in 0..2 * m {
+                let q: f64 = x.iter().zip(&w).map(|(x, w)| w * x.powi(k as i32)).sum();
+                assert!((q - 1.0 / (k + 1) as f64).abs() < 1e-13, "m {m}, degree {k}: {q}");
+            }
+        }
+    }
 
     #[test]
     fn lagrange_bases_are_cardinal_and_reproduce_polynomials() {
