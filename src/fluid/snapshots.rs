@@ -198,10 +198,8 @@ impl SnapshotWriter {
             file.flush().map_err(|e| io(&self.dir.join(format!("{q}.f64")), e))?;
         }
         let path = self.dir.join("snapshots.json");
-        let tmp = self.dir.join("snapshots.json.tmp");
         let text = serde_json::to_string_pretty(&self.meta).map_err(|e| io(&path, e))?;
-        std::fs::write(&tmp, text).map_err(|e| io(&tmp, e))?;
-        std::fs::rename(&tmp, &path).map_err(|e| io(&path, e))
+        crate::atomic_file::write(&path, text.as_bytes()).map_err(|e| io(&path, e))
     }
 }
 

@@ -165,9 +165,48 @@ fn read_obj(path: &Path) -> Result<ObjContents, MeshError> {
         if triangles.len() == first {
             return Err(file_error(path, format!("object {} has no faces", m.name)));
         }
+        check_closed(&triangles[first..], &positions)
+            .map_err(|e| file_error(path, format!("object {}: {e}", m.name)))?;
         parts.push((m.name.clone(), first..triangles.len()));
     }
     Ok((triangles, parts, positions))
+}
+
+/// Refuses a part that is not a closed surface: every edge (by its end positions, so vertices
+/// an OBJ repeats for other texture or normal indices still join) must be shared by exactly
+/// two of the part's triangles, traversed in opposite directions (consistently oriented).
+fn check_closed(triangles: &[[u32; 3]], positions: &[[f64; 3]]) -> Result<(), String> {
+    use std::collections::HashMap;
+    let key = |v: u32| positions[v as usize].map(f64::to_bits);
+    // (lower end, higher end) → (uses from lower to higher, uses from higher to lower)
+    let mut edges: HashMap<([u64; 3], [u64; 3]), (u32, u32)> = HashMap::with_capacity(3 * triangles.len());
+    for t in triangles {
+        for k in 0..3 {
+            let (a, b) = (key(t[k]), key(t[(k + 1) % 3]));
+            if a == b {
+                continue;
+            }
+            let entry = edges.entry(if a < b { (a, b) } else { (b, a) }).or_insert((0, 0));
+            if a < b {
+                entry.0 += 1;
+            } else {
+                entry.1 += 1;
+            }
+        }
+    }
+    let point = |bits: [u64; 3]| bits.map(f64::from_bits);
+    let mut bad: Vec<_> = edges.iter().filter(|(_, &(f, r))| !(f == 1 && r == 1)).collect();
+    bad.sort_by(|a, b| a.0.cmp(b.0));
+    match bad.first() {
+        None => Ok(()),
+        Some(((a, b), &(f, r))) => Err(format!(
+            "not a closed, consistently oriented surface: the edge from {:?} to {:?} is used by {} triangle(s) ({f} one way, {r} the other; a closed surface uses every edge twice, once each way), and {} edge(s) like it",
+            point(*a),
+            point(*b),
+            f + r,
+            bad.len()
+        )),
+    }
 }
 
 #[cfg(test)]
@@ -213,14 +252,27 @@ mod tests {
         let sdf = back.sdf(1).expect("sdf");
         assert!(sdf.distance([2.2, 0.43, 0.1]) < 0.0);
         assert!(sdf.distance([1.5, 1.5, 1.5]) > 0.0);
-        // A third frame missing a face.
+        // A third frame with one face's corners numbered from another corner: the same closed
+        // surface, another topology.
         let text = std::fs::read_to_string(&files[1]).expect("read");
-        let cut: String = text.lines().filter(|l| *l != "f 6 7 8").map(|l| format!("{l}\n")).collect();
-        assert_ne!(cut, text);
-        std::fs::write(dir.join("shape_0002.obj"), cut).expect("write");
+        let turned: String = text
+            .lines()
+            .map(|l| if l == "f 6 7 8" { "f 7 8 6\n".to_string() } else { format!("{l}\n") })
+            .collect();
+        assert_ne!(turned, text);
+        std::fs::write(dir.join("shape_0002.obj"), &turned).expect("write");
         let files = SurfaceAnimation::sequence_files(&dir.join("shape_*.obj")).expect("listed");
         let err = SurfaceAnimation::read_sequence(&files).expect_err("topology changed").to_string();
         assert!(err.contains("shape_0002.obj") && err.contains("differ"), "{err}");
+        // A frame missing a face: its object is not closed, refused naming the file and object.
+        let cut: String = text.lines().filter(|l| *l != "f 6 7 8").map(|l| format!("{l}\n")).collect();
+        std::fs::write(dir.join("shape_0002.obj"), cut).expect("write");
+        let files = SurfaceAnimation::sequence_files(&dir.join("shape_*.obj")).expect("listed");
+        let err = SurfaceAnimation::read_sequence(&files).expect_err("an open part").to_string();
+        assert!(
+            err.contains("shape_0002.obj") && err.contains("object b") && err.contains("not a closed"),
+            "{err}"
+        );
         assert!(SurfaceAnimation::sequence_files(&dir.join("shape.obj")).is_err());
         std::fs::remove_dir_all(&dir).expect("clean up");
     }

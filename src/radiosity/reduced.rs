@@ -266,9 +266,7 @@ impl ReducedRadiosity {
             .map_err(|e| fail(e.to_string()))?;
         let buffer = safetensors::serialize(views, Some(meta)).map_err(|e| fail(e.to_string()))?;
         let path = dir.join("visibility.safetensors");
-        let tmp = dir.join(format!(".visibility.safetensors.{}.tmp", std::process::id()));
-        std::fs::write(&tmp, buffer).map_err(|e| fail(e.to_string()))?;
-        std::fs::rename(&tmp, &path).map_err(|e| fail(e.to_string()))
+        crate::atomic_file::write(&path, &buffer).map_err(|e| fail(e.to_string()))
     }
 
     /// Reads what [`ReducedRadiosity::save`] wrote; errors name the file and what is wrong.

@@ -38,7 +38,7 @@ fn f64_bytes(t: &Tensor) -> Vec<u8> {
 }
 
 impl ReducedModel {
-    /// Writes the model to `path` (a temporary file beside it, then renamed: never half-written).
+    /// Writes the model to `path`, whole or not at all ([`crate::atomic_file`]).
     pub fn save(&self, path: &Path) -> Result<(), ReduceError> {
         self.save_with(path, &ModelExtras::default())
     }
@@ -166,7 +166,7 @@ impl ReducedModel {
 }
 
 /// Writes f64 `arrays` (name, tensor) and string `metadata` as one safetensors file at `path`
-/// (a temporary file beside it, then renamed: never half-written). The format of reduced
+/// (whole or not at all, [`crate::atomic_file`]). The format of reduced
 /// models, for capabilities that keep other arrays (a fluid's bases between training stages).
 pub fn save_arrays(
     path: &Path,
@@ -182,16 +182,10 @@ pub fn save_arrays(
         .collect::<Result<Vec<_>, _>>()
         .map_err(|e| fail(e.to_string()))?;
     let buffer = safetensors::serialize(views, Some(metadata)).map_err(|e| fail(e.to_string()))?;
-    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-    let tmp = path.with_file_name(format!(".{name}.{}.tmp", std::process::id()));
     if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).map_err(|e| fail(e.to_string()))?;
     }
-    std::fs::write(&tmp, &buffer).map_err(|e| fail(e.to_string()))?;
-    std::fs::rename(&tmp, path).map_err(|e| {
-        let _ = std::fs::remove_file(&tmp);
-        fail(e.to_string())
-    })
+    crate::atomic_file::write(path, &buffer).map_err(|e| fail(e.to_string()))
 }
 
 /// What [`load_arrays`] reads: the metadata and the arrays by name.

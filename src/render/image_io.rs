@@ -1,16 +1,12 @@
 //! PNG (8-bit sRGB RGBA) and EXR (32-bit float RGBA) files. Writers never leave a half-written
-//! file behind: they write a temporary file beside the target and rename it into place.
+//! file behind and two writers of one name never share a temporary ([`crate::atomic_file`]).
 
 use std::fs::File;
 use std::io::{BufReader, BufWriter};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use super::error::RenderError;
-
-fn temp_beside(path: &Path) -> PathBuf {
-    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-    path.with_file_name(format!(".{name}.{}.tmp", std::process::id()))
-}
+use crate::atomic_file::AtomicFile;
 
 fn io(path: &Path) -> impl FnOnce(std::io::Error) -> RenderError + '_ {
     move |source| RenderError::Io { path: path.to_path_buf(), source }
@@ -22,24 +18,18 @@ pub fn write_png_rgba8(path: &Path, width: u32, height: u32, rgba: &[u8]) -> Res
     if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).map_err(io(dir))?;
     }
-    let tmp = temp_beside(path);
-    let result = (|| {
-        let file = File::create(&tmp).map_err(io(&tmp))?;
-        let mut encoder = png::Encoder::new(BufWriter::new(file), width, height);
+    let mut file = AtomicFile::create(path).map_err(io(path))?;
+    let err = |e: png::EncodingError| RenderError::Image { path: path.to_path_buf(), detail: e.to_string() };
+    {
+        let mut encoder = png::Encoder::new(BufWriter::new(file.file()), width, height);
         encoder.set_color(png::ColorType::Rgba);
         encoder.set_depth(png::BitDepth::Eight);
         encoder.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
-        let err =
-            |e: png::EncodingError| RenderError::Image { path: path.to_path_buf(), detail: e.to_string() };
         let mut writer = encoder.write_header().map_err(err)?;
         writer.write_image_data(rgba).map_err(err)?;
         writer.finish().map_err(err)?;
-        std::fs::rename(&tmp, path).map_err(io(path))
-    })();
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
     }
-    result
+    file.commit().map_err(io(path))
 }
 
 /// Reads a PNG as 8-bit RGBA (grey, RGB and 16-bit images are converted).
@@ -80,27 +70,23 @@ pub fn write_exr_rgba(path: &Path, width: u32, height: u32, rgba: &[f32]) -> Res
     if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).map_err(io(dir))?;
     }
-    let tmp = temp_beside(path).with_extension("exr");
     let w = width as usize;
     use exr::prelude::*;
     let channels = SpecificChannels::rgba(|Vec2(x, y): Vec2<usize>| {
         let i = 4 * (y * w + x);
         (rgba[i], rgba[i + 1], rgba[i + 2], rgba[i + 3])
     });
-    let result = Image::from_encoded_channels((w, height as usize), Encoding::SMALL_LOSSLESS, channels)
+    let mut file = AtomicFile::create(path).map_err(io(path))?;
+    Image::from_encoded_channels((w, height as usize), Encoding::SMALL_LOSSLESS, channels)
         .write()
-        .to_file(&tmp)
-        .map_err(|e| RenderError::Image { path: path.to_path_buf(), detail: e.to_string() })
-        .and_then(|()| std::fs::rename(&tmp, path).map_err(io(path)));
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    }
-    result
+        .to_buffered(BufWriter::new(&mut file))
+        .map_err(|e| RenderError::Image { path: path.to_path_buf(), detail: e.to_string() })?;
+    file.commit().map_err(io(path))
 }
 
 /// Writes named 32-bit float channels (each row-major from the top, `width × height` values)
 /// as one EXR layer: raw values beside or instead of colour, for analysis (e.g. a spacetime
-/// slice's `U`, `speed` and normal). ZIP-compressed; written to a temporary name and renamed.
+/// slice's `U`, `speed` and normal). ZIP-compressed; written whole or not at all.
 pub fn write_exr_channels(
     path: &Path,
     width: u32,
@@ -115,7 +101,6 @@ pub fn write_exr_channels(
     if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).map_err(io(dir))?;
     }
-    let tmp = temp_beside(path).with_extension("exr");
     let list: SmallVec<[AnyChannel<FlatSamples>; 4]> =
         channels.into_iter().map(|(name, v)| AnyChannel::new(name, FlatSamples::F32(v))).collect();
     let layer = Layer::new(
@@ -124,15 +109,12 @@ pub fn write_exr_channels(
         Encoding::SMALL_LOSSLESS,
         AnyChannels::sort(list),
     );
-    let result = Image::from_layer(layer)
+    let mut file = AtomicFile::create(path).map_err(io(path))?;
+    Image::from_layer(layer)
         .write()
-        .to_file(&tmp)
-        .map_err(|e| RenderError::Image { path: path.to_path_buf(), detail: e.to_string() })
-        .and_then(|()| std::fs::rename(&tmp, path).map_err(io(path)));
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    }
-    result
+        .to_buffered(BufWriter::new(&mut file))
+        .map_err(|e| RenderError::Image { path: path.to_path_buf(), detail: e.to_string() })?;
+    file.commit().map_err(io(path))
 }
 
 /// Channel `c` of RGBA8 pixels as floats in [0, 1]: an image's colour beside raw values in an

@@ -256,7 +256,7 @@ pub fn read(path: &Path) -> Result<SpectralMesh, SpectralError> {
 /// Writes `mesh` as Lagrange cells of order max(field order, geometry order) on equispaced
 /// nodes — an exact representation of both polynomials — with every field's steps as point
 /// data (`NAME`, or `NAME_t0`, `NAME_t1`, … for several steps). Each element has its own points
-/// (the data may be discontinuous). Written to `path.partial`, renamed when complete.
+/// (the data may be discontinuous). Written whole or not at all ([`crate::atomic_file`]).
 pub fn write(path: &Path, mesh: &SpectralMesh) -> Result<(), SpectralError> {
     let n = mesh.basis.order.max(mesh.geometry.order);
     let nodes = Basis1d::new(NodeSet::Equispaced, n)?.nodes;
