@@ -42,6 +42,7 @@ fn compare_measures_the_receiving_surfaces_all_faces_and_each_room() {
         full_frames: Some(kept.clone()),
         timed_full: 1,
         out: dir.path().join("out"),
+        full_form_factors: Default::default(),
     };
     let report = compare(&scene, Path::new(SMALL), &model, &compare_options, &mut |_| {}).expect("compared");
 
@@ -110,6 +111,21 @@ fn compare_measures_the_receiving_surfaces_all_faces_and_each_room() {
         }
     }
     assert!(std::fs::read_dir(&kept).expect("kept").count() >= 2);
+
+    // Against the full radiosity with the exact near field: the errors are those of a plain
+    // recomputation against that solve (kept frames of the centroid run are not reused).
+    use galerkin::radiosity::near_field::{FormFactorMethod, DEFAULT_REACH};
+    let method = FormFactorMethod::ExactNear { reach: DEFAULT_REACH };
+    let exact_options = CompareOptions { full_form_factors: method, ..compare_options.clone() };
+    let exact = compare(&scene, Path::new(SMALL), &model, &exact_options, &mut |_| {}).expect("exact");
+    let p = sequence(&space.ranges(), 0, 0, compare_options.frames[0]);
+    let mesh = space.mesh(&p).expect("mesh");
+    let full = galerkin::radiosity::full_radiosity_with(mesh.clone(), space.lights(), method).expect("full");
+    let (b, _) = model.evaluate(&mesh).expect("reduced");
+    let recv = plain_error(&b, &full.radiosity, &full.geometry.areas, &|i| mesh.kind[i] == FaceKind::Surface);
+    let e = &exact.sequences[0].errors[0];
+    assert!((e.groups[0] - recv).abs() <= 1e-12 * recv, "{} vs {recv}", e.groups[0]);
+    assert_ne!(e.groups[0], report.sequences[0].errors[0].groups[0]);
 }
 
 /// `radiosity render --faces FILE.csv` writes the full radiosity of every face in f64 that

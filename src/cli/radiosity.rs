@@ -129,6 +129,11 @@ pub struct CompareArgs {
     /// they depend on the scene alone, so they can be made before or while a model trains.
     #[arg(long, requires = "full_frames")]
     pub full_only: bool,
+    /// The full frames' form factors: `centroid` (what the model is trained on: the error of
+    /// the reduction) or `exact` (exact polygon form factors for near pairs: the error against
+    /// the accurate full radiosity, about 8× slower per full frame).
+    #[arg(long, value_parser = ["centroid", "exact"], default_value = "centroid")]
+    pub full_near_field: String,
 }
 
 /// What a picture or window shows: the configuration and how it is looked at.
@@ -330,6 +335,10 @@ fn train(args: &TrainArgs) -> Result<()> {
 fn compare(args: &CompareArgs) -> Result<()> {
     use galerkin::radiosity::compare::{self, CompareOptions, Progress};
     compare::check_frames(&args.frames)?;
+    let method = match args.full_near_field.as_str() {
+        "exact" => FormFactorMethod::ExactNear { reach: galerkin::radiosity::near_field::DEFAULT_REACH },
+        _ => FormFactorMethod::Centroid,
+    };
     let scene = AnyScene::load(&args.scene, light_mode(args.lights.as_deref()))?;
     let mut bar: Option<indicatif::ProgressBar> = None;
     let mut progress = |p: Progress| match p {
@@ -359,7 +368,8 @@ fn compare(args: &CompareArgs) -> Result<()> {
     };
     if args.full_only {
         let dir = args.full_frames.as_ref().context("--full-only needs --full-frames DIR")?;
-        for path in compare::keep_full_frames(&scene, &args.scene, &args.frames, dir, &mut progress)? {
+        for path in compare::keep_full_frames(&scene, &args.scene, &args.frames, dir, method, &mut progress)?
+        {
             eprintln!("full frames kept in {}", path.display());
         }
         return Ok(());
@@ -369,6 +379,7 @@ fn compare(args: &CompareArgs) -> Result<()> {
         model.set_eq17(galerkin::radiosity::visibility::Eq17::Printed);
     }
     let options = CompareOptions {
+        full_form_factors: method,
         frames: args.frames.clone(),
         full_frames: args.full_frames.clone(),
         timed_full: args.timed_full as usize,

@@ -186,6 +186,20 @@ pub struct CompareOptions {
     pub timed_full: usize,
     /// Where `compare.csv` and `compare.png` go (created).
     pub out: PathBuf,
+    /// The full frames' form factors: centroid (what the model was trained on) or with the
+    /// exact near field (the accurate ground truth: the error of the whole approximation).
+    pub full_form_factors: super::near_field::FormFactorMethod,
+}
+
+/// The full-frames files' key for a lighting and a form-factor method (frames of another
+/// method are never reused).
+fn frames_key(mode: super::LightMode, method: super::near_field::FormFactorMethod) -> String {
+    match method {
+        super::near_field::FormFactorMethod::Centroid => format!("{mode:?}"),
+        super::near_field::FormFactorMethod::ExactNear { reach } => {
+            format!("{mode:?} exact near field {reach}")
+        }
+    }
 }
 
 /// Progress of a comparison, for a progress display.
@@ -240,7 +254,7 @@ pub fn compare(
     let mut sequences: Vec<SequenceReport> = Vec::new();
     let (mut full_times, mut reduced_times) = (Vec::new(), Vec::new());
     let mut stages = [0.0f64; 4];
-    let lighting = format!("{:?}", spec.lights().mode);
+    let lighting = frames_key(spec.lights().mode, options.full_form_factors);
     let csv = options.out.join("compare.csv");
     for (which, &frames) in options.frames.iter().enumerate() {
         let params: Vec<Vec<f64>> = (0..frames).map(|f| sequence(&ranges, which % 2, f, frames)).collect();
@@ -268,7 +282,7 @@ pub fn compare(
         for (f, p) in params.iter().enumerate() {
             let from_file = f < reused;
             let fresh = if !from_file || f % stride == 0 {
-                let frame = FullFrame::solve(spec, p)?;
+                let frame = FullFrame::solve(spec, p, options.full_form_factors)?;
                 full_times.push(frame.seconds);
                 if from_file {
                     // Solved again, the kept frame must be what the solver gives now.
@@ -377,11 +391,12 @@ pub fn keep_full_frames(
     scene_path: &Path,
     frames: &[usize],
     dir: &Path,
+    method: super::near_field::FormFactorMethod,
     progress: &mut dyn FnMut(Progress),
 ) -> Result<Vec<PathBuf>> {
     check_frames(frames)?;
     let spec = scene.space();
-    let lighting = format!("{:?}", spec.lights().mode);
+    let lighting = frames_key(spec.lights().mode, method);
     let ranges = spec.ranges();
     let mut files = Vec::new();
     for (which, &count) in frames.iter().enumerate() {
@@ -397,7 +412,7 @@ pub fn keep_full_frames(
             progress(Progress::Frame);
         }
         for p in &params[reused..] {
-            kept.push(FullFrame::solve(spec, p)?);
+            kept.push(FullFrame::solve(spec, p, method)?);
             if save_due(kept.len() - reused, kept.len(), count) {
                 file.save(faces, &kept)?;
             }

@@ -1,6 +1,6 @@
 //! The full radiosity of `galerkin radiosity compare`'s frames, kept on disk (`--full-frames
-//! DIR`). The full solution of a frame depends on the scene file, its lighting and the frame's
-//! parameters only — not on the reduced model — so a later comparison of another model of the
+//! DIR`). The full solution of a frame depends on the scene file, its lighting, the form factors'
+//! near-field method and the frame's parameters only — not on the reduced model — so a later comparison of another model of the
 //! same scene reuses them and solves only a few full frames again, for the speed ratio measured
 //! in the same run and to check the kept ones. A sequence stopped part way keeps the frames
 //! solved so far (the file is rewritten every [`SAVE_EVERY`] frames), and the next run goes on
@@ -39,10 +39,15 @@ pub struct FullFrame {
 }
 
 impl FullFrame {
-    /// Solves the full radiosity at `params` in `space` (mesh build included), timed.
-    pub fn solve(space: &dyn DesignSpace, params: &[f64]) -> Result<Self> {
+    /// Solves the full radiosity at `params` in `space` (mesh build included) with the form
+    /// factors of `method`, timed.
+    pub fn solve(
+        space: &dyn DesignSpace,
+        params: &[f64],
+        method: super::near_field::FormFactorMethod,
+    ) -> Result<Self> {
         let t = std::time::Instant::now();
-        let full = super::full_radiosity_of(space.mesh(params)?, space.lights())?;
+        let full = super::full_radiosity_with(space.mesh(params)?, space.lights(), method)?;
         Ok(Self {
             params: params.to_vec(),
             seconds: t.elapsed().as_secs_f64(),
