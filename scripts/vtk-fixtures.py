@@ -6,7 +6,8 @@ field u given below, in every encoding vtkXMLUnstructuredGridWriter offers: asci
 binary and appended (raw and base64), uncompressed and zlib/LZ4/LZMA, UInt32 and UInt64
 headers; `quad_series.pvd`, a ParaView collection (written as ParaView's vtkPVDWriter
 writes it: VTK has no writer of its own for it) of three VTK-written files whose field is
-(1 + k) times the quadrilaterals' field at times 0, 0.5, 1. Also `hex_legacy.vtu`: the same hexahedra with the node order VTK used before file
+(1 + k) times the quadrilaterals' field at times 0, 0.5, 1; `quad_time.vtu`, the
+quadrilaterals with their time in the field data (`TimeValue` 2.5). Also `hex_legacy.vtu`: the same hexahedra with the node order VTK used before file
 version 2.2 (vertical edges 2-6 and 3-7 swapped) and the version attribute set to 1.0, checked
 by reading it back with VTK. Run from the repository root: python3 scripts/vtk-fixtures.py
 """
@@ -164,6 +165,21 @@ def main():
         lines.append(f'    <DataSet timestep="{t}" group="" part="0" file="quad_series_{k}.vtu"/>')
     lines += ["  </Collection>", "</VTKFile>", ""]
     open(os.path.join(OUT, "quad_series.pvd"), "w").write("\n".join(lines))
+
+    # One time step as a solver writes it for ParaView: the time in the grid's field data,
+    # `TimeValue` (VTK's convention, which ParaView's reader takes as the data set's time).
+    timed = vtk.vtkUnstructuredGrid()
+    timed.DeepCopy(quads)
+    t = vtk.vtkDoubleArray()
+    t.SetName("TimeValue")
+    t.InsertNextValue(2.5)
+    timed.GetFieldData().AddArray(t)
+    write(timed, "quad_time.vtu", "appended", "zlib", False)
+    r = vtk.vtkXMLUnstructuredGridReader()
+    r.SetFileName(os.path.join(OUT, "quad_time.vtu"))
+    r.Update()
+    if r.GetOutput().GetFieldData().GetArray("TimeValue").GetValue(0) != 2.5:
+        sys.exit("quad_time.vtu: VTK does not read TimeValue 2.5 back")
 
     # Bezier cells, and VTK's evaluation of them at parametric points.
     for shape, pts in [("quad", [(0.5, 0.5), (0.1, 0.8), (0.93, 0.27), (0.0, 1.0)]),

@@ -167,6 +167,30 @@ fn hostile_variants_are_refused_naming_the_file_and_array_before_inflating() {
     }
 }
 
+/// VTK's time convention for one file: the grid's field data `TimeValue` (written by VTK,
+/// `scripts/vtk-fixtures.py`) is the step's time; the field data's other entries are not read;
+/// the data are the same as without it.
+#[test]
+fn a_files_time_value_is_its_steps_time() {
+    let timed = galerkin::spectral::load(&fixture("quad_time.vtu"), &[]).expect("the timed file");
+    let plain = galerkin::spectral::load(&fixture("quad_default.vtu"), &[]).expect("the same without a time");
+    let field = timed.field_index(Some("u")).expect("u");
+    assert_eq!(timed.fields[field].times, vec![2.5]);
+    assert_eq!(plain.fields[field].times, vec![0.0]);
+    assert_eq!(timed.fields[field].steps, plain.fields[field].steps);
+    // A TimeValue that is not one finite number is ignored, not an error; a huge declared
+    // tuple count is refused naming the array.
+    let text = std::fs::read_to_string(fixture("quad_time.vtu")).expect("fixture");
+    let (_d, path) = edited("quad_time.vtu", |b| {
+        *b = String::from_utf8_lossy(b)
+            .replace("NumberOfTuples=\"1\"", "NumberOfTuples=\"99999999999999\"")
+            .into_bytes()
+    });
+    let e = vtu::read(&path).expect_err("a huge field-data count").to_string();
+    assert!(e.contains("TimeValue") && e.contains("over the limit"), "{e}");
+    assert!(text.contains("TimeValue"));
+}
+
 #[test]
 fn a_paraview_collection_reads_as_time_steps_at_its_times() {
     let mesh = galerkin::spectral::load(&fixture("quad_series.pvd"), &[]).expect("the collection");

@@ -242,9 +242,15 @@ pub fn read(path: &Path) -> Result<SpectralMesh, SpectralError> {
                 steps.iter().map(|s| s.0).collect::<Vec<_>>()
             )));
         }
+        // One step at the file's `TimeValue` where it has one (VTK's convention); else steps
+        // are numbered.
+        let times = match (steps.len(), grid.time_value()) {
+            (1, Some(t)) => vec![t],
+            (n, _) => (0..n).map(|k| k as f64).collect(),
+        };
         fields.push(Field {
             name,
-            times: (0..steps.len()).map(|k| k as f64).collect(),
+            times,
             steps: steps.iter().map(|(_, v)| order.iter().map(|&p| v[p]).collect()).collect(),
         });
     }

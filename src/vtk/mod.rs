@@ -40,7 +40,8 @@ fn err(path: &Path, detail: impl Into<String>) -> VtkError {
 /// One `<DataArray>` as numbers.
 #[derive(Clone, Debug, PartialEq)]
 pub struct DataArray {
-    /// Its section: `Points`, `Cells`, `PointData` or `CellData`.
+    /// Its section: `Points`, `Cells`, `PointData`, `CellData` or `FieldData` (only its
+    /// `TimeValue` is read).
     pub section: String,
     /// Its `Name` (`Points` for the points).
     pub name: String,
@@ -285,22 +286,40 @@ pub fn read(path: &Path) -> Result<UnstructuredGrid, VtkError> {
         }
     }
     // Appended arrays end where the next one starts (base64 runs are decoded up to there).
-    let mut offsets: Vec<usize> = piece
+    let mut offsets: Vec<usize> = doc
         .descendants()
         .filter(|n| n.has_tag_name("DataArray") && n.attribute("format") == Some("appended"))
         .filter_map(|n| n.attribute("offset").and_then(|o| o.trim().parse().ok()))
         .collect();
     offsets.sort_unstable();
     let mut arrays = Vec::new();
-    for section in piece.children().filter(|n| n.is_element()) {
+    // The grid's field data (VTK's `TimeValue`: the data set's time), then the piece's sections.
+    let field_data =
+        piece.parent().into_iter().flat_map(|g| g.children()).filter(|n| n.has_tag_name("FieldData"));
+    for section in field_data.chain(piece.children().filter(|n| n.is_element())) {
         for node in section.children().filter(|n| n.has_tag_name("DataArray")) {
             let section_name = section.tag_name().name();
             let name = node.attribute("Name").unwrap_or(if section_name == "Points" { "Points" } else { "" });
+            // Of the field data only the time is read (other entries may be strings).
+            if section_name == "FieldData" && name != TIME_VALUE {
+                continue;
+            }
             let ty = node.attribute("type").unwrap_or("Float32");
             let comps: usize = node.attribute("NumberOfComponents").and_then(|c| c.parse().ok()).unwrap_or(1);
             let what = |d: String| err(path, format!("array {name}: {d}"));
-            // The most bytes this array can hold, from the piece's counts.
+            // The most bytes this array can hold, from the piece's counts (field data: its own
+            // declared tuples, checked against the same limit).
             let tuples = match (section_name, name) {
+                ("FieldData", _) => {
+                    let n: usize = node
+                        .attribute("NumberOfTuples")
+                        .and_then(|v| v.trim().parse().ok())
+                        .ok_or_else(|| what("field data without a valid NumberOfTuples".into()))?;
+                    if n > MAX_COUNT {
+                        return Err(what(format!("NumberOfTuples = {n} is over the limit of {MAX_COUNT}")));
+                    }
+                    n
+                }
                 ("Points" | "PointData", _) => n_points,
                 ("CellData", _) | ("Cells", "offsets" | "types" | "faceoffsets") => n_cells,
                 _ => n_cells.saturating_mul(MAX_NODES_PER_CELL),
@@ -352,6 +371,21 @@ pub fn read(path: &Path) -> Result<UnstructuredGrid, VtkError> {
         }
     }
     Ok(UnstructuredGrid { path: path.to_path_buf(), points: n_points, cells: n_cells, arrays, version })
+}
+
+/// The field-data array in which VTK writers put a data set's time (ParaView reads it as the
+/// time of the file).
+pub const TIME_VALUE: &str = "TimeValue";
+
+impl UnstructuredGrid {
+    /// The data set's time from its field data's `TimeValue`, if it has exactly one finite
+    /// value there.
+    pub fn time_value(&self) -> Option<f64> {
+        match self.array("FieldData", TIME_VALUE).map(|a| a.values.as_slice()) {
+            Some([t]) if t.is_finite() => Some(*t),
+            _ => None,
+        }
+    }
 }
 
 fn find(haystack: &[u8], needle: &[u8]) -> Option<usize> {
