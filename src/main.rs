@@ -139,9 +139,12 @@ fn main() {
     let result = run(&desc, cli.command);
     // Validation is checked once, here, after every device of the command is dropped (their
     // leak reports are in the log too).
-    let result = result.and(validation_result(&desc));
-    if let Err(e) = result {
+    // A failed command is checked too: what it left behind must be cleaned up.
+    let validation = validation_result(&desc);
+    for e in [&result, &validation].into_iter().filter_map(|r| r.as_ref().err()) {
         eprintln!("error: {e:#}");
+    }
+    if result.is_err() || validation.is_err() {
         std::process::exit(1);
     }
 }

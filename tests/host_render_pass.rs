@@ -152,7 +152,7 @@ fn host_attachments_galerkin_does_not_write_and_passes_without_depth_are_refused
     let mut rec = unsafe { Recorder::from_host(&gpu, host.cmd) };
     let target = DrawTarget::new(&pass, VIEWPORT).unwrap();
     match spectral.record_draw_into(&mut rec, target, &SpectralView::default()) {
-        Err(SpectralError::Device { source: GpuError::Unsupported(m), .. }) => {
+        Err(SpectralError::Device { cause: GpuError::Unsupported(m), .. }) => {
             assert!(m.contains("depth attachment"), "{m}")
         }
         other => panic!("a pass without depth was accepted: {other:?}"),

@@ -79,7 +79,7 @@ pub fn premultiply_volume(
     let (out, plan) = match gpu {
         Some(g) => crate::reduce::premultiply_sparse_gpu(g, &v, &bases, options)?,
         None => premultiply_sparse_with(&v, &bases, options)
-            .map_err(|source| ReduceError::Tensor { context: "premultiplying V".into(), source })?,
+            .map_err(|cause| ReduceError::Tensor { context: "premultiplying V".into(), cause })?,
     };
     let run =
         PremultiplyRun { cells, entries: v.nnz(), m, m_g, time: t.elapsed(), flops: plan.total_flops() };

@@ -52,6 +52,11 @@ pub struct GpuDesc {
     /// this description) instead of a new one per `Gpu`, so that a caller can check once,
     /// after all of them are dropped and their leak reports are in (the command line does).
     pub validation_log: Option<Arc<ValidationLog>>,
+    /// Fault injection for tests: the device allocation with this number (1 = the first, counted
+    /// per [`Gpu`]) fails as out of memory, and so does every one after it
+    /// (`GALERKIN_FAIL_ALLOCATION=N`): every command must then fail with an error, leaving
+    /// nothing behind and leaking no Vulkan object.
+    pub fail_allocation: Option<u64>,
 }
 
 impl Default for GpuDesc {
@@ -68,6 +73,9 @@ impl Default for GpuDesc {
             max_binding_bytes: None,
             loader_path: std::env::var_os("GALERKIN_VULKAN_LIBRARY").map(PathBuf::from),
             validation_log: None,
+            fail_allocation: std::env::var("GALERKIN_FAIL_ALLOCATION")
+                .ok()
+                .and_then(|v| v.trim().parse().ok()),
         }
     }
 }
@@ -103,6 +111,9 @@ pub(crate) struct DeviceShared {
     pub caps: Capabilities,
     pub max_binding_bytes: u64,
     pub fence_timeout: Duration,
+    /// [`GpuDesc::fail_allocation`], and the allocations made so far.
+    pub(crate) fail_allocation: Option<u64>,
+    pub(crate) allocations: std::sync::atomic::AtomicU64,
     pub(crate) allocator: Mutex<ManuallyDrop<Allocator>>,
     pub(crate) tracker: Mutex<Tracker>,
     debug_names: Option<ash::ext::debug_utils::Device>,
@@ -327,6 +338,8 @@ impl Gpu {
                 caps,
                 max_binding_bytes,
                 fence_timeout: p.desc.fence_timeout,
+                fail_allocation: p.desc.fail_allocation,
+                allocations: std::sync::atomic::AtomicU64::new(0),
                 allocator: Mutex::new(ManuallyDrop::new(allocator)),
                 tracker: Mutex::new(Tracker::default()),
                 debug_names: p.debug_names,

@@ -116,11 +116,11 @@ pub enum ReduceError {
         detail: String,
     },
     /// A tensor operation failed (singular matrix, non-SPD root, …).
-    #[error("{context}: {source}")]
+    #[error("{context}: {cause}")]
     Tensor {
         /// Where.
         context: String,
-        /// The failure.
-        source: TensorError,
+        /// The failure (shown in the message, so not also the error's `source`).
+        cause: TensorError,
     },
 }

@@ -63,7 +63,7 @@ pub(crate) trait Operands: Sync {
 }
 
 fn tensor_err(e: &Expr) -> impl FnOnce(TensorError) -> ReduceError + '_ {
-    move |source| ReduceError::Tensor { context: e.to_string(), source }
+    move |cause| ReduceError::Tensor { context: e.to_string(), cause }
 }
 
 /// The basis of every axis of `e`'s value, checking every rule on the way: known names,
@@ -334,9 +334,9 @@ fn evaluate_values(e: &Expr, ops: &impl Operands) -> Result<Vec<Value>, ReduceEr
                         .into_iter()
                         .enumerate()
                         .map(|(b, x)| {
-                            x.map(|y| Value::Dense(Tensor::vector(y))).map_err(|source| ReduceError::Tensor {
+                            x.map(|y| Value::Dense(Tensor::vector(y))).map_err(|cause| ReduceError::Tensor {
                                 context: format!("{what}, input set {b}"),
-                                source,
+                                cause,
                             })
                         })
                         .collect();

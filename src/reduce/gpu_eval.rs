@@ -247,7 +247,7 @@ impl GpuReducedModel {
         out.chunks(r_total)
             .map(|c| {
                 Tensor::from_vec(&dc.kept_shape, c.to_vec())
-                    .map_err(|source| ReduceError::Tensor { context: name.into(), source })
+                    .map_err(|cause| ReduceError::Tensor { context: name.into(), cause })
             })
             .collect()
     }

@@ -292,11 +292,11 @@ impl Model {
                     .collect::<Result<Vec<&Tensor>, ReduceError>>()?;
                 match (&t.data, options.backend.uses_gpu(options.gpu), options.gpu) {
                     (FullTensor::Dense(d), _, _) => premultiply_dense(d, &mats)
-                        .map_err(|source| ReduceError::Tensor { context: context(), source })?,
+                        .map_err(|cause| ReduceError::Tensor { context: context(), cause })?,
                     (FullTensor::Sparse(s), true, Some(gpu)) => premultiply_sparse_gpu(gpu, s, &mats, pm)?.0,
                     (FullTensor::Sparse(s), _, _) => {
                         premultiply_sparse_with(s, &mats, pm)
-                            .map_err(|source| ReduceError::Tensor { context: context(), source })?
+                            .map_err(|cause| ReduceError::Tensor { context: context(), cause })?
                             .0
                     }
                     (FullTensor::Streamed(_), _, _) => unreachable!("handled above"),

@@ -285,7 +285,7 @@ pub(crate) fn modes_from_gram(
         }
     }
     let (values, vectors) = symmetric_eigen(name, &Tensor::from_vec(&[k, k], gram).expect("k×k"))
-        .map_err(|source| ReduceError::Tensor { context: format!("PCA of `{name}`"), source })?;
+        .map_err(|cause| ReduceError::Tensor { context: format!("PCA of `{name}`"), cause })?;
     // Descending; tiny negative eigenvalues of G are rounding.
     let order: Vec<usize> = (0..k).rev().collect();
     let sigma2: Vec<f64> = order.iter().map(|&i| values[i].max(0.0)).collect();

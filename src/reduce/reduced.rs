@@ -55,18 +55,18 @@ impl ReducedModel {
                     detail: format!("cannot cut {} columns to {m}", b.reduced_dim()),
                 });
             }
-            let cut = b.matrix().leading(&[b.full_dim(), m]).map_err(|source| ReduceError::Tensor {
-                context: format!("cutting basis `{name}`"),
-                source,
-            })?;
+            let cut = b
+                .matrix()
+                .leading(&[b.full_dim(), m])
+                .map_err(|cause| ReduceError::Tensor { context: format!("cutting basis `{name}`"), cause })?;
             out.bases.insert(name.clone(), Basis::new(name, cut, 1e-9)?);
         }
         for (name, t) in out.tensors.iter_mut() {
             let lens: Vec<usize> =
                 t.axes.iter().zip(t.data.shape()).map(|(b, &n)| dims.get(b).copied().unwrap_or(n)).collect();
-            t.data = t.data.leading(&lens).map_err(|source| ReduceError::Tensor {
+            t.data = t.data.leading(&lens).map_err(|cause| ReduceError::Tensor {
                 context: format!("cutting tensor `{name}`"),
-                source,
+                cause,
             })?;
         }
         Ok(out)

@@ -9,12 +9,12 @@ use crate::gpu::GpuError;
 #[derive(Debug, thiserror::Error)]
 pub enum RenderError {
     /// Reading or writing a file failed.
-    #[error("{path}: {source}")]
+    #[error("{path}: {cause}")]
     Io {
         /// The file.
         path: PathBuf,
-        /// The OS error.
-        source: std::io::Error,
+        /// The OS error (shown in the message, so not also the error's `source`).
+        cause: std::io::Error,
     },
     /// An image file could not be encoded or decoded.
     #[error("{path}: {detail}")]

@@ -9,7 +9,7 @@ use super::error::RenderError;
 use crate::atomic_file::AtomicFile;
 
 fn io(path: &Path) -> impl FnOnce(std::io::Error) -> RenderError + '_ {
-    move |source| RenderError::Io { path: path.to_path_buf(), source }
+    move |cause| RenderError::Io { path: path.to_path_buf(), cause }
 }
 
 /// Writes `rgba` (row-major from the top row, 4 bytes per pixel) as an 8-bit RGBA PNG.

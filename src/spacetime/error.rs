@@ -85,18 +85,18 @@ pub enum SpacetimeError {
     #[error(transparent)]
     Picture(#[from] crate::picture::PictureError),
     /// A device failure.
-    #[error("{context}: {source}")]
+    #[error("{context}: {cause}")]
     Device {
         /// What was being done.
         context: String,
         /// The failure.
-        source: crate::gpu::GpuError,
+        cause: crate::gpu::GpuError,
     },
 }
 
 impl SpacetimeError {
     /// Wraps a device failure met while doing `context` (for `map_err`).
     pub fn device(context: &str) -> impl FnOnce(crate::gpu::GpuError) -> Self + '_ {
-        move |source| Self::Device { context: context.to_string(), source }
+        move |cause| Self::Device { context: context.to_string(), cause }
     }
 }

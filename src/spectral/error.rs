@@ -56,18 +56,18 @@ pub enum SpectralError {
     #[error(transparent)]
     Picture(#[from] crate::picture::PictureError),
     /// A Vulkan failure while rendering.
-    #[error("{context}: {source}")]
+    #[error("{context}: {cause}")]
     Device {
         /// What the renderer was doing.
         context: String,
         /// The device error.
-        source: crate::gpu::GpuError,
+        cause: crate::gpu::GpuError,
     },
 }
 
 impl SpectralError {
     /// Wraps a device error with what the renderer was doing.
     pub fn device(context: &str) -> impl Fn(crate::gpu::GpuError) -> Self + '_ {
-        move |source| Self::Device { context: context.to_owned(), source }
+        move |cause| Self::Device { context: context.to_owned(), cause }
     }
 }

@@ -660,7 +660,7 @@ pub fn premultiply_sparse_on(
     // The planner counts 8-byte values; keep every intermediate within one binding of f32.
     let budget = options.memory_budget.min(2 * gpu.max_binding_bytes());
     let setup = Setup::new(q, bases, budget)
-        .map_err(|source| ReduceError::Tensor { context: "premultiply".into(), source })?;
+        .map_err(|cause| ReduceError::Tensor { context: "premultiply".into(), cause })?;
     if q.nnz() == 0 {
         return Ok((Tensor::zeros(&setup.reduced_shape), setup.plan));
     }

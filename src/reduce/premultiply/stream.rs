@@ -176,8 +176,8 @@ pub fn premultiply_streamed_together(
             time[1] += clock.elapsed().as_secs_f64();
             let clock = std::time::Instant::now();
             let refs: Vec<&Tensor> = rows.iter().map(|r| r.as_ref()).collect();
-            let (y, _) = premultiply_sparse_in(&local, &refs, inner, &mut buffers).map_err(|source| {
-                ReduceError::Tensor { context: format!("premultiplying `{name}` in chunks"), source }
+            let (y, _) = premultiply_sparse_in(&local, &refs, inner, &mut buffers).map_err(|cause| {
+                ReduceError::Tensor { context: format!("premultiplying `{name}` in chunks"), cause }
             })?;
             for (t, v) in total.data_mut().iter_mut().zip(y.data()) {
                 *t += v;
@@ -309,11 +309,11 @@ fn localise(
     let shape: Vec<usize> = lists.iter().map(Vec::len).collect();
     let context = || "localising a chunk".to_string();
     let mut local = SparseTensor::from_coords("chunk", &shape, coords, part.values().to_vec())
-        .map_err(|source| ReduceError::Tensor { context: context(), source })?;
+        .map_err(|cause| ReduceError::Tensor { context: context(), cause })?;
     for g in &groups {
         local = local
             .with_symmetric_axes(g)
-            .map_err(|source| ReduceError::Tensor { context: context(), source })?;
+            .map_err(|cause| ReduceError::Tensor { context: context(), cause })?;
     }
     let rows = lists.iter().zip(bases).map(|(l, b)| memo.rows(*b, l)).collect::<Result<Vec<_>, _>>()?;
     Ok((local, rows))
