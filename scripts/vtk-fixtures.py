@@ -7,7 +7,8 @@ binary and appended (raw and base64), uncompressed and zlib/LZ4/LZMA, UInt32 and
 headers; `quad_series.pvd`, a ParaView collection (written as ParaView's vtkPVDWriter
 writes it: VTK has no writer of its own for it) of three VTK-written files whose field is
 (1 + k) times the quadrilaterals' field at times 0, 0.5, 1; `quad_time.vtu`, the
-quadrilaterals with their time in the field data (`TimeValue` 2.5). Also `hex_legacy.vtu`: the same hexahedra with the node order VTK used before file
+quadrilaterals with their time in the field data (`TimeValue` 2.5); `tri_lagrange.vtu`, a
+quadratic Lagrange triangle (a cell the renderer refuses by name). Also `hex_legacy.vtu`: the same hexahedra with the node order VTK used before file
 version 2.2 (vertical edges 2-6 and 3-7 swapped) and the version attribute set to 1.0, checked
 by reading it back with VTK. Run from the repository root: python3 scripts/vtk-fixtures.py
 """
@@ -180,6 +181,20 @@ def main():
     r.Update()
     if r.GetOutput().GetFieldData().GetArray("TimeValue").GetValue(0) != 2.5:
         sys.exit("quad_time.vtu: VTK does not read TimeValue 2.5 back")
+
+    # A cell the renderer does not draw (a quadratic Lagrange triangle), to be refused by name.
+    tri = vtk.vtkUnstructuredGrid()
+    pts = vtk.vtkPoints()
+    for p in [(0, 0, 0), (1, 0, 0), (0, 1, 0), (0.5, 0, 0), (0.5, 0.5, 0), (0, 0.5, 0)]:
+        pts.InsertNextPoint(*p)
+    tri.SetPoints(pts)
+    tri.InsertNextCell(vtk.VTK_LAGRANGE_TRIANGLE, 6, list(range(6)))
+    u = vtk.vtkDoubleArray()
+    u.SetName("u")
+    for i in range(6):
+        u.InsertNextValue(float(i))
+    tri.GetPointData().AddArray(u)
+    write(tri, "tri_lagrange.vtu", "appended", "zlib", False)
 
     # Bezier cells, and VTK's evaluation of them at parametric points.
     for shape, pts in [("quad", [(0.5, 0.5), (0.1, 0.8), (0.93, 0.27), (0.0, 1.0)]),

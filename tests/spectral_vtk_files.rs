@@ -167,6 +167,17 @@ fn hostile_variants_are_refused_naming_the_file_and_array_before_inflating() {
     }
 }
 
+/// A cell type the renderer does not draw — here VTK's quadratic Lagrange triangle, written by
+/// VTK — is refused naming the file, the element and the type by its VTK name.
+#[test]
+fn a_cell_type_the_renderer_does_not_draw_is_refused_by_name() {
+    let e = galerkin::spectral::load(&fixture("tri_lagrange.vtu"), &[]).expect_err("a triangle").to_string();
+    assert!(
+        e.contains("tri_lagrange.vtu") && e.contains("element 0") && e.contains("VTK_LAGRANGE_TRIANGLE"),
+        "{e}"
+    );
+}
+
 /// VTK's time convention for one file: the grid's field data `TimeValue` (written by VTK,
 /// `scripts/vtk-fixtures.py`) is the step's time; the field data's other entries are not read;
 /// the data are the same as without it.

@@ -143,7 +143,8 @@ pub fn read(path: &Path) -> Result<SpectralMesh, SpectralError> {
         VTK_HEXAHEDRON | VTK_LAGRANGE_HEXAHEDRON | VTK_BEZIER_HEXAHEDRON => Shape::Hexahedron,
         _ => {
             return Err(file(format!(
-                "element 0: cell type {first} (spectral elements are VTK_LAGRANGE_QUADRILATERAL = 70, VTK_LAGRANGE_HEXAHEDRON = 72, VTK_BEZIER_QUADRILATERAL = 77, VTK_BEZIER_HEXAHEDRON = 79, VTK_QUAD = 9 or VTK_HEXAHEDRON = 12)"
+                "element 0: cell type {first}{} (spectral elements are VTK_LAGRANGE_QUADRILATERAL = 70, VTK_LAGRANGE_HEXAHEDRON = 72, VTK_BEZIER_QUADRILATERAL = 77, VTK_BEZIER_HEXAHEDRON = 79, VTK_QUAD = 9 or VTK_HEXAHEDRON = 12)",
+                vtk_cell_name(first).map_or(String::new(), |n| format!(", {n}, which the renderer does not draw"))
             )))
         }
     };
@@ -257,6 +258,24 @@ pub fn read(path: &Path) -> Result<SpectralMesh, SpectralError> {
     let nodes = if bezier { NodeSet::Bernstein } else { NodeSet::Equispaced };
     let basis = Basis1d::new(nodes, n)?;
     SpectralMesh::new(shape, basis.clone(), basis, geometry, fields).map_err(|e| file(e.to_string()))
+}
+
+/// The VTK name of the cell types a user is likeliest to hand the spectral renderer by mistake
+/// (simplices, linear and high order), for the refusal.
+fn vtk_cell_name(ty: f64) -> Option<&'static str> {
+    Some(match ty as i64 {
+        5 => "VTK_TRIANGLE",
+        10 => "VTK_TETRA",
+        22 => "VTK_QUADRATIC_TRIANGLE",
+        24 => "VTK_QUADRATIC_TETRA",
+        69 => "VTK_LAGRANGE_TRIANGLE",
+        71 => "VTK_LAGRANGE_TETRAHEDRON",
+        73 => "VTK_LAGRANGE_WEDGE",
+        75 => "VTK_BEZIER_CURVE",
+        76 => "VTK_BEZIER_TRIANGLE",
+        78 => "VTK_BEZIER_TETRAHEDRON",
+        _ => return None,
+    })
 }
 
 /// Writes `mesh` as Lagrange cells of order max(field order, geometry order) on equispaced
