@@ -43,3 +43,10 @@ pub enum FluidError {
     #[error(transparent)]
     Picture(#[from] crate::picture::PictureError),
 }
+
+impl FluidError {
+    /// Wraps an I/O failure on `path` (for `map_err`).
+    pub fn io(path: &std::path::Path) -> impl Fn(std::io::Error) -> Self + '_ {
+        move |e| Self::File { path: path.to_path_buf(), message: e.to_string() }
+    }
+}

@@ -51,24 +51,26 @@ pub fn log_distance_integral(p: DVec3, a: DVec3, u: DVec3, len: f64) -> f64 {
 /// The pieces `[t₀, t₁]` of `[0, 1]` the outer integral is split into: geometrically graded
 /// (ratio ¼, [`GRADING`] levels) towards each end that touches or nearly touches the other
 /// edge — so that an `s ln s` end behaves like a smooth function on every piece — and two
-/// plain halves where the integrand is smooth.
-fn graded_pieces(graded_start: bool, graded_end: bool) -> Vec<(f64, f64)> {
-    let mut levels: Vec<f64> = Vec::new();
-    let mut t = 0.5f64;
-    for _ in 0..GRADING {
-        t *= 0.25;
-        levels.push(t);
-    }
-    let mut cuts = vec![0.0];
-    if graded_start {
-        cuts.extend(levels.iter().rev());
-    }
-    cuts.push(0.5);
-    if graded_end {
-        cuts.extend(levels.iter().map(|t| 1.0 - t));
-    }
-    cuts.push(1.0);
-    cuts.windows(2).map(|w| (w[0], w[1])).collect()
+/// plain halves where the integrand is smooth. The four variants are built once.
+fn graded_pieces(graded_start: bool, graded_end: bool) -> &'static [(f64, f64)] {
+    static PIECES: std::sync::OnceLock<[Vec<(f64, f64)>; 4]> = std::sync::OnceLock::new();
+    let all = PIECES.get_or_init(|| {
+        let levels: Vec<f64> = (1..=GRADING).map(|k| 0.5 * 0.25f64.powi(k as i32)).collect();
+        let build = |start: bool, end: bool| {
+            let mut cuts = vec![0.0];
+            if start {
+                cuts.extend(levels.iter().rev());
+            }
+            cuts.push(0.5);
+            if end {
+                cuts.extend(levels.iter().map(|t| 1.0 - t));
+            }
+            cuts.push(1.0);
+            cuts.windows(2).map(|w| (w[0], w[1])).collect()
+        };
+        [build(false, false), build(true, false), build(false, true), build(true, true)]
+    });
+    &all[usize::from(graded_start) + 2 * usize::from(graded_end)]
 }
 
 /// The distance from `p` to the segment `[c, d]`.
@@ -78,9 +80,10 @@ fn distance_to_segment(p: DVec3, c: DVec3, d: DVec3) -> f64 {
     (p - (c + cd * t)).length()
 }
 
-/// The Gauss–Legendre rule of [`POINTS`] points on `[0, 1]`: nodes and weights.
-fn gauss_rule() -> (Vec<f64>, Vec<f64>) {
-    crate::spectral::basis::gauss_rule(POINTS)
+/// The Gauss–Legendre rule of [`POINTS`] points on `[0, 1]`: nodes and weights, computed once.
+fn gauss_rule() -> &'static (Vec<f64>, Vec<f64>) {
+    static RULE: std::sync::OnceLock<(Vec<f64>, Vec<f64>)> = std::sync::OnceLock::new();
+    RULE.get_or_init(|| crate::spectral::basis::gauss_rule(POINTS))
 }
 
 /// `∫ₑ ∫_f ln|p − q| dq ds` over the straight edges `e = [a, b]` and `f = [c, d]` (arc
@@ -94,7 +97,7 @@ fn edge_pair_integral(a: DVec3, b: DVec3, c: DVec3, d: DVec3, rule: &(Vec<f64>, 
     let uf = (d - c) / lf;
     let near = |p: DVec3| distance_to_segment(p, c, d) < 0.5 * le;
     let mut sum = 0.0;
-    for (t0, t1) in graded_pieces(near(a), near(b)) {
+    for &(t0, t1) in graded_pieces(near(a), near(b)) {
         let w = t1 - t0;
         for (x, wx) in rule.0.iter().zip(&rule.1) {
             let t = t0 + w * x;
@@ -142,7 +145,7 @@ pub fn exact_form_factor(pi: &[DVec3], pj: &[DVec3]) -> Option<f64> {
             if dot.abs() < 1e-15 {
                 continue;
             }
-            sum += dot * edge_pair_integral(a, b, c, d, &rule);
+            sum += dot * edge_pair_integral(a, b, c, d, rule);
         }
     }
     Some((sum / (2.0 * std::f64::consts::PI * area_i)).max(0.0))

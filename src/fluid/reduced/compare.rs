@@ -300,13 +300,9 @@ impl Comparison {
         frames: usize,
         dir: &std::path::Path,
     ) -> Result<(), FluidError> {
-        let file = |path: &std::path::Path| {
-            let path = path.to_path_buf();
-            move |e: std::io::Error| FluidError::File { path: path.clone(), message: e.to_string() }
-        };
-        std::fs::create_dir_all(dir).map_err(file(dir))?;
+        std::fs::create_dir_all(dir).map_err(FluidError::io(dir))?;
         let csv = dir.join("comparison.csv");
-        crate::atomic_file::write(&csv, self.csv().as_bytes()).map_err(file(&csv))?;
+        crate::atomic_file::write(&csv, self.csv().as_bytes()).map_err(FluidError::io(&csv))?;
         super::plot::plot_comparison(self, title, &dir.join("energy.png"), &dir.join("error.png"))?;
         let size = (900, 700);
         let picture = error_section(gpu, mesh, self, size)?;

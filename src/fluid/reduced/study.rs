@@ -215,14 +215,10 @@ impl ErrorStudy {
     /// Writes the study into `dir`: errors.csv (per size and frame), summary.csv (per size),
     /// and the plots fig5d.png (error over time) and fig5e.png (error against basis size).
     pub fn write_outputs(&self, dir: &std::path::Path) -> Result<(), FluidError> {
-        let file = |path: &std::path::Path| {
-            let path = path.to_path_buf();
-            move |e: std::io::Error| FluidError::File { path: path.clone(), message: e.to_string() }
-        };
-        std::fs::create_dir_all(dir).map_err(file(dir))?;
+        std::fs::create_dir_all(dir).map_err(FluidError::io(dir))?;
         for (name, text) in [("errors.csv", self.csv()), ("summary.csv", self.summary_csv())] {
             let path = dir.join(name);
-            crate::atomic_file::write(&path, text.as_bytes()).map_err(file(&path))?;
+            crate::atomic_file::write(&path, text.as_bytes()).map_err(FluidError::io(&path))?;
         }
         super::plot::plot_over_time(self, &dir.join("fig5d.png"))?;
         super::plot::plot_by_size(self, &dir.join("fig5e.png"))
