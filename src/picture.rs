@@ -44,6 +44,12 @@ pub enum PictureError {
     Plot(#[from] PlotError),
 }
 
+/// The format `path` is written in, or [`PictureError::Format`] naming it (checked before any
+/// rendering).
+pub fn format_of(path: &Path) -> Result<ImageFormat, PictureError> {
+    ImageFormat::of(path).ok_or_else(|| PictureError::Format(path.to_path_buf()))
+}
+
 /// The legend of a PNG picture: a title above it and a colour bar beside it.
 pub struct Legend<'a> {
     /// The title (data set, field, time).
@@ -108,6 +114,8 @@ mod tests {
         assert_eq!(ImageFormat::of(Path::new("a/b.EXR")), Some(ImageFormat::Exr));
         assert_eq!(ImageFormat::of(Path::new("a.txt")), None);
         assert_eq!(ImageFormat::of(Path::new("a")), None);
+        let e = format_of(Path::new("out/a.txt")).expect_err("not a picture format").to_string();
+        assert!(e.contains("out/a.txt") && e.contains(".png or .exr"), "{e}");
     }
 
     #[test]

@@ -58,8 +58,7 @@ pub fn write_frame(
     out: &Path,
     progress: &mut dyn FnMut(usize, usize),
 ) -> Result<FrameReport, FluidError> {
-    let format = ImageFormat::of(out)
-        .ok_or_else(|| state(out, "the image format comes from the extension: .png or .exr".into()))?;
+    let format = picture::format_of(out)?;
     let reader = SnapshotReader::open(dir)?;
     let meta = reader.meta().clone();
     if meta.frames == 0 {

@@ -57,10 +57,7 @@ pub fn write_picture(
     request: &PictureRequest,
     out: &Path,
 ) -> Result<PictureReport, RadiosityError> {
-    let format = ImageFormat::of(out).ok_or_else(|| RadiosityError::File {
-        path: out.to_path_buf(),
-        message: "the image format comes from the extension: .png or .exr".into(),
-    })?;
+    let format = picture::format_of(out)?;
     if let Some(e) = request.exposure.filter(|e| !(e.is_finite() && *e > 0.0)) {
         return Err(RadiosityError::Mesh(format!("the exposure must be positive, got {e}")));
     }

@@ -26,13 +26,6 @@ pub struct SliceReport {
     pub u_max: Option<f64>,
 }
 
-fn format_of(out: &Path) -> Result<ImageFormat, SpacetimeError> {
-    ImageFormat::of(out).ok_or_else(|| SpacetimeError::File {
-        path: out.to_path_buf(),
-        detail: "the image format comes from the extension: .png or .exr".into(),
-    })
-}
-
 /// Checks a view's numbers (the subdivision area, U_max and the height scale are positive
 /// when given) and its time against the data's span.
 pub fn check_view(data: &SpacetimeData, view: &SpacetimeView) -> Result<(), SpacetimeError> {
@@ -68,7 +61,7 @@ pub fn write_slice(
     title: Option<&str>,
 ) -> Result<SliceReport, SpacetimeError> {
     check_view(&data, view)?;
-    let exr = format_of(out)? == ImageFormat::Exr;
+    let exr = picture::format_of(out)? == ImageFormat::Exr;
     let dev = SpacetimeError::device;
     let mut renderer = SpacetimeRenderer::new(gpu, data, colormap)?;
     let start = Instant::now();
@@ -149,7 +142,7 @@ pub fn write_bar(
     size: (u32, u32),
     out: &Path,
 ) -> Result<BarReport, SpacetimeError> {
-    let exr = format_of(out)? == ImageFormat::Exr;
+    let exr = picture::format_of(out)? == ImageFormat::Exr;
     let dev = SpacetimeError::device;
     let mesh = bar1d(elements);
     let mut renderer = BarRenderer::new(gpu, &mesh, colormap)?;

@@ -88,10 +88,7 @@ pub fn write_picture(
     title: Option<&str>,
 ) -> Result<PictureReport, SpectralError> {
     check_view(&mesh, view)?;
-    let format = ImageFormat::of(out).ok_or_else(|| SpectralError::File {
-        path: out.to_path_buf(),
-        detail: "the image format comes from the extension: .png or .exr".into(),
-    })?;
+    let format = picture::format_of(out)?;
     let dev = SpectralError::device;
     let mut renderer = SpectralRenderer::new(gpu, mesh.clone(), colormap)?;
     let (w, h) = size;
