@@ -1,13 +1,14 @@
 # galerkin — two commands:
 #   make demo   install what is missing, build, run every demo (writes out/*.png)
 #   make test   install what is missing, run every test on Mesa lavapipe with validation on
+# make test-mpi: the trainings over MPI ranks (installs OpenMPI, builds with --features mpi).
 # Also: make bench (the device's ceilings), make bench-all (every benchmark in one run, its
 # tables also written to out/benchmarks.md; QUICK=1 for the quick sizes), make lint.
 
 CARGO ?= cargo
 LAVAPIPE_ICD ?= /usr/share/vulkan/icd.d/lvp_icd.json
 
-.PHONY: deps build demo test bench bench-all lint
+.PHONY: deps build demo test test-mpi bench bench-all lint
 
 deps:
 	@scripts/install-deps.sh
@@ -23,6 +24,13 @@ demo: build
 test: deps
 	VK_DRIVER_FILES=$(LAVAPIPE_ICD) VK_ICD_FILENAMES=$(LAVAPIPE_ICD) GALERKIN_VALIDATION=1 \
 		$(CARGO) test --release
+
+# The trainings under mpirun (1, 2, 4 ranks, oversubscribed) against one process: needs the
+# `mpi` feature and OpenMPI (installed by install-deps.sh --mpi).
+test-mpi:
+	@scripts/install-deps.sh --mpi
+	OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 \
+		$(CARGO) test --release --features mpi --test mpi
 
 bench: deps
 	$(CARGO) run --release --quiet -- bench gpu

@@ -3,12 +3,22 @@
 #   Mesa lavapipe (Vulkan on the CPU; Mesa 25 from bookworm-backports on Debian 12),
 #   the Vulkan loader, the Khronos validation layer, glslc, spirv-tools, Xvfb, and the X11
 #   client libraries the viewer's window (winit) loads at run time.
+# With --mpi, also what the `mpi` cargo feature needs: OpenMPI (libopenmpi-dev, openmpi-bin:
+#   mpirun) and libclang-dev (the mpi crate generates its bindings with bindgen).
 # Idempotent and quick when everything is present. No mirror host name is written here:
 # on Debian 12 the bookworm-backports entry is derived from the machine's own apt sources.
 set -euo pipefail
 
 ICD=/usr/share/vulkan/icd.d/lvp_icd.json
 need=()
+with_mpi=0
+for arg in "$@"; do
+    case "$arg" in
+        --mpi) with_mpi=1 ;;
+        -h|--help) sed -n '2,10p' "$0"; exit 0 ;;
+        *) echo "install-deps: unknown option '$arg' (options: --mpi)" >&2; exit 2 ;;
+    esac
+done
 
 have_pkg() { dpkg-query -W -f='${Status}' "$1" 2>/dev/null | grep -q 'install ok installed'; }
 
@@ -19,6 +29,7 @@ mesa_major() {
 is_bookworm() { [ -r /etc/os-release ] && grep -q '^VERSION_CODENAME=bookworm' /etc/os-release; }
 
 if ! command -v apt-get >/dev/null 2>&1; then
+    [ "$with_mpi" = 0 ] || command -v mpirun >/dev/null || { echo "install-deps: 'mpirun' is missing and this is not a Debian-like system; install OpenMPI and libclang by hand" >&2; exit 1; }
     for c in glslc spirv-val Xvfb; do
         command -v "$c" >/dev/null || { echo "install-deps: '$c' is missing and this is not a Debian-like system; install it by hand (packages: glslc, spirv-tools, xvfb, mesa-vulkan-drivers, libvulkan1, vulkan-validationlayers)" >&2; exit 1; }
     done
@@ -29,6 +40,11 @@ for p in libvulkan1 vulkan-validationlayers glslc spirv-tools xvfb \
          libx11-xcb1 libxcursor1 libxrandr2 libxi6 libxkbcommon-x11-0; do
     have_pkg "$p" || need+=("$p")
 done
+if [ "$with_mpi" = 1 ]; then
+    for p in libopenmpi-dev openmpi-bin libclang-dev; do
+        have_pkg "$p" || need+=("$p")
+    done
+fi
 mesa_ok=1
 if ! have_pkg mesa-vulkan-drivers || [ ! -f "$ICD" ]; then mesa_ok=0; fi
 if [ "$mesa_ok" = 1 ] && is_bookworm && [ "$(mesa_major)" -lt 25 ]; then mesa_ok=0; fi

@@ -14,12 +14,14 @@ mod cli {
     pub mod fluid_reduced;
     pub mod legacy;
     pub mod radiosity;
+    pub mod ranks;
     pub mod spacetime;
     pub mod spectral;
 }
 use clap::{Parser, Subcommand};
 use galerkin::demo::scene::DemoScene;
 use galerkin::gpu::{shaders, Gpu, GpuDesc};
+use galerkin::reduce::Communicator;
 
 /// galerkin: reduced simulation by non-polynomial Galerkin projection and pixel-exact
 /// rendering of high-order solutions, on Vulkan.
@@ -127,21 +129,36 @@ enum BenchWhat {
 }
 
 fn main() {
-    let filter = tracing_subscriber::EnvFilter::try_from_env("GALERKIN_LOG")
-        .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("warn,winit=error"));
+    let ranks = match cli::ranks::open() {
+        Ok(ranks) => ranks,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            std::process::exit(1);
+        }
+    };
+    // Logs from rank 0 only.
+    let filter = match ranks.is_root() {
+        true => tracing_subscriber::EnvFilter::try_from_env("GALERKIN_LOG")
+            .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("warn,winit=error")),
+        false => tracing_subscriber::EnvFilter::new("off"),
+    };
     tracing_subscriber::fmt().with_env_filter(filter).with_writer(std::io::stderr).init();
     let (args, notes) = cli::legacy::translate(std::env::args_os().collect());
-    for note in notes {
+    for note in notes.iter().filter(|_| ranks.is_root()) {
         eprintln!("note: {note}");
     }
     let cli = Cli::parse_from(args);
     let desc = desc(&cli);
-    let result = run(&desc, cli.command);
+    let result = run(&desc, cli.command, &*ranks);
     // Validation is checked once, here, after every device of the command is dropped (their
     // leak reports are in the log too).
     // A failed command is checked too: what it left behind must be cleaned up.
     let validation = validation_result(&desc);
     for e in [&result, &validation].into_iter().filter_map(|r| r.as_ref().err()) {
+        if ranks.size() > 1 {
+            // A failing rank stops all with its message (MPI aborts the job).
+            ranks.fail(&format!("{e:#}"));
+        }
         eprintln!("error: {e:#}");
     }
     if result.is_err() || validation.is_err() {
@@ -170,15 +187,26 @@ fn validation_result(desc: &GpuDesc) -> Result<()> {
     }
 }
 
-fn run(desc: &GpuDesc, command: Command) -> Result<()> {
+fn run(desc: &GpuDesc, command: Command, ranks: &dyn Communicator) -> Result<()> {
+    let over_ranks = matches!(
+        &command,
+        Command::Radiosity { action: cli::radiosity::Action::Train(_) }
+            | Command::Fluid { action: cli::fluid::Action::Train(_) }
+    );
+    if ranks.size() > 1 && !over_ranks {
+        bail!(
+            "{} ranks: only `radiosity train` and `fluid train` run over MPI ranks; run other commands without mpirun",
+            ranks.size()
+        );
+    }
     match command {
         Command::Info => info(desc),
         Command::Demo(args) if args.viewer.view => view(desc.clone(), &args),
         Command::Demo(args) => demo(desc, args.scene.as_deref(), &args.out),
         Command::Spacetime { verb } => cli::spacetime::run(desc, &verb),
         Command::Spectral { verb } => cli::spectral::run(desc, &verb),
-        Command::Radiosity { action } => cli::radiosity::run(desc, &action),
-        Command::Fluid { action } => cli::fluid::run(desc, &action),
+        Command::Radiosity { action } => cli::radiosity::run(desc, &action, ranks),
+        Command::Fluid { action } => cli::fluid::run(desc, &action, ranks),
         Command::Bench { what: BenchWhat::Gpu { quick } } => bench_gpu(desc, quick),
         Command::Bench { what: BenchWhat::Reduce { quick } } => bench_reduce(desc, quick),
         Command::Bench { what: BenchWhat::All { quick } } => bench_all(desc, quick),
@@ -216,7 +244,7 @@ fn bench_all(desc: &GpuDesc, quick: bool) -> Result<()> {
         println!("\n# `galerkin {line}` ({} of {})\n", k + 1, commands.len());
         let cli = Cli::try_parse_from(std::iter::once("galerkin").chain(line.split_whitespace()))?;
         let start = Instant::now();
-        run(desc, cli.command).with_context(|| format!("galerkin {line}"))?;
+        run(desc, cli.command, &galerkin::reduce::SingleRank).with_context(|| format!("galerkin {line}"))?;
         println!("\n(`galerkin {line}`: {:.0} s)", start.elapsed().as_secs_f64());
     }
     Ok(())

@@ -118,14 +118,30 @@ fn a_model_reduces_on_either_backend_and_auto_picks_the_cpu_here() {
     bases.insert("u".into(), Basis::new("u", random_basis(72, 6, 2), 1e-12).unwrap());
     let cpu = model.reduce(&bases).unwrap();
     let on_gpu = model
-        .reduce_with(&bases, &ReduceOptions { backend: Backend::Gpu, gpu: Some(&gpu), progress: None })
+        .reduce_with(
+            &bases,
+            &ReduceOptions {
+                backend: Backend::Gpu,
+                gpu: Some(&gpu),
+                progress: None,
+                ..ReduceOptions::default()
+            },
+        )
         .unwrap();
     let (a, b) = (cpu.tensor("V").unwrap(), on_gpu.tensor("V").unwrap());
     // 24 monomials × 3 components per cell, 6 permutations each: f32 sums of a few hundred
     // terms of size ≤ 1 (orthonormal bases, coefficients 1/36).
     assert!(a.max_abs_diff(b) <= 1e-5 * a.max_abs(), "{}", a.max_abs_diff(b));
     let auto = model
-        .reduce_with(&bases, &ReduceOptions { backend: Backend::Auto, gpu: Some(&gpu), progress: None })
+        .reduce_with(
+            &bases,
+            &ReduceOptions {
+                backend: Backend::Auto,
+                gpu: Some(&gpu),
+                progress: None,
+                ..ReduceOptions::default()
+            },
+        )
         .unwrap();
     if gpu.caps().is_cpu() {
         assert_eq!(auto.tensor("V").unwrap(), a, "auto takes the CPU backend on a CPU rasteriser");

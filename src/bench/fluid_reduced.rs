@@ -16,7 +16,7 @@ use crate::fluid::reduced::{
 };
 use crate::fluid::scene::FluidScene;
 use crate::fluid::FluidError;
-use crate::reduce::Basis;
+use crate::reduce::{Basis, SingleRank};
 use crate::tensor::Tensor;
 
 use super::reduce::random;
@@ -118,6 +118,7 @@ pub fn cavity_step(
         &BasisSizes::default(),
         vec![],
         vec![traj],
+        &SingleRank,
     )?;
     let premultiply_seconds = t.elapsed().as_secs_f64();
     let mut fluid = ReducedFluid::new(&model)?;

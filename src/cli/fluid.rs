@@ -9,6 +9,7 @@ use galerkin::fluid::run::simulate_run;
 use galerkin::fluid::scene::FluidScene;
 use galerkin::fluid::snapshots::SnapshotReader;
 use galerkin::gpu::{Gpu, GpuDesc};
+use galerkin::reduce::Communicator;
 use galerkin::render::Colormap;
 
 /// `galerkin fluid` subcommands.
@@ -172,14 +173,14 @@ pub struct RenderArgs {
 }
 
 /// Runs a `galerkin fluid` action.
-pub fn run(desc: &GpuDesc, action: &Action) -> Result<()> {
+pub fn run(desc: &GpuDesc, action: &Action, ranks: &dyn Communicator) -> Result<()> {
     match action {
         Action::Simulate(args) => simulate(args),
         Action::Render(args) => render(desc, args),
         Action::View(args) => view(desc, args),
         Action::Surface(args) => surface(args),
         Action::Export(args) => export(args),
-        Action::Train(args) => crate::cli::fluid_reduced::train(args),
+        Action::Train(args) => crate::cli::fluid_reduced::train(args, ranks),
         Action::Reduced(args) => crate::cli::fluid_reduced::reduced(args),
         Action::TrainScene(args) => crate::cli::fluid_reduced::train_scene(args),
         Action::Compare(args) => crate::cli::fluid_reduced::compare(desc, args),

@@ -9,6 +9,7 @@ use clap::Args;
 use galerkin::fluid::reduced::{
     run_reduced, write_lifted, BasisSizes, ReducedFluid, ReducedFluidModel, ReducedMotion, TrainingSet,
 };
+use galerkin::reduce::Communicator;
 
 /// Arguments of `galerkin fluid train`.
 #[derive(Args)]
@@ -229,27 +230,46 @@ pub fn error_study(args: &StudyArgs) -> Result<()> {
     Ok(())
 }
 
-pub fn train(args: &TrainArgs) -> Result<()> {
+/// `galerkin fluid train`, over MPI ranks when `mpirun` started it: progress and results from
+/// rank 0 only, which alone writes the model.
+pub fn train(args: &TrainArgs, ranks: &dyn Communicator) -> Result<()> {
     let start = Instant::now();
     let set = TrainingSet::open(&args.runs)?;
     let frames: usize = set.frames().iter().sum();
-    println!(
-        "fluid train: {} runs, {frames} frames, {}D mesh of {} cells and {} faces",
-        args.runs.len(),
-        set.mesh().dim(),
-        set.mesh().cell_count(),
-        set.topology().face_count()
-    );
+    let root = ranks.is_root();
+    if root {
+        println!(
+            "fluid train: {} runs, {frames} frames, {}D mesh of {} cells and {} faces",
+            args.runs.len(),
+            set.mesh().dim(),
+            set.mesh().cell_count(),
+            set.topology().face_count()
+        );
+    }
     let sizes = args.sizes.sizes();
     // FluidBases::build's order (the geometry first), then the model's.
     let stages = ["g", "f", "u", "h", "d", "trajectories", "premultiply"];
-    let bar = crate::progress_bar(stages.len() as u64, "training");
+    let bar = match root {
+        true => crate::progress_bar(stages.len() as u64, "training"),
+        false => indicatif::ProgressBar::hidden(),
+    };
     let mut stage = |name: &str| {
+        tracing::info!(stage = name, seconds = start.elapsed().as_secs_f64(), "fluid train: stage starts");
         bar.set_message(format!("{name} ({:.0} s)", start.elapsed().as_secs_f64()));
         bar.set_position(stages.iter().position(|s| *s == name).unwrap_or(0) as u64);
     };
-    let model = ReducedFluidModel::fit(&set, &sizes, &mut stage)?;
+    let model = ReducedFluidModel::fit_across(&set, &sizes, &mut stage, ranks)?;
     bar.finish_and_clear();
+    if ranks.size() > 1 {
+        tracing::info!(
+            ranks = ranks.size(),
+            sent_mb = ranks.bytes_sent() as f64 / 1e6,
+            "fluid train: rank 0's communication"
+        );
+    }
+    if !root {
+        return Ok(());
+    }
     model.save(&args.out)?;
     print_bases(&model);
     println!("trained in {:.1} s → {}", start.elapsed().as_secs_f64(), args.out.display());

@@ -12,6 +12,7 @@ use galerkin::radiosity::reduced::ReducedRadiosity;
 use galerkin::radiosity::render::{Shading, Viewpoint};
 use galerkin::radiosity::train::{train_and_save, TrainOptions};
 use galerkin::radiosity::LightMode;
+use galerkin::reduce::Communicator;
 
 /// `galerkin radiosity` subcommands.
 #[derive(Subcommand)]
@@ -211,10 +212,10 @@ fn parse_param(s: &str) -> Result<(String, f64), String> {
 }
 
 /// Runs a `galerkin radiosity` subcommand.
-pub fn run(desc: &GpuDesc, action: &Action) -> Result<()> {
+pub fn run(desc: &GpuDesc, action: &Action, ranks: &dyn Communicator) -> Result<()> {
     match action {
         Action::Render(args) => render(desc, args),
-        Action::Train(args) => train(args),
+        Action::Train(args) => train(args, ranks),
         Action::View(args) => view(desc, args),
         Action::Compare(args) => compare(args),
         Action::Bench(args) => bench(desc, args),
@@ -284,8 +285,9 @@ fn light_mode(lights: Option<&str>) -> Option<LightMode> {
     lights.map(|l| if l == "sky" { LightMode::Sky } else { LightMode::Area })
 }
 
-/// `galerkin radiosity train` ([`galerkin::radiosity::train::train_and_save`]).
-fn train(args: &TrainArgs) -> Result<()> {
+/// `galerkin radiosity train` ([`galerkin::radiosity::train::train_and_save`]), over MPI
+/// ranks when `mpirun` started it: progress and results from rank 0 only.
+fn train(args: &TrainArgs, ranks: &dyn Communicator) -> Result<()> {
     let scene = AnyScene::load(&args.scene, light_mode(args.lights.as_deref()))?;
     let options = TrainOptions {
         samples: args.samples,
@@ -296,23 +298,35 @@ fn train(args: &TrainArgs) -> Result<()> {
         ..TrainOptions::default()
     };
     let bars = std::sync::Mutex::new(std::collections::BTreeMap::<String, indicatif::ProgressBar>::new());
-    let trained = train_and_save(scene.space(), &options, &args.out, &|stage, done, total| {
-        let mut bars = bars.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
-        let label = match stage {
-            "solve" => "full radiosity of samples",
-            "gram" => "Gram matrices of the pair quantities (pairs)",
-            "pca" => "PCA of Table 2's quantities",
-            "orthonormalise" => "orthonormalising the pair bases (pairs)",
-            _ => "premultiplying tensors (chunks of pairs)",
-        };
-        let bar = bars.entry(stage.to_string()).or_insert_with(|| crate::progress_bar(total, label));
-        bar.set_length(total);
-        bar.set_position(done);
-    });
+    let trained = train_and_save(
+        scene.space(),
+        &options,
+        &args.out,
+        &|stage, done, total| {
+            if !ranks.is_root() {
+                return;
+            }
+            let mut bars = bars.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+            let label = match stage {
+                "solve" => "full radiosity of samples",
+                "gram" => "Gram matrices of the pair quantities (pairs)",
+                "pca" => "PCA of Table 2's quantities",
+                "orthonormalise" => "orthonormalising the pair bases (pairs)",
+                _ => "premultiplying tensors (chunks of pairs)",
+            };
+            let bar = bars.entry(stage.to_string()).or_insert_with(|| crate::progress_bar(total, label));
+            bar.set_length(total);
+            bar.set_position(done);
+        },
+        ranks,
+    );
     for bar in bars.into_inner().unwrap_or_else(std::sync::PoisonError::into_inner).values() {
         bar.finish();
     }
     let t = trained?;
+    if !ranks.is_root() {
+        return Ok(());
+    }
     println!(
         "radiosity train: {} faces, {} samples solved in {:.1} s, trained in {:.1} s → {}",
         t.model.faces(),

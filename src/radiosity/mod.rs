@@ -35,6 +35,7 @@ pub mod scene;
 pub mod snapshots;
 pub mod solve;
 pub mod train;
+pub mod train_ranks;
 #[cfg(feature = "viewer")]
 pub mod viewer;
 pub mod visibility;

@@ -31,8 +31,8 @@ use super::solve::{solve_jacobi, Rgb};
 use super::visibility::LearnedVisibility;
 use super::{JACOBI_MAX_SWEEPS, JACOBI_TOLERANCE};
 use crate::reduce::{
-    basis_grams, pca, snapshot_grams, Bases, Basis, BasisRows, ReduceError, ReduceOptions, SnapshotBasis,
-    SnapshotFn, SnapshotRows, Truncation,
+    basis_grams, pca_across, snapshot_grams, Bases, Basis, BasisRows, Communicator, ReduceError,
+    ReduceOptions, SingleRank, SnapshotBasis, SnapshotFn, SnapshotRows, Truncation,
 };
 use crate::tensor::Tensor;
 
@@ -355,12 +355,27 @@ pub type Progress<'a> = &'a (dyn Fn(&str, u64, u64) + Sync);
 
 /// Trains the reduced radiosity of `space` from solved `configurations`, lit as
 /// `space.lights()` says (sky lighting keeps the face–opening visibility of every
-/// configuration for the run time's direct light).
+/// configuration for the run time's direct light). One rank: [`train_across`].
 pub fn train(
     space: &dyn DesignSpace,
     configurations: &[Configuration],
     options: &TrainOptions,
     progress: Progress<'_>,
+) -> Result<(ReducedRadiosity, TrainingReport), RadiosityError> {
+    train_across(space, configurations, options, progress, &SingleRank)
+}
+
+/// [`train`] shared over `ranks` (every rank holds every configuration,
+/// [`super::train_ranks::solve_configurations_across`]): the Gram matrices of the pair
+/// quantities and of their modes, the per-face PCAs and the premultiplication each take the
+/// rank's share of rows or chunks and meet in one allreduce ([`crate::reduce::ranks`]); every
+/// rank returns the same model, within rounding of one rank's.
+pub fn train_across(
+    space: &dyn DesignSpace,
+    configurations: &[Configuration],
+    options: &TrainOptions,
+    progress: Progress<'_>,
+    ranks: &dyn Communicator,
 ) -> Result<(ReducedRadiosity, TrainingReport), RadiosityError> {
     let Some(first) = configurations.first() else {
         return Err(RadiosityError::Solve("no training configurations".into()));
@@ -388,11 +403,16 @@ pub fn train(
     let diagonal: Vec<(usize, usize)> = (0..PAIR_QUANTITIES.len()).map(|i| (i, i)).collect();
     let gram_progress = |done: f64, total: f64| progress("gram", done as u64, total as u64);
     let clock = std::time::Instant::now();
-    let grams = snapshot_grams(&refs, &diagonal, Some(&gram_progress)).map_err(reduce_err)?;
-    tracing::info!(seconds = clock.elapsed().as_secs_f64(), "training: Gram matrices of the pair quantities");
+    let grams = snapshot_grams(&refs, &diagonal, Some(&gram_progress), ranks).map_err(reduce_err)?;
+    tracing::info!(
+        seconds = clock.elapsed().as_secs_f64(),
+        sent_mb = sent_mb(ranks),
+        "training: Gram matrices of the pair quantities"
+    );
     let mut pair_bases: std::collections::BTreeMap<&str, SnapshotBasis<'_>> =
         std::collections::BTreeMap::new();
     let mut stored: std::collections::BTreeMap<&str, Basis> = std::collections::BTreeMap::new();
+    let clock = std::time::Instant::now();
     for (qi, q) in Quantity::ALL.iter().enumerate() {
         progress("pca", qi as u64, Quantity::ALL.len() as u64);
         let (vectors, energy) = if q.is_pair() {
@@ -408,7 +428,7 @@ pub fn train(
                 count: configurations.len(),
                 rows: |rows: Range<usize>| snapshot_rows(*q, configurations, rows, options.near),
             };
-            let p = pca(q.name(), &mut source, truncation(*q)).map_err(reduce_err)?;
+            let p = pca_across(q.name(), &mut source, truncation(*q), ranks).map_err(reduce_err)?;
             let m = p.basis.reduced_dim();
             stored.insert(q.name(), p.basis);
             (m, p.energy)
@@ -416,6 +436,7 @@ pub fn train(
         report.bases.push((q.name().to_string(), q.dim(n, vertices), vectors, energy));
     }
     progress("pca", Quantity::ALL.len() as u64, Quantity::ALL.len() as u64);
+    tracing::info!(seconds = clock.elapsed().as_secs_f64(), sent_mb = sent_mb(ranks), "training: PCA");
     // A second pass: the Gram matrices of the modes themselves, to orthonormalise and merge
     // them to rounding.
     let order: Vec<&str> = PAIR_QUANTITIES.iter().map(|q| q.name()).collect();
@@ -425,8 +446,12 @@ pub fn train(
     wanted.push((slot(Quantity::S), slot(Quantity::H)));
     wanted.push((slot(Quantity::D), slot(Quantity::P)));
     let clock = std::time::Instant::now();
-    let own = basis_grams(&rows, &wanted, Some(&own_progress)).map_err(reduce_err)?;
-    tracing::info!(seconds = clock.elapsed().as_secs_f64(), "training: Gram matrices of the pair modes");
+    let own = basis_grams(&rows, &wanted, Some(&own_progress), ranks).map_err(reduce_err)?;
+    tracing::info!(
+        seconds = clock.elapsed().as_secs_f64(),
+        sent_mb = sent_mb(ranks),
+        "training: Gram matrices of the pair modes"
+    );
     let merge_pairs = |name: &str, a: Quantity, b: Quantity, cross: &Tensor| {
         let (a, b) = (slot(a), slot(b));
         SnapshotBasis::merge(name, (&pair_bases[order[a]], &own[a]), (&pair_bases[order[b]], &own[b]), cross)
@@ -465,10 +490,14 @@ pub fn train(
         .reduce_with_rows(
             &bases,
             &row_bases,
-            &ReduceOptions { progress: Some(&premultiply_progress), ..ReduceOptions::default() },
+            &ReduceOptions { progress: Some(&premultiply_progress), ranks, ..ReduceOptions::default() },
         )
         .map_err(reduce_err)?;
-    tracing::info!(seconds = clock.elapsed().as_secs_f64(), "training: premultiplication");
+    tracing::info!(
+        seconds = clock.elapsed().as_secs_f64(),
+        sent_mb = sent_mb(ranks),
+        "training: premultiplication"
+    );
     // The visibility is always given reduced (Eq. 17): its n²-row basis stays out of the model.
     reduced.forget_input_basis("v").map_err(reduce_err)?;
     // The learned visibility: B_gᵀ G, and B_vᵀ V from the visibility's Gram matrix.
@@ -510,6 +539,11 @@ pub fn train(
     Ok((ReducedRadiosity::new(reduced, learned, emission_hat, n, sky)?, report))
 }
 
+/// Megabytes this rank has sent in collectives so far (for the stage logs).
+fn sent_mb(ranks: &dyn Communicator) -> f64 {
+    ranks.bytes_sent() as f64 / 1e6
+}
+
 impl TrainOptions {
     /// Refuses options no training can use: an energy fraction outside (0, 1], a cap of 0,
     /// fewer than 2 samples.
@@ -547,26 +581,41 @@ pub struct TrainedScene {
 /// The whole precompute of §8.2–8.3 and §9: samples the design space of `space`
 /// ([`sample_parameters`]), solves every sample in full ([`solve_configurations`]; progress
 /// stage `"solve"`), trains ([`train`]) and saves the model to `out`.
+///
+/// Over several `ranks` (`mpirun -n N galerkin radiosity train …`), each rank solves its
+/// share of the samples and trains on its share of rows and chunks
+/// ([`super::train_ranks::solve_configurations_across`], [`train_across`]); rank 0 alone
+/// writes the model (the others report 0 bytes on disk).
 pub fn train_and_save(
     space: &dyn DesignSpace,
     options: &TrainOptions,
     out: &Path,
     progress: Progress<'_>,
+    ranks: &dyn Communicator,
 ) -> Result<TrainedScene, RadiosityError> {
     options.check()?;
     let start = std::time::Instant::now();
     let params = sample_parameters(&space.ranges(), &space.defaults(), options.samples, options.seed);
-    let total = params.len() as u64;
-    let configurations =
-        solve_configurations(space, &params, options.near, &|done| progress("solve", done as u64, total))?;
+    let total = ranks.share(params.len()).len() as u64;
+    let configurations = super::train_ranks::solve_configurations_across(
+        space,
+        &params,
+        options.near,
+        &|done| progress("solve", done as u64, total),
+        ranks,
+    )?;
     let solve_seconds = start.elapsed().as_secs_f64();
-    let (model, report) = train(space, &configurations, options, progress)?;
-    model.save(out)?;
-    let bytes_on_disk = ["model.safetensors", "visibility.safetensors"]
-        .iter()
-        .filter_map(|f| std::fs::metadata(out.join(f)).ok())
-        .map(|m| m.len())
-        .sum();
+    tracing::info!(seconds = solve_seconds, sent_mb = sent_mb(ranks), "training: full solves, gathered");
+    let (model, report) = train_across(space, &configurations, options, progress, ranks)?;
+    let mut bytes_on_disk = 0;
+    if ranks.is_root() {
+        model.save(out)?;
+        bytes_on_disk = ["model.safetensors", "visibility.safetensors"]
+            .iter()
+            .filter_map(|f| std::fs::metadata(out.join(f)).ok())
+            .map(|m| m.len())
+            .sum();
+    }
     Ok(TrainedScene {
         model,
         report,

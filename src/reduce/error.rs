@@ -123,4 +123,12 @@ pub enum ReduceError {
         /// The failure (shown in the message, so not also the error's `source`).
         cause: TensorError,
     },
+    /// A collective operation between ranks failed, or another rank failed and stopped all.
+    #[error("{context}: {cause}")]
+    Ranks {
+        /// What was being done.
+        context: String,
+        /// The rank and its message (shown in the message, so not also the error's `source`).
+        cause: super::ranks::RanksError,
+    },
 }

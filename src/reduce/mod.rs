@@ -22,6 +22,7 @@ mod gpu_eval;
 mod model;
 mod pca;
 mod premultiply;
+pub mod ranks;
 mod reduced;
 mod snapshot_basis;
 pub mod synthetic;
@@ -33,11 +34,12 @@ pub(crate) use file::erased;
 pub use file::{load_arrays, save_arrays, ModelExtras, FORMAT, VERSION};
 pub use gpu_eval::{Backend, GpuReducedModel};
 pub use model::{FullTensor, Model, ReduceOptions, StreamedTensor, TensorDecl};
-pub use pca::{pca, pca_on, pca_with, Pca, SnapshotFile, SnapshotFn, SnapshotSource, Truncation};
+pub use pca::{pca, pca_across, pca_on, pca_with, Pca, SnapshotFile, SnapshotFn, SnapshotSource, Truncation};
 pub use premultiply::{
     premultiply_dense, premultiply_sparse, premultiply_sparse_gpu, premultiply_sparse_on,
     premultiply_sparse_with, premultiply_streamed, premultiply_streamed_together, AxisRows, BasisRows,
     PremultiplyOptions, PremultiplyPlan, TensorChunks, Unit,
 };
+pub use ranks::{Communicator, RanksError, SingleRank, ThreadRank, ThreadRanks};
 pub use reduced::ReducedModel;
 pub use snapshot_basis::{basis_grams, snapshot_grams, SnapshotBasis, SnapshotRows, Spectrum};

@@ -13,12 +13,14 @@ use super::premultiply::{
     premultiply_dense, premultiply_sparse_gpu, premultiply_sparse_with, premultiply_streamed_together,
     BasisRows, PremultiplyOptions, TensorChunks,
 };
+use super::ranks::{Communicator, SINGLE_RANK};
 use super::reduced::{ReducedModel, ReducedTensor};
+use super::snapshot_basis::allreduce_all;
 use crate::gpu::Gpu;
 use crate::tensor::{SparseTensor, Tensor, TensorError};
 
 /// How [`Model::reduce_with`] premultiplies.
-#[derive(Clone, Copy, Default)]
+#[derive(Clone, Copy)]
 pub struct ReduceOptions<'a> {
     /// CPU, GPU, or `Auto` (the GPU on a real GPU, the CPU on a CPU rasteriser).
     pub backend: Backend,
@@ -26,6 +28,17 @@ pub struct ReduceOptions<'a> {
     pub gpu: Option<&'a Gpu>,
     /// Called with (multiply–adds done, planned) during each sparse tensor's premultiplication.
     pub progress: Option<&'a (dyn Fn(f64, f64) + Sync)>,
+    /// The ranks the premultiplication is shared over: each premultiplies its share of every
+    /// sparse tensor's entries (of a streamed tensor's chunks) and one allreduce sums the
+    /// reduced tensors; dense tensors (small) are premultiplied whole on every rank. One rank
+    /// by default.
+    pub ranks: &'a dyn Communicator,
+}
+
+impl Default for ReduceOptions<'_> {
+    fn default() -> Self {
+        Self { backend: Backend::default(), gpu: None, progress: None, ranks: &SINGLE_RANK }
+    }
 }
 
 /// A full-space tensor: dense (small) or sparse (what real models have), or streamed (too
@@ -272,6 +285,9 @@ impl Model {
             };
             let context = || format!("premultiplying `{name}`");
             let pm = PremultiplyOptions { progress: options.progress, ..PremultiplyOptions::default() };
+            let ranks = options.ranks;
+            // This rank's share of a sparse tensor's entries (the whole tensor on one rank).
+            let local = |s: &SparseTensor| (ranks.size() > 1).then(|| s.entries(ranks.share(s.nnz())));
             let axes = t.axes.iter().zip(t.data.shape()).enumerate();
             let data = if let FullTensor::Streamed(st) = &t.data {
                 // Premultiplied below, all streamed tensors together.
@@ -293,11 +309,23 @@ impl Model {
                 match (&t.data, options.backend.uses_gpu(options.gpu), options.gpu) {
                     (FullTensor::Dense(d), _, _) => premultiply_dense(d, &mats)
                         .map_err(|cause| ReduceError::Tensor { context: context(), cause })?,
-                    (FullTensor::Sparse(s), true, Some(gpu)) => premultiply_sparse_gpu(gpu, s, &mats, pm)?.0,
-                    (FullTensor::Sparse(s), _, _) => {
-                        premultiply_sparse_with(s, &mats, pm)
-                            .map_err(|cause| ReduceError::Tensor { context: context(), cause })?
-                            .0
+                    (FullTensor::Sparse(s), gpu_wanted, gpu) => {
+                        let part = local(s);
+                        let s = part.as_ref().unwrap_or(s);
+                        let mut y = match (gpu_wanted, gpu) {
+                            (true, Some(gpu)) => premultiply_sparse_gpu(gpu, s, &mats, pm)?.0,
+                            _ => {
+                                premultiply_sparse_with(s, &mats, pm)
+                                    .map_err(|cause| ReduceError::Tensor { context: context(), cause })?
+                                    .0
+                            }
+                        };
+                        if ranks.size() > 1 {
+                            let mut sum = vec![y.data().to_vec()];
+                            allreduce_all(ranks, &mut sum, &format!("the premultiplied `{name}`"))?;
+                            y.data_mut().copy_from_slice(&sum[0]);
+                        }
+                        y
                     }
                     (FullTensor::Streamed(_), _, _) => unreachable!("handled above"),
                 }
@@ -305,7 +333,11 @@ impl Model {
             reduced.insert(name.clone(), ReducedTensor { axes: t.axes.clone(), data });
         }
         // In lockstep, so that bases regenerating rows make each block once for all of them.
-        let pm = PremultiplyOptions { progress: options.progress, ..PremultiplyOptions::default() };
+        let pm = PremultiplyOptions {
+            progress: options.progress,
+            ranks: options.ranks,
+            ..PremultiplyOptions::default()
+        };
         let together: Vec<(&str, &dyn TensorChunks, &[&dyn BasisRows])> =
             streamed.iter().map(|(n, q, rows)| (*n, *q, rows.as_slice())).collect();
         for ((name, _, _), data) in streamed.iter().zip(premultiply_streamed_together(&together, pm)?) {

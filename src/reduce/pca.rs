@@ -20,6 +20,8 @@ use ash::vk;
 use super::basis::Basis;
 use super::error::ReduceError;
 use super::gpu_eval::Backend;
+use super::ranks::{bytes_f64, f64_bytes, Communicator, SingleRank};
+use super::snapshot_basis::{allreduce_all, orthonormal_in, product, transposed_product};
 use crate::gpu::{Buffer, Gpu, MemoryKind, Submitter};
 use crate::tensor::gpu::{Gemm, GemmShape};
 use crate::tensor::{symmetric_eigen, Tensor};
@@ -175,8 +177,8 @@ pub fn pca_with(
     gpu: Option<&Gpu>,
 ) -> Result<Pca, ReduceError> {
     match (backend.uses_gpu(gpu), gpu) {
-        (true, Some(g)) => pca_inner(name, source, truncation, Some(&mut g.submitter())),
-        _ => pca_inner(name, source, truncation, None),
+        (true, Some(g)) => pca_inner(name, source, truncation, Some(&mut g.submitter()), &SingleRank),
+        _ => pca_inner(name, source, truncation, None, &SingleRank),
     }
 }
 
@@ -189,7 +191,31 @@ pub fn pca_on(
     truncation: Truncation,
     submitter: &mut dyn Submitter,
 ) -> Result<Pca, ReduceError> {
-    pca_inner(name, source, truncation, Some(submitter))
+    pca_inner(name, source, truncation, Some(submitter), &SingleRank)
+}
+
+/// [`pca`] sharded over `ranks`: rows of the snapshot matrix partitioned over the ranks in
+/// contiguous blocks (each rank asks `source` only for its own rows — the snapshots are
+/// generated or read by the rank that owns them); each rank forms the Gram matrix of its rows,
+/// one allreduce sums them, the eigendecomposition runs on every rank, and each rank forms its
+/// rows of the basis. Those are orthonormalised by CholeskyQR2 in the form this module already
+/// uses for bases held as coefficients — twice: the Gram matrix of the rows (one allreduce),
+/// Gram–Schmidt in its metric ([`super::snapshot_basis`]), the rows multiplied by the
+/// coefficients — and gathered, so every rank returns the whole basis (the per-face and
+/// per-vertex bases are small; bases of `n²` rows are kept as coefficients instead,
+/// [`super::SnapshotBasis`]).
+///
+/// Why a second pass: the columns `S vᵢ / σᵢ` carry the eigenvectors' rounding, about
+/// `ε σ_max² / σᵢ²`, magnified by `1/σᵢ`; one Cholesky-like pass leaves an orthonormality
+/// error of about `ε κ²` of what it was given, the second brings it to rounding ("twice is
+/// enough"). On one rank the result is the same as on many, within rounding.
+pub fn pca_across(
+    name: &str,
+    source: &mut impl SnapshotSource,
+    truncation: Truncation,
+    ranks: &dyn Communicator,
+) -> Result<Pca, ReduceError> {
+    pca_inner(name, source, truncation, None, ranks)
 }
 
 fn pca_inner(
@@ -197,6 +223,7 @@ fn pca_inner(
     source: &mut impl SnapshotSource,
     truncation: Truncation,
     submitter: Option<&mut dyn Submitter>,
+    ranks: &dyn Communicator,
 ) -> Result<Pca, ReduceError> {
     let (n, k) = (source.dim(), source.count());
     let bad = |detail: String| ReduceError::BadBasis { basis: name.to_string(), detail };
@@ -206,19 +233,22 @@ fn pca_inner(
     if !(truncation.energy > 0.0 && truncation.energy <= 1.0) || truncation.max_modes == 0 {
         return Err(bad(format!("truncation needs 0 < energy ≤ 1 and max_modes ≥ 1, got {truncation:?}")));
     }
+    // This rank's rows: a contiguous share, read in blocks.
+    let share = ranks.share(n);
+    let (first, last) = (share.start, share.end);
     // Pass 1: G = Σ_blocks Sᵀ_b S_b.
     let mut gram = vec![0.0; k * k];
     let mut device = match submitter {
         Some(submitter) => Some(DeviceGram::new(submitter, k)?),
         None => None,
     };
-    for start in (0..n).step_by(BLOCK_ROWS) {
-        let block = source.rows(start..(start + BLOCK_ROWS).min(n))?;
+    for start in (first..last).step_by(BLOCK_ROWS) {
+        let block = source.rows(start..(start + BLOCK_ROWS).min(last))?;
         if let Some(i) = block.data().iter().position(|v| !v.is_finite()) {
             return Err(bad(format!("snapshot {} row {} is not finite", i % k, start + i / k)));
         }
         match &mut device {
-            Some(d) => d.accumulate(&block, start == 0)?,
+            Some(d) => d.accumulate(&block, start == first)?,
             None => {
                 let s = MatRef::from_row_major_slice(block.data(), block.shape()[0], k);
                 let g = MatMut::from_row_major_slice_mut(&mut gram, k, k);
@@ -227,30 +257,64 @@ fn pca_inner(
         }
     }
     if let Some(d) = &mut device {
-        gram = d.read()?;
+        if last > first {
+            gram = d.read()?;
+        }
     }
+    allreduce_all(ranks, std::slice::from_mut(&mut gram), "the Gram matrix of the snapshots")?;
     let modes = modes_from_gram(name, gram, k, truncation, 0.0)?;
     let (vs, m, sigma2, kept, total) =
         (modes.coefficients, modes.columns, modes.sigma2, modes.kept, modes.total);
-    let mut b = vec![0.0; n * m];
-    for start in (0..n).step_by(BLOCK_ROWS) {
-        let end = (start + BLOCK_ROWS).min(n);
+    // Pass 2: this rank's rows of B = S V.
+    let rows = last - first;
+    let mut b = vec![0.0; rows * m];
+    for start in (first..last).step_by(BLOCK_ROWS) {
+        let end = (start + BLOCK_ROWS).min(last);
         let block = source.rows(start..end)?;
         let s = MatRef::from_row_major_slice(block.data(), end - start, k);
-        let out = MatMut::from_row_major_slice_mut(&mut b[start * m..end * m], end - start, m);
+        let out =
+            MatMut::from_row_major_slice_mut(&mut b[(start - first) * m..(end - first) * m], end - start, m);
         matmul(out, Accum::Replace, s, MatRef::from_row_major_slice(&vs, k, m), 1.0, Par::rayon(0));
     }
-    // Small σ amplify rounding in S v / σ: re-orthonormalise (Gram–Schmidt twice).
-    let basis = Basis::orthonormalize(name, &Tensor::from_vec(&[n, m], b).expect("n×m"))?;
+    // CholeskyQR2 over the ranks (see above).
+    let mut b = Tensor::from_vec(&[rows, m], b).expect("rows × m");
+    for _ in 0..2 {
+        let mut w = transposed_product(&b, &b).into_data();
+        allreduce_all(ranks, std::slice::from_mut(&mut w), "the Gram matrix of the basis rows")?;
+        let cols = b.shape()[1];
+        let u = orthonormal_in(name, &Tensor::from_vec(&[cols, cols], w).expect("m × m"))?;
+        b = product(&b, &u);
+    }
+    let m = b.shape()[1];
+    let whole = if ranks.size() == 1 {
+        b
+    } else {
+        let parts = ranks.all_gather(&f64_bytes(b.data())).map_err(|cause| ReduceError::Ranks {
+            context: format!("gathering the rows of basis `{name}`"),
+            cause,
+        })?;
+        let mut data = Vec::with_capacity(n * m);
+        for (r, part) in parts.iter().enumerate() {
+            let values = bytes_f64(part).map_err(|detail| bad(format!("rows from rank {r}: {detail}")))?;
+            data.extend_from_slice(&values);
+        }
+        Tensor::from_vec(&[n, m], data).map_err(|e| bad(format!("the gathered rows: {e}")))?
+    };
+    let basis = Basis::new(name, whole, ORTHONORMAL)?;
     let energy = if total > 0.0 { kept / total } else { 1.0 };
     Ok(Pca { basis, singular_values: sigma2.iter().map(|s| s.sqrt()).collect(), energy })
 }
+
+/// What [`pca_across`] guarantees of its basis: max |BᵀB − I| after CholeskyQR2 (rounding of
+/// Gram matrices summed over up to millions of rows).
+const ORTHONORMAL: f64 = 1e-10;
 
 /// The modes a PCA keeps, from the Gram matrix of its snapshots (shared by [`pca_with`] and
 /// the snapshot-coefficient bases of [`super::snapshot_basis`]).
 pub(crate) struct Modes {
     /// `k × columns` row-major: basis column `c` is `S · coefficients[:, c]` (centred: the mean
-    /// first, then `(I − 11ᵀ/k) vᵢ / σᵢ`), orthonormal up to rounding except for the mean.
+    /// first, scaled to unit length like the modes, then `(I − 11ᵀ/k) vᵢ / σᵢ`), orthonormal up
+    /// to rounding except for the mean.
     pub coefficients: Vec<f64>,
     /// Number of columns (modes, plus the mean when centred).
     pub columns: usize,
@@ -273,6 +337,9 @@ pub(crate) fn modes_from_gram(
     floor_ratio: f64,
 ) -> Result<Modes, ReduceError> {
     let bad = |detail: String| ReduceError::BadBasis { basis: name.to_string(), detail };
+    // |S 1/k|² = 1ᵀG1/k²: the mean column is scaled to unit length, so that a column far
+    // shorter than the others is rounding whatever the data's scale.
+    let mean_norm2 = gram.iter().sum::<f64>() / (k * k) as f64;
     if truncation.centred {
         // The Gram matrix of the centred snapshots S(I − 11ᵀ/k) is (I − 11ᵀ/k) G (I − 11ᵀ/k).
         let row_mean: Vec<f64> =
@@ -308,8 +375,9 @@ pub(crate) fn modes_from_gram(
     let cols = m + offset;
     let mut vs = vec![0.0; k * cols];
     if truncation.centred {
+        let unit = if mean_norm2 > 0.0 { mean_norm2.sqrt() } else { 1.0 };
         for r in 0..k {
-            vs[r * cols] = 1.0 / k as f64;
+            vs[r * cols] = 1.0 / (k as f64 * unit);
         }
     }
     for (c, &i) in order.iter().take(m).enumerate() {

@@ -21,6 +21,7 @@ use faer::{Accum, MatMut, MatRef, Par};
 use super::error::ReduceError;
 use super::pca::{modes_from_gram, Truncation, BLOCK_ROWS};
 use super::premultiply::BasisRows;
+use super::ranks::Communicator;
 use super::Basis;
 use crate::tensor::Tensor;
 
@@ -37,37 +38,45 @@ pub trait SnapshotRows: Sync {
 
 /// The Gram matrices `S_aᵀ S_b` (`k_a × k_b`) of `sources[a]` and `sources[b]` for every `(a,
 /// b)` in `pairs`, in one pass over blocks of rows (all sources have the same dimension).
-/// `progress` is called with (rows done, rows).
+/// `progress` is called with (rows done, rows) of this rank's share.
+///
+/// Sharded over `ranks`: each rank regenerates and multiplies only its contiguous share of
+/// the rows, in blocks (for pair quantities, rows `i n + j` of a range of faces `i`), and one
+/// allreduce sums the small Gram matrices — the same on every rank, added in rank order.
 pub fn snapshot_grams(
     sources: &[&dyn SnapshotRows],
     pairs: &[(usize, usize)],
     progress: Option<&(dyn Fn(f64, f64) + Sync)>,
+    ranks: &dyn Communicator,
 ) -> Result<Vec<Tensor>, ReduceError> {
     let dims: Vec<usize> = sources.iter().map(|s| s.dim()).collect();
     let counts: Vec<usize> = sources.iter().map(|s| s.count()).collect();
-    gram_pass(&dims, &counts, |s, rows| sources[s].rows_at(rows), pairs, progress)
+    gram_pass(&dims, &counts, |s, rows| sources[s].rows_at(rows), pairs, progress, ranks)
 }
 
 /// The Gram matrices `B_aᵀ B_b` (`m_a × m_b`) of bases given by rows, in one pass over blocks
-/// of rows — what orthonormalising and merging [`SnapshotBasis`] columns needs.
+/// of rows — what orthonormalising and merging [`SnapshotBasis`] columns needs. Sharded over
+/// `ranks` as [`snapshot_grams`].
 pub fn basis_grams(
     bases: &[&dyn BasisRows],
     pairs: &[(usize, usize)],
     progress: Option<&(dyn Fn(f64, f64) + Sync)>,
+    ranks: &dyn Communicator,
 ) -> Result<Vec<Tensor>, ReduceError> {
     let dims: Vec<usize> = bases.iter().map(|b| b.full_dim()).collect();
     let counts: Vec<usize> = bases.iter().map(|b| b.reduced_dim()).collect();
-    gram_pass(&dims, &counts, |s, rows| bases[s].rows(rows).map(Arc::new), pairs, progress)
+    gram_pass(&dims, &counts, |s, rows| bases[s].rows(rows).map(Arc::new), pairs, progress, ranks)
 }
 
 /// `X_aᵀ X_b` over blocks of rows of matrices given by rows (`rows(source, indices)`, of
-/// `counts[source]` columns each).
+/// `counts[source]` columns each): this rank's share of the blocks, then one allreduce.
 fn gram_pass(
     dims: &[usize],
     counts: &[usize],
     rows: impl Fn(usize, &[usize]) -> Result<Arc<Tensor>, ReduceError>,
     pairs: &[(usize, usize)],
     progress: Option<&(dyn Fn(f64, f64) + Sync)>,
+    ranks: &dyn Communicator,
 ) -> Result<Vec<Tensor>, ReduceError> {
     let Some(&n) = dims.first() else { return Ok(Vec::new()) };
     if let Some(d) = dims.iter().find(|&&d| d != n) {
@@ -83,8 +92,10 @@ fn gram_pass(
         u.dedup();
         u
     };
-    for start in (0..n).step_by(BLOCK_ROWS) {
-        let end = (start + BLOCK_ROWS).min(n);
+    let share = ranks.share(n);
+    let (first, last) = (share.start, share.end);
+    for start in (first..last).step_by(BLOCK_ROWS) {
+        let end = (start + BLOCK_ROWS).min(last);
         let indices: Vec<usize> = (start..end).collect();
         let mut blocks: Vec<Option<Arc<Tensor>>> = vec![None; counts.len()];
         for &s in &used {
@@ -123,9 +134,10 @@ fn gram_pass(
             }
         }
         if let Some(p) = progress {
-            p(end as f64, n as f64);
+            p((end - first) as f64, (last - first) as f64);
         }
     }
+    allreduce_all(ranks, &mut grams, "the Gram matrices of the snapshots")?;
     for (g, &(a, b)) in grams.iter_mut().zip(pairs) {
         if a == b {
             let k = counts[a];
@@ -141,6 +153,28 @@ fn gram_pass(
         .zip(grams)
         .map(|(&(a, b), g)| Tensor::from_vec(&[counts[a], counts[b]], g).expect("k_a × k_b"))
         .collect())
+}
+
+/// Sums `parts` (each a vector of values) over `ranks` in one allreduce.
+pub(crate) fn allreduce_all(
+    ranks: &dyn Communicator,
+    parts: &mut [Vec<f64>],
+    what: &str,
+) -> Result<(), ReduceError> {
+    if ranks.size() == 1 {
+        return Ok(());
+    }
+    let mut flat: Vec<f64> = parts.iter().flatten().copied().collect();
+    ranks
+        .allreduce_sum(&mut flat)
+        .map_err(|cause| ReduceError::Ranks { context: format!("summing {what} over ranks"), cause })?;
+    let mut at = 0;
+    for p in parts.iter_mut() {
+        let len = p.len();
+        p.copy_from_slice(&flat[at..at + len]);
+        at += len;
+    }
+    Ok(())
 }
 
 /// A basis `B = Σ_p S_p W_p` over one or two snapshot sources, its rows regenerated on demand
@@ -177,7 +211,7 @@ const DEPENDENT: f64 = 1e-8;
 /// Gram–Schmidt (twice) of the columns of the identity in the metric `c` (`m × m`, SPD up to
 /// rounding): coefficient columns `u` with `uᵢᵀ c uⱼ = δᵢⱼ`, dependent and negligible columns
 /// dropped — the coefficients that orthonormalise columns whose Gram matrix is `c`.
-fn orthonormal_in(name: &str, c: &Tensor) -> Result<Tensor, ReduceError> {
+pub(crate) fn orthonormal_in(name: &str, c: &Tensor) -> Result<Tensor, ReduceError> {
     let m = c.shape()[0];
     let cd = c.data();
     let apply =
@@ -226,7 +260,7 @@ fn orthonormal_in(name: &str, c: &Tensor) -> Result<Tensor, ReduceError> {
 }
 
 /// `a · b` for row-major matrices.
-fn product(a: &Tensor, b: &Tensor) -> Tensor {
+pub(crate) fn product(a: &Tensor, b: &Tensor) -> Tensor {
     let (r, k, c) = (a.shape()[0], a.shape()[1], b.shape()[1]);
     let mut out = vec![0.0; r * c];
     matmul(
@@ -241,7 +275,7 @@ fn product(a: &Tensor, b: &Tensor) -> Tensor {
 }
 
 /// `aᵀ · b`.
-fn transposed_product(a: &Tensor, b: &Tensor) -> Tensor {
+pub(crate) fn transposed_product(a: &Tensor, b: &Tensor) -> Tensor {
     product(&a.permute(&[1, 0]), b)
 }
 
@@ -264,17 +298,7 @@ impl<'a> SnapshotBasis<'a> {
             });
         }
         let modes = modes_from_gram(name, gram.data().to_vec(), k, truncation, RESOLVED)?;
-        let mut coefficients = modes.coefficients;
-        if truncation.centred {
-            // The mean column S 1/k scaled to unit length like the modes (|S 1/k|² = 1ᵀG1/k²),
-            // so that a column far shorter than the others is rounding whatever the data's scale.
-            let norm2 = gram.data().iter().sum::<f64>() / (k * k) as f64;
-            if norm2 > 0.0 {
-                let s = norm2.sqrt();
-                coefficients.iter_mut().step_by(modes.columns).for_each(|w| *w /= s);
-            }
-        }
-        let w = Tensor::from_vec(&[k, modes.columns], coefficients).expect("k × columns");
+        let w = Tensor::from_vec(&[k, modes.columns], modes.coefficients).expect("k × columns");
         let spectrum = Spectrum {
             singular_values: modes.sigma2.iter().map(|s| s.sqrt()).collect(),
             energy: if modes.total > 0.0 { modes.kept / modes.total } else { 1.0 },
@@ -403,7 +427,7 @@ impl BasisRows for SnapshotBasis<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::reduce::{pca, SnapshotFn};
+    use crate::reduce::{pca, SingleRank, SnapshotFn};
 
     /// Snapshots made of a few random directions with decaying weights plus a common part.
     struct Random {
@@ -462,10 +486,10 @@ mod tests {
     fn snapshot_bases_match_the_stored_pca_and_merge() {
         let (a, b) = (Random { n: 5000, k: 30, seed: 1 }, Random { n: 5000, k: 25, seed: 2 });
         let t = Truncation { energy: 0.999, max_modes: 8, centred: true };
-        let grams = snapshot_grams(&[&a, &b], &[(0, 0), (1, 1)], None).unwrap();
+        let grams = snapshot_grams(&[&a, &b], &[(0, 0), (1, 1)], None, &SingleRank).unwrap();
         let (sa, spectrum) = SnapshotBasis::pca("a", &a, &grams[0], t).unwrap();
         let (sb, _) = SnapshotBasis::pca("b", &b, &grams[1], t).unwrap();
-        let own = basis_grams(&[&sa, &sb], &[(0, 0), (1, 1), (0, 1)], None).unwrap();
+        let own = basis_grams(&[&sa, &sb], &[(0, 0), (1, 1), (0, 1)], None, &SingleRank).unwrap();
         fn stored(s: &Random, t: Truncation) -> crate::reduce::Pca {
             let rows = |r: std::ops::Range<usize>| (*s.rows_at(&r.collect::<Vec<_>>()).unwrap()).clone();
             pca(s.name(), &mut SnapshotFn { dim: s.n, count: s.k, rows }, t).unwrap()

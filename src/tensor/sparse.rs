@@ -207,6 +207,21 @@ impl SparseTensor {
         &self.values
     }
 
+    /// Stored entries `range` (clamped to the entries there are) as a tensor of the same
+    /// shape and symmetric groups: the tensor is the sum of its entry ranges — what a rank
+    /// premultiplies of a tensor shared over ranks.
+    pub fn entries(&self, range: std::ops::Range<usize>) -> SparseTensor {
+        let end = range.end.min(self.nnz());
+        let start = range.start.min(end);
+        let o = self.order();
+        SparseTensor {
+            shape: self.shape.clone(),
+            coords: self.coords[start * o..end * o].to_vec(),
+            values: self.values[start..end].to_vec(),
+            symmetric: self.symmetric.clone(),
+        }
+    }
+
     /// The dense equivalent (duplicates summed, symmetric groups expanded).
     pub fn to_dense(&self) -> Tensor {
         let mut t = Tensor::zeros(&self.shape);

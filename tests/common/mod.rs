@@ -5,6 +5,7 @@
 
 pub mod evaluations;
 pub mod host;
+pub mod models;
 pub mod obj_box;
 pub mod wavy;
 

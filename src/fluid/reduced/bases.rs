@@ -26,7 +26,9 @@ use crate::mesh::{SimplexMesh, Topology};
 use std::collections::HashMap;
 use std::path::Path;
 
-use crate::reduce::{load_arrays, pca, save_arrays, Basis, Pca, ReduceError, SnapshotSource, Truncation};
+use crate::reduce::{
+    load_arrays, pca_across, save_arrays, Basis, Communicator, Pca, ReduceError, SnapshotSource, Truncation,
+};
 use crate::tensor::Tensor;
 
 use super::training::TrainingSet;
@@ -166,6 +168,7 @@ impl FluidBases {
         set: &TrainingSet,
         sizes: &BasisSizes,
         stage: &mut dyn FnMut(&str),
+        ranks: &dyn Communicator,
     ) -> Result<Self, FluidError> {
         if !(sizes.energy > 0.0 && sizes.energy <= 1.0) {
             return Err(FluidError::State(format!("energy {}: must be in (0, 1]", sizes.energy)));
@@ -180,7 +183,8 @@ impl FluidBases {
         // The geometry first: the cheapest basis, and the one whose check (no projected
         // training frame may fold a cell) can refuse the training before the costly ones.
         stage("g");
-        let pg = pca("g", &mut set.source("g")?, truncation(sizes, sizes.m_g, true)).map_err(reduce_err)?;
+        let pg = pca_across("g", &mut set.source("g")?, truncation(sizes, sizes.m_g, true), ranks)
+            .map_err(reduce_err)?;
         let geometry_error = check_projected_volumes(set, mesh, &pg.basis)?;
         reports.push(report(
             "g",
@@ -189,8 +193,8 @@ impl FluidBases {
         ));
 
         stage("f");
-        let mut pf =
-            pca("f", &mut set.source("f")?, truncation(sizes, sizes.m_f, false)).map_err(reduce_err)?;
+        let mut pf = pca_across("f", &mut set.source("f")?, truncation(sizes, sizes.m_f, false), ranks)
+            .map_err(reduce_err)?;
         let mut div = relative_divergence(topo, &pf.basis);
         if div > DIVERGENCE_TOLERANCE {
             // Modes of small σ amplify the snapshots' rounding-level divergence (B = S V Σ⁻¹).
@@ -207,8 +211,10 @@ impl FluidBases {
         reports.push(report("f", &pf, format!("‖div B_f‖/‖B_f‖ = {div:.1e}")));
 
         stage("u");
-        let pu = pca("u", &mut set.source("u")?, truncation(sizes, sizes.m_u, false)).map_err(reduce_err)?;
-        let pp = pca("p", &mut set.source("p")?, truncation(sizes, sizes.m_u, false)).map_err(reduce_err)?;
+        let pu = pca_across("u", &mut set.source("u")?, truncation(sizes, sizes.m_u, false), ranks)
+            .map_err(reduce_err)?;
+        let pp = pca_across("p", &mut set.source("p")?, truncation(sizes, sizes.m_u, false), ranks)
+            .map_err(reduce_err)?;
         let u = interleave_merge("u", &pu.basis, &pp.basis, sizes.m_u)?;
         reports.push(BasisReport {
             name: "u".into(),
@@ -226,8 +232,8 @@ impl FluidBases {
 
         stage("h");
         let h = if any_nonzero(&mut set.source("h")?)? {
-            let ph =
-                pca("h", &mut set.source("h")?, truncation(sizes, sizes.m_h, false)).map_err(reduce_err)?;
+            let ph = pca_across("h", &mut set.source("h")?, truncation(sizes, sizes.m_h, false), ranks)
+                .map_err(reduce_err)?;
             reports.push(report("h", &ph, String::new()));
             Some(ph.basis)
         } else {

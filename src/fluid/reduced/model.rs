@@ -37,7 +37,7 @@ use crate::fluid::operators::{
 };
 use crate::fluid::FluidError;
 use crate::mesh::{SimplexMesh, Topology};
-use crate::reduce::{Bases, Basis, Expr, Model, ReducedModel};
+use crate::reduce::{Bases, Basis, Communicator, Expr, Model, ReduceOptions, ReducedModel, SingleRank};
 use crate::tensor::{SparseTensor, Tensor};
 
 use super::bases::{BasisReport, BasisSizes, FluidBases};
@@ -233,14 +233,28 @@ pub(super) fn core_err(e: crate::reduce::ReduceError) -> FluidError {
 
 impl ReducedFluidModel {
     /// Builds the bases of `set` ([`FluidBases::build`]) and trains the model on them
-    /// ([`Self::train`]); `stage(name)` is called as each stage starts.
+    /// ([`Self::train`]); `stage(name)` is called as each stage starts. One rank:
+    /// [`Self::fit_across`].
     pub fn fit(
         set: &TrainingSet,
         sizes: &BasisSizes,
         stage: &mut dyn FnMut(&str),
     ) -> Result<Self, FluidError> {
-        let bases = FluidBases::build(set, sizes, stage)?;
-        Self::train(set, bases, sizes, stage)
+        Self::fit_across(set, sizes, stage, &SingleRank)
+    }
+
+    /// [`Self::fit`] shared over `ranks`: the PCAs and the premultiplication take each rank's
+    /// share of the rows (cells, faces, vertices) and of the tensors' entries and meet in
+    /// allreduces ([`crate::reduce::ranks`]); every rank returns the same model, within
+    /// rounding of one rank's.
+    pub fn fit_across(
+        set: &TrainingSet,
+        sizes: &BasisSizes,
+        stage: &mut dyn FnMut(&str),
+        ranks: &dyn Communicator,
+    ) -> Result<Self, FluidError> {
+        let bases = FluidBases::build(set, sizes, stage, ranks)?;
+        Self::train(set, bases, sizes, stage, ranks)
     }
 
     /// Trains a model on `set` with `bases` (built by [`FluidBases::build`]): premultiplies every
@@ -250,6 +264,7 @@ impl ReducedFluidModel {
         bases: FluidBases,
         sizes: &BasisSizes,
         stage: &mut dyn FnMut(&str),
+        ranks: &dyn Communicator,
     ) -> Result<Self, FluidError> {
         stage("trajectories");
         let mut trajectories = Vec::new();
@@ -260,12 +275,14 @@ impl ReducedFluidModel {
         stage("premultiply");
         let mesh =
             MeshOf { mesh: set.mesh(), topology: set.topology(), periodic_axis: set.meta().periodic_axis };
-        Self::from_bases(mesh, set.params(), true, bases, sizes, runs, trajectories)
+        Self::from_bases(mesh, set.params(), true, bases, sizes, runs, trajectories, ranks)
     }
 
     /// Premultiplies the fluid's tensors on `mesh` by `bases` (the work of [`Self::train`]
     /// once the bases and trajectories are known; benchmarks give synthetic bases), the
-    /// induced-flux tensor only if `induced` (the step does not read it; driven motions do).
+    /// induced-flux tensor only if `induced` (the step does not read it; driven motions do),
+    /// each rank of `ranks` premultiplying its share of every tensor's entries.
+    #[allow(clippy::too_many_arguments)]
     pub fn from_bases(
         mesh: MeshOf<'_>,
         params: &crate::fluid::FluidParams,
@@ -274,6 +291,7 @@ impl ReducedFluidModel {
         sizes: &BasisSizes,
         runs: Vec<(String, usize)>,
         trajectories: Vec<Trajectory>,
+        ranks: &dyn Communicator,
     ) -> Result<Self, FluidError> {
         let (topo, periodic_axis) = (mesh.topology, mesh.periodic_axis);
         let mesh = mesh.mesh;
@@ -303,7 +321,8 @@ impl ReducedFluidModel {
         if let Some(d) = &bases.d {
             core_bases.insert("d".into(), d.clone());
         }
-        let mut core = model.reduce(&core_bases).map_err(core_err)?;
+        let options = ReduceOptions { ranks, ..ReduceOptions::default() };
+        let mut core = model.reduce_with(&core_bases, &options).map_err(core_err)?;
         // The core keeps the bases of inputs and outputs; the step needs B_h and B_d too.
         core.bases.extend(core_bases.into_iter().filter(|(k, _)| k == "h" || k == "d"));
         let provenance = Provenance {

@@ -27,6 +27,7 @@ use crate::fluid::scene::{FluidScene, Motion};
 use crate::fluid::snapshots::SnapshotReader;
 use crate::fluid::FluidError;
 use crate::process::{peak_memory_mb, reset_peak_memory};
+use crate::reduce::SingleRank;
 
 use super::bases::{BasisSizes, FluidBases};
 use super::cavity_motion::CavityMotion;
@@ -187,8 +188,12 @@ pub fn train_scene(
     let bases = match kept {
         Some(b) => b,
         None => {
-            let b =
-                FluidBases::build(&set, &options.sizes, &mut |p| on_event(TrainingEvent::Part(p.into())))?;
+            let b = FluidBases::build(
+                &set,
+                &options.sizes,
+                &mut |p| on_event(TrainingEvent::Part(p.into())),
+                &SingleRank,
+            )?;
             b.save(&bases_path, &bases_key)?;
             b
         }
@@ -197,9 +202,13 @@ pub fn train_scene(
 
     // The trajectories and the premultiplied tensors: the model.
     let stage = Stage::start();
-    let mut model = ReducedFluidModel::train(&set, bases, &options.sizes, &mut |p| {
-        on_event(TrainingEvent::Part(p.into()))
-    })?;
+    let mut model = ReducedFluidModel::train(
+        &set,
+        bases,
+        &options.sizes,
+        &mut |p| on_event(TrainingEvent::Part(p.into())),
+        &SingleRank,
+    )?;
     // The cavity is driven at run time by its compressions: its reduced motion model.
     if let Motion::Cavity { cavity, .. } = &FluidScene::parse(&scene_text, scene_path)?.motion {
         let b_g = model.basis("g").ok_or_else(|| FluidError::State("the model has no basis g".into()))?;

@@ -29,6 +29,7 @@
 
 use std::collections::HashMap;
 
+use super::ranks::{Communicator, SINGLE_RANK};
 use crate::tensor::{SparseTensor, Tensor, TensorError};
 
 mod cpu;
@@ -50,11 +51,14 @@ pub struct PremultiplyOptions<'a> {
     pub memory_budget: u64,
     /// Called with (multiply–adds done, multiply–adds planned) as stages progress.
     pub progress: Option<&'a (dyn Fn(f64, f64) + Sync)>,
+    /// The ranks a streamed tensor's chunks are shared over ([`premultiply_streamed_together`]):
+    /// one rank by default.
+    pub ranks: &'a dyn Communicator,
 }
 
 impl Default for PremultiplyOptions<'_> {
     fn default() -> Self {
-        Self { memory_budget: 4 << 30, progress: None }
+        Self { memory_budget: 4 << 30, progress: None, ranks: &SINGLE_RANK }
     }
 }
 

@@ -12,6 +12,7 @@
 use std::sync::Arc;
 
 use super::{premultiply_sparse_in, Buffers, PremultiplyOptions};
+use crate::reduce::snapshot_basis::allreduce_all;
 use crate::reduce::{Basis, ReduceError};
 use crate::tensor::{SparseTensor, Tensor};
 
@@ -110,7 +111,12 @@ pub fn premultiply_streamed(
 
 /// Several chunked tensors premultiplied in lockstep — chunk `c` of every tensor before chunk
 /// `c + 1` of any — so that bases regenerating rows for a chunk (and keeping the last few
-/// blocks) make them once for all the tensors. `progress`: (chunks done, chunks).
+/// blocks) make them once for all the tensors. `progress`: (chunks done, chunks) of this
+/// rank's share.
+///
+/// Sharded over `options.ranks`: `Q̂` is linear in `Q`'s entries, so each rank premultiplies a
+/// contiguous share of the chunks (its faces' pairs, its cells) against the basis rows those
+/// chunks name, and one allreduce sums the small reduced tensors, in rank order.
 pub fn premultiply_streamed_together(
     tensors: &[(&str, &dyn TensorChunks, &[&dyn BasisRows])],
     options: PremultiplyOptions<'_>,
@@ -135,11 +141,12 @@ pub fn premultiply_streamed_together(
         totals.push(Tensor::zeros(&bases.iter().map(|b| b.reduced_dim()).collect::<Vec<_>>()));
     }
     let chunks = tensors.iter().map(|t| t.1.chunks()).max().unwrap_or(0);
+    let share = options.ranks.share(chunks);
     let inner = PremultiplyOptions { progress: None, ..options };
     // Seconds per tensor: generating chunks, gathering rows, premultiplying.
     let mut seconds = vec![[0.0f64; 3]; tensors.len()];
     let mut buffers = Buffers::default();
-    for c in 0..chunks {
+    for c in share.clone() {
         let mut memo = RowMemo::default();
         for ((&(name, q, bases), total), time) in tensors.iter().zip(&mut totals).zip(&mut seconds) {
             if c >= q.chunks() {
@@ -185,8 +192,13 @@ pub fn premultiply_streamed_together(
             time[2] += clock.elapsed().as_secs_f64();
         }
         if let Some(p) = options.progress {
-            p((c + 1) as f64, chunks as f64);
+            p((c + 1 - share.start) as f64, share.len() as f64);
         }
+    }
+    let mut sums: Vec<Vec<f64>> = totals.iter().map(|t| t.data().to_vec()).collect();
+    allreduce_all(options.ranks, &mut sums, "the premultiplied chunks")?;
+    for (t, s) in totals.iter_mut().zip(sums) {
+        t.data_mut().copy_from_slice(&s);
     }
     for ((name, ..), [generate, rows, multiply]) in tensors.iter().zip(&seconds) {
         tracing::debug!(tensor = name, generate, rows, multiply, "streamed premultiplication (seconds)");

@@ -1,0 +1,139 @@
+//! The training configurations over ranks: each rank solves its contiguous share of the
+//! samples in full ([`super::train::solve_configurations`]) and every rank receives every
+//! solved configuration (one all-gather), since each rank's share of the pair quantities'
+//! rows (a range of faces `i`, pairs `i n + j`) needs every configuration's values there.
+//!
+//! A configuration crosses between ranks as little-endian bytes: a header of counts, then its
+//! parameters, vertex positions, face geometry, visibility words, emission and radiosity. The
+//! reader checks every count against the bytes that remain before allocating from it.
+
+use super::error::RadiosityError;
+use super::form_factor::NearField;
+use super::mesh::FaceGeometry;
+use super::train::{solve_configurations, Configuration, DesignSpace};
+use crate::reduce::Communicator;
+use glam::DVec3;
+
+/// Solves the configurations at `params` shared over `ranks` and gathers them all on every
+/// rank, in the order of `params`. `progress` is called with this rank's solves so far.
+pub fn solve_configurations_across(
+    space: &dyn DesignSpace,
+    params: &[Vec<f64>],
+    near: NearField,
+    progress: &(dyn Fn(usize) + Sync),
+    ranks: &dyn Communicator,
+) -> Result<Vec<Configuration>, RadiosityError> {
+    let share = ranks.share(params.len());
+    let mine = solve_configurations(space, &params[share], near, progress)?;
+    if ranks.size() == 1 {
+        return Ok(mine);
+    }
+    let mut bytes = Vec::new();
+    for c in &mine {
+        encode(c, &mut bytes);
+    }
+    let parts = ranks
+        .all_gather(&bytes)
+        .map_err(|cause| RadiosityError::Solve(format!("gathering the solved configurations: {cause}")))?;
+    let mut all = Vec::with_capacity(params.len());
+    for (rank, part) in parts.iter().enumerate() {
+        let mut reader = Reader { bytes: part, rank };
+        while !reader.bytes.is_empty() {
+            all.push(reader.configuration()?);
+        }
+    }
+    if all.len() != params.len() {
+        return Err(RadiosityError::Solve(format!(
+            "the ranks solved {} configurations of {}",
+            all.len(),
+            params.len()
+        )));
+    }
+    Ok(all)
+}
+
+fn put_f64s(out: &mut Vec<u8>, values: impl IntoIterator<Item = f64>) {
+    for v in values {
+        out.extend_from_slice(&v.to_le_bytes());
+    }
+}
+
+fn vec3s(v: &[DVec3]) -> impl Iterator<Item = f64> + '_ {
+    v.iter().flat_map(|p| p.to_array())
+}
+
+/// Appends `c` to `out`.
+fn encode(c: &Configuration, out: &mut Vec<u8>) {
+    let n = c.geometry.areas.len();
+    for count in [c.params.len(), c.g.len(), n, c.visibility.len()] {
+        out.extend_from_slice(&(count as u64).to_le_bytes());
+    }
+    put_f64s(out, c.params.iter().copied());
+    put_f64s(out, c.g.iter().copied());
+    put_f64s(out, vec3s(&c.geometry.centroids));
+    put_f64s(out, vec3s(&c.geometry.normals));
+    put_f64s(out, c.geometry.areas.iter().copied());
+    put_f64s(out, c.geometry.edge_squares.iter().copied());
+    for w in &c.visibility {
+        out.extend_from_slice(&w.to_le_bytes());
+    }
+    put_f64s(out, c.emission.iter().flatten().copied());
+    put_f64s(out, c.radiosity.iter().flatten().copied());
+}
+
+struct Reader<'a> {
+    bytes: &'a [u8],
+    rank: usize,
+}
+
+impl Reader<'_> {
+    fn bad(&self, what: &str) -> RadiosityError {
+        RadiosityError::Solve(format!("configuration bytes from rank {}: {what}", self.rank))
+    }
+
+    fn word(&mut self) -> Result<u64, RadiosityError> {
+        let (w, rest) = self.bytes.split_first_chunk::<8>().ok_or_else(|| self.bad("they end early"))?;
+        self.bytes = rest;
+        Ok(u64::from_le_bytes(*w))
+    }
+
+    /// `count` words, refused before allocating if fewer bytes remain.
+    fn words(&mut self, count: u64) -> Result<Vec<u64>, RadiosityError> {
+        let count = usize::try_from(count).map_err(|_| self.bad("a count longer than memory"))?;
+        if count.checked_mul(8).is_none_or(|b| b > self.bytes.len()) {
+            return Err(self.bad(&format!("{count} values declared, {} bytes remain", self.bytes.len())));
+        }
+        (0..count).map(|_| self.word()).collect()
+    }
+
+    fn f64s(&mut self, count: u64) -> Result<Vec<f64>, RadiosityError> {
+        Ok(self.words(count)?.into_iter().map(f64::from_bits).collect())
+    }
+
+    fn vec3s(&mut self, count: u64) -> Result<Vec<DVec3>, RadiosityError> {
+        let v = self.f64s(count.saturating_mul(3))?;
+        Ok(v.chunks_exact(3).map(DVec3::from_slice).collect())
+    }
+
+    fn rgbs(&mut self, count: u64) -> Result<Vec<[f64; 3]>, RadiosityError> {
+        let v = self.f64s(count.saturating_mul(3))?;
+        Ok(v.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect())
+    }
+
+    fn configuration(&mut self) -> Result<Configuration, RadiosityError> {
+        let (params, g, n, words) = (self.word()?, self.word()?, self.word()?, self.word()?);
+        Ok(Configuration {
+            params: self.f64s(params)?,
+            g: self.f64s(g)?,
+            geometry: FaceGeometry {
+                centroids: self.vec3s(n)?,
+                normals: self.vec3s(n)?,
+                areas: self.f64s(n)?,
+                edge_squares: self.f64s(n)?,
+            },
+            visibility: self.words(words)?,
+            emission: self.rgbs(n)?,
+            radiosity: self.rgbs(n)?,
+        })
+    }
+}
