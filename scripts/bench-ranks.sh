@@ -20,20 +20,18 @@ export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
 export GALERKIN_LOG=galerkin=info
 
 # `timed NAME CMD…`: runs CMD, its log in $OUT/NAME.log, wall seconds and the largest resident
-# set of the process tree (GNU time's %M, kB) on the log's last line.
+# set of the process tree (GNU time's %M, kB) on the log's last line. A finished log is kept
+# (FORCE=1 runs it again).
 timed() {
     local name=$1
     shift
-    /usr/bin/time -f "wall %e s, peak %M kB" "$@" >"$OUT/$name.out" 2>"$OUT/$name.log"
+    if [ "${FORCE:-0}" = 1 ] || ! tail -n 1 "$OUT/$name.log" 2>/dev/null | grep -q '^wall'; then
+        /usr/bin/time -f "wall %e s, peak %M kB" "$@" >"$OUT/$name.out" 2>"$OUT/$name.log"
+    fi
     tail -n 1 "$OUT/$name.log"
 }
 
-ranks() {
-    local n=$1
-    shift
-    mpirun --oversubscribe --mca btl_vader_single_copy_mechanism none -n "$n" -x RAYON_NUM_THREADS=1 \
-        -x GALERKIN_LOG "$BIN" "$@"
-}
+mpi=(mpirun --oversubscribe --mca btl_vader_single_copy_mechanism none -x RAYON_NUM_THREADS=1 -x GALERKIN_LOG)
 
 scene=scenes/radiosity/two_rooms_medium.toml
 echo "radiosity train $scene (540 samples)"
@@ -41,7 +39,7 @@ printf '  %-22s ' "one process, 2 threads"
 timed radiosity-alone "$BIN" radiosity train "$scene" --out "$OUT/radiosity-alone"
 for n in $RANKS; do
     printf '  %-22s ' "$n ranks"
-    timed "radiosity-$n" ranks "$n" radiosity train "$scene" --out "$OUT/radiosity-$n"
+    timed "radiosity-$n" "${mpi[@]}" -n "$n" "$BIN" radiosity train "$scene" --out "$OUT/radiosity-$n"
 done
 
 # Four cavity training runs of 33 frames (132 snapshots: enough for Table 1's m_u = 128).
@@ -57,6 +55,6 @@ printf '  %-22s ' "one process, 2 threads"
 timed fluid-alone "$BIN" fluid train "${runs[@]}" "${sizes[@]}" --out "$OUT/fluid-alone.safetensors"
 for n in $RANKS; do
     printf '  %-22s ' "$n ranks"
-    timed "fluid-$n" ranks "$n" fluid train "${runs[@]}" "${sizes[@]}" --out "$OUT/fluid-$n.safetensors"
+    timed "fluid-$n" "${mpi[@]}" -n "$n" "$BIN" fluid train "${runs[@]}" "${sizes[@]}" --out "$OUT/fluid-$n.safetensors"
 done
 echo "stage logs (seconds, megabytes sent by rank 0): $OUT/*.log"
