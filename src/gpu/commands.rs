@@ -235,6 +235,12 @@ impl Submission {
         let nanos = u64::try_from(timeout.as_nanos()).unwrap_or(u64::MAX);
         // SAFETY: the fence was submitted with this work and is owned by the engine.
         let r = unsafe { self.shared.raw.wait_for_fences(&[self.slot.fence], true, nanos) };
+        let r = match (r, self.shared.inject_loss()) {
+            // Injected (GpuDesc::lose_device): the work has finished, so the lost path below
+            // may destroy what it used, as after a real loss.
+            (Ok(()), true) => Err(vk::Result::ERROR_DEVICE_LOST),
+            (r, _) => r,
+        };
         match r {
             Ok(()) => {
                 self.done = true;
@@ -253,13 +259,35 @@ impl Submission {
                 Err(GpuError::Timeout { during: "Gpu::run", seconds: timeout.as_secs_f64() })
             }
             Err(e) => {
-                // Device lost: nothing will signal again. Retire the serial so drops proceed.
+                // Device lost: nothing will signal again. Retire the serial so drops proceed,
+                // and destroy the slot's fence and command buffer (allowed on a lost device).
                 self.done = true;
                 self.uses.clear();
+                self.slot.destroy(&self.shared);
                 self.shared.finish(self.serial, None);
+                if self.shared.lost.load(std::sync::atomic::Ordering::Relaxed) {
+                    return Err(GpuError::DeviceLost { during: INJECTED_WAIT });
+                }
                 Err(vk_error("vkWaitForFences (Gpu::run)", e))
             }
         }
+    }
+}
+
+/// What an injected device loss ([`crate::gpu::GpuDesc::lose_device`]) reports.
+const INJECTED_WAIT: &str = "vkWaitForFences (Gpu::run; lost by fault injection, GALERKIN_LOSE_DEVICE)";
+const INJECTED_SUBMIT: &str = "vkQueueSubmit (the device was lost by fault injection, GALERKIN_LOSE_DEVICE)";
+
+impl DeviceShared {
+    /// Counts a wait for a submission; true if [`crate::gpu::GpuDesc::lose_device`] says the
+    /// device is lost from this one on (the flag then fails every later submission).
+    fn inject_loss(&self) -> bool {
+        let Some(n) = self.lose_device else { return false };
+        let count = self.waits.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+        if count >= n {
+            self.lost.store(true, std::sync::atomic::Ordering::Relaxed);
+        }
+        count >= n
     }
 }
 
@@ -362,6 +390,9 @@ impl Gpu {
             .wait_semaphores(&wait_semaphores)
             .wait_dst_stage_mask(&wait_stages)
             .signal_semaphores(signal);
+        if shared.lost.load(std::sync::atomic::Ordering::Relaxed) {
+            return Err(GpuError::DeviceLost { during: INJECTED_SUBMIT });
+        }
         {
             let queue = shared.queue.lock().unwrap_or_else(|p| p.into_inner());
             // SAFETY: the queue is externally synchronised by its mutex; `fence` is unsignalled.

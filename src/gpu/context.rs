@@ -57,6 +57,11 @@ pub struct GpuDesc {
     /// (`GALERKIN_FAIL_ALLOCATION=N`): every command must then fail with an error, leaving
     /// nothing behind and leaking no Vulkan object.
     pub fail_allocation: Option<u64>,
+    /// Fault injection for tests: the wait for the submission with this number (1 = the
+    /// first, counted per [`Gpu`]) reports the device lost once the work has really finished,
+    /// and every later submission fails as lost (`GALERKIN_LOSE_DEVICE=N`): every command must
+    /// then fail with an error, leaving nothing behind and leaking no Vulkan object.
+    pub lose_device: Option<u64>,
 }
 
 impl Default for GpuDesc {
@@ -76,6 +81,7 @@ impl Default for GpuDesc {
             fail_allocation: std::env::var("GALERKIN_FAIL_ALLOCATION")
                 .ok()
                 .and_then(|v| v.trim().parse().ok()),
+            lose_device: std::env::var("GALERKIN_LOSE_DEVICE").ok().and_then(|v| v.trim().parse().ok()),
         }
     }
 }
@@ -114,6 +120,11 @@ pub(crate) struct DeviceShared {
     /// [`GpuDesc::fail_allocation`], and the allocations made so far.
     pub(crate) fail_allocation: Option<u64>,
     pub(crate) allocations: std::sync::atomic::AtomicU64,
+    /// [`GpuDesc::lose_device`], the submissions waited for so far, and whether the device
+    /// counts as lost.
+    pub(crate) lose_device: Option<u64>,
+    pub(crate) waits: std::sync::atomic::AtomicU64,
+    pub(crate) lost: std::sync::atomic::AtomicBool,
     pub(crate) allocator: Mutex<ManuallyDrop<Allocator>>,
     pub(crate) tracker: Mutex<Tracker>,
     debug_names: Option<ash::ext::debug_utils::Device>,
@@ -340,6 +351,9 @@ impl Gpu {
                 fence_timeout: p.desc.fence_timeout,
                 fail_allocation: p.desc.fail_allocation,
                 allocations: std::sync::atomic::AtomicU64::new(0),
+                lose_device: p.desc.lose_device,
+                waits: std::sync::atomic::AtomicU64::new(0),
+                lost: std::sync::atomic::AtomicBool::new(false),
                 allocator: Mutex::new(ManuallyDrop::new(allocator)),
                 tracker: Mutex::new(Tracker::default()),
                 debug_names: p.debug_names,
