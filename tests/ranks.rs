@@ -8,8 +8,10 @@
 //! compared to 1e-12 of `σ_max²`: a σ of 1e-5 σ_max is only known to 1e-7 of itself by any
 //! method of snapshots), eigenvectors by that over the spectral gap
 //! (principal angles at 1e-10 for well-separated spectra), and reduced tensors, linear in the
-//! bases, by the same relative amount (1e-10 relative to each tensor's largest entry; observed
-//! about 1e-13).
+//! bases, by the same relative amount: the fluid's to 1e-10 of each tensor's largest entry
+//! (observed 2e-13 to 4e-13), the radiosity's to 1e-9 (observed 7.5e-11: its pair bases may
+//! keep modes down to σ = 1e-5 σ_max, whose directions rounding moves by up to ε σ_max²/σ²,
+//! and the reduced tensors carry them).
 
 mod common;
 
@@ -235,13 +237,20 @@ fn radiosity_training_over_ranks_matches_one_rank() {
             let t = r.unwrap();
             assert_eq!(t.configurations, 10);
             let worst = compare_models(t.model.model(), one.model.model());
-            assert!(worst < 1e-10, "{size} ranks, rank {rank}: reduced tensors differ by {worst:e}");
+            eprintln!("radiosity, {size} ranks, rank {rank}: reduced tensors within {worst:.1e}");
+            assert!(
+                worst < RADIOSITY_TOLERANCE,
+                "{size} ranks, rank {rank}: reduced tensors differ by {worst:e}"
+            );
             // Rank 0 alone writes the model.
             assert_eq!(t.bytes_on_disk > 0, rank == 0);
         }
         assert!(out.join("model.safetensors").is_file());
     }
 }
+
+/// How far the radiosity model trained over ranks may differ from one rank's (see the header).
+const RADIOSITY_TOLERANCE: f64 = 1e-9;
 
 fn tunnel_run(dir: &Path, scale: f64, frames: usize) -> PathBuf {
     let mut scene = small_tunnel(scale).expect("scene");
@@ -263,6 +272,7 @@ fn fluid_training_over_ranks_matches_one_rank() {
         {
             let model = r.unwrap();
             let worst = compare_models(&model.core, &one.core);
+            eprintln!("fluid, {size} ranks: reduced tensors within {worst:.1e}");
             assert!(worst < 1e-10, "{size} ranks: reduced tensors differ by {worst:e}");
         }
     }
