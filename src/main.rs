@@ -191,11 +191,11 @@ fn run(desc: &GpuDesc, command: Command, ranks: &dyn Communicator) -> Result<()>
     let over_ranks = matches!(
         &command,
         Command::Radiosity { action: cli::radiosity::Action::Train(_) }
-            | Command::Fluid { action: cli::fluid::Action::Train(_) }
+            | Command::Fluid { action: cli::fluid::Action::Train(_) | cli::fluid::Action::TrainScene(_) }
     );
     if ranks.size() > 1 && !over_ranks {
         bail!(
-            "{} ranks: only `radiosity train` and `fluid train` run over MPI ranks; run other commands without mpirun",
+            "{} ranks: only `radiosity train`, `fluid train` and `fluid train-scene` run over MPI ranks; run other commands without mpirun",
             ranks.size()
         );
     }

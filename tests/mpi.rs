@@ -81,7 +81,7 @@ fn radiosity_training_over_mpi_ranks_matches_one_process() {
         // Results are printed by rank 0 only.
         assert_eq!(stdout.matches("radiosity train:").count(), 1, "{stdout}");
         let model = ReducedRadiosity::load(Path::new(&to)).unwrap();
-        let worst = compare_models(model.model(), alone.model());
+        let worst = compare_models(model.model(), alone.model()).worst;
         assert!(worst < 1e-9, "{ranks} ranks: reduced tensors differ by {worst:e}");
     }
 }
@@ -112,9 +112,46 @@ fn fluid_training_over_mpi_ranks_matches_one_process() {
         let to = model_path(&format!("ranks-{ranks}"));
         ok(&train(ranks, &to), &format!("{ranks} ranks"));
         let model = ReducedFluidModel::load(&to).unwrap();
-        let worst = compare_models(&model.core, &alone.core);
-        assert!(worst < 1e-10, "{ranks} ranks: reduced tensors differ by {worst:e}");
+        let a = compare_models(&model.core, &alone.core);
+        assert!(a.worst < 1e-10 && a.constraint < 1e-6, "{ranks} ranks: reduced tensors differ by {a:?}");
     }
+}
+
+#[test]
+fn a_scene_trains_over_mpi_ranks_each_simulating_its_runs() {
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/fluid/cavity_small.toml");
+    let dir = tempfile::tempdir().unwrap();
+    let work = dir.path().join("work");
+    let path = |p: &Path| p.to_string_lossy().into_owned();
+    let (scene, work_s) = (path(&scene), path(&work));
+    let train = |ranks: usize, model: &Path| {
+        let model = path(model);
+        let args = [
+            "fluid",
+            "train-scene",
+            &scene,
+            "--runs",
+            "0,3",
+            "--frames",
+            "6",
+            "--work",
+            &work_s,
+            "--out",
+            &model,
+        ];
+        galerkin(ranks, &args)
+    };
+    let stdout = ok(&train(2, &dir.path().join("ranks.safetensors")), "2 ranks");
+    assert_eq!(stdout.matches("trained in").count(), 1, "rank 0 alone prints: {stdout}");
+    assert!(work.join("run-00").is_dir() && work.join("run-03").is_dir());
+    // One process on the same runs (simulations are not bit-reproducible across processes):
+    // the bases and tensors again.
+    std::fs::remove_file(work.join("bases.safetensors")).unwrap();
+    ok(&train(0, &dir.path().join("one.safetensors")), "one process");
+    let ranks = ReducedFluidModel::load(&dir.path().join("ranks.safetensors")).unwrap();
+    let one = ReducedFluidModel::load(&dir.path().join("one.safetensors")).unwrap();
+    let a = compare_models(&ranks.core, &one.core);
+    assert!(a.worst < 1e-10 && a.constraint < 1e-6, "{a:?}");
 }
 
 #[test]
@@ -130,5 +167,6 @@ fn a_failing_command_stops_every_rank_with_its_message() {
     // Commands that do not run over ranks are refused under mpirun, before any work.
     let out = galerkin(2, &["info"]);
     assert!(!out.status.success());
-    assert!(String::from_utf8_lossy(&out.stderr).contains("only `radiosity train` and `fluid train`"));
+    assert!(String::from_utf8_lossy(&out.stderr)
+        .contains("only `radiosity train`, `fluid train` and `fluid train-scene`"));
 }

@@ -182,7 +182,7 @@ pub fn run(desc: &GpuDesc, action: &Action, ranks: &dyn Communicator) -> Result<
         Action::Export(args) => export(args),
         Action::Train(args) => crate::cli::fluid_reduced::train(args, ranks),
         Action::Reduced(args) => crate::cli::fluid_reduced::reduced(args),
-        Action::TrainScene(args) => crate::cli::fluid_reduced::train_scene(args),
+        Action::TrainScene(args) => crate::cli::fluid_reduced::train_scene(args, ranks),
         Action::Compare(args) => crate::cli::fluid_reduced::compare(desc, args),
         Action::ErrorStudy(args) => crate::cli::fluid_reduced::error_study(args),
         Action::Bench(args) => bench(desc, args),

@@ -276,7 +276,9 @@ pub fn train(args: &TrainArgs, ranks: &dyn Communicator) -> Result<()> {
     Ok(())
 }
 
-pub fn train_scene(args: &TrainSceneArgs) -> Result<()> {
+/// `galerkin fluid train-scene`, over MPI ranks when `mpirun` started it (each rank simulates
+/// its share of the runs; rank 0 alone prints and writes).
+pub fn train_scene(args: &TrainSceneArgs, ranks: &dyn Communicator) -> Result<()> {
     use galerkin::fluid::reduced::{SceneTraining, TrainingEvent};
     let start = Instant::now();
     let work = args.work.clone().unwrap_or_else(|| {
@@ -289,9 +291,13 @@ pub fn train_scene(args: &TrainSceneArgs) -> Result<()> {
         runs: args.runs.clone(),
         work: work.clone(),
     };
-    println!("fluid train-scene: {} (work directory {})", args.scene.display(), work.display());
+    let root = ranks.is_root();
+    if root {
+        println!("fluid train-scene: {} (work directory {})", args.scene.display(), work.display());
+    }
     let mut bar: Option<indicatif::ProgressBar> = None;
     let mut on_event = |event: TrainingEvent| match event {
+        _ if !root => {}
         TrainingEvent::RunStarted { run, index, of, frames } => {
             let b = crate::progress_bar(frames as u64, &format!("run {run} ({} of {of})", index + 1));
             bar = Some(b);
@@ -316,7 +322,11 @@ pub fn train_scene(args: &TrainSceneArgs) -> Result<()> {
             println!("  {stage}: {how} in {seconds:.1} s, peak memory {peak}");
         }
     };
-    let model = galerkin::fluid::reduced::train_scene(&args.scene, &args.out, &options, &mut on_event)?;
+    let model =
+        galerkin::fluid::reduced::train_scene_across(&args.scene, &args.out, &options, &mut on_event, ranks)?;
+    if !root {
+        return Ok(());
+    }
     print_bases(&model);
     println!(
         "trained in {:.1} s → {} ({:.1} MB of reduced tensors)",

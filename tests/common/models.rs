@@ -27,10 +27,26 @@ pub fn max_relative(a: &Tensor, b: &Tensor) -> f64 {
     a.data().iter().zip(b.data()).fold(0.0f64, |m, (x, y)| m.max((x - y).abs())) / scale
 }
 
+/// The fluid's constraint basis `B_d`: an SVD of `D [B_f B_h]` cut at singular values of 1e-9,
+/// which magnifies the rounding of its input by up to the inverse of its singular-value gaps —
+/// so it and the tensors it reduces agree between rank counts to about 1e-8 on small cases and
+/// 2e-7 on the cavity (BENCHMARKS.md), not to rounding.
+pub const CONSTRAINT_BASES: [&str; 1] = ["d"];
+
+/// How closely two models agree.
+#[derive(Debug)]
+pub struct Agreement {
+    /// The worst relative difference of the tensors that carry no constraint basis.
+    pub worst: f64,
+    /// The worst of the tensors that carry one ([`CONSTRAINT_BASES`]); 0 if none does.
+    pub constraint: f64,
+}
+
 /// Every reduced tensor of `a` against `b`'s, up to the sign of each kept basis's columns
 /// (PCA's sign is the eigensolver's choice; the bases the model does not keep must agree in
-/// sign): the worst relative difference.
-pub fn compare_models(a: &ReducedModel, b: &ReducedModel) -> f64 {
+/// sign): the worst relative differences. Kept bases must agree column by column to 1e-9
+/// (constraint bases to 1e-6).
+pub fn compare_models(a: &ReducedModel, b: &ReducedModel) -> Agreement {
     // The sign of each column of each kept basis, from the bases themselves.
     let mut signs = std::collections::BTreeMap::new();
     let mut names: Vec<&str> = a.tensors().flat_map(|(_, axes, _)| axes.iter().map(String::as_str)).collect();
@@ -49,10 +65,11 @@ pub fn compare_models(a: &ReducedModel, b: &ReducedModel) -> f64 {
                     .signum()
             })
             .collect();
-        same_columns_up_to_sign(ba.matrix(), bb.matrix(), 1e-9);
+        let tol = if CONSTRAINT_BASES.contains(&name) { 1e-6 } else { 1e-9 };
+        same_columns_up_to_sign(ba.matrix(), bb.matrix(), tol);
         signs.insert(name.to_string(), s);
     }
-    let mut worst = 0.0f64;
+    let mut agreement = Agreement { worst: 0.0, constraint: 0.0 };
     for (name, axes, ta) in a.tensors() {
         let tb = b.tensor(name).unwrap_or_else(|| panic!("tensor {name}"));
         let shape = ta.shape().to_vec();
@@ -67,7 +84,12 @@ pub fn compare_models(a: &ReducedModel, b: &ReducedModel) -> f64 {
                 }
             }
         }
-        worst = worst.max(max_relative(ta, &flipped));
+        let d = max_relative(ta, &flipped);
+        if axes.iter().any(|x| CONSTRAINT_BASES.contains(&x.as_str())) {
+            agreement.constraint = agreement.constraint.max(d);
+        } else {
+            agreement.worst = agreement.worst.max(d);
+        }
     }
-    worst
+    agreement
 }

@@ -39,7 +39,7 @@ pub mod training;
 pub use bases::{BasisReport, BasisSizes, FluidBases};
 pub use cavity_motion::{CavityMotion, CompressionSchedule};
 pub use model::{MeshFingerprint, MeshOf, ReducedFluidModel, Trajectory};
-pub use pipeline::{train_scene, SceneTraining, TrainingEvent};
+pub use pipeline::{train_scene, train_scene_across, SceneTraining, TrainingEvent};
 pub use run::{run_driven, run_paced, run_reduced, write_lifted, ReducedMotion, ReducedRun, PACE_RANGE};
 pub use step::{Exponential, FluxCombination, ReducedFluid, ReducedState, ReducedStepReport};
 pub use study::{one_step_errors, ErrorStudy, SizeErrors};

@@ -27,7 +27,7 @@ use crate::fluid::scene::{FluidScene, Motion};
 use crate::fluid::snapshots::SnapshotReader;
 use crate::fluid::FluidError;
 use crate::process::{peak_memory_mb, reset_peak_memory};
-use crate::reduce::SingleRank;
+use crate::reduce::{Communicator, SingleRank};
 
 use super::bases::{BasisSizes, FluidBases};
 use super::cavity_motion::CavityMotion;
@@ -117,12 +117,29 @@ fn io(path: &Path, e: impl std::fmt::Display) -> FluidError {
 }
 
 /// Trains a reduced model of the scene at `scene_path` and writes it to `model_path` (see the
-/// module docs); `on_event` hears every run, frame and stage.
+/// module docs); `on_event` hears every run, frame and stage. One rank:
+/// [`train_scene_across`].
 pub fn train_scene(
     scene_path: &Path,
     model_path: &Path,
     options: &SceneTraining,
     on_event: &mut dyn FnMut(TrainingEvent),
+) -> Result<ReducedFluidModel, FluidError> {
+    train_scene_across(scene_path, model_path, options, on_event, &SingleRank)
+}
+
+/// [`train_scene`] shared over `ranks` (`mpirun -n N galerkin fluid train-scene …`): each rank
+/// simulates its contiguous share of the training runs into the work directory (each run its
+/// own snapshot directory), then the bases and tensors are built over the ranks
+/// ([`ReducedFluidModel::fit_across`]'s sharding). Rank 0 alone writes the work directory's
+/// key, the bases and the model; every rank returns the same model, within rounding of one
+/// rank's. Resuming works as on one rank, whatever the number of ranks of the stopped run.
+pub fn train_scene_across(
+    scene_path: &Path,
+    model_path: &Path,
+    options: &SceneTraining,
+    on_event: &mut dyn FnMut(TrainingEvent),
+    ranks: &dyn Communicator,
 ) -> Result<ReducedFluidModel, FluidError> {
     let scene_text = std::fs::read_to_string(scene_path).map_err(|e| io(scene_path, e))?;
     let scene = FluidScene::parse(&scene_text, scene_path)?;
@@ -133,8 +150,95 @@ pub fn train_scene(
     let runs = runs_of(&scene, options.runs.as_deref())?;
     drop(scene);
     let work = &options.work;
+    // Rank 0 checks or writes the work directory's key; the others wait for it.
+    if ranks.is_root() {
+        check_work_key(scene_path, &scene_text, frames, work)?;
+    }
+    barrier(ranks)?;
+
+    // The full-space runs, each into its own snapshot directory, each by the rank that owns it.
+    let share = ranks.share(runs.len());
+    let mut dirs = Vec::new();
+    for (index, &run) in runs.iter().enumerate() {
+        let dir = work.join(format!("run-{run:02}"));
+        dirs.push(dir.clone());
+        if !share.contains(&index) {
+            continue;
+        }
+        let stage = Stage::start();
+        let done = SnapshotReader::open(&dir).is_ok_and(|r| r.meta().frames == frames + 1);
+        if !done {
+            on_event(TrainingEvent::RunStarted { run, index, of: runs.len(), frames });
+            let mut scene = FluidScene::parse(&scene_text, scene_path)?;
+            if matches!(scene.motion, Motion::Cavity { .. }) {
+                scene.set_run(run)?;
+            }
+            scene.frames = frames;
+            simulate_run(&mut scene, frames, &dir, true, &mut |k, _, _, _| {
+                on_event(TrainingEvent::Frame(k))
+            })?;
+        }
+        on_event(stage.done(format!("run {run}"), done));
+    }
+    barrier(ranks)?;
+
+    // The bases, kept in the work directory for a training that stops after them.
+    let set = TrainingSet::open(&dirs)?;
+    let bases_path = work.join("bases.safetensors");
+    let bases_key = format!("{:?} {:?} {frames}", runs, options.sizes);
+    let stage = Stage::start();
+    let kept = if bases_path.exists() { FluidBases::load(&bases_path, &bases_key)? } else { None };
+    let resumed = kept.is_some();
+    let bases = match kept {
+        Some(b) => b,
+        None => {
+            let b = FluidBases::build(
+                &set,
+                &options.sizes,
+                &mut |p| on_event(TrainingEvent::Part(p.into())),
+                ranks,
+            )?;
+            if ranks.is_root() {
+                b.save(&bases_path, &bases_key)?;
+            }
+            b
+        }
+    };
+    on_event(stage.done("bases".into(), resumed));
+
+    // The trajectories and the premultiplied tensors: the model.
+    let stage = Stage::start();
+    let mut model = ReducedFluidModel::train(
+        &set,
+        bases,
+        &options.sizes,
+        &mut |p| on_event(TrainingEvent::Part(p.into())),
+        ranks,
+    )?;
+    // The cavity is driven at run time by its compressions: its reduced motion model.
+    if let Motion::Cavity { cavity, .. } = &FluidScene::parse(&scene_text, scene_path)?.motion {
+        let b_g = model.basis("g").ok_or_else(|| FluidError::State("the model has no basis g".into()))?;
+        model.cavity = Some(CavityMotion::new(cavity, b_g));
+    }
+    if ranks.is_root() {
+        model.save(model_path)?;
+    }
+    on_event(stage.done("tensors".into(), false));
+    Ok(model)
+}
+
+/// Every rank waits here until all have arrived (a failed rank stops them with its message).
+fn barrier(ranks: &dyn Communicator) -> Result<(), FluidError> {
+    ranks
+        .allreduce_sum(&mut [0.0])
+        .map_err(|e| FluidError::State(format!("waiting for the other ranks: {e}")))
+}
+
+/// Refuses a work directory that holds the training of another scene or frame count, and
+/// marks a new one as this training's.
+fn check_work_key(scene_path: &Path, scene_text: &str, frames: usize, work: &Path) -> Result<(), FluidError> {
     std::fs::create_dir_all(work).map_err(|e| io(work, e))?;
-    let key = WorkKey { scene: scene_path.to_path_buf(), scene_text: scene_text.clone(), frames };
+    let key = WorkKey { scene: scene_path.to_path_buf(), scene_text: scene_text.to_string(), frames };
     let key_path = work.join("work.json");
     match std::fs::read_to_string(&key_path) {
         Ok(text) => {
@@ -156,67 +260,7 @@ pub fn train_scene(
         }
         Err(e) => return Err(io(&key_path, e)),
     }
-
-    // The full-space runs, each into its own snapshot directory.
-    let mut dirs = Vec::new();
-    for (index, &run) in runs.iter().enumerate() {
-        let dir = work.join(format!("run-{run:02}"));
-        let stage = Stage::start();
-        let done = SnapshotReader::open(&dir).is_ok_and(|r| r.meta().frames == frames + 1);
-        if !done {
-            on_event(TrainingEvent::RunStarted { run, index, of: runs.len(), frames });
-            let mut scene = FluidScene::parse(&scene_text, scene_path)?;
-            if matches!(scene.motion, Motion::Cavity { .. }) {
-                scene.set_run(run)?;
-            }
-            scene.frames = frames;
-            simulate_run(&mut scene, frames, &dir, true, &mut |k, _, _, _| {
-                on_event(TrainingEvent::Frame(k))
-            })?;
-        }
-        on_event(stage.done(format!("run {run}"), done));
-        dirs.push(dir);
-    }
-
-    // The bases, kept in the work directory for a training that stops after them.
-    let set = TrainingSet::open(&dirs)?;
-    let bases_path = work.join("bases.safetensors");
-    let bases_key = format!("{:?} {:?} {frames}", runs, options.sizes);
-    let stage = Stage::start();
-    let kept = if bases_path.exists() { FluidBases::load(&bases_path, &bases_key)? } else { None };
-    let resumed = kept.is_some();
-    let bases = match kept {
-        Some(b) => b,
-        None => {
-            let b = FluidBases::build(
-                &set,
-                &options.sizes,
-                &mut |p| on_event(TrainingEvent::Part(p.into())),
-                &SingleRank,
-            )?;
-            b.save(&bases_path, &bases_key)?;
-            b
-        }
-    };
-    on_event(stage.done("bases".into(), resumed));
-
-    // The trajectories and the premultiplied tensors: the model.
-    let stage = Stage::start();
-    let mut model = ReducedFluidModel::train(
-        &set,
-        bases,
-        &options.sizes,
-        &mut |p| on_event(TrainingEvent::Part(p.into())),
-        &SingleRank,
-    )?;
-    // The cavity is driven at run time by its compressions: its reduced motion model.
-    if let Motion::Cavity { cavity, .. } = &FluidScene::parse(&scene_text, scene_path)?.motion {
-        let b_g = model.basis("g").ok_or_else(|| FluidError::State("the model has no basis g".into()))?;
-        model.cavity = Some(CavityMotion::new(cavity, b_g));
-    }
-    model.save(model_path)?;
-    on_event(stage.done("tensors".into(), false));
-    Ok(model)
+    Ok(())
 }
 
 /// A stage's start: its clock, and the peak memory reset.
