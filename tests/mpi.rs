@@ -144,7 +144,7 @@ fn a_scene_trains_over_mpi_ranks_each_simulating_its_runs() {
     let stdout = ok(&train(2, &dir.path().join("ranks.safetensors")), "2 ranks");
     assert_eq!(stdout.matches("trained in").count(), 1, "rank 0 alone prints: {stdout}");
     assert!(work.join("run-00").is_dir() && work.join("run-03").is_dir());
-    // One process on the same runs (simulations are not bit-reproducible across processes):
+    // One process on the same runs (read back from the work directory, not simulated again):
     // the bases and tensors again.
     std::fs::remove_file(work.join("bases.safetensors")).unwrap();
     ok(&train(0, &dir.path().join("one.safetensors")), "one process");

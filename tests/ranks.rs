@@ -321,8 +321,8 @@ fn a_scene_trains_over_ranks_each_simulating_its_runs() {
             .collect::<Vec<_>>()
     };
     let trained = over_ranks(false);
-    // One rank on the same runs (the simulations themselves are not bit-reproducible across
-    // processes' thread schedules): the bases and tensors again, from the same snapshots.
+    // One rank on the same runs (read back from the work directory, not simulated again): the
+    // bases and tensors again, from the same snapshots.
     std::fs::remove_file(dir.path().join("work/bases.safetensors")).unwrap();
     let one = train_scene(&scene, &dir.path().join("one.safetensors"), &options, &mut |_| {}).unwrap();
     for model in &trained {
