@@ -174,20 +174,6 @@ fn unpack(mut bytes: &[u8], count: usize) -> Result<Vec<Vec<u8>>, String> {
     Ok(parts)
 }
 
-/// Runs `work` on `ranks`, and if it fails, tells the other ranks before returning the error —
-/// so that a failing rank stops all with its message instead of leaving them waiting in a
-/// collective.
-pub fn run_or_stop_all<T, E: std::fmt::Display>(
-    ranks: &dyn Communicator,
-    work: impl FnOnce() -> Result<T, E>,
-) -> Result<T, E> {
-    let result = work();
-    if let Err(e) = &result {
-        ranks.fail(&e.to_string());
-    }
-    result
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
