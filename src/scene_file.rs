@@ -7,7 +7,7 @@ use serde::de::DeserializeOwned;
 
 /// A scene file that cannot be read, parsed or validated.
 #[derive(Debug, thiserror::Error)]
-#[error("{path}:{line}: {message}")]
+#[error("{}{}: {message}", path.display(), at_line(*line))]
 pub struct SceneFileError {
     /// The file.
     pub path: PathBuf,
@@ -15,6 +15,15 @@ pub struct SceneFileError {
     pub line: usize,
     /// What is wrong.
     pub message: String,
+}
+
+/// `:LINE` for a line of the file, nothing when the file could not be read at all (line 0).
+fn at_line(line: usize) -> String {
+    if line == 0 {
+        String::new()
+    } else {
+        format!(":{line}")
+    }
 }
 
 /// The file's text. A file of another kind (a Wavefront OBJ, VTK XML, a binary file) is
@@ -85,4 +94,17 @@ pub fn error_at(text: &str, path: &Path, key: &str, message: String) -> SceneFil
         .or_else(|| text.lines().position(|l| code(l).contains(key)))
         .map_or(1, |i| i + 1);
     SceneFileError { path: path.to_path_buf(), line, message }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_unreadable_file_is_named_without_a_line_and_a_bad_line_with_it() {
+        let missing = read(Path::new("/nonexistent/scene.toml")).unwrap_err().to_string();
+        assert!(missing.starts_with("/nonexistent/scene.toml: "), "{missing}");
+        let at = error_at("a = 1\nb = 2\n", Path::new("s.toml"), "b", "bad".into()).to_string();
+        assert_eq!(at, "s.toml:2: bad");
+    }
 }
