@@ -14,7 +14,6 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use galerkin::fluid::operators::{add_laplacian, advect, divergence, CellOperators};
-use galerkin::fluid::reduced::example::small_tunnel;
 use galerkin::fluid::reduced::{
     bases::relative_divergence, run_reduced, BasisSizes, Exponential, FluidBases, FluxCombination,
     ReducedFluid, ReducedFluidModel, ReducedMotion, ReducedState, ReducedStepReport, TrainingSet,
@@ -22,6 +21,8 @@ use galerkin::fluid::reduced::{
 use galerkin::fluid::FluidSolver;
 use galerkin::mesh::{SimplexMesh, Topology};
 use galerkin::reduce::{Basis, SingleRank};
+
+use common::tunnel::tunnel_run;
 
 struct Lcg(u64);
 impl Lcg {
@@ -41,14 +42,6 @@ fn norm(x: &[f64]) -> f64 {
 fn rel_diff(a: &[f64], b: &[f64]) -> f64 {
     let d: Vec<f64> = a.iter().zip(b).map(|(x, y)| x - y).collect();
     norm(&d) / norm(b).max(1e-300)
-}
-
-/// The small tunnel at an obstacle scale, simulated for `frames` frames into `dir`.
-fn tunnel_run(dir: &Path, scale: f64, frames: usize) -> PathBuf {
-    let mut scene = small_tunnel(scale).expect("scene");
-    let out = dir.join(format!("tunnel-{scale}"));
-    galerkin::fluid::run::simulate_run(&mut scene, frames, &out, true, &mut |_, _, _, _| {}).expect("run");
-    out
 }
 
 /// Two waving-channel runs (different flows) in `dim` dimensions.

@@ -8,15 +8,15 @@
 
 mod common;
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
 
-use galerkin::fluid::reduced::example::small_tunnel;
 use galerkin::fluid::reduced::ReducedFluidModel;
 use galerkin::radiosity::reduced::ReducedRadiosity;
 
 use common::models::compare_models;
+use common::tunnel::tunnel_run;
 
 const BIN: &str = env!("CARGO_BIN_EXE_galerkin");
 
@@ -84,13 +84,6 @@ fn radiosity_training_over_mpi_ranks_matches_one_process() {
         let worst = compare_models(model.model(), alone.model()).worst;
         assert!(worst < 1e-9, "{ranks} ranks: reduced tensors differ by {worst:e}");
     }
-}
-
-fn tunnel_run(dir: &Path, scale: f64, frames: usize) -> PathBuf {
-    let mut scene = small_tunnel(scale).expect("scene");
-    let out = dir.join(format!("tunnel-{scale}"));
-    galerkin::fluid::run::simulate_run(&mut scene, frames, &out, true, &mut |_, _, _, _| {}).expect("run");
-    out
 }
 
 #[test]

@@ -16,9 +16,8 @@
 mod common;
 
 use std::ops::Range;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
-use galerkin::fluid::reduced::example::small_tunnel;
 use galerkin::fluid::reduced::{BasisSizes, ReducedFluidModel, TrainingSet};
 use galerkin::radiosity::any_scene::AnyScene;
 use galerkin::radiosity::train::{train_and_save, TrainOptions};
@@ -30,6 +29,7 @@ use galerkin::reduce::{
 use galerkin::tensor::{SparseTensor, Tensor};
 
 use common::models::{compare_models, max_relative, same_columns_up_to_sign};
+use common::tunnel::tunnel_run;
 
 struct Lcg(u64);
 impl Lcg {
@@ -251,13 +251,6 @@ fn radiosity_training_over_ranks_matches_one_rank() {
 
 /// How far the radiosity model trained over ranks may differ from one rank's (see the header).
 const RADIOSITY_TOLERANCE: f64 = 1e-9;
-
-fn tunnel_run(dir: &Path, scale: f64, frames: usize) -> PathBuf {
-    let mut scene = small_tunnel(scale).expect("scene");
-    let out = dir.join(format!("tunnel-{scale}"));
-    galerkin::fluid::run::simulate_run(&mut scene, frames, &out, true, &mut |_, _, _, _| {}).expect("run");
-    out
-}
 
 #[test]
 fn fluid_training_over_ranks_matches_one_rank() {

@@ -13,9 +13,9 @@ use super::premultiply::{
     premultiply_dense, premultiply_sparse_gpu, premultiply_sparse_with, premultiply_streamed_together,
     BasisRows, PremultiplyOptions, TensorChunks,
 };
+use super::ranks::allreduce_parts;
 use super::ranks::{Communicator, SINGLE_RANK};
 use super::reduced::{ReducedModel, ReducedTensor};
-use super::snapshot_basis::allreduce_all;
 use crate::gpu::Gpu;
 use crate::tensor::{SparseTensor, Tensor, TensorError};
 
@@ -320,11 +320,7 @@ impl Model {
                                     .0
                             }
                         };
-                        if ranks.size() > 1 {
-                            let mut sum = vec![y.data().to_vec()];
-                            allreduce_all(ranks, &mut sum, &format!("the premultiplied `{name}`"))?;
-                            y.data_mut().copy_from_slice(&sum[0]);
-                        }
+                        allreduce_parts(ranks, &mut [y.data_mut()], &format!("the premultiplied `{name}`"))?;
                         y
                     }
                     (FullTensor::Streamed(_), _, _) => unreachable!("handled above"),

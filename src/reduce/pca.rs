@@ -20,8 +20,9 @@ use ash::vk;
 use super::basis::Basis;
 use super::error::ReduceError;
 use super::gpu_eval::Backend;
+use super::ranks::allreduce_parts;
 use super::ranks::{bytes_f64, f64_bytes, Communicator, SingleRank};
-use super::snapshot_basis::{allreduce_all, orthonormal_in, product, transposed_product};
+use super::snapshot_basis::{orthonormal_in, product, transposed_product};
 use crate::gpu::{Buffer, Gpu, MemoryKind, Submitter};
 use crate::tensor::gpu::{Gemm, GemmShape};
 use crate::tensor::{symmetric_eigen, Tensor};
@@ -261,7 +262,7 @@ fn pca_inner(
             gram = d.read()?;
         }
     }
-    allreduce_all(ranks, std::slice::from_mut(&mut gram), "the Gram matrix of the snapshots")?;
+    allreduce_parts(ranks, &mut [&mut gram], "the Gram matrix of the snapshots")?;
     let modes = modes_from_gram(name, gram, k, truncation, 0.0)?;
     let (vs, m, sigma2, kept, total) =
         (modes.coefficients, modes.columns, modes.sigma2, modes.kept, modes.total);
@@ -280,7 +281,7 @@ fn pca_inner(
     let mut b = Tensor::from_vec(&[rows, m], b).expect("rows × m");
     for _ in 0..2 {
         let mut w = transposed_product(&b, &b).into_data();
-        allreduce_all(ranks, std::slice::from_mut(&mut w), "the Gram matrix of the basis rows")?;
+        allreduce_parts(ranks, &mut [&mut w], "the Gram matrix of the basis rows")?;
         let cols = b.shape()[1];
         let u = orthonormal_in(name, &Tensor::from_vec(&[cols, cols], w).expect("m × m"))?;
         b = product(&b, &u);

@@ -21,7 +21,7 @@ use faer::{Accum, MatMut, MatRef, Par};
 use super::error::ReduceError;
 use super::pca::{modes_from_gram, Truncation, BLOCK_ROWS};
 use super::premultiply::BasisRows;
-use super::ranks::Communicator;
+use super::ranks::{allreduce_parts, Communicator};
 use super::Basis;
 use crate::tensor::Tensor;
 
@@ -69,7 +69,7 @@ pub fn basis_grams(
 }
 
 /// `X_aᵀ X_b` over blocks of rows of matrices given by rows (`rows(source, indices)`, of
-/// `counts[source]` columns each): this rank's share of the blocks, then one allreduce.
+/// `counts[source]` columns each): this rank's share of the rows, then one allreduce.
 fn gram_pass(
     dims: &[usize],
     counts: &[usize],
@@ -137,7 +137,8 @@ fn gram_pass(
             p((end - first) as f64, (last - first) as f64);
         }
     }
-    allreduce_all(ranks, &mut grams, "the Gram matrices of the snapshots")?;
+    let mut parts: Vec<&mut [f64]> = grams.iter_mut().map(Vec::as_mut_slice).collect();
+    allreduce_parts(ranks, &mut parts, "the Gram matrices of the snapshots")?;
     for (g, &(a, b)) in grams.iter_mut().zip(pairs) {
         if a == b {
             let k = counts[a];
@@ -153,28 +154,6 @@ fn gram_pass(
         .zip(grams)
         .map(|(&(a, b), g)| Tensor::from_vec(&[counts[a], counts[b]], g).expect("k_a × k_b"))
         .collect())
-}
-
-/// Sums `parts` (each a vector of values) over `ranks` in one allreduce.
-pub(crate) fn allreduce_all(
-    ranks: &dyn Communicator,
-    parts: &mut [Vec<f64>],
-    what: &str,
-) -> Result<(), ReduceError> {
-    if ranks.size() == 1 {
-        return Ok(());
-    }
-    let mut flat: Vec<f64> = parts.iter().flatten().copied().collect();
-    ranks
-        .allreduce_sum(&mut flat)
-        .map_err(|cause| ReduceError::Ranks { context: format!("summing {what} over ranks"), cause })?;
-    let mut at = 0;
-    for p in parts.iter_mut() {
-        let len = p.len();
-        p.copy_from_slice(&flat[at..at + len]);
-        at += len;
-    }
-    Ok(())
 }
 
 /// A basis `B = Σ_p S_p W_p` over one or two snapshot sources, its rows regenerated on demand

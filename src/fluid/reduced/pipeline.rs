@@ -27,7 +27,7 @@ use crate::fluid::scene::{FluidScene, Motion};
 use crate::fluid::snapshots::SnapshotReader;
 use crate::fluid::FluidError;
 use crate::process::{peak_memory_mb, reset_peak_memory};
-use crate::reduce::{Communicator, SingleRank};
+use crate::reduce::{Communicator, RanksError, SingleRank};
 
 use super::bases::{BasisSizes, FluidBases};
 use super::cavity_motion::CavityMotion;
@@ -150,11 +150,12 @@ pub fn train_scene_across(
     let runs = runs_of(&scene, options.runs.as_deref())?;
     drop(scene);
     let work = &options.work;
+    let waiting = |e: RanksError| FluidError::State(format!("waiting for the other ranks: {e}"));
     // Rank 0 checks or writes the work directory's key; the others wait for it.
     if ranks.is_root() {
         check_work_key(scene_path, &scene_text, frames, work)?;
     }
-    barrier(ranks)?;
+    ranks.barrier().map_err(waiting)?;
 
     // The full-space runs, each into its own snapshot directory, each by the rank that owns it.
     let share = ranks.share(runs.len());
@@ -180,7 +181,7 @@ pub fn train_scene_across(
         }
         on_event(stage.done(format!("run {run}"), done));
     }
-    barrier(ranks)?;
+    ranks.barrier().map_err(waiting)?;
 
     // The bases, kept in the work directory for a training that stops after them.
     let set = TrainingSet::open(&dirs)?;
@@ -225,13 +226,6 @@ pub fn train_scene_across(
     }
     on_event(stage.done("tensors".into(), false));
     Ok(model)
-}
-
-/// Every rank waits here until all have arrived (a failed rank stops them with its message).
-fn barrier(ranks: &dyn Communicator) -> Result<(), FluidError> {
-    ranks
-        .allreduce_sum(&mut [0.0])
-        .map_err(|e| FluidError::State(format!("waiting for the other ranks: {e}")))
 }
 
 /// Refuses a work directory that holds the training of another scene or frame count, and

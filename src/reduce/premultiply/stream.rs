@@ -12,7 +12,7 @@
 use std::sync::Arc;
 
 use super::{premultiply_sparse_in, Buffers, PremultiplyOptions};
-use crate::reduce::snapshot_basis::allreduce_all;
+use crate::reduce::ranks::allreduce_parts;
 use crate::reduce::{Basis, ReduceError};
 use crate::tensor::{SparseTensor, Tensor};
 
@@ -195,11 +195,8 @@ pub fn premultiply_streamed_together(
             p((c + 1 - share.start) as f64, share.len() as f64);
         }
     }
-    let mut sums: Vec<Vec<f64>> = totals.iter().map(|t| t.data().to_vec()).collect();
-    allreduce_all(options.ranks, &mut sums, "the premultiplied chunks")?;
-    for (t, s) in totals.iter_mut().zip(sums) {
-        t.data_mut().copy_from_slice(&s);
-    }
+    let mut parts: Vec<&mut [f64]> = totals.iter_mut().map(Tensor::data_mut).collect();
+    allreduce_parts(options.ranks, &mut parts, "the premultiplied chunks")?;
     for ((name, ..), [generate, rows, multiply]) in tensors.iter().zip(&seconds) {
         tracing::debug!(tensor = name, generate, rows, multiply, "streamed premultiplication (seconds)");
     }

@@ -75,6 +75,12 @@ pub trait Communicator: Sync {
         0
     }
 
+    /// Waits until every rank has arrived here (an allreduce of nothing; a failed rank stops
+    /// the others with its message).
+    fn barrier(&self) -> Result<(), RanksError> {
+        self.allreduce_sum(&mut [0.0])
+    }
+
     /// Whether this rank writes files and shows progress and logs (rank 0).
     fn is_root(&self) -> bool {
         self.rank() == 0
@@ -89,6 +95,30 @@ pub fn partition(n: usize, size: usize, rank: usize) -> Range<usize> {
     let start = rank * base + rank.min(extra);
     let len = base + usize::from(rank < extra);
     start.min(n)..(start + len).min(n)
+}
+
+/// Sums `parts` element-wise over `ranks` in one allreduce (their lengths must agree between
+/// ranks); nothing to do on one rank.
+pub(crate) fn allreduce_parts(
+    ranks: &dyn Communicator,
+    parts: &mut [&mut [f64]],
+    what: &str,
+) -> Result<(), crate::reduce::ReduceError> {
+    if ranks.size() == 1 {
+        return Ok(());
+    }
+    let mut flat: Vec<f64> = parts.iter().flat_map(|p| p.iter().copied()).collect();
+    ranks.allreduce_sum(&mut flat).map_err(|cause| crate::reduce::ReduceError::Ranks {
+        context: format!("summing {what} over ranks"),
+        cause,
+    })?;
+    let mut rest = flat.as_slice();
+    for p in parts.iter_mut() {
+        let (mine, tail) = rest.split_at(p.len());
+        p.copy_from_slice(mine);
+        rest = tail;
+    }
+    Ok(())
 }
 
 /// One rank alone: every collective is the identity. The default.
