@@ -351,7 +351,7 @@ fn a_paraview_file_series_reads_as_the_same_time_steps_as_the_collection() {
 /// bound, and none inside an element is missing.
 #[test]
 fn vtk_written_hexahedra_render_pixel_exact_through_a_cut_plane() {
-    use galerkin::spectral::reference::rounding_bound_hex;
+    use galerkin::spectral::reference::{plane_point, rounding_bound_hex};
     use galerkin::spectral::render::fit_camera;
     let gpu = common::gpu();
     let (w, h) = (240u32, 180u32);
@@ -364,17 +364,11 @@ fn vtk_written_hexahedra_render_pixel_exact_through_a_cut_plane() {
     let Pixels::Rgba32F(px) = r.render(&target, &view).expect("rendered") else {
         panic!("a float target returned bytes")
     };
-    let on_plane = |x: u32, y: u32| {
-        let (o, d) = camera.pixel_ray(x, y, w, h);
-        let n = glam::DVec3::new(cut[0], cut[1], cut[2]);
-        let s = (cut[3] - n.dot(o)) / n.dot(d);
-        (o + s * d).to_array()
-    };
     let (mut covered, mut missing) = (0, 0);
     for y in 0..h {
         for x in 0..w {
             let t = &px[4 * (y * w + x) as usize..][..4];
-            let p = on_plane(x, y);
+            let p = plane_point(&camera, cut, x, y, (w, h));
             if t[3].is_nan() {
                 if mesh.locate_hex(p, -1e-3).is_some() {
                     missing += 1;

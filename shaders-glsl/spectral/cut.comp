@@ -38,9 +38,13 @@ void main() {
         rmax = max(rmax, uv);
         size = max(size, max(abs(p.x), max(abs(p.y), abs(p.z))));
     }
-    if (lo > 0.0 || hi < 0.0) return;
-    // Grown by f32 rounding of the corners (a few ulps of the coordinates).
-    vec2 grow = vec2(8.0 * 1.2e-7 * size);
+    // Crossed within f32 rounding of the control points (a few ulps of the coordinates): a
+    // plane lying on a face between two elements meets the face's control points only to
+    // rounding, and without this slack it could miss the elements on both sides.
+    float slack = 8.0 * 1.2e-7 * size;
+    if (lo > slack || hi < -slack) return;
+    // Grown by the same rounding at the corners.
+    vec2 grow = vec2(slack);
     rmin -= grow;
     rmax += grow;
     vec3 o = d * n;

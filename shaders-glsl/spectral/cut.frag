@@ -4,6 +4,12 @@
 // by Newton's method in (xi, eta, zeta); points outside the reference cube are discarded, so
 // the section's curved outline is exact; the element's polynomial is evaluated there,
 // colour-mapped and lit with the plane's normal.
+//
+// Ownership at element faces: where two elements' rectangles overlap, both may accept a point
+// within the inside tolerance (1e-5) of their common face. The fragment lies deeper by how far
+// its reference point is outside [0, 1]³, so the element that contains the point wins whatever
+// the draw order (the rule of element_planar.frag's edges; a cut plane's fragments are few, so
+// writing the depth costs little here).
 #include "spectral_element.glsl"
 #include "spectral_push.glsl"
 #include "colormap.glsl"
@@ -15,6 +21,7 @@ layout(location = 3) in vec3 world;
 layout(set = 0, binding = 2) uniform sampler1D colormap;
 layout(std430, set = 0, binding = 3) readonly buffer Planes { vec4 planes[]; };
 layout(location = 0) out vec4 out_colour;
+layout(depth_greater) out float gl_FragDepth;
 
 void main() {
     uint plane = uint(in_reference.x + 0.5);
@@ -22,6 +29,8 @@ void main() {
     float tol = pc.misc.y;
     bool inside = spectral_inverse_map_hex(element, world, r)
                && all(greaterThanEqual(r, vec3(-tol))) && all(lessThanEqual(r, vec3(1.0 + tol)));
+    vec3 beyond = max(max(-r, r - 1.0), vec3(0.0));
+    gl_FragDepth = gl_FragCoord.z + max(beyond.x, max(beyond.y, beyond.z));
     r = clamp(r, 0.0, 1.0);
     float v = spectral_value_hex(element, r);
     float t = ramp_coordinate(v, pc.range.x, pc.range.y, pc.flags.y != 0u);
