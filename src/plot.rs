@@ -200,11 +200,6 @@ pub fn picture_with_colour_bar(
             format!("a {pw}×{ph} picture needs {} bytes, got {}", 4 * pw * ph, rgba.len()),
         ));
     }
-    let (lo, hi) = bar.range;
-    if !(lo.is_finite() && hi.is_finite()) || (bar.log && !(lo > 0.0 && hi > lo)) {
-        return Err(plot_err(path, format!("colour range [{lo}, {hi}] (log: {})", bar.log)));
-    }
-    let hi = if hi > lo { hi } else { lo + 1.0 };
     let (w, h) = (pw + BAR_WIDTH, ph.max(300) + TITLE_HEIGHT);
     let mut buf = vec![255u8; 3 * (w as usize) * (h as usize)];
     for y in 0..ph as usize {
@@ -218,52 +213,84 @@ pub fn picture_with_colour_bar(
         root.draw_text(title, &("sans-serif", 22).into_text_style(&root), (16, 14))
             .map_err(|e| plot_err(path, e))?;
         let (_, right) = root.split_horizontally(pw);
-        let label = if bar.log { format!("{} (log scale)", bar.label) } else { bar.label.to_string() };
-        // The label runs along the bar: a smaller font where it would not fit (a sans-serif
-        // character is about 0.55 of the font size wide).
-        let along = f64::from(h.saturating_sub(TITLE_HEIGHT + 50));
-        let desc_size = (along / (0.55 * label.chars().count().max(1) as f64)).clamp(10.0, 18.0) as u32;
-        let mut builder = ChartBuilder::on(&right);
-        builder
-            .margin_top(TITLE_HEIGHT + 20)
-            .margin_left(24)
-            .margin_bottom(30)
-            .margin_right(20)
-            .y_label_area_size(110);
-        const STEPS: usize = 256;
-        let colour = |t: f64| {
-            let c = bar.colormap.sample(t);
-            RGBColor((255.0 * c[0]) as u8, (255.0 * c[1]) as u8, (255.0 * c[2]) as u8)
-        };
-        // The bar's axis is linear in the ramp's coordinate: the value, or its logarithm
-        // (so a log range of less than a decade still gets ticks); labels show the value.
-        let (a, b) = if bar.log { (lo.log10(), hi.log10()) } else { (lo, hi) };
-        let (log, shift) = (bar.log, bar.shift);
-        let value = move |y: f64| if log { 10f64.powf(y) } else { y };
-        let mut chart = builder.build_cartesian_2d(0.0..1.0, a..b).map_err(|e| plot_err(path, e))?;
-        chart
-            .configure_mesh()
-            .disable_x_mesh()
-            .disable_y_mesh()
-            .x_labels(0)
-            .y_desc(label.as_str())
-            .label_style(("sans-serif", 16))
-            .axis_desc_style(("sans-serif", desc_size))
-            .y_label_formatter(&|y: &f64| format!("{:.3e}", value(*y) - shift))
-            .draw()
-            .map_err(|e| plot_err(path, e))?;
-        chart
-            .draw_series((0..STEPS).map(|k| {
-                let (s0, s1) = (k as f64 / STEPS as f64, (k + 1) as f64 / STEPS as f64);
-                Rectangle::new(
-                    [(0.0, a + s0 * (b - a)), (1.0, a + s1 * (b - a))],
-                    colour(0.5 * (s0 + s1)).filled(),
-                )
-            }))
-            .map_err(|e| plot_err(path, e))?;
+        draw_colour_bar(&right, bar, TITLE_HEIGHT + 20, path)?;
         root.present().map_err(|e| plot_err(path, e))?;
     }
     save(path, w, h, &buf)
+}
+
+/// The colour bar alone, as the viewers show it beside their picture: [`BAR_WIDTH`] × `height`
+/// RGBA pixels, white behind the bar, drawn as [`picture_with_colour_bar`] draws it (`name`
+/// stands for the file in errors).
+pub fn colour_bar_rgba(bar: &ColourBar<'_>, height: u32, name: &Path) -> Result<Vec<u8>, PlotError> {
+    font(name)?;
+    let h = height.max(1);
+    let mut buf = vec![255u8; 3 * BAR_WIDTH as usize * h as usize];
+    {
+        let root = BitMapBackend::with_buffer(&mut buf, (BAR_WIDTH, h)).into_drawing_area();
+        draw_colour_bar(&root, bar, 20, name)?;
+        root.present().map_err(|e| plot_err(name, e))?;
+    }
+    Ok(buf.chunks_exact(3).flat_map(|p| [p[0], p[1], p[2], 255]).collect())
+}
+
+/// Draws `bar` in `area` (a panel [`BAR_WIDTH`] wide), `top` pixels below its top edge: the map
+/// in 256 steps, ticks labelled with values, the quantity along it. Refused: a range that is
+/// not finite, or not positive on a log scale.
+fn draw_colour_bar(
+    area: &DrawingArea<BitMapBackend<'_>, plotters::coord::Shift>,
+    bar: &ColourBar<'_>,
+    top: u32,
+    path: &Path,
+) -> Result<(), PlotError> {
+    let (lo, hi) = bar.range;
+    if !(lo.is_finite() && hi.is_finite()) || (bar.log && !(lo > 0.0 && hi > lo)) {
+        return Err(plot_err(path, format!("colour range [{lo}, {hi}] (log: {})", bar.log)));
+    }
+    let hi = if hi > lo { hi } else { lo + 1.0 };
+    let label = if bar.log { format!("{} (log scale)", bar.label) } else { bar.label.to_string() };
+    // The label runs along the bar: a smaller font where it would not fit (a sans-serif
+    // character is about 0.55 of the font size wide).
+    let along = f64::from(area.dim_in_pixel().1.saturating_sub(top + 30));
+    let desc_size = (along / (0.55 * label.chars().count().max(1) as f64)).clamp(10.0, 18.0) as u32;
+    let mut builder = ChartBuilder::on(area);
+    builder.margin_top(top).margin_left(24).margin_bottom(30).margin_right(20).y_label_area_size(110);
+    const STEPS: usize = 256;
+    let colour = |t: f64| {
+        let c = bar.colormap.sample(t);
+        RGBColor((255.0 * c[0]) as u8, (255.0 * c[1]) as u8, (255.0 * c[2]) as u8)
+    };
+    // The bar's axis is linear in the ramp's coordinate: the value, or its logarithm (so a log
+    // range of less than a decade still gets ticks); labels show the value.
+    let (a, b) = if bar.log { (lo.log10(), hi.log10()) } else { (lo, hi) };
+    let (log, shift) = (bar.log, bar.shift);
+    let value = move |y: f64| if log { 10f64.powf(y) } else { y };
+    let mut chart = builder.build_cartesian_2d(0.0..1.0, a..b).map_err(|e| plot_err(path, e))?;
+    chart
+        .configure_mesh()
+        .disable_x_mesh()
+        .disable_y_mesh()
+        .x_labels(0)
+        .y_desc(label.as_str())
+        .label_style(("sans-serif", 16))
+        .axis_desc_style(("sans-serif", desc_size))
+        // A tick at zero comes out of the axis's arithmetic as ±1e-16: shown as 0.
+        .y_label_formatter(&|y: &f64| {
+            let v = value(*y) - shift;
+            format!("{:.3e}", if v.abs() < 1e-12 * (hi - lo).abs().max(hi.abs()) { 0.0 } else { v })
+        })
+        .draw()
+        .map_err(|e| plot_err(path, e))?;
+    chart
+        .draw_series((0..STEPS).map(|k| {
+            let (s0, s1) = (k as f64 / STEPS as f64, (k + 1) as f64 / STEPS as f64);
+            Rectangle::new(
+                [(0.0, a + s0 * (b - a)), (1.0, a + s1 * (b - a))],
+                colour(0.5 * (s0 + s1)).filled(),
+            )
+        }))
+        .map_err(|e| plot_err(path, e))?;
+    Ok(())
 }
 
 #[cfg(test)]
@@ -321,6 +348,23 @@ mod tests {
         let bad = ColourBar { colormap: &map, range: (-1.0, 1.0), log: true, label: "u", shift: 0.0 };
         assert!(picture_with_colour_bar(&rgba, (pw, ph), &bad, "t", &path).is_err());
         let _ = std::fs::remove_dir_all(dir);
+    }
+
+    #[test]
+    fn the_colour_bar_alone_shows_the_map_on_white() {
+        let map = crate::render::Colormap::by_name("cool-warm").expect("cool-warm");
+        let bar = ColourBar { colormap: &map, range: (-2.0, 3.0), log: false, label: "u", shift: 0.0 };
+        // Tall enough that each of the bar's 256 steps gets a pixel row of its own.
+        let rgba = colour_bar_rgba(&bar, 400, Path::new("legend")).expect("drawn");
+        assert_eq!(rgba.len(), 4 * BAR_WIDTH as usize * 400);
+        assert_eq!(rgba[..4], [255, 255, 255, 255], "white in the corner");
+        for t in [0.0, 1.0] {
+            let c = map.sample((t + 0.5 / 256.0f64).min(1.0 - 0.5 / 256.0));
+            let want = [(255.0 * c[0]) as u8, (255.0 * c[1]) as u8, (255.0 * c[2]) as u8];
+            assert!(rgba.chunks_exact(4).any(|p| p[..3] == want), "end {t} of the map missing");
+        }
+        let bad = ColourBar { colormap: &map, range: (f64::NAN, 1.0), log: false, label: "u", shift: 0.0 };
+        assert!(colour_bar_rgba(&bad, 240, Path::new("legend")).is_err());
     }
 
     /// A scratch directory of this test's own (the tests run in parallel).

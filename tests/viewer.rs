@@ -151,33 +151,94 @@ fn the_spacetime_viewer_animates_t() {
     assert!(drawn > (w * h / 10) as usize, "only {drawn} pixels drawn");
 }
 
-/// Runs `galerkin spectral view --validation … --quit-after N --size 320x200 --screenshot …`
-/// on display `x`; returns its stdout and the screenshot's share of drawn pixels.
-fn run_spectral_viewer(x: &Xvfb, name: &str, args: &[&str], frames: u32) -> (String, f64) {
+/// Runs `galerkin ARGS… --validation --size SIZE --screenshot …` on display `x`; returns its
+/// stdout and the screenshot.
+fn run_view(x: &Xvfb, name: &str, args: &[&str], size: &str) -> (String, u32, u32, Vec<u8>) {
     let scratch = tempfile::Builder::new()
         .prefix(&format!("galerkin-viewer-{name}-"))
         .tempdir()
         .expect("a scratch directory");
-    let dir = scratch.path().to_path_buf();
-    let shot = dir.join("shot.png");
+    let shot = scratch.path().join("shot.png");
     let out = Command::new(env!("CARGO_BIN_EXE_galerkin"))
-        .args(["spectral", "view", "--validation"])
         .args(args)
-        .args(["--quit-after", &frames.to_string(), "--size", "320x200", "--screenshot"])
+        .args(["--validation", "--size", size, "--screenshot"])
         .arg(&shot)
         .env("DISPLAY", &x.display)
         .env_remove("WAYLAND_DISPLAY")
         .output()
         .unwrap();
-    assert!(
-        out.status.success(),
-        "galerkin spectral --view failed: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert!(out.status.success(), "galerkin {args:?} failed: {}", String::from_utf8_lossy(&out.stderr));
     let (w, h, rgba) = read_png_rgba8(&shot).unwrap();
+    (String::from_utf8_lossy(&out.stdout).to_string(), w, h, rgba)
+}
+
+/// Runs `galerkin spectral view … --quit-after N` at 320×200 on display `x`; returns its stdout
+/// and the screenshot's share of drawn pixels.
+fn run_spectral_viewer(x: &Xvfb, name: &str, args: &[&str], frames: u32) -> (String, f64) {
+    let frames = frames.to_string();
+    let args: Vec<&str> = ["spectral", "view"]
+        .into_iter()
+        .chain(args.iter().copied())
+        .chain(["--quit-after", &frames])
+        .collect();
+    let (stdout, w, h, rgba) = run_view(x, name, &args, "320x200");
     assert_eq!((w, h), (320, 200));
     let drawn = drawn_pixels(&rgba);
-    (String::from_utf8_lossy(&out.stdout).to_string(), drawn as f64 / f64::from(w * h))
+    (stdout, drawn as f64 / f64::from(w * h))
+}
+
+/// Viewers wide enough show the colour bar their PNG pictures carry, beside the picture: the
+/// right-hand strip of `BAR_WIDTH` pixels is the legend (mostly white, with both ends of the
+/// colour map, as `plot::colour_bar_rgba` draws them), and the picture keeps the rest (no
+/// white in it). The 320-pixel windows of the other tests are too narrow and show none.
+#[test]
+fn wide_viewers_show_the_colour_legend_beside_the_picture() {
+    use galerkin::plot::BAR_WIDTH;
+    let x = Xvfb::start();
+    let map = Colormap::by_name("cool-warm").expect("cool-warm");
+    let views: [&[&str]; 2] = [
+        &["spectral", "view", "--generate", "annulus", "--colormap", "cool-warm", "--quit-after", "3"],
+        &["spacetime", "view", "--generate", "pulses", "--elements", "6000", "--time", "0.2"],
+    ];
+    for args in views {
+        let mut args = args.to_vec();
+        if args[0] == "spacetime" {
+            args.extend(["--colormap", "cool-warm", "--quit-after", "3"]);
+        }
+        let (_, w, h, rgba) = run_view(&x, args[0], &args, "800x400");
+        assert_eq!((w, h), (800, 400));
+        let strip = w - BAR_WIDTH;
+        let white = |p: &[u8]| p[..3] == [255, 255, 255];
+        let (mut legend_white, mut picture_white, mut legend) = (0, 0, Vec::new());
+        for y in 0..h {
+            for x in 0..w {
+                let p = &rgba[4 * (y * w + x) as usize..][..4];
+                if x >= strip {
+                    legend_white += usize::from(white(p));
+                    legend.push([p[0], p[1], p[2]]);
+                } else {
+                    picture_white += usize::from(white(p));
+                }
+            }
+        }
+        let area = (BAR_WIDTH * h) as usize;
+        assert!(legend_white > area / 2, "{}: {legend_white} of {area} legend pixels white", args[0]);
+        assert!(
+            picture_white < (strip * h / 100) as usize,
+            "{}: {picture_white} white pixels in the picture",
+            args[0]
+        );
+        for t in [0.0, 1.0] {
+            let c = map.sample((t + 0.5 / 256.0f64).min(1.0 - 0.5 / 256.0));
+            let want = [(255.0 * c[0]) as u8, (255.0 * c[1]) as u8, (255.0 * c[2]) as u8];
+            assert!(legend.contains(&want), "{}: end {t} of the map is not in the legend", args[0]);
+        }
+        let drawn = (0..h)
+            .flat_map(|y| (0..strip).map(move |x| (x, y)))
+            .filter(|&(x, y)| drawn_pixels(&rgba[4 * (y * w + x) as usize..][..4]) == 1)
+            .count();
+        assert!(drawn > (strip * h / 20) as usize, "{}: only {drawn} pixels of the picture drawn", args[0]);
+    }
 }
 
 #[test]

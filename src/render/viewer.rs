@@ -26,6 +26,7 @@ use crate::gpu::{
     record_image_barrier, surface_extensions, Buffer, Gpu, GpuDesc, MemoryKind, Recorder, Submission,
     Surface, Swapchain,
 };
+use crate::plot::{colour_bar_rgba, ColourBar, BAR_WIDTH};
 
 /// What the viewer shows. The viewer owns the window, the swapchain, the offscreen target and
 /// the camera; the content draws into the target's render pass.
@@ -60,6 +61,25 @@ pub trait ViewerContent {
     fn summary(&self) -> Option<String> {
         None
     }
+    /// What the picture's colours mean, shown as a colour bar beside it (the one the PNG
+    /// pictures carry) when the window is wide enough. Default: none (e.g. radiance).
+    fn legend(&self) -> Option<ColourBar<'_>> {
+        None
+    }
+}
+
+/// The narrowest window that shows the legend: the picture keeps at least two thirds.
+pub const LEGEND_MIN_WIDTH: u32 = 3 * BAR_WIDTH;
+
+/// The colour bar beside the picture: drawn on the CPU by [`colour_bar_rgba`] (as the PNG
+/// legend is) when what it shows or the window's height changes, kept in the swapchain's byte
+/// order and copied into the right-hand strip of each presented image.
+struct LegendStrip {
+    /// What it shows (range, scale, label, map, height).
+    key: String,
+    /// [`BAR_WIDTH`] × `height` texels in the swapchain's byte order.
+    texels: Buffer<u8>,
+    height: u32,
 }
 
 /// How a viewer run goes: interactive by default, scripted for tests and recordings.
@@ -157,6 +177,9 @@ struct State {
     animating: bool,
     target: RenderTarget,
     readback: Option<Buffer<u8>>,
+    legend: Option<LegendStrip>,
+    /// What the legend could not be drawn for (said once; tried again when it changes).
+    legend_failed: Option<String>,
     swapchain: Option<Swapchain>,
     surface: Surface,
     gpu: Gpu,
@@ -197,6 +220,8 @@ impl State {
             animating: false,
             target,
             readback: None,
+            legend: None,
+            legend_failed: None,
             swapchain: Some(swapchain),
             surface,
             gpu,
@@ -223,12 +248,7 @@ impl State {
         // does not cover presentation.
         self.gpu.wait_queue_idle()?;
         drop(old);
-        let e = swapchain.extent();
-        if e != self.target.extent() {
-            // Same formats, so the render pass is compatible and the pipeline can stay.
-            self.target =
-                RenderTarget::new(&self.gpu, "viewer frame", e.width, e.height, ColorFormat::Rgba8)?;
-        }
+        // The frame fits the offscreen target to the new extent (less the legend's strip).
         self.swapchain = Some(swapchain);
         Ok(())
     }
@@ -250,6 +270,21 @@ impl State {
         };
         let image = swapchain.images()[index as usize];
         let extent = swapchain.extent();
+        let format = swapchain.format();
+        self.update_legend(format, extent)?;
+        let bar = if self.legend.is_some() { BAR_WIDTH } else { 0 };
+        let picture = vk::Extent2D { width: extent.width - bar, height: extent.height };
+        if self.target.extent() != picture {
+            // Same formats, so the render pass is compatible and the pipelines can stay.
+            self.target = RenderTarget::new(
+                &self.gpu,
+                "viewer frame",
+                picture.width,
+                picture.height,
+                ColorFormat::Rgba8,
+            )?;
+        }
+        let swapchain = self.swapchain.as_ref().expect("present above");
         let readable = save && swapchain.readable();
         if readable {
             let bytes = 4 * u64::from(extent.width) * u64::from(extent.height);
@@ -261,8 +296,8 @@ impl State {
                 MemoryKind::GpuToCpu,
             )?);
         }
-        let (gpu, target, content, camera, readback) =
-            (&self.gpu, &self.target, &mut self.content, &self.camera, &self.readback);
+        let (gpu, target, content, camera, readback, legend) =
+            (&self.gpu, &self.target, &mut self.content, &self.camera, &self.readback, &self.legend);
         let waits = [(swapchain.image_available, vk::PipelineStageFlags::TRANSFER)];
         let signals = [swapchain.render_finished[index as usize]];
         let record = |rec: &mut Recorder<'_>| {
@@ -301,7 +336,7 @@ impl State {
                 src_subresource: layers,
                 src_offsets: corner(te.width, te.height),
                 dst_subresource: layers,
-                dst_offsets: corner(extent.width, extent.height),
+                dst_offsets: corner(picture.width, picture.height),
             };
             // SAFETY: the target is in TRANSFER_SRC after its pass; the swapchain image was
             // just moved to TRANSFER_DST; both are alive until the fence.
@@ -321,6 +356,31 @@ impl State {
                 vk::PipelineStageFlags::TRANSFER,
                 vk::AccessFlags::TRANSFER_WRITE,
             );
+            if let Some(strip) = legend {
+                // SAFETY: as above; the blit's write is ordered before the copy's.
+                unsafe { record_image_barrier(rec, image, color, layout, layout) };
+                rec.keep(&strip.texels);
+                let region = vk::BufferImageCopy {
+                    buffer_offset: 0,
+                    buffer_row_length: 0,
+                    buffer_image_height: 0,
+                    image_subresource: layers,
+                    image_offset: vk::Offset3D { x: picture.width as i32, y: 0, z: 0 },
+                    image_extent: vk::Extent3D { width: BAR_WIDTH, height: strip.height, depth: 1 },
+                };
+                // SAFETY: the image is in TRANSFER_DST; the strip is BAR_WIDTH × height texels
+                // of the swapchain's format and lies inside the image (update_legend checked
+                // both against this extent and format).
+                unsafe {
+                    dev.cmd_copy_buffer_to_image(
+                        rec.raw(),
+                        strip.texels.raw(),
+                        image,
+                        vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                        &[region],
+                    )
+                };
+            }
             if let (true, Some(buf)) = (readable, readback) {
                 let next = (
                     vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
@@ -374,6 +434,66 @@ impl State {
             self.recreate()?;
         }
         Ok(true)
+    }
+
+    /// Draws the content's legend for a window of `extent` in `format` when what it shows has
+    /// changed (no frame is in flight: the last one was waited for). None when the content has
+    /// none, the window is narrower than [`LEGEND_MIN_WIDTH`], the swapchain's format is not
+    /// 8-bit RGBA or BGRA, or the legend cannot be drawn (no font, a log range reaching 0: said
+    /// once for each thing it would show).
+    fn update_legend(&mut self, format: vk::Format, extent: vk::Extent2D) -> Result<()> {
+        let bgra = match format {
+            vk::Format::B8G8R8A8_UNORM | vk::Format::B8G8R8A8_SRGB => true,
+            vk::Format::R8G8B8A8_UNORM | vk::Format::R8G8B8A8_SRGB => false,
+            _ => {
+                self.legend = None;
+                return Ok(());
+            }
+        };
+        let bar = match self.content.legend() {
+            Some(bar) if extent.width >= LEGEND_MIN_WIDTH && extent.height > 0 => bar,
+            _ => {
+                self.legend = None;
+                return Ok(());
+            }
+        };
+        let key = format!(
+            "{:?} {} {} {} {} {}",
+            bar.range,
+            bar.log,
+            bar.label,
+            bar.shift,
+            bar.colormap.name(),
+            extent.height
+        );
+        if self.legend.as_ref().is_some_and(|l| l.key == key) || self.legend_failed.as_ref() == Some(&key) {
+            return Ok(());
+        }
+        let mut rgba = match colour_bar_rgba(&bar, extent.height, std::path::Path::new("the viewer's legend"))
+        {
+            Ok(rgba) => rgba,
+            Err(e) => {
+                eprintln!("warning: {e}; the viewer shows no legend");
+                self.legend_failed = Some(key);
+                self.legend = None;
+                return Ok(());
+            }
+        };
+        if bgra {
+            for p in rgba.chunks_exact_mut(4) {
+                p.swap(0, 2);
+            }
+        }
+        let mut texels = Buffer::new(
+            &self.gpu,
+            "viewer legend",
+            rgba.len() as u64,
+            vk::BufferUsageFlags::TRANSFER_SRC,
+            MemoryKind::CpuToGpu,
+        )?;
+        texels.mapped_mut()?.copy_from_slice(&rgba);
+        self.legend = Some(LegendStrip { key, texels, height: extent.height });
+        Ok(())
     }
 
     /// Writes the last frame's copy of the presented image as PNG (RGBA; BGRA swapchains

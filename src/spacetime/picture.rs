@@ -26,6 +26,18 @@ pub struct SliceReport {
     pub u_max: Option<f64>,
 }
 
+/// What the colours of a spacetime picture mean, for its legend (the PNG's and the viewer's):
+/// the strain energy density U on the ramp log(U + 1) up to `u_max`, labelled in U.
+pub fn colour_bar(colormap: &Colormap, u_max: f64) -> ColourBar<'_> {
+    ColourBar {
+        colormap,
+        range: (1.0, u_max + 1.0),
+        log: true,
+        label: "U, strain energy density (ramp log(U + 1))",
+        shift: 1.0,
+    }
+}
+
 /// Checks a view's numbers (the subdivision area, U_max and the height scale are positive
 /// when given) and its time against the data's span.
 pub fn check_view(data: &SpacetimeData, view: &SpacetimeView) -> Result<(), SpacetimeError> {
@@ -81,16 +93,7 @@ pub fn write_slice(
     let render_ms = start.elapsed().as_secs_f64() * 1e3;
     match (pixels, title, view.u_max) {
         (Pixels::Rgba8(rgba), Some(title), Some(u_max)) if u_max > 0.0 => {
-            let legend = Legend {
-                title: title.to_string(),
-                bar: ColourBar {
-                    colormap,
-                    range: (1.0, u_max + 1.0),
-                    log: true,
-                    label: "U, strain energy density (ramp log(U + 1))",
-                    shift: 1.0,
-                },
-            };
+            let legend = Legend { title: title.to_string(), bar: colour_bar(colormap, u_max) };
             picture::write_png(out, size, &rgba, Some(&legend))?;
         }
         (Pixels::Rgba8(rgba), ..) => picture::write_png(out, size, &rgba, None)?,

@@ -8,6 +8,7 @@ use anyhow::Result;
 
 use super::{SpacetimeData, SpacetimeRenderer, SpacetimeView};
 use crate::gpu::{Gpu, Recorder};
+use crate::plot::ColourBar;
 use crate::render::viewer::ViewerContent;
 use crate::render::{Camera, Colormap, RenderTarget};
 
@@ -119,6 +120,11 @@ impl ViewerContent for SpacetimeContent {
             r.record_draw_into(rec, target.draw_target(), &view, self.u_max)?;
         }
         Ok(())
+    }
+
+    fn legend(&self) -> Option<ColourBar<'_>> {
+        (self.renderer.is_some() && self.u_max > 0.0)
+            .then(|| super::picture::colour_bar(&self.colormap, self.u_max))
     }
 
     fn key(&mut self, key: &str) -> bool {

@@ -75,6 +75,12 @@ pub fn kind(mesh: &SpectralMesh) -> &'static str {
     }
 }
 
+/// What the colours of a spectral picture mean, for its legend (the PNG's and the viewer's):
+/// `field` mapped through `colormap` over `range`, on a log scale when `log`.
+pub fn colour_bar<'a>(colormap: &'a Colormap, range: (f64, f64), log: bool, field: &'a str) -> ColourBar<'a> {
+    ColourBar { colormap, range, log, label: field, shift: 0.0 }
+}
+
 /// Renders `view` of `mesh` at `size` and writes it to `out` (format by extension): a PNG with
 /// `title` and a colour bar beside it, or the bare picture when `title` is `None`; an EXR with
 /// the raw channels.
@@ -105,7 +111,7 @@ pub fn write_picture(
         ImageFormat::Png => {
             let legend = title.map(|title| Legend {
                 title: title.to_string(),
-                bar: ColourBar { colormap, range, log: view.log, label: &field.name, shift: 0.0 },
+                bar: colour_bar(colormap, range, view.log, &field.name),
             });
             picture::write_png(out, size, &rgba, legend.as_ref())?;
         }

@@ -15,6 +15,7 @@ use anyhow::Result;
 
 use super::{fit_camera, SpectralMesh, SpectralRenderer, SpectralView};
 use crate::gpu::{Gpu, Recorder};
+use crate::plot::ColourBar;
 use crate::render::viewer::ViewerContent;
 use crate::render::{Camera, Colormap, RenderTarget};
 
@@ -36,6 +37,10 @@ pub struct SpectralContent {
     frames: u64,
     /// The palette changed: swap the colour map in `update`, when no frame is in flight.
     recolour: bool,
+    /// The colour map shown (for the legend).
+    colormap: Colormap,
+    /// The colour range of the step shown (for the legend), set in `update`.
+    range: Option<(f64, f64)>,
     /// The selected cut plane.
     selected: usize,
     /// The mesh's bounding box: centre and size.
@@ -73,6 +78,8 @@ impl SpectralContent {
             clock: 0.0,
             frames: 0,
             recolour: false,
+            colormap: Colormap::viridis(),
+            range: None,
             selected: 0,
             centre,
             extent,
@@ -107,7 +114,8 @@ impl SpectralContent {
 
     fn recolour(&mut self) -> Result<()> {
         if let (Some(gpu), Some(r)) = (&self.gpu, self.renderer.as_mut()) {
-            r.set_colormap(gpu, &Colormap::by_name(PALETTES[self.palette])?)?;
+            self.colormap = Colormap::by_name(PALETTES[self.palette])?;
+            r.set_colormap(gpu, &self.colormap)?;
         }
         Ok(())
     }
@@ -155,8 +163,8 @@ impl ViewerContent for SpectralContent {
     }
 
     fn start(&mut self, gpu: &Gpu, _: &RenderTarget) -> Result<()> {
-        let colormap = Colormap::by_name(PALETTES[self.palette])?;
-        self.renderer = Some(SpectralRenderer::new(gpu, self.mesh.clone(), &colormap)?);
+        self.colormap = Colormap::by_name(PALETTES[self.palette])?;
+        self.renderer = Some(SpectralRenderer::new(gpu, self.mesh.clone(), &self.colormap)?);
         self.gpu = Some(gpu.clone());
         Ok(())
     }
@@ -173,7 +181,13 @@ impl ViewerContent for SpectralContent {
             }
         }
         self.frames += 1;
+        self.range = self.renderer.as_mut().map(|r| r.range(&self.view));
         Ok(self.playing)
+    }
+
+    fn legend(&self) -> Option<ColourBar<'_>> {
+        let name = &self.mesh.fields[self.view.field].name;
+        Some(super::picture::colour_bar(&self.colormap, self.range?, self.view.log, name))
     }
 
     fn record_prepass(
