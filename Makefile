@@ -3,12 +3,13 @@
 #   make test   install what is missing, run every test on Mesa lavapipe with validation on
 # make test-mpi: the trainings over MPI ranks (installs OpenMPI, builds with --features mpi).
 # Also: make bench (the device's ceilings), make bench-all (every benchmark in one run, its
-# tables also written to out/benchmarks.md; QUICK=1 for the quick sizes), make lint.
+# tables also written to out/benchmarks.md; QUICK=1 for the quick sizes), make lint,
+# make fuzz (every loader's fuzz target, FUZZ_SECONDS each; nightly + cargo-fuzz; not in CI).
 
 CARGO ?= cargo
 LAVAPIPE_ICD ?= /usr/share/vulkan/icd.d/lvp_icd.json
 
-.PHONY: deps build demo test test-mpi bench bench-all lint
+.PHONY: deps build demo test test-mpi bench bench-all lint fuzz
 
 deps:
 	@scripts/install-deps.sh
@@ -31,6 +32,9 @@ test-mpi:
 	@scripts/install-deps.sh --mpi
 	OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 \
 		$(CARGO) test --release --features mpi --test mpi
+
+fuzz: deps
+	@scripts/fuzz.sh
 
 bench: deps
 	$(CARGO) run --release --quiet -- bench gpu

@@ -115,12 +115,14 @@ pub fn stuff(sdf: &dyn Sdf, h: f64) -> Result<Stuffed, MeshError> {
         )));
     }
     let origin = lo.map(|v| v - 2.0 * h);
-    let n: [usize; 3] = std::array::from_fn(|k| ((hi[k] - lo[k]) / h).ceil() as usize + 4);
-    if n.iter().product::<usize>() > 60_000_000 {
+    // Counted in f64: a tiny spacing must be refused, not overflow the product.
+    let per_axis: [f64; 3] = std::array::from_fn(|k| ((hi[k] - lo[k]) / h).ceil() + 4.0);
+    if per_axis.iter().product::<f64>() > 60_000_000.0 {
         return Err(MeshError::Generation(format!(
-            "isosurface stuffing: {n:?} lattice cells: raise the spacing"
+            "isosurface stuffing: {per_axis:?} lattice cells (at most 60,000,000): raise the spacing"
         )));
     }
+    let n: [usize; 3] = per_axis.map(|c| c as usize);
     let lattice = Lattice { n, h, origin };
     let nl = lattice.count();
     let mut position: Vec<Point> = (0..nl).map(|v| lattice.position(v)).collect();

@@ -78,6 +78,9 @@ pub fn tunnel(spec: &TunnelSpec) -> Result<TunnelMesh, MeshError> {
     if s.height / s.cell > 2000.0 || s.length / s.cell > 8000.0 {
         return bad("more than 2000 cells across the tunnel: raise `cell`");
     }
+    if 3f64.sqrt() * s.radius / (s.cell * s.obstacle_refinement) > 100_000.0 {
+        return bad("more than 100,000 points along an obstacle edge: raise `obstacle_refinement`");
+    }
     let mut cdt = ConstrainedDelaunayTriangulation::<Point2<f64>>::new();
     let insert = |cdt: &mut ConstrainedDelaunayTriangulation<Point2<f64>>, p: [f64; 2]| {
         cdt.insert(Point2::new(p[0], p[1])).map_err(|e| MeshError::Generation(format!("tunnel: {e:?}")))

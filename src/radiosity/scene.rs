@@ -130,6 +130,10 @@ pub struct SceneSpec {
     pub lights: Lights,
 }
 
+/// The most faces a scene file may ask for (estimated from its rooms and resolution before the
+/// mesh is built): the full solve stores a form factor for every pair, 20 GB at this size.
+pub const MAX_FACES: usize = 50_000;
+
 /// A point of the parameter space, in the order of [`PARAMETERS`].
 pub type Parameters = [f64; 4];
 
@@ -190,6 +194,20 @@ impl SceneSpec {
             return fail(
                 "cell",
                 format!("resolution.cell must be 0.02 to 10 m, got {}", spec.resolution.cell),
+            );
+        }
+        // The mesh the resolution asks for, estimated before it is built: two triangles per
+        // cell² of the rooms' surfaces. The full solve stores every pair's form factor.
+        let area: f64 =
+            [r.living, r.bedroom].iter().map(|d| 2.0 * (d[0] * d[1] + d[1] * d[2] + d[2] * d[0])).sum();
+        let faces = 2.0 * area / (spec.resolution.cell * spec.resolution.cell);
+        if faces > MAX_FACES as f64 {
+            return fail(
+                "cell",
+                format!(
+                    "rooms of {area:.0} m² at resolution.cell = {} m make about {faces:.0} faces; at most {MAX_FACES} (raise the cell size)",
+                    spec.resolution.cell
+                ),
             );
         }
         let m = &spec.materials;

@@ -1,0 +1,14 @@
+//! Reduced models (safetensors with our header): the core model, the fluid's and the
+//! radiosity's (its directory: the model and the visibility file).
+#![no_main]
+use galerkin_fuzz::{parts, scratch_dir, scratch_file};
+use libfuzzer_sys::fuzz_target;
+
+fuzz_target!(|data: &[u8]| {
+    let [model, visibility] = parts(data, 2)[..] else { return };
+    let path = scratch_file("model.safetensors", model);
+    let _ = galerkin::reduce::ReducedModel::load(&path);
+    let _ = galerkin::fluid::reduced::ReducedFluidModel::load(&path);
+    scratch_file("visibility.safetensors", visibility);
+    let _ = galerkin::radiosity::reduced::ReducedRadiosity::load(&scratch_dir());
+});
