@@ -23,6 +23,18 @@ pub fn declared_count(what: &str, count: u64, remaining: usize, min_size: usize)
     usize::try_from(count).map_err(|_| format!("{what}: {count} does not fit in memory"))
 }
 
+/// An empty vector with room for `n` items (`what`), reserved fallibly: a count that passed
+/// [`declared_count`] but does not fit in memory is an error naming it instead of an abort.
+/// (Linux overcommits, so this catches sizes the allocator refuses outright — more than the
+/// address space or a `ulimit -v` allows — not pages the kernel cannot back later.)
+pub fn vec_for<T>(n: usize, what: &str) -> Result<Vec<T>, String> {
+    let mut v = Vec::new();
+    v.try_reserve_exact(n).map_err(|_| {
+        format!("{what}: room for {n} items of {} bytes cannot be allocated", std::mem::size_of::<T>())
+    })?;
+    Ok(v)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -34,5 +46,12 @@ mod tests {
         assert!(declared_count("nodes", 13, 100, 8).unwrap_err().contains("holds at most 12"));
         assert!(declared_count("nodes", 1 << 40, usize::MAX, 1).unwrap_err().contains("over the limit"));
         assert_eq!(declared_count("lines", 0, 0, 1), Ok(0));
+    }
+
+    #[test]
+    fn a_reservation_past_the_address_space_is_an_error_naming_it() {
+        assert!(vec_for::<u64>(1000, "nodes").expect("small").capacity() >= 1000);
+        let e = vec_for::<u64>(usize::MAX / 4, "the node tags").expect_err("too large");
+        assert!(e.contains("the node tags") && e.contains("cannot be allocated"), "{e}");
     }
 }

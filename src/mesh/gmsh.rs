@@ -218,7 +218,7 @@ pub fn parse_msh(bytes: &[u8], path: &Path) -> Result<SimplexMesh, MeshError> {
                     // Each node takes at least a tag and three coordinates: 8 bytes in text
                     // ("1\n0 0 0\n"), 32 in binary.
                     let n = r.count("a node block's node count", if r.binary { 32 } else { 8 })?;
-                    let mut tags = Vec::with_capacity(n);
+                    let mut tags = crate::limits::vec_for(n, "a node block's tags").map_err(|e| r.fail(e))?;
                     for _ in 0..n {
                         tags.push(r.size()?);
                     }

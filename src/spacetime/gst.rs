@@ -235,7 +235,7 @@ pub fn open(path: &Path) -> Result<SpacetimeData, SpacetimeError> {
             format!("{what}: {size} bytes, the header's {n} elements need {expected}"),
         ));
     }
-    let mut materials = Vec::with_capacity(m);
+    let mut materials = crate::limits::vec_for(m, "the materials").map_err(|e| file_error(path, e))?;
     for i in 0..m {
         let at = MATERIALS_AT + 24 * i;
         let mat =

@@ -252,7 +252,8 @@ fn read_mesh_lines(path: &Path, lines: &mut Lines<'_>) -> Result<MfemMesh, Spect
     lines.expect("elements")?;
     let count = lines.count("the element count")?;
     let (want_geometry, corners) = if dim == 2 { (GEOMETRY_SQUARE, 4) } else { (GEOMETRY_CUBE, 8) };
-    let mut elements = Vec::with_capacity(count);
+    let at = lines.line_number();
+    let mut elements = crate::limits::vec_for(count, "the elements").map_err(|e| err(path, at, e))?;
     for e in 0..count {
         let (n, l) = lines.next("an element")?;
         let w: Vec<usize> = l
@@ -414,7 +415,10 @@ pub fn to_spectral(
                     c.name
                 )));
             }
-            let mut points = Vec::with_capacity(mesh.elements.len() * (c.order + 1).pow(mesh.dim));
+            let per_element = (c.order + 1).pow(mesh.dim);
+            let mut points =
+                crate::limits::vec_for(mesh.elements.len() * per_element, "the geometry's nodes")
+                    .map_err(file)?;
             for e in 0..mesh.elements.len() {
                 for d in topology.element_dofs(c, e) {
                     points.push(std::array::from_fn(|k| {
@@ -466,7 +470,9 @@ pub fn to_spectral(
                     c.name
                 )));
             }
-            let mut v = Vec::with_capacity(mesh.elements.len() * (c.order + 1).pow(mesh.dim));
+            let per_element = (c.order + 1).pow(mesh.dim);
+            let mut v = crate::limits::vec_for(mesh.elements.len() * per_element, "the field's values")
+                .map_err(file)?;
             for e in 0..mesh.elements.len() {
                 v.extend(topology.element_dofs(c, e).into_iter().map(|d| gf.values[d]));
             }

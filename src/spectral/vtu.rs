@@ -187,7 +187,7 @@ pub fn read(path: &Path) -> Result<SpectralMesh, SpectralError> {
     }
     // Our lexicographic node (i, j, k) of cell e ← VTK's point at vtk_point_index.
     let edges = HexEdgeOrder::of_version(grid.version);
-    let mut order = Vec::with_capacity(cells * per_cell);
+    let mut order = crate::limits::vec_for(cells * per_cell, "the cells' nodes").map_err(file)?;
     for e in 0..cells {
         for flat in 0..per_cell {
             let (i, j, k) = (flat % m, (flat / m) % m, flat / (m * m));
