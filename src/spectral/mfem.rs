@@ -52,6 +52,9 @@ pub struct Space {
 /// A GridFunction: its space and values.
 #[derive(Clone, Debug, PartialEq)]
 pub struct GridFunction {
+    /// The file it was read from (the mesh's for its nodes, the stream's for GLVis): errors
+    /// about its values name it.
+    pub path: PathBuf,
     /// The space.
     pub space: Space,
     /// The values, in the space's numbering.
@@ -229,6 +232,9 @@ fn read_values(lines: &mut Lines<'_>, stop_at_keyword: bool) -> Result<Vec<f64>,
         let (n, l) = lines.next("values")?;
         for w in l.split_whitespace() {
             let v: f64 = w.parse().map_err(|_| err(lines.path, n, format!("{w:?} is not a number")))?;
+            if !v.is_finite() {
+                return Err(err(lines.path, n, format!("{w:?} is not finite")));
+            }
             values.push(v);
         }
     }
@@ -300,7 +306,7 @@ fn read_mesh_lines(path: &Path, lines: &mut Lines<'_>) -> Result<MfemMesh, Spect
         lines.next("nodes")?;
         let space = read_space(lines)?;
         let values = read_values(lines, true)?;
-        nodes = Some(GridFunction { space, values });
+        nodes = Some(GridFunction { path: path.to_path_buf(), space, values });
     } else {
         let sdim: usize = lines.number("the space dimension")?;
         if !(1..=3).contains(&sdim) {
@@ -341,7 +347,7 @@ pub fn read_grid_function(path: &Path) -> Result<GridFunction, SpectralError> {
     let mut lines = Lines::new(path, &text);
     let space = read_space(&mut lines)?;
     let values = read_values(&mut lines, false)?;
-    Ok(GridFunction { space, values })
+    Ok(GridFunction { path: path.to_path_buf(), space, values })
 }
 
 /// Reads a GLVis "solution" stream saved to a file: the keyword `solution`, a mesh, then a
@@ -354,7 +360,7 @@ pub fn read_solution(path: &Path) -> Result<(MfemMesh, GridFunction), SpectralEr
     let mesh = read_mesh_lines(path, &mut lines)?;
     let space = read_space(&mut lines)?;
     let values = read_values(&mut lines, false)?;
-    Ok((mesh, GridFunction { space, values }))
+    Ok((mesh, GridFunction { path: path.to_path_buf(), space, values }))
 }
 
 /// The vertices of an MFEM quadrilateral (counter-clockwise from (0, 0)) or hexahedron (bottom
@@ -439,6 +445,7 @@ pub fn to_spectral(
     for (name, steps) in fields {
         let mut values = Vec::new();
         for (k, gf) in steps.iter().enumerate() {
+            let file = |detail: String| SpectralError::File { path: gf.path.clone(), detail };
             let c = &gf.space.collection;
             if gf.space.vdim != 1 {
                 return Err(file(format!(

@@ -229,6 +229,15 @@ pub fn read(path: &Path) -> Result<UnstructuredGrid, VtkError> {
         .map_err(|e| err(path, format!("not UTF-8 XML text at byte {}", e.valid_up_to())))?
         .to_string();
     if appended_at.is_some() {
+        // The raw data end where the file closes: a file cut short (its closing tags gone) is
+        // refused even where the arrays it declares happen to be complete.
+        let tail = bytes.trim_ascii_end();
+        if !tail.ends_with(b"</VTKFile>") || find(&bytes[text_end..], b"</AppendedData>").is_none() {
+            return Err(err(
+                path,
+                "truncated: the appended data are not closed by </AppendedData> and </VTKFile>",
+            ));
+        }
         text.push_str("</VTKFile>");
     }
     let doc = roxmltree::Document::parse(&text).map_err(|e| err(path, format!("XML: {e}")))?;
@@ -254,6 +263,17 @@ pub fn read(path: &Path) -> Result<UnstructuredGrid, VtkError> {
             }
         }
     };
+    // VTK 9 writes 2.2 (2.3 with its newer cells); a later major version may change what the
+    // arrays mean (as 2.2 changed the Lagrange hexahedron's node order), so it is refused.
+    if version.0 > 2 {
+        return Err(err(
+            path,
+            format!(
+                "<VTKFile> version {}.{}: this reader knows versions up to 2.x (VTK 9)",
+                version.0, version.1
+            ),
+        ));
+    }
     // The appended section: after the '_' that follows the opening tag.
     let appended = match appended_at {
         Some(at) => {
