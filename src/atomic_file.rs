@@ -1,17 +1,60 @@
 //! Files written whole or not at all (issue 24): each writer writes a uniquely named temporary
-//! beside the target (`.NAME.XXXXXX.partial`, through the `tempfile` crate), so two writers of
-//! one name never share a temporary, and renames it over the target when complete; a writer
+//! beside the target (`.NAME.PID.XXXXXX.partial`, through the `tempfile` crate), so two writers
+//! of one name never share a temporary, and renames it over the target when complete; a writer
 //! dropped unfinished removes its temporary. Readers see the old file or a new complete one,
 //! never half of one; of two concurrent writers the last to finish wins.
+//!
+//! Interrupted runs leave nothing behind either: [`remove_on_interrupt`] (installed by the
+//! command line) removes every unfinished temporary on SIGINT or SIGTERM before the process
+//! exits, and a writer starting on NAME removes temporaries of NAME whose process is provably
+//! gone (a killed run, `kill -9`): their PID has no `/proc` entry.
 
 use std::fs::File;
 use std::io::Write;
 use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+
+/// The temporaries being written now, removed on an interrupt.
+static UNFINISHED: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+
+/// Exit code of a command stopped by SIGINT or SIGTERM (128 + SIGINT, as shells report it).
+pub const INTERRUPTED_EXIT: i32 = 130;
+
+/// Installs the handler that, on SIGINT or SIGTERM, removes every unfinished temporary, says
+/// so on stderr and exits with [`INTERRUPTED_EXIT`]. Call once, early (the command line does).
+pub fn remove_on_interrupt() -> Result<(), String> {
+    ctrlc::set_handler(|| {
+        let removed = match UNFINISHED.try_lock() {
+            Ok(list) => list.iter().filter(|p| std::fs::remove_file(p).is_ok()).count(),
+            Err(_) => 0,
+        };
+        eprintln!("interrupted: {removed} unfinished file(s) removed");
+        std::process::exit(INTERRUPTED_EXIT);
+    })
+    .map_err(|e| format!("cannot handle SIGINT/SIGTERM: {e}"))
+}
+
+/// Removes temporaries of `name` in `dir` left by processes that no longer exist.
+fn remove_stale(dir: &Path, name: &str) {
+    if !Path::new("/proc/self").exists() {
+        return; // no /proc: a process cannot be proved gone
+    }
+    let Ok(entries) = std::fs::read_dir(dir) else { return };
+    let prefix = format!(".{name}.");
+    for entry in entries.flatten().take(100_000) {
+        let file = entry.file_name();
+        let Some(rest) = file.to_str().and_then(|f| f.strip_prefix(&prefix)) else { continue };
+        let Some(pid) = rest.strip_suffix(".partial").and_then(|r| r.split('.').next()) else { continue };
+        if pid.parse::<u32>().is_ok_and(|pid| !Path::new(&format!("/proc/{pid}")).exists()) {
+            let _ = std::fs::remove_file(entry.path());
+        }
+    }
+}
 
 /// A file being written to a temporary beside `target`.
 pub struct AtomicFile {
     file: File,
-    temp: tempfile::TempPath,
+    temp: Option<tempfile::TempPath>,
     target: PathBuf,
 }
 
@@ -20,12 +63,16 @@ impl AtomicFile {
     pub fn create(target: &Path) -> std::io::Result<Self> {
         let dir = target.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
         let name = target.file_name().map_or_else(|| "file".into(), |n| n.to_string_lossy().into_owned());
+        remove_stale(dir, &name);
         let (file, temp) = tempfile::Builder::new()
-            .prefix(&format!(".{name}."))
+            .prefix(&format!(".{name}.{}.", std::process::id()))
             .suffix(".partial")
             .tempfile_in(dir)?
             .into_parts();
-        Ok(Self { file, temp, target: target.to_path_buf() })
+        if let Ok(mut list) = UNFINISHED.lock() {
+            list.push(temp.to_path_buf());
+        }
+        Ok(Self { file, temp: Some(temp), target: target.to_path_buf() })
     }
 
     /// The open temporary, to write to.
@@ -35,7 +82,7 @@ impl AtomicFile {
 
     /// The temporary's path (for error messages).
     pub fn temp_path(&self) -> &Path {
-        &self.temp
+        self.temp.as_deref().unwrap_or(&self.target)
     }
 
     /// The final name.
@@ -44,10 +91,27 @@ impl AtomicFile {
     }
 
     /// Flushes the data to disk and moves the temporary over the target.
-    pub fn commit(self) -> std::io::Result<()> {
+    pub fn commit(mut self) -> std::io::Result<()> {
         self.file.sync_all()?;
-        drop(self.file);
-        self.temp.persist(&self.target).map_err(|e| e.error)
+        let temp = self.temp.take().ok_or_else(|| std::io::Error::other("committed twice"))?;
+        forget(&temp);
+        temp.persist(&self.target).map_err(|e| e.error)
+    }
+}
+
+/// Takes `temp` off the list of unfinished temporaries.
+fn forget(temp: &Path) {
+    if let Ok(mut list) = UNFINISHED.lock() {
+        list.retain(|p| p != temp);
+    }
+}
+
+impl Drop for AtomicFile {
+    fn drop(&mut self) {
+        // Unfinished: the TempPath removes the file as it drops.
+        if let Some(temp) = &self.temp {
+            forget(temp);
+        }
     }
 }
 
@@ -100,5 +164,23 @@ mod tests {
         b.commit().expect("b");
         assert_eq!(std::fs::read(&target).expect("read"), b"from b");
         assert_eq!(std::fs::read_dir(dir.path()).expect("dir").count(), 1, "temporaries left");
+    }
+
+    #[test]
+    fn a_writer_removes_temporaries_of_its_name_whose_process_is_gone() {
+        let dir = tempfile::tempdir().expect("scratch");
+        let target = dir.path().join("b.gst");
+        // PID 999999999 is above any pid_max (at most 2²²): that process cannot exist.
+        let dead = dir.path().join(".b.gst.999999999.AbC123.partial");
+        let alive = dir.path().join(format!(".b.gst.{}.XyZ789.partial", std::process::id()));
+        let other = dir.path().join(".c.gst.999999999.AbC123.partial");
+        for p in [&dead, &alive, &other] {
+            std::fs::write(p, b"half").expect("a temporary");
+        }
+        write(&target, b"whole").expect("written");
+        assert!(!dead.exists(), "a dead process's temporary of this name stayed");
+        assert!(alive.exists(), "a live process's temporary was removed");
+        assert!(other.exists(), "another name's temporary was removed");
+        assert!(UNFINISHED.lock().expect("list").iter().all(|p| !p.starts_with(dir.path())));
     }
 }

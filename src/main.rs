@@ -143,6 +143,10 @@ fn main() {
         false => tracing_subscriber::EnvFilter::new("off"),
     };
     tracing_subscriber::fmt().with_env_filter(filter).with_writer(std::io::stderr).init();
+    // Ctrl-C and SIGTERM remove the unfinished files a command was writing, then exit 130.
+    if let Err(e) = galerkin::atomic_file::remove_on_interrupt() {
+        tracing::warn!("{e}");
+    }
     let (args, notes) = cli::legacy::translate(std::env::args_os().collect());
     for note in notes.iter().filter(|_| ranks.is_root()) {
         eprintln!("note: {note}");
