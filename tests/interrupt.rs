@@ -26,7 +26,7 @@ fn an_interrupted_writer_removes_its_temporary_and_exits_130() {
     for signal in ["INT", "TERM"] {
         let dir = tempfile::Builder::new().prefix("galerkin-interrupt-").tempdir().expect("scratch");
         let target = dir.path().join("big.gst");
-        let mut child = Command::new(env!("CARGO_BIN_EXE_galerkin"))
+        let child = Command::new(env!("CARGO_BIN_EXE_galerkin"))
             .args(["spacetime", "gen", "--generate", "pulses", "--elements", "50000000", "--out"])
             .arg(&target)
             .stdout(Stdio::null())
