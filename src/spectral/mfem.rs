@@ -276,7 +276,15 @@ fn read_mesh_lines(path: &Path, lines: &mut Lines<'_>) -> Result<MfemMesh, Spect
                 format!("element {e}: geometry {} with {} vertices (a {dim}D mesh needs geometry {want_geometry} with {corners})", w.get(1).copied().unwrap_or(0), w.len().saturating_sub(2)),
             ));
         }
-        elements.push(w[2..].to_vec());
+        let vertices = &w[2..];
+        if let Some(k) = (1..corners).find(|&k| vertices[..k].contains(&vertices[k])) {
+            return Err(err(
+                path,
+                n,
+                format!("element {e}: vertex {} appears twice (a degenerate element)", vertices[k]),
+            ));
+        }
+        elements.push(vertices.to_vec());
     }
     // Skip the boundary.
     if lines.peek() == Some("boundary") {
