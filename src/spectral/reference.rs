@@ -34,6 +34,18 @@ impl PixelReport {
     pub fn passed(&self) -> bool {
         self.max_error_ratio <= 1.0 && self.wrong_element == 0 && self.missing == 0
     }
+
+    /// Accounts pixel `at`, which shows `shown` where the reference is `reference` within
+    /// `bound`.
+    fn compare(&mut self, at: (u32, u32), shown: f32, reference: f64, bound: f64) {
+        let err = (f64::from(shown) - reference).abs();
+        self.max_error = self.max_error.max(err);
+        let ratio = err / bound;
+        if ratio > self.max_error_ratio {
+            self.max_error_ratio = ratio;
+            self.worst = Some((at.0, at.1, f64::from(shown), reference, bound));
+        }
+    }
 }
 
 /// The f32 rounding bound of the value shown at reference point `r` of element `e`, times 4:
@@ -116,14 +128,7 @@ pub fn check_pixels(
             };
             let r = r.map(|c| c.clamp(0.0, 1.0));
             let reference = mesh.value(field, step, e, r[0], r[1]);
-            let err = (f64::from(texel[0]) - reference).abs();
-            let bound = rounding_bound(mesh, field, step, e, r);
-            report.max_error = report.max_error.max(err);
-            let ratio = err / bound;
-            if ratio > report.max_error_ratio {
-                report.max_error_ratio = ratio;
-                report.worst = Some((px, py, f64::from(texel[0]), reference, bound));
-            }
+            report.compare((px, py), texel[0], reference, rounding_bound(mesh, field, step, e, r));
         }
     }
     report
@@ -238,14 +243,7 @@ pub fn check_cut_pixels(
             };
             let r = r.map(|c| c.clamp(0.0, 1.0));
             let reference = mesh.value_hex(field, step, e, r);
-            let err = (f64::from(texel[0]) - reference).abs();
-            let bound = rounding_bound_hex(mesh, field, step, e, r);
-            report.max_error = report.max_error.max(err);
-            let ratio = err / bound;
-            if ratio > report.max_error_ratio {
-                report.max_error_ratio = ratio;
-                report.worst = Some((px, py, f64::from(texel[0]), reference, bound));
-            }
+            report.compare((px, py), texel[0], reference, rounding_bound_hex(mesh, field, step, e, r));
         }
     }
     report
