@@ -18,6 +18,8 @@ struct Format {
     valid: Vec<u8>,
     read: fn(&Path) -> Result<(), String>,
     edits: Vec<(&'static str, &'static str, &'static str)>,
+    /// Valid files read with it, written beside it in every case (name, bytes).
+    beside: Vec<(&'static str, Vec<u8>)>,
 }
 
 /// A closed unit cube, one object, consistently oriented.
@@ -92,6 +94,7 @@ fn formats(scratch: &Path) -> Vec<Format> {
                     "type=\"UInt8\" Name=\"types\" format=\"nonsense\"",
                 ),
             ],
+            beside: vec![],
         },
         Format {
             name: "VTU (appended zlib, VTK's default)",
@@ -99,6 +102,7 @@ fn formats(scratch: &Path) -> Vec<Format> {
             valid: bytes("tests/data/vtk/hex_appended_zlib_u32.vtu"),
             read: |p| galerkin::spectral::vtu::read(p).map(|_| ()).map_err(|e| e.to_string()),
             edits: vec![("an unknown compressor", "vtkZLibDataCompressor", "vtkNoSuchCompressor")],
+            beside: vec![],
         },
         Format {
             name: "MFEM mesh",
@@ -113,6 +117,7 @@ fn formats(scratch: &Path) -> Vec<Format> {
                 ("another version", "MFEM mesh v1.0", "MFEM mesh v9.0"),
                 ("a vertex out of range", "1 3 0 1 5 4\n", "1 3 0 1 5 99\n"),
             ],
+            beside: vec![],
         },
         Format {
             name: "MFEM GridFunction",
@@ -127,6 +132,7 @@ fn formats(scratch: &Path) -> Vec<Format> {
                 ("an unknown collection", "H1_2D_P4", "H7_9D_P4"),
                 ("NaN among the values", "0.60551628181174066", "nan"),
             ],
+            beside: vec![],
         },
         Format {
             name: "Gmsh MSH 4.1",
@@ -139,6 +145,7 @@ fn formats(scratch: &Path) -> Vec<Format> {
                 ("a node out of range", "1 1 2 3 4\n", "1 1 2 3 9\n"),
                 ("a degenerate tetrahedron", "0 0 1\n$EndNodes", "0 0 0\n$EndNodes"),
             ],
+            beside: vec![],
         },
         Format {
             name: "OBJ surface (a frame of an animated boundary)",
@@ -154,6 +161,7 @@ fn formats(scratch: &Path) -> Vec<Format> {
                 ("a face index out of range", "f 1 3 2", "f 1 3 99"),
                 ("an open surface (a face removed)", "f 1 3 2\n", "\n"),
             ],
+            beside: vec![],
         },
         Format {
             name: "radiosity scene",
@@ -164,6 +172,7 @@ fn formats(scratch: &Path) -> Vec<Format> {
                 ("NaN size", "living = [6.0,", "living = [nan,"),
                 ("an unknown key", "[lights]", "[lights]\nbrightness = 3"),
             ],
+            beside: vec![],
         },
         Format {
             name: "fluid scene",
@@ -174,6 +183,7 @@ fn formats(scratch: &Path) -> Vec<Format> {
                 ("NaN cell", "cell = 0.1", "cell = nan"),
                 ("a negative cell", "cell = 0.1", "cell = -0.1"),
             ],
+            beside: vec![],
         },
         Format {
             name: "spacetime .gst",
@@ -181,6 +191,7 @@ fn formats(scratch: &Path) -> Vec<Format> {
             valid: std::fs::read(&gst).expect("the .gst"),
             read: |p| galerkin::spacetime::gst::open(p).map(|_| ()).map_err(|e| e.to_string()),
             edits: vec![],
+            beside: vec![],
         },
         Format {
             name: "reduced fluid model",
@@ -190,24 +201,20 @@ fn formats(scratch: &Path) -> Vec<Format> {
                 galerkin::fluid::reduced::ReducedFluidModel::load(p).map(|_| ()).map_err(|e| e.to_string())
             },
             edits: vec![("another format", "galerkin", "galerkon")],
+            beside: vec![],
         },
         Format {
             name: "fluid snapshot header (snapshots.json, read with its directory)",
             file: "snapshots.json",
             valid: std::fs::read(sim.join("snapshots.json")).expect("the header"),
             read: |p| {
-                // The run's other files beside the header under test.
                 let dir = p.parent().expect("a directory");
-                for f in ["mesh.json", "u.f64", "p.f64", "f.f64", "g.f64", "h.f64"] {
-                    let at = dir.join(f);
-                    if !at.exists() {
-                        let from = Path::new(env!("CARGO_TARGET_TMPDIR")).join("hostile-sim").join(f);
-                        std::fs::copy(from, at).map_err(|e| e.to_string())?;
-                    }
-                }
                 galerkin::fluid::snapshots::SnapshotReader::open(dir).map(|_| ()).map_err(|e| e.to_string())
             },
             edits: vec![("more frames than written", "\"frames\": ", "\"frames\": 9000")],
+            beside: ["mesh.json", "u.f64", "p.f64", "f.f64", "g.f64", "h.f64"]
+                .map(|f| (f, std::fs::read(sim.join(f)).expect("the run's files")))
+                .to_vec(),
         },
     ]
 }
@@ -216,13 +223,6 @@ fn formats(scratch: &Path) -> Vec<Format> {
 fn every_format_refuses_hostile_variants_naming_the_file_in_bounded_time_and_memory() {
     let scratch = tempfile::Builder::new().prefix("galerkin-hostile-").tempdir().expect("scratch");
     let formats = formats(scratch.path());
-    // The snapshot variants read the run's other files from here.
-    let shared = Path::new(env!("CARGO_TARGET_TMPDIR")).join("hostile-sim");
-    let _ = std::fs::remove_dir_all(&shared);
-    std::fs::create_dir_all(&shared).expect("shared");
-    for f in ["mesh.json", "u.f64", "p.f64", "f.f64", "g.f64", "h.f64"] {
-        std::fs::copy(scratch.path().join("sim").join(f), shared.join(f)).expect("copied");
-    }
     let start_peak = peak_mib();
     let mut cases = 0;
     for (k, format) in formats.iter().enumerate() {
@@ -230,6 +230,9 @@ fn every_format_refuses_hostile_variants_naming_the_file_in_bounded_time_and_mem
         let check = |what: &str, setup: &dyn Fn(&Path)| {
             let dir = case_dir.join(what.replace(|c: char| !c.is_ascii_alphanumeric(), "_"));
             std::fs::create_dir_all(&dir).expect("case dir");
+            for (name, bytes) in &format.beside {
+                std::fs::write(dir.join(name), bytes).expect("written");
+            }
             let path = dir.join(format.file);
             setup(&path);
             let start = Instant::now();
@@ -247,6 +250,9 @@ fn every_format_refuses_hostile_variants_naming_the_file_in_bounded_time_and_mem
         // The valid file itself loads (so each variant fails for what it changed).
         let valid_dir = case_dir.join("valid");
         std::fs::create_dir_all(&valid_dir).expect("valid dir");
+        for (name, bytes) in &format.beside {
+            std::fs::write(valid_dir.join(name), bytes).expect("written");
+        }
         let valid_path = valid_dir.join(format.file);
         std::fs::write(&valid_path, &format.valid).expect("written");
         if let Err(e) = (format.read)(&valid_path) {
