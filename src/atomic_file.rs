@@ -64,9 +64,14 @@ impl AtomicFile {
         let dir = target.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
         let name = target.file_name().map_or_else(|| "file".into(), |n| n.to_string_lossy().into_owned());
         remove_stale(dir, &name);
-        let (file, temp) = tempfile::Builder::new()
-            .prefix(&format!(".{name}.{}.", std::process::id()))
-            .suffix(".partial")
+        let prefix = format!(".{name}.{}.", std::process::id());
+        let mut builder = tempfile::Builder::new();
+        builder.prefix(&prefix).suffix(".partial");
+        // The permissions `File::create` gives (0o666 less the umask), not the temporary's
+        // owner-only default: a result is as readable as a file written directly.
+        #[cfg(unix)]
+        builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666));
+        let (file, temp) = builder
             .tempfile_in(dir)?
             .into_parts();
         if let Ok(mut list) = UNFINISHED.lock() {
@@ -164,6 +169,18 @@ mod tests {
         b.commit().expect("b");
         assert_eq!(std::fs::read(&target).expect("read"), b"from b");
         assert_eq!(std::fs::read_dir(dir.path()).expect("dir").count(), 1, "temporaries left");
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn a_written_file_has_the_permissions_a_direct_write_gives() {
+        use std::os::unix::fs::PermissionsExt;
+        let dir = tempfile::tempdir().expect("scratch");
+        let (atomic, direct) = (dir.path().join("atomic.png"), dir.path().join("direct.png"));
+        write(&atomic, b"x").expect("atomic write");
+        std::fs::write(&direct, b"x").expect("direct write");
+        let mode = |p: &Path| std::fs::metadata(p).expect("metadata").permissions().mode() & 0o777;
+        assert_eq!(mode(&atomic), mode(&direct), "not the owner-only temporary's 0o600");
     }
 
     #[test]

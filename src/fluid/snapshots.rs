@@ -7,7 +7,9 @@
 //! - `snapshots.json`: `{"format": "galerkin-fluid-snapshots", "version": 1, "dim": d,
 //!   "cells": n_c, "faces": n_f, "vertices": n_v, "frame_time": Δt, "frames": k,
 //!   "periodic_axis": a | null, "viscosity": μ, "forcing": [e₀, e₁, e₂]}` (the last two
-//!   optional), rewritten after every frame, so an interrupted run is a valid shorter one;
+//!   optional), rewritten (atomically) after every frame is flushed, so an interrupted run is
+//!   a valid shorter one; it is written last when a run starts and removed first when one is
+//!   overwritten;
 //! - `mesh.json`: the topology, `{"dim": d, "cells": [v₀, v₁, …]}` (d + 1 indices per cell);
 //! - one file per quantity, `u.f64 p.f64 f.f64 g.f64 h.f64`: little-endian f64, one frame
 //!   after another (frame k of quantity q starts at byte `8·k·len_q`). u and p have d
@@ -156,9 +158,19 @@ impl SnapshotWriter {
             }
             Err(std::fs::TryLockError::Error(e)) => return Err(io(&lock_path, e)),
         }
+        // Overwriting: the old header goes first, so no moment of the rewrite shows the old
+        // header over the new mesh or over truncated frame files (an interrupted overwrite leaves
+        // a directory without a run, which every reader refuses, or a valid shorter new run).
+        let header = dir.join("snapshots.json");
+        match std::fs::remove_file(&header) {
+            Ok(()) => {}
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
+            Err(e) => return Err(io(&header, e)),
+        }
         let mesh =
             serde_json::to_vec(&MeshFile { dim: meta.dim, cells: cells.to_vec() }).map_err(|e| io(dir, e))?;
-        std::fs::write(dir.join("mesh.json"), mesh).map_err(|e| io(&dir.join("mesh.json"), e))?;
+        let mesh_path = dir.join("mesh.json");
+        crate::atomic_file::write(&mesh_path, &mesh).map_err(|e| io(&mesh_path, e))?;
         let mut files = Vec::new();
         for q in QUANTITIES {
             let path = dir.join(format!("{q}.f64"));
