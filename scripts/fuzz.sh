@@ -53,14 +53,17 @@ box() {
     printf 'o window\nf 4 1 5\nf 4 5 8\n'
 }
 { box 1; printf '%s' "$SEP"; box 2; printf '%s' "$SEP"; printf 'base = "a.obj"\n[[targets]]\nname = "width"\nfile = "b.obj"\nrange = [0.0, 1.0]\ndefault = 0.0\n[materials]\ndefault = [0.7, 0.7, 0.7]\n[openings]\nwindows = ["window"]\nskylights = []\n'; } > "$C/obj/box"
-# Scene TOML.
-# (the small scenes: the full-size ones take seconds to build their meshes, every run)
-cp scenes/demo.toml scenes/fluid/*small*.toml scenes/radiosity/two_rooms_small.toml "$C/scene_toml/"
-# A fluid run and its reduced model: snapshots (header, mesh, frames) and model (+ visibility).
-"$G" fluid simulate scenes/fluid/tunnel_small.toml --frames 2 --out "$seeds/sim" >/dev/null
-"$G" fluid train "$seeds/sim" --out "$seeds/model.safetensors" >/dev/null
-{ cat "$seeds/sim/snapshots.json"; printf '%s' "$SEP"; cat "$seeds/sim/mesh.json"; printf '%s' "$SEP"; cat "$seeds/sim/p.f64"; } > "$C/snapshots/tunnel_small"
+# Scene TOML: every kind of scene at its coarsest (fuzz/seeds; a valid scene builds its mesh on
+# every run, so seeds of scenes/ size would make nearly every execution a mesh build).
+cp scenes/demo.toml fuzz/seeds/*.toml "$C/scene_toml/"
+# A fluid run and its reduced model: snapshots (header, mesh, frames) and model (+ visibility),
+# on the 45-cell tunnel; a radiosity model of the 134-face rooms (model, then visibility).
+"$G" fluid simulate fuzz/seeds/tunnel_tiny.toml --frames 2 --out "$seeds/sim" >/dev/null
+"$G" fluid train "$seeds/sim" --m-f 2 --m-u 2 --out "$seeds/model.safetensors" >/dev/null
+{ cat "$seeds/sim/snapshots.json"; printf '%s' "$SEP"; cat "$seeds/sim/mesh.json"; printf '%s' "$SEP"; cat "$seeds/sim/p.f64"; } > "$C/snapshots/tunnel_tiny"
 cp "$seeds/model.safetensors" "$C/reduced_model/fluid"
+"$G" radiosity train fuzz/seeds/rooms_tiny.toml --samples 12 --cap 2 --out "$seeds/rooms" >/dev/null
+{ cat "$seeds/rooms/model.safetensors"; printf '%s' "$SEP"; cat "$seeds/rooms/visibility.safetensors"; } > "$C/reduced_model/radiosity"
 # The command line's values.
 for v in 1920x1080 0.5,2 -1e-3,1e300 100000 out.png 1@3,3@20 "0:0.5,1:0.2" crack inclusions; do
     printf '%s' "$v" > "$C/cli_values/$(printf '%s' "$v" | tr -c 'a-zA-Z0-9' '_')"

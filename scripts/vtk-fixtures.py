@@ -8,7 +8,10 @@ headers; `quad_series.pvd`, a ParaView collection (written as ParaView's vtkPVDW
 writes it: VTK has no writer of its own for it) of three VTK-written files whose field is
 (1 + k) times the quadrilaterals' field at times 0, 0.5, 1; `quad_time.vtu`, the
 quadrilaterals with their time in the field data (`TimeValue` 2.5); `tri_lagrange.vtu`, a
-quadratic Lagrange triangle (a cell the renderer refuses by name). Also `hex_legacy.vtu`: the same hexahedra with the node order VTK used before file
+quadratic Lagrange triangle (a cell the renderer refuses by name); `bezier_{quad,hex}.vtu`
+and `bezier_{quad,hex}_rational.vtu`, two order-3 Bezier cells each (the latter with
+RationalWeights), with VTK's own evaluation of their geometry and field at parametric points
+in the `.json` beside them. Also `hex_legacy.vtu`: the same hexahedra with the node order VTK used before file
 version 2.2 (vertical edges 2-6 and 3-7 swapped) and the version attribute set to 1.0, checked
 by reading it back with VTK. Run from the repository root: python3 scripts/vtk-fixtures.py
 """
@@ -73,7 +76,8 @@ def grid(shape):
 def bezier(shape, rational=False):
     """Two order-3 Bezier cells: control points at the affine map's equispaced values (linear
     precision) with the interior ones moved (curved cells), coefficients sin(i + 2j + 3k) as
-    point data; with `rational`, RationalWeights not all 1 (which we refuse)."""
+    point data; with `rational`, RationalWeights between 0.6 and 2.1 varying along every axis
+    (a rational cell: geometry and field are ratios of the weighted Bernstein sums)."""
     g = vtk.vtkUnstructuredGrid()
     pts = vtk.vtkPoints()
     pts.SetDataTypeToDouble()
@@ -99,7 +103,7 @@ def bezier(shape, rational=False):
                         x[2] = 0.0
                     ids[at] = pts.InsertNextPoint(*x)
                     u.InsertNextValue(math.sin(i + 2 * j + 3 * k + 5 * c))
-                    w.InsertNextValue(1.0 + (0.5 if rational and i == 1 else 0.0))
+                    w.InsertNextValue(1.0 + 0.5 * (i == 1) + 0.3 * (j == 2) - 0.4 * (k == 3) + 0.3 * c if rational else 1.0)
         g.InsertNextCell(ctype, per, ids)
     g.SetPoints(pts)
     g.GetPointData().AddArray(u)
@@ -203,7 +207,10 @@ def main():
         write(cells, f"bezier_{shape}.vtu", "appended", "zlib", False)
         with open(os.path.join(OUT, f"bezier_{shape}.json"), "w") as f:
             json.dump(evaluations(cells, pts), f)
-    write(bezier("quad", rational=True), "bezier_quad_rational.vtu", "ascii", "none", False)
+        rational = bezier(shape, rational=True)
+        write(rational, f"bezier_{shape}_rational.vtu", "ascii", "none", False)
+        with open(os.path.join(OUT, f"bezier_{shape}_rational.json"), "w") as f:
+            json.dump(evaluations(rational, pts), f)
 
     # The legacy order: vertical edges 2-6 and 3-7 swapped, version 1.0.
     legacy = vtk.vtkUnstructuredGrid()

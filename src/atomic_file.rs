@@ -71,9 +71,7 @@ impl AtomicFile {
         // owner-only default: a result is as readable as a file written directly.
         #[cfg(unix)]
         builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666));
-        let (file, temp) = builder
-            .tempfile_in(dir)?
-            .into_parts();
+        let (file, temp) = builder.tempfile_in(dir)?.into_parts();
         if let Ok(mut list) = UNFINISHED.lock() {
             list.push(temp.to_path_buf());
         }

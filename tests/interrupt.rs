@@ -67,7 +67,15 @@ fn an_interrupted_simulation_leaves_a_valid_shorter_run() {
     let simulate = |dir: &Path, frames: &str| {
         let mut command = Command::new(env!("CARGO_BIN_EXE_galerkin"));
         command
-            .args(["fluid", "simulate", "scenes/fluid/tunnel_small.toml", "--force", "--frames", frames, "--out"])
+            .args([
+                "fluid",
+                "simulate",
+                "scenes/fluid/tunnel_small.toml",
+                "--force",
+                "--frames",
+                frames,
+                "--out",
+            ])
             .arg(dir)
             .stdout(Stdio::null())
             .stderr(Stdio::piped());
@@ -82,7 +90,8 @@ fn an_interrupted_simulation_leaves_a_valid_shorter_run() {
         if round != "new directory" {
             assert!(simulate(&stopped, "40").status().expect("galerkin runs").success());
         }
-        let modified = |dir: &Path| std::fs::metadata(dir.join("snapshots.json")).and_then(|m| m.modified()).ok();
+        let modified =
+            |dir: &Path| std::fs::metadata(dir.join("snapshots.json")).and_then(|m| m.modified()).ok();
         let before = modified(&stopped);
         let child = simulate(&stopped, "1000000").spawn().expect("galerkin starts");
         let start = Instant::now();

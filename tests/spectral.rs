@@ -34,10 +34,11 @@ fn glsl_element_maths_match_their_rust_twins() {
         // (order 3) and from the buffer (order 5).
         annulus(2, 3, 3, 3, NodeSet::GaussLobatto).unwrap(),
         annulus(2, 3, 5, 5, NodeSet::Equispaced).unwrap(),
+        // Rational: VTK's rational Bézier quadrilaterals (homogeneous points and coefficients).
+        galerkin::spectral::vtu::read(std::path::Path::new("tests/data/vtk/bezier_quad_rational.vtu")).unwrap(),
     ];
     for mesh in &cases {
-        let points: Vec<[f32; 4]> =
-            mesh.points.iter().map(|p| [p[0] as f32, p[1] as f32, 0.0, 0.0]).collect();
+        let points = galerkin::spectral::render::geometry_points(mesh);
         let values = galerkin::spectral::render::padded_values(mesh, 0, 0);
         let r = common::random_f32(200, 11);
         let n = 100;
@@ -489,4 +490,69 @@ fn height_fields_show_the_field_within_half_a_pixel() {
     assert!(covered > 2000, "{covered}");
     assert!(worst <= 0.5 + 0.01, "a pixel shows a point {worst} px away");
     assert!(worst_value <= 1.0);
+}
+
+/// Rational cells in 3D: a cylinder of radius 1 and height 1 from four rational quadratic
+/// Bézier quadrilaterals (weights 1, √2/2, 1 around; the circle is exact, which no polynomial
+/// quadrilateral is). The f64 map lies on the cylinder to rounding (closed form), and the
+/// rendered surface keeps the half-pixel bound and each pixel's value bound as polynomial
+/// surfaces do.
+#[test]
+fn rational_quadrilaterals_draw_an_exact_cylinder() {
+    use galerkin::spectral::render::fit_camera;
+    let basis = Basis1d::new(NodeSet::Bernstein, 2).unwrap();
+    let (mut points, mut weights, mut values) = (Vec::new(), Vec::new(), Vec::new());
+    for e in 0..4 {
+        let a = f64::from(e) * std::f64::consts::FRAC_PI_2;
+        let (c, s) = (a.cos(), a.sin());
+        let around = [([c, s], 1.0), ([c - s, s + c], std::f64::consts::FRAC_1_SQRT_2), ([-s, c], 1.0)];
+        for j in 0..3 {
+            let z = 0.5 * f64::from(j);
+            for (i, (p, w)) in around.iter().enumerate() {
+                points.push([p[0], p[1], z]);
+                weights.push(*w);
+                values.push((f64::from(e) + i as f64 - z).sin());
+            }
+        }
+    }
+    let fields = vec![Field { name: "u".into(), times: vec![0.0], steps: vec![values] }];
+    let mesh = SpectralMesh::new(Shape::Quadrilateral, basis.clone(), basis, points, fields)
+        .unwrap()
+        .with_weights(weights)
+        .unwrap();
+    let mut off_circle = 0.0f64;
+    for e in 0..4 {
+        for k in 0..=20 {
+            let (x, _) = mesh.map(e, f64::from(k) / 20.0, 0.3);
+            off_circle = off_circle.max((x[0].hypot(x[1]) - 1.0).abs());
+        }
+    }
+    assert!(off_circle < 1e-15, "the rational map leaves the circle by {off_circle:e}");
+    let mesh = Arc::new(mesh);
+    let gpu = common::gpu();
+    let size = (256u32, 192u32);
+    let camera = fit_camera(&mesh);
+    let view = SpectralView { overdraw: false, max_error_px: 0.5, ..SpectralView::default() };
+    let pixels = render_data(&gpu, &mesh, &view, size);
+    let (mut covered, mut farthest, mut worst_value) = (0, 0.0f64, 0.0f64);
+    for py in 0..size.1 {
+        for px in 0..size.0 {
+            let t = &pixels[4 * (py * size.0 + px) as usize..][..4];
+            if t[3].is_nan() {
+                continue;
+            }
+            covered += 1;
+            let (e, r) = (t[3] as usize, [f64::from(t[1]), f64::from(t[2])]);
+            let (x, _) = mesh.map(e, r[0], r[1]);
+            let (sx, sy) = camera.project(glam::DVec3::from(x), size.0, size.1);
+            farthest = farthest.max((sx - (f64::from(px) + 0.5)).hypot(sy - (f64::from(py) + 0.5)));
+            let bound = galerkin::spectral::reference::rounding_bound(&mesh, 0, 0, e, r);
+            worst_value = worst_value.max((f64::from(t[0]) - mesh.value(0, 0, e, r[0], r[1])).abs() / bound);
+        }
+    }
+    eprintln!("rational cylinder: {covered} pixels, farthest {farthest:.3} px, value error {worst_value:.3} of its bound");
+    assert!(covered > 3000, "{covered}");
+    // As for polynomial surfaces: the budget plus f32 slack (≈ 1e-3 px).
+    assert!(farthest <= 0.5 + 0.01, "a pixel shows a surface point {farthest} px away");
+    assert!(worst_value <= 1.0, "value error {worst_value} of its bound");
 }

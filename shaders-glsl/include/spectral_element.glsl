@@ -48,6 +48,9 @@ layout(constant_id = 27) const float SPECTRAL_FW12 = 0.0;
 layout(constant_id = 56) const uint SPECTRAL_DIM = 2u;
 // Field and geometry share one basis (isoparametric elements), id 57.
 layout(constant_id = 57) const bool SPECTRAL_SHARED_BASIS = false;
+// Rational cells (SpectralMesh::weights, mesh.rs): spectral_points hold (w x, w y, w z, w), the
+// coefficients are w F, and the map and the field divide by sum w B (one shared basis).
+layout(constant_id = 58) const bool SPECTRAL_RATIONAL = false;
 layout(constant_id = 28) const uint SPECTRAL_GEOMETRY_KIND = 0u;
 layout(constant_id = 29) const uint SPECTRAL_GEOMETRY_ORDER = 1u;
 layout(constant_id = 30) const float SPECTRAL_GN0 = 0.0;
@@ -98,21 +101,42 @@ vec3 spectral_map_bases(uint e, float a[SPECTRAL_MAX_NODES], float da[SPECTRAL_M
                         float db[SPECTRAL_MAX_NODES], out vec3 dxi, out vec3 deta) {
     const uint m = SPECTRAL_GEOMETRY_ORDER + 1u;
     uint base = e * m * m;
-    vec3 x = vec3(0.0);
-    dxi = vec3(0.0);
-    deta = vec3(0.0);
+    // Homogeneous sums; w only matters (and is only computed) for rational cells.
+    vec4 x = vec4(0.0), hxi = vec4(0.0), heta = vec4(0.0);
     for (uint j = 0u; j < m; ++j) {
-        vec3 row = vec3(0.0), drow = vec3(0.0);
+        vec4 row = vec4(0.0), drow = vec4(0.0);
         for (uint i = 0u; i < m; ++i) {
-            vec3 p = spectral_points[base + j * m + i].xyz;
+            vec4 p = spectral_points[base + j * m + i];
             row += a[i] * p;
             drow += da[i] * p;
         }
         x += b[j] * row;
-        dxi += b[j] * drow;
-        deta += db[j] * row;
+        hxi += b[j] * drow;
+        heta += db[j] * row;
     }
-    return x;
+    if (!SPECTRAL_RATIONAL) {
+        dxi = hxi.xyz;
+        deta = heta.xyz;
+        return x.xyz;
+    }
+    vec3 y = x.xyz / x.w;
+    dxi = (hxi.xyz - y * hxi.w) / x.w;
+    deta = (heta.xyz - y * heta.w) / x.w;
+    return y;
+}
+
+// sum_ij a_i b_j w_ij over element e's rational weights (1.0 for polynomial cells).
+float spectral_weight_sum(uint e, float a[SPECTRAL_MAX_NODES], float b[SPECTRAL_MAX_NODES]) {
+    if (!SPECTRAL_RATIONAL) return 1.0;
+    const uint m = SPECTRAL_GEOMETRY_ORDER + 1u;
+    uint base = e * m * m;
+    float w = 0.0;
+    for (uint j = 0u; j < m; ++j) {
+        float row = 0.0;
+        for (uint i = 0u; i < m; ++i) row += a[i] * spectral_points[base + j * m + i].w;
+        w += b[j] * row;
+    }
+    return w;
 }
 
 // The geometry map x(xi, eta) of element e and its derivatives along xi and eta.
@@ -155,7 +179,7 @@ float spectral_tensor_sum(uint e, vec4 given[SPECTRAL_FLAT_VEC4S], float a[SPECT
         vec4 f = SPECTRAL_FLAT_VALUES ? given[min(q, SPECTRAL_FLAT_VEC4S - 1u)] : spectral_values[e * SPECTRAL_VALUE_VEC4S + q];
         v += dot(w, f);
     }
-    return v;
+    return SPECTRAL_RATIONAL ? v / spectral_weight_sum(e, a, b) : v;
 }
 
 // The field value of element e at reference point r, sum_ij l_i(xi) l_j(eta) F_ij, with the
@@ -201,23 +225,42 @@ vec3 spectral_value_gradient(uint e, vec2 r) {
             if (k < m * m) v += f[c] * vec3(a[k % m] * b[k / m], da[k % m] * b[k / m], a[k % m] * db[k / m]);
         }
     }
-    return v;
+    if (!SPECTRAL_RATIONAL) return v;
+    // (N / W)' = (N' - (N / W) W') / W, with W and its derivatives from the weights.
+    vec3 w = vec3(0.0);
+    for (uint k = 0u; k < m * m; ++k)
+        w += spectral_points[e * m * m + k].w * vec3(a[k % m] * b[k / m], da[k % m] * b[k / m], a[k % m] * db[k / m]);
+    float f = v.x / w.x;
+    return vec3(f, (v.yz - f * w.yz) / w.x);
+}
+
+// A Newton step at most half the reference element long per axis (damped in mesh.rs).
+vec2 spectral_damped(vec2 s) {
+    float longest = max(abs(s.x), abs(s.y));
+    return longest > 0.5 ? s * (0.5 / longest) : s;
+}
+vec3 spectral_damped(vec3 s) {
+    float longest = max(abs(s.x), max(abs(s.y), abs(s.z)));
+    return longest > 0.5 ? s * (0.5 / longest) : s;
 }
 
 // Newton's method for the reference point of planar element e that maps to p, from r; returns
-// false if it diverged. Stops when the step is below 1e-6 (a few f32 ulps of [0, 1]).
+// false if it diverged or had not settled (last step over 1e-4: far more than f32 noise) when
+// the iterations ran out. Stops when the step is below 1e-6 (a few f32 ulps of [0, 1]).
 bool spectral_inverse_map(uint e, vec2 p, inout vec2 r) {
+    float last = 1.0;
     for (int k = 0; k < SPECTRAL_NEWTON_ITERATIONS; ++k) {
         vec3 dxi, deta;
         vec2 f = spectral_map(e, r, dxi, deta).xy - p;
         float det = dxi.x * deta.y - deta.x * dxi.y;
         if (det == 0.0) return false;
-        vec2 s = vec2(deta.y * f.x - deta.x * f.y, -dxi.y * f.x + dxi.x * f.y) / det;
+        vec2 s = spectral_damped(vec2(deta.y * f.x - deta.x * f.y, -dxi.y * f.x + dxi.x * f.y) / det);
         r -= s;
         if (any(greaterThan(abs(r), vec2(10.0)))) return false;
-        if (max(abs(s.x), abs(s.y)) < 1e-6) return true;
+        last = max(abs(s.x), abs(s.y));
+        if (last < 1e-6) return true;
     }
-    return true;
+    return last < 1e-4;
 }
 
 
@@ -233,13 +276,14 @@ vec3 spectral_map_hex(uint e, vec3 r, out mat3 jacobian) {
     spectral_geometry_eval(r.z, true, c, dc);
     const uint m = SPECTRAL_GEOMETRY_ORDER + 1u;
     uint base = e * m * m * m;
-    vec3 x = vec3(0.0), dx = vec3(0.0), dy = vec3(0.0), dz = vec3(0.0);
+    // Homogeneous sums, as spectral_map_bases.
+    vec4 x = vec4(0.0), dx = vec4(0.0), dy = vec4(0.0), dz = vec4(0.0);
     for (uint k = 0u; k < m; ++k) {
-        vec3 layer = vec3(0.0), dlayer_x = vec3(0.0), dlayer_y = vec3(0.0);
+        vec4 layer = vec4(0.0), dlayer_x = vec4(0.0), dlayer_y = vec4(0.0);
         for (uint j = 0u; j < m; ++j) {
-            vec3 row = vec3(0.0), drow = vec3(0.0);
+            vec4 row = vec4(0.0), drow = vec4(0.0);
             for (uint i = 0u; i < m; ++i) {
-                vec3 p = spectral_points[base + (k * m + j) * m + i].xyz;
+                vec4 p = spectral_points[base + (k * m + j) * m + i];
                 row += a[i] * p;
                 drow += da[i] * p;
             }
@@ -252,8 +296,13 @@ vec3 spectral_map_hex(uint e, vec3 r, out mat3 jacobian) {
         dy += c[k] * dlayer_y;
         dz += dc[k] * layer;
     }
-    jacobian = mat3(dx, dy, dz);
-    return x;
+    if (!SPECTRAL_RATIONAL) {
+        jacobian = mat3(dx.xyz, dy.xyz, dz.xyz);
+        return x.xyz;
+    }
+    vec3 y = x.xyz / x.w;
+    jacobian = mat3((dx.xyz - y * dx.w) / x.w, (dy.xyz - y * dy.w) / x.w, (dz.xyz - y * dz.w) / x.w);
+    return y;
 }
 
 // The field value of hexahedron e at r: sum_ijk l_i(xi) l_j(eta) l_k(zeta) F_ijk.
@@ -273,22 +322,28 @@ float spectral_value_hex(uint e, vec3 r) {
         }
         v += dot(w, spectral_values[base + q]);
     }
-    return v;
+    if (!SPECTRAL_RATIONAL) return v;
+    float weight = 0.0;
+    for (uint k = 0u; k < m * m * m; ++k)
+        weight += a[k % m] * b[(k / m) % m] * c[k / (m * m)] * spectral_points[e * m * m * m + k].w;
+    return v / weight;
 }
 
 // Newton's method for the reference point of hexahedron e that maps to p, from r; false if it
-// diverged or met a singular Jacobian.
+// diverged, met a singular Jacobian or had not settled (as spectral_inverse_map).
 bool spectral_inverse_map_hex(uint e, vec3 p, inout vec3 r) {
+    float last = 1.0;
     for (int k = 0; k < SPECTRAL_NEWTON_ITERATIONS; ++k) {
         mat3 j;
         vec3 f = spectral_map_hex(e, r, j) - p;
         if (determinant(j) == 0.0) return false;
-        vec3 s = inverse(j) * f;
+        vec3 s = spectral_damped(inverse(j) * f);
         r -= s;
         if (any(greaterThan(abs(r), vec3(10.0)))) return false;
-        if (max(abs(s.x), max(abs(s.y), abs(s.z))) < 1e-6) return true;
+        last = max(abs(s.x), max(abs(s.y), abs(s.z)));
+        if (last < 1e-6) return true;
     }
-    return true;
+    return last < 1e-4;
 }
 
 #endif

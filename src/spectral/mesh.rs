@@ -56,6 +56,17 @@ pub struct SpectralMesh {
     pub points: Vec<[f64; 3]>,
     /// The scalar fields.
     pub fields: Vec<Field>,
+    /// Rational cells (VTK's Bézier cells with `RationalWeights`): a positive weight w per
+    /// node, and then the geometry map is x = Σ w X B / Σ w B and every field f = Σ w F B / Σ w B
+    /// (one basis for both; [`SpectralMesh::with_weights`]). `None`: polynomials.
+    pub weights: Option<Vec<f64>>,
+}
+
+/// The rational value and derivatives N/W from a homogeneous sum (`n`, its derivatives `dn`)
+/// and its weight sum (`w`, derivatives `dw`): (N/W)' = (N' − (N/W) W') / W.
+fn rational<const D: usize>(n: f64, dn: [f64; D], w: f64, dw: [f64; D]) -> (f64, [f64; D]) {
+    let v = n / w;
+    (v, std::array::from_fn(|a| (dn[a] - v * dw[a]) / w))
 }
 
 /// The axis-aligned box [lo, hi] of `points`.
@@ -73,6 +84,18 @@ fn near_box(points: &[[f64; 3]], p: &[f64], dims: usize) -> bool {
         let grow = 0.5 * (hi[c] - lo[c]);
         p[c] >= lo[c] - grow && p[c] <= hi[c] + grow
     })
+}
+
+/// A Newton step of the inverse map at most half the reference element long per axis: far
+/// from the solution a strongly curved (e.g. rational) map can send a full step out of the
+/// basin; near it steps are tiny and Newton's quadratic convergence is kept.
+fn damped<const D: usize>(s: [f64; D]) -> [f64; D] {
+    let longest = s.iter().fold(0.0f64, |a, c| a.max(c.abs()));
+    if longest > 0.5 {
+        s.map(|c| c * 0.5 / longest)
+    } else {
+        s
+    }
 }
 
 /// Newton iterations of the inverse map: quadratic convergence from a guess inside the
@@ -132,7 +155,7 @@ impl SpectralMesh {
                 }
             }
         }
-        let mesh = Self { shape, geometry, basis, points, fields };
+        let mesh = Self { shape, geometry, basis, points, fields, weights: None };
         for e in 0..elements {
             match shape {
                 Shape::Quadrilateral if mesh.is_planar() => mesh.check_orientation(e)?,
@@ -141,6 +164,51 @@ impl SpectralMesh {
             }
         }
         Ok(mesh)
+    }
+
+    /// The mesh made rational by `weights`, one per geometry node (VTK's `RationalWeights`):
+    /// each must be positive and finite (so Σ w B > 0 everywhere and the element lies in its
+    /// control points' convex hull), the geometry and fields must share one Bernstein basis, and
+    /// the rational map must neither fold nor collapse. Errors name the element.
+    pub fn with_weights(mut self, weights: Vec<f64>) -> Result<Self, SpectralError> {
+        if weights.len() != self.points.len() {
+            return Err(SpectralError::Length {
+                what: "rational weights (one per geometry node)".into(),
+                found: weights.len(),
+                expected: self.points.len(),
+            });
+        }
+        if self.geometry != self.basis || self.geometry.set != super::basis::NodeSet::Bernstein {
+            return Err(SpectralError::Missing(
+                "rational weights need the geometry and the fields on one Bernstein basis".into(),
+            ));
+        }
+        let gm = self.points_per_element();
+        if let Some(k) = weights.iter().position(|w| !(w.is_finite() && *w > 0.0)) {
+            return Err(SpectralError::Invalid {
+                element: k / gm,
+                what: format!(
+                    "rational weight {} of node {} (weights must be positive and finite)",
+                    weights[k],
+                    k % gm
+                ),
+            });
+        }
+        self.weights = Some(weights);
+        for e in 0..self.elements() {
+            match self.shape {
+                Shape::Quadrilateral if self.is_planar() => self.check_orientation(e)?,
+                Shape::Hexahedron => self.check_orientation_hex(e)?,
+                Shape::Quadrilateral => {}
+            }
+        }
+        Ok(self)
+    }
+
+    /// Element `e`'s rational weights (one per geometry node), when the mesh is rational.
+    pub fn element_weights(&self, e: usize) -> Option<&[f64]> {
+        let gm = self.points_per_element();
+        self.weights.as_deref().map(|w| &w[e * gm..(e + 1) * gm])
     }
 
     /// Number of elements.
@@ -200,18 +268,29 @@ impl SpectralMesh {
         self.geometry.eval(xi, &mut a, Some(&mut da));
         self.geometry.eval(eta, &mut b, Some(&mut db));
         let pts = self.element_points(e);
+        let weights = self.element_weights(e);
         let (mut x, mut dx, mut dy) = ([0.0; 3], [0.0; 3], [0.0; 3]);
+        let (mut w, mut dw) = (0.0, [0.0; 2]);
         for j in 0..m {
             for i in 0..m {
                 let p = pts[j * m + i];
+                // Homogeneous sums (w = 1 and no division for polynomial meshes).
+                let wk = weights.map_or(1.0, |w| w[j * m + i]);
                 for c in 0..3 {
-                    x[c] += a[i] * b[j] * p[c];
-                    dx[c] += da[i] * b[j] * p[c];
-                    dy[c] += a[i] * db[j] * p[c];
+                    x[c] += a[i] * b[j] * wk * p[c];
+                    dx[c] += da[i] * b[j] * wk * p[c];
+                    dy[c] += a[i] * db[j] * wk * p[c];
                 }
+                w += a[i] * b[j] * wk;
+                dw[0] += da[i] * b[j] * wk;
+                dw[1] += a[i] * db[j] * wk;
             }
         }
-        (x, [dx, dy])
+        if weights.is_none() {
+            return (x, [dx, dy]);
+        }
+        let per: [(f64, [f64; 2]); 3] = std::array::from_fn(|c| rational(x[c], [dx[c], dy[c]], w, dw));
+        (per.map(|p| p.0), [per.map(|p| p.1[0]), per.map(|p| p.1[1])])
     }
 
     /// The value of `field` at `step` in quadrilateral `e` at reference point (ξ, η).
@@ -221,7 +300,19 @@ impl SpectralMesh {
         self.basis.eval(xi, &mut a, None);
         self.basis.eval(eta, &mut b, None);
         let v = self.element_values(field, step, e);
-        (0..m).map(|j| b[j] * (0..m).map(|i| a[i] * v[j * m + i]).sum::<f64>()).sum()
+        match self.element_weights(e) {
+            None => (0..m).map(|j| b[j] * (0..m).map(|i| a[i] * v[j * m + i]).sum::<f64>()).sum(),
+            Some(w) => {
+                let (mut n, mut d) = (0.0, 0.0);
+                for j in 0..m {
+                    for i in 0..m {
+                        n += a[i] * b[j] * w[j * m + i] * v[j * m + i];
+                        d += a[i] * b[j] * w[j * m + i];
+                    }
+                }
+                n / d
+            }
+        }
     }
 
     /// The reference point of element `e` that maps to the planar point `p`, by Newton's
@@ -235,7 +326,7 @@ impl SpectralMesh {
             if det == 0.0 || !det.is_finite() {
                 return None;
             }
-            let s = [(dy[1] * fx - dy[0] * fy) / det, (-dx[1] * fx + dx[0] * fy) / det];
+            let s = damped([(dy[1] * fx - dy[0] * fy) / det, (-dx[1] * fx + dx[0] * fy) / det]);
             r = [r[0] - s[0], r[1] - s[1]];
             if r.iter().any(|c| !c.is_finite() || c.abs() > 10.0) {
                 return None;
@@ -295,16 +386,19 @@ impl SpectralMesh {
             self.geometry.eval(r[a], &mut v[a], Some(&mut d[a]));
         }
         let pts = self.element_points(e);
+        let weights = self.element_weights(e);
         let (mut x, mut j) = ([0.0; 3], [[0.0; 3]; 3]);
+        let (mut ws, mut dws) = (0.0, [0.0; 3]);
         for k in 0..m {
             for jj in 0..m {
                 for i in 0..m {
                     let p = pts[(k * m + jj) * m + i];
+                    let wk = weights.map_or(1.0, |w| w[(k * m + jj) * m + i]);
                     let w = [
-                        v[0][i] * v[1][jj] * v[2][k],
-                        d[0][i] * v[1][jj] * v[2][k],
-                        v[0][i] * d[1][jj] * v[2][k],
-                        v[0][i] * v[1][jj] * d[2][k],
+                        v[0][i] * v[1][jj] * v[2][k] * wk,
+                        d[0][i] * v[1][jj] * v[2][k] * wk,
+                        v[0][i] * d[1][jj] * v[2][k] * wk,
+                        v[0][i] * v[1][jj] * d[2][k] * wk,
                     ];
                     for c in 0..3 {
                         x[c] += w[0] * p[c];
@@ -312,10 +406,19 @@ impl SpectralMesh {
                         j[1][c] += w[2] * p[c];
                         j[2][c] += w[3] * p[c];
                     }
+                    ws += w[0];
+                    for a in 0..3 {
+                        dws[a] += w[a + 1];
+                    }
                 }
             }
         }
-        (x, j)
+        if weights.is_none() {
+            return (x, j);
+        }
+        let per: [(f64, [f64; 3]); 3] =
+            std::array::from_fn(|c| rational(x[c], [j[0][c], j[1][c], j[2][c]], ws, dws));
+        (per.map(|p| p.0), std::array::from_fn(|a| per.map(|p| p.1[a])))
     }
 
     /// The value of `field` at `step` in hexahedron `e` at r = (ξ, η, ζ).
@@ -326,15 +429,28 @@ impl SpectralMesh {
             self.basis.eval(r[a], &mut v[a], None);
         }
         let f = self.element_values(field, step, e);
-        let mut sum = 0.0;
+        let weights = self.element_weights(e);
+        let (mut sum, mut ws) = (0.0, 0.0);
         for k in 0..m {
             for j in 0..m {
                 for i in 0..m {
-                    sum += v[0][i] * v[1][j] * v[2][k] * f[(k * m + j) * m + i];
+                    let node = (k * m + j) * m + i;
+                    let b = v[0][i] * v[1][j] * v[2][k];
+                    match weights {
+                        None => sum += b * f[node],
+                        Some(w) => {
+                            sum += b * w[node] * f[node];
+                            ws += b * w[node];
+                        }
+                    }
                 }
             }
         }
-        sum
+        if weights.is_some() {
+            sum / ws
+        } else {
+            sum
+        }
     }
 
     /// The reference point of hexahedron `e` that maps to `p`, by Newton's method in f64 from
@@ -353,7 +469,7 @@ impl SpectralMesh {
             if det == 0.0 || !det.is_finite() {
                 return None;
             }
-            let s = [det3(f, j[1], j[2]) / det, det3(j[0], f, j[2]) / det, det3(j[0], j[1], f) / det];
+            let s = damped([det3(f, j[1], j[2]) / det, det3(j[0], f, j[2]) / det, det3(j[0], j[1], f) / det]);
             r = [r[0] - s[0], r[1] - s[1], r[2] - s[2]];
             if r.iter().any(|c| !c.is_finite() || c.abs() > 10.0) {
                 return None;

@@ -20,7 +20,7 @@
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec4};
 
-use super::basis::{Basis1d, NodeSet};
+use super::basis::{Basis1d, NodeSet, MAX_ORDER};
 use super::mesh::SpectralMesh;
 
 /// One vertex of the spectral draws: world position, reference coordinates, element.
@@ -106,21 +106,60 @@ fn edge_curvature_bound(mesh: &SpectralMesh, bernstein: &Basis1d, e: usize, k: u
 /// few per cent more fragments to discard.
 pub const OWNERSHIP_MARGIN: f64 = 0.01;
 
+/// A rational element's proxy polygon: the convex hull of its control points, which contains
+/// the element when every weight is positive, each corner with its control point's Greville
+/// abscissae as the Newton guess. (The boundary-sample polygon's curvature bound holds for
+/// polynomial edges only.)
+fn rational_ring(mesh: &SpectralMesh, e: usize) -> (Vec<[f64; 2]>, Vec<[f64; 2]>) {
+    let nodes = &mesh.geometry.nodes;
+    let m = nodes.len();
+    let mut corners: Vec<([f64; 2], [f64; 2])> = mesh
+        .element_points(e)
+        .iter()
+        .enumerate()
+        .map(|(k, p)| ([p[0], p[1]], [nodes[k % m], nodes[k / m]]))
+        .collect();
+    corners.sort_by(|a, b| a.0[0].total_cmp(&b.0[0]).then(a.0[1].total_cmp(&b.0[1])));
+    // Andrew's monotone chain, counter-clockwise.
+    let cross =
+        |o: [f64; 2], a: [f64; 2], b: [f64; 2]| (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0]);
+    let mut hull: Vec<([f64; 2], [f64; 2])> = Vec::new();
+    for pass in 0..2 {
+        let start = hull.len();
+        let sweep: Vec<_> = if pass == 0 { corners.clone() } else { corners.iter().rev().copied().collect() };
+        for c in sweep {
+            while hull.len() >= start + 2 && cross(hull[hull.len() - 2].0, hull[hull.len() - 1].0, c.0) <= 0.0
+            {
+                hull.pop();
+            }
+            hull.push(c);
+        }
+        hull.pop();
+    }
+    (hull.iter().map(|c| c.1).collect(), hull.iter().map(|c| c.0).collect())
+}
+
 fn proxy(mesh: &SpectralMesh, bernstein: &Basis1d, e: usize, out: &mut Vec<DrawVertex>) {
     let g = mesh.geometry.order;
     let per_edge = g.max(1);
     let h = 1.0 / per_edge as f64;
-    let mut dilation =
-        (0..4).map(|k| h * h / 8.0 * edge_curvature_bound(mesh, bernstein, e, k)).fold(0.0, f64::max);
-    let ring: Vec<[f64; 2]> =
-        (0..4).flat_map(|k| (0..per_edge).map(move |i| boundary(k, i as f64 * h))).collect();
-    let mut points: Vec<[f64; 2]> = ring
-        .iter()
-        .map(|r| {
-            let (x, _) = mesh.map(e, r[0], r[1]);
-            [x[0], x[1]]
-        })
-        .collect();
+    let (ring, mut points, mut dilation) = if mesh.weights.is_some() {
+        let (ring, points) = rational_ring(mesh, e);
+        (ring, points, 0.0)
+    } else {
+        let dilation =
+            (0..4).map(|k| h * h / 8.0 * edge_curvature_bound(mesh, bernstein, e, k)).fold(0.0, f64::max);
+        let ring: Vec<[f64; 2]> =
+            (0..4).flat_map(|k| (0..per_edge).map(move |i| boundary(k, i as f64 * h))).collect();
+        let points: Vec<[f64; 2]> = ring
+            .iter()
+            .map(|r| {
+                let (x, _) = mesh.map(e, r[0], r[1]);
+                [x[0], x[1]]
+            })
+            .collect();
+        (ring, points, dilation)
+    };
     let n = points.len();
     let (lo, hi) = points.iter().fold(([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]), |(lo, hi), p| {
         ([lo[0].min(p[0]), lo[1].min(p[1])], [hi[0].max(p[0]), hi[1].max(p[1])])
@@ -201,8 +240,39 @@ fn edges(mesh: &SpectralMesh, e: usize, out: &mut Vec<DrawVertex>) {
 /// differences: |x_ξξ| ≤ g(g − 1) max|B_{i+2,j} − 2B_{i+1,j} + B_{ij}|, likewise η, and
 /// |x_ξη| ≤ g² max|B_{i+1,j+1} − B_{i+1,j} − B_{i,j+1} + B_{ij}|. The last float is the height
 /// scale (0: the geometry itself).
+///
+/// A rational surface is bounded through its polynomial interpolant of degree 2g + 2 (at most
+/// [`MAX_ORDER`]; an
+/// estimate of K, which sets the tessellation level, not a bound), with the sphere widened to
+/// contain the control points, whose convex hull contains the element.
 pub fn surface_patches(mesh: &SpectralMesh) -> Vec<[f32; 8]> {
-    patches_of(mesh, mesh.geometry.order, 0.0, |e, xi, eta| mesh.map(e, xi, eta).0)
+    if mesh.weights.is_none() {
+        return patches_of(mesh, mesh.geometry.order, 0.0, |e, xi, eta| mesh.map(e, xi, eta).0);
+    }
+    let patches = patches_of(mesh, (2 * mesh.geometry.order + 2).min(MAX_ORDER), 0.0, |e, xi, eta| {
+        mesh.map(e, xi, eta).0
+    });
+    containing_control_points(mesh, patches, |e, k| mesh.element_points(e)[k])
+}
+
+/// `patches` with each sphere grown to contain its element's control points (`control(e, k)`
+/// of node k): a rational element lies in their convex hull.
+fn containing_control_points(
+    mesh: &SpectralMesh,
+    mut patches: Vec<[f32; 8]>,
+    control: impl Fn(usize, usize) -> [f64; 3],
+) -> Vec<[f32; 8]> {
+    for (e, patch) in patches.iter_mut().enumerate() {
+        let centre = [patch[0], patch[1], patch[2]].map(f64::from);
+        let reach = (0..mesh.points_per_element()).fold(0.0f64, |r, k| {
+            let p = control(e, k);
+            r.max(
+                ((p[0] - centre[0]).powi(2) + (p[1] - centre[1]).powi(2) + (p[2] - centre[2]).powi(2)).sqrt(),
+            )
+        });
+        patch[3] = patch[3].max((reach * (1.0 + 1e-6)) as f32);
+    }
+    patches
 }
 
 /// [`surface_patches`] of the height field of a planar mesh: the surface
@@ -210,9 +280,18 @@ pub fn surface_patches(mesh: &SpectralMesh) -> Vec<[f32; 8]> {
 /// max(g, n) per axis.
 pub fn height_patches(mesh: &SpectralMesh, field: usize, step: usize, scale: f64) -> Vec<[f32; 8]> {
     let order = mesh.geometry.order.max(mesh.basis.order);
-    patches_of(mesh, order, scale, |e, xi, eta| {
+    let surface = |e, xi, eta| {
         let (x, _) = mesh.map(e, xi, eta);
         [x[0], x[1], scale * mesh.value(field, step, e, xi, eta)]
+    };
+    if mesh.weights.is_none() {
+        return patches_of(mesh, order, scale, surface);
+    }
+    // Rational: as surface_patches; the control net of (x, y, scale f) is (X, Y, scale F).
+    let patches = patches_of(mesh, (2 * order + 2).min(MAX_ORDER), scale, surface);
+    containing_control_points(mesh, patches, |e, k| {
+        let p = mesh.element_points(e)[k];
+        [p[0], p[1], scale * mesh.element_values(field, step, e)[k]]
     })
 }
 
@@ -312,6 +391,10 @@ pub fn bernstein_hull(mesh: &SpectralMesh) -> Vec<[f32; 4]> {
     let g = mesh.geometry.order;
     let bernstein = Basis1d::new(NodeSet::Bernstein, g).expect("same order as the geometry");
     let dim = mesh.shape.dim() as usize;
+    if mesh.geometry.set == NodeSet::Bernstein {
+        // Bézier cells (rational ones too): the points are the control points already.
+        return mesh.points.iter().map(|p| [p[0] as f32, p[1] as f32, p[2] as f32, 0.0]).collect();
+    }
     let mut out = Vec::with_capacity(mesh.points.len());
     for e in 0..mesh.elements() {
         let pts = mesh.element_points(e);

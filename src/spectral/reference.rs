@@ -52,7 +52,9 @@ impl PixelReport {
 /// the tensor-product sum's rounding, 8m ε Σ|ℓ_i ℓ_j F_ij| (m = n + 1 terms per axis, each
 /// basis value a product of m factors), plus the field's change over the reference-point error
 /// that f32 geometry causes, |∇_ξ f| ‖J⁻¹‖ (2|p| + 8(g + 1) Σ|g_i g_j X_ij|) ε (pixel centre
-/// and geometry map rounded to f32, pulled back through the Jacobian).
+/// and geometry map rounded to f32, pulled back through the Jacobian). Rational cells: the
+/// sums are homogeneous (over w F and w X) and divided by W = Σ w B, so each sum's bound is
+/// over W plus the quotient's size times W's own bound.
 pub fn rounding_bound(mesh: &SpectralMesh, field: usize, step: usize, e: usize, r: [f64; 2]) -> f64 {
     let eps = f64::from(f32::EPSILON);
     let (fb, gb) = (&mesh.basis, &mesh.geometry);
@@ -61,25 +63,43 @@ pub fn rounding_bound(mesh: &SpectralMesh, field: usize, step: usize, e: usize, 
     fb.eval(r[0], &mut a, Some(&mut da));
     fb.eval(r[1], &mut b, Some(&mut db));
     let v = mesh.element_values(field, step, e);
+    // Rational cells: homogeneous sums over w F and w, then N / W (weights 1 otherwise).
+    let weights = mesh.element_weights(e);
+    let wk = |k: usize| weights.map_or(1.0, |w| w[k]);
     let (mut s, mut fx, mut fy) = (0.0, 0.0, 0.0);
+    let (mut n, mut ws, mut ws_abs, mut wx, mut wy) = (0.0, 0.0, 0.0, 0.0, 0.0);
     for j in 0..m {
         for i in 0..m {
-            s += (a[i] * b[j] * v[j * m + i]).abs();
-            fx += da[i] * b[j] * v[j * m + i];
-            fy += a[i] * db[j] * v[j * m + i];
+            let k = j * m + i;
+            s += (a[i] * b[j] * wk(k) * v[k]).abs();
+            fx += da[i] * b[j] * wk(k) * v[k];
+            fy += a[i] * db[j] * wk(k) * v[k];
+            n += a[i] * b[j] * wk(k) * v[k];
+            ws += a[i] * b[j] * wk(k);
+            ws_abs += (a[i] * b[j] * wk(k)).abs();
+            wx += da[i] * b[j] * wk(k);
+            wy += a[i] * db[j] * wk(k);
         }
+    }
+    if weights.is_some() {
+        // f = N / W: the numerator's and the denominator's rounding, and (N / W)'.
+        let f = n / ws;
+        s = (s + f.abs() * ws_abs) / ws;
+        (fx, fy) = ((fx - f * wx) / ws, (fy - f * wy) / ws);
     }
     let (mut ga, mut gbv) = ([0.0; 16], [0.0; 16]);
     gb.eval(r[0], &mut ga, None);
     gb.eval(r[1], &mut gbv, None);
     let pts = mesh.element_points(e);
     let mut gs: f64 = 0.0;
-    for j in 0..gm {
-        for i in 0..gm {
-            gs += (ga[i] * gbv[j]).abs() * pts[j * gm + i][0].abs().max(pts[j * gm + i][1].abs());
-        }
+    for (k, p) in pts.iter().enumerate() {
+        gs += (ga[k % gm] * gbv[k / gm] * wk(k)).abs() * p[0].abs().max(p[1].abs());
     }
     let (x, [dx, dy]) = mesh.map(e, r[0], r[1]);
+    if weights.is_some() {
+        // x = (Σ B w X) / W: the homogeneous sums' rounding over W, plus |x| times W's.
+        gs = (gs + x[0].abs().max(x[1].abs()) * ws_abs) / ws;
+    }
     let det = (dx[0] * dy[1] - dy[0] * dx[1]).abs();
     // ‖J⁻¹‖ ≤ ‖J‖_F / |det J| for 2 × 2.
     let jinv = (dx[0] * dx[0] + dx[1] * dx[1] + dy[0] * dy[0] + dy[1] * dy[1]).sqrt() / det;
@@ -148,17 +168,33 @@ pub fn rounding_bound_hex(mesh: &SpectralMesh, field: usize, step: usize, e: usi
         fb.eval(r[a], &mut v[a], Some(&mut d[a]));
     }
     let f = mesh.element_values(field, step, e);
+    let weights = mesh.element_weights(e);
+    let wk = |k: usize| weights.map_or(1.0, |w| w[k]);
     let (mut s, mut grad) = (0.0, [0.0; 3]);
+    let (mut n, mut ws, mut ws_abs, mut wgrad) = (0.0, 0.0, 0.0, [0.0; 3]);
     for k in 0..m {
         for j in 0..m {
             for i in 0..m {
-                let c = f[(k * m + j) * m + i];
+                let node = (k * m + j) * m + i;
+                let c = f[node] * wk(node);
                 s += (v[0][i] * v[1][j] * v[2][k] * c).abs();
-                grad[0] += d[0][i] * v[1][j] * v[2][k] * c;
-                grad[1] += v[0][i] * d[1][j] * v[2][k] * c;
-                grad[2] += v[0][i] * v[1][j] * d[2][k] * c;
+                let tensor =
+                    [d[0][i] * v[1][j] * v[2][k], v[0][i] * d[1][j] * v[2][k], v[0][i] * v[1][j] * d[2][k]];
+                for a in 0..3 {
+                    grad[a] += tensor[a] * c;
+                    wgrad[a] += tensor[a] * wk(node);
+                }
+                n += v[0][i] * v[1][j] * v[2][k] * c;
+                ws += v[0][i] * v[1][j] * v[2][k] * wk(node);
+                ws_abs += (v[0][i] * v[1][j] * v[2][k] * wk(node)).abs();
             }
         }
+    }
+    if weights.is_some() {
+        // f = N / W, as rounding_bound.
+        let value = n / ws;
+        s = (s + value.abs() * ws_abs) / ws;
+        grad = std::array::from_fn(|a| (grad[a] - value * wgrad[a]) / ws);
     }
     let mut g = [[0.0; 16]; 3];
     for a in 0..3 {
@@ -169,12 +205,17 @@ pub fn rounding_bound_hex(mesh: &SpectralMesh, field: usize, step: usize, e: usi
     for k in 0..gm {
         for j in 0..gm {
             for i in 0..gm {
-                let p = pts[(k * gm + j) * gm + i];
-                gs += (g[0][i] * g[1][j] * g[2][k]).abs() * p[0].abs().max(p[1].abs()).max(p[2].abs());
+                let node = (k * gm + j) * gm + i;
+                let p = pts[node];
+                gs += (g[0][i] * g[1][j] * g[2][k] * wk(node)).abs()
+                    * p[0].abs().max(p[1].abs()).max(p[2].abs());
             }
         }
     }
     let (x, j) = mesh.map_hex(e, r);
+    if weights.is_some() {
+        gs = (gs + x[0].abs().max(x[1].abs()).max(x[2].abs()) * ws_abs) / ws;
+    }
     let jm = glam::DMat3::from_cols(j[0].into(), j[1].into(), j[2].into());
     let jinv = jm.inverse();
     let norm =

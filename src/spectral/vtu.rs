@@ -2,7 +2,7 @@
 //! (`VTK_LAGRANGE_QUADRILATERAL` = 70, `VTK_LAGRANGE_HEXAHEDRON` = 72; also the linear
 //! `VTK_QUAD` = 9 and `VTK_HEXAHEDRON` = 12) and Bézier cells (`VTK_BEZIER_QUADRILATERAL` =
 //! 77, `VTK_BEZIER_HEXAHEDRON` = 79: the points and point data are Bernstein coefficients;
-//! `RationalWeights` other than 1 make a rational cell, which is refused) with point data, as
+//! `RationalWeights` other than 1 make rational cells, [`SpectralMesh::with_weights`]) with point data, as
 //! ParaView and solvers write them. VTK's Lagrange cells are isoparametric on equispaced nodes
 //! of [0, 1]; their points are
 //! ordered corners, then edge interiors, then face interiors, then the body
@@ -205,15 +205,13 @@ pub fn read(path: &Path) -> Result<SpectralMesh, SpectralError> {
         order.iter().map(|&p| [points[3 * p], points[3 * p + 1], points[3 * p + 2]]).collect();
     // Fields: one-component point data, NAME_t<k> grouped into steps.
     let mut grouped: BTreeMap<String, Vec<(usize, &[f64])>> = BTreeMap::new();
-    if let Some(w) = grid.optional("PointData", "RationalWeights", 1, grid.points)? {
-        if let Some(k) = order.iter().position(|&p| w[p] != 1.0) {
-            return Err(file(format!(
-                "element {}: RationalWeights {} (a rational Bézier cell is not a polynomial; only weights of 1 are drawn)",
-                k / per_cell,
-                w[order[k]]
-            )));
+    // Rational Bézier cells: weights not all 1 (VTK reads RationalWeights of Bézier cells only).
+    let weights = match grid.optional("PointData", "RationalWeights", 1, grid.points)? {
+        Some(w) if bezier && order.iter().any(|&p| w[p] != 1.0) => {
+            Some(order.iter().map(|&p| w[p]).collect::<Vec<f64>>())
         }
-    }
+        _ => None,
+    };
     for a in grid.arrays.iter().filter(|a| a.section == "PointData" && a.name != "RationalWeights") {
         if a.components != 1 {
             continue;
@@ -257,7 +255,12 @@ pub fn read(path: &Path) -> Result<SpectralMesh, SpectralError> {
     }
     let nodes = if bezier { NodeSet::Bernstein } else { NodeSet::Equispaced };
     let basis = Basis1d::new(nodes, n)?;
-    SpectralMesh::new(shape, basis.clone(), basis, geometry, fields).map_err(|e| file(e.to_string()))
+    let mesh =
+        SpectralMesh::new(shape, basis.clone(), basis, geometry, fields).map_err(|e| file(e.to_string()))?;
+    match weights {
+        Some(w) => mesh.with_weights(w).map_err(|e| file(e.to_string())),
+        None => Ok(mesh),
+    }
 }
 
 /// The VTK name of the cell types a user is likeliest to hand the spectral renderer by mistake
@@ -283,6 +286,9 @@ fn vtk_cell_name(ty: f64) -> Option<&'static str> {
 /// data (`NAME`, or `NAME_t0`, `NAME_t1`, … for several steps). Each element has its own points
 /// (the data may be discontinuous). Written whole or not at all ([`crate::atomic_file`]).
 pub fn write(path: &Path, mesh: &SpectralMesh) -> Result<(), SpectralError> {
+    if let Some(weights) = &mesh.weights {
+        return write_rational(path, mesh, weights);
+    }
     let n = mesh.basis.order.max(mesh.geometry.order);
     let nodes = Basis1d::new(NodeSet::Equispaced, n)?.nodes;
     let m = n + 1;
@@ -349,6 +355,81 @@ pub fn write(path: &Path, mesh: &SpectralMesh) -> Result<(), SpectralError> {
     vtk::write(
         path,
         "galerkin spectral elements (seed 002): VTK Lagrange cells on equispaced nodes, one field per point-data array",
+        cells * per_cell,
+        cells,
+        &arrays,
+    )?;
+    Ok(())
+}
+
+/// [`fn@write`] for a rational mesh (no polynomial cell represents it): VTK Bézier cells with
+/// its control points, weights (`RationalWeights`) and field coefficients as they are.
+fn write_rational(path: &Path, mesh: &SpectralMesh, weights: &[f64]) -> Result<(), SpectralError> {
+    let n = mesh.geometry.order;
+    let m = n + 1;
+    let per_cell = mesh.points_per_element();
+    let cells = mesh.elements();
+    // Our lexicographic node of each of VTK's points.
+    let mut ours = vec![0; per_cell];
+    for flat in 0..per_cell {
+        let (i, j, k) = (flat % m, (flat / m) % m, flat / (m * m));
+        ours[vtk_point_index(mesh.shape, n, i, j, k, HexEdgeOrder::Current)] = flat;
+    }
+    let in_vtk_order = |per_node: &dyn Fn(usize) -> f64| -> Vec<f64> {
+        (0..cells)
+            .flat_map(|e| ours.iter().map(move |&k| (e, k)))
+            .map(|(e, k)| per_node(e * per_cell + k))
+            .collect()
+    };
+    let points = (0..cells)
+        .flat_map(|e| ours.iter().map(move |&k| e * per_cell + k))
+        .flat_map(|node| mesh.points[node])
+        .collect();
+    let cell_type = match mesh.shape {
+        Shape::Quadrilateral => VTK_BEZIER_QUADRILATERAL,
+        Shape::Hexahedron => VTK_BEZIER_HEXAHEDRON,
+    };
+    let mut arrays = vec![
+        OutArray { section: "Points", name: "Points".into(), components: 3, values: Values::F64(points) },
+        OutArray {
+            section: "Cells",
+            name: "connectivity".into(),
+            components: 1,
+            values: Values::I64((0..(cells * per_cell) as i64).collect()),
+        },
+        OutArray {
+            section: "Cells",
+            name: "offsets".into(),
+            components: 1,
+            values: Values::I64((1..=cells as i64).map(|c| c * per_cell as i64).collect()),
+        },
+        OutArray {
+            section: "Cells",
+            name: "types".into(),
+            components: 1,
+            values: Values::U8(vec![cell_type; cells]),
+        },
+        OutArray {
+            section: "PointData",
+            name: "RationalWeights".into(),
+            components: 1,
+            values: Values::F64(in_vtk_order(&|node| weights[node])),
+        },
+    ];
+    for f in &mesh.fields {
+        for (step, v) in f.steps.iter().enumerate() {
+            let name = if f.steps.len() == 1 { f.name.clone() } else { format!("{}_t{step}", f.name) };
+            arrays.push(OutArray {
+                section: "PointData",
+                name,
+                components: 1,
+                values: Values::F64(in_vtk_order(&|node| v[node])),
+            });
+        }
+    }
+    vtk::write(
+        path,
+        "galerkin spectral elements (seed 002): VTK rational Bézier cells, one field per point-data array",
         cells * per_cell,
         cells,
         &arrays,

@@ -184,7 +184,10 @@ pub fn write(
         if members.is_empty() {
             continue;
         }
-        xml.push_str(&format!("      <{section}>\n"));
+        // VTK takes a point-data array as a Bézier cell's weights only when the section names it.
+        let rational = section == "PointData" && members.iter().any(|&k| arrays[k].name == "RationalWeights");
+        let attribute = if rational { " RationalWeights=\"RationalWeights\"" } else { "" };
+        xml.push_str(&format!("      <{section}{attribute}>\n"));
         for k in members {
             let a = &arrays[k];
             xml.push_str(&format!(

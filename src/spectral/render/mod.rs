@@ -84,18 +84,36 @@ pub fn basis_specialization(mesh: &SpectralMesh) -> Vec<u32> {
     // Id 57: field and geometry share one basis (isoparametric elements), so a fragment that
     // needs both evaluates the 1D bases once.
     v.push(u32::from(mesh.basis == mesh.geometry));
+    // Id 58: rational cells (homogeneous points and coefficients, see `geometry_points`).
+    v.push(u32::from(mesh.weights.is_some()));
     v
 }
 
-/// The coefficients of `field` at `step` as `spectral_element.glsl` reads them: f32, each
+/// The geometry as `spectral_element.glsl` reads it: (x, y, z, 0) per node, or for rational
+/// cells the homogeneous (w x, w y, w z, w).
+pub fn geometry_points(mesh: &SpectralMesh) -> Vec<[f32; 4]> {
+    match &mesh.weights {
+        None => mesh.points.iter().map(|p| [p[0] as f32, p[1] as f32, p[2] as f32, 0.0]).collect(),
+        Some(w) => mesh
+            .points
+            .iter()
+            .zip(w)
+            .map(|(p, &w)| [(w * p[0]) as f32, (w * p[1]) as f32, (w * p[2]) as f32, w as f32])
+            .collect(),
+    }
+}
+
+/// The coefficients of `field` at `step` as `spectral_element.glsl` reads them: f32 (times the
+/// node's weight for rational cells), each
 /// element's (n + 1)² padded with zeros to a multiple of 4.
 pub fn padded_values(mesh: &SpectralMesh, field: usize, step: usize) -> Vec<f32> {
     let per = mesh.values_per_element();
     let stride = per.div_ceil(4) * 4;
     let mut out = vec![0.0f32; stride * mesh.elements()];
     for (e, chunk) in mesh.fields[field].steps[step].chunks_exact(per).enumerate() {
-        for (o, &v) in out[e * stride..].iter_mut().zip(chunk) {
-            *o = v as f32;
+        let weights = mesh.element_weights(e);
+        for (k, (o, &v)) in out[e * stride..].iter_mut().zip(chunk).enumerate() {
+            *o = weights.map_or(v, |w| w[k] * v) as f32;
         }
     }
     out
@@ -212,8 +230,7 @@ impl SpectralRenderer {
             return Err(SpectralError::Missing("the data set has no fields to show".into()));
         }
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
-        let points: Vec<[f32; 4]> =
-            mesh.points.iter().map(|p| [p[0] as f32, p[1] as f32, p[2] as f32, 0.0]).collect();
+        let points = geometry_points(&mesh);
         let points =
             Buffer::from_slice(gpu, "spectral geometry", &points, storage).map_err(dev("uploading"))?;
         let values = padded_values(&mesh, 0, 0);
