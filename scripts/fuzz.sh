@@ -90,4 +90,8 @@ while [ $# -gt 0 ]; do
     done
     wait
 done
-ls artifacts/*/* 2>/dev/null && echo "fuzz: findings above (fuzz/artifacts)" || echo "fuzz: no findings"
+# crash-*, timeout-*, oom-*, leak-* are findings; slow-unit-* are valid inputs that took over
+# 10 s under AddressSanitizer (e.g. a scene asking for a large mesh within the limits): a
+# report, not a failure.
+ls artifacts/*/* 2>/dev/null | grep -v '/slow-unit-' && echo "fuzz: findings above (fuzz/artifacts)" || echo "fuzz: no findings"
+ls artifacts/*/slow-unit-* 2>/dev/null | sed 's/^/fuzz: slow (not a finding): /' || true

@@ -35,7 +35,8 @@ fn glsl_element_maths_match_their_rust_twins() {
         annulus(2, 3, 3, 3, NodeSet::GaussLobatto).unwrap(),
         annulus(2, 3, 5, 5, NodeSet::Equispaced).unwrap(),
         // Rational: VTK's rational Bézier quadrilaterals (homogeneous points and coefficients).
-        galerkin::spectral::vtu::read(std::path::Path::new("tests/data/vtk/bezier_quad_rational.vtu")).unwrap(),
+        galerkin::spectral::vtu::read(std::path::Path::new("tests/data/vtk/bezier_quad_rational.vtu"))
+            .unwrap(),
     ];
     for mesh in &cases {
         let points = galerkin::spectral::render::geometry_points(mesh);

@@ -101,7 +101,25 @@ vec3 spectral_map_bases(uint e, float a[SPECTRAL_MAX_NODES], float da[SPECTRAL_M
                         float db[SPECTRAL_MAX_NODES], out vec3 dxi, out vec3 deta) {
     const uint m = SPECTRAL_GEOMETRY_ORDER + 1u;
     uint base = e * m * m;
-    // Homogeneous sums; w only matters (and is only computed) for rational cells.
+    if (!SPECTRAL_RATIONAL) {
+        // Polynomial cells: three components only (a vec4 sum costs lavapipe ~15 % here).
+        vec3 x = vec3(0.0);
+        dxi = vec3(0.0);
+        deta = vec3(0.0);
+        for (uint j = 0u; j < m; ++j) {
+            vec3 row = vec3(0.0), drow = vec3(0.0);
+            for (uint i = 0u; i < m; ++i) {
+                vec3 p = spectral_points[base + j * m + i].xyz;
+                row += a[i] * p;
+                drow += da[i] * p;
+            }
+            x += b[j] * row;
+            dxi += b[j] * drow;
+            deta += db[j] * row;
+        }
+        return x;
+    }
+    // Rational cells: homogeneous sums, then the quotient.
     vec4 x = vec4(0.0), hxi = vec4(0.0), heta = vec4(0.0);
     for (uint j = 0u; j < m; ++j) {
         vec4 row = vec4(0.0), drow = vec4(0.0);
@@ -113,11 +131,6 @@ vec3 spectral_map_bases(uint e, float a[SPECTRAL_MAX_NODES], float da[SPECTRAL_M
         x += b[j] * row;
         hxi += b[j] * drow;
         heta += db[j] * row;
-    }
-    if (!SPECTRAL_RATIONAL) {
-        dxi = hxi.xyz;
-        deta = heta.xyz;
-        return x.xyz;
     }
     vec3 y = x.xyz / x.w;
     dxi = (hxi.xyz - y * hxi.w) / x.w;
@@ -234,19 +247,11 @@ vec3 spectral_value_gradient(uint e, vec2 r) {
     return vec3(f, (v.yz - f * w.yz) / w.x);
 }
 
-// A Newton step at most half the reference element long per axis (damped in mesh.rs).
-vec2 spectral_damped(vec2 s) {
-    float longest = max(abs(s.x), abs(s.y));
-    return longest > 0.5 ? s * (0.5 / longest) : s;
-}
-vec3 spectral_damped(vec3 s) {
-    float longest = max(abs(s.x), max(abs(s.y), abs(s.z)));
-    return longest > 0.5 ? s * (0.5 / longest) : s;
-}
-
 // Newton's method for the reference point of planar element e that maps to p, from r; returns
 // false if it diverged or had not settled (last step over 1e-4: far more than f32 noise) when
 // the iterations ran out. Stops when the step is below 1e-6 (a few f32 ulps of [0, 1]).
+// Undamped, unlike the f64 reference's (mesh.rs): a fragment outside its element must leave
+// quickly (|r| > 10), and most proxy fragments beyond an element are such.
 bool spectral_inverse_map(uint e, vec2 p, inout vec2 r) {
     float last = 1.0;
     for (int k = 0; k < SPECTRAL_NEWTON_ITERATIONS; ++k) {
@@ -254,7 +259,7 @@ bool spectral_inverse_map(uint e, vec2 p, inout vec2 r) {
         vec2 f = spectral_map(e, r, dxi, deta).xy - p;
         float det = dxi.x * deta.y - deta.x * dxi.y;
         if (det == 0.0) return false;
-        vec2 s = spectral_damped(vec2(deta.y * f.x - deta.x * f.y, -dxi.y * f.x + dxi.x * f.y) / det);
+        vec2 s = vec2(deta.y * f.x - deta.x * f.y, -dxi.y * f.x + dxi.x * f.y) / det;
         r -= s;
         if (any(greaterThan(abs(r), vec2(10.0)))) return false;
         last = max(abs(s.x), abs(s.y));
@@ -276,7 +281,31 @@ vec3 spectral_map_hex(uint e, vec3 r, out mat3 jacobian) {
     spectral_geometry_eval(r.z, true, c, dc);
     const uint m = SPECTRAL_GEOMETRY_ORDER + 1u;
     uint base = e * m * m * m;
-    // Homogeneous sums, as spectral_map_bases.
+    if (!SPECTRAL_RATIONAL) {
+        // Polynomial cells: three components only, as spectral_map_bases.
+        vec3 x = vec3(0.0), dx = vec3(0.0), dy = vec3(0.0), dz = vec3(0.0);
+        for (uint k = 0u; k < m; ++k) {
+            vec3 layer = vec3(0.0), dlayer_x = vec3(0.0), dlayer_y = vec3(0.0);
+            for (uint j = 0u; j < m; ++j) {
+                vec3 row = vec3(0.0), drow = vec3(0.0);
+                for (uint i = 0u; i < m; ++i) {
+                    vec3 p = spectral_points[base + (k * m + j) * m + i].xyz;
+                    row += a[i] * p;
+                    drow += da[i] * p;
+                }
+                layer += b[j] * row;
+                dlayer_x += b[j] * drow;
+                dlayer_y += db[j] * row;
+            }
+            x += c[k] * layer;
+            dx += c[k] * dlayer_x;
+            dy += c[k] * dlayer_y;
+            dz += dc[k] * layer;
+        }
+        jacobian = mat3(dx, dy, dz);
+        return x;
+    }
+    // Rational cells: homogeneous sums, then the quotient.
     vec4 x = vec4(0.0), dx = vec4(0.0), dy = vec4(0.0), dz = vec4(0.0);
     for (uint k = 0u; k < m; ++k) {
         vec4 layer = vec4(0.0), dlayer_x = vec4(0.0), dlayer_y = vec4(0.0);
@@ -295,10 +324,6 @@ vec3 spectral_map_hex(uint e, vec3 r, out mat3 jacobian) {
         dx += c[k] * dlayer_x;
         dy += c[k] * dlayer_y;
         dz += dc[k] * layer;
-    }
-    if (!SPECTRAL_RATIONAL) {
-        jacobian = mat3(dx.xyz, dy.xyz, dz.xyz);
-        return x.xyz;
     }
     vec3 y = x.xyz / x.w;
     jacobian = mat3((dx.xyz - y * dx.w) / x.w, (dy.xyz - y * dy.w) / x.w, (dz.xyz - y * dz.w) / x.w);
@@ -337,7 +362,7 @@ bool spectral_inverse_map_hex(uint e, vec3 p, inout vec3 r) {
         mat3 j;
         vec3 f = spectral_map_hex(e, r, j) - p;
         if (determinant(j) == 0.0) return false;
-        vec3 s = spectral_damped(inverse(j) * f);
+        vec3 s = inverse(j) * f;
         r -= s;
         if (any(greaterThan(abs(r), vec3(10.0)))) return false;
         last = max(abs(s.x), max(abs(s.y), abs(s.z)));

@@ -298,6 +298,10 @@ fn simulate(args: &SimulateArgs) -> Result<()> {
         bar.inc(1);
     })?;
     bar.finish_and_clear();
+    if frames == 0 {
+        println!("the initial state only (0 frames simulated) → {}", args.out.display());
+        return Ok(());
+    }
     let [td, ta, tp] = summary.stage_medians();
     println!(
         "{frames} frames (setup {:.2} s): t_d {:.4} s (deformation), t_a {:.4} s (advection + diffusion, {} RK4 substeps), t_p {:.4} s (projection: {:.1} multigrid-preconditioned CG steps per frame) per frame (medians); energy {:.5} → {:.5}; worst relative divergence {:.1e} → {}",
