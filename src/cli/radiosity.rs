@@ -160,7 +160,7 @@ pub struct Look {
 /// Arguments of `galerkin radiosity render`.
 #[derive(Args)]
 pub struct RenderArgs {
-    /// Scene file (TOML): the two rooms (scenes/radiosity/two_rooms.toml, 4,974 faces;
+    /// Scene file (TOML): the two rooms (scenes/radiosity/two_rooms.toml, 4,876 faces;
     /// two_rooms_small.toml, 496) or an OBJ scene — a TOML file naming its base OBJ
     /// (`base = "room.obj"`), its deformation targets (one OBJ per parameter), albedos,
     /// openings (the objects light enters through) and lights; the format is in

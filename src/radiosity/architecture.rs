@@ -135,6 +135,12 @@ pub(crate) fn check_layout(spec: &SceneSpec, p: &Parameters) -> Result<(), (&'st
     Ok(())
 }
 
+/// The solids standing in the rooms at parameters `p` — the two cubes, the bed and its
+/// headboard — as boxes (min, max corners): no face of the scene lies inside one.
+pub fn solids(spec: &SceneSpec, p: &Parameters) -> Vec<(DVec3, DVec3)> {
+    furniture(&Layout::new(spec, p)).to_vec()
+}
+
 /// Boxes (min, max corners) of the two cubes, the bed and its headboard.
 fn furniture(l: &Layout) -> [(DVec3, DVec3); 4] {
     let cube = |cx: f64, cy: f64, sx: f64, sy: f64, sz: f64| {
@@ -200,15 +206,9 @@ fn panels<'a>(spec: &'a SceneSpec, l: &'a Layout) -> Vec<Panel<'a>> {
             knee + (v - knee) / (h - knee) * (l.ceiling(y) - knee)
         }
     };
+    let [cube1, cube2, bed, headboard] = furniture(l);
     let mut out = vec![
-        plain(
-            "living floor",
-            m.living_floor,
-            [0.0, l1],
-            [0.0, w],
-            DVec3::Z,
-            Box::new(|u, v| DVec3::new(u, v, 0.0)),
-        ),
+        floor("living floor", m.living_floor, [0.0, l1], w, &[cube1, cube2]),
         Panel {
             part: "living ceiling",
             albedo: m.living_ceiling,
@@ -293,14 +293,7 @@ fn panels<'a>(spec: &'a SceneSpec, l: &'a Layout) -> Vec<Panel<'a>> {
             map: Box::new(move |u, v| DVec3::new(x2, u, v)),
             inward: DVec3::X,
         },
-        plain(
-            "bedroom floor",
-            m.bedroom_floor,
-            [x2, x2 + l2],
-            [0.0, w],
-            DVec3::Z,
-            Box::new(|u, v| DVec3::new(u, v, 0.0)),
-        ),
+        floor("bedroom floor", m.bedroom_floor, [x2, x2 + l2], w, &[bed, headboard]),
         plain(
             "bedroom ceiling",
             m.bedroom_ceiling,
@@ -335,12 +328,41 @@ fn panels<'a>(spec: &'a SceneSpec, l: &'a Layout) -> Vec<Panel<'a>> {
             Box::new(move |u, v| DVec3::new(x2 + l2, u, v)),
         ),
     ];
-    let [cube1, cube2, bed, headboard] = furniture(l);
     out.extend(box_panels("cube", m.furniture, cube1, false));
     out.extend(box_panels("cube", m.furniture, cube2, false));
     out.extend(box_panels("bed", m.bed, bed, true));
-    out.extend(box_panels("bed", m.bed, headboard, false));
+    let mut head = box_panels("bed", m.bed, headboard, false);
+    // The headboard's south side below the bed's top lies against the bed: left out.
+    for side in head.iter_mut().filter(|p| p.inward == -DVec3::Y) {
+        side.v = vec![headboard.0.z, bed.1.z, headboard.1.z];
+        side.special = vec![((0, 0), Block::Omitted)];
+    }
+    out.extend(head);
     out
+}
+
+/// A floor x ∈ `x`, y ∈ [0, `w`] with the footprints of the furniture standing on it left out
+/// (their edges are breakpoints; the blocks under a box are omitted), so no floor face lies
+/// inside a solid and the floor with the boxes' sides and tops stays a closed surface.
+fn floor<'a>(part: &'static str, albedo: [f64; 3], x: [f64; 2], w: f64, boxes: &[(DVec3, DVec3)]) -> Panel<'a> {
+    let breakpoints = |ends: [f64; 2], inner: Vec<f64>| {
+        let mut b: Vec<f64> = ends.into_iter().chain(inner).collect();
+        b.sort_by(f64::total_cmp);
+        b.dedup_by(|a, b| (*a - *b).abs() < 1e-9);
+        b
+    };
+    let u = breakpoints(x, boxes.iter().flat_map(|(lo, hi)| [lo.x, hi.x]).collect());
+    let v = breakpoints([0.0, w], boxes.iter().flat_map(|(lo, hi)| [lo.y, hi.y]).collect());
+    let mut special = Vec::new();
+    for bu in 0..u.len() - 1 {
+        for bv in 0..v.len() - 1 {
+            let c = DVec3::new(0.5 * (u[bu] + u[bu + 1]), 0.5 * (v[bv] + v[bv + 1]), 0.0);
+            if boxes.iter().any(|(lo, hi)| c.x > lo.x && c.x < hi.x && c.y > lo.y && c.y < hi.y) {
+                special.push(((bu, bv), Block::Omitted));
+            }
+        }
+    }
+    Panel { part, albedo, u, v, special, map: Box::new(|u, v| DVec3::new(u, v, 0.0)), inward: DVec3::Z }
 }
 
 /// Cells per block of every panel: from the block's length at the default parameters.
