@@ -344,7 +344,13 @@ fn panels<'a>(spec: &'a SceneSpec, l: &'a Layout) -> Vec<Panel<'a>> {
 /// A floor x ∈ `x`, y ∈ [0, `w`] with the footprints of the furniture standing on it left out
 /// (their edges are breakpoints; the blocks under a box are omitted), so no floor face lies
 /// inside a solid and the floor with the boxes' sides and tops stays a closed surface.
-fn floor<'a>(part: &'static str, albedo: [f64; 3], x: [f64; 2], w: f64, boxes: &[(DVec3, DVec3)]) -> Panel<'a> {
+fn floor<'a>(
+    part: &'static str,
+    albedo: [f64; 3],
+    x: [f64; 2],
+    w: f64,
+    boxes: &[(DVec3, DVec3)],
+) -> Panel<'a> {
     let breakpoints = |ends: [f64; 2], inner: Vec<f64>| {
         let mut b: Vec<f64> = ends.into_iter().chain(inner).collect();
         b.sort_by(f64::total_cmp);

@@ -316,27 +316,7 @@ pub fn write(path: &Path, mesh: &SpectralMesh) -> Result<(), SpectralError> {
         Shape::Quadrilateral => VTK_LAGRANGE_QUADRILATERAL,
         Shape::Hexahedron => VTK_LAGRANGE_HEXAHEDRON,
     };
-    let mut arrays = vec![
-        OutArray { section: "Points", name: "Points".into(), components: 3, values: Values::F64(points) },
-        OutArray {
-            section: "Cells",
-            name: "connectivity".into(),
-            components: 1,
-            values: Values::I64((0..(cells * per_cell) as i64).collect()),
-        },
-        OutArray {
-            section: "Cells",
-            name: "offsets".into(),
-            components: 1,
-            values: Values::I64((1..=cells as i64).map(|c| c * per_cell as i64).collect()),
-        },
-        OutArray {
-            section: "Cells",
-            name: "types".into(),
-            components: 1,
-            values: Values::U8(vec![cell_type; cells]),
-        },
-    ];
+    let mut arrays = grid_arrays(points, cells, per_cell, cell_type);
     for (fi, f) in mesh.fields.iter().enumerate() {
         for step in 0..f.steps.len() {
             let mut v = Vec::with_capacity(cells * per_cell);
@@ -360,6 +340,32 @@ pub fn write(path: &Path, mesh: &SpectralMesh) -> Result<(), SpectralError> {
         &arrays,
     )?;
     Ok(())
+}
+
+/// The points and cells of `cells` cells of `per_cell` points each, every cell with its own
+/// points in order, all of type `cell_type`.
+fn grid_arrays(points: Vec<f64>, cells: usize, per_cell: usize, cell_type: u8) -> Vec<OutArray> {
+    vec![
+        OutArray { section: "Points", name: "Points".into(), components: 3, values: Values::F64(points) },
+        OutArray {
+            section: "Cells",
+            name: "connectivity".into(),
+            components: 1,
+            values: Values::I64((0..(cells * per_cell) as i64).collect()),
+        },
+        OutArray {
+            section: "Cells",
+            name: "offsets".into(),
+            components: 1,
+            values: Values::I64((1..=cells as i64).map(|c| c * per_cell as i64).collect()),
+        },
+        OutArray {
+            section: "Cells",
+            name: "types".into(),
+            components: 1,
+            values: Values::U8(vec![cell_type; cells]),
+        },
+    ]
 }
 
 /// [`fn@write`] for a rational mesh (no polynomial cell represents it): VTK Bézier cells with
@@ -389,33 +395,13 @@ fn write_rational(path: &Path, mesh: &SpectralMesh, weights: &[f64]) -> Result<(
         Shape::Quadrilateral => VTK_BEZIER_QUADRILATERAL,
         Shape::Hexahedron => VTK_BEZIER_HEXAHEDRON,
     };
-    let mut arrays = vec![
-        OutArray { section: "Points", name: "Points".into(), components: 3, values: Values::F64(points) },
-        OutArray {
-            section: "Cells",
-            name: "connectivity".into(),
-            components: 1,
-            values: Values::I64((0..(cells * per_cell) as i64).collect()),
-        },
-        OutArray {
-            section: "Cells",
-            name: "offsets".into(),
-            components: 1,
-            values: Values::I64((1..=cells as i64).map(|c| c * per_cell as i64).collect()),
-        },
-        OutArray {
-            section: "Cells",
-            name: "types".into(),
-            components: 1,
-            values: Values::U8(vec![cell_type; cells]),
-        },
-        OutArray {
-            section: "PointData",
-            name: "RationalWeights".into(),
-            components: 1,
-            values: Values::F64(in_vtk_order(&|node| weights[node])),
-        },
-    ];
+    let mut arrays = grid_arrays(points, cells, per_cell, cell_type);
+    arrays.push(OutArray {
+        section: "PointData",
+        name: "RationalWeights".into(),
+        components: 1,
+        values: Values::F64(in_vtk_order(&|node| weights[node])),
+    });
     for f in &mesh.fields {
         for (step, v) in f.steps.iter().enumerate() {
             let name = if f.steps.len() == 1 { f.name.clone() } else { format!("{}_t{step}", f.name) };
