@@ -128,9 +128,9 @@ fn compare_measures_the_receiving_surfaces_all_faces_and_each_room() {
     assert_ne!(e.groups[0], report.sequences[0].errors[0].groups[0]);
 }
 
-/// `radiosity render --faces FILE.csv` writes the full radiosity of every face in f64 that
-/// reads back to the same bits as a plain solve of the same configuration in this process
-/// (the solve is deterministic), with each face's part, kind, area and centroid.
+/// `radiosity render --faces FILE.csv` (and `FILE.npy`) writes the full radiosity of every
+/// face in f64 that reads back to the same bits as a plain solve of the same configuration in
+/// this process (the solve is deterministic), with each face's part, kind, area and centroid.
 #[test]
 fn the_per_face_table_reads_back_to_the_solve() {
     let dir = tempfile::Builder::new().prefix("galerkin-faces-").tempdir().expect("scratch");
@@ -147,6 +147,34 @@ fn the_per_face_table_reads_back_to_the_solve() {
     let p = scene.parameters_from(&[("window_width".to_string(), 2.2)]).expect("params");
     let mesh = scene.space().mesh(&p).expect("mesh");
     let full = galerkin::radiosity::full_radiosity_of(mesh.clone(), scene.space().lights()).expect("full");
+    // The same numbers as NumPy's array: faces × 8 f64, kind and the CSV's numbers, bit for bit.
+    let npy = dir.path().join("faces.npy");
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_galerkin"))
+        .args(["radiosity", "render", SMALL, "--params", "window_width=2.2", "--size", "32x24", "--out"])
+        .arg(dir.path().join("r.png"))
+        .arg("--faces")
+        .arg(&npy)
+        .output()
+        .expect("ran");
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let bytes = std::fs::read(&npy).expect("npy");
+    let array = npyz::NpyFile::new(&bytes[..]).expect("an NPY file");
+    assert_eq!(array.shape(), [mesh.len() as u64, 8]);
+    let values: Vec<f64> = array.into_vec().expect("f64 values");
+    for i in 0..mesh.len() {
+        let row = &values[8 * i..8 * i + 8];
+        let kind = match mesh.kind[i] {
+            FaceKind::Surface => 0.0,
+            FaceKind::Window => 1.0,
+            FaceKind::Skylight => 2.0,
+        };
+        assert_eq!(row[0], kind, "row {i}: kind");
+        assert_eq!(row[1].to_bits(), full.geometry.areas[i].to_bits(), "row {i}: area");
+        for c in 0..3 {
+            assert_eq!(row[2 + c].to_bits(), full.geometry.centroids[i][c].to_bits(), "row {i}: centroid");
+            assert_eq!(row[5 + c].to_bits(), full.radiosity[i][c].to_bits(), "row {i} channel {c}");
+        }
+    }
     let text = std::fs::read_to_string(&csv).expect("table");
     let mut lines = text.lines();
     assert_eq!(lines.next(), Some(galerkin::radiosity::face_table::HEADER));

@@ -177,10 +177,11 @@ pub struct RenderArgs {
     pub look: Look,
     #[command(flatten)]
     pub image: crate::cli::args::ImageArgs,
-    /// Also write the per-face result as a table (CSV: face, part, kind, area, centroid,
-    /// radiosity R, G, B — f64 that reads back to the same bits), to check it outside the
-    /// engine.
-    #[arg(long, value_name = "FILE.csv", value_parser = csv_path)]
+    /// Also write the per-face result as a table, to check it outside the engine: CSV (face,
+    /// part, kind, area, centroid, radiosity R, G, B — f64 that reads back to the same bits)
+    /// or NumPy .npy (faces × 8 f64: kind 0 surface / 1 window / 2 skylight, area, centroid,
+    /// radiosity R, G, B).
+    #[arg(long, value_name = "FILE.csv|FILE.npy", value_parser = table_path)]
     pub faces: Option<PathBuf>,
     /// The full solve's form factors for near pairs: `centroid` (Eq. 15 with the regularised
     /// near field: what training and the reduced model use) or `exact` (exact polygon form
@@ -193,12 +194,9 @@ pub struct RenderArgs {
 }
 
 /// A `.csv` path, checked when the arguments are parsed.
-fn csv_path(s: &str) -> Result<PathBuf, String> {
+fn table_path(s: &str) -> Result<PathBuf, String> {
     let path = PathBuf::from(s);
-    match path.extension().and_then(|e| e.to_str()) {
-        Some(e) if e.eq_ignore_ascii_case("csv") => Ok(path),
-        _ => Err(format!("{s:?}: the face table is written as CSV (.csv)")),
-    }
+    galerkin::radiosity::face_table::TableFormat::of(&path).map(|_| path)
 }
 
 fn parse_param(s: &str) -> Result<(String, f64), String> {
@@ -246,7 +244,7 @@ fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
         shading: args.look.shading,
         exposure: args.look.exposure,
         size,
-        faces_csv: args.faces.clone(),
+        faces: args.faces.clone(),
         form_factors: match args.near_field.as_str() {
             "exact" => FormFactorMethod::ExactNear { reach: galerkin::radiosity::near_field::DEFAULT_REACH },
             _ => FormFactorMethod::Centroid,

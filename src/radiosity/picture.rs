@@ -2,7 +2,7 @@
 //! the full solve (Eq. 14 with Eq. 15's form factors, visibility by ray casting) or a trained
 //! model's reduced evaluation (Table 2) — drawn with flat or smooth shading and written as
 //! PNG (tone-mapped sRGB) or EXR (the colour, then the raw radiance R, G, B and the face index
-//! of every pixel); optionally the per-face result as a CSV table ([`super::face_table`]).
+//! of every pixel); optionally the per-face result as a CSV or NPY table ([`super::face_table`]).
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -27,8 +27,8 @@ pub struct PictureRequest {
     pub exposure: Option<f64>,
     /// Image size.
     pub size: (u32, u32),
-    /// Also write the per-face radiosity here (CSV, f64).
-    pub faces_csv: Option<PathBuf>,
+    /// Also write the per-face radiosity here (CSV or NPY, f64: [`super::face_table`]).
+    pub faces: Option<PathBuf>,
     /// The full solve's form factors (ignored with a model).
     pub form_factors: super::near_field::FormFactorMethod,
 }
@@ -101,7 +101,7 @@ pub fn write_picture(
             picture::write_exr(out, request.size, Some(&picture.rgba), channels)?;
         }
     }
-    if let Some(table) = &request.faces_csv {
+    if let Some(table) = &request.faces {
         super::face_table::write(table, &mesh, &geometry, &radiosity)?;
     }
     Ok(PictureReport { faces: mesh.len(), lights: lights.mode, how, solve_seconds, exposure })
