@@ -160,5 +160,43 @@ fn same_cells(a: &SpectralMesh, b: &SpectralMesh) -> Result<(), String> {
             return Err(format!("element {}: its points differ from the first file's", i / per));
         }
     }
+    // Rational cells: the weights are part of the geometry (and of every field's basis).
+    match (&a.weights, &b.weights) {
+        (None, None) => {}
+        (Some(wa), Some(wb)) => {
+            if let Some(i) = wa.iter().zip(wb).position(|(x, y)| (x - y).abs() > 1e-12 * x.abs()) {
+                return Err(format!(
+                    "element {}: its rational weights differ from the first file's",
+                    i / per
+                ));
+            }
+        }
+        _ => return Err("rational cells in one file, polynomial ones in the other".into()),
+    }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Files of one series must agree on rational weights as on points: VTK's polynomial and
+    /// rational Bézier fixtures share their control points and differ only in the weights.
+    #[test]
+    fn a_series_refuses_files_whose_rational_weights_differ() {
+        let fixture = |name: &str| {
+            let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/vtk").join(name);
+            crate::spectral::vtu::read(&path).expect("fixture")
+        };
+        let (plain, rational) = (fixture("bezier_quad.vtu"), fixture("bezier_quad_rational.vtu"));
+        assert_eq!(same_cells(&rational, &rational.clone()), Ok(()));
+        let e = same_cells(&plain, &rational).expect_err("polynomial against rational");
+        assert!(e.contains("rational cells in one file"), "{e}");
+        let mut other = rational.clone();
+        if let Some(w) = other.weights.as_mut() {
+            w[20] *= 1.5;
+        }
+        let e = same_cells(&rational, &other).expect_err("other weights");
+        assert!(e.contains("element 1") && e.contains("rational weights differ"), "{e}");
+    }
 }

@@ -242,9 +242,8 @@ fn edges(mesh: &SpectralMesh, e: usize, out: &mut Vec<DrawVertex>) {
 /// scale (0: the geometry itself).
 ///
 /// A rational surface is bounded through its polynomial interpolant of degree 2g + 2 (at most
-/// [`MAX_ORDER`]; an
-/// estimate of K, which sets the tessellation level, not a bound), with the sphere widened to
-/// contain the control points, whose convex hull contains the element.
+/// [`MAX_ORDER`]; an estimate of K, which sets the tessellation level, not a bound), with the
+/// sphere widened to contain the control points, whose convex hull contains the element.
 pub fn surface_patches(mesh: &SpectralMesh) -> Vec<[f32; 8]> {
     if mesh.weights.is_none() {
         return patches_of(mesh, mesh.geometry.order, 0.0, |e, xi, eta| mesh.map(e, xi, eta).0);
