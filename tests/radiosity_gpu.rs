@@ -43,19 +43,29 @@ fn device_form_factors_and_solve_match_the_cpu() {
         if near == NearField::Regularised {
             let (b, sweeps) = device.solve(&gpu, &f, &s.mesh.albedo, &s.emission, 1e-6, 2000).unwrap();
             let top = s.radiosity.iter().flatten().fold(0.0f64, |m, v| m.max(*v));
-            let worst = b
-                .iter()
-                .zip(&s.radiosity)
-                .flat_map(|(x, y)| (0..3).map(move |c| (x[c] - y[c]).abs()))
-                .fold(0.0f64, f64::max);
+            let off = |reference: &[[f64; 3]]| {
+                b.iter()
+                    .zip(reference)
+                    .flat_map(|(x, y)| (0..3).map(move |c| (x[c] - y[c]).abs()))
+                    .fold(0.0f64, f64::max)
+            };
+            // The solver: against an f64 direct solve of the device's own form factors, f32
+            // sums of ~500 terms and the stopping rule at 10⁻⁶ give 10⁻⁵ of the largest value.
+            let same_factors =
+                galerkin::radiosity::solve::solve_direct(&gpu_f, &s.mesh.albedo, &s.emission).unwrap();
+            let solver = off(&same_factors);
+            // Against the CPU's whole solve: the visibility flips above (grazing pairs, some of
+            // them neighbours with large F where a floor meets the furniture) move a few faces'
+            // radiosity by up to 10⁻³ of the largest value (measured 2.1·10⁻⁴).
+            let whole = off(&s.radiosity);
             eprintln!(
-                "solve: {sweeps} sweeps on the device ({} on the CPU), worst error {:.2e} of max",
+                "solve: {sweeps} sweeps on the device ({} on the CPU); {:.2e} of max from the same factors' f64 solve, {:.2e} from the CPU's",
                 s.sweeps,
-                worst / top
+                solver / top,
+                whole / top
             );
-            // f32 sums of ~500 terms and the stopping rule at 10⁻⁶: 10⁻⁵ of the largest value
-            // (measured 10⁻⁷).
-            assert!(worst <= 1e-5 * top, "radiosity off by {worst} (max {top})");
+            assert!(solver <= 1e-5 * top, "the device's solve is off by {solver} (max {top})");
+            assert!(whole <= 1e-3 * top, "radiosity off by {whole} (max {top})");
         }
     }
 }

@@ -90,7 +90,8 @@ pub fn spectral(gpu: &Gpu, (w, h): (u32, u32), out: &Path) -> Result<Vec<DemoPar
 }
 
 /// Radiosity: the small two-room scene's full radiosity solved on the CPU (f64) and on the
-/// device (f32) and compared (1e-5 of the largest value: the Jacobi tolerance is 1e-6), drawn
+/// device (f32), the device's checked against an f64 solve of its own form factors (1e-5 of the
+/// largest value: the Jacobi tolerance is 1e-6), drawn
 /// from the living room, every pixel whose neighbourhood sees one face checked against an
 /// f64 ray cast (its face, and its radiance to 1e-6 of the largest: f32 storage).
 pub fn radiosity(gpu: &Gpu, size: (u32, u32), out: &Path) -> Result<DemoPart> {
@@ -115,14 +116,21 @@ pub fn radiosity(gpu: &Gpu, size: (u32, u32), out: &Path) -> Result<DemoPart> {
     let (b, _) = device.solve(gpu, &f, &s.mesh.albedo, &s.emission, 1e-6, 2000)?;
     let gpu_s = start.elapsed().as_secs_f64();
     let top = s.radiosity.iter().flatten().fold(0.0f64, |m, v| m.max(*v));
+    // The device's solve against an f64 direct solve of its own form factors (f32 sums and the
+    // 10⁻⁶ stopping rule: 10⁻⁵ of the largest value). Against the CPU's whole solve the two
+    // differ also where a grazing pair's visibility flips between f32 and f64 (up to ~10⁻³:
+    // tests/radiosity_gpu.rs).
+    let same_factors = crate::radiosity::solve::solve_direct(&f.download(gpu)?, &s.mesh.albedo, &s.emission)?;
     let worst = b
         .iter()
-        .zip(&s.radiosity)
+        .zip(&same_factors)
         .flat_map(|(x, y)| (0..3).map(move |c| (x[c] - y[c]).abs()))
         .fold(0.0f64, f64::max)
         / top;
     if worst > 1e-5 {
-        bail!("radiosity: the device's solution differs from the CPU's by {worst:.2e} of the largest value");
+        bail!(
+            "radiosity: the device's solution differs from an f64 solve of its form factors by {worst:.2e} of the largest value"
+        );
     }
     let radiance = display_radiance(&s.mesh, &s.geometry, &spec.lights, &s.radiosity);
     let exposure = default_exposure(&s.mesh, &s.geometry, &radiance);
