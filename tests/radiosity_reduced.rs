@@ -47,8 +47,9 @@ fn reduced_radiosity_reproduces_training_and_improves_with_larger_bases() {
     eprintln!("training configurations: worst relative error {worst:.2e}");
     // Every intermediate lies in its basis, so contractions and the Galerkin inverses are
     // exact; the one approximation left is the inverse square root (P ⊗ a)^(-1/2), whose
-    // reduction does not commute with projection (§4.2): measured 0.72 %.
-    assert!(worst < 1e-2, "training configurations reproduced only to {worst}");
+    // reduction does not commute with projection (§4.2): measured 1.14 % (0.72 % on the mesh
+    // whose floors ran under the furniture; the size depends on the mesh).
+    assert!(worst < 2e-2, "training configurations reproduced only to {worst}");
 
     // Error at an unseen configuration against the basis caps (energy 1.0: the cap decides).
     let mut errors = Vec::new();
