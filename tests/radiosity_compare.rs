@@ -134,29 +134,25 @@ fn compare_measures_the_receiving_surfaces_all_faces_and_each_room() {
 #[test]
 fn the_per_face_table_reads_back_to_the_solve() {
     let dir = tempfile::Builder::new().prefix("galerkin-faces-").tempdir().expect("scratch");
+    let render_faces = |table: &Path| {
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_galerkin"))
+            .args(["radiosity", "render", SMALL, "--params", "window_width=2.2", "--size", "32x24", "--out"])
+            .arg(dir.path().join("r.png"))
+            .arg("--faces")
+            .arg(table)
+            .output()
+            .expect("ran");
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    };
     let csv = dir.path().join("faces.csv");
-    let out = std::process::Command::new(env!("CARGO_BIN_EXE_galerkin"))
-        .args(["radiosity", "render", SMALL, "--params", "window_width=2.2", "--size", "32x24", "--out"])
-        .arg(dir.path().join("r.png"))
-        .arg("--faces")
-        .arg(&csv)
-        .output()
-        .expect("ran");
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    render_faces(&csv);
     let scene = AnyScene::load(Path::new(SMALL), None).expect("scene");
     let p = scene.parameters_from(&[("window_width".to_string(), 2.2)]).expect("params");
     let mesh = scene.space().mesh(&p).expect("mesh");
     let full = galerkin::radiosity::full_radiosity_of(mesh.clone(), scene.space().lights()).expect("full");
     // The same numbers as NumPy's array: faces × 8 f64, kind and the CSV's numbers, bit for bit.
     let npy = dir.path().join("faces.npy");
-    let out = std::process::Command::new(env!("CARGO_BIN_EXE_galerkin"))
-        .args(["radiosity", "render", SMALL, "--params", "window_width=2.2", "--size", "32x24", "--out"])
-        .arg(dir.path().join("r.png"))
-        .arg("--faces")
-        .arg(&npy)
-        .output()
-        .expect("ran");
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    render_faces(&npy);
     let bytes = std::fs::read(&npy).expect("npy");
     let array = npyz::NpyFile::new(&bytes[..]).expect("an NPY file");
     assert_eq!(array.shape(), [mesh.len() as u64, 8]);

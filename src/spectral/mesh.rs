@@ -156,13 +156,7 @@ impl SpectralMesh {
             }
         }
         let mesh = Self { shape, geometry, basis, points, fields, weights: None };
-        for e in 0..elements {
-            match shape {
-                Shape::Quadrilateral if mesh.is_planar() => mesh.check_orientation(e)?,
-                Shape::Hexahedron => mesh.check_orientation_hex(e)?,
-                Shape::Quadrilateral => {}
-            }
-        }
+        mesh.check_orientations()?;
         Ok(mesh)
     }
 
@@ -195,13 +189,7 @@ impl SpectralMesh {
             });
         }
         self.weights = Some(weights);
-        for e in 0..self.elements() {
-            match self.shape {
-                Shape::Quadrilateral if self.is_planar() => self.check_orientation(e)?,
-                Shape::Hexahedron => self.check_orientation_hex(e)?,
-                Shape::Quadrilateral => {}
-            }
-        }
+        self.check_orientations()?;
         Ok(self)
     }
 
@@ -518,6 +506,19 @@ impl SpectralMesh {
                     }
                     sign = det.signum();
                 }
+            }
+        }
+        Ok(())
+    }
+
+    /// Every element's map keeps one orientation (planar quadrilaterals and hexahedra; surfaces
+    /// in 3D have no sign to keep).
+    fn check_orientations(&self) -> Result<(), SpectralError> {
+        for e in 0..self.elements() {
+            match self.shape {
+                Shape::Quadrilateral if self.is_planar() => self.check_orientation(e)?,
+                Shape::Hexahedron => self.check_orientation_hex(e)?,
+                Shape::Quadrilateral => {}
             }
         }
         Ok(())
