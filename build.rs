@@ -2,9 +2,9 @@
 //! glslang inside) and generates `$OUT_DIR/shaders.rs`: one module per folder, one
 //! `pub const NAME: &[u32]` per shader, embedded as properly aligned words.
 //!
-//! Why `glslc` and not the `shaderc` crate: Debian 12's `libshaderc.so.1` has undefined glslang
-//! symbols, and the crate's `build-from-source` takes about 20 minutes on 2 cores. `glslc` is the
-//! same compiler front end, packaged and quick.
+//! Why `glslc` and not the `shaderc` crate for the shipped shaders: the build needs no compiler
+//! library at all. Run-time compilation (feature `runtime-shaderc`, derived-field expressions)
+//! uses the crate; see [`link_system_glslang`] for how it links.
 //!
 //! Naming: `shaders-glsl/tensor/contract.comp` becomes `shaders::tensor::CONTRACT`; graphics stages
 //! carry their stage, so `demo/field.vert` becomes `shaders::demo::FIELD_VERT`.
@@ -25,6 +25,9 @@ fn main() {
     let glslc = std::env::var("GLSLC").unwrap_or_else(|_| "glslc".to_string());
     println!("cargo:rerun-if-env-changed=GLSLC");
     println!("cargo:rerun-if-changed={}", src.display());
+    if std::env::var_os("CARGO_FEATURE_RUNTIME_SHADERC").is_some() {
+        link_system_glslang();
+    }
 
     let mut shaders = Vec::new();
     collect(&src, &src, &mut shaders);
@@ -135,6 +138,24 @@ fn main() {
             code.push_str("}\n\n");
         }
     }
+    // The include files' text, for shaders compiled at run time (feature runtime-shaderc:
+    // derived fields splice an expression into the spectral fragment shader).
+    let mut includes: Vec<PathBuf> = std::fs::read_dir(src.join("include"))
+        .map(|d| {
+            d.flatten().map(|e| e.path()).filter(|p| p.extension().is_some_and(|e| e == "glsl")).collect()
+        })
+        .unwrap_or_default();
+    includes.sort();
+    writeln!(code, "/// The text of every file in `shaders-glsl/include/`: (file name, GLSL source).")
+        .unwrap();
+    let entries: Vec<String> = includes
+        .iter()
+        .map(|p| {
+            let name = p.file_name().and_then(|n| n.to_str()).unwrap_or_default();
+            format!("(\"{name}\", include_str!({:?}))", p.display().to_string())
+        })
+        .collect();
+    writeln!(code, "pub const INCLUDES: &[(&str, &str)] = &[{}];", entries.join(", ")).unwrap();
     writeln!(code, "/// Every compiled shader: (path under `shaders-glsl/`, SPIR-V words).").unwrap();
     writeln!(code, "pub const ALL: &[(&str, &[u32])] = &[{}];", all.join(", ")).unwrap();
     std::fs::write(out.join("shaders.rs"), code).expect("write shaders.rs");
@@ -166,4 +187,45 @@ fn depfile_inputs(text: &str) -> Vec<String> {
         return Vec::new();
     };
     deps.split_whitespace().map(str::to_string).collect()
+}
+
+/// Feature `runtime-shaderc`: the `shaderc` crate (with `prefer-static-linking`) links the system's
+/// `libshaderc_combined.a`. Debian 12's archive of that name holds shaderc only — glslang and
+/// SPIRV-Tools are separate static archives (glslang-dev, spirv-tools), and its shared
+/// `libshaderc.so.1` expects glslang's symbols from the executable. So the archives shaderc needs
+/// are named here, after every Rust library on the link line (`rustc-link-arg` comes last), in
+/// one group so their mutual references resolve in any order. Linking these takes seconds; the
+/// crate's `build-from-source` takes about 20 minutes on 2 cores.
+fn link_system_glslang() {
+    let dir = std::env::var("SHADERC_LIB_DIR").unwrap_or_else(|_| "/usr/lib/x86_64-linux-gnu".to_string());
+    println!("cargo:rerun-if-env-changed=SHADERC_LIB_DIR");
+    let archives = [
+        "glslang",
+        "MachineIndependent",
+        "GenericCodeGen",
+        "OSDependent",
+        "OGLCompiler",
+        "SPIRV",
+        "glslang-default-resource-limits",
+        "SPIRV-Tools-opt",
+        "SPIRV-Tools",
+    ];
+    for a in archives {
+        let file = Path::new(&dir).join(format!("lib{a}.a"));
+        if !file.exists() {
+            panic!(
+                "feature runtime-shaderc: {} is missing; install glslang-dev, spirv-tools and libshaderc-dev \
+                 (scripts/install-deps.sh --shaderc) or set SHADERC_LIB_DIR to the folder holding glslang's static archives",
+                file.display()
+            );
+        }
+    }
+    println!("cargo:rustc-link-arg=-L{dir}");
+    println!("cargo:rustc-link-arg=-Wl,--start-group");
+    for a in archives {
+        println!("cargo:rustc-link-arg=-l{a}");
+    }
+    println!("cargo:rustc-link-arg=-Wl,--end-group");
+    println!("cargo:rustc-link-arg=-lstdc++");
+    println!("cargo:rustc-link-arg=-lpthread");
 }

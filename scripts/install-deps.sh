@@ -5,6 +5,8 @@
 #   client libraries the viewer's window (winit) loads at run time.
 # With --mpi, also what the `mpi` cargo feature needs: OpenMPI (libopenmpi-dev, openmpi-bin:
 #   mpirun) and libclang-dev (the mpi crate generates its bindings with bindgen).
+# With --shaderc, what the `runtime-shaderc` feature links: the system's shaderc, glslang and
+#   SPIRV-Tools static archives (libshaderc-dev, glslang-dev, spirv-tools).
 # Idempotent and quick when everything is present. No mirror host name is written here:
 # on Debian 12 the bookworm-backports entry is derived from the machine's own apt sources.
 set -euo pipefail
@@ -12,11 +14,13 @@ set -euo pipefail
 ICD=/usr/share/vulkan/icd.d/lvp_icd.json
 need=()
 with_mpi=0
+with_shaderc=0
 for arg in "$@"; do
     case "$arg" in
         --mpi) with_mpi=1 ;;
-        -h|--help) sed -n '2,10p' "$0"; exit 0 ;;
-        *) echo "install-deps: unknown option '$arg' (options: --mpi)" >&2; exit 2 ;;
+        --shaderc) with_shaderc=1 ;;
+        -h|--help) sed -n '2,12p' "$0"; exit 0 ;;
+        *) echo "install-deps: unknown option '$arg' (options: --mpi, --shaderc)" >&2; exit 2 ;;
     esac
 done
 
@@ -42,6 +46,11 @@ for p in libvulkan1 vulkan-validationlayers glslc spirv-tools xvfb \
 done
 if [ "$with_mpi" = 1 ]; then
     for p in libopenmpi-dev openmpi-bin libclang-dev; do
+        have_pkg "$p" || need+=("$p")
+    done
+fi
+if [ "$with_shaderc" = 1 ]; then
+    for p in libshaderc-dev glslang-dev spirv-tools; do
         have_pkg "$p" || need+=("$p")
     done
 fi

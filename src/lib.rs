@@ -21,6 +21,7 @@
 pub mod atomic_file;
 pub mod bench;
 pub mod demo;
+pub mod expression;
 pub mod fluid;
 pub mod gpu;
 pub mod limits;

@@ -163,6 +163,13 @@ vec3 spectral_map(uint e, vec2 r, out vec3 dxi, out vec3 deta) {
 // Whole vec4s of one element's coefficients.
 #define SPECTRAL_VALUES_PER_ELEMENT ((SPECTRAL_FIELD_ORDER + 1u) * (SPECTRAL_FIELD_ORDER + 1u) * (SPECTRAL_DIM == 3u ? SPECTRAL_FIELD_ORDER + 1u : 1u))
 #define SPECTRAL_VALUE_VEC4S ((SPECTRAL_VALUES_PER_ELEMENT + 3u) / 4u)
+// Fields per element in spectral_values: 1 for the shipped shaders; a derived-field shader
+// (src/expression, compiled at run time) defines more — each element's run is then the shown
+// field's vec4s followed by those of every other field the expression names.
+#ifndef SPECTRAL_FIELDS
+#define SPECTRAL_FIELDS 1u
+#endif
+#define SPECTRAL_ELEMENT_VEC4S (SPECTRAL_FIELDS * SPECTRAL_VALUE_VEC4S)
 
 // Elements whose coefficients fit four vec4s (quadrilaterals up to order 3) can hand them from
 // the vertex stage to the fragment stage as flat varyings: on a CPU rasteriser a per-fragment
@@ -174,7 +181,7 @@ vec3 spectral_map(uint e, vec2 r, out vec3 dxi, out vec3 deta) {
 // read the buffer instead).
 void spectral_flat_coefficients(uint e, out vec4 f[SPECTRAL_FLAT_VEC4S]) {
     for (uint q = 0u; q < SPECTRAL_FLAT_VEC4S; ++q)
-        f[q] = SPECTRAL_FLAT_VALUES && q < SPECTRAL_VALUE_VEC4S ? spectral_values[e * SPECTRAL_VALUE_VEC4S + q] : vec4(0.0);
+        f[q] = SPECTRAL_FLAT_VALUES && q < SPECTRAL_VALUE_VEC4S ? spectral_values[e * SPECTRAL_ELEMENT_VEC4S + q] : vec4(0.0);
 }
 
 // sum_ij a_i b_j F_ij over element e's coefficients, taken from `given` when they travel as
@@ -189,7 +196,7 @@ float spectral_tensor_sum(uint e, vec4 given[SPECTRAL_FLAT_VEC4S], float a[SPECT
             uint k = 4u * q + c;
             w[c] = k < m * m ? a[k % m] * b[k / m] : 0.0;
         }
-        vec4 f = SPECTRAL_FLAT_VALUES ? given[min(q, SPECTRAL_FLAT_VEC4S - 1u)] : spectral_values[e * SPECTRAL_VALUE_VEC4S + q];
+        vec4 f = SPECTRAL_FLAT_VALUES ? given[min(q, SPECTRAL_FLAT_VEC4S - 1u)] : spectral_values[e * SPECTRAL_ELEMENT_VEC4S + q];
         v += dot(w, f);
     }
     return SPECTRAL_RATIONAL ? v / spectral_weight_sum(e, a, b) : v;
@@ -223,13 +230,15 @@ float spectral_value_and_map(uint e, vec2 r, vec4 given[SPECTRAL_FLAT_VEC4S], ou
     return SPECTRAL_SHARED_BASIS ? spectral_tensor_sum(e, given, a, b) : spectral_value_given(e, r, given);
 }
 
-// The field value of element e at r and its derivatives along xi and eta: (f, f_xi, f_eta).
-vec3 spectral_value_gradient(uint e, vec2 r) {
+// Field slot k's value of element e at r and its derivatives along xi and eta: (f, f_xi,
+// f_eta). Slot 0 is the shown field; a derived-field shader has SPECTRAL_FIELDS slots.
+// Twin of SpectralMesh::value_gradient (mesh.rs).
+vec3 spectral_slot_value_gradient(uint e, uint k, vec2 r) {
     float a[SPECTRAL_MAX_NODES], da[SPECTRAL_MAX_NODES], b[SPECTRAL_MAX_NODES], db[SPECTRAL_MAX_NODES];
     spectral_field_eval(r.x, true, a, da);
     spectral_field_eval(r.y, true, b, db);
     const uint m = SPECTRAL_FIELD_ORDER + 1u;
-    uint base = e * SPECTRAL_VALUE_VEC4S;
+    uint base = e * SPECTRAL_ELEMENT_VEC4S + k * SPECTRAL_VALUE_VEC4S;
     vec3 v = vec3(0.0);
     for (uint q = 0u; q < SPECTRAL_VALUE_VEC4S; ++q) {
         vec4 f = spectral_values[base + q];
@@ -245,6 +254,22 @@ vec3 spectral_value_gradient(uint e, vec2 r) {
         w += spectral_points[e * m * m + k].w * vec3(a[k % m] * b[k / m], da[k % m] * b[k / m], a[k % m] * db[k / m]);
     float f = v.x / w.x;
     return vec3(f, (v.yz - f * w.yz) / w.x);
+}
+
+// The shown field's value of element e at r and its derivatives along xi and eta.
+vec3 spectral_value_gradient(uint e, vec2 r) {
+    return spectral_slot_value_gradient(e, 0u, r);
+}
+
+// The physical (surface) gradient of a field with reference derivatives d = (f_xi, f_eta) on a
+// quadrilateral with tangents dxi, deta: [dxi deta] G^-1 d with the metric G = [t_i . t_j] —
+// the inverse transpose of the Jacobian for planar elements, the tangential gradient on
+// surfaces. Twin of expression::physical_gradient (src/expression/eval.rs).
+vec3 spectral_physical_gradient(vec3 dxi, vec3 deta, vec2 d) {
+    float g11 = dot(dxi, dxi), g12 = dot(dxi, deta), g22 = dot(deta, deta);
+    float det = g11 * g22 - g12 * g12;
+    vec2 c = vec2(g22 * d.x - g12 * d.y, -g12 * d.x + g11 * d.y) / det;
+    return c.x * dxi + c.y * deta;
 }
 
 // Newton's method for the reference point of planar element e that maps to p, from r; returns
@@ -268,6 +293,29 @@ bool spectral_inverse_map(uint e, vec2 p, inout vec2 r) {
     return last < 1e-4;
 }
 
+#ifdef SPECTRAL_EXPRESSION
+// A derived field (src/expression): `spectral_expression(values, gradients, x, t)`, written by
+// the expression's translation to GLSL before this file is included, evaluated from every
+// slot's value and physical gradient at r, the mapped point and the step's time. The time
+// is the x of the vec4 after the last element's coefficients (DerivedField::padded_values;
+// the buffer may be longer), SPECTRAL_ELEMENTS defined by the run-time source.
+// Twin of DerivedField::value_at (src/expression/spectral.rs).
+float spectral_time() {
+    return spectral_values[SPECTRAL_ELEMENTS * SPECTRAL_ELEMENT_VEC4S].x;
+}
+float spectral_derived_value(uint e, vec2 r) {
+    vec3 dxi, deta;
+    vec3 x = spectral_map(e, r, dxi, deta);
+    float values[SPECTRAL_FIELDS];
+    vec3 gradients[SPECTRAL_FIELDS];
+    for (uint k = 0u; k < SPECTRAL_FIELDS; ++k) {
+        vec3 f = spectral_slot_value_gradient(e, k, r);
+        values[k] = f.x;
+        gradients[k] = spectral_physical_gradient(dxi, deta, f.yz);
+    }
+    return spectral_expression(values, gradients, x, spectral_time());
+}
+#endif
 
 // Hexahedra (SPECTRAL_DIM == 3): node (i, j, k) at e (g+1)^3 + k (g+1)^2 + j (g+1) + i.
 
@@ -337,7 +385,7 @@ float spectral_value_hex(uint e, vec3 r) {
     spectral_field_eval(r.y, false, b, unused);
     spectral_field_eval(r.z, false, c, unused);
     const uint m = SPECTRAL_FIELD_ORDER + 1u;
-    uint base = e * SPECTRAL_VALUE_VEC4S;
+    uint base = e * SPECTRAL_ELEMENT_VEC4S;
     float v = 0.0;
     for (uint q = 0u; q < SPECTRAL_VALUE_VEC4S; ++q) {
         vec4 w;

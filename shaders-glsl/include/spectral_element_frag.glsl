@@ -9,6 +9,8 @@
 // element (within the error budget of the true surface on screen); the value is evaluated
 // there, and lit with the exact normal of the geometry map at that point.
 // Iso-lines of constant on-screen width come from the per-pixel value and its screen derivatives.
+// With SPECTRAL_EXPRESSION defined (a derived field, src/expression) the value shown is the
+// expression's, evaluated per pixel from the element's exact polynomials.
 #include "spectral_element.glsl"
 #include "spectral_push.glsl"
 #include "colormap.glsl"
@@ -62,6 +64,11 @@ void main() {
     } else {
         v = spectral_value_given(element, r, coefficients);
     }
+#ifdef SPECTRAL_EXPRESSION
+    // A derived field (`--expr`, compiled at run time): the expression of every slot's value
+    // and physical gradient at r replaces the value (edge lines keep their dark colour).
+    if (mode != SPECTRAL_MODE_EDGE_LINES) v = spectral_derived_value(element, r);
+#endif
     float t = ramp_coordinate(v, pc.range.x, pc.range.y, pc.flags.y != 0u);
     // Iso-lines: distance to the nearest level in pixels from the screen derivative of the
     // level coordinate (taken before any discard, while the whole quad is live).

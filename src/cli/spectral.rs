@@ -110,6 +110,14 @@ pub struct RenderArgs {
     /// Its time step (0 = first).
     #[arg(long, default_value_t = 0)]
     pub step: usize,
+    /// Show a derived field, evaluated per pixel from the elements' exact polynomials, e.g.
+    /// 'length(grad(u))', 'log(abs(u) + 1e-6)', 'u - pressure', 'grad(u).x * x'. Names: u (the
+    /// --field shown), the file's other fields by name (or field("a name")), x y z (the point),
+    /// t (the step's time); grad(f) is a field's physical gradient (a vector: .x .y .z, length,
+    /// dot); + - * /, abs sqrt log exp sin cos pow min max clamp. Quadrilateral meshes, per
+    /// pixel; needs the `runtime-shaderc` build feature (the shader is compiled at run time).
+    #[arg(long, value_name = "EXPR")]
+    pub expr: Option<String>,
     #[command(flatten)]
     pub colour: crate::cli::args::ColourArgs,
     /// Logarithmic colour scale (needs a positive range).
@@ -225,10 +233,15 @@ pub fn generate_file(args: &GenArgs) -> Result<()> {
 /// `galerkin spectral render` ([`galerkin::spectral::picture::write_picture`]).
 pub fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
     use galerkin::spectral::picture::{check_view, kind, write_picture};
+    use std::sync::Arc;
     let loaded = Instant::now();
     let mesh = Arc::new(args.source.mesh(args.file.as_deref(), &args.grid_functions)?);
     let load_ms = loaded.elapsed().as_secs_f64() * 1e3;
     let field = mesh.field_index(args.field.as_deref())?;
+    let expression = match &args.expr {
+        Some(text) => Some(Arc::new(galerkin::expression::spectral::DerivedField::new(&mesh, text)?)),
+        None => None,
+    };
     let view = SpectralView {
         field,
         step: args.step,
@@ -241,15 +254,19 @@ pub fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
         max_error_px: args.max_error,
         cuts: args.cuts.clone(),
         height: args.height,
+        expression,
         ..SpectralView::default()
     };
-    check_view(&mesh, &view).context("--step, --log, --range, --max-error")?;
+    check_view(&mesh, &view).context("--step, --log, --range, --max-error, --expr")?;
     if args.viewer.view {
         return open_viewer(desc, mesh, view, args);
     }
     let gpu = Gpu::new(desc)?;
     let colormap = Colormap::by_name(&args.colour.colormap)?;
-    let name = &mesh.fields[field].name;
+    let name = match &args.expr {
+        Some(text) => format!("{text} (u = {})", mesh.fields[field].name),
+        None => mesh.fields[field].name.clone(),
+    };
     let source = args
         .file
         .as_ref()
@@ -269,7 +286,7 @@ pub fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
     )?;
     let (lo, hi) = r.range;
     println!(
-        "spectral: {} {} elements of order {} ({} geometry of order {}), field {name:?} step {}, range [{lo:.4}, {hi:.4}]; {} triangles ({}), {} edge lines; load {load_ms:.1} ms, render {:.1} ms → {}",
+        "spectral: {} {} elements of order {} ({} geometry of order {}), showing {name:?} step {}, range [{lo:.4}, {hi:.4}]; {} triangles ({}), {} edge lines; load {load_ms:.1} ms, render {:.1} ms → {}",
         mesh.elements(),
         kind(&mesh),
         mesh.basis.order,

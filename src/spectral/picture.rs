@@ -1,6 +1,6 @@
 //! `galerkin spectral render`'s picture (seed 002): a view checked against its data set, drawn
 //! per pixel and written as PNG (with a title and a colour bar beside it) or EXR (the colour,
-//! then the raw value, the reference coordinates ξ, η — for cut planes the plane and ζ — and
+//! then the raw value (of the derived field with `--expr`), the reference coordinates ξ, η — for cut planes the plane and ζ — and
 //! the element of every pixel; NaN where no element, −(e + 1) where only edge overdraw drew).
 
 use std::path::Path;
@@ -41,6 +41,9 @@ pub fn check_view(mesh: &SpectralMesh, view: &SpectralView) -> Result<(), Spectr
             steps.saturating_sub(1)
         )));
     }
+    if let Some(d) = &view.expression {
+        d.check_step(mesh, view.field, view.step)?;
+    }
     if view.log {
         match view.range {
             Some((lo, _)) if lo <= 0.0 => {
@@ -48,11 +51,17 @@ pub fn check_view(mesh: &SpectralMesh, view: &SpectralView) -> Result<(), Spectr
             }
             Some(_) => {}
             None => {
-                let (lo, hi) = mesh.value_range(view.field, view.step);
+                let (what, (lo, hi)) = match &view.expression {
+                    Some(d) => (
+                        format!("--expr {:?}", d.expression.text),
+                        d.range(mesh, view.field, view.step).unwrap_or((f64::NAN, f64::NAN)),
+                    ),
+                    None => (format!("field {:?}", field.name), mesh.value_range(view.field, view.step)),
+                };
                 if lo.is_nan() || lo <= 0.0 {
                     return Err(SpectralError::Missing(format!(
-                        "a log scale: field {:?} at step {} spans [{lo}, {hi}], not above 0; give a range LO,HI with LO > 0",
-                        field.name, view.step
+                        "a log scale: {what} at step {} spans [{lo}, {hi}], not above 0; give a range LO,HI with LO > 0",
+                        view.step
                     )));
                 }
             }
@@ -81,6 +90,14 @@ pub fn colour_bar<'a>(colormap: &'a Colormap, range: (f64, f64), log: bool, fiel
     ColourBar { colormap, range, log, label: field, shift: 0.0 }
 }
 
+/// What `view` colours: its derived field's expression, or the field's name.
+pub fn shown_label(mesh: &SpectralMesh, view: &SpectralView) -> String {
+    match &view.expression {
+        Some(d) => d.expression.text.clone(),
+        None => mesh.fields.get(view.field).map_or_else(String::new, |f| f.name.clone()),
+    }
+}
+
 /// Renders `view` of `mesh` at `size` and writes it to `out` (format by extension): a PNG with
 /// `title` and a colour bar beside it, or the bare picture when `title` is `None`; an EXR with
 /// the raw channels.
@@ -106,12 +123,12 @@ pub fn write_picture(
     };
     let render_ms = start.elapsed().as_secs_f64() * 1e3;
     let range = renderer.range(view);
-    let field = &mesh.fields[view.field];
+    let label = shown_label(&mesh, view);
     match format {
         ImageFormat::Png => {
             let legend = title.map(|title| Legend {
                 title: title.to_string(),
-                bar: colour_bar(colormap, range, view.log, &field.name),
+                bar: colour_bar(colormap, range, view.log, &label),
             });
             picture::write_png(out, size, &rgba, legend.as_ref())?;
         }

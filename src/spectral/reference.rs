@@ -24,6 +24,9 @@ pub struct PixelReport {
     /// Covered pixels whose centre is not inside the element that drew them (beyond the
     /// renderer's inside tolerance, with a margin).
     pub wrong_element: usize,
+    /// Covered pixels not compared: the reference or its bound is not finite (derived fields
+    /// where a function meets the edge of its domain; always 0 for a field itself).
+    pub uncomparable: usize,
     /// Uncovered pixels whose centre lies inside an element (by more than 10⁻³ of its
     /// reference square from its edges).
     pub missing: usize,
@@ -115,8 +118,39 @@ pub fn check_pixels(
     field: usize,
     step: usize,
     view: &View2d,
+    size: (u32, u32),
+    pixels: &[f32],
+) -> PixelReport {
+    check_pixels_of(mesh, view, size, pixels, |e, r| {
+        (mesh.value(field, step, e, r[0], r[1]), rounding_bound(mesh, field, step, e, r))
+    })
+}
+
+/// [`check_pixels`] for a derived field (`--expr`): the reference is the expression in f64
+/// at the pixel centre's reference point, the bound [`DerivedField::rounding_bound`].
+/// Pixels whose bound is infinite (a function at the edge of its domain) are counted in
+/// `PixelReport::uncomparable`, not compared.
+pub fn check_derived_pixels(
+    mesh: &SpectralMesh,
+    derived: &crate::expression::spectral::DerivedField,
+    (field, step): (usize, usize),
+    view: &View2d,
+    size: (u32, u32),
+    pixels: &[f32],
+) -> PixelReport {
+    check_pixels_of(mesh, view, size, pixels, |e, r| {
+        (derived.value_at(mesh, field, step, e, r), derived.rounding_bound(mesh, field, step, e, r))
+    })
+}
+
+/// The per-pixel comparison of [`check_pixels`] with the reference value and its bound at
+/// element e's reference point r given by `reference(e, r)`.
+fn check_pixels_of(
+    mesh: &SpectralMesh,
+    view: &View2d,
     (width, height): (u32, u32),
     pixels: &[f32],
+    reference: impl Fn(usize, [f64; 2]) -> (f64, f64),
 ) -> PixelReport {
     let mut report = PixelReport::default();
     let slack = 1e-4;
@@ -147,8 +181,12 @@ pub fn check_pixels(
                 continue;
             };
             let r = r.map(|c| c.clamp(0.0, 1.0));
-            let reference = mesh.value(field, step, e, r[0], r[1]);
-            report.compare((px, py), texel[0], reference, rounding_bound(mesh, field, step, e, r));
+            let (value, bound) = reference(e, r);
+            if !bound.is_finite() || !value.is_finite() {
+                report.uncomparable += 1;
+                continue;
+            }
+            report.compare((px, py), texel[0], value, bound);
         }
     }
     report

@@ -186,7 +186,10 @@ impl ViewerContent for SpectralContent {
     }
 
     fn legend(&self) -> Option<ColourBar<'_>> {
-        let name = &self.mesh.fields[self.view.field].name;
+        let name = match &self.view.expression {
+            Some(d) => d.expression.text.as_str(),
+            None => self.mesh.fields[self.view.field].name.as_str(),
+        };
         Some(super::picture::colour_bar(&self.colormap, self.range?, self.view.log, name))
     }
 

@@ -162,7 +162,8 @@ impl SpectralRenderer {
         target: &DrawTarget<'_>,
         view: &SpectralView,
     ) -> Result<(Box<dyn FnOnce(&mut Recorder<'_>) + '_>, Box<dyn FnOnce(&mut Recorder<'_>) + '_>)> {
-        self.show(view.field, view.step)?;
+        self.check_derived_view(view)?;
+        self.show(view)?;
         self.cut_pipeline_for(target)?;
         let planes = self.cut_planes(view)?;
         let push = self.push(target, view);

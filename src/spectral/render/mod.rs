@@ -42,6 +42,7 @@ use crate::render::{
 };
 
 mod cut;
+mod derived;
 mod tessellate;
 mod view;
 
@@ -207,9 +208,14 @@ pub struct SpectralRenderer {
     counts: [u32; 3],
     planar: bool,
     colormap: ColormapTexture,
-    shown: (usize, usize),
-    pipelines: HashMap<PassKey, Pipelines>,
-    ranges: HashMap<(usize, usize), (f64, f64)>,
+    /// The field, step and derived field (its text) whose coefficients `values` holds.
+    shown: (usize, usize, Option<String>),
+    /// Draw pipelines per target and derived field (`None`: the field itself).
+    pipelines: HashMap<(PassKey, Option<String>), Pipelines>,
+    /// Colour ranges per field, step and derived field.
+    ranges: HashMap<(usize, usize, Option<String>), (f64, f64)>,
+    /// Fragment shaders compiled at run time, per derived field (its text).
+    derived_shaders: HashMap<String, Vec<u32>>,
     tessellator: Option<Tessellator>,
     cutter: Option<Cutter>,
     /// Vertices the last surface frame reserved room for (the CPU bound of its tessellation).
@@ -282,9 +288,10 @@ impl SpectralRenderer {
             counts,
             planar,
             colormap,
-            shown: (0, 0),
+            shown: (0, 0, None),
             pipelines: HashMap::new(),
             ranges: HashMap::new(),
+            derived_shaders: HashMap::new(),
             tessellator: None,
             cutter,
             tessellated: 0,
@@ -318,18 +325,27 @@ impl SpectralRenderer {
         [per_pixel, u64::from(self.counts[1]) / 3, u64::from(self.counts[2]) / 2]
     }
 
-    /// The colour range `view` uses: its own, or the field's sampled range at its step.
+    /// The colour range `view` uses: its own, or the sampled range of the field (or of the
+    /// derived field, [`DerivedField::range`]; (0, 1) when it has no finite value) at its step.
     pub fn range(&mut self, view: &SpectralView) -> (f64, f64) {
         if let Some(r) = view.range {
             return r;
         }
-        let key = (view.field, view.step);
+        let key = (view.field, view.step, view.expression.as_ref().map(|d| d.expression.text.clone()));
         let mesh = &self.mesh;
-        *self.ranges.entry(key).or_insert_with(|| mesh.value_range(key.0, key.1))
+        *self.ranges.entry(key).or_insert_with(|| match &view.expression {
+            Some(d) => d.range(mesh, view.field, view.step).unwrap_or((0.0, 1.0)),
+            None => mesh.value_range(view.field, view.step),
+        })
     }
 
-    /// Uploads the coefficients of `field` at `step` unless they are the ones shown.
-    fn show(&mut self, field: usize, step: usize) -> Result<()> {
+    /// Uploads the coefficients `view` draws (its field at its step, or every field its
+    /// derived field reads) unless they are the ones shown.
+    fn show(&mut self, view: &SpectralView) -> Result<()> {
+        if view.expression.is_some() {
+            return self.show_derived(view);
+        }
+        let (field, step) = (view.field, view.step);
         let f = self.mesh.fields.get(field).ok_or_else(|| {
             SpectralError::Missing(format!("no field {field} ({} fields)", self.mesh.fields.len()))
         })?;
@@ -340,10 +356,10 @@ impl SpectralRenderer {
                 f.steps.len()
             )));
         }
-        if self.shown != (field, step) {
+        if self.shown != (field, step, None) {
             let v = padded_values(&self.mesh, field, step);
             self.values.upload(&self.gpu, 0, &v).map_err(dev("uploading a time step"))?;
-            self.shown = (field, step);
+            self.shown = (field, step, None);
         }
         Ok(())
     }
@@ -366,24 +382,24 @@ impl SpectralRenderer {
         desc
     }
 
-    fn pipelines_for(&mut self, target: &DrawTarget<'_>) -> Result<()> {
-        if self.pipelines.contains_key(&target.key()) {
+    fn pipelines_for(&mut self, target: &DrawTarget<'_>, view: &SpectralView) -> Result<()> {
+        let key = (target.key(), view.expression.as_ref().map(|d| d.expression.text.clone()));
+        if self.pipelines.contains_key(&key) {
             return Ok(());
         }
         target.require_depth("spectral elements").map_err(dev("building the spectral pipelines"))?;
+        if let Some(d) = &view.expression {
+            self.derived_shader(d)?;
+        }
+        let fragment = match &key.1 {
+            Some(text) => &self.derived_shaders[text][..],
+            // Planar meshes: the variant with the ownership rule at element edges.
+            None if self.planar => crate::spectral::shaders::ELEMENT_PLANAR_FRAG,
+            None => crate::spectral::shaders::ELEMENT_FRAG,
+        };
         let make = |lines: bool| {
             let name = if lines { "spectral edges" } else { "spectral elements" };
-            let mut desc = self.draw_desc(
-                name,
-                crate::spectral::shaders::ELEMENT_VERT,
-                // Planar meshes: the variant with the ownership rule at element edges.
-                if self.planar {
-                    crate::spectral::shaders::ELEMENT_PLANAR_FRAG
-                } else {
-                    crate::spectral::shaders::ELEMENT_FRAG
-                },
-                target,
-            );
+            let mut desc = self.draw_desc(name, crate::spectral::shaders::ELEMENT_VERT, fragment, target);
             if lines {
                 desc.topology = vk::PrimitiveTopology::LINE_LIST;
             }
@@ -393,7 +409,7 @@ impl SpectralRenderer {
         let resources = self.resources()?;
         let bind = |p: &GraphicsPipeline| p.bind(&self.gpu, &resources).map_err(dev("binding"));
         let (fill_set, lines_set) = (bind(&fill)?, bind(&lines)?);
-        self.pipelines.insert(target.key(), Pipelines { fill, lines, fill_set, lines_set });
+        self.pipelines.insert(key, Pipelines { fill, lines, fill_set, lines_set });
         Ok(())
     }
 
@@ -495,8 +511,9 @@ impl SpectralRenderer {
         if self.cutter.is_some() {
             return self.prepare_cuts(target, view);
         }
-        self.show(view.field, view.step)?;
-        self.pipelines_for(target)?;
+        self.check_derived_view(view)?;
+        self.show(view)?;
+        self.pipelines_for(target, view)?;
         self.patches_for_view(view)?;
         let push = self.push(target, view);
         let lifted = !self.planar || push.flags[3] == 1;
@@ -507,7 +524,7 @@ impl SpectralRenderer {
         if surface && !fresh {
             self.tessellator_for(&push)?;
         }
-        let p = &self.pipelines[&target.key()];
+        let p = &self.pipelines[&(target.key(), view.expression.as_ref().map(|d| d.expression.text.clone()))];
         let extent = target.viewport();
         let (edges, edge_count) = (&self.edges, self.counts[2]);
         let (overdraw, mesh_lines) = (view.overdraw, view.edges);

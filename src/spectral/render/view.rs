@@ -118,6 +118,9 @@ pub struct SpectralView {
     /// (at most [`super::MAX_CUT_PLANES`]; the normal need not be unit). Empty: one plane z = the
     /// middle of the mesh.
     pub cuts: Vec<[f64; 4]>,
+    /// A derived field to show instead of the field itself (`--expr`; the field is its `u`),
+    /// evaluated per pixel by a fragment shader compiled at run time.
+    pub expression: Option<std::sync::Arc<crate::expression::spectral::DerivedField>>,
 }
 
 impl Default for SpectralView {
@@ -137,6 +140,7 @@ impl Default for SpectralView {
             max_error_px: 0.5,
             height: None,
             cuts: Vec::new(),
+            expression: None,
         }
     }
 }

@@ -1,0 +1,69 @@
+//! Derived fields in the spectral renderer (`--expr`, [`DerivedField`]): the coefficients of
+//! every field an expression reads, uploaded element by element, and the fragment shader with
+//! the expression spliced in, compiled at run time and kept per expression.
+
+use super::{dev, Result, SpectralRenderer, SpectralView};
+use crate::expression::spectral::DerivedField;
+use crate::gpu::Buffer;
+use crate::spectral::SpectralError;
+use ash::vk;
+
+impl SpectralRenderer {
+    /// Refuses a derived field with what it cannot be drawn with: the per-vertex baseline (it
+    /// colours node values), a height field (its surface is the field's), cut planes through
+    /// hexahedra, or a step one of its fields lacks.
+    pub(super) fn check_derived_view(&self, view: &SpectralView) -> Result<()> {
+        let Some(d) = &view.expression else { return Ok(()) };
+        let refuse = |what: &str| {
+            Err(SpectralError::Expression(format!("--expr {:?} cannot be drawn {what}", d.expression.text)))
+        };
+        if self.cutter.is_some() {
+            return refuse("on cut planes through hexahedra (quadrilateral meshes only)");
+        }
+        if view.per_vertex {
+            return refuse("per vertex (it is evaluated per pixel)");
+        }
+        if view.height.is_some() && self.planar {
+            return refuse("as a height field");
+        }
+        d.check_step(&self.mesh, view.field, view.step)
+    }
+
+    /// Uploads the coefficients of every field `view`'s derived field reads (and the step's
+    /// time), growing the coefficient buffer when they do not fit; a new buffer drops the
+    /// pipelines' descriptor sets (the compiled shaders are kept).
+    pub(super) fn show_derived(&mut self, view: &SpectralView) -> Result<()> {
+        let Some(d) = &view.expression else { return Ok(()) };
+        let want = (view.field, view.step, Some(d.expression.text.clone()));
+        if self.shown == want {
+            return Ok(());
+        }
+        let data = d.padded_values(&self.mesh, view.field, view.step);
+        if data.len() as u64 > self.values.len() {
+            let values =
+                Buffer::from_slice(&self.gpu, "spectral values", &data, vk::BufferUsageFlags::STORAGE_BUFFER)
+                    .map_err(dev("uploading the derived field's coefficients"))?;
+            values.binding().map_err(dev("binding the derived field's coefficients"))?;
+            self.values = values;
+            self.pipelines.clear();
+            if let Some(t) = self.tessellator.as_mut() {
+                t.set = None;
+            }
+        } else {
+            self.values
+                .upload(&self.gpu, 0, &data)
+                .map_err(dev("uploading the derived field's coefficients"))?;
+        }
+        self.shown = want;
+        Ok(())
+    }
+
+    /// Compiles `d`'s fragment shader for this mesh unless it was compiled before.
+    pub(super) fn derived_shader(&mut self, d: &DerivedField) -> Result<()> {
+        if !self.derived_shaders.contains_key(&d.expression.text) {
+            let spirv = d.compile_fragment(self.planar, self.mesh.elements())?;
+            self.derived_shaders.insert(d.expression.text.clone(), spirv);
+        }
+        Ok(())
+    }
+}

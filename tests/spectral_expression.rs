@@ -1,0 +1,241 @@
+//! Derived fields (`--expr`): expressions over the solution evaluated per pixel by a fragment
+//! shader compiled at run time (shaderc), on lavapipe with validation on — every covered pixel
+//! against the f64 interpreter at the pixel centre's reference point within its propagated
+//! rounding bound, a closed-form gradient, surfaces, and what is refused. The command-line
+//! refusals run in every build; the GPU tests need the `runtime-shaderc` feature
+//! (`make test-shaderc`).
+
+mod common;
+
+use std::process::Command;
+
+fn galerkin(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_galerkin")).args(args).output().expect("ran galerkin")
+}
+
+/// A type error is reported with its column before any GPU work, in every build.
+#[test]
+fn cli_reports_expression_errors_with_their_column() {
+    let out = galerkin(&["spectral", "render", "--expr", "grad(u) + 1", "--out", "/nonexistent/x.png"]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("column 9") && err.contains("cannot add a vector and a scalar"), "{err}");
+    let out = galerkin(&["spectral", "render", "--expr", "u * wavs", "--out", "/nonexistent/x.png"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && err.contains("column 5") && err.contains("\"waves\""), "{err}");
+    // Hexahedra are refused by name.
+    let out = galerkin(&[
+        "spectral",
+        "render",
+        "--generate",
+        "shell",
+        "--expr",
+        "u",
+        "--out",
+        "/nonexistent/x.png",
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && err.contains("hexahedral"), "{err}");
+}
+
+#[cfg(feature = "runtime-shaderc")]
+mod device {
+    use std::sync::Arc;
+
+    use super::common;
+    use galerkin::expression::spectral::DerivedField;
+    use galerkin::render::{ColorFormat, Colormap, Pixels, RenderTarget};
+    use galerkin::spectral::generate::{annulus, artery, quad_grid};
+    use galerkin::spectral::reference::check_derived_pixels;
+    use galerkin::spectral::{Field, NodeSet, SpectralMesh, SpectralRenderer, SpectralView, View2d};
+
+    /// The linked compiler turns a fragment shader into SPIR-V (magic number first), resolves
+    /// the project's includes, and reports a syntax error as an error, not a panic.
+    #[test]
+    fn runtime_compiler_compiles_and_reports_errors() {
+        use galerkin::gpu::shaders::compile_glsl;
+        let ok = compile_glsl(
+            "#version 450\n#include \"colormap.glsl\"\nlayout(location=0) out vec4 c;\nvoid main(){ c = vec4(sqrt(2.0)); }\n",
+            "probe.frag",
+            shaderc::ShaderKind::Fragment,
+        )
+        .expect("a valid shader compiles");
+        assert_eq!(ok[0], 0x0723_0203);
+        let bad = compile_glsl(
+            "#version 450\nvoid main(){ float a = ; }\n",
+            "bad.frag",
+            shaderc::ShaderKind::Fragment,
+        );
+        assert!(bad.is_err_and(|e| e.contains("bad.frag")));
+        let missing = compile_glsl(
+            "#version 450\n#include \"nope.glsl\"\nvoid main(){}\n",
+            "m.frag",
+            shaderc::ShaderKind::Fragment,
+        );
+        assert!(missing.is_err_and(|e| e.contains("nope.glsl")));
+    }
+
+    fn render(
+        gpu: &galerkin::gpu::Gpu,
+        renderer: &mut SpectralRenderer,
+        view: &SpectralView,
+        size: (u32, u32),
+    ) -> Vec<f32> {
+        let target = RenderTarget::new(gpu, "derived data", size.0, size.1, ColorFormat::Rgba32F).unwrap();
+        match renderer.render(&target, view).unwrap() {
+            Pixels::Rgba32F(v) => v,
+            Pixels::Rgba8(_) => unreachable!(),
+        }
+    }
+
+    /// Every covered pixel of a derived field shows the expression, evaluated in f64 from the
+    /// element's exact polynomials at the pixel centre's reference point, within the bound
+    /// propagated from the f32 sums through the expression (DerivedField::rounding_bound);
+    /// every pixel inside an element is covered. Curved and straight meshes, gradients,
+    /// a second field, coordinates, the time, and every built-in function. One renderer per
+    /// mesh draws all expressions (pipelines kept per expression).
+    #[test]
+    fn derived_pixels_match_the_f64_reference() {
+        let gpu = common::gpu();
+        let size = (160, 120);
+        let expressions = [
+            "length(grad(u))",
+            "u * cells - 0.5 * grad(u).x",
+            "sqrt(abs(u)) + x * y - z",
+            "dot(grad(u), grad(cells)) / (1 + u * u)",
+            "exp(-t) * clamp(u, -0.5, 0.5) + pow(abs(u) + 1, 1.5)",
+            "sin(u) - cos(grad(u).y / 4) + log(abs(u) + 0.1) + min(u, 0) * max(u, 0)",
+            "-grad(u).y / (length(grad(u)) + 1)",
+        ];
+        let meshes = [
+            ("curved annulus, order 5", annulus(2, 4, 3, 5, NodeSet::GaussLobatto).unwrap()),
+            ("straight grid, order 7", quad_grid(4, 3, 0.25, 7, NodeSet::GaussLobatto).unwrap()),
+        ];
+        for (name, mesh) in meshes {
+            let mesh = Arc::new(mesh);
+            let mut renderer = SpectralRenderer::new(&gpu, mesh.clone(), &Colormap::viridis()).unwrap();
+            let v2 = View2d::fit(&mesh, size.0, size.1);
+            for (k, text) in expressions.iter().enumerate() {
+                let d = Arc::new(DerivedField::new(&mesh, text).unwrap());
+                // Step 2 for the time-dependent one (t ≠ 0); `cells` has one step.
+                let step = if d.expression.uses_time { 2 } else { 0 };
+                let view = SpectralView {
+                    step,
+                    overdraw: false,
+                    expression: Some(d.clone()),
+                    ..SpectralView::default()
+                };
+                let pixels = render(&gpu, &mut renderer, &view, size);
+                let report = check_derived_pixels(&mesh, &d, (0, step), &v2, size, &pixels);
+                eprintln!(
+                    "{name}, {text:?}: {} px, max error {:.2e}, {:.3} of the bound, {} not comparable",
+                    report.covered, report.max_error, report.max_error_ratio, report.uncomparable
+                );
+                assert!(report.covered > 2000, "{name} {text}: {report:?}");
+                assert!(report.uncomparable * 100 <= report.covered, "{name} {text}: {report:?}");
+                assert!(report.passed(), "{name}, expression {k} {text:?}: {report:?}");
+            }
+            // The plain field after derived ones: the coefficient buffer goes back to one field.
+            let view = SpectralView { overdraw: false, ..SpectralView::default() };
+            let pixels = render(&gpu, &mut renderer, &view, size);
+            let report = galerkin::spectral::reference::check_pixels(&mesh, 0, 0, &v2, size, &pixels);
+            assert!(report.passed(), "{name}, the field after derived fields: {report:?}");
+        }
+    }
+
+    /// A closed form: on parallelogram elements u = x² + 3xy is exactly an order-2 polynomial
+    /// of the reference coordinates, so length(grad(u)) must be |(2x + 3y, 3x)| at the point
+    /// each pixel shows (its reported reference point mapped in f64), within the bound.
+    #[test]
+    fn gradient_matches_its_closed_form() {
+        let gpu = common::gpu();
+        let size = (160, 120);
+        let mut mesh = quad_grid(4, 3, 0.0, 2, NodeSet::GaussLobatto).unwrap();
+        let nodes = mesh.basis.nodes.clone();
+        let m = nodes.len();
+        let mut values = Vec::new();
+        for e in 0..mesh.elements() {
+            for j in 0..m {
+                for i in 0..m {
+                    let (x, _) = mesh.map(e, nodes[i], nodes[j]);
+                    values.push(x[0] * x[0] + 3.0 * x[0] * x[1]);
+                }
+            }
+        }
+        mesh.fields = vec![Field { name: "u".into(), times: vec![0.0], steps: vec![values] }];
+        let mesh = Arc::new(mesh);
+        let d = Arc::new(DerivedField::new(&mesh, "length(grad(u))").unwrap());
+        let mut renderer = SpectralRenderer::new(&gpu, mesh.clone(), &Colormap::viridis()).unwrap();
+        let view = SpectralView { overdraw: false, expression: Some(d.clone()), ..SpectralView::default() };
+        let pixels = render(&gpu, &mut renderer, &view, size);
+        let (mut covered, mut worst, mut caught) = (0, 0.0f64, 0);
+        for t in pixels.chunks_exact(4).filter(|t| !t[3].is_nan()) {
+            let (e, r) = (t[3] as usize, [f64::from(t[1]), f64::from(t[2])]);
+            let (x, [dxi, deta]) = mesh.map(e, r[0], r[1]);
+            let exact = (2.0 * x[0] + 3.0 * x[1]).hypot(3.0 * x[0]);
+            let bound = d.rounding_bound(&mesh, 0, 0, e, r);
+            worst = worst.max((f64::from(t[0]) - exact).abs() / bound);
+            covered += 1;
+            // The bound is tight enough to catch a plausible mistake: the Jacobian applied
+            // transposed (J d instead of J⁻ᵀ d) on these skew-free cells.
+            let (_, d_ref) = mesh.value_gradient(0, 0, e, r[0], r[1]);
+            let wrong =
+                (dxi[0] * d_ref[0] + deta[0] * d_ref[1]).hypot(dxi[1] * d_ref[0] + deta[1] * d_ref[1]);
+            if (f64::from(t[0]) - wrong).abs() > bound {
+                caught += 1;
+            }
+        }
+        eprintln!("closed form: {covered} px, worst error {worst:.3} of the bound; a transposed Jacobian fails {caught}");
+        assert!(covered > 5000);
+        assert!(worst <= 1.0, "{worst}");
+        assert!(caught * 100 >= covered * 99, "{caught} of {covered}");
+    }
+
+    /// Surfaces: the tangential gradient on the artery, at the reference point each pixel
+    /// reports, against the f64 interpreter there within the bound.
+    #[test]
+    fn surfaces_show_the_tangential_gradient() {
+        let gpu = common::gpu();
+        let size = (200, 150);
+        let mesh = Arc::new(artery(8, 6, 3, 4, NodeSet::GaussLobatto).unwrap());
+        let d = Arc::new(DerivedField::new(&mesh, "length(grad(u)) + 0.1 * u").unwrap());
+        let mut renderer = SpectralRenderer::new(&gpu, mesh.clone(), &Colormap::viridis()).unwrap();
+        let view = SpectralView { expression: Some(d.clone()), ..SpectralView::default() };
+        let pixels = render(&gpu, &mut renderer, &view, size);
+        let (mut covered, mut worst) = (0, 0.0f64);
+        for t in pixels.chunks_exact(4).filter(|t| !t[3].is_nan() && t[3] >= 0.0) {
+            let (e, r) = (t[3] as usize, [f64::from(t[1]), f64::from(t[2])]);
+            let reference = d.value_at(&mesh, 0, 0, e, r);
+            worst = worst.max((f64::from(t[0]) - reference).abs() / d.rounding_bound(&mesh, 0, 0, e, r));
+            covered += 1;
+        }
+        eprintln!("artery: {covered} px, worst error {worst:.3} of the bound");
+        assert!(covered > 1500, "{covered}");
+        assert!(worst <= 1.0, "{worst}");
+    }
+
+    /// What a derived field cannot be drawn with is refused by name, before drawing.
+    #[test]
+    fn unsuitable_views_are_refused() {
+        let gpu = common::gpu();
+        let mesh: Arc<SpectralMesh> = Arc::new(annulus(2, 3, 3, 3, NodeSet::GaussLobatto).unwrap());
+        let d = Arc::new(DerivedField::new(&mesh, "u * cells").unwrap());
+        let mut renderer = SpectralRenderer::new(&gpu, mesh.clone(), &Colormap::viridis()).unwrap();
+        let target = RenderTarget::new(&gpu, "derived", 32, 32, ColorFormat::Rgba8).unwrap();
+        for (view, needle) in [
+            (
+                SpectralView { per_vertex: true, expression: Some(d.clone()), ..SpectralView::default() },
+                "per vertex",
+            ),
+            (
+                SpectralView { height: Some(0.0), expression: Some(d.clone()), ..SpectralView::default() },
+                "height",
+            ),
+            // `cells` has one time step.
+            (SpectralView { step: 1, expression: Some(d.clone()), ..SpectralView::default() }, "\"cells\""),
+        ] {
+            let err = renderer.render(&target, &view).err().map(|e| e.to_string()).unwrap_or_default();
+            assert!(err.contains(needle), "{needle}: {err}");
+        }
+    }
+}
