@@ -23,6 +23,10 @@ fn cli_reports_expression_errors_with_their_column() {
     let out = galerkin(&["spectral", "render", "--expr", "u * wavs", "--out", "/nonexistent/x.png"]);
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(!out.status.success() && err.contains("column 5") && err.contains("\"waves\""), "{err}");
+    // The spacetime renderer's names: grad takes a field, U is a variable.
+    let out = galerkin(&["spacetime", "render", "--expr", "length(grad(U))", "--out", "/nonexistent/x.png"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && err.contains("column 13") && err.contains("not a field"), "{err}");
     // Hexahedra are refused by name.
     let out = galerkin(&[
         "spectral",
@@ -118,7 +122,7 @@ mod device {
             for (k, text) in expressions.iter().enumerate() {
                 let d = Arc::new(DerivedField::new(&mesh, text).unwrap());
                 // Step 2 for the time-dependent one (t ≠ 0); `cells` has one step.
-                let step = if d.expression.uses_time { 2 } else { 0 };
+                let step = if d.expression.uses("t") { 2 } else { 0 };
                 let view = SpectralView {
                     step,
                     overdraw: false,
@@ -237,5 +241,71 @@ mod device {
             let err = renderer.render(&target, &view).err().map(|e| e.to_string()).unwrap_or_default();
             assert!(err.contains(needle), "{needle}: {err}");
         }
+    }
+
+    /// Spacetime slices: derived fields of |v| (with its exact gradient), U, v, the
+    /// displacement and the strain, per pixel, against the f64 interpreter from each
+    /// element's fields at the pixel's point, within 1e-4 of the slice's largest |value| (the
+    /// tolerance of the U check in tests/spacetime.rs: the polynomial in f32 on the device,
+    /// the point a pixel centre sees in f32). A colour render maps the range it found.
+    #[test]
+    fn spacetime_slices_show_derived_fields() {
+        use galerkin::expression::spacetime::SpacetimeExpression;
+        use galerkin::spacetime::generate::pulses;
+        use galerkin::spacetime::reference::check_derived_flat_pixels;
+        use galerkin::spacetime::{SpacetimeRenderer, SpacetimeView};
+        let gpu = common::gpu();
+        let m = pulses(6000);
+        let mut r =
+            galerkin::spacetime::SpacetimeRenderer::from_mesh(&gpu, &m, &Colormap::viridis()).unwrap();
+        let t = 0.43 * m.time_range().1;
+        let view = SpacetimeView { edges: false, ..SpacetimeView::from_above(r.data().summary(), t) };
+        let (w, h) = (160, 160);
+        let data = RenderTarget::new(&gpu, "data", w, h, ColorFormat::Rgba32F).unwrap();
+        for text in [
+            "speed",
+            "length(grad(speed))",
+            "eps_xx + eps_yy",
+            "dot(v, disp) + U * t",
+            "sqrt(U) - length(v) / (1 + x * x + y * y)",
+        ] {
+            let e = Arc::new(SpacetimeExpression::new(text).unwrap());
+            r.set_expression(Some(e.clone()), None).unwrap();
+            let Pixels::Rgba32F(pixels) = r.render(&data, &view).unwrap() else { panic!("float target") };
+            let check = check_derived_flat_pixels(
+                &m,
+                &e,
+                &view,
+                r.default_height_scale(),
+                (w, h),
+                &pixels,
+                (1, 1e-4),
+            );
+            eprintln!(
+                "spacetime {text:?}: {} px, worst error {:.2e} of the largest",
+                check.checked, check.worst_u
+            );
+            assert!(check.passed(), "{text}: {} failures; first: {:?}", check.failures, check.first_failure);
+            assert!(check.checked > (w * h) as usize / 2, "{} pixels checked", check.checked);
+        }
+        // A colour render with the automatic range, and per-vertex colour refused.
+        let colour = RenderTarget::new(&gpu, "colour", w, h, ColorFormat::Rgba8).unwrap();
+        assert!(matches!(r.render(&colour, &view), Ok(Pixels::Rgba8(_))));
+        let err = r.render(&colour, &SpacetimeView { per_vertex: true, ..view }).err().map(|e| e.to_string());
+        assert!(err.is_some_and(|e| e.contains("per vertex")));
+        // Back to U.
+        r.set_expression(None, None).unwrap();
+        let _ = SpacetimeRenderer::from_mesh;
+        let Pixels::Rgba32F(pixels) = r.render(&data, &view).unwrap() else { panic!("float target") };
+        let check = galerkin::spacetime::reference::check_flat_pixels(
+            &m,
+            &view,
+            r.default_height_scale(),
+            (w, h),
+            &pixels,
+            1,
+            1e-4,
+        );
+        assert!(check.passed(), "U after derived fields: {:?}", check.first_failure);
     }
 }

@@ -294,7 +294,7 @@ bool spectral_inverse_map(uint e, vec2 p, inout vec2 r) {
 }
 
 #ifdef SPECTRAL_EXPRESSION
-// A derived field (src/expression): `spectral_expression(values, gradients, x, t)`, written by
+// A derived field (src/expression): `spectral_expression(values, gradients, variables)`, written by
 // the expression's translation to GLSL before this file is included, evaluated from every
 // slot's value and physical gradient at r, the mapped point and the step's time. The time
 // is the x of the vec4 after the last element's coefficients (DerivedField::padded_values;
@@ -313,7 +313,9 @@ float spectral_derived_value(uint e, vec2 r) {
         values[k] = f.x;
         gradients[k] = spectral_physical_gradient(dxi, deta, f.yz);
     }
-    return spectral_expression(values, gradients, x, spectral_time());
+    // The variables of expression::SPECTRAL_VARIABLES: x, y, z, t.
+    vec3 variables[4] = vec3[4](vec3(x.x, 0.0, 0.0), vec3(x.y, 0.0, 0.0), vec3(x.z, 0.0, 0.0), vec3(spectral_time(), 0.0, 0.0));
+    return spectral_expression(values, gradients, variables);
 }
 #endif
 

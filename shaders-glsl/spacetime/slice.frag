@@ -1,41 +1,5 @@
 #version 450
-// Per-pixel strain energy density and exact height-field normal (seed 003 §4.2.3): the
-// element's cubic, restricted to the slice time by the cut pass, is evaluated at the
-// fragment's (x, y); U maps to the
-// ramp by s = log(U + 1) / log(U_max + 1), the normal comes from the exact derivatives of |v|,
-// and the colour is lit by Phong. The data output writes the raw values for EXR files and tests.
-#include "spacetime_cubic.glsl"
-#include "colormap.glsl"
-#include "phong.glsl"
-#include "spacetime_push.glsl"
-
-layout(location = 0) in vec3 world;
-layout(location = 1) in float vertex_s;
-layout(location = 2) flat in uint el_index;
-// The cut elements' cubics restricted to the slice's plane (written by slice.comp).
-layout(std430, set = 0, binding = 3) readonly buffer Cubics { SpacetimeSliceCubic cubics[]; };
-layout(set = 0, binding = 1) uniform sampler1D colormap;
-layout(location = 0) out vec4 out_colour;
-
-void main() {
-    if (pc.flags.x == 2u) {
-        // Unshaded (SpacetimeView::unshaded): the draw's cost floor, nothing evaluated.
-        out_colour = vec4(1.0);
-        return;
-    }
-    SpacetimeFields f = spacetime_evaluate_slice(cubics[el_index], world.xy);
-    // The height field's normal (at the height scale) is reported whether or not the surface
-    // is displaced; lighting uses it only when it is (else the slice is flat).
-    vec3 n = spacetime_normal(f, pc.light_scale.w);
-    if (pc.flags.x == 1u) {
-        out_colour = vec4(f.strain_energy_density, f.speed, n.x, n.y);
-        return;
-    }
-    if (pc.flags.y == 0u) n = vec3(0.0, 0.0, 1.0);
-    float s = pc.flags.z != 0u
-        ? vertex_s
-        : ramp_coordinate(f.strain_energy_density + 1.0, 1.0, pc.ramp.x + 1.0, true);
-    vec3 colour = texture(colormap, ramp_texcoord(s, pc.ramp.y)).rgb;
-    vec3 v = normalize(pc.eye_t.xyz - world);
-    out_colour = vec4(phong(colour, n, pc.light_scale.xyz, v), 1.0);
-}
+// Per-pixel strain energy density and exact height-field normal (seed 003 §4.2.3); the body,
+// with its description, is spacetime_slice_frag.glsl (also compiled at run time with a
+// derived field spliced in).
+#include "spacetime_slice_frag.glsl"

@@ -105,6 +105,17 @@ pub struct RenderArgs {
     /// Colour at the vertices, interpolated (the seed's per-vertex baseline, Fig. 5a).
     #[arg(long)]
     pub per_vertex: bool,
+    /// Colour by a derived field instead of U, evaluated per pixel from each element's exact
+    /// polynomials, on a linear ramp over --range (default: the slice's own). Names: speed
+    /// (|v|; grad(speed) is its exact gradient), U, v and disp (velocity and displacement
+    /// vectors: .x .y, length, dot), eps_xx eps_yy eps_xy (strain), x y (the point), t; + - *
+    /// /, abs sqrt log exp sin cos pow min max clamp. E.g. 'eps_xx + eps_yy' (volumetric
+    /// strain), 'length(grad(speed))'. Needs the `runtime-shaderc` build feature.
+    #[arg(long, value_name = "EXPR")]
+    pub expr: Option<String>,
+    /// With --expr: the colour range LO,HI of the derived field.
+    #[arg(long, value_name = "LO,HI", value_parser = crate::cli::args::parse_range, requires = "expr")]
+    pub range: Option<(f64, f64)>,
     /// Colour map: viridis, cool-warm, grey, or a ramp PNG file.
     #[arg(long, default_value = "viridis")]
     pub colormap: String,
@@ -195,6 +206,18 @@ pub fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
         ..SpacetimeView::looking_at(data.summary(), time)
     };
     picture::check_view(&data, &view).context("--time, --umax, --subdivide, --height-scale")?;
+    let derived = match &args.expr {
+        Some(text) => {
+            if args.viewer.view {
+                anyhow::bail!("--expr is drawn by `spacetime render`; the viewer shows U");
+            }
+            Some((
+                std::sync::Arc::new(galerkin::expression::spacetime::SpacetimeExpression::new(text)?),
+                args.range,
+            ))
+        }
+        None => None,
+    };
     if args.viewer.view {
         return open_viewer(desc, data, view, args);
     }
@@ -207,9 +230,13 @@ pub fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
         .file
         .as_ref()
         .map_or_else(|| format!("generated {}", args.generate), |f| f.display().to_string());
-    let title = format!("{source}: t = {time:.4}");
+    let title = match &args.expr {
+        Some(text) => format!("{source}: {text}, t = {time:.4}"),
+        None => format!("{source}: t = {time:.4}"),
+    };
     let title = (!args.no_legend).then_some(title.as_str());
-    let r = picture::write_slice(&gpu, data, &view, &colormap, args.image.size_or((1280, 720)), out, title)?;
+    let size = args.image.size_or((1280, 720));
+    let r = picture::write_slice(&gpu, data, &view, &colormap, (size, out), title, derived)?;
     println!(
         "spacetime: {elements} elements, t = {time:.4}: {} active ({} streamed to the device), {} triangles, {} edge lines; load {open_ms:.1} ms, slice {:.1} ms, render + readback {:.1} ms, peak RSS {} → {}",
         r.stats.active,

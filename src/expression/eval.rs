@@ -3,18 +3,16 @@
 
 use super::{BinaryOp, Expression, Function, Node};
 
-/// What an expression reads at one point: every slot's value and physical gradient, the
-/// physical point and the time.
+/// What an expression reads at one point: every slot's value and physical gradient, and the
+/// scope's variables.
 #[derive(Debug, Clone, Copy)]
 pub struct Inputs<'a> {
     /// Slot k's value (slot 0: the shown field).
     pub values: &'a [f64],
     /// Slot k's physical gradient.
     pub gradients: &'a [[f64; 3]],
-    /// The physical point (x, y, z).
-    pub point: [f64; 3],
-    /// The step's time.
-    pub time: f64,
+    /// Variable k's value ([`super::Scope::variables`]; a scalar in its first component).
+    pub variables: &'a [[f64; 3]],
 }
 
 /// The physical (surface) gradient of a field with reference derivatives `d` = (f_ξ, f_η) on a
@@ -56,8 +54,14 @@ fn eval(node: &Node, inputs: &Inputs<'_>) -> Value {
     use Value::{Scalar, Vector};
     match node {
         Node::Number(v) => Scalar(*v),
-        Node::Coordinate(c) => Scalar(inputs.point[*c]),
-        Node::Time => Scalar(inputs.time),
+        Node::Variable(k, ty) => {
+            let v = inputs.variables.get(*k).copied().unwrap_or([f64::NAN; 3]);
+            if *ty == super::Type::Scalar {
+                Scalar(v[0])
+            } else {
+                Vector(v)
+            }
+        }
         Node::Value(k) => Scalar(inputs.values.get(*k).copied().unwrap_or(f64::NAN)),
         Node::Gradient(k) => Vector(inputs.gradients.get(*k).copied().unwrap_or([f64::NAN; 3])),
         Node::Negate(a) => match eval(a, inputs) {
@@ -123,8 +127,8 @@ pub struct InputErrors<'a> {
     pub values: &'a [f64],
     /// Bound on the Euclidean norm of device − exact of slot k's gradient.
     pub gradients: &'a [f64],
-    /// Bound on each coordinate of the mapped point.
-    pub point: f64,
+    /// Bound on variable k's error (vectors: the norm).
+    pub variables: &'a [f64],
 }
 
 const EPS: f64 = f32::EPSILON as f64;
@@ -145,8 +149,15 @@ fn bound(node: &Node, inputs: &Inputs<'_>, errors: &InputErrors<'_>) -> Bounded 
     let inf = f64::INFINITY;
     match node {
         Node::Number(v) => Scalar(*v, EPS * v.abs()),
-        Node::Coordinate(c) => Scalar(inputs.point[*c], errors.point),
-        Node::Time => Scalar(inputs.time, EPS * inputs.time.abs()),
+        Node::Variable(k, ty) => {
+            let v = inputs.variables.get(*k).copied().unwrap_or([f64::NAN; 3]);
+            let e = errors.variables.get(*k).copied().unwrap_or(inf);
+            if *ty == super::Type::Scalar {
+                Scalar(v[0], e)
+            } else {
+                Vector(v, e)
+            }
+        }
         Node::Value(k) => Scalar(inputs.values[*k], errors.values[*k]),
         Node::Gradient(k) => Vector(inputs.gradients[*k], errors.gradients[*k]),
         Node::Negate(a) => match bound(a, inputs, errors) {

@@ -11,11 +11,12 @@ fn literal(v: f64) -> String {
 fn emit(node: &Node, out: &mut String) {
     match node {
         Node::Number(v) => out.push_str(&literal(*v)),
-        Node::Coordinate(c) => {
-            out.push_str("x.");
-            out.push(['x', 'y', 'z'][*c]);
+        Node::Variable(k, ty) => {
+            out.push_str(&format!("variables[{k}]"));
+            if *ty == super::Type::Scalar {
+                out.push_str(".x");
+            }
         }
-        Node::Time => out.push('t'),
         Node::Value(k) => out.push_str(&format!("values[{k}]")),
         Node::Gradient(k) => out.push_str(&format!("gradients[{k}]")),
         Node::Negate(a) => {
@@ -56,11 +57,11 @@ fn emit(node: &Node, out: &mut String) {
 }
 
 impl Expression {
-    /// The GLSL function `float spectral_expression(float values[SPECTRAL_FIELDS],
-    /// vec3 gradients[SPECTRAL_FIELDS], vec3 x, float t)` computing this expression (every
-    /// operation parenthesised; literals rounded to f32). The source text appears only in a
-    /// comment with anything but plain printable ASCII replaced.
-    pub fn glsl(&self) -> String {
+    /// The GLSL function `float NAME(float values[F], vec3 gradients[F], vec3 variables[V])`
+    /// computing this expression (F slots, V variables — scalars in x; every operation
+    /// parenthesised; literals rounded to f32). The source text appears only in a comment
+    /// with anything but plain printable ASCII replaced.
+    pub fn glsl(&self, name: &str) -> String {
         let mut body = String::new();
         emit(&self.root, &mut body);
         let comment: String = self
@@ -68,8 +69,9 @@ impl Expression {
             .chars()
             .map(|c| if c.is_ascii_graphic() && c != '*' && c != '/' || c == ' ' { c } else { '?' })
             .collect();
+        let (f, v) = (self.slots.len(), self.variables.len().max(1));
         format!(
-            "// --expr {comment}\nfloat spectral_expression(float values[SPECTRAL_FIELDS], vec3 gradients[SPECTRAL_FIELDS], vec3 x, float t) {{\n    return {body};\n}}\n"
+            "// --expr {comment}\nfloat {name}(float values[{f}], vec3 gradients[{f}], vec3 variables[{v}]) {{\n    return {body};\n}}\n"
         )
     }
 }

@@ -10,8 +10,9 @@
 //!
 //! # The language
 //! - numbers (`2`, `0.5`, `1e-3`), `+ - * /`, unary `-`, parentheses;
-//! - `u`: the shown field; any other field of the file by its name (`pressure`), or by
-//!   `field("name with spaces")`; `x`, `y`, `z`: the physical point; `t`: the step's time;
+//! - spectral elements: `u`, the shown field; any other field of the file by its name
+//!   (`pressure`), or by `field("name with spaces")`; `x`, `y`, `z`: the physical point; `t`:
+//!   the step's time (other renderers name their own fields and variables: [`Scope`]);
 //! - `grad(f)`: the physical gradient of a field (a 3-vector: on planar meshes z is 0, on
 //!   surfaces it is tangential), from the element's polynomial and its geometry map, exact;
 //!   `v.x`, `v.y`, `v.z`: a vector's components;
@@ -26,6 +27,7 @@
 mod eval;
 mod glsl;
 mod parse;
+pub mod spacetime;
 pub mod spectral;
 
 pub use eval::{physical_gradient, InputErrors, Inputs};
@@ -162,10 +164,8 @@ pub enum BinaryOp {
 pub enum Node {
     /// A literal.
     Number(f64),
-    /// `x`, `y` or `z` (0, 1, 2).
-    Coordinate(usize),
-    /// `t`.
-    Time,
+    /// A variable of the scope (its index in [`Scope::variables`], and its type).
+    Variable(usize, Type),
     /// A field's value (its slot).
     Value(usize),
     /// A field's physical gradient (its slot).
@@ -189,16 +189,52 @@ pub struct Expression {
     pub root: Node,
     /// The fields read, slot 0 first (always [`Slot::Shown`], read or not).
     pub slots: Vec<Slot>,
-    /// Whether `t` appears.
-    pub uses_time: bool,
+    /// The scope's variable names, in order (what [`Node::Variable`] indexes).
+    pub variables: Vec<String>,
 }
 
+/// What names an expression may use: the shown field (`u` for spectral elements), the
+/// file's other fields (gradable scalars, by name) and built-in variables.
+#[derive(Debug, Clone, Copy)]
+pub struct Scope<'a> {
+    /// The shown field's name in the language (slot 0).
+    pub shown: &'a str,
+    /// The file's fields, in file order ([`Slot::Named`] indexes them).
+    pub fields: &'a [String],
+    /// Built-in variables and their types.
+    pub variables: &'a [(&'a str, Type)],
+}
+
+/// The spectral renderer's variables: the physical point and the step's time.
+pub const SPECTRAL_VARIABLES: [(&str, Type); 4] =
+    [("x", Type::Scalar), ("y", Type::Scalar), ("z", Type::Scalar), ("t", Type::Scalar)];
+
 impl Expression {
-    /// Parses `text` against the file's field names (`fields`, in file order): a syntax error,
-    /// an unknown name or a type error is reported with its column, and a vector-valued
-    /// expression is refused (it cannot be colour-mapped).
+    /// Parses `text` for spectral elements: `u`, the file's fields (`fields`, in file order),
+    /// x, y, z and t ([`Self::parse_in`]).
     pub fn parse(text: &str, fields: &[String]) -> Result<Self, ExpressionError> {
-        parse::parse(text, fields)
+        parse::parse(text, &Scope { shown: "u", fields, variables: &SPECTRAL_VARIABLES })
+    }
+
+    /// Parses `text` in `scope`: a syntax error, an unknown name or a type error is reported
+    /// with its column, and a vector-valued expression is refused (it cannot be
+    /// colour-mapped).
+    pub fn parse_in(text: &str, scope: &Scope<'_>) -> Result<Self, ExpressionError> {
+        parse::parse(text, scope)
+    }
+
+    /// Whether the variable `name` appears.
+    pub fn uses(&self, name: &str) -> bool {
+        fn find(n: &Node, k: usize) -> bool {
+            match n {
+                Node::Variable(v, _) => *v == k,
+                Node::Negate(a) | Node::Component(a, _) => find(a, k),
+                Node::Binary(_, a, b) => find(a, k) || find(b, k),
+                Node::Call(_, args) => args.iter().any(|a| find(a, k)),
+                _ => false,
+            }
+        }
+        self.variables.iter().position(|v| v == name).is_some_and(|k| find(&self.root, k))
     }
 
     /// Whether the shown field `u` is read (by value or gradient).

@@ -10,7 +10,9 @@
 //!         | "field" "(" string ")" | "grad" "(" field ")"
 //! ```
 
-use super::{BinaryOp, Expression, ExpressionError, Function, Node, Slot, Type, MAX_DEPTH, MAX_LENGTH};
+use super::{
+    BinaryOp, Expression, ExpressionError, Function, Node, Scope, Slot, Type, MAX_DEPTH, MAX_LENGTH,
+};
 
 #[derive(Debug, Clone, PartialEq)]
 enum Token {
@@ -98,16 +100,15 @@ struct Parser<'a> {
     text: &'a str,
     tokens: Vec<Located>,
     at: usize,
-    fields: &'a [String],
+    scope: &'a Scope<'a>,
     slots: Vec<Slot>,
-    uses_time: bool,
     depth: usize,
 }
 
 /// A parsed sub-expression: its tree, type and starting column.
 type Typed = (Node, Type, usize);
 
-pub(super) fn parse(text: &str, fields: &[String]) -> Result<Expression, ExpressionError> {
+pub(super) fn parse(text: &str, scope: &Scope<'_>) -> Result<Expression, ExpressionError> {
     if text.chars().count() > MAX_LENGTH {
         return Err(ExpressionError::new(
             text,
@@ -116,7 +117,7 @@ pub(super) fn parse(text: &str, fields: &[String]) -> Result<Expression, Express
         ));
     }
     let tokens = lex(text)?;
-    let mut p = Parser { text, tokens, at: 0, fields, slots: vec![Slot::Shown], uses_time: false, depth: 0 };
+    let mut p = Parser { text, tokens, at: 0, scope, slots: vec![Slot::Shown], depth: 0 };
     if matches!(p.peek(), Token::End) {
         return Err(p.error(1, "the expression is empty"));
     }
@@ -130,7 +131,8 @@ pub(super) fn parse(text: &str, fields: &[String]) -> Result<Expression, Express
             "the expression is a vector; colour needs a scalar: take length(…), dot(…, …) or a component (.x)",
         ));
     }
-    Ok(Expression { text: text.to_string(), root, slots: p.slots, uses_time: p.uses_time })
+    let variables = scope.variables.iter().map(|v| v.0.to_string()).collect();
+    Ok(Expression { text: text.to_string(), root, slots: p.slots, variables })
 }
 
 impl Parser<'_> {
@@ -266,19 +268,26 @@ impl Parser<'_> {
         Ok((node, ty, start))
     }
 
-    /// The slot of the file's field `name` (added on first use), or the shown field for `u`.
+    /// The slot of the file's field `name` (added on first use), or the shown field's.
     fn field_slot(&mut self, name: &str, column: usize, quoted: bool) -> Result<usize, ExpressionError> {
-        if name == "u" && !quoted {
+        if name == self.scope.shown && !quoted {
             return Ok(0);
         }
-        let Some(index) = self.fields.iter().position(|f| f == name) else {
+        let Some(index) = self.scope.fields.iter().position(|f| f == name) else {
+            let mut names = vec![self.scope.shown];
+            names.extend(self.scope.variables.iter().map(|v| v.0));
+            let fields = if self.scope.fields.is_empty() {
+                String::new()
+            } else {
+                format!(", and the file's fields {:?}", self.scope.fields)
+            };
             return Err(self.error(
                 column,
                 format!(
-                    "unknown name {name:?}: the names are u, x, y, z, t, the functions ({}), grad and field, \
-                     and the file's fields {:?}",
+                    "unknown name {name:?}: the names are {}, the functions ({}), grad{}{fields}",
+                    names.join(", "),
                     Function::ALL.map(|f| f.1).join(", "),
-                    self.fields
+                    if self.scope.fields.is_empty() { "" } else { " and field" },
                 ),
             ));
         };
@@ -305,9 +314,12 @@ impl Parser<'_> {
                 let _ = c;
                 Ok(slot)
             }
-            (Token::Name(n), c) if matches!(n.as_str(), "x" | "y" | "z" | "t") => Err(self.error(
+            (Token::Name(n), c) if self.scope.variables.iter().any(|v| v.0 == n) => Err(self.error(
                 c,
-                format!("{n} is a coordinate, not a field: grad takes a field (u or a field's name)"),
+                format!(
+                    "{n} is a variable, not a field: grad takes a field ({} or a field's name)",
+                    self.scope.shown
+                ),
             )),
             (Token::Name(n), c) => self.field_slot(&n, c, false),
             (_, c) => Err(self.error(c, "expected a field (u, a field's name or field(\"name\"))")),
@@ -326,12 +338,10 @@ impl Parser<'_> {
                 Ok((node, ty, column))
             }
             Token::Name(name) => match name.as_str() {
-                "x" | "y" | "z" => {
-                    Ok((Node::Coordinate(usize::from(name.as_bytes()[0] - b'x')), Type::Scalar, column))
-                }
-                "t" => {
-                    self.uses_time = true;
-                    Ok((Node::Time, Type::Scalar, column))
+                _ if name != self.scope.shown && self.scope.variables.iter().any(|v| v.0 == name) => {
+                    let k = self.scope.variables.iter().position(|v| v.0 == name).unwrap_or(0);
+                    let ty = self.scope.variables[k].1;
+                    Ok((Node::Variable(k, ty), ty, column))
                 }
                 "grad" => {
                     self.expect('(', "after grad")?;

@@ -61,6 +61,12 @@ impl DerivedField {
         mesh.fields.get(shown).and_then(|f| f.times.get(step)).copied().unwrap_or(0.0)
     }
 
+    /// The variables x, y, z, t ([`crate::expression::SPECTRAL_VARIABLES`]) as the
+    /// interpreter reads them.
+    fn variables(point: [f64; 3], time: f64) -> [[f64; 3]; 4] {
+        [[point[0], 0.0, 0.0], [point[1], 0.0, 0.0], [point[2], 0.0, 0.0], [time, 0.0, 0.0]]
+    }
+
     /// The derived value in quadrilateral `e` at reference point `r`, in f64: every slot's
     /// value and physical gradient ([`SpectralMesh::value_gradient`], [`physical_gradient`]
     /// with the geometry map's tangents), the mapped point and the step's time. Twin of
@@ -75,8 +81,8 @@ impl DerivedField {
             values.push(v);
             gradients.push(physical_gradient(tangents, d));
         }
-        let time = Self::time(mesh, shown, step);
-        self.expression.eval(&Inputs { values: &values, gradients: &gradients, point, time })
+        let variables = Self::variables(point, Self::time(mesh, shown, step));
+        self.expression.eval(&Inputs { values: &values, gradients: &gradients, variables: &variables })
     }
 
     /// A bound on |device − exact| of the derived value at reference point `r` of element
@@ -170,9 +176,14 @@ impl DerivedField {
             );
         }
         let time = Self::time(mesh, shown, step);
-        let inputs = Inputs { values: &values, gradients: &gradients, point, time };
-        let errors =
-            InputErrors { values: &value_errors, gradients: &gradient_errors, point: 4.0 * position };
+        let variables = Self::variables(point, time);
+        let inputs = Inputs { values: &values, gradients: &gradients, variables: &variables };
+        let p = 4.0 * position;
+        let errors = InputErrors {
+            values: &value_errors,
+            gradients: &gradient_errors,
+            variables: &[p, p, p, eps * time.abs()],
+        };
         self.expression.rounding_bound(&inputs, &errors)
     }
 
@@ -224,7 +235,7 @@ impl DerivedField {
             "#version 450\n#define SPECTRAL_FIELDS {}u\n#define SPECTRAL_ELEMENTS {elements}u\n#define SPECTRAL_EXPRESSION\n{}{}#include \"spectral_element_frag.glsl\"\n",
             self.expression.slots.len(),
             if planar { "#define SPECTRAL_EDGE_OWNERSHIP\n" } else { "" },
-            self.expression.glsl()
+            self.expression.glsl("spectral_expression")
         )
     }
 

@@ -57,15 +57,16 @@ fn slots_follow_first_appearance() {
     let e = Expression::parse("field(\"u\") + field(\"x\") + x", &fields()).unwrap();
     assert_eq!(e.slots.len(), 3);
     assert!(!e.reads_shown());
-    assert!(!e.uses_time);
-    assert!(Expression::parse("t * u", &fields()).unwrap().uses_time);
+    assert!(!e.uses("t"));
+    assert!(Expression::parse("t * u", &fields()).unwrap().uses("t"));
 }
 
 #[test]
 fn interpreter_follows_precedence_and_functions() {
     let values = [3.0, -2.0];
     let gradients = [[3.0, 4.0, 0.0], [1.0, 0.0, 0.0]];
-    let inputs = Inputs { values: &values, gradients: &gradients, point: [0.5, 2.0, -1.0], time: 0.25 };
+    let variables = [[0.5, 0.0, 0.0], [2.0, 0.0, 0.0], [-1.0, 0.0, 0.0], [0.25, 0.0, 0.0]];
+    let inputs = Inputs { values: &values, gradients: &gradients, variables: &variables };
     let eval = |text: &str| Expression::parse(text, &fields()).unwrap().eval(&inputs);
     assert_eq!(eval("1 + 2 * 3 - 4 / 2"), 5.0);
     assert_eq!(eval("-u * -2"), 6.0);
@@ -86,18 +87,19 @@ fn interpreter_follows_precedence_and_functions() {
 #[test]
 fn glsl_translation_is_parenthesised_and_typed() {
     let e = Expression::parse("length(grad(u)) - 2 * pressure / x + t", &fields()).unwrap();
-    let g = e.glsl();
+    let g = e.glsl("f");
     assert!(
-        g.contains("return (((length(gradients[0])) - ((2e0 * values[1]) / x.x)) + t);")
-            || g.contains("return ((length(gradients[0]) - ((2e0 * values[1]) / x.x)) + t);"),
+        g.contains(
+            "return ((length(gradients[0]) - ((2e0 * values[1]) / variables[0].x)) + variables[3].x);"
+        ),
         "{g}"
     );
-    assert!(g.contains("float spectral_expression(float values[SPECTRAL_FIELDS], vec3 gradients[SPECTRAL_FIELDS], vec3 x, float t)"));
+    assert!(g.contains("float f(float values[2], vec3 gradients[2], vec3 variables[4])"), "{g}");
     // The user's text reaches the source only as a comment without '*' or '/'.
     let e = Expression::parse("u */ 1", &fields());
     assert!(e.is_err());
     let e = Expression::parse("u * 1 / 2", &fields()).unwrap();
-    assert!(e.glsl().starts_with("// --expr u ? 1 ? 2\n"), "{}", e.glsl());
+    assert!(e.glsl("f").starts_with("// --expr u ? 1 ? 2\n"), "{}", e.glsl("f"));
 }
 
 #[test]

@@ -4,10 +4,12 @@
 //! (x, t) spacetime of the 1D bar (EXR channels U, speed, u, s).
 
 use std::path::Path;
+use std::sync::Arc;
 use std::time::Instant;
 
 use super::bar::{bar1d, BarRenderer};
 use super::{SliceStats, SpacetimeData, SpacetimeError, SpacetimeRenderer, SpacetimeView};
+use crate::expression::spacetime::SpacetimeExpression;
 use crate::gpu::Gpu;
 use crate::picture::{self, ImageFormat, Legend};
 use crate::plot::ColourBar;
@@ -60,22 +62,30 @@ pub fn check_view(data: &SpacetimeData, view: &SpacetimeView) -> Result<(), Spac
     Ok(())
 }
 
+/// A derived field to show instead of U (`--expr`) and its colour range (`None`: the
+/// slice's own).
+pub type Derived = (Arc<SpacetimeExpression>, Option<(f64, f64)>);
+
 /// Slices `data` at `view.time`, renders it at `size` and writes `out` (format by extension):
-/// a PNG with `title` and the colour bar of U beside it (the bare picture when `title` is
-/// `None`), or an EXR of the raw channels.
+/// a PNG with `title` and the colour bar of U (or of the derived field) beside it (the bare
+/// picture when `title` is `None`), or an EXR of the raw channels (the derived value in the
+/// first, named `value`).
 pub fn write_slice(
     gpu: &Gpu,
     data: SpacetimeData,
     view: &SpacetimeView,
     colormap: &Colormap,
-    size: (u32, u32),
-    out: &Path,
+    (size, out): ((u32, u32), &Path),
     title: Option<&str>,
+    derived: Option<Derived>,
 ) -> Result<SliceReport, SpacetimeError> {
     check_view(&data, view)?;
     let exr = picture::format_of(out)? == ImageFormat::Exr;
     let dev = SpacetimeError::device;
     let mut renderer = SpacetimeRenderer::new(gpu, data, colormap)?;
+    if let Some((e, range)) = &derived {
+        renderer.set_expression(Some(e.clone()), *range)?;
+    }
     let start = Instant::now();
     let stats = renderer.slice(view.time, view.subdivide)?;
     let slice_ms = start.elapsed().as_secs_f64() * 1e3;
@@ -86,11 +96,28 @@ pub fn write_slice(
     // The legend needs the ramp's U_max: resolved once here, and the render uses the same.
     let legend = !exr && title.is_some();
     let mut view = *view;
-    if legend && view.u_max.is_none() {
+    let mut derived_range = None;
+    if let Some((e, range)) = &derived {
+        if legend {
+            let range = match range {
+                Some(r) => *r,
+                None => renderer.derived_range_for(&target, &view)?,
+            };
+            renderer.set_expression(Some(e.clone()), Some(range))?;
+            derived_range = Some((e.expression.text.clone(), range));
+        }
+    } else if legend && view.u_max.is_none() {
         view.u_max = Some(renderer.u_max_for(&target, &view)?);
     }
     let pixels = renderer.render(&target, &view)?;
     let render_ms = start.elapsed().as_secs_f64() * 1e3;
+    if let (Pixels::Rgba8(rgba), Some(title), Some((label, range))) = (&pixels, title, &derived_range) {
+        let bar = ColourBar { colormap, range: *range, log: false, label, shift: 0.0 };
+        let legend = Legend { title: title.to_string(), bar };
+        picture::write_png(out, size, rgba, Some(&legend))?;
+        return Ok(SliceReport { stats, slice_ms, render_ms, u_max: None });
+    }
+    let first = if derived.is_some() { "value" } else { "U" };
     match (pixels, title, view.u_max) {
         (Pixels::Rgba8(rgba), Some(title), Some(u_max)) if u_max > 0.0 => {
             let legend = Legend { title: title.to_string(), bar: colour_bar(colormap, u_max) };
@@ -109,7 +136,7 @@ pub fn write_slice(
             let channels = picture::mapped_channels(
                 &raw,
                 &[
-                    ("U", |p| p[0]),
+                    (first, |p| p[0]),
                     ("speed", |p| p[1]),
                     ("normal.x", |p| p[2]),
                     ("normal.y", |p| p[3]),

@@ -58,10 +58,44 @@ pub fn check_flat_pixels(
     mesh: &SpacetimeMesh,
     view: &SpacetimeView,
     height_scale: f64,
-    (width, height): (u32, u32),
+    size: (u32, u32),
     data: &[f32],
     step: u32,
     tolerance: f64,
+) -> PixelCheck {
+    check_flat_pixels_of(mesh, view, height_scale, size, data, (step, tolerance), |f, _, _| {
+        f.strain_energy_density
+    })
+}
+
+/// [`check_flat_pixels`] for a derived field (`--expr`): the first channel must show the
+/// expression evaluated in f64 from the element's fields at the pixel's point
+/// ([`SpacetimeExpression::value_at`]), within `tolerance` of the slice's largest |value|.
+pub fn check_derived_flat_pixels(
+    mesh: &SpacetimeMesh,
+    expression: &crate::expression::spacetime::SpacetimeExpression,
+    view: &SpacetimeView,
+    height_scale: f64,
+    size: (u32, u32),
+    data: &[f32],
+    (step, tolerance): (u32, f64),
+) -> PixelCheck {
+    let t = view.time;
+    check_flat_pixels_of(mesh, view, height_scale, size, data, (step, tolerance), |f, x, y| {
+        expression.value_at(f, x, y, t)
+    })
+}
+
+/// The per-pixel comparison of [`check_flat_pixels`] with the first channel's reference
+/// `shown(fields, x, y)` (U, or a derived field).
+fn check_flat_pixels_of(
+    mesh: &SpacetimeMesh,
+    view: &SpacetimeView,
+    height_scale: f64,
+    (width, height): (u32, u32),
+    data: &[f32],
+    (step, tolerance): (u32, f64),
+    shown: impl Fn(&PointFields, f64, f64) -> f64,
 ) -> PixelCheck {
     assert!(!view.height, "the flat reference needs the height field off");
     let t = view.time;
@@ -74,7 +108,7 @@ pub fn check_flat_pixels(
     for p in &polys {
         for q in &p.corners {
             let v = field(p.element, q[0], q[1]);
-            max_u = max_u.max(v.strain_energy_density);
+            max_u = max_u.max(shown(&v, q[0], q[1]).abs());
             max_v = max_v.max(v.speed);
         }
     }
@@ -115,7 +149,7 @@ pub fn check_flat_pixels(
                         0.0
                     };
                     (
-                        (f64::from(got[0]) - v.strain_energy_density).abs() / max_u.max(f64::MIN_POSITIVE),
+                        (f64::from(got[0]) - shown(&v, q.x, q.y)).abs() / max_u.max(f64::MIN_POSITIVE),
                         (f64::from(got[1]) - v.speed).abs() / max_v.max(f64::MIN_POSITIVE),
                         normal,
                     )

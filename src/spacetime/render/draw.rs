@@ -16,10 +16,14 @@ impl SpacetimeRenderer {
         if !self.pipelines.contains_key(&format) {
             target.require_depth("a spacetime slice").map_err(dev("building the slice pipelines"))?;
             let make = |lines: bool| -> Result<GraphicsPipeline, SpacetimeError> {
+                let fragment = match &self.derived {
+                    Some((_, spirv)) => &spirv[..],
+                    None => crate::spacetime::shaders::SLICE_FRAG,
+                };
                 let mut desc = GraphicsPipelineDesc::new(
                     if lines { "spacetime slice edges" } else { "spacetime slice" },
                     crate::spacetime::shaders::SLICE_VERT,
-                    crate::spacetime::shaders::SLICE_FRAG,
+                    fragment,
                     target.render_pass(),
                 );
                 desc.bindings = &[
@@ -70,6 +74,9 @@ impl SpacetimeRenderer {
         target: &DrawTarget<'_>,
         view: &SpacetimeView,
     ) -> Result<f64, SpacetimeError> {
+        if self.derived.is_some() {
+            return self.resolve_derived_range(target, view);
+        }
         match view.u_max {
             Some(u) => Ok(u),
             None if target.format() == ColorFormat::Rgba32F => Ok(1.0),
@@ -176,7 +183,7 @@ impl SpacetimeRenderer {
             view_proj: view.camera.view_proj_f32(target.aspect()).to_cols_array(),
             eye_t: [eye[0], eye[1], eye[2], view.time as f32],
             light_scale: [LIGHT[0] as f32, LIGHT[1] as f32, LIGHT[2] as f32, height_scale as f32],
-            ramp: [u_max as f32, self.colormap.texels() as f32, 0.0, 0.0],
+            ramp: [u_max as f32, self.colormap.texels() as f32, 0.0, self.derived_lo as f32],
             flags: [
                 match (target.format(), view.unshaded) {
                     (ColorFormat::Rgba32F, _) => 1,
@@ -197,6 +204,7 @@ impl SpacetimeRenderer {
         view: &SpacetimeView,
         push: &DrawPush,
     ) -> Result<impl FnOnce(&mut Recorder<'_>) + '_, SpacetimeError> {
+        self.check_derived_view(view)?;
         self.pipelines_for(target)?;
         Ok(self.draw_commands(target, view, push))
     }

@@ -32,6 +32,7 @@ use crate::render::{
     Camera, ColorFormat, Colormap, ColormapTexture, DrawTarget, Pixels, RenderTarget, BACKGROUND,
 };
 
+mod derived;
 mod draw;
 mod slicing;
 
@@ -250,6 +251,12 @@ pub struct SpacetimeRenderer {
     umax_pixels: Option<Buffer<[f32; 4]>>,
     umax_result: Buffer<u32>,
     umax_set: Option<DescriptorSet>,
+    /// A derived field shown instead of U (`--expr`), its fixed colour range if given, and its
+    /// compiled slice shader.
+    derived: Option<(crate::spacetime::picture::Derived, Vec<u32>)>,
+    /// The low end of the derived field's colour range used by the next draw (the high end
+    /// travels as U_max does).
+    derived_lo: f64,
 }
 
 /// A slice output buffer: vertices written by the slicer, read by the draws.
@@ -335,6 +342,8 @@ impl SpacetimeRenderer {
             )
             .map_err(dev("the U_max pass"))?,
             umax_set: None,
+            derived: None,
+            derived_lo: 0.0,
         })
     }
 
