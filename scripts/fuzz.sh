@@ -64,8 +64,10 @@ cp scenes/demo.toml fuzz/seeds/*.toml "$C/scene_toml/"
 cp "$seeds/model.safetensors" "$C/reduced_model/fluid"
 "$G" radiosity train fuzz/seeds/rooms_tiny.toml --samples 12 --cap 2 --out "$seeds/rooms" >/dev/null
 { cat "$seeds/rooms/model.safetensors"; printf '%s' "$SEP"; cat "$seeds/rooms/visibility.safetensors"; } > "$C/reduced_model/radiosity"
-# The command line's values.
-for v in 1920x1080 0.5,2 -1e-3,1e300 100000 out.png 1@3,3@20 "0:0.5,1:0.2" crack inclusions; do
+# The command line's values (and --expr expressions).
+for v in 1920x1080 0.5,2 -1e-3,1e300 100000 out.png 1@3,3@20 "0:0.5,1:0.2" crack inclusions \
+         "length(grad(u))" "u * pressure - field(\"a b\") / 2" "clamp(sqrt(abs(u)), 0, 1e-3) + t" \
+         "dot(grad(speed), v) + eps_xx * U"; do
     printf '%s' "$v" > "$C/cli_values/$(printf '%s' "$v" | tr -c 'a-zA-Z0-9' '_')"
 done
 

@@ -404,6 +404,57 @@ float spectral_value_hex(uint e, vec3 r) {
     return v / weight;
 }
 
+// Field slot k's value of hexahedron e at r and its derivatives along xi, eta, zeta:
+// (f, f_xi, f_eta, f_zeta). Twin of SpectralMesh::value_gradient_at (gradient.rs).
+vec4 spectral_slot_value_gradient_hex(uint e, uint k, vec3 r) {
+    float a[SPECTRAL_MAX_NODES], da[SPECTRAL_MAX_NODES], b[SPECTRAL_MAX_NODES], db[SPECTRAL_MAX_NODES];
+    float c[SPECTRAL_MAX_NODES], dc[SPECTRAL_MAX_NODES];
+    spectral_field_eval(r.x, true, a, da);
+    spectral_field_eval(r.y, true, b, db);
+    spectral_field_eval(r.z, true, c, dc);
+    const uint m = SPECTRAL_FIELD_ORDER + 1u;
+    uint base = e * SPECTRAL_ELEMENT_VEC4S + k * SPECTRAL_VALUE_VEC4S;
+    vec4 v = vec4(0.0), w = vec4(0.0);
+    for (uint q = 0u; q < SPECTRAL_VALUE_VEC4S; ++q) {
+        vec4 f = spectral_values[base + q];
+        for (uint t = 0u; t < 4u; ++t) {
+            uint n = 4u * q + t;
+            if (n >= m * m * m) break;
+            uint i = n % m, j = (n / m) % m, l = n / (m * m);
+            vec4 basis = vec4(a[i] * b[j] * c[l], da[i] * b[j] * c[l], a[i] * db[j] * c[l], a[i] * b[j] * dc[l]);
+            v += f[t] * basis;
+            if (SPECTRAL_RATIONAL) w += spectral_points[e * m * m * m + n].w * basis;
+        }
+    }
+    if (!SPECTRAL_RATIONAL) return v;
+    float value = v.x / w.x;
+    return vec4(value, (v.yzw - value * w.yzw) / w.x);
+}
+
+// The physical gradient J^-T d of a field with reference derivatives d on a hexahedron with
+// Jacobian j. Twin of expression::spectral::gradient.
+vec3 spectral_physical_gradient_hex(mat3 j, vec3 d) {
+    return transpose(inverse(j)) * d;
+}
+
+#ifdef SPECTRAL_EXPRESSION
+// The derived field of hexahedron e at r (as spectral_derived_value, with the 3D gradient).
+// Twin of DerivedField::value_at_hex (src/expression/spectral.rs).
+float spectral_derived_value_hex(uint e, vec3 r) {
+    mat3 j;
+    vec3 x = spectral_map_hex(e, r, j);
+    float values[SPECTRAL_FIELDS];
+    vec3 gradients[SPECTRAL_FIELDS];
+    for (uint k = 0u; k < SPECTRAL_FIELDS; ++k) {
+        vec4 f = spectral_slot_value_gradient_hex(e, k, r);
+        values[k] = f.x;
+        gradients[k] = spectral_physical_gradient_hex(j, f.yzw);
+    }
+    vec3 variables[4] = vec3[4](vec3(x.x, 0.0, 0.0), vec3(x.y, 0.0, 0.0), vec3(x.z, 0.0, 0.0), vec3(spectral_time(), 0.0, 0.0));
+    return spectral_expression(values, gradients, variables);
+}
+#endif
+
 // Newton's method for the reference point of hexahedron e that maps to p, from r; false if it
 // diverged, met a singular Jacobian or had not settled (as spectral_inverse_map).
 bool spectral_inverse_map_hex(uint e, vec3 p, inout vec3 r) {

@@ -29,6 +29,7 @@ mod glsl;
 mod parse;
 pub mod spacetime;
 pub mod spectral;
+mod spectral_bound;
 
 pub use eval::{physical_gradient, InputErrors, Inputs};
 

@@ -64,7 +64,7 @@ pub struct SpectralMesh {
 
 /// The rational value and derivatives N/W from a homogeneous sum (`n`, its derivatives `dn`)
 /// and its weight sum (`w`, derivatives `dw`): (N/W)' = (N' − (N/W) W') / W.
-fn rational<const D: usize>(n: f64, dn: [f64; D], w: f64, dw: [f64; D]) -> (f64, [f64; D]) {
+pub(super) fn rational<const D: usize>(n: f64, dn: [f64; D], w: f64, dw: [f64; D]) -> (f64, [f64; D]) {
     let v = n / w;
     (v, std::array::from_fn(|a| (dn[a] - v * dw[a]) / w))
 }
@@ -301,35 +301,6 @@ impl SpectralMesh {
                 n / d
             }
         }
-    }
-
-    /// The value of `field` at `step` in quadrilateral `e` at (ξ, η) and its derivatives
-    /// (f_ξ, f_η) (quotient rule on rational cells). Twin of `spectral_slot_value_gradient`
-    /// (spectral_element.glsl).
-    pub fn value_gradient(&self, field: usize, step: usize, e: usize, xi: f64, eta: f64) -> (f64, [f64; 2]) {
-        let m = self.basis.len();
-        let (mut a, mut da, mut b, mut db) = ([0.0; 16], [0.0; 16], [0.0; 16], [0.0; 16]);
-        self.basis.eval(xi, &mut a, Some(&mut da));
-        self.basis.eval(eta, &mut b, Some(&mut db));
-        let v = self.element_values(field, step, e);
-        let weights = self.element_weights(e);
-        let (mut n, mut dn, mut w, mut dw) = (0.0, [0.0; 2], 0.0, [0.0; 2]);
-        for j in 0..m {
-            for i in 0..m {
-                let wk = weights.map_or(1.0, |w| w[j * m + i]);
-                let f = wk * v[j * m + i];
-                n += a[i] * b[j] * f;
-                dn[0] += da[i] * b[j] * f;
-                dn[1] += a[i] * db[j] * f;
-                w += a[i] * b[j] * wk;
-                dw[0] += da[i] * b[j] * wk;
-                dw[1] += a[i] * db[j] * wk;
-            }
-        }
-        if weights.is_none() {
-            return (n, dn);
-        }
-        rational(n, dn, w, dw)
     }
 
     /// The reference point of element `e` that maps to the planar point `p`, by Newton's

@@ -25,6 +25,7 @@ pub mod basis;
 pub mod collection;
 pub mod error;
 pub mod generate;
+pub mod gradient;
 pub mod mesh;
 pub mod mfem;
 pub mod picture;

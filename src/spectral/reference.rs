@@ -293,6 +293,39 @@ pub fn check_cut_pixels(
     size: (u32, u32),
     pixels: &[f32],
 ) -> PixelReport {
+    check_cut_pixels_of(mesh, camera, planes, size, pixels, |e, r| {
+        (mesh.value_hex(field, step, e, r), rounding_bound_hex(mesh, field, step, e, r))
+    })
+}
+
+/// [`check_cut_pixels`] for a derived field: the expression in f64 at the pixel's reference
+/// point within [`DerivedField::rounding_bound_hex`] (infinite bounds counted as
+/// uncomparable).
+///
+/// [`DerivedField::rounding_bound_hex`]: crate::expression::spectral::DerivedField::rounding_bound_hex
+pub fn check_derived_cut_pixels(
+    mesh: &SpectralMesh,
+    derived: &crate::expression::spectral::DerivedField,
+    (field, step): (usize, usize),
+    (camera, planes): (&Camera, &[[f64; 4]]),
+    size: (u32, u32),
+    pixels: &[f32],
+) -> PixelReport {
+    check_cut_pixels_of(mesh, camera, planes, size, pixels, |e, r| {
+        (derived.value_at_hex(mesh, field, step, e, r), derived.rounding_bound_hex(mesh, field, step, e, r))
+    })
+}
+
+/// The per-pixel comparison of [`check_cut_pixels`] with the reference value and bound at
+/// hexahedron e's reference point r given by `reference(e, r)`.
+fn check_cut_pixels_of(
+    mesh: &SpectralMesh,
+    camera: &Camera,
+    planes: &[[f64; 4]],
+    size: (u32, u32),
+    pixels: &[f32],
+    reference: impl Fn(usize, [f64; 3]) -> (f64, f64),
+) -> PixelReport {
     let mut report = PixelReport::default();
     let slack = 1e-4;
     for py in 0..size.1 {
@@ -321,8 +354,12 @@ pub fn check_cut_pixels(
                 continue;
             };
             let r = r.map(|c| c.clamp(0.0, 1.0));
-            let reference = mesh.value_hex(field, step, e, r);
-            report.compare((px, py), texel[0], reference, rounding_bound_hex(mesh, field, step, e, r));
+            let (value, bound) = reference(e, r);
+            if !bound.is_finite() || !value.is_finite() {
+                report.uncomparable += 1;
+                continue;
+            }
+            report.compare((px, py), texel[0], value, bound);
         }
     }
     report

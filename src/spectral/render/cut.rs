@@ -64,24 +64,55 @@ impl Cutter {
             },
         )
         .map_err(dev("building the cut pass"))?;
+        let pass_set = Self::bind_pass(gpu, &pass, points, values, (&planes, &hull, &draw, &vertices))?;
+        Ok(Self { pass, pass_set, planes, draw, vertices, _hull: hull, pipelines: HashMap::new() })
+    }
+
+    /// The cut pass's bindings: geometry, coefficients (read by the shared declarations of
+    /// spectral_element.glsl), planes, hulls, the indirect draw and the rectangles.
+    #[allow(clippy::type_complexity)]
+    fn bind_pass(
+        gpu: &Gpu,
+        pass: &ComputePipeline,
+        points: &Buffer<[f32; 4]>,
+        values: &Buffer<f32>,
+        (planes, hull, draw, vertices): (
+            &Buffer<[f32; 4]>,
+            &Buffer<[f32; 4]>,
+            &Buffer<u32>,
+            &Buffer<DrawVertex>,
+        ),
+    ) -> Result<DescriptorSet> {
         fn b(r: crate::gpu::GpuResult<crate::gpu::BufferBinding<'_>>) -> Result<Resource<'_>> {
             r.map(Resource::Storage).map_err(dev("binding"))
         }
-        let pass_set = pass
-            .bind(
-                gpu,
-                &[
-                    b(points.binding())?,
-                    b(values.binding())?,
-                    b(values.binding())?,
-                    b(planes.binding())?,
-                    b(hull.binding())?,
-                    b(draw.binding())?,
-                    b(vertices.binding())?,
-                ],
-            )
-            .map_err(dev("binding the cut pass"))?;
-        Ok(Self { pass, pass_set, planes, draw, vertices, _hull: hull, pipelines: HashMap::new() })
+        pass.bind(
+            gpu,
+            &[
+                b(points.binding())?,
+                b(values.binding())?,
+                b(values.binding())?,
+                b(planes.binding())?,
+                b(hull.binding())?,
+                b(draw.binding())?,
+                b(vertices.binding())?,
+            ],
+        )
+        .map_err(dev("binding the cut pass"))
+    }
+
+    /// Rebinds the cut pass to a new coefficient buffer (a derived field's, larger) and drops
+    /// the draw pipelines' bindings with it.
+    pub(super) fn rebind(
+        &mut self,
+        gpu: &Gpu,
+        points: &Buffer<[f32; 4]>,
+        values: &Buffer<f32>,
+    ) -> Result<()> {
+        let rest = (&self.planes, &self._hull, &self.draw, &self.vertices);
+        self.pass_set = Self::bind_pass(gpu, &self.pass, points, values, rest)?;
+        self.pipelines.clear();
+        Ok(())
     }
 }
 
@@ -133,20 +164,23 @@ impl SpectralRenderer {
             .collect()
     }
 
-    pub(super) fn cut_pipeline_for(&mut self, target: &DrawTarget<'_>) -> Result<()> {
-        let format = target.key();
-        let Some(c) = self.cutter.as_ref() else { return Ok(()) };
-        if c.pipelines.contains_key(&format) {
+    pub(super) fn cut_pipeline_for(&mut self, target: &DrawTarget<'_>, view: &SpectralView) -> Result<()> {
+        let format = (target.key(), view.expression.as_ref().map(|d| d.expression.text.clone()));
+        if self.cutter.as_ref().is_none_or(|c| c.pipelines.contains_key(&format)) {
             return Ok(());
         }
+        if let Some(d) = &view.expression {
+            self.derived_shader(d)?;
+        }
+        let Some(c) = self.cutter.as_ref() else { return Ok(()) };
         target.require_depth("cut planes").map_err(dev("building the cut pipeline"))?;
         let planes = Resource::Storage(c.planes.binding().map_err(dev("binding"))?);
-        let desc = self.draw_desc(
-            "spectral cut planes",
-            crate::spectral::shaders::CUT_VERT,
-            crate::spectral::shaders::CUT_FRAG,
-            target,
-        );
+        let fragment = match &format.1 {
+            Some(text) => &self.derived_shaders[text][..],
+            None => crate::spectral::shaders::CUT_FRAG,
+        };
+        let desc =
+            self.draw_desc("spectral cut planes", crate::spectral::shaders::CUT_VERT, fragment, target);
         let pipeline = GraphicsPipeline::new(&self.gpu, &desc).map_err(dev("building the cut pipeline"))?;
         let r = self.resources()?;
         let resources = [r[0], r[1], r[2], planes];
@@ -164,11 +198,12 @@ impl SpectralRenderer {
     ) -> Result<(Box<dyn FnOnce(&mut Recorder<'_>) + '_>, Box<dyn FnOnce(&mut Recorder<'_>) + '_>)> {
         self.check_derived_view(view)?;
         self.show(view)?;
-        self.cut_pipeline_for(target)?;
+        self.cut_pipeline_for(target, view)?;
         let planes = self.cut_planes(view)?;
         let push = self.push(target, view);
         let c = self.cutter.as_ref().expect("a hexahedral mesh has a cutter");
-        let (pipeline, set) = &c.pipelines[&target.key()];
+        let (pipeline, set) =
+            &c.pipelines[&(target.key(), view.expression.as_ref().map(|d| d.expression.text.clone()))];
         let extent = target.viewport();
         let cut_push = CutPush {
             elements: self.mesh.elements() as u32,

@@ -3,23 +3,20 @@
 //! the expression spliced in, compiled at run time and kept per expression.
 
 use super::{dev, Result, SpectralRenderer, SpectralView};
-use crate::expression::spectral::DerivedField;
+use crate::expression::spectral::{DerivedField, DerivedShader};
 use crate::gpu::Buffer;
 use crate::spectral::SpectralError;
 use ash::vk;
 
 impl SpectralRenderer {
     /// Refuses a derived field with what it cannot be drawn with: the per-vertex baseline (it
-    /// colours node values), a height field (its surface is the field's), cut planes through
-    /// hexahedra, or a step one of its fields lacks.
+    /// colours node values), a height field (its surface is the field's), or a step one of its
+    /// fields lacks.
     pub(super) fn check_derived_view(&self, view: &SpectralView) -> Result<()> {
         let Some(d) = &view.expression else { return Ok(()) };
         let refuse = |what: &str| {
             Err(SpectralError::Expression(format!("--expr {:?} cannot be drawn {what}", d.expression.text)))
         };
-        if self.cutter.is_some() {
-            return refuse("on cut planes through hexahedra (quadrilateral meshes only)");
-        }
         if view.per_vertex {
             return refuse("per vertex (it is evaluated per pixel)");
         }
@@ -46,6 +43,9 @@ impl SpectralRenderer {
             values.binding().map_err(dev("binding the derived field's coefficients"))?;
             self.values = values;
             self.pipelines.clear();
+            if let Some(c) = self.cutter.as_mut() {
+                c.rebind(&self.gpu, &self._points, &self.values)?;
+            }
             if let Some(t) = self.tessellator.as_mut() {
                 t.set = None;
             }
@@ -61,7 +61,12 @@ impl SpectralRenderer {
     /// Compiles `d`'s fragment shader for this mesh unless it was compiled before.
     pub(super) fn derived_shader(&mut self, d: &DerivedField) -> Result<()> {
         if !self.derived_shaders.contains_key(&d.expression.text) {
-            let spirv = d.compile_fragment(self.planar, self.mesh.elements())?;
+            let kind = match (self.cutter.is_some(), self.planar) {
+                (true, _) => DerivedShader::CutPlanes,
+                (false, true) => DerivedShader::Planar,
+                (false, false) => DerivedShader::Surface,
+            };
+            let spirv = d.compile_fragment(kind, self.mesh.elements())?;
             self.derived_shaders.insert(d.expression.text.clone(), spirv);
         }
         Ok(())

@@ -171,7 +171,8 @@ struct Cutter {
     draw: Buffer<u32>,
     vertices: Buffer<DrawVertex>,
     _hull: Buffer<[f32; 4]>,
-    pipelines: HashMap<PassKey, (GraphicsPipeline, DescriptorSet)>,
+    /// Per target and derived field (its text; `None`: the field itself).
+    pipelines: HashMap<(PassKey, Option<String>), (GraphicsPipeline, DescriptorSet)>,
 }
 
 /// What a tessellation depends on: the view-projection, the focal scale, the error budget and
