@@ -219,7 +219,12 @@ mod device {
         let camera = fit_camera(&mesh);
         let mut renderer = SpectralRenderer::new(&gpu, mesh.clone(), &Colormap::viridis()).unwrap();
         let planes = [[0.0, 0.0, 1.0, 0.45], [1.0, 1.0, 0.0, 0.9]];
-        for text in ["length(grad(u))", "grad(u).z * x - u * u", "dot(grad(u), grad(u)) / (1 + abs(u)) + t"] {
+        for text in [
+            "length(grad(u))",
+            "grad(u).z * x - u * u",
+            "dot(grad(u), grad(u)) / (1 + abs(u)) + t",
+            "u * u - x",
+        ] {
             let d = Arc::new(DerivedField::new(&mesh, text).unwrap());
             let step = if d.expression.uses("t") { 1 } else { 0 };
             for cuts in [vec![planes[0]], planes.to_vec()] {

@@ -303,15 +303,41 @@ bool spectral_inverse_map(uint e, vec2 p, inout vec2 r) {
 float spectral_time() {
     return spectral_values[SPECTRAL_ELEMENTS * SPECTRAL_ELEMENT_VEC4S].x;
 }
+// Field slot k's value of element e at r (no derivatives).
+float spectral_slot_value(uint e, uint k, vec2 r) {
+    float a[SPECTRAL_MAX_NODES], b[SPECTRAL_MAX_NODES], unused[SPECTRAL_MAX_NODES];
+    spectral_field_eval(r.x, false, a, unused);
+    spectral_field_eval(r.y, false, b, unused);
+    const uint m = SPECTRAL_FIELD_ORDER + 1u;
+    uint base = e * SPECTRAL_ELEMENT_VEC4S + k * SPECTRAL_VALUE_VEC4S;
+    float v = 0.0;
+    for (uint q = 0u; q < SPECTRAL_VALUE_VEC4S; ++q) {
+        vec4 w;
+        for (uint c = 0u; c < 4u; ++c) {
+            uint n = 4u * q + c;
+            w[c] = n < m * m ? a[n % m] * b[n / m] : 0.0;
+        }
+        v += dot(w, spectral_values[base + q]);
+    }
+    return SPECTRAL_RATIONAL ? v / spectral_weight_sum(e, a, b) : v;
+}
+
+// Slots whose gradient the expression reads take the derivative sums
+// (SPECTRAL_SLOT_GRADIENTS, written by the run-time source); the others their value only.
 float spectral_derived_value(uint e, vec2 r) {
     vec3 dxi, deta;
     vec3 x = spectral_map(e, r, dxi, deta);
     float values[SPECTRAL_FIELDS];
     vec3 gradients[SPECTRAL_FIELDS];
     for (uint k = 0u; k < SPECTRAL_FIELDS; ++k) {
-        vec3 f = spectral_slot_value_gradient(e, k, r);
-        values[k] = f.x;
-        gradients[k] = spectral_physical_gradient(dxi, deta, f.yz);
+        if (SPECTRAL_SLOT_GRADIENTS[k]) {
+            vec3 f = spectral_slot_value_gradient(e, k, r);
+            values[k] = f.x;
+            gradients[k] = spectral_physical_gradient(dxi, deta, f.yz);
+        } else {
+            values[k] = spectral_slot_value(e, k, r);
+            gradients[k] = vec3(0.0);
+        }
     }
     // The variables of expression::SPECTRAL_VARIABLES: x, y, z, t.
     vec3 variables[4] = vec3[4](vec3(x.x, 0.0, 0.0), vec3(x.y, 0.0, 0.0), vec3(x.z, 0.0, 0.0), vec3(spectral_time(), 0.0, 0.0));
@@ -380,14 +406,14 @@ vec3 spectral_map_hex(uint e, vec3 r, out mat3 jacobian) {
     return y;
 }
 
-// The field value of hexahedron e at r: sum_ijk l_i(xi) l_j(eta) l_k(zeta) F_ijk.
-float spectral_value_hex(uint e, vec3 r) {
+// Field slot k's value of hexahedron e at r: sum_ijk l_i(xi) l_j(eta) l_k(zeta) F_ijk.
+float spectral_value_hex_slot(uint e, uint slot, vec3 r) {
     float a[SPECTRAL_MAX_NODES], b[SPECTRAL_MAX_NODES], c[SPECTRAL_MAX_NODES], unused[SPECTRAL_MAX_NODES];
     spectral_field_eval(r.x, false, a, unused);
     spectral_field_eval(r.y, false, b, unused);
     spectral_field_eval(r.z, false, c, unused);
     const uint m = SPECTRAL_FIELD_ORDER + 1u;
-    uint base = e * SPECTRAL_ELEMENT_VEC4S;
+    uint base = e * SPECTRAL_ELEMENT_VEC4S + slot * SPECTRAL_VALUE_VEC4S;
     float v = 0.0;
     for (uint q = 0u; q < SPECTRAL_VALUE_VEC4S; ++q) {
         vec4 w;
@@ -402,6 +428,11 @@ float spectral_value_hex(uint e, vec3 r) {
     for (uint k = 0u; k < m * m * m; ++k)
         weight += a[k % m] * b[(k / m) % m] * c[k / (m * m)] * spectral_points[e * m * m * m + k].w;
     return v / weight;
+}
+
+// The field value of hexahedron e at r: sum_ijk l_i(xi) l_j(eta) l_k(zeta) F_ijk.
+float spectral_value_hex(uint e, vec3 r) {
+    return spectral_value_hex_slot(e, 0u, r);
 }
 
 // Field slot k's value of hexahedron e at r and its derivatives along xi, eta, zeta:
@@ -446,9 +477,14 @@ float spectral_derived_value_hex(uint e, vec3 r) {
     float values[SPECTRAL_FIELDS];
     vec3 gradients[SPECTRAL_FIELDS];
     for (uint k = 0u; k < SPECTRAL_FIELDS; ++k) {
-        vec4 f = spectral_slot_value_gradient_hex(e, k, r);
-        values[k] = f.x;
-        gradients[k] = spectral_physical_gradient_hex(j, f.yzw);
+        if (SPECTRAL_SLOT_GRADIENTS[k]) {
+            vec4 f = spectral_slot_value_gradient_hex(e, k, r);
+            values[k] = f.x;
+            gradients[k] = spectral_physical_gradient_hex(j, f.yzw);
+        } else {
+            values[k] = spectral_value_hex_slot(e, k, r);
+            gradients[k] = vec3(0.0);
+        }
     }
     vec3 variables[4] = vec3[4](vec3(x.x, 0.0, 0.0), vec3(x.y, 0.0, 0.0), vec3(x.z, 0.0, 0.0), vec3(spectral_time(), 0.0, 0.0));
     return spectral_expression(values, gradients, variables);

@@ -56,6 +56,12 @@ void main() {
     bool lit = surface && mode != SPECTRAL_MODE_EDGE_LINES;
     vec3 x, dxi, deta;
     float v;
+#ifdef SPECTRAL_EXPRESSION
+    // A derived field (`--expr`, compiled at run time): the expression of every slot's value
+    // and physical gradient at r is the value (per-vertex colour is refused on the host).
+    v = spectral_derived_value(element, r);
+    if (lit) x = spectral_map(element, r, dxi, deta);
+#else
     if (mode == SPECTRAL_MODE_PER_VERTEX) {
         v = vertex_value;
         if (lit) x = spectral_map(element, r, dxi, deta);
@@ -64,10 +70,6 @@ void main() {
     } else {
         v = spectral_value_given(element, r, coefficients);
     }
-#ifdef SPECTRAL_EXPRESSION
-    // A derived field (`--expr`, compiled at run time): the expression of every slot's value
-    // and physical gradient at r replaces the value (edge lines keep their dark colour).
-    if (mode != SPECTRAL_MODE_EDGE_LINES) v = spectral_derived_value(element, r);
 #endif
     float t = ramp_coordinate(v, pc.range.x, pc.range.y, pc.flags.y != 0u);
     // Iso-lines: distance to the nearest level in pixels from the screen derivative of the

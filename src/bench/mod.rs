@@ -17,6 +17,7 @@ pub mod radiosity;
 pub mod reduce;
 pub mod spacetime;
 pub mod spectral;
+pub mod spectral_derived;
 
 use std::time::{Duration, Instant};
 

@@ -312,11 +312,19 @@ pub struct BenchArgs {
     /// Frames per measurement (the median is reported).
     #[arg(long, default_value_t = 15, value_parser = crate::cli::args::count_up_to(crate::cli::args::MAX_FRAMES))]
     pub frames: usize,
+    /// Instead: what derived fields (--expr) cost — shader compile time, device frame time
+    /// against the field itself, and the CPU interpreter on the same pixels (needs the
+    /// `runtime-shaderc` build feature).
+    #[arg(long)]
+    pub derived: bool,
 }
 
 /// `galerkin spectral bench`: seed 002's table on this device
 /// ([`galerkin::bench::spectral::report`]).
 pub fn bench(desc: &GpuDesc, args: &BenchArgs) -> Result<()> {
     let gpu = Gpu::new(desc)?;
+    if args.derived {
+        return galerkin::bench::spectral_derived::report(&gpu, args.frames, &mut |s| print!("{s}"));
+    }
     galerkin::bench::spectral::report(&gpu, args.quick, args.frames, &mut |s| print!("{s}"))
 }

@@ -224,6 +224,20 @@ impl Expression {
         parse::parse(text, scope)
     }
 
+    /// Whether slot `k`'s gradient is read (the device skips the derivative sums of the others).
+    pub fn reads_gradient(&self, k: usize) -> bool {
+        fn find(n: &Node, k: usize) -> bool {
+            match n {
+                Node::Gradient(s) => *s == k,
+                Node::Negate(a) | Node::Component(a, _) => find(a, k),
+                Node::Binary(_, a, b) => find(a, k) || find(b, k),
+                Node::Call(_, args) => args.iter().any(|a| find(a, k)),
+                _ => false,
+            }
+        }
+        find(&self.root, k)
+    }
+
     /// Whether the variable `name` appears.
     pub fn uses(&self, name: &str) -> bool {
         fn find(n: &Node, k: usize) -> bool {

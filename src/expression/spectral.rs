@@ -161,9 +161,13 @@ impl DerivedField {
             DerivedShader::Surface => ("", "spectral_element_frag.glsl"),
             DerivedShader::CutPlanes => ("", "spectral_cut_frag.glsl"),
         };
+        let slots = self.expression.slots.len();
+        let gradients: Vec<&str> =
+            (0..slots).map(|k| if self.expression.reads_gradient(k) { "true" } else { "false" }).collect();
         format!(
-            "#version 450\n#define SPECTRAL_FIELDS {}u\n#define SPECTRAL_ELEMENTS {elements}u\n#define SPECTRAL_EXPRESSION\n{defines}{}#include \"{body}\"\n",
-            self.expression.slots.len(),
+            "#version 450\n#define SPECTRAL_FIELDS {slots}u\n#define SPECTRAL_ELEMENTS {elements}u\n#define SPECTRAL_EXPRESSION\n\
+             #define SPECTRAL_SLOT_GRADIENTS bool[{slots}]({})\n{defines}{}#include \"{body}\"\n",
+            gradients.join(", "),
             self.expression.glsl("spectral_expression")
         )
     }
