@@ -29,6 +29,24 @@ fn cli_reports_expression_errors_with_their_column() {
     assert!(!out.status.success() && err.contains("column 13") && err.contains("not a field"), "{err}");
 }
 
+/// The viewer's keys with a derived field, without a window: `v` (per vertex) and `h` (height
+/// field) are not taken — a derived field is drawn per pixel and flat — and `.` cycles only
+/// through the steps every field it reads has (`cells` has one).
+#[test]
+fn the_viewer_keeps_a_derived_field_drawable() {
+    use galerkin::render::viewer::ViewerContent;
+    use galerkin::spectral::{generate, NodeSet, SpectralView};
+    let mesh = std::sync::Arc::new(generate::by_name("annulus", 3, 3, NodeSet::GaussLobatto).unwrap());
+    let d = galerkin::expression::spectral::DerivedField::new(&mesh, "u * cells").unwrap();
+    let view = SpectralView { expression: Some(std::sync::Arc::new(d)), ..SpectralView::default() };
+    let mut content =
+        galerkin::spectral::viewer::SpectralContent::new(mesh, view, "viridis", (320, 200), false);
+    assert!(!content.key("v") && !content.key("h"));
+    assert!(content.key("."));
+    let title = content.title();
+    assert!(title.contains("u * cells step 0/1"), "{title}");
+}
+
 #[cfg(feature = "runtime-shaderc")]
 mod device {
     use std::sync::Arc;
@@ -262,6 +280,76 @@ mod device {
             &pixels,
         );
         assert!(report.passed(), "the field after derived fields: {report:?}");
+    }
+
+    /// The command line end to end: `spectral render --expr … --out F.exr` writes the derived
+    /// value in the `value` channel — every covered pixel equal to the f64 interpreter at the
+    /// (ξ, η, element) the file reports, within the bound — and the PNG's legend is labelled
+    /// with the expression (the run prints it).
+    #[test]
+    fn cli_writes_the_derived_value_to_exr() {
+        use galerkin::spectral::generate;
+        let dir = tempfile::tempdir().unwrap();
+        let exr = dir.path().join("grad.exr");
+        let text = "length(grad(u)) - 0.5 * u";
+        let out = super::galerkin(&[
+            "spectral",
+            "render",
+            "--generate",
+            "annulus",
+            "--order",
+            "5",
+            "--expr",
+            text,
+            "--size",
+            "96x72",
+            "--out",
+            exr.to_str().unwrap(),
+        ]);
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        let image = exr::prelude::read_all_flat_layers_from_file(&exr).unwrap();
+        let layer = &image.layer_data[0];
+        let channel = |name: &str| -> Vec<f32> {
+            let c = layer.channel_data.list.iter().find(|c| c.name.eq(name)).expect("channel");
+            match &c.sample_data {
+                exr::prelude::FlatSamples::F32(v) => v.clone(),
+                _ => panic!("{name} is not f32"),
+            }
+        };
+        let (value, xi, eta, element) = (channel("value"), channel("xi"), channel("eta"), channel("element"));
+        let mesh = generate::by_name("annulus", 3, 5, NodeSet::GaussLobatto).unwrap();
+        let d = DerivedField::new(&mesh, text).unwrap();
+        let mut covered = 0;
+        for k in 0..value.len() {
+            if element[k].is_nan() || element[k] < 0.0 {
+                continue;
+            }
+            let (e, r) = (element[k] as usize, [f64::from(xi[k]), f64::from(eta[k])]);
+            let reference = d.value_at(&mesh, 0, 0, e, r);
+            let bound = d.rounding_bound(&mesh, 0, 0, e, r);
+            assert!(
+                (f64::from(value[k]) - reference).abs() <= bound,
+                "pixel {k}: {} vs {reference}",
+                value[k]
+            );
+            covered += 1;
+        }
+        assert!(covered > 1500, "{covered}");
+        let png = dir.path().join("grad.png");
+        let out = super::galerkin(&[
+            "spectral",
+            "render",
+            "--generate",
+            "annulus",
+            "--expr",
+            text,
+            "--size",
+            "96x72",
+            "--out",
+            png.to_str().unwrap(),
+        ]);
+        let said = String::from_utf8_lossy(&out.stdout);
+        assert!(out.status.success() && said.contains(text), "{said}");
     }
 
     /// What a derived field cannot be drawn with is refused by name, before drawing.

@@ -86,8 +86,19 @@ impl SpectralContent {
         }
     }
 
+    /// The time steps to cycle through: the shown field's, or with a derived field the fewest
+    /// of the fields it reads.
     fn steps(&self) -> usize {
-        self.mesh.fields[self.view.field].steps.len()
+        let shown = self.mesh.fields[self.view.field].steps.len();
+        match &self.view.expression {
+            Some(d) => d
+                .fields(self.view.field)
+                .iter()
+                .map(|&f| self.mesh.fields[f].steps.len())
+                .fold(shown, usize::min),
+            None => shown,
+        }
+        .max(1)
     }
 
     /// Turns the selected plane's normal by `angle` about z (`tilt`: towards z), keeping the
@@ -123,12 +134,12 @@ impl SpectralContent {
 
 impl ViewerContent for SpectralContent {
     fn title(&self) -> String {
-        let f = &self.mesh.fields[self.view.field];
+        let shown = super::picture::shown_label(&self.mesh, &self.view);
         let range =
             self.view.range.map_or("auto range".to_string(), |(lo, hi)| format!("[{lo:.3}, {hi:.3}]"));
         format!(
             "galerkin spectral — {} step {}/{} ({}) — {} {}, {}, {} iso-lines{}{}",
-            f.name,
+            shown,
             self.view.step,
             self.steps(),
             if self.playing { "playing" } else { "paused" },
@@ -221,13 +232,14 @@ impl ViewerContent for SpectralContent {
             "." => self.view.step = (self.view.step + 1) % steps,
             "," => self.view.step = (self.view.step + steps - 1) % steps,
             "l" | "L" => self.view.log = !self.view.log,
-            "h" | "H" if self.mesh.is_planar() => {
+            // A derived field is drawn per pixel and flat (refused otherwise): h and v do nothing.
+            "h" | "H" if self.mesh.is_planar() && self.view.expression.is_none() => {
                 self.view.height = if self.view.height.is_some() { None } else { Some(0.0) };
             }
             "i" => self.view.isolines += 2,
             "I" => self.view.isolines = self.view.isolines.saturating_sub(2),
             "e" | "E" => self.view.edges = !self.view.edges,
-            "v" | "V" => self.view.per_vertex = !self.view.per_vertex,
+            "v" | "V" if self.view.expression.is_none() => self.view.per_vertex = !self.view.per_vertex,
             "r" => {
                 let (lo, hi) = match (self.view.range, self.renderer.as_mut()) {
                     (Some(r), _) => r,
