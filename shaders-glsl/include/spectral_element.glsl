@@ -303,6 +303,13 @@ bool spectral_inverse_map(uint e, vec2 p, inout vec2 r) {
 float spectral_time() {
     return spectral_values[SPECTRAL_ELEMENTS * SPECTRAL_ELEMENT_VEC4S].x;
 }
+
+// The expression of the slots' values and gradients at the mapped point x and the step's time
+// (the variables of expression::SPECTRAL_VARIABLES: x, y, z, t).
+float spectral_expression_at(float values[SPECTRAL_FIELDS], vec3 gradients[SPECTRAL_FIELDS], vec3 x) {
+    vec3 variables[4] = vec3[4](vec3(x.x, 0.0, 0.0), vec3(x.y, 0.0, 0.0), vec3(x.z, 0.0, 0.0), vec3(spectral_time(), 0.0, 0.0));
+    return spectral_expression(values, gradients, variables);
+}
 // Field slot k's value of element e at r (no derivatives).
 float spectral_slot_value(uint e, uint k, vec2 r) {
     float a[SPECTRAL_MAX_NODES], b[SPECTRAL_MAX_NODES], unused[SPECTRAL_MAX_NODES];
@@ -339,9 +346,7 @@ float spectral_derived_value(uint e, vec2 r) {
             gradients[k] = vec3(0.0);
         }
     }
-    // The variables of expression::SPECTRAL_VARIABLES: x, y, z, t.
-    vec3 variables[4] = vec3[4](vec3(x.x, 0.0, 0.0), vec3(x.y, 0.0, 0.0), vec3(x.z, 0.0, 0.0), vec3(spectral_time(), 0.0, 0.0));
-    return spectral_expression(values, gradients, variables);
+    return spectral_expression_at(values, gradients, x);
 }
 #endif
 
@@ -486,8 +491,7 @@ float spectral_derived_value_hex(uint e, vec3 r) {
             gradients[k] = vec3(0.0);
         }
     }
-    vec3 variables[4] = vec3[4](vec3(x.x, 0.0, 0.0), vec3(x.y, 0.0, 0.0), vec3(x.z, 0.0, 0.0), vec3(spectral_time(), 0.0, 0.0));
-    return spectral_expression(values, gradients, variables);
+    return spectral_expression_at(values, gradients, x);
 }
 #endif
 

@@ -110,25 +110,16 @@ impl DerivedField {
     /// (as [`SpectralMesh::value_range`] samples a field): the colour range's "auto". `None`
     /// when no sample is finite.
     pub fn range(&self, mesh: &SpectralMesh, shown: usize, step: usize) -> Option<(f64, f64)> {
-        let s = 2 * mesh.basis.order.max(1);
-        let layers = if mesh.shape == Shape::Hexahedron { s } else { 0 };
         let mut range: Option<(f64, f64)> = None;
-        for e in 0..mesh.elements() {
-            for k in 0..=layers {
-                for j in 0..=s {
-                    for i in 0..=s {
-                        let r = [i, j, k].map(|c| c as f64 / s as f64);
-                        let v = match mesh.shape {
-                            Shape::Quadrilateral => self.value_at(mesh, shown, step, e, [r[0], r[1]]),
-                            Shape::Hexahedron => self.value_at_hex(mesh, shown, step, e, r),
-                        };
-                        if v.is_finite() {
-                            range = Some(range.map_or((v, v), |(lo, hi)| (lo.min(v), hi.max(v))));
-                        }
-                    }
-                }
+        mesh.for_each_sample(|e, r| {
+            let v = match mesh.shape {
+                Shape::Quadrilateral => self.value_at(mesh, shown, step, e, [r[0], r[1]]),
+                Shape::Hexahedron => self.value_at_hex(mesh, shown, step, e, r),
+            };
+            if v.is_finite() {
+                range = Some(range.map_or((v, v), |(lo, hi)| (lo.min(v), hi.max(v))));
             }
-        }
+        });
         range
     }
 

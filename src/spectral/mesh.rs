@@ -343,24 +343,32 @@ impl SpectralMesh {
     /// The least and greatest value of `field` at `step`, sampled on a (2n + 1)² grid per
     /// element (the colour range's "auto").
     pub fn value_range(&self, field: usize, step: usize) -> (f64, f64) {
-        let s = 2 * self.basis.order;
         let mut range = (f64::MAX, f64::MIN);
+        self.for_each_sample(|e, r| {
+            let v = match self.shape {
+                Shape::Quadrilateral => self.value(field, step, e, r[0], r[1]),
+                Shape::Hexahedron => self.value_hex(field, step, e, r),
+            };
+            range = (range.0.min(v), range.1.max(v));
+        });
+        range
+    }
+
+    /// Calls `visit(e, r)` at the points of a (2n + 1)ᴰ grid on every element's reference
+    /// square or cube (n the fields' order; r's third coordinate 0 on quadrilaterals): where
+    /// colour ranges are sampled.
+    pub fn for_each_sample(&self, mut visit: impl FnMut(usize, [f64; 3])) {
+        let s = 2 * self.basis.order.max(1);
         let layers = if self.shape == Shape::Hexahedron { s } else { 0 };
         for e in 0..self.elements() {
             for k in 0..=layers {
                 for j in 0..=s {
                     for i in 0..=s {
-                        let r = [i, j, k].map(|c| c as f64 / s as f64);
-                        let v = match self.shape {
-                            Shape::Quadrilateral => self.value(field, step, e, r[0], r[1]),
-                            Shape::Hexahedron => self.value_hex(field, step, e, r),
-                        };
-                        range = (range.0.min(v), range.1.max(v));
+                        visit(e, [i, j, k].map(|c| c as f64 / s as f64));
                     }
                 }
             }
         }
-        range
     }
 
     /// The geometry map of hexahedron `e` at r = (ξ, η, ζ): the point and its derivatives
