@@ -390,8 +390,7 @@ mod device {
         use galerkin::spacetime::{SpacetimeRenderer, SpacetimeView};
         let gpu = common::gpu();
         let m = pulses(6000);
-        let mut r =
-            galerkin::spacetime::SpacetimeRenderer::from_mesh(&gpu, &m, &Colormap::viridis()).unwrap();
+        let mut r = SpacetimeRenderer::from_mesh(&gpu, &m, &Colormap::viridis()).unwrap();
         let t = 0.43 * m.time_range().1;
         let view = SpacetimeView { edges: false, ..SpacetimeView::from_above(r.data().summary(), t) };
         let (w, h) = (160, 160);
@@ -429,7 +428,6 @@ mod device {
         assert!(err.is_some_and(|e| e.contains("per vertex")));
         // Back to U.
         r.set_expression(None, None).unwrap();
-        let _ = SpacetimeRenderer::from_mesh;
         let Pixels::Rgba32F(pixels) = r.render(&data, &view).unwrap() else { panic!("float target") };
         let check = galerkin::spacetime::reference::check_flat_pixels(
             &m,

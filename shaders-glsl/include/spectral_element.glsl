@@ -184,22 +184,29 @@ void spectral_flat_coefficients(uint e, out vec4 f[SPECTRAL_FLAT_VEC4S]) {
         f[q] = SPECTRAL_FLAT_VALUES && q < SPECTRAL_VALUE_VEC4S ? spectral_values[e * SPECTRAL_ELEMENT_VEC4S + q] : vec4(0.0);
 }
 
-// sum_ij a_i b_j F_ij over element e's coefficients, taken from `given` when they travel as
-// flat varyings (SPECTRAL_FLAT_VALUES) and from the buffer otherwise; the tensor weights are
+// sum_ij a_i b_j F_ij over field slot k's coefficients of element e, taken from `given` when
+// `from_given` (they travel as flat varyings) and from the buffer otherwise; the tensor weights are
 // dotted with the coefficients four at a time.
-float spectral_tensor_sum(uint e, vec4 given[SPECTRAL_FLAT_VEC4S], float a[SPECTRAL_MAX_NODES], float b[SPECTRAL_MAX_NODES]) {
+float spectral_slot_tensor_sum(uint e, uint k, bool from_given, vec4 given[SPECTRAL_FLAT_VEC4S], float a[SPECTRAL_MAX_NODES],
+                               float b[SPECTRAL_MAX_NODES]) {
     const uint m = SPECTRAL_FIELD_ORDER + 1u;
+    uint base = e * SPECTRAL_ELEMENT_VEC4S + k * SPECTRAL_VALUE_VEC4S;
     float v = 0.0;
     for (uint q = 0u; q < SPECTRAL_VALUE_VEC4S; ++q) {
         vec4 w;
         for (uint c = 0u; c < 4u; ++c) {
-            uint k = 4u * q + c;
-            w[c] = k < m * m ? a[k % m] * b[k / m] : 0.0;
+            uint n = 4u * q + c;
+            w[c] = n < m * m ? a[n % m] * b[n / m] : 0.0;
         }
-        vec4 f = SPECTRAL_FLAT_VALUES ? given[min(q, SPECTRAL_FLAT_VEC4S - 1u)] : spectral_values[e * SPECTRAL_ELEMENT_VEC4S + q];
+        vec4 f = from_given ? given[min(q, SPECTRAL_FLAT_VEC4S - 1u)] : spectral_values[base + q];
         v += dot(w, f);
     }
     return SPECTRAL_RATIONAL ? v / spectral_weight_sum(e, a, b) : v;
+}
+
+// The shown field's sum (slot 0), from the flat varyings when SPECTRAL_FLAT_VALUES.
+float spectral_tensor_sum(uint e, vec4 given[SPECTRAL_FLAT_VEC4S], float a[SPECTRAL_MAX_NODES], float b[SPECTRAL_MAX_NODES]) {
+    return spectral_slot_tensor_sum(e, 0u, SPECTRAL_FLAT_VALUES, given, a, b);
 }
 
 // The field value of element e at reference point r, sum_ij l_i(xi) l_j(eta) F_ij, with the
@@ -310,23 +317,14 @@ float spectral_expression_at(float values[SPECTRAL_FIELDS], vec3 gradients[SPECT
     vec3 variables[4] = vec3[4](vec3(x.x, 0.0, 0.0), vec3(x.y, 0.0, 0.0), vec3(x.z, 0.0, 0.0), vec3(spectral_time(), 0.0, 0.0));
     return spectral_expression(values, gradients, variables);
 }
-// Field slot k's value of element e at r (no derivatives).
+// Field slot k's value of element e at r (no derivatives), from the buffer (a derived-field
+// shader's flat varyings hold only the shipped vertex stage's single-field view).
 float spectral_slot_value(uint e, uint k, vec2 r) {
     float a[SPECTRAL_MAX_NODES], b[SPECTRAL_MAX_NODES], unused[SPECTRAL_MAX_NODES];
     spectral_field_eval(r.x, false, a, unused);
     spectral_field_eval(r.y, false, b, unused);
-    const uint m = SPECTRAL_FIELD_ORDER + 1u;
-    uint base = e * SPECTRAL_ELEMENT_VEC4S + k * SPECTRAL_VALUE_VEC4S;
-    float v = 0.0;
-    for (uint q = 0u; q < SPECTRAL_VALUE_VEC4S; ++q) {
-        vec4 w;
-        for (uint c = 0u; c < 4u; ++c) {
-            uint n = 4u * q + c;
-            w[c] = n < m * m ? a[n % m] * b[n / m] : 0.0;
-        }
-        v += dot(w, spectral_values[base + q]);
-    }
-    return SPECTRAL_RATIONAL ? v / spectral_weight_sum(e, a, b) : v;
+    vec4 none[SPECTRAL_FLAT_VEC4S];
+    return spectral_slot_tensor_sum(e, k, false, none, a, b);
 }
 
 // Slots whose gradient the expression reads take the derivative sums

@@ -233,7 +233,6 @@ pub fn generate_file(args: &GenArgs) -> Result<()> {
 /// `galerkin spectral render` ([`galerkin::spectral::picture::write_picture`]).
 pub fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
     use galerkin::spectral::picture::{check_view, kind, write_picture};
-    use std::sync::Arc;
     let loaded = Instant::now();
     let mesh = Arc::new(args.source.mesh(args.file.as_deref(), &args.grid_functions)?);
     let load_ms = loaded.elapsed().as_secs_f64() * 1e3;

@@ -226,44 +226,32 @@ impl Expression {
 
     /// Whether slot `k`'s gradient is read (the device skips the derivative sums of the others).
     pub fn reads_gradient(&self, k: usize) -> bool {
-        fn find(n: &Node, k: usize) -> bool {
-            match n {
-                Node::Gradient(s) => *s == k,
-                Node::Negate(a) | Node::Component(a, _) => find(a, k),
-                Node::Binary(_, a, b) => find(a, k) || find(b, k),
-                Node::Call(_, args) => args.iter().any(|a| find(a, k)),
-                _ => false,
-            }
-        }
-        find(&self.root, k)
+        self.any(&|n| *n == Node::Gradient(k))
     }
 
     /// Whether the variable `name` appears.
     pub fn uses(&self, name: &str) -> bool {
-        fn find(n: &Node, k: usize) -> bool {
-            match n {
-                Node::Variable(v, _) => *v == k,
-                Node::Negate(a) | Node::Component(a, _) => find(a, k),
-                Node::Binary(_, a, b) => find(a, k) || find(b, k),
-                Node::Call(_, args) => args.iter().any(|a| find(a, k)),
-                _ => false,
-            }
-        }
-        self.variables.iter().position(|v| v == name).is_some_and(|k| find(&self.root, k))
+        let Some(k) = self.variables.iter().position(|v| v == name) else { return false };
+        self.any(&|n| matches!(n, Node::Variable(v, _) if *v == k))
     }
 
     /// Whether the shown field `u` is read (by value or gradient).
     pub fn reads_shown(&self) -> bool {
-        fn reads(n: &Node) -> bool {
-            match n {
-                Node::Value(0) | Node::Gradient(0) => true,
-                Node::Negate(a) | Node::Component(a, _) => reads(a),
-                Node::Binary(_, a, b) => reads(a) || reads(b),
-                Node::Call(_, args) => args.iter().any(reads),
-                _ => false,
-            }
+        self.any(&|n| matches!(n, Node::Value(0) | Node::Gradient(0)))
+    }
+
+    /// Whether any node of the tree satisfies `test`.
+    fn any(&self, test: &dyn Fn(&Node) -> bool) -> bool {
+        fn walk(n: &Node, test: &dyn Fn(&Node) -> bool) -> bool {
+            test(n)
+                || match n {
+                    Node::Negate(a) | Node::Component(a, _) => walk(a, test),
+                    Node::Binary(_, a, b) => walk(a, test) || walk(b, test),
+                    Node::Call(_, args) => args.iter().any(|a| walk(a, test)),
+                    _ => false,
+                }
         }
-        reads(&self.root)
+        walk(&self.root, test)
     }
 }
 

@@ -5,7 +5,7 @@ use std::sync::Arc;
 
 use super::{SpacetimeError, SpacetimeRenderer, SpacetimeView};
 use crate::expression::spacetime::SpacetimeExpression;
-use crate::render::{ColorFormat, DrawTarget, Pixels, RenderTarget};
+use crate::render::{ColorFormat, DrawTarget, Pixels};
 
 impl SpacetimeRenderer {
     /// Shows `expression` instead of U (None: U again), mapped linearly over `range` — or,
@@ -28,6 +28,9 @@ impl SpacetimeRenderer {
                     "the colour range [{lo}, {hi}] is not an interval"
                 )));
             }
+            // A host's draw (record_draw_into) resolves no range: the fixed one's low end
+            // must be in place for it.
+            self.derived_lo = lo;
         }
         if same {
             if let Some(d) = self.derived.as_mut() {
@@ -93,18 +96,7 @@ impl SpacetimeRenderer {
         if target.format() == ColorFormat::Rgba32F {
             return Ok(1.0);
         }
-        let extent = target.extent();
-        let data = match self.umax_target.take() {
-            Some(d) if d.extent() == extent => d,
-            _ => RenderTarget::new(
-                &self.gpu,
-                "spacetime range pass",
-                extent.width,
-                extent.height,
-                ColorFormat::Rgba32F,
-            )
-            .map_err(super::dev("the derived field's range pass"))?,
-        };
+        let data = self.data_pass_target(target)?;
         let data_view = SpacetimeView { u_max: Some(1.0), ..*view };
         let pixels = self.render(&data, &data_view);
         self.umax_target = Some(data);

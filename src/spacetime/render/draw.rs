@@ -81,18 +81,7 @@ impl SpacetimeRenderer {
             Some(u) => Ok(u),
             None if target.format() == ColorFormat::Rgba32F => Ok(1.0),
             None => {
-                let extent = target.extent();
-                let data = match self.umax_target.take() {
-                    Some(d) if d.extent() == extent => d,
-                    _ => RenderTarget::new(
-                        &self.gpu,
-                        "spacetime U_max pass",
-                        extent.width,
-                        extent.height,
-                        ColorFormat::Rgba32F,
-                    )
-                    .map_err(dev("the U_max pass"))?,
-                };
+                let data = self.data_pass_target(target)?;
                 let data_view = SpacetimeView { u_max: Some(1.0), ..*view };
                 self.slice(view.time, view.subdivide)?;
                 let u_max = if data.readback_bytes() <= self.gpu.max_binding_bytes() {
@@ -113,6 +102,27 @@ impl SpacetimeRenderer {
                 u_max
             }
         }
+    }
+
+    /// The float target of a data pass at `target`'s size (for U_max or a derived field's
+    /// range): the one kept from the last pass when the size is the same (give it back to
+    /// `umax_target` when done).
+    pub(super) fn data_pass_target(
+        &mut self,
+        target: &DrawTarget<'_>,
+    ) -> Result<RenderTarget, SpacetimeError> {
+        let extent = target.extent();
+        Ok(match self.umax_target.take() {
+            Some(d) if d.extent() == extent => d,
+            _ => RenderTarget::new(
+                &self.gpu,
+                "spacetime data pass",
+                extent.width,
+                extent.height,
+                ColorFormat::Rgba32F,
+            )
+            .map_err(dev("the data pass's target"))?,
+        })
     }
 
     /// Draws the data pass of `view` into the float target `data` and reduces its U channel to

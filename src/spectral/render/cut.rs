@@ -165,7 +165,7 @@ impl SpectralRenderer {
     }
 
     pub(super) fn cut_pipeline_for(&mut self, target: &DrawTarget<'_>, view: &SpectralView) -> Result<()> {
-        let format = (target.key(), view.expression.as_ref().map(|d| d.expression.text.clone()));
+        let format = (target.key(), view.expression_key());
         if self.cutter.as_ref().is_none_or(|c| c.pipelines.contains_key(&format)) {
             return Ok(());
         }
@@ -202,8 +202,7 @@ impl SpectralRenderer {
         let planes = self.cut_planes(view)?;
         let push = self.push(target, view);
         let c = self.cutter.as_ref().expect("a hexahedral mesh has a cutter");
-        let (pipeline, set) =
-            &c.pipelines[&(target.key(), view.expression.as_ref().map(|d| d.expression.text.clone()))];
+        let (pipeline, set) = &c.pipelines[&(target.key(), view.expression_key())];
         let extent = target.viewport();
         let cut_push = CutPush {
             elements: self.mesh.elements() as u32,

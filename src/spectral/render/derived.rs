@@ -31,7 +31,7 @@ impl SpectralRenderer {
     /// pipelines' descriptor sets (the compiled shaders are kept).
     pub(super) fn show_derived(&mut self, view: &SpectralView) -> Result<()> {
         let Some(d) = &view.expression else { return Ok(()) };
-        let want = (view.field, view.step, Some(d.expression.text.clone()));
+        let want = (view.field, view.step, view.expression_key());
         if self.shown == want {
             return Ok(());
         }

@@ -332,7 +332,7 @@ impl SpectralRenderer {
         if let Some(r) = view.range {
             return r;
         }
-        let key = (view.field, view.step, view.expression.as_ref().map(|d| d.expression.text.clone()));
+        let key = (view.field, view.step, view.expression_key());
         let mesh = &self.mesh;
         *self.ranges.entry(key).or_insert_with(|| match &view.expression {
             Some(d) => d.range(mesh, view.field, view.step).unwrap_or((0.0, 1.0)),
@@ -384,7 +384,7 @@ impl SpectralRenderer {
     }
 
     fn pipelines_for(&mut self, target: &DrawTarget<'_>, view: &SpectralView) -> Result<()> {
-        let key = (target.key(), view.expression.as_ref().map(|d| d.expression.text.clone()));
+        let key = (target.key(), view.expression_key());
         if self.pipelines.contains_key(&key) {
             return Ok(());
         }
@@ -525,7 +525,7 @@ impl SpectralRenderer {
         if surface && !fresh {
             self.tessellator_for(&push)?;
         }
-        let p = &self.pipelines[&(target.key(), view.expression.as_ref().map(|d| d.expression.text.clone()))];
+        let p = &self.pipelines[&(target.key(), view.expression_key())];
         let extent = target.viewport();
         let (edges, edge_count) = (&self.edges, self.counts[2]);
         let (overdraw, mesh_lines) = (view.overdraw, view.edges);

@@ -123,6 +123,14 @@ pub struct SpectralView {
     pub expression: Option<std::sync::Arc<crate::expression::spectral::DerivedField>>,
 }
 
+impl SpectralView {
+    /// The derived field's text, which keys its shader, pipelines, ranges and uploads
+    /// (`None`: the field itself).
+    pub(crate) fn expression_key(&self) -> Option<String> {
+        self.expression.as_ref().map(|d| d.expression.text.clone())
+    }
+}
+
 impl Default for SpectralView {
     fn default() -> Self {
         Self {
