@@ -498,3 +498,108 @@ fn with_the_exact_near_field_every_row_of_a_closed_box_sums_to_one() {
     eprintln!("box 12, exact near field ({exact} pairs): mean row sum {mean}, worst off by {worst}");
     assert!(worst < 0.01, "worst row sum off by {worst}");
 }
+
+/// The exact near field as Table 2's correction `Q` (issue 28, `radiosity::near_correction`):
+/// centroid form factors plus the stored correction equal the exact near field's
+/// ([`form_factors_exact_near`]) on every near pair — to the f32 storage of the correction,
+/// 6e-8 of it, so 1e-7 of the largest form factor — and the chain
+/// `b = (I − E ⊗₂ p − Q ⊗₂ x)⁻¹ ⊗₁ e` evaluated in the full space with weights `x` over two
+/// configurations equals the direct solve with `F + Σₜ xₜ ΔF_t`: both f64 on the same
+/// corrections, so 10⁻¹² as for the chain without `Q`.
+#[test]
+fn the_near_field_correction_is_exact_on_near_pairs_and_enters_the_chain_as_q() {
+    use galerkin::radiosity::chain::{radiosity_near_corrected, stack_channels, table2_model};
+    use galerkin::radiosity::form_factor::visibility;
+    use galerkin::radiosity::near_correction::{
+        apply, near_corrections, NearCorrection, NearCorrectionTensor,
+    };
+    use galerkin::radiosity::near_field::{form_factors_exact_near, is_near, DEFAULT_REACH};
+    use galerkin::reduce::StreamedTensor;
+    use std::collections::BTreeMap;
+    use std::sync::Arc;
+    let mut base = unit_box(3);
+    base.append(&SceneMesh::parallelogram(
+        DVec3::new(0.3, 0.3, 0.6),
+        DVec3::Y * 0.4,
+        DVec3::X * 0.4,
+        2,
+        [0.6; 3],
+        "panel",
+    ));
+    for (i, a) in base.albedo.iter_mut().enumerate() {
+        *a = [0.3 + 0.4 * ((i % 5) as f64 / 5.0), 0.5, 0.7 - 0.3 * ((i % 3) as f64 / 3.0)];
+    }
+    let deformed = |s: f64| {
+        let g: Vec<f64> = base
+            .vertices
+            .iter()
+            .flat_map(|v| {
+                [
+                    v.x + s * (3.0 * v.y).sin(),
+                    v.y + 0.8 * s * (2.0 * v.z).cos() * v.x,
+                    v.z * (1.0 + 2.0 * s * v.x),
+                ]
+            })
+            .collect();
+        base.with_g(&g).unwrap()
+    };
+    let meshes = [deformed(0.02), deformed(0.05)];
+    let n = base.len();
+    let mut corrections: Vec<(NearCorrection, Arc<[f64]>)> = Vec::new();
+    for mesh in &meshes {
+        let g = mesh.geometry();
+        let centroid = form_factors(mesh, NearField::Regularised);
+        let delta = near_corrections(&|i| mesh.corners(i), &g, &centroid, DEFAULT_REACH);
+        let mut corrected = centroid.clone();
+        apply(&mut corrected, &delta, &g.areas);
+        let (exact, integrated) = form_factors_exact_near(mesh, DEFAULT_REACH);
+        let top = exact.values.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+        let mut near = 0;
+        let mut worst = 0.0f64;
+        for i in 0..n {
+            for j in 0..n {
+                if i != j && centroid.get(i, j) > 0.0 && is_near(&g, i, j, DEFAULT_REACH) {
+                    near += 1;
+                    worst = worst.max((corrected.get(i, j) - exact.get(i, j)).abs());
+                }
+            }
+        }
+        eprintln!("{near} near pairs ({integrated} integrated exactly): corrected against exact {:.1e} of max {top:.3}", worst / top);
+        assert!(near > 1000 && delta.len() > 500, "{near} near pairs, {} corrections", delta.len());
+        assert!(worst <= 1e-7 * top, "the corrected form factors are off the exact ones by {worst}");
+        corrections.push((delta.into(), g.areas.clone().into()));
+    }
+    // The chain with Q at the second configuration's geometry and visibility, blended weights.
+    let mesh = &meshes[1];
+    let g = mesh.g();
+    let v = visibility(mesh);
+    let e: Vec<[f64; 3]> = (0..n).map(|i| if i < 18 { [1.0, 0.9, 0.8] } else { [0.0; 3] }).collect();
+    let e_stacked = stack_channels(&e);
+    let x = [0.25, 0.75];
+    let q = NearCorrectionTensor::new(mesh.albedo.clone(), corrections.clone());
+    let model = table2_model(mesh, NearField::Regularised, radiosity_near_corrected())
+        .with_tensor("Q", &["b", "b", "x"], StreamedTensor::new(Arc::new(q)))
+        .with_input("x", "x");
+    model.check().unwrap();
+    let inputs: BTreeMap<&str, &[f64]> =
+        [("g", g.as_slice()), ("v", v.as_slice()), ("e", e_stacked.as_slice()), ("x", x.as_slice())].into();
+    let b = model.evaluate(&inputs).unwrap();
+    let mut f = form_factors(mesh, NearField::Regularised);
+    for ((delta, areas), xt) in corrections.iter().zip(x) {
+        let mut part = galerkin::radiosity::FormFactors { n, values: vec![0.0; n * n] };
+        apply(&mut part, delta, areas);
+        for (fk, pk) in f.values.iter_mut().zip(&part.values) {
+            *fk += xt * pk;
+        }
+    }
+    let want = stack_channels(&solve_direct(&f, &mesh.albedo, &e).unwrap());
+    let top = want.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    let worst = b.data().iter().zip(&want).fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+    eprintln!("corrected chain vs direct radiosity: worst {:.2e} of max {top:.3}", worst / top);
+    assert!(worst <= 1e-12 * top, "radiosity off by {worst}");
+    // The correction matters here: without Q the radiosity is visibly different.
+    let plain =
+        stack_channels(&solve_direct(&form_factors(mesh, NearField::Regularised), &mesh.albedo, &e).unwrap());
+    let moved = plain.iter().zip(&want).fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+    assert!(moved > 1e-3 * top, "the correction moved the radiosity by only {moved}");
+}

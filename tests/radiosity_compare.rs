@@ -32,7 +32,7 @@ fn compare_measures_the_receiving_surfaces_all_faces_and_each_room() {
     let params = sample_parameters(&space.ranges(), &space.defaults(), 6, 5);
     let options =
         TrainOptions { samples: 6, energy: 0.99, cap: 4, radiosity_cap: 8, ..TrainOptions::default() };
-    let configurations = solve_configurations(space, &params, options.near, &|_| {}).expect("solved");
+    let configurations = solve_configurations(space, &params, &options, &|_| {}).expect("solved");
     let (model, _) = train(space, &configurations, &options, &|_, _, _| {}).expect("trained");
 
     let dir = tempfile::Builder::new().prefix("galerkin-compare-").tempdir().expect("scratch");

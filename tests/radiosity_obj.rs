@@ -31,7 +31,7 @@ fn an_obj_scene_with_a_deformation_target_trains_and_reduces() {
     let params = sample_parameters(&scene.ranges(), &scene.defaults(), 6, 1);
     let options =
         TrainOptions { samples: 6, energy: 1.0, cap: 1000, radiosity_cap: 2000, ..TrainOptions::default() };
-    let configurations = solve_configurations(&scene, &params, options.near, &|_| {}).unwrap();
+    let configurations = solve_configurations(&scene, &params, &options, &|_| {}).unwrap();
     let (model, _) = train(&scene, &configurations, &options, &|_, _, _| {}).unwrap();
     for c in &configurations {
         let (b, _) = model.evaluate(&scene.mesh(&c.params).unwrap()).unwrap();

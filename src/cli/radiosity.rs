@@ -73,6 +73,13 @@ pub struct TrainArgs {
     /// (direct light from an overcast sky computed at run time outside it).
     #[arg(long, value_parser = ["area", "sky"])]
     pub lights: Option<String>,
+    /// Form factors of near pairs: `exact` (the default with area lights: exact polygon form
+    /// factors for visible pairs within 4 face diameters, in the training solves and in the
+    /// model as a precomputed correction blended by Eq. 17's weights; about 3× the training
+    /// time) or `centroid` (Table 2 as printed: Eq. 15 with the regularised near field, low
+    /// where faces meet; the default and the only choice with sky lighting).
+    #[arg(long, value_parser = ["centroid", "exact"])]
+    pub near_field: Option<String>,
 }
 
 /// Arguments of `galerkin radiosity view`.
@@ -130,11 +137,13 @@ pub struct CompareArgs {
     /// they depend on the scene alone, so they can be made before or while a model trains.
     #[arg(long, requires = "full_frames")]
     pub full_only: bool,
-    /// The full frames' form factors: `centroid` (what the model is trained on: the error of
-    /// the reduction) or `exact` (exact polygon form factors for near pairs: the error against
-    /// the accurate full radiosity, about 8× slower per full frame).
-    #[arg(long, value_parser = ["centroid", "exact"], default_value = "centroid")]
-    pub full_near_field: String,
+    /// The full frames' form factors: `exact` (exact polygon form factors for near pairs: the
+    /// accurate full radiosity, about 8× slower per full frame) or `centroid` (Eq. 15 with the
+    /// regularised near field). By default what the model was trained with: `exact` for a
+    /// model carrying the exact near field, else `centroid` (then the error is the
+    /// reduction's alone, not the centroid form factors' bias).
+    #[arg(long, value_parser = ["centroid", "exact"])]
+    pub full_near_field: Option<String>,
 }
 
 /// What a picture or window shows: the configuration and how it is looked at.
@@ -293,6 +302,12 @@ fn train(args: &TrainArgs, ranks: &dyn Communicator) -> Result<()> {
         cap: args.cap,
         radiosity_cap: 2 * args.cap,
         seed: args.seed,
+        near_correction: match (args.near_field.as_deref(), scene.space().lights().mode) {
+            (Some("exact"), _) | (None, galerkin::radiosity::LightMode::Area) => {
+                Some(galerkin::radiosity::near_field::DEFAULT_REACH)
+            }
+            _ => None,
+        },
         ..TrainOptions::default()
     };
     let bars = std::sync::Mutex::new(std::collections::BTreeMap::<String, indicatif::ProgressBar>::new());
@@ -340,6 +355,9 @@ fn train(args: &TrainArgs, ranks: &dyn Communicator) -> Result<()> {
     for (name, m) in &t.report.merged {
         println!("merged basis {name}: {m} vectors");
     }
+    if t.model.has_near_correction() {
+        println!("the exact near field is in the model (Q: one correction per sample, blended by Eq. 17's weights)");
+    }
     println!("model size on disk: {:.1} MB", t.bytes_on_disk as f64 / 1e6);
     Ok(())
 }
@@ -347,9 +365,14 @@ fn train(args: &TrainArgs, ranks: &dyn Communicator) -> Result<()> {
 fn compare(args: &CompareArgs) -> Result<()> {
     use galerkin::radiosity::compare::{self, CompareOptions, Progress};
     compare::check_frames(&args.frames)?;
-    let method = match args.full_near_field.as_str() {
-        "exact" => FormFactorMethod::ExactNear { reach: galerkin::radiosity::near_field::DEFAULT_REACH },
-        _ => FormFactorMethod::Centroid,
+    let exact = FormFactorMethod::ExactNear { reach: galerkin::radiosity::near_field::DEFAULT_REACH };
+    // The full frames' form factors: as asked, else as the model was trained (without a
+    // model, --full-only: as a model of this lighting trains by default).
+    let method_for = |trained_exact: bool| match args.full_near_field.as_deref() {
+        Some("exact") => exact,
+        Some(_) => FormFactorMethod::Centroid,
+        None if trained_exact => exact,
+        None => FormFactorMethod::Centroid,
     };
     let scene = AnyScene::load(&args.scene, light_mode(args.lights.as_deref()))?;
     let mut bar: Option<indicatif::ProgressBar> = None;
@@ -380,6 +403,7 @@ fn compare(args: &CompareArgs) -> Result<()> {
     };
     if args.full_only {
         let dir = args.full_frames.as_ref().context("--full-only needs --full-frames DIR")?;
+        let method = method_for(scene.space().lights().mode == galerkin::radiosity::LightMode::Area);
         for path in compare::keep_full_frames(&scene, &args.scene, &args.frames, dir, method, &mut progress)?
         {
             eprintln!("full frames kept in {}", path.display());
@@ -391,7 +415,7 @@ fn compare(args: &CompareArgs) -> Result<()> {
         model.set_eq17(galerkin::radiosity::visibility::Eq17::Printed);
     }
     let options = CompareOptions {
-        full_form_factors: method,
+        full_form_factors: method_for(model.has_near_correction()),
         frames: args.frames.clone(),
         full_frames: args.full_frames.clone(),
         timed_full: args.timed_full as usize,
@@ -401,7 +425,12 @@ fn compare(args: &CompareArgs) -> Result<()> {
         .with_context(|| format!("comparing {} with {}", args.model.display(), args.scene.display()))?;
     let pct = |(m, w): (f64, f64)| format!("{:.2} % | {:.2} %", 100.0 * m, 100.0 * w);
     println!(
-        "Relative error, area-weighted over faces and channels (emitters: the window and skylight faces)"
+        "Relative error against the full solve with {} form factors, area-weighted over faces and channels (emitters: the window and skylight faces); the model {}",
+        match options.full_form_factors {
+            FormFactorMethod::Centroid => "centroid (regularised near field)",
+            FormFactorMethod::ExactNear { .. } => "exact near-field",
+        },
+        if model.has_near_correction() { "carries the exact near field" } else { "has centroid form factors only" }
     );
     println!(
         "| sequence | frames | receiving surfaces: mean | worst frame | all faces, emitters included: mean | worst frame |\n|---|---:|---:|---:|---:|---:|"

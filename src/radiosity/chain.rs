@@ -17,6 +17,7 @@
 //! | squared areas | `aᵢ = nᵢ·nᵢ` | `a = A ⊗₁ n ⊗₂ n` | A: a, n, n |
 //! | form factors | `p_k = d_k / √aᵢ` | `p = (P ⊗₂ a)^(−½) ⊗₁ d` | P: dp, dp, a |
 //! | radiosity | `b = (I − ρF)⁻¹ e` | `b = (I − E ⊗₂ p)⁻¹ ⊗₁ e` | I: b, b; E: b, b, dp |
+//! | with the exact near field | `b = (I − ρ(F + Σₜ xₜ ΔF_t))⁻¹ e` | `b = (I − E ⊗₂ p − Q ⊗₂ x)⁻¹ ⊗₁ e` | Q: b, b, x |
 //!
 //! The bases carry the paper's constraints in their names: `B_s = B_h` ("sh"), `B_d = B_p`
 //! ("dp"), `B_e = B_b` ("b") — §4's rule that an inverted or rooted matrix has one basis on
@@ -63,6 +64,15 @@ pub fn form_factors() -> Expr {
 /// `b = (I − E ⊗₂ p)⁻¹ ⊗₁ e` (Eq. 16), the three channels stacked.
 pub fn radiosity() -> Expr {
     Expr::tensor("I").minus(Expr::tensor("E").times(2, form_factors())).inverse().times(1, Expr::input("e"))
+}
+
+/// `b = (I − E ⊗₂ p − Q ⊗₂ x)⁻¹ ⊗₁ e`: Eq. 16 with the exact near field as a precomputed
+/// correction `Q` (axes b, b, x) blended by Eq. 17's weights `x`
+/// ([`super::near_correction`]).
+pub fn radiosity_near_corrected() -> Expr {
+    let operator =
+        Expr::tensor("E").times(2, form_factors()).plus(Expr::tensor("Q").times(2, Expr::input("x")));
+    Expr::tensor("I").minus(operator).inverse().times(1, Expr::input("e"))
 }
 
 /// Table 2's tensors for `mesh`'s topology and albedo, as a model computing `output`

@@ -26,6 +26,7 @@ pub mod full_frames;
 pub mod gpu;
 pub mod lighting;
 pub mod mesh;
+pub mod near_correction;
 pub mod near_field;
 pub mod obj;
 pub mod picture;

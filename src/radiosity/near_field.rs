@@ -218,6 +218,13 @@ mod tests {
 /// distance squared.
 pub const DEFAULT_REACH: f64 = 4.0;
 
+/// Whether faces `i` and `j` are near: centroids closer than `reach` times the larger face's
+/// diameter (the root of its summed squared edge lengths).
+pub fn is_near(g: &super::FaceGeometry, i: usize, j: usize, reach: f64) -> bool {
+    let diameter = g.edge_squares[i].max(g.edge_squares[j]).sqrt();
+    (g.centroids[j] - g.centroids[i]).length() < reach * diameter
+}
+
 /// How the full solve's form factors treat near pairs.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub enum FormFactorMethod {
@@ -254,8 +261,7 @@ pub fn form_factors_exact_near(
             row.iter()
                 .map(|&j| {
                     let j = j as usize;
-                    let diameter = g.edge_squares[i].max(g.edge_squares[j]).sqrt();
-                    let near = (g.centroids[j] - g.centroids[i]).length() < reach * diameter;
+                    let near = is_near(&g, i, j, reach);
                     let exact =
                         if near { exact_form_factor(&mesh.corners(i), &mesh.corners(j)) } else { None };
                     match exact {

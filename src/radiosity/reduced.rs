@@ -116,8 +116,16 @@ impl ReducedRadiosity {
                 return Err(bad(format!("basis `{name}` has {} rows for {faces} faces", b.full_dim())));
             }
         }
+        let t = visibility.geometry().shape()[1];
+        if let Some(q) = model.tensor("Q") {
+            if q.shape().get(2) != Some(&t) {
+                return Err(bad(format!(
+                    "the near-field correction has {:?} configurations, the learned visibility {t}",
+                    q.shape().get(2)
+                )));
+            }
+        }
         if let Some(sky) = &sky {
-            let t = visibility.geometry().shape()[1];
             let words = (faces * sky.openings.len()).div_ceil(64);
             if sky.bits.len() != t || sky.bits.iter().any(|b| b.len() != words) {
                 return Err(bad(format!(
@@ -154,6 +162,12 @@ impl ReducedRadiosity {
             .tensors()
             .flat_map(|(_, axes, t)| axes.iter().cloned().zip(t.shape().iter().copied()))
             .collect()
+    }
+
+    /// Whether the model carries the exact near field as a correction
+    /// ([`super::near_correction`]).
+    pub fn has_near_correction(&self) -> bool {
+        self.model.tensor("Q").is_some()
     }
 
     /// How the model was trained to be lit.
@@ -195,8 +209,11 @@ impl ReducedRadiosity {
         };
         times.direct = t2.elapsed().as_secs_f64();
         let t2 = Instant::now();
-        let inputs: BTreeMap<&str, &[f64]> =
+        let mut inputs: BTreeMap<&str, &[f64]> =
             [("g", ghat.as_slice()), ("v", vhat.as_slice()), ("e", ehat)].into();
+        if self.has_near_correction() {
+            inputs.insert("x", &x);
+        }
         let bhat = self.model.evaluate(&inputs).map_err(err)?;
         let t3 = Instant::now();
         let b = self.model.lift(bhat.data()).map_err(err)?;

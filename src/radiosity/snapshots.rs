@@ -273,6 +273,7 @@ mod tests {
                     visibility,
                     emission: vec![[0.0; 3]; n],
                     radiosity: vec![[0.0; 3]; n],
+                    near_correction: Vec::new().into(),
                 }
             })
             .collect();

@@ -8,9 +8,9 @@
 //! reader checks every count against the bytes that remain before allocating from it.
 
 use super::error::RadiosityError;
-use super::form_factor::NearField;
 use super::mesh::FaceGeometry;
-use super::train::{solve_configurations, Configuration, DesignSpace};
+use super::near_correction::NearCorrection;
+use super::train::{solve_configurations, Configuration, DesignSpace, TrainOptions};
 use crate::reduce::Communicator;
 use glam::DVec3;
 
@@ -19,12 +19,12 @@ use glam::DVec3;
 pub fn solve_configurations_across(
     space: &dyn DesignSpace,
     params: &[Vec<f64>],
-    near: NearField,
+    options: &TrainOptions,
     progress: &(dyn Fn(usize) + Sync),
     ranks: &dyn Communicator,
 ) -> Result<Vec<Configuration>, RadiosityError> {
     let share = ranks.share(params.len());
-    let mine = solve_configurations(space, &params[share], near, progress)?;
+    let mine = solve_configurations(space, &params[share], options, progress)?;
     if ranks.size() == 1 {
         return Ok(mine);
     }
@@ -65,7 +65,7 @@ fn vec3s(v: &[DVec3]) -> impl Iterator<Item = f64> + '_ {
 /// Appends `c` to `out`.
 fn encode(c: &Configuration, out: &mut Vec<u8>) {
     let n = c.geometry.areas.len();
-    for count in [c.params.len(), c.g.len(), n, c.visibility.len()] {
+    for count in [c.params.len(), c.g.len(), n, c.visibility.len(), c.near_correction.len()] {
         out.extend_from_slice(&(count as u64).to_le_bytes());
     }
     put_f64s(out, c.params.iter().copied());
@@ -79,6 +79,9 @@ fn encode(c: &Configuration, out: &mut Vec<u8>) {
     }
     put_f64s(out, c.emission.iter().flatten().copied());
     put_f64s(out, c.radiosity.iter().flatten().copied());
+    for &(k, delta) in c.near_correction.iter() {
+        out.extend_from_slice(&(u64::from(k) | u64::from(delta.to_bits()) << 32).to_le_bytes());
+    }
 }
 
 struct Reader<'a> {
@@ -122,6 +125,7 @@ impl Reader<'_> {
 
     fn configuration(&mut self) -> Result<Configuration, RadiosityError> {
         let (params, g, n, words) = (self.word()?, self.word()?, self.word()?, self.word()?);
+        let corrections = self.word()?;
         Ok(Configuration {
             params: self.f64s(params)?,
             g: self.f64s(g)?,
@@ -134,6 +138,21 @@ impl Reader<'_> {
             visibility: self.words(words)?,
             emission: self.rgbs(n)?,
             radiosity: self.rgbs(n)?,
+            near_correction: self.near_correction(corrections, n)?,
         })
+    }
+
+    /// `count` near-field corrections of `n` faces (pairs `k = n·i + j` with `i < j`).
+    fn near_correction(&mut self, count: u64, n: u64) -> Result<NearCorrection, RadiosityError> {
+        let entries = self.words(count)?;
+        let mut out = Vec::with_capacity(entries.len());
+        for w in entries {
+            let (k, delta) = (w & 0xFFFF_FFFF, f32::from_bits((w >> 32) as u32));
+            if k / n.max(1) >= k % n.max(1) || !delta.is_finite() {
+                return Err(self.bad(&format!("near-field correction of pair {k} for {n} faces")));
+            }
+            out.push((k as u32, delta));
+        }
+        Ok(out.into())
     }
 }
