@@ -103,6 +103,24 @@ fn compare_measures_the_receiving_surfaces_all_faces_and_each_room() {
     assert_eq!(csv.lines().count(), 1 + 3 + 2);
     assert!(report.plot.exists());
 
+    // The design space's 16 corners, each against a plain recomputation; their table.
+    assert_eq!(report.corners.len(), 16);
+    for (p, e) in &report.corners {
+        assert!(p.iter().zip(space.ranges()).all(|(v, r)| *v == r[0] || *v == r[1]), "{p:?}");
+        let mesh = space.mesh(p).expect("mesh");
+        let full = galerkin::radiosity::full_radiosity_of(mesh.clone(), space.lights()).expect("full");
+        let (b, _) = model.evaluate(&mesh).expect("reduced");
+        let recv =
+            plain_error(&b, &full.radiosity, &full.geometry.areas, &|i| mesh.kind[i] == FaceKind::Surface);
+        assert!((e.groups[0] - recv).abs() <= 1e-12 * recv, "corner {p:?}: {} vs {recv}", e.groups[0]);
+    }
+    let (_, worst, at) = report.corners_overall(Some(0)).expect("corners");
+    let top = report.corners.iter().map(|(_, e)| e.groups[0]).fold(0.0f64, f64::max);
+    assert_eq!(worst, top);
+    assert!(report.corners.iter().any(|(p, e)| p.as_slice() == at && e.groups[0] == top));
+    let corners_csv = std::fs::read_to_string(compare_options.out.join("corners.csv")).expect("corners.csv");
+    assert_eq!(corners_csv.lines().count(), 1 + 16);
+
     // A second run reads the kept full frames back: the same errors.
     let again = compare(&scene, Path::new(SMALL), &model, &compare_options, &mut |_| {}).expect("again");
     for (a, b) in report.sequences.iter().zip(&again.sequences) {

@@ -451,6 +451,20 @@ fn compare(args: &CompareArgs) -> Result<()> {
             pct(r.overall(Some(k))).replace(" | ", ", worst ")
         );
     }
+    if let (Some((mean, worst, at)), Some((all_mean, all_worst, _))) =
+        (r.corners_overall(Some(0)), r.corners_overall(None))
+    {
+        let at: Vec<String> = scene.names().iter().zip(at).map(|(n, v)| format!("{n}={v}")).collect();
+        println!(
+            "corners of the design space ({}, training configurations): receiving surfaces mean {:.2} %, worst {:.2} % (at {}); all faces {:.2} %, {:.2} %",
+            r.corners.len(),
+            100.0 * mean,
+            100.0 * worst,
+            at.join(","),
+            100.0 * all_mean,
+            100.0 * all_worst
+        );
+    }
     let (full, reduced) = (r.full_median_s, r.reduced_median_s);
     println!(
         "median frame: full {:.1} ms ({:.2} FPS, {} frames solved in this run), reduced {:.3} ms ({:.0} FPS, mesh build and lift included): {:.0}× faster",
@@ -470,7 +484,7 @@ fn compare(args: &CompareArgs) -> Result<()> {
         share(2),
         share(3)
     );
-    println!("→ {} and {}", r.csv.display(), r.plot.display());
+    println!("→ {}, {} and corners.csv", r.csv.display(), r.plot.display());
     Ok(())
 }
 

@@ -117,6 +117,18 @@ pub struct FrameError {
     pub groups: Vec<f64>,
 }
 
+/// The errors of reduced radiosity `b` against the full `frame`, over all faces and each group.
+fn frame_error(b: &[Rgb], frame: &FullFrame, groups: &FaceGroups) -> FrameError {
+    FrameError {
+        all: super::reduced::relative_error(b, &frame.radiosity, &frame.areas),
+        groups: groups
+            .faces
+            .iter()
+            .map(|faces| relative_error_over(b, &frame.radiosity, &frame.areas, faces))
+            .collect(),
+    }
+}
+
 /// Mean and worst of a series.
 fn mean_worst(v: impl Iterator<Item = f64> + Clone) -> (f64, f64) {
     let n = v.clone().count().max(1) as f64;
@@ -149,6 +161,9 @@ pub struct CompareReport {
     pub groups: FaceGroups,
     /// Per sequence.
     pub sequences: Vec<SequenceReport>,
+    /// The design space's corners ([`super::train::box_corners`]; in the training set, since
+    /// the sampler takes them all): each corner's parameters and errors.
+    pub corners: Vec<(Vec<f64>, FrameError)>,
     /// Median seconds of a full frame solved in this run, and how many were.
     pub full_median_s: f64,
     /// Full frames solved in this run.
@@ -168,10 +183,23 @@ impl CompareReport {
     /// Mean and worst over every frame of every sequence, over group `k` (`None`: all faces).
     pub fn overall(&self, k: Option<usize>) -> (f64, f64) {
         let all = self.sequences.iter().flat_map(|s| &s.errors);
-        mean_worst(all.map(move |e| match k {
-            None => e.all,
-            Some(k) => e.groups.get(k).copied().unwrap_or(f64::NAN),
-        }))
+        mean_worst(all.map(move |e| pick(e, k)))
+    }
+
+    /// Mean and worst over the corners, over group `k` (`None`: all faces), and the worst
+    /// corner's parameters (`None` without corners).
+    pub fn corners_overall(&self, k: Option<usize>) -> Option<(f64, f64, &[f64])> {
+        let worst = self.corners.iter().max_by(|a, b| pick(&a.1, k).total_cmp(&pick(&b.1, k)))?;
+        let (mean, top) = mean_worst(self.corners.iter().map(|(_, e)| pick(e, k)));
+        Some((mean, top, &worst.0))
+    }
+}
+
+/// Error `e` over group `k` (`None`: all faces).
+fn pick(e: &FrameError, k: Option<usize>) -> f64 {
+    match k {
+        None => e.all,
+        Some(k) => e.groups.get(k).copied().unwrap_or(f64::NAN),
     }
 }
 
@@ -314,14 +342,7 @@ pub fn compare(
                 (Some(frame), false) => frame,
                 (None, false) => bail!("frame {f} of sequence {} was neither kept nor solved", which + 1),
             };
-            let error = FrameError {
-                all: super::reduced::relative_error(&b, &reference.radiosity, &reference.areas),
-                groups: groups
-                    .faces
-                    .iter()
-                    .map(|faces| relative_error_over(&b, &reference.radiosity, &reference.areas, faces))
-                    .collect(),
-            };
+            let error = frame_error(&b, reference, &groups);
             let values: Vec<String> = p.iter().map(|v| v.to_string()).collect();
             let group_values: Vec<String> = error.groups.iter().map(|e| format!("{e:.6}")).collect();
             rows.push(format!(
@@ -347,6 +368,22 @@ pub fn compare(
         std::fs::write(&csv, rows.join("\n") + "\n").with_context(|| format!("writing {}", csv.display()))?;
         sequences.push(report);
     }
+    // The corners of the design space, solved in full and reduced like frames.
+    let mut corners = Vec::new();
+    let mut corner_rows =
+        vec![format!("{},relative_error,{}", scene.names().join(","), group_columns.join(","))];
+    for p in super::train::box_corners(&ranges) {
+        let full = FullFrame::solve(spec, &p, options.full_form_factors)?;
+        let (b, _) = model.evaluate(&spec.mesh(&p)?)?;
+        let error = frame_error(&b, &full, &groups);
+        let values: Vec<String> = p.iter().map(|v| v.to_string()).collect();
+        let group_values: Vec<String> = error.groups.iter().map(|e| format!("{e:.6}")).collect();
+        corner_rows.push(format!("{},{:.6},{}", values.join(","), error.all, group_values.join(",")));
+        corners.push((p, error));
+    }
+    let corners_csv = options.out.join("corners.csv");
+    std::fs::write(&corners_csv, corner_rows.join("\n") + "\n")
+        .with_context(|| format!("writing {}", corners_csv.display()))?;
     let plot = options.out.join("compare.png");
     let mut lines: Vec<crate::plot::Line> = Vec::new();
     for (label, pick) in [("receiving surfaces", Some(0)), ("all faces, emitters included", None)] {
@@ -374,6 +411,7 @@ pub fn compare(
     Ok(CompareReport {
         groups,
         sequences,
+        corners,
         full_median_s: crate::bench::median_f64(&mut full_times),
         full_solved,
         reduced_median_s: crate::bench::median_f64(&mut reduced_times),

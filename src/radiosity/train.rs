@@ -125,6 +125,19 @@ fn splitmix(state: &mut u64) -> f64 {
     (z >> 11) as f64 / (1u64 << 53) as f64
 }
 
+/// Most parameters whose box corners are sampled and measured (2¹⁰ corners).
+pub const MAX_CORNER_PARAMETERS: usize = 10;
+
+/// Every corner of the box `ranges` (parameter `a` at its low end where bit `a` of the corner's
+/// index is 0), or none beyond [`MAX_CORNER_PARAMETERS`] parameters.
+pub fn box_corners(ranges: &[[f64; 2]]) -> Vec<Vec<f64>> {
+    let d = ranges.len();
+    if d > MAX_CORNER_PARAMETERS {
+        return Vec::new();
+    }
+    (0..1u32 << d).map(|corner| (0..d).map(|a| ranges[a][((corner >> a) & 1) as usize]).collect()).collect()
+}
+
 /// The training configurations: every axis's two extremes (the others at their defaults),
 /// every corner of the box (up to 10 parameters), then a Latin hypercube for the rest.
 pub fn sample_parameters(ranges: &[[f64; 2]], defaults: &[f64], samples: usize, seed: u64) -> Vec<Vec<f64>> {
@@ -142,10 +155,8 @@ pub fn sample_parameters(ranges: &[[f64; 2]], defaults: &[f64], samples: usize, 
             push(p, &mut out);
         }
     }
-    if d <= 10 {
-        for corner in 0..1u32 << d {
-            push((0..d).map(|a| ranges[a][((corner >> a) & 1) as usize]).collect(), &mut out);
-        }
+    for corner in box_corners(ranges) {
+        push(corner, &mut out);
     }
     let rest = samples.saturating_sub(out.len());
     let mut state = seed;
@@ -400,13 +411,7 @@ pub fn train_across(
     let Some(first) = configurations.first() else {
         return Err(RadiosityError::Solve("no training configurations".into()));
     };
-    if options.near_correction.is_some() && space.lights().mode == LightMode::Sky {
-        return Err(RadiosityError::Solve(
-            "the exact near field is not available with sky lighting (its direct light is computed \
-             outside the model with centroid form factors): train with the centroid near field"
-                .into(),
-        ));
-    }
+    options.check_lights(space.lights().mode)?;
     let n = first.geometry.areas.len();
     let vertices = first.g.len() / 3;
     let reduce_err = |e: ReduceError| RadiosityError::Solve(e.to_string());
@@ -589,6 +594,20 @@ fn sent_mb(ranks: &dyn Communicator) -> f64 {
 }
 
 impl TrainOptions {
+    /// Refuses the exact near field with sky lighting, whose direct light is computed outside
+    /// the model with centroid form factors.
+    pub fn check_lights(&self, mode: LightMode) -> Result<(), RadiosityError> {
+        if self.near_correction.is_some() && mode == LightMode::Sky {
+            return Err(RadiosityError::Solve(
+                "the exact near field is not available with sky lighting (its direct light is \
+                 computed outside the model with centroid form factors): train with the centroid \
+                 near field"
+                    .into(),
+            ));
+        }
+        Ok(())
+    }
+
     /// Refuses options no training can use: an energy fraction outside (0, 1], a cap of 0,
     /// fewer than 2 samples.
     pub fn check(&self) -> Result<(), RadiosityError> {
@@ -643,6 +662,7 @@ pub fn train_and_save(
     ranks: &dyn Communicator,
 ) -> Result<TrainedScene, RadiosityError> {
     options.check()?;
+    options.check_lights(space.lights().mode)?;
     let start = std::time::Instant::now();
     let params = sample_parameters(&space.ranges(), &space.defaults(), options.samples, options.seed);
     let total = ranks.share(params.len()).len() as u64;
