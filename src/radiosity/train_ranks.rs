@@ -156,3 +156,46 @@ impl Reader<'_> {
         Ok(out.into())
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn configuration(n: usize, correction: Vec<(u32, f32)>) -> Configuration {
+        Configuration {
+            params: vec![0.5, 1.5],
+            g: (0..9).map(f64::from).collect(),
+            geometry: FaceGeometry {
+                centroids: vec![DVec3::new(1.0, 2.0, 3.0); n],
+                normals: vec![DVec3::Z; n],
+                areas: vec![0.25; n],
+                edge_squares: vec![1.0; n],
+            },
+            visibility: vec![0b1011; (n * n).div_ceil(64)],
+            emission: vec![[1.0, 0.5, 0.25]; n],
+            radiosity: vec![[2.0, 1.0, 0.5]; n],
+            near_correction: correction.into(),
+        }
+    }
+
+    /// A configuration with its near-field correction crosses ranks whole; a correction naming
+    /// a pair that is not `i < j` of its faces, or a non-finite value, is refused before it
+    /// can reach the tensor `Q`.
+    #[test]
+    fn configurations_cross_ranks_with_their_near_field_corrections() {
+        let n = 3;
+        let good = configuration(n, vec![(1, 0.125), (2, -0.5), (5, 1e-3)]);
+        let mut bytes = Vec::new();
+        encode(&good, &mut bytes);
+        let back = Reader { bytes: &bytes, rank: 1 }.configuration().expect("read back");
+        assert_eq!(back.near_correction, good.near_correction);
+        assert_eq!((back.g, back.radiosity, back.visibility), (good.g, good.radiosity, good.visibility));
+        // (k = 4: i = j = 1; k = 3: i = 1 > j = 0; k = 9: beyond n²; a NaN.)
+        for bad in [vec![(4, 0.1)], vec![(3, 0.1)], vec![(9, 0.1)], vec![(1, f32::NAN)]] {
+            let mut bytes = Vec::new();
+            encode(&configuration(n, bad.clone()), &mut bytes);
+            let e = Reader { bytes: &bytes, rank: 2 }.configuration().expect_err("refused");
+            assert!(e.to_string().contains("rank 2") && e.to_string().contains("near-field"), "{bad:?}: {e}");
+        }
+    }
+}
