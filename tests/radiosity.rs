@@ -95,6 +95,24 @@ fn unit_box(cells: usize) -> SceneMesh {
     mesh
 }
 
+/// The 3-cell unit box with a panel inside, lit downwards, so that some pairs are occluded;
+/// albedo varying from face to face and channel to channel.
+fn box_with_panel() -> SceneMesh {
+    let mut mesh = unit_box(3);
+    mesh.append(&SceneMesh::parallelogram(
+        DVec3::new(0.3, 0.3, 0.6),
+        DVec3::Y * 0.4,
+        DVec3::X * 0.4,
+        2,
+        [0.6; 3],
+        "panel",
+    ));
+    for (i, a) in mesh.albedo.iter_mut().enumerate() {
+        *a = [0.3 + 0.4 * ((i % 5) as f64 / 5.0), 0.5, 0.7 - 0.3 * ((i % 3) as f64 / 3.0)];
+    }
+    mesh
+}
+
 /// Rows of F sum to 1 in a closed box (all light leaving a face lands somewhere), up to the
 /// centroid sampling's error, which is first order in the cell size: the mean row sum is
 /// within 2 % at 24 cells a side and its error falls by at least 40 % from 12 to 24 cells.
@@ -292,16 +310,7 @@ fn the_table2_chain_reproduces_the_direct_form_factors_and_radiosity() {
     };
     use galerkin::radiosity::form_factor::visibility;
     use std::collections::BTreeMap;
-    let mut mesh = unit_box(3);
-    // A panel inside, lit downwards, so that some pairs are occluded.
-    mesh.append(&SceneMesh::parallelogram(
-        DVec3::new(0.3, 0.3, 0.6),
-        DVec3::Y * 0.4,
-        DVec3::X * 0.4,
-        2,
-        [0.6; 3],
-        "panel",
-    ));
+    let mesh = box_with_panel();
     // Deform: every vertex moved by a smooth field (the topology stays).
     let g: Vec<f64> = mesh
         .vertices
@@ -310,10 +319,7 @@ fn the_table2_chain_reproduces_the_direct_form_factors_and_radiosity() {
             [v.x + 0.05 * (3.0 * v.y).sin(), v.y + 0.04 * (2.0 * v.z).cos() * v.x, v.z * (1.0 + 0.1 * v.x)]
         })
         .collect();
-    let mut mesh = mesh.with_g(&g).unwrap();
-    for (i, a) in mesh.albedo.iter_mut().enumerate() {
-        *a = [0.3 + 0.4 * ((i % 5) as f64 / 5.0), 0.5, 0.7 - 0.3 * ((i % 3) as f64 / 3.0)];
-    }
+    let mesh = mesh.with_g(&g).unwrap();
     let n = mesh.len();
     let v = visibility(&mesh);
     let geometry = mesh.geometry();
@@ -517,18 +523,7 @@ fn the_near_field_correction_is_exact_on_near_pairs_and_enters_the_chain_as_q() 
     use galerkin::reduce::StreamedTensor;
     use std::collections::BTreeMap;
     use std::sync::Arc;
-    let mut base = unit_box(3);
-    base.append(&SceneMesh::parallelogram(
-        DVec3::new(0.3, 0.3, 0.6),
-        DVec3::Y * 0.4,
-        DVec3::X * 0.4,
-        2,
-        [0.6; 3],
-        "panel",
-    ));
-    for (i, a) in base.albedo.iter_mut().enumerate() {
-        *a = [0.3 + 0.4 * ((i % 5) as f64 / 5.0), 0.5, 0.7 - 0.3 * ((i % 3) as f64 / 3.0)];
-    }
+    let base = box_with_panel();
     let deformed = |s: f64| {
         let g: Vec<f64> = base
             .vertices

@@ -16,6 +16,21 @@ fn spec() -> SceneSpec {
     SceneSpec::parse(SMALL, Path::new("two_rooms_small.toml")).unwrap()
 }
 
+/// The model's largest relative error (all faces) over the configurations it was trained on.
+fn worst_training_error(
+    spec: &SceneSpec,
+    model: &galerkin::radiosity::reduced::ReducedRadiosity,
+    configurations: &[galerkin::radiosity::train::Configuration],
+) -> f64 {
+    configurations
+        .iter()
+        .map(|c| {
+            let (b, _) = model.evaluate(&DesignSpace::mesh(spec, &c.params).unwrap()).unwrap();
+            relative_error(&b, &c.radiosity, &c.geometry.areas)
+        })
+        .fold(0.0f64, f64::max)
+}
+
 #[test]
 fn reduced_radiosity_reproduces_training_and_improves_with_larger_bases() {
     let spec = spec();
@@ -96,12 +111,7 @@ fn sky_lit_reduced_radiosity_reproduces_training_and_round_trips() {
     );
     let (model, _) = train(&spec, &configurations, &options, &|_, _, _| {}).unwrap();
     assert_eq!(model.light_mode(), galerkin::radiosity::LightMode::Sky);
-    let mut worst = 0.0f64;
-    for c in &configurations {
-        let mesh = DesignSpace::mesh(&spec, &c.params).unwrap();
-        let (b, _) = model.evaluate(&mesh).unwrap();
-        worst = worst.max(relative_error(&b, &c.radiosity, &c.geometry.areas));
-    }
+    let worst = worst_training_error(&spec, &model, &configurations);
     eprintln!("sky, training configurations: worst relative error {worst:.2e}");
     // As for area lights: exact but for the reduced inverse square root (measured 1.1 %).
     assert!(worst < 2e-2, "{worst}");
@@ -169,12 +179,7 @@ fn the_near_field_correction_brings_the_model_to_the_exact_full_solve() {
     assert!(configurations.iter().all(|c| c.near_correction.len() > 1000), "near pairs corrected");
     let (model, _) = train(&spec, &configurations, &exact_options, &|_, _, _| {}).unwrap();
     assert!(model.has_near_correction());
-    let mut worst = 0.0f64;
-    for c in &configurations {
-        let mesh = DesignSpace::mesh(&spec, &c.params).unwrap();
-        let (b, _) = model.evaluate(&mesh).unwrap();
-        worst = worst.max(relative_error(&b, &c.radiosity, &c.geometry.areas));
-    }
+    let worst = worst_training_error(&spec, &model, &configurations);
     eprintln!("exact near field, training configurations: worst relative error {worst:.2e}");
     assert!(worst < 2e-2, "training configurations reproduced only to {worst}");
 

@@ -129,6 +129,14 @@ fn frame_error(b: &[Rgb], frame: &FullFrame, groups: &FaceGroups) -> FrameError 
     }
 }
 
+/// A row's parameters and errors for the tables (`compare.csv`, `corners.csv`): the
+/// parameters, the all-faces error, then each group's.
+fn csv_fields(p: &[f64], error: &FrameError) -> String {
+    let values: Vec<String> = p.iter().map(|v| v.to_string()).collect();
+    let group_values: Vec<String> = error.groups.iter().map(|e| format!("{e:.6}")).collect();
+    format!("{},{:.6},{}", values.join(","), error.all, group_values.join(","))
+}
+
 /// Mean and worst of a series.
 fn mean_worst(v: impl Iterator<Item = f64> + Clone) -> (f64, f64) {
     let n = v.clone().count().max(1) as f64;
@@ -343,14 +351,10 @@ pub fn compare(
                 (None, false) => bail!("frame {f} of sequence {} was neither kept nor solved", which + 1),
             };
             let error = frame_error(&b, reference, &groups);
-            let values: Vec<String> = p.iter().map(|v| v.to_string()).collect();
-            let group_values: Vec<String> = error.groups.iter().map(|e| format!("{e:.6}")).collect();
             rows.push(format!(
-                "{},{f},{},{:.6},{},{full_ms},{:.4}",
+                "{},{f},{},{full_ms},{:.4}",
                 which + 1,
-                values.join(","),
-                error.all,
-                group_values.join(","),
+                csv_fields(p, &error),
                 reduced_s * 1e3
             ));
             errors.push(error);
@@ -376,9 +380,7 @@ pub fn compare(
         let full = FullFrame::solve(spec, &p, options.full_form_factors)?;
         let (b, _) = model.evaluate(&spec.mesh(&p)?)?;
         let error = frame_error(&b, &full, &groups);
-        let values: Vec<String> = p.iter().map(|v| v.to_string()).collect();
-        let group_values: Vec<String> = error.groups.iter().map(|e| format!("{e:.6}")).collect();
-        corner_rows.push(format!("{},{:.6},{}", values.join(","), error.all, group_values.join(",")));
+        corner_rows.push(csv_fields(&p, &error));
         corners.push((p, error));
     }
     let corners_csv = options.out.join("corners.csv");
