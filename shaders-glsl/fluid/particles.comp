@@ -51,9 +51,10 @@ layout(push_constant) uniform Push {
 const uint WALK_CAP = 64u;
 const float INSIDE = -1e-6;  // f32: a few ulps of a barycentric weight
 
-vec3 vertex_at(uint v, float t) {
-    vec3 a = vec3(0.0);
-    vec3 b = vec3(0.0);
+// Vertex v at the frame's start (a) and end (b); at fraction t it is a + t (b − a).
+void vertex_ends(uint v, out vec3 a, out vec3 b) {
+    a = vec3(0.0);
+    b = vec3(0.0);
     if (REDUCED) {
         uint m = pc.reduced.x;
         for (uint k = 0u; k < pc.dim; ++k) {
@@ -69,7 +70,6 @@ vec3 vertex_at(uint v, float t) {
             b[k] = g1[pc.dim * v + k];
         }
     }
-    return a + t * (b - a);
 }
 
 float face_flux(uint face) {
@@ -88,17 +88,25 @@ float face_flux(uint face) {
     return s;
 }
 
-void cell_points(uint c, float t, out vec3 p[4]) {
-    p[3] = vec3(0.0);
+// Cell c's corners at the frame's start and end (CellCorners in src/fluid/particles.rs): a
+// particle keeps its cell's while it stays there, so a substep evaluates no vertex (no B_g
+// row) unless the particle changes cell.
+void cell_corners(uint c, out vec3 p0[4], out vec3 p1[4]) {
+    p0[3] = vec3(0.0);
+    p1[3] = vec3(0.0);
     for (uint i = 0u; i <= pc.dim; ++i) {
-        p[i] = vertex_at(cells[(pc.dim + 1u) * c + i], t);
+        vertex_ends(cells[(pc.dim + 1u) * c + i], p0[i], p1[i]);
     }
 }
 
-// Eq. 13: u_c = V⁻¹ Σ_faces σ f (x_face − x_c).
-vec3 cell_velocity(uint c, float t) {
-    vec3 p[4];
-    cell_points(c, t, p);
+void corners_at(vec3 p0[4], vec3 p1[4], float t, out vec3 p[4]) {
+    for (uint i = 0u; i < 4u; ++i) {
+        p[i] = p0[i] + t * (p1[i] - p0[i]);
+    }
+}
+
+// Eq. 13: u_c = V⁻¹ Σ_faces σ f (x_face − x_c), with the cell's corners p.
+vec3 cell_velocity(uint c, vec3 p[4]) {
     float vol = simplex_volume(pc.dim, p);
     vec3 xc = simplex_centroid(pc.dim, p);
     vec3 u = vec3(0.0);
@@ -112,11 +120,12 @@ vec3 cell_velocity(uint c, float t) {
 }
 
 // Barycentric-clipped closest point of the cell.
-vec3 clamp_into(vec3 p[4], float vol, vec3 x) {
+vec3 clamp_into(vec3 p[4], vec3 x) {
+    vec4 b = simplex_barycentrics(pc.dim, p, x);
     float w[4];
     float s = 0.0;
     for (uint k = 0u; k <= pc.dim; ++k) {
-        w[k] = max(simplex_barycentric(pc.dim, p, vol, k, x), 0.0);
+        w[k] = max(b[k], 0.0);
         s += w[k];
     }
     if (s <= 0.0) {
@@ -129,30 +138,28 @@ vec3 clamp_into(vec3 p[4], float vol, vec3 x) {
     return out_p;
 }
 
-bool inside(uint c, float t, vec3 x) {
-    vec3 p[4];
-    cell_points(c, t, p);
-    float vol = simplex_volume(pc.dim, p);
+bool inside(vec3 p[4], vec3 x) {
+    vec4 b = simplex_barycentrics(pc.dim, p, x);
     for (uint k = 0u; k <= pc.dim; ++k) {
-        if (simplex_barycentric(pc.dim, p, vol, k, x) < INSIDE) {
+        if (b[k] < INSIDE) {
             return false;
         }
     }
     return true;
 }
 
-// 0 walked, 1 hashed, 2 clamped.
-uint locate(inout vec3 x, inout uint c, float t) {
+// 0 walked, 1 hashed, 2 clamped. p0, p1: the corners of cell c on entry and of the cell found
+// on return.
+uint locate(inout vec3 x, inout uint c, float t, inout vec3 p0[4], inout vec3 p1[4]) {
     for (uint step = 0u; step < WALK_CAP; ++step) {
         vec3 p[4];
-        cell_points(c, t, p);
-        float vol = simplex_volume(pc.dim, p);
+        corners_at(p0, p1, t, p);
+        vec4 b = simplex_barycentrics(pc.dim, p, x);
         uint worst_k = 0u;
         float worst = 1e30;
         for (uint k = 0u; k <= pc.dim; ++k) {
-            float b = simplex_barycentric(pc.dim, p, vol, k, x);
-            if (b < worst) {
-                worst = b;
+            if (b[k] < worst) {
+                worst = b[k];
                 worst_k = k;
             }
         }
@@ -162,13 +169,14 @@ uint locate(inout vec3 x, inout uint c, float t) {
         uint link = links[(pc.dim + 1u) * c + worst_k];
         uint e1 = link & 0x0fffffffu;
         if (e1 == 0u) {
-            x = clamp_into(p, vol, x);
+            x = clamp_into(p, x);
             return 2u;
         }
         uint e = e1 - 1u;
+        cell_corners(e, p0, p1);
         if ((link & 0x40000000u) != 0u) {
             vec3 q[4];
-            cell_points(e, t, q);
+            corners_at(p0, p1, t, q);
             uint theirs = (link >> 28) & 3u;
             x += simplex_face_centroid(pc.dim, q, theirs) - simplex_face_centroid(pc.dim, p, worst_k);
         }
@@ -182,14 +190,21 @@ uint locate(inout vec3 x, inout uint c, float t) {
     uint bucket = (cell_index.z * pc.grid_dims.y + cell_index.y) * pc.grid_dims.x + cell_index.x;
     for (uint i = grid_start[bucket]; i < grid_start[bucket + 1u]; ++i) {
         uint cand = grid_cells[i];
-        if (inside(cand, t, x)) {
+        vec3 q0[4];
+        vec3 q1[4];
+        vec3 q[4];
+        cell_corners(cand, q0, q1);
+        corners_at(q0, q1, t, q);
+        if (inside(q, x)) {
             c = cand;
+            p0 = q0;
+            p1 = q1;
             return 1u;
         }
     }
     vec3 p[4];
-    cell_points(c, t, p);
-    x = clamp_into(p, simplex_volume(pc.dim, p), x);
+    corners_at(p0, p1, t, p);
+    x = clamp_into(p, x);
     return 2u;
 }
 
@@ -202,21 +217,25 @@ void main() {
     uint c = floatBitsToUint(particles[i].w);
     float dt = pc.frame_time / float(pc.substeps);
     uint tally[3] = uint[3](0u, 0u, 0u);
-    // The velocity is the frame's end state's, one per cell: evaluated again only when the
-    // particle changed cell (the flux rows cost m_f per face on the reduced state).
+    // The particle's cell's corners, kept while it stays there, and the velocity of the frame's
+    // end state in that cell: evaluated again only when the particle changed cell (the flux
+    // rows cost m_f per face on the reduced state).
+    vec3 p0[4];
+    vec3 p1[4];
+    cell_corners(c, p0, p1);
     uint velocity_cell = 0xffffffffu;
     vec3 velocity = vec3(0.0);
     for (uint s = 0u; s < pc.substeps; ++s) {
         if (c != velocity_cell) {
-            velocity = cell_velocity(c, 1.0);
+            velocity = cell_velocity(c, p1);
             velocity_cell = c;
         }
         x += dt * velocity;
         float t1 = float(s + 1u) / float(pc.substeps);
-        tally[locate(x, c, t1)] += 1u;
+        tally[locate(x, c, t1, p0, p1)] += 1u;
     }
     particles[i] = vec4(x, uintBitsToFloat(c));
-    particle_speed[i] = length(c == velocity_cell ? velocity : cell_velocity(c, 1.0));
+    particle_speed[i] = length(c == velocity_cell ? velocity : cell_velocity(c, p1));
     for (uint k = 0u; k < 3u; ++k) {
         if (tally[k] != 0u) {
             atomicAdd(counts[k], tally[k]);

@@ -1,6 +1,6 @@
 // The geometry of one simplex, dimension-generic (dim 2: triangles, z = 0; dim 3: tetrahedra).
-// Twin of src/mesh/geometry.rs (signed_volume, face_area_normal, centroid, face_centroid) and
-// src/fluid/particles.rs (barycentric); the particle tests check the two agree.
+// Twin of src/mesh/geometry.rs (signed_volume, centroid, face_centroid) and
+// src/fluid/particles.rs (barycentric); tests/includes_agree.rs checks the two agree.
 #ifndef GALERKIN_SIMPLEX_GLSL
 #define GALERKIN_SIMPLEX_GLSL
 
@@ -12,20 +12,6 @@ float simplex_volume(uint dim, vec3 p[4]) {
         return 0.5 * (a.x * b.y - a.y * b.x);
     }
     return dot(a, cross(b, p[3] - p[0])) / 6.0;
-}
-
-// Outward area normal of the face opposite vertex k: −d ∂vol/∂x_k.
-vec3 simplex_face_normal(uint dim, vec3 p[4], uint k) {
-    if (dim == 2u) {
-        vec3 a = p[(k + 1u) % 3u];
-        vec3 b = p[(k + 2u) % 3u];
-        return vec3(b.y - a.y, -(b.x - a.x), 0.0);
-    }
-    vec3 g1 = cross(p[2] - p[0], p[3] - p[0]);
-    vec3 g2 = cross(p[3] - p[0], p[1] - p[0]);
-    vec3 g3 = cross(p[1] - p[0], p[2] - p[0]);
-    vec3 g = k == 0u ? -(g1 + g2 + g3) : (k == 1u ? g1 : (k == 2u ? g2 : g3));
-    return -0.5 * g;
 }
 
 vec3 simplex_centroid(uint dim, vec3 p[4]) {
@@ -47,9 +33,29 @@ vec3 simplex_face_centroid(uint dim, vec3 p[4], uint k) {
     return c / float(dim);
 }
 
-// Barycentric weight of vertex k at x: 1 − (x − p_k)·(A_k n_k) / (d vol).
-float simplex_barycentric(uint dim, vec3 p[4], float vol, uint k, vec3 x) {
-    return 1.0 - dot(x - p[k], simplex_face_normal(dim, p, k)) / (float(dim) * vol);
+// Barycentric weights of x (xyz, then w for a tetrahedron's fourth vertex): with edges
+// e_i = p_i − p_0 and r = x − p_0, λ_i = r·g_i / (e_1·g_1) for i ≥ 1 (g_i the gradient of the
+// scaled volume with respect to p_i: in 3D g_1 = e_2 × e_3, g_2 = e_3 × e_1, g_3 = e_1 × e_2),
+// λ_0 = 1 − Σ λ_i. Twin of barycentric in src/fluid/particles.rs.
+vec4 simplex_barycentrics(uint dim, vec3 p[4], vec3 x) {
+    vec3 r = x - p[0];
+    vec3 e1 = p[1] - p[0];
+    vec3 e2 = p[2] - p[0];
+    vec4 b = vec4(0.0);
+    if (dim == 2u) {
+        float det = e1.x * e2.y - e1.y * e2.x;
+        b.y = (r.x * e2.y - r.y * e2.x) / det;
+        b.z = (e1.x * r.y - e1.y * r.x) / det;
+    } else {
+        vec3 e3 = p[3] - p[0];
+        vec3 g1 = cross(e2, e3);
+        float det = dot(e1, g1);
+        b.y = dot(r, g1) / det;
+        b.z = dot(r, cross(e3, e1)) / det;
+        b.w = dot(r, cross(e1, e2)) / det;
+    }
+    b.x = 1.0 - b.y - b.z - b.w;
+    return b;
 }
 
 #endif

@@ -26,11 +26,14 @@ use std::sync::OnceLock;
 
 use rayon::prelude::*;
 
-use crate::mesh::geometry::{centroid, face_area_normal, face_centroid, signed_volume, Point};
+use crate::mesh::geometry::{centroid, face_centroid, signed_volume, Point};
 use crate::mesh::{point_of, FaceKind, SimplexMesh, Topology};
 
 /// Most faces a walk crosses before the grid hash takes over.
 pub const WALK_CAP: usize = 64;
+
+/// Particles a thread advects in turn (each asking for the next one's rows before it starts).
+const PARTICLE_CHUNK: usize = 256;
 
 /// A marker: position (z = 0 in 2D) and the cell containing it.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -41,17 +44,25 @@ pub struct Particle {
     pub cell: u32,
 }
 
-/// Where a frame's vertex positions come from: vertex `v` at fraction `t` ∈ [0, 1] of a frame
-/// whose geometry moves linearly from its start to its end.
+/// Where a frame's vertex positions come from. The geometry moves linearly across the frame:
+/// at fraction `t` ∈ [0, 1] vertex `v` is at `start + t (end − start)` ([`CellCorners::at`]).
 pub trait FrameGeometry: Sync {
-    /// The position of vertex `v` (z = 0 in 2D) of a `dim`-dimensional mesh at `t`.
-    fn vertex(&self, dim: usize, v: usize, t: f64) -> Point;
+    /// The position of vertex `v` (z = 0 in 2D) of a `dim`-dimensional mesh at the frame's
+    /// start and at its end.
+    fn vertex(&self, dim: usize, v: usize) -> (Point, Point);
+
+    /// A hint that vertex `v` will be evaluated soon (a source reading rows of a basis asks
+    /// the processor to fetch them); nothing by default.
+    fn prefetch(&self, _dim: usize, _v: usize) {}
 }
 
 /// Where a frame's fluxes come from: the flux through face `face` (of the frame's end state).
 pub trait FrameFlux: Sync {
     /// The flux through `face`.
     fn flux(&self, face: usize) -> f64;
+
+    /// A hint that the flux through `face` will be evaluated soon; nothing by default.
+    fn prefetch(&self, _face: usize) {}
 }
 
 /// A frame of the full state: the geometries at its start and end and the end's fluxes.
@@ -66,13 +77,8 @@ pub struct FullFrame<'a> {
 }
 
 impl FrameGeometry for FullFrame<'_> {
-    fn vertex(&self, dim: usize, v: usize, t: f64) -> Point {
-        let mut out = [0.0; 3];
-        for (k, x) in out.iter_mut().enumerate().take(dim) {
-            let j = dim * v + k;
-            *x = self.g0[j] + t * (self.g1[j] - self.g0[j]);
-        }
-        out
+    fn vertex(&self, dim: usize, v: usize) -> (Point, Point) {
+        (point_of(dim, self.g0, v), point_of(dim, self.g1, v))
     }
 }
 
@@ -85,15 +91,14 @@ impl FrameFlux for FullFrame<'_> {
 /// The velocity of cell `c` from the fluxes (Eq. 13), at geometry `g`.
 pub fn cell_velocity(mesh: &SimplexMesh, topo: &Topology, g: &[f64], f: &[f64], c: usize) -> Point {
     let frame = FullFrame { g0: g, g1: g, f };
-    let at = MovingGeometry { mesh, frame: &frame, t: 1.0 };
-    cell_velocity_at(&at, topo, &frame, c)
+    let corners = CellCorners::of(mesh, &frame, c);
+    cell_velocity_at(mesh.dim(), corners.end(), topo, &frame, c)
 }
 
 /// The velocity of cell `c` (Eq. 13: `u_c = V_c⁻¹ Σ_faces σ f (x_face − x_c)`) with the cell's
-/// corners from `at` and its faces' fluxes from `flux` — only those.
-pub fn cell_velocity_at(at: &MovingGeometry, topo: &Topology, flux: &dyn FrameFlux, c: usize) -> Point {
-    let d = at.mesh.dim();
-    let p = &at.points(c)[..=d];
+/// corners `p` (the first `dim + 1` entries) and its faces' fluxes from `flux` — only those.
+pub fn cell_velocity_at(d: usize, p: &[Point; 4], topo: &Topology, flux: &dyn FrameFlux, c: usize) -> Point {
+    let p = &p[..=d];
     let vol = signed_volume(d, p);
     let xc = centroid(p);
     let mut u = [0.0; 3];
@@ -107,17 +112,32 @@ pub fn cell_velocity_at(at: &MovingGeometry, topo: &Topology, flux: &dyn FrameFl
     u
 }
 
-/// Barycentric coordinates of `x` in the simplex `p` (the weight of vertex k is the signed
-/// volume of the simplex with x in place of vertex k, over the volume).
+/// Barycentric coordinates of `x` in the simplex `p`: with edges `eᵢ = pᵢ − p₀` and
+/// `r = x − p₀`, `λᵢ = r·gᵢ / (e₁·g₁)` for i ≥ 1, where `gᵢ` is the gradient of the simplex's
+/// scaled volume with respect to `pᵢ` (in 3D `g₁ = e₂ × e₃`, `g₂ = e₃ × e₁`, `g₃ = e₁ × e₂`; in
+/// 2D the edges turned), and `λ₀ = 1 − Σ λᵢ`. Twin of `simplex_barycentrics` in simplex.glsl.
 pub fn barycentric(dim: usize, p: &[Point], x: Point) -> [f64; 4] {
-    let vol = signed_volume(dim, p);
+    let sub = |a: Point, b: Point| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+    let dot3 = |a: Point, b: Point| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+    let r = sub(x, p[0]);
+    let (e1, e2) = (sub(p[1], p[0]), sub(p[2], p[0]));
     let mut b = [0.0; 4];
-    for k in 0..=dim {
-        // λ_k = 1 + (x − x_k)·∇λ_k with ∇λ_k = −A_k n_k / (d vol).
-        let n = face_area_normal(dim, p, k);
-        let dot: f64 = (0..dim).map(|i| (x[i] - p[k][i]) * n[i]).sum();
-        b[k] = 1.0 - dot / (dim as f64 * vol);
+    if dim == 2 {
+        let det = e1[0] * e2[1] - e1[1] * e2[0];
+        b[1] = (r[0] * e2[1] - r[1] * e2[0]) / det;
+        b[2] = (e1[0] * r[1] - e1[1] * r[0]) / det;
+    } else {
+        let cross = |a: Point, b: Point| {
+            [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+        };
+        let e3 = sub(p[3], p[0]);
+        let g = [cross(e2, e3), cross(e3, e1), cross(e1, e2)];
+        let det = dot3(e1, g[0]);
+        for i in 0..3 {
+            b[i + 1] = dot3(r, g[i]) / det;
+        }
     }
+    b[0] = 1.0 - b[1..=dim].iter().sum::<f64>();
     b
 }
 
@@ -240,6 +260,46 @@ pub enum Located {
 /// Tolerance on barycentric coordinates for "inside".
 const INSIDE: f64 = -1e-12;
 
+/// A cell's corners (the first `dim + 1` entries) at a frame's start and end. The mesh moves
+/// linearly across the frame, so the corners at any fraction of it are the interpolation of
+/// these: a particle keeps its cell's while it stays there, and a substep evaluates no vertex
+/// (on the reduced state, no `B_g` row) unless the particle changes cell.
+#[derive(Clone, Copy, Debug)]
+pub struct CellCorners {
+    /// The cell.
+    pub cell: usize,
+    start: [Point; 4],
+    end: [Point; 4],
+}
+
+impl CellCorners {
+    /// The corners of cell `c` of `mesh` (its cells; its own geometry is not used) in `frame`.
+    pub fn of(mesh: &SimplexMesh, frame: &dyn FrameGeometry, c: usize) -> Self {
+        let d = mesh.dim();
+        let mut out = Self { cell: c, start: [[0.0; 3]; 4], end: [[0.0; 3]; 4] };
+        for (i, &v) in mesh.cell(c).iter().enumerate() {
+            (out.start[i], out.end[i]) = frame.vertex(d, v as usize);
+        }
+        out
+    }
+
+    /// The corners at fraction `t` of the frame.
+    pub fn at(&self, t: f64) -> [Point; 4] {
+        let mut out = [[0.0; 3]; 4];
+        for ((o, a), b) in out.iter_mut().zip(&self.start).zip(&self.end) {
+            for k in 0..3 {
+                o[k] = a[k] + t * (b[k] - a[k]);
+            }
+        }
+        out
+    }
+
+    /// The corners at the frame's end.
+    pub fn end(&self) -> &[Point; 4] {
+        &self.end
+    }
+}
+
 /// The mesh at time `t` ∈ [0, 1] of a frame whose vertices move linearly across it; only the
 /// vertices of the cells a particle visits are evaluated.
 #[derive(Clone, Copy)]
@@ -253,14 +313,14 @@ pub struct MovingGeometry<'a> {
 }
 
 impl MovingGeometry<'_> {
+    /// The corners of cell `c` at the frame's start and end.
+    pub fn corners(&self, c: usize) -> CellCorners {
+        CellCorners::of(self.mesh, self.frame, c)
+    }
+
     /// The corners of cell `c` (the first `dim + 1` entries).
     pub fn points(&self, c: usize) -> [Point; 4] {
-        let d = self.mesh.dim();
-        let mut out = [[0.0; 3]; 4];
-        for (i, &v) in self.mesh.cell(c).iter().enumerate() {
-            out[i] = self.frame.vertex(d, v as usize, self.t);
-        }
-        out
+        self.corners(c).at(self.t)
     }
 }
 
@@ -283,12 +343,22 @@ impl WalkGrid<'_> {
 }
 
 /// Finds the cell containing `particle.position` in the mesh `at`, walking from its cell; a
-/// walk that reaches its cap asks the grid hash.
-pub fn locate(at: &MovingGeometry, topo: &Topology, grid: &WalkGrid, particle: &mut Particle) -> Located {
+/// walk that reaches its cap asks the grid hash. `corners` are the corners of the particle's
+/// cell on entry (evaluated if they are another cell's) and of the cell found on return.
+pub fn locate(
+    at: &MovingGeometry,
+    topo: &Topology,
+    grid: &WalkGrid,
+    particle: &mut Particle,
+    corners: &mut CellCorners,
+) -> Located {
     let d = at.mesh.dim();
     let mut c = particle.cell as usize;
+    if corners.cell != c {
+        *corners = at.corners(c);
+    }
     for _ in 0..WALK_CAP {
-        let p = at.points(c);
+        let p = corners.at(at.t);
         let b = barycentric(d, &p[..=d], particle.position);
         let (k, worst) =
             (0..=d).map(|k| (k, b[k])).fold((0, f64::INFINITY), |m, x| if x.1 < m.1 { x } else { m });
@@ -311,19 +381,22 @@ pub fn locate(at: &MovingGeometry, topo: &Topology, grid: &WalkGrid, particle: &
                     }
                 }
                 c = e;
+                *corners = at.corners(e);
             }
         }
     }
     let grid = grid.get();
     for &cand in grid.candidates(grid.bucket(particle.position)) {
-        let p = at.points(cand as usize);
+        let found = at.corners(cand as usize);
+        let p = found.at(at.t);
         let b = barycentric(d, &p[..=d], particle.position);
         if (0..=d).all(|k| b[k] >= INSIDE) {
             particle.cell = cand;
+            *corners = found;
             return Located::Hashed;
         }
     }
-    let p = at.points(c);
+    let p = corners.at(at.t);
     particle.position = clamp_into(d, &p[..=d], particle.position);
     particle.cell = c as u32;
     Located::Clamped
@@ -419,32 +492,52 @@ pub fn advect_through(
     let d = mesh.dim();
     let substeps = substeps.max(1);
     let dt = frame_time / substeps as f64;
-    let end = MovingGeometry { mesh, frame: geometry, t: 1.0 };
+    // Each particle's first evaluations (its cell's corners, then the velocity from its faces'
+    // fluxes) wait on memory: the next particle's are requested before this one starts.
+    let prefetch = |p: &Particle| {
+        let c = p.cell as usize;
+        if c < mesh.cell_count() {
+            for (l, &v) in mesh.cell(c).iter().enumerate() {
+                geometry.prefetch(d, v as usize);
+                flux.prefetch(topo.cell_face(c, l));
+            }
+        }
+    };
+    let advect_one = |p: &mut Particle, report: &mut AdvectReport| {
+        // The particle's cell's corners, kept while it stays there, and the velocity of the
+        // frame's end state (f belongs to g1) in that cell: evaluated again only when the
+        // particle changed cell.
+        let mut corners = CellCorners::of(mesh, geometry, p.cell as usize);
+        let mut velocity: Option<(u32, Point)> = None;
+        for s in 0..substeps {
+            let u = match velocity {
+                Some((cell, u)) if cell == p.cell => u,
+                _ => {
+                    let u = cell_velocity_at(d, corners.end(), topo, flux, p.cell as usize);
+                    velocity = Some((p.cell, u));
+                    u
+                }
+            };
+            for k in 0..d {
+                p.position[k] += dt * u[k];
+            }
+            let at = MovingGeometry { mesh, frame: geometry, t: (s + 1) as f64 / substeps as f64 };
+            match locate(&at, topo, &grid, p, &mut corners) {
+                Located::Walked => report.walked += 1,
+                Located::Hashed => report.hashed += 1,
+                Located::Clamped => report.clamped += 1,
+            }
+        }
+    };
     particles
-        .par_iter_mut()
-        .map(|p| {
+        .par_chunks_mut(PARTICLE_CHUNK)
+        .map(|chunk| {
             let mut report = AdvectReport::default();
-            // The velocity of the frame's end state (f belongs to g1), one per cell: evaluated
-            // again only when the particle changed cell.
-            let mut velocity: Option<(u32, Point)> = None;
-            for s in 0..substeps {
-                let u = match velocity {
-                    Some((cell, u)) if cell == p.cell => u,
-                    _ => {
-                        let u = cell_velocity_at(&end, topo, flux, p.cell as usize);
-                        velocity = Some((p.cell, u));
-                        u
-                    }
-                };
-                for k in 0..d {
-                    p.position[k] += dt * u[k];
+            for i in 0..chunk.len() {
+                if let Some(next) = chunk.get(i + 1) {
+                    prefetch(next);
                 }
-                let at = MovingGeometry { mesh, frame: geometry, t: (s + 1) as f64 / substeps as f64 };
-                match locate(&at, topo, &grid, p) {
-                    Located::Walked => report.walked += 1,
-                    Located::Hashed => report.hashed += 1,
-                    Located::Clamped => report.clamped += 1,
-                }
+                advect_one(&mut chunk[i], &mut report);
             }
             report
         })
@@ -464,4 +557,39 @@ pub fn seed_particles(mesh: &SimplexMesh, count: usize) -> Vec<Particle> {
             Particle { position: mesh.cell_centroid(c), cell: c as u32 }
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The weights against their definition — the signed volume of the simplex with `x` in
+    /// place of vertex k, over the simplex's — and `Σ λₖ pₖ = x`, in 2D and 3D, for points
+    /// inside and outside.
+    #[test]
+    fn barycentric_weights_are_volume_ratios_and_reproduce_the_point() {
+        let simplices: [(usize, [Point; 4]); 2] = [
+            (2, [[0.1, -0.2, 0.0], [1.3, 0.1, 0.0], [0.2, 0.9, 0.0], [0.0; 3]]),
+            (3, [[0.1, -0.2, 0.05], [1.3, 0.1, -0.1], [0.2, 0.9, 0.2], [-0.1, 0.3, 1.1]]),
+        ];
+        for (dim, p) in simplices {
+            let p = &p[..=dim];
+            let vol = signed_volume(dim, p);
+            for x in [[0.3, 0.2, 0.25], [2.0, -1.0, 0.5], [-0.4, 0.7, -0.3]] {
+                let x = if dim == 2 { [x[0], x[1], 0.0] } else { x };
+                let b = barycentric(dim, p, x);
+                let mut back = [0.0; 3];
+                for k in 0..=dim {
+                    let mut q = p.to_vec();
+                    q[k] = x;
+                    let want = signed_volume(dim, &q) / vol;
+                    assert!((b[k] - want).abs() < 1e-14, "{dim}D λ{k} at {x:?}: {} vs {want}", b[k]);
+                    for i in 0..3 {
+                        back[i] += b[k] * p[k][i];
+                    }
+                }
+                assert!((0..3).all(|i| (back[i] - x[i]).abs() < 1e-14), "{dim}D: Σ λ p = {back:?} for {x:?}");
+            }
+        }
+    }
 }

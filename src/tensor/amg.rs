@@ -27,6 +27,7 @@ use faer::{Mat, Side};
 
 use super::csr::CsrMatrix;
 use super::error::TensorError;
+use super::linalg::dot;
 
 /// The coarsest level is solved densely once it has at most this many rows.
 pub const COARSE_SIZE: usize = 400;
@@ -93,10 +94,6 @@ fn gauss_seidel(a: &CsrMatrix, inv_diag: &[f64], b: &[f64], x: &mut [f64], backw
     } else {
         (0..a.rows()).for_each(&mut relax);
     }
-}
-
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(p, q)| p * q).sum()
 }
 
 /// Groups the rows into aggregates (Vaněk et al.'s three passes); the aggregate of each row

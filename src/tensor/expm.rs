@@ -18,6 +18,7 @@ use faer::Mat;
 
 use super::dense::Tensor;
 use super::error::TensorError;
+use super::linalg::dot;
 
 /// Padé coefficients b₀ … b_m (Higham 2005, Table 2.3's degrees).
 const PADE3: [f64; 4] = [120.0, 60.0, 12.0, 1.0];
@@ -334,10 +335,6 @@ pub fn expm_krylov(
         }
     }
     Ok((w, report))
-}
-
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
 
 fn norm2(a: &[f64]) -> f64 {

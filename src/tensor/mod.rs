@@ -29,6 +29,6 @@ pub use dense::{Scalar, Tensor};
 pub use error::TensorError;
 pub use expm::{expm, expm_faer, expm_krylov, KrylovReport, KRYLOV_MAX_DIM, KRYLOV_MAX_STEPS};
 pub(crate) use linalg::{check_system, pivot_tolerance};
-pub use linalg::{matmul, solve, solve_many, spd_power, spd_power_apply, symmetric_eigen, transpose};
+pub use linalg::{dot, matmul, solve, solve_many, spd_power, spd_power_apply, symmetric_eigen, transpose};
 pub use sparse::{distinct_permutations, SparseTensor};
 pub use sparse_symmetric::{Factorisation, SparseSymmetricSolver, SymmetricPattern};
