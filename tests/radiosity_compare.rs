@@ -120,6 +120,18 @@ fn compare_measures_the_receiving_surfaces_all_faces_and_each_room() {
     assert!(report.corners.iter().any(|(p, e)| p.as_slice() == at && e.groups[0] == top));
     let corners_csv = std::fs::read_to_string(compare_options.out.join("corners.csv")).expect("corners.csv");
     assert_eq!(corners_csv.lines().count(), 1 + 16);
+    // Each corner's reduced-operator margin, in the report and the table's last column.
+    assert_eq!(report.corner_margins.len(), 16);
+    assert!(corners_csv.lines().next().is_some_and(|h| h.ends_with(",operator_margin")));
+    for ((p, _), (margin, line)) in
+        report.corners.iter().zip(report.corner_margins.iter().zip(corners_csv.lines().skip(1)))
+    {
+        let again = model.operator_margin(&space.mesh(p).expect("mesh")).expect("margin");
+        assert_eq!(*margin, again, "corner {p:?}");
+        let written: f64 = line.rsplit(',').next().and_then(|v| v.parse().ok()).expect("a margin");
+        assert!((written - margin).abs() <= 5e-7, "{line}");
+        assert!(*margin > 0.0, "corner {p:?}: the small model's reduced operator has a margin {margin}");
+    }
 
     // A second run reads the kept full frames back: the same errors.
     let again = compare(&scene, Path::new(SMALL), &model, &compare_options, &mut |_| {}).expect("again");

@@ -121,3 +121,40 @@ fn pixels_show_the_face_their_ray_meets_with_its_radiance() {
         }
     }
 }
+
+/// `write_picture` with a reduced model reports the model's operator margin at the drawn
+/// parameters (the value `operator_margin` gives; positive for a sane model), and none for the
+/// full solve.
+#[test]
+fn a_picture_from_a_model_reports_its_operator_margin() {
+    use galerkin::radiosity::any_scene::AnyScene;
+    use galerkin::radiosity::picture::{write_picture, PictureRequest};
+    use galerkin::radiosity::train::{
+        sample_parameters, solve_configurations, train, DesignSpace, TrainOptions,
+    };
+    let gpu = common::gpu();
+    let spec = SceneSpec::parse(SMALL, Path::new("two_rooms_small.toml")).unwrap();
+    let params = sample_parameters(&spec.ranges(), &spec.defaults(), 6, 5);
+    let options =
+        TrainOptions { samples: 6, energy: 0.99, cap: 4, radiosity_cap: 8, ..TrainOptions::default() };
+    let configurations = solve_configurations(&spec, &params, &options, &|_| {}).unwrap();
+    let (model, _) = train(&spec, &configurations, &options, &|_, _, _| {}).unwrap();
+    let scene = AnyScene::Rooms(Box::new(spec.clone()));
+    let dir = tempfile::Builder::new().prefix("galerkin-picture-").tempdir().unwrap();
+    let request = PictureRequest {
+        params: spec.defaults().to_vec(),
+        viewpoint: Viewpoint::Living,
+        shading: Shading::Flat,
+        exposure: None,
+        size: (W, H),
+        faces: None,
+        form_factors: galerkin::radiosity::near_field::FormFactorMethod::Centroid,
+    };
+    let reduced =
+        write_picture(&gpu, &scene, Some(&model), &request, &dir.path().join("reduced.png")).unwrap();
+    let want = model.operator_margin(&DesignSpace::mesh(&spec, &spec.defaults()).unwrap()).unwrap();
+    assert_eq!(reduced.operator_margin, Some(want));
+    assert!(want > 0.0, "a sane model's margin: {want}");
+    let full = write_picture(&gpu, &scene, None, &request, &dir.path().join("full.png")).unwrap();
+    assert_eq!(full.operator_margin, None);
+}

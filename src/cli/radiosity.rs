@@ -272,6 +272,11 @@ fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
     if let Some(table) = &args.faces {
         println!("per-face table ({} faces, f64) → {}", r.faces, table.display());
     }
+    if let Some(margin) = r.operator_margin.filter(|m| *m <= 0.0) {
+        eprintln!(
+            "warning: the model's reduced operator has an eigenvalue with real part {margin:.3} here (the full operator's are positive): its radiosity at these parameters is not to be trusted; train with larger bases"
+        );
+    }
     let p_text: Vec<String> = scene.names().iter().zip(&p).map(|(n, v)| format!("{n}={v}")).collect();
     println!(
         "radiosity: {} faces, {} lights, {}; {} {:.3} s, exposure {:.3} → {}",
@@ -463,6 +468,19 @@ fn compare(args: &CompareArgs) -> Result<()> {
             at.join(","),
             100.0 * all_mean,
             100.0 * all_worst
+        );
+    }
+    if let Some((k, margin)) = r.corner_margins.iter().enumerate().min_by(|a, b| a.1.total_cmp(b.1)) {
+        let at: Vec<String> =
+            scene.names().iter().zip(&r.corners[k].0).map(|(n, v)| format!("{n}={v}")).collect();
+        println!(
+            "reduced operator at the corners: smallest eigenvalue real part {margin:.3} (at {}){}",
+            at.join(","),
+            if *margin <= 0.0 {
+                " — the reduced system has left the physics there (the full operator's are positive): train with larger bases"
+            } else {
+                ""
+            }
         );
     }
     let (full, reduced) = (r.full_median_s, r.reduced_median_s);

@@ -61,18 +61,25 @@ pub fn form_factors() -> Expr {
     Expr::tensor("P").times(2, a).inverse_sqrt().times(1, d)
 }
 
+/// The operator Eq. 16 inverts, `I − E ⊗₂ p` (axes b, b: `I − ρF` per channel), and with
+/// `near_corrected` `I − E ⊗₂ p − Q ⊗₂ x`.
+pub fn radiosity_operator(near_corrected: bool) -> Expr {
+    let reflected = Expr::tensor("E").times(2, form_factors());
+    let reflected =
+        if near_corrected { reflected.plus(Expr::tensor("Q").times(2, Expr::input("x"))) } else { reflected };
+    Expr::tensor("I").minus(reflected)
+}
+
 /// `b = (I − E ⊗₂ p)⁻¹ ⊗₁ e` (Eq. 16), the three channels stacked.
 pub fn radiosity() -> Expr {
-    Expr::tensor("I").minus(Expr::tensor("E").times(2, form_factors())).inverse().times(1, Expr::input("e"))
+    radiosity_operator(false).inverse().times(1, Expr::input("e"))
 }
 
 /// `b = (I − E ⊗₂ p − Q ⊗₂ x)⁻¹ ⊗₁ e`: Eq. 16 with the exact near field as a precomputed
 /// correction `Q` (axes b, b, x) blended by Eq. 17's weights `x`
 /// ([`super::near_correction`]).
 pub fn radiosity_near_corrected() -> Expr {
-    let operator =
-        Expr::tensor("E").times(2, form_factors()).plus(Expr::tensor("Q").times(2, Expr::input("x")));
-    Expr::tensor("I").minus(operator).inverse().times(1, Expr::input("e"))
+    radiosity_operator(true).inverse().times(1, Expr::input("e"))
 }
 
 /// Table 2's tensors for `mesh`'s topology and albedo, as a model computing `output`

@@ -172,6 +172,10 @@ pub struct CompareReport {
     /// The design space's corners ([`super::train::box_corners`]; in the training set, since
     /// the sampler takes them all): each corner's parameters and errors.
     pub corners: Vec<(Vec<f64>, FrameError)>,
+    /// At each corner, the smallest real part of the reduced operator's eigenvalues
+    /// ([`super::reduced::ReducedRadiosity::operator_margin`]; ≤ 0: the reduced system has
+    /// left the physics there).
+    pub corner_margins: Vec<f64>,
     /// Median seconds of a full frame solved in this run, and how many were.
     pub full_median_s: f64,
     /// Full frames solved in this run.
@@ -374,14 +378,21 @@ pub fn compare(
     }
     // The corners of the design space, solved in full and reduced like frames.
     let mut corners = Vec::new();
-    let mut corner_rows =
-        vec![format!("{},relative_error,{}", scene.names().join(","), group_columns.join(","))];
+    let mut corner_rows = vec![format!(
+        "{},relative_error,{},operator_margin",
+        scene.names().join(","),
+        group_columns.join(",")
+    )];
+    let mut corner_margins = Vec::new();
     for p in super::train::box_corners(&ranges) {
         let full = FullFrame::solve(spec, &p, options.full_form_factors)?;
-        let (b, _) = model.evaluate(&spec.mesh(&p)?)?;
+        let mesh = spec.mesh(&p)?;
+        let (b, _) = model.evaluate(&mesh)?;
+        let margin = model.operator_margin(&mesh)?;
         let error = frame_error(&b, &full, &groups);
-        corner_rows.push(csv_fields(&p, &error));
+        corner_rows.push(format!("{},{margin:.6}", csv_fields(&p, &error)));
         corners.push((p, error));
+        corner_margins.push(margin);
     }
     let corners_csv = options.out.join("corners.csv");
     std::fs::write(&corners_csv, corner_rows.join("\n") + "\n")
@@ -414,6 +425,7 @@ pub fn compare(
         groups,
         sequences,
         corners,
+        corner_margins,
         full_median_s: crate::bench::median_f64(&mut full_times),
         full_solved,
         reduced_median_s: crate::bench::median_f64(&mut reduced_times),

@@ -46,6 +46,10 @@ pub struct PictureReport {
     pub solve_seconds: f64,
     /// The exposure used.
     pub exposure: f64,
+    /// With a model: the smallest real part of its reduced operator's eigenvalues at these
+    /// parameters ([`super::reduced::ReducedRadiosity::operator_margin`]; not positive: the
+    /// reduced radiosity has left the physics and is not to be trusted).
+    pub operator_margin: Option<f64>,
 }
 
 /// Solves `scene` at `request.params` — with `model` when given (its lighting must match the
@@ -88,6 +92,7 @@ pub fn write_picture(
         }
     };
     let solve_seconds = start.elapsed().as_secs_f64();
+    let operator_margin = model.map(|m| m.operator_margin(&mesh)).transpose()?;
     let radiance = display_radiance(&mesh, &geometry, &lights, &radiosity);
     let exposure = request.exposure.unwrap_or_else(|| default_exposure(&mesh, &geometry, &radiance));
     let vertices = scene_vertices(&mesh, &geometry, &radiance, request.shading);
@@ -104,7 +109,14 @@ pub fn write_picture(
     if let Some(table) = &request.faces {
         super::face_table::write(table, &mesh, &geometry, &radiosity)?;
     }
-    Ok(PictureReport { faces: mesh.len(), lights: lights.mode, how, solve_seconds, exposure })
+    Ok(PictureReport {
+        faces: mesh.len(),
+        lights: lights.mode,
+        how,
+        solve_seconds,
+        exposure,
+        operator_margin,
+    })
 }
 
 /// The exposure a picture of `scene` at `params` gets by default: [`default_exposure`] of its

@@ -209,11 +209,8 @@ impl ReducedRadiosity {
         };
         times.direct = t2.elapsed().as_secs_f64();
         let t2 = Instant::now();
-        let mut inputs: BTreeMap<&str, &[f64]> =
-            [("g", ghat.as_slice()), ("v", vhat.as_slice()), ("e", ehat)].into();
-        if self.has_near_correction() {
-            inputs.insert("x", &x);
-        }
+        let mut inputs = self.chain_inputs(&ghat, &vhat, &x);
+        inputs.insert("e", ehat);
         let bhat = self.model.evaluate(&inputs).map_err(err)?;
         let t3 = Instant::now();
         let b = self.model.lift(bhat.data()).map_err(err)?;
@@ -224,6 +221,46 @@ impl ReducedRadiosity {
         times.lift = (t4 - t3).as_secs_f64();
         let n = self.faces;
         Ok(((0..n).map(|i| [b[i], b[n + i], b[2 * n + i]]).collect(), times))
+    }
+
+    /// The chain's reduced inputs `ĝ`, `v̂` and, with the near-field correction, Eq. 17's
+    /// weights `x` (the emission `ê` is added by the caller that needs it).
+    fn chain_inputs<'a>(
+        &self,
+        ghat: &'a [f64],
+        vhat: &'a [f64],
+        x: &'a [f64],
+    ) -> BTreeMap<&'static str, &'a [f64]> {
+        let mut inputs: BTreeMap<&str, &[f64]> = [("g", ghat), ("v", vhat)].into();
+        if self.has_near_correction() {
+            inputs.insert("x", x);
+        }
+        inputs
+    }
+
+    /// The reduced operator `M̂ = Î − Ê ⊗₂ p̂ (− Q̂ ⊗₂ x)` at `mesh` (m_b × m_b): what
+    /// [`Self::evaluate`] inverts — `B_bᵀ (I − ρF̂) B_b` with `F̂` the reduced chain's form
+    /// factors (Table 2) — for checking it against the exact operator projected on `B_b`.
+    pub fn reduced_operator(&self, mesh: &SceneMesh) -> Result<Tensor, RadiosityError> {
+        let err = |e: crate::reduce::ReduceError| RadiosityError::Solve(e.to_string());
+        let ghat = self.model.project_input("g", &mesh.g()).map_err(err)?;
+        let (vhat, x) = self.visibility.predict(&ghat);
+        let expr = super::chain::radiosity_operator(self.has_near_correction());
+        self.model.evaluate_expression(&expr, &self.chain_inputs(&ghat, &vhat, &x)).map_err(err)
+    }
+
+    /// The smallest real part of the reduced operator's eigenvalues at `mesh`. The full
+    /// operator `I − ρF` has every eigenvalue's real part at least `1 − ρ(ρF) > 0` (albedo
+    /// below 1, rows of F summing to at most 1); a reduced operator whose smallest real part
+    /// is near 0 or below has left the physics, and its radiosity is not to be trusted.
+    pub fn operator_margin(&self, mesh: &SceneMesh) -> Result<f64, RadiosityError> {
+        let m = self.reduced_operator(mesh)?;
+        let n = m.shape()[0];
+        let a = faer::Mat::<f64>::from_fn(n, n, |i, j| m.data()[i * n + j]);
+        let values = a
+            .eigenvalues()
+            .map_err(|e| RadiosityError::Solve(format!("the reduced operator's eigenvalues: {e:?}")))?;
+        Ok(values.iter().map(|z| z.re).fold(f64::INFINITY, f64::min))
     }
 }
 

@@ -176,6 +176,21 @@ impl ReducedModel {
         evaluate(&self.output, &ReducedOperands { model: self, inputs: batch })
     }
 
+    /// Evaluates another composition `expr` over this model's reduced tensors on reduced
+    /// inputs — a part of the output's (§4: every sub-expression of a reduced composition is
+    /// the reduction of the same sub-expression), e.g. the reduced operator inside an inverse.
+    /// Its tensors must be this model's; its axes come out in their reduced bases.
+    pub fn evaluate_expression(
+        &self,
+        expr: &Expr,
+        inputs: &BTreeMap<&str, &[f64]>,
+    ) -> Result<Tensor, ReduceError> {
+        self.check_inputs(std::slice::from_ref(inputs))?;
+        let ops = ReducedOperands { model: self, inputs: std::slice::from_ref(inputs) };
+        super::eval::signature(expr, &ReducedOperands { model: self, inputs: &[] })?;
+        Ok(evaluate(expr, &ops)?.swap_remove(0))
+    }
+
     /// Every given input has its basis's reduced length.
     pub(crate) fn check_inputs(&self, batch: &[BTreeMap<&str, &[f64]>]) -> Result<(), ReduceError> {
         for inputs in batch {
