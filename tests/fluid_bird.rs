@@ -171,3 +171,41 @@ fn the_cli_writes_a_scene_s_surface_animation_as_an_obj_sequence() {
     assert_eq!(out.status.code(), Some(1), "{stderr}");
     assert!(stderr.contains("only [bird] and [surface] scenes"), "{stderr}");
 }
+
+/// The bird trains although a small geometry basis folds cells of the projected mesh (the
+/// wings' shells rotate; seed 000 §6.1 keeps m_g = 7 for its eagle), the folded cells
+/// reported; a reduced geometry whose volume matrix V̂(ĝ) is not positive definite is refused
+/// naming its run and frame.
+#[test]
+fn a_bird_trains_with_its_folded_cells_reported_and_an_indefinite_volume_matrix_refused() {
+    use galerkin::fluid::reduced::{train_scene, BasisSizes, ReducedFluid, SceneTraining};
+    let dir = tempfile::tempdir().expect("temp dir");
+    let scene = dir.path().join("bird.toml");
+    // 24 animation frames: six steps are a whole wingbeat.
+    std::fs::write(&scene, scene_text(24, 6)).expect("scene written");
+    let options = SceneTraining {
+        sizes: BasisSizes { energy: 0.9999, m_f: Some(5), m_u: Some(6), m_g: Some(2), m_h: Some(4) },
+        frames: Some(6),
+        runs: None,
+        work: dir.path().join("work"),
+    };
+    let mut model = train_scene(&scene, &dir.path().join("bird.safetensors"), &options, &mut |_| {})
+        .expect("the bird trains");
+    let g = model.provenance.bases.iter().find(|b| b.name == "g").expect("basis g");
+    assert_eq!(g.columns, 2);
+    assert!(g.note.contains("folds cells in"), "{}", g.note);
+    // The model runs: every training frame's V̂(ĝ) was factorised.
+    let fluid = ReducedFluid::new(&model).expect("a reduced fluid");
+    let mg = model.trajectories[0].g.shape()[1];
+    let g3 = model.trajectories[0].g.data()[3 * mg..4 * mg].to_vec();
+    fluid.check_geometry(&g3, "frame 3").expect("positive definite");
+    // ĝ → −ĝ turns every volume (cubic in g) negative: V̂ is negative definite, refused.
+    for x in &mut model.trajectories[0].g.data_mut()[3 * mg..4 * mg] {
+        *x = -*x;
+    }
+    let e = model.check_trajectories().unwrap_err().to_string();
+    assert!(
+        e.contains("training run 0") && e.contains("frame 3") && e.contains("not positive definite"),
+        "{e}"
+    );
+}

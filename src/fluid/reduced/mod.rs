@@ -36,7 +36,7 @@ pub mod step;
 pub mod study;
 pub mod training;
 
-pub use bases::{BasisReport, BasisSizes, FluidBases};
+pub use bases::{BasisReport, BasisSizes, FluidBases, ProjectedGeometry};
 pub use cavity_motion::{CavityMotion, CompressionSchedule};
 pub use model::{MeshFingerprint, MeshOf, ReducedFluidModel, Trajectory};
 pub use pipeline::{train_scene, train_scene_across, SceneTraining, TrainingEvent};

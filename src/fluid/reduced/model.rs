@@ -258,7 +258,9 @@ impl ReducedFluidModel {
     }
 
     /// Trains a model on `set` with `bases` (built by [`FluidBases::build`]): premultiplies every
-    /// tensor and projects every training run's motion. `stage(name)` is called per stage.
+    /// tensor and projects every training run's motion, then refuses the model if a training
+    /// frame's `V̂(ĝ)` is not positive definite ([`Self::check_trajectories`]). `stage(name)`
+    /// is called per stage.
     pub fn train(
         set: &TrainingSet,
         bases: FluidBases,
@@ -275,7 +277,27 @@ impl ReducedFluidModel {
         stage("premultiply");
         let mesh =
             MeshOf { mesh: set.mesh(), topology: set.topology(), periodic_axis: set.meta().periodic_axis };
-        Self::from_bases(mesh, set.params(), true, bases, sizes, runs, trajectories, ranks)
+        let model = Self::from_bases(mesh, set.params(), true, bases, sizes, runs, trajectories, ranks)?;
+        model.check_trajectories()?;
+        Ok(model)
+    }
+
+    /// Refuses a model under which a training frame's reduced geometry has a volume matrix
+    /// `V̂(ĝ)` that is not positive definite (the reduced step could not run through it),
+    /// naming the run and frame; the geometry basis may fold cells of the projected mesh
+    /// ([`super::bases::ProjectedGeometry`]) as long as this holds.
+    pub fn check_trajectories(&self) -> Result<(), FluidError> {
+        let fluid = super::step::ReducedFluid::new(self)?;
+        for (r, (trajectory, (run, _))) in self.trajectories.iter().zip(&self.provenance.runs).enumerate() {
+            let mg = trajectory.g.shape()[1];
+            for (frame, g) in trajectory.g.data().chunks(mg.max(1)).enumerate() {
+                fluid.check_geometry(
+                    g,
+                    &format!("V̂(ĝ) of training run {r} ({run}) frame {frame} (keep more geometry modes: --m-g or a higher --energy)"),
+                )?;
+            }
+        }
+        Ok(())
     }
 
     /// Premultiplies the fluid's tensors on `mesh` by `bases` (the work of [`Self::train`]

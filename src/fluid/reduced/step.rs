@@ -303,6 +303,12 @@ impl ReducedFluid {
         out
     }
 
+    /// Refuses a reduced geometry ĝ whose volume matrix `V̂(ĝ)` is not positive definite
+    /// (the step could not invert it), `what` naming ĝ in the error.
+    pub fn check_geometry(&self, g: &[f64], what: &str) -> Result<(), FluidError> {
+        cholesky(&self.volume_matrix(g), what).map(|_| ())
+    }
+
     /// The Cholesky factor of `V̂(ĝ)`, from the cache when ĝ is the last one factorised.
     fn volume_factor(&self, g: &[f64], what: &str) -> Result<Mat<f64>, FluidError> {
         if let Ok(cache) = self.factor.0.lock() {
