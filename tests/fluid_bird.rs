@@ -199,6 +199,30 @@ fn a_bird_trains_with_its_folded_cells_reported_and_an_indefinite_volume_matrix_
     let mg = model.trajectories[0].g.shape()[1];
     let g3 = model.trajectories[0].g.data()[3 * mg..4 * mg].to_vec();
     fluid.check_geometry(&g3, "frame 3").expect("positive definite");
+    // Table 1's rows measure a bird model by replaying its training run beside the full step
+    // of the same scene; a model measured on another scene's mesh is refused.
+    use galerkin::bench::fluid_reduced::{trained_model, BenchMotion};
+    let b = trained_model(&model, &scene, BenchMotion::Replay(0), (6, 2), 300, None, &mut |_| {})
+        .expect("the bird's rows");
+    assert_eq!(b.dims, (6, 5, 2, model.dim_of("h")));
+    assert!(b.full.iter().all(|&t| t > 0.0) && b.reduced > 0.0 && b.particles.0 > 0.0, "{b:?}");
+    assert!(b.particles.1.is_none());
+    let e = trained_model(
+        &model,
+        Path::new("scenes/fluid/cavity_small.toml"),
+        BenchMotion::Replay(0),
+        (6, 2),
+        10,
+        None,
+        &mut |_| {},
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("mesh"), "{e}");
+    let e = trained_model(&model, &scene, BenchMotion::Replay(0), (7, 2), 10, None, &mut |_| {})
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("training run 0 has 6"), "{e}");
     // ĝ → −ĝ turns every volume (cubic in g) negative: V̂ is negative definite, refused.
     for x in &mut model.trajectories[0].g.data_mut()[3 * mg..4 * mg] {
         *x = -*x;

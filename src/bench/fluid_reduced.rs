@@ -219,8 +219,8 @@ pub fn energy_run(
     })
 }
 
-/// Table 1's reduced rows measured on a trained cavity model, side by side with the full step
-/// at the same size under the same motion.
+/// Table 1's reduced rows measured on a trained model (the cavity driven, the bird replayed),
+/// side by side with the full step at the same size under the same motion.
 #[derive(Clone, Debug)]
 pub struct ModelBench {
     /// Cells of the mesh.
@@ -230,7 +230,7 @@ pub struct ModelBench {
     /// Median seconds of a full frame (deformation, advection, projection) and its stages.
     pub full: [f64; 4],
     /// Median seconds of a reduced step (t_s), the steps timed alone: [`STEP_ROUNDS`] rounds
-    /// of the driven motion.
+    /// of the motion.
     pub reduced: f64,
     /// Median seconds of a reduced step in the loop that also advects the particles between
     /// steps (on the CPU and the device), as an application stepping and drawing does.
@@ -244,17 +244,28 @@ pub struct ModelBench {
     pub model_bytes: usize,
 }
 
-/// Rounds of the driven motion in which [`cavity_model`] times the reduced step alone.
+/// Rounds of the motion in which [`trained_model`] times the reduced step alone.
 pub const STEP_ROUNDS: usize = 5;
 
-/// Measures `model` (a cavity model) driven by `schedule`: `full_frames` frames of the full
-/// solver on `scene` under the same compressions; `frames` reduced steps timed alone,
-/// [`STEP_ROUNDS`] times; then the `frames` steps again, each followed by `particles` particles
-/// advected from the reduced state (on `gpu` too, if given), every part timed.
-pub fn cavity_model(
+/// The motion a trained model is measured under ([`trained_model`]).
+#[derive(Clone, Copy, Debug)]
+pub enum BenchMotion<'a> {
+    /// A cavity model driven by compressions: ĝ from its reduced motion model, ĥ from the
+    /// reduced induced-flux tensor; the full step under the same compressions.
+    Drive(&'a crate::fluid::reduced::CompressionSchedule),
+    /// Training run K replayed (its ĝ and ĥ, seed 000 §6.2; the bird's Table 1 row); the full
+    /// step under the scene's own motion of that run, its deformation included.
+    Replay(usize),
+}
+
+/// Measures `model` under `motion`: `full_frames` frames of the full solver on `scene` under
+/// the same motion; `frames` reduced steps timed alone, [`STEP_ROUNDS`] times; then the
+/// `frames` steps again, each followed by `particles` particles advected from the reduced
+/// state (on `gpu` too, if given), every part timed.
+pub fn trained_model(
     model: &ReducedFluidModel,
     scene: &Path,
-    schedule: &crate::fluid::reduced::CompressionSchedule,
+    motion: BenchMotion<'_>,
     (frames, full_frames): (usize, usize),
     particles: usize,
     gpu: Option<&crate::gpu::Gpu>,
@@ -263,19 +274,48 @@ pub fn cavity_model(
     use crate::fluid::particles::seed_particles;
     use crate::fluid::reduced::particles::ReducedParticles;
     use crate::fluid::scene::Motion;
-    let motion = model.cavity.as_ref().ok_or_else(|| FluidError::State("not a cavity model".into()))?;
-    stage("the full step");
-    let scene = FluidScene::load(scene)?;
-    let Motion::Cavity { cavity, .. } = &scene.motion else {
-        return Err(FluidError::State("the benchmark's scene must be the model's cavity".into()));
+    let (mg, mh) = (model.dim_of("g"), model.dim_of("h"));
+    let replayed = match motion {
+        BenchMotion::Drive(_) => None,
+        BenchMotion::Replay(k) => {
+            let traj = model.trajectories.get(k).ok_or_else(|| {
+                FluidError::State(format!(
+                    "run {k}: the model has training runs 0 to {}",
+                    model.trajectories.len().saturating_sub(1)
+                ))
+            })?;
+            let available = traj.g.shape()[0].saturating_sub(1);
+            if frames > available {
+                return Err(FluidError::State(format!("{frames} frames: training run {k} has {available}")));
+            }
+            Some((k, traj))
+        }
     };
+    stage("the full step");
+    let mut scene = FluidScene::load(scene)?;
+    model.check_mesh(&crate::fluid::reduced::MeshFingerprint::of(
+        &scene.mesh,
+        &scene.topology,
+        scene.periodic_axis,
+    ))?;
+    if let (Some((k, _)), Motion::Cavity { .. }) = (replayed, &scene.motion) {
+        scene.set_run(k)?;
+    }
     let mut solver =
         crate::fluid::FluidSolver::new(scene.mesh.clone(), scene.topology.clone(), scene.params)?;
     let mut state = solver.initial_state(scene.mesh.g().to_vec(), &scene.initial_velocity)?;
     let mut full = vec![Vec::new(); 4];
     for t in 1..=full_frames {
         let start = Instant::now();
-        let g = cavity.mapped_for(schedule.at(t));
+        let g = match (motion, &scene.motion) {
+            (BenchMotion::Drive(schedule), Motion::Cavity { cavity, .. }) => {
+                cavity.mapped_for(schedule.at(t))
+            }
+            (BenchMotion::Drive(_), _) => {
+                return Err(FluidError::State("a driven benchmark's scene must be the model's cavity".into()))
+            }
+            (BenchMotion::Replay(_), _) => scene.geometry(t)?,
+        };
         let td = start.elapsed().as_secs_f64();
         let (next, r) = solver.step(&state, &g, t)?;
         for (v, x) in full.iter_mut().zip([
@@ -304,10 +344,28 @@ pub fn cavity_model(
         .transpose()
         .map_err(|e| FluidError::State(e.to_string()))?;
     let (mu, mf) = (model.dim_of("u"), model.dim_of("f"));
-    let rest = ReducedState { u: vec![0.0; mu], f: vec![0.0; mf], g: motion.geometry(schedule.at(0))? };
+    let row = |t: &crate::tensor::Tensor, m: usize, k: usize| t.data()[k * m..(k + 1) * m].to_vec();
+    let geometry = |t: usize| -> Result<Vec<f64>, FluidError> {
+        match (motion, replayed) {
+            (BenchMotion::Drive(schedule), _) => {
+                let cavity =
+                    model.cavity.as_ref().ok_or_else(|| FluidError::State("not a cavity model".into()))?;
+                cavity.geometry(schedule.at(t))
+            }
+            (_, Some((_, traj))) => Ok(row(&traj.g, mg, t)),
+            (BenchMotion::Replay(_), None) => unreachable!("a replay has its trajectory"),
+        }
+    };
+    let rest = match replayed {
+        Some((_, traj)) => ReducedState { u: traj.u0.clone(), f: traj.f0.clone(), g: geometry(0)? },
+        None => ReducedState { u: vec![0.0; mu], f: vec![0.0; mf], g: geometry(0)? },
+    };
     let step = |s: &ReducedState, t: usize| -> Result<(ReducedState, f64), FluidError> {
-        let g1 = motion.geometry(schedule.at(t))?;
-        let h1 = fluid.induced_flux(&s.g, &g1).ok_or_else(|| FluidError::State("no tensor H".into()))?;
+        let g1 = geometry(t)?;
+        let h1 = match replayed {
+            Some((_, traj)) if mh > 0 => row(&traj.h, mh, t),
+            _ => fluid.induced_flux(&s.g, &g1).ok_or_else(|| FluidError::State("no tensor H".into()))?,
+        };
         let (next, r) = fluid.step(s, &g1, &h1)?;
         Ok((next, r.total_seconds()))
     };
@@ -348,7 +406,7 @@ pub fn cavity_model(
     let bases: usize = ["f", "g"].iter().filter_map(|b| model.basis(b)).map(|b| 8 * b.matrix().len()).sum();
     Ok(ModelBench {
         cells,
-        dims: (mu, mf, model.dim_of("g"), model.dim_of("h")),
+        dims: (mu, mf, mg, mh),
         full: [med(&mut full[0]), med(&mut full[1]), med(&mut full[2]), med(&mut full[3])],
         reduced: med(&mut reduced),
         reduced_with_particles: med(&mut interleaved),
@@ -443,25 +501,36 @@ pub fn step_report(
     Ok(())
 }
 
-/// Table 1's reduced rows on a trained cavity `model` ([`cavity_model`]): the full step on
-/// `scene` (median of 8 frames) and the reduced step under the same `schedule`, and
-/// `particles` particles from the reduced state on the CPU and `gpu`, as Markdown.
+/// Table 1's reduced rows on a trained `model` ([`trained_model`]): the full step on `scene`
+/// (median of 8 frames) and the reduced step under the same `motion` (`frames` of it; a
+/// drive's default is its last keyframe, a replay's its whole run), and `particles`
+/// particles from the reduced state on the CPU and `gpu`, as Markdown.
+#[allow(clippy::too_many_arguments)]
 pub fn model_report(
     model: &ReducedFluidModel,
     scene: &Path,
-    schedule: &crate::fluid::reduced::CompressionSchedule,
+    motion: BenchMotion<'_>,
+    frames: Option<usize>,
     particles: usize,
     gpu: Option<&crate::gpu::Gpu>,
     log: &mut dyn FnMut(&str),
     emit: &mut dyn FnMut(&str),
 ) -> Result<(), FluidError> {
-    let frames = schedule.last_frame().max(1);
-    let b = cavity_model(model, scene, schedule, (frames, 8), particles, gpu, log)?;
+    let (frames, what) = match motion {
+        BenchMotion::Drive(schedule) => {
+            (frames.unwrap_or(schedule.last_frame()).max(1), "frames of compressions".to_string())
+        }
+        BenchMotion::Replay(k) => {
+            let available = model.trajectories.get(k).map_or(1, |t| t.g.shape()[0].saturating_sub(1));
+            (frames.unwrap_or(available).max(1), format!("frames of training run {k} replayed"))
+        }
+    };
+    let b = trained_model(model, scene, motion, (frames, 8), particles, gpu, log)?;
     let (mu, mf, mg, mh) = b.dims;
     let [td, ta, tp, total] = b.full;
     let device = b.particles.1.map_or("no device".into(), |s| format!("{:.2} ms", 1e3 * s));
     emit(&format!(
-        "Cavity model ({} cells; m_u {mu}, m_f {mf}, m_g {mg}, m_h {mh}), driven by {frames} frames of compressions:\n\n\
+        "Model of {} ({} cells; m_u {mu}, m_f {mf}, m_g {mg}, m_h {mh}), {frames} {what}:\n\n\
          | quantity | time |\n|---|---:|\n\
          | full step t_d (median of 8 frames) | {td:.3} s |\n\
          | full step t_a | {ta:.3} s |\n\
@@ -472,6 +541,7 @@ pub fn model_report(
          | particles t_pa, {} from the reduced state, 10 substeps a frame, CPU | {:.2} ms |\n\
          | the same on the device | {device} |\n\
          | run-time model (reduced tensors, B_f and B_g) | {:.1} MB |\n",
+        scene.display(),
         b.cells,
         STEP_ROUNDS * frames,
         1e3 * b.reduced,

@@ -454,14 +454,24 @@ pub struct BenchArgs {
     /// Basis sizes m_u,m_f,m_g,m_h of the cavity step (Table 1's cavity: 128,64,5; m_h ours).
     #[arg(long, value_delimiter = ',', default_value = "128,64,5,16")]
     pub sizes: Vec<usize>,
-    /// Measure a trained cavity model instead (Table 1's reduced rows): the full step on
-    /// --scene and the reduced step under the same driven motion, and reduced particles on
-    /// the CPU and the device.
+    /// Measure a trained model instead (Table 1's reduced rows): the full step on --scene and
+    /// the reduced step under the same motion (a cavity model driven by --drive, any other
+    /// model replaying a training run, --replay), and reduced particles on the CPU and the
+    /// device.
     #[arg(long)]
     pub model: Option<std::path::PathBuf>,
-    /// With --model: the cavity scene the model was trained on.
+    /// With --model: the scene the model was trained on (its mesh is checked against the
+    /// model's), e.g. scenes/fluid/bird.toml for a bird model.
     #[arg(long, default_value = "scenes/fluid/cavity.toml")]
     pub scene: std::path::PathBuf,
+    /// With --model: replay training run K (its reduced geometry and induced flux) instead of
+    /// driving a cavity model; the default for models that are not a cavity's.
+    #[arg(long, conflicts_with = "drive")]
+    pub replay: Option<usize>,
+    /// With --model: frames of the motion (default: the drive's last keyframe, or the replayed
+    /// run's whole length).
+    #[arg(long, value_parser = crate::cli::args::count_up_to(crate::cli::args::MAX_FRAMES))]
+    pub frames: Option<usize>,
     /// With --model: particles advected every frame.
     #[arg(long, default_value_t = 10_000, value_parser = crate::cli::args::count_up_to(crate::cli::args::MAX_PARTICLES))]
     pub particles: usize,
@@ -473,15 +483,31 @@ pub struct BenchArgs {
 /// `galerkin fluid bench-reduced` ([`galerkin::bench::fluid_reduced::step_report`], or with
 /// --model [`galerkin::bench::fluid_reduced::model_report`]).
 pub fn bench(desc: &galerkin::gpu::GpuDesc, args: &BenchArgs) -> Result<()> {
-    use galerkin::bench::fluid_reduced::{model_report, step_report, StepBench};
+    use galerkin::bench::fluid_reduced::{model_report, step_report, BenchMotion, StepBench};
     let start = Instant::now();
     let mut log = |s: &str| eprintln!("[{:6.1} s] {s}", start.elapsed().as_secs_f64());
     let mut emit = |s: &str| print!("{s}");
     if let Some(path) = &args.model {
         let model = ReducedFluidModel::load(path)?;
         let gpu = galerkin::gpu::Gpu::new(desc).ok();
-        let drive = warn_beyond(&model, &args.drive);
-        model_report(&model, &args.scene, &drive, args.particles, gpu.as_ref(), &mut log, &mut emit)?;
+        let drive;
+        let motion = match (args.replay, &model.cavity) {
+            (None, Some(_)) => {
+                drive = warn_beyond(&model, &args.drive);
+                BenchMotion::Drive(&drive)
+            }
+            (k, _) => BenchMotion::Replay(k.unwrap_or(0)),
+        };
+        model_report(
+            &model,
+            &args.scene,
+            motion,
+            args.frames,
+            args.particles,
+            gpu.as_ref(),
+            &mut log,
+            &mut emit,
+        )?;
         drop(gpu);
         return Ok(());
     }
