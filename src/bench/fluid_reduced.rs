@@ -240,6 +240,8 @@ pub struct ModelBench {
     pub particles: (f64, Option<f64>),
     /// Particles advected.
     pub particle_count: usize,
+    /// Why the device could not run the particle pass, if it could not.
+    pub device_refused: Option<String>,
     /// Bytes the run-time model holds (reduced tensors and the bases the step and particles use).
     pub model_bytes: usize,
 }
@@ -335,8 +337,17 @@ pub fn trained_model(
     let reference = ReducedParticles::new(model)?;
     let seeds = seed_particles(reference.mesh(), particles);
     let mut cpu = seeds.clone();
+    // A device that cannot hold the pass's buffers is reported, not fatal to the CPU rows.
+    let mut device_refused = None;
     let mut device = match gpu {
-        Some(g) => Some((crate::fluid::gpu::GpuParticles::new_reduced(g, &reference, &seeds)?, g)),
+        Some(g) => match crate::fluid::gpu::GpuParticles::new_reduced(g, &reference, &seeds) {
+            Ok(p) => Some((p, g)),
+            Err(e) => {
+                stage(&format!("particles on the device refused: {e}"));
+                device_refused = Some(e.to_string());
+                None
+            }
+        },
         None => None,
     };
     let mut profiler = gpu
@@ -412,6 +423,7 @@ pub fn trained_model(
         reduced_with_particles: med(&mut interleaved),
         particles: (med(&mut particles_cpu), (!particles_gpu.is_empty()).then(|| med(&mut particles_gpu))),
         particle_count: particles,
+        device_refused,
         model_bytes: model.tensor_bytes() + bases,
     })
 }
@@ -528,7 +540,11 @@ pub fn model_report(
     let b = trained_model(model, scene, motion, (frames, 8), particles, gpu, log)?;
     let (mu, mf, mg, mh) = b.dims;
     let [td, ta, tp, total] = b.full;
-    let device = b.particles.1.map_or("no device".into(), |s| format!("{:.2} ms", 1e3 * s));
+    let device = match (b.particles.1, &b.device_refused) {
+        (Some(s), _) => format!("{:.2} ms", 1e3 * s),
+        (None, Some(why)) => format!("refused: {why}"),
+        (None, None) => "no device".into(),
+    };
     emit(&format!(
         "Model of {} ({} cells; m_u {mu}, m_f {mf}, m_g {mg}, m_h {mh}), {frames} {what}:\n\n\
          | quantity | time |\n|---|---:|\n\

@@ -141,6 +141,13 @@ pub fn barycentric(dim: usize, p: &[Point], x: Point) -> [f64; 4] {
     b
 }
 
+/// Most entries per mesh cell a [`GridHash`]'s lists may hold: at about one mesh cell per
+/// bucket a still cell touches up to 8 buckets; a grid whose cells' swept boxes would touch
+/// more on average is made coarser, keeping it within 64 bytes (16 entries) per mesh cell (the bird's
+/// training motion would otherwise list 69 million entries for its 302,679 cells, more than
+/// a device binds in one storage buffer).
+pub const GRID_LIST_BUDGET: usize = 16;
+
 /// A uniform grid over the mesh's bounds listing the cells whose bounding boxes overlap
 /// each grid cell: the walk's fallback.
 #[derive(Clone, Debug)]
@@ -187,27 +194,59 @@ impl GridHash {
         }
         let extent: Vec<f64> = (0..d).map(|k| (hi[k] - lo[k]).max(1e-300)).collect();
         let volume: f64 = extent.iter().product();
-        let h = (volume / nc.max(1) as f64).powf(1.0 / d as f64);
-        let mut dims = [1usize; 3];
-        let mut size = [1.0; 3];
-        for k in 0..d {
-            dims[k] = ((extent[k] / h).ceil() as usize).clamp(1, 4096);
-            size[k] = extent[k] / dims[k] as f64;
-        }
+        // Each cell's box over the motions, once.
+        let cell_boxes: Vec<(Point, Point)> = (0..nc)
+            .map(|c| {
+                let mut b = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+                for &v in mesh.cell(c) {
+                    let (vlo, vhi) = boxes[v as usize];
+                    for k in 0..d {
+                        b.0[k] = b.0[k].min(vlo[k]);
+                        b.1[k] = b.1[k].max(vhi[k]);
+                    }
+                }
+                b
+            })
+            .collect();
+        let layout = |h: f64| {
+            let mut dims = [1usize; 3];
+            let mut size = [1.0; 3];
+            for k in 0..d {
+                dims[k] = ((extent[k] / h).ceil() as usize).clamp(1, 4096);
+                size[k] = extent[k] / dims[k] as f64;
+            }
+            (dims, size)
+        };
+        let span = |dims: [usize; 3], size: Point, (mn, mx): &(Point, Point)| {
+            let (mut a, mut b) = ([0usize; 3], [0usize; 3]);
+            for k in 0..d {
+                a[k] = (((mn[k] - lo[k]) / size[k]).floor().max(0.0) as usize).min(dims[k] - 1);
+                b[k] = (((mx[k] - lo[k]) / size[k]).floor().max(0.0) as usize).min(dims[k] - 1);
+            }
+            (a, b)
+        };
+        // About one mesh cell per grid cell; coarser while the lists would exceed
+        // GRID_LIST_BUDGET entries per mesh cell (cells swept far by a motion — a bird's
+        // wingtips — touch many buckets).
+        let mut h = (volume / nc.max(1) as f64).powf(1.0 / d as f64);
+        let (dims, size) = loop {
+            let (dims, size) = layout(h);
+            let entries: usize = cell_boxes
+                .iter()
+                .map(|bx| {
+                    let (a, b) = span(dims, size, bx);
+                    (0..3).map(|k| b[k] - a[k] + 1).product::<usize>()
+                })
+                .sum();
+            if entries <= GRID_LIST_BUDGET * nc.max(1) || dims.iter().all(|&n| n == 1) {
+                break (dims, size);
+            }
+            h *= 1.25;
+        };
         let total = dims[0] * dims[1] * dims[2];
         let mut lists: Vec<Vec<u32>> = vec![Vec::new(); total];
-        for c in 0..nc {
-            let corners = mesh.cell(c);
-            let mut a = [0usize; 3];
-            let mut b = [0usize; 3];
-            for k in 0..d {
-                let (mn, mx) = corners.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(m, n), &v| {
-                    let (vlo, vhi) = boxes[v as usize];
-                    (m.min(vlo[k]), n.max(vhi[k]))
-                });
-                a[k] = (((mn - lo[k]) / size[k]).floor().max(0.0) as usize).min(dims[k] - 1);
-                b[k] = (((mx - lo[k]) / size[k]).floor().max(0.0) as usize).min(dims[k] - 1);
-            }
+        for (c, bx) in cell_boxes.iter().enumerate() {
+            let (a, b) = span(dims, size, bx);
             for z in a[2]..=b[2] {
                 for y in a[1]..=b[1] {
                     for x in a[0]..=b[0] {
@@ -562,6 +601,39 @@ pub fn seed_particles(mesh: &SimplexMesh, count: usize) -> Vec<Particle> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Vertex boxes swept across the whole domain (a motion moving every vertex far) would
+    /// list every cell under every bucket; the grid coarsens to stay within its budget, and
+    /// every cell is still listed under the bucket of each of its vertices.
+    #[test]
+    fn a_grid_of_far_swept_cells_stays_within_its_list_budget() {
+        use crate::mesh::tunnel::{tunnel, TunnelSpec};
+        let t = tunnel(&TunnelSpec { cell: 0.1, ..Default::default() }).expect("tunnel");
+        let mesh = &t.mesh;
+        let still: Vec<(Point, Point)> =
+            (0..mesh.vertex_count()).map(|v| (mesh.point(v), mesh.point(v))).collect();
+        let fine = GridHash::from_vertex_boxes(mesh, &still);
+        let swept: Vec<(Point, Point)> = still
+            .iter()
+            .map(|&(p, _)| ([p[0] - 0.8, p[1] - 0.3, 0.0], [p[0] + 0.8, p[1] + 0.3, 0.0]))
+            .collect();
+        let coarse = GridHash::from_vertex_boxes(mesh, &swept);
+        let nc = mesh.cell_count();
+        assert!(fine.parts().4.len() <= GRID_LIST_BUDGET * nc);
+        assert!(
+            coarse.parts().4.len() <= GRID_LIST_BUDGET * nc,
+            "{} entries for {nc} cells",
+            coarse.parts().4.len()
+        );
+        let buckets = |g: &GridHash| g.parts().2.iter().product::<usize>();
+        assert!(buckets(&coarse) < buckets(&fine), "{} vs {}", buckets(&coarse), buckets(&fine));
+        for c in 0..nc {
+            for &v in mesh.cell(c) {
+                let b = coarse.bucket(mesh.point(v as usize));
+                assert!(coarse.candidates(b).contains(&(c as u32)), "cell {c} missing under vertex {v}");
+            }
+        }
+    }
 
     /// The weights against their definition — the signed volume of the simplex with `x` in
     /// place of vertex k, over the simplex's — and `Σ λₖ pₖ = x`, in 2D and 3D, for points
