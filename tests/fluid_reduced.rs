@@ -376,10 +376,18 @@ fn bad_training_input_is_refused_naming_the_run_frame_or_basis() {
         .unwrap();
     let set = TrainingSet::open(std::slice::from_ref(&turned)).unwrap();
     let sizes = BasisSizes { m_g: Some(1), ..BasisSizes::default() };
-    let err = FluidBases::build(&set, &sizes, &mut |_| {}, &SingleRank).unwrap_err().to_string();
-    // Every cell collapses to the centre (the mean of a frame and its turned copy): the error
-    // names the first the rounding leaves at or below zero volume.
-    assert!(err.contains("basis g") && err.contains("turned frame 0") && err.contains(" volume "), "{err}");
+    // Every cell collapses to the centre (the mean of a frame and its turned copy): the basis
+    // report counts the folded cells, and the model is refused at its reduced volume matrix,
+    // naming the run and frame.
+    let bases = FluidBases::build(&set, &sizes, &mut |_| {}, &SingleRank).expect("the bases");
+    let g_note = &bases.reports.iter().find(|r| r.name == "g").expect("basis g").note;
+    assert!(g_note.contains("folds cells in 30 frames") && g_note.contains("turned frame"), "{g_note}");
+    let err =
+        ReducedFluidModel::train(&set, bases, &sizes, &mut |_| {}, &SingleRank).unwrap_err().to_string();
+    assert!(
+        err.contains("training run 0") && err.contains("frame 0") && err.contains("not positive definite"),
+        "{err}"
+    );
     // A reduced state of the wrong length.
     let (_, model) = train(&wavy, BasisSizes::default());
     let fluid = ReducedFluid::new(&model).unwrap();
