@@ -277,8 +277,16 @@ pub fn trained_model(
     use crate::fluid::reduced::particles::ReducedParticles;
     use crate::fluid::scene::Motion;
     let (mg, mh) = (model.dim_of("g"), model.dim_of("h"));
-    let replayed = match motion {
-        BenchMotion::Drive(_) => None,
+    // Where the reduced side's ĝ and ĥ come from, resolved once.
+    enum Reduced<'m> {
+        Drive(&'m crate::fluid::reduced::CavityMotion, &'m crate::fluid::reduced::CompressionSchedule),
+        Replay(usize, &'m crate::fluid::reduced::Trajectory),
+    }
+    let reduced_motion = match motion {
+        BenchMotion::Drive(schedule) => Reduced::Drive(
+            model.cavity.as_ref().ok_or_else(|| FluidError::State("not a cavity model".into()))?,
+            schedule,
+        ),
         BenchMotion::Replay(k) => {
             let traj = model.trajectories.get(k).ok_or_else(|| {
                 FluidError::State(format!(
@@ -290,7 +298,7 @@ pub fn trained_model(
             if frames > available {
                 return Err(FluidError::State(format!("{frames} frames: training run {k} has {available}")));
             }
-            Some((k, traj))
+            Reduced::Replay(k, traj)
         }
     };
     stage("the full step");
@@ -300,8 +308,8 @@ pub fn trained_model(
         &scene.topology,
         scene.periodic_axis,
     ))?;
-    if let (Some((k, _)), Motion::Cavity { .. }) = (replayed, &scene.motion) {
-        scene.set_run(k)?;
+    if let (Reduced::Replay(k, _), Motion::Cavity { .. }) = (&reduced_motion, &scene.motion) {
+        scene.set_run(*k)?;
     }
     let mut solver =
         crate::fluid::FluidSolver::new(scene.mesh.clone(), scene.topology.clone(), scene.params)?;
@@ -357,24 +365,19 @@ pub fn trained_model(
     let (mu, mf) = (model.dim_of("u"), model.dim_of("f"));
     let row = |t: &crate::tensor::Tensor, m: usize, k: usize| t.data()[k * m..(k + 1) * m].to_vec();
     let geometry = |t: usize| -> Result<Vec<f64>, FluidError> {
-        match (motion, replayed) {
-            (BenchMotion::Drive(schedule), _) => {
-                let cavity =
-                    model.cavity.as_ref().ok_or_else(|| FluidError::State("not a cavity model".into()))?;
-                cavity.geometry(schedule.at(t))
-            }
-            (_, Some((_, traj))) => Ok(row(&traj.g, mg, t)),
-            (BenchMotion::Replay(_), None) => unreachable!("a replay has its trajectory"),
+        match &reduced_motion {
+            Reduced::Drive(cavity, schedule) => cavity.geometry(schedule.at(t)),
+            Reduced::Replay(_, traj) => Ok(row(&traj.g, mg, t)),
         }
     };
-    let rest = match replayed {
-        Some((_, traj)) => ReducedState { u: traj.u0.clone(), f: traj.f0.clone(), g: geometry(0)? },
-        None => ReducedState { u: vec![0.0; mu], f: vec![0.0; mf], g: geometry(0)? },
+    let rest = match &reduced_motion {
+        Reduced::Replay(_, traj) => ReducedState { u: traj.u0.clone(), f: traj.f0.clone(), g: geometry(0)? },
+        Reduced::Drive(..) => ReducedState { u: vec![0.0; mu], f: vec![0.0; mf], g: geometry(0)? },
     };
     let step = |s: &ReducedState, t: usize| -> Result<(ReducedState, f64), FluidError> {
         let g1 = geometry(t)?;
-        let h1 = match replayed {
-            Some((_, traj)) if mh > 0 => row(&traj.h, mh, t),
+        let h1 = match &reduced_motion {
+            Reduced::Replay(_, traj) if mh > 0 => row(&traj.h, mh, t),
             _ => fluid.induced_flux(&s.g, &g1).ok_or_else(|| FluidError::State("no tensor H".into()))?,
         };
         let (next, r) = fluid.step(s, &g1, &h1)?;

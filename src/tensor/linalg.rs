@@ -363,6 +363,8 @@ pub fn transpose(a: &Tensor) -> Tensor {
 
 #[cfg(test)]
 mod tests {
+    use super::*;
+
     #[test]
     fn dot_sums_every_product_of_any_length() {
         for n in [0usize, 1, 7, 8, 9, 64, 67] {
@@ -370,15 +372,10 @@ mod tests {
             let b: Vec<f64> = (0..n).map(|i| 2.0 - 0.5 * i as f64).collect();
             let plain: f64 = a.iter().zip(&b).map(|(x, y)| x * y).sum();
             // Integers and halves: every partial sum exact, so any order gives the same.
-            assert_eq!(super::dot(&a, &b), plain, "length {n}");
-            assert_eq!(
-                super::dot(&a, &b[..n / 2]),
-                a[..n / 2].iter().zip(&b).map(|(x, y)| x * y).sum::<f64>()
-            );
+            assert_eq!(dot(&a, &b), plain, "length {n}");
+            assert_eq!(dot(&a, &b[..n / 2]), a[..n / 2].iter().zip(&b).map(|(x, y)| x * y).sum::<f64>());
         }
     }
-
-    use super::*;
 
     fn spd(n: usize) -> Tensor {
         // A = Mᵀ M + n I for a fixed M.

@@ -410,7 +410,8 @@ fn check_projected_volumes(
                     .min_by(|a, b| a.1.total_cmp(b.1))
                     .map(|(c, &v)| (c, v))
                     .unwrap_or((0, 0.0));
-                out.worst = Some((path.display().to_string(), frame, c, v, mesh.volumes_at(&g)[c]));
+                let truth = crate::mesh::geometry::signed_volume(mesh.dim(), &mesh.cell_points_at(&g, c));
+                out.worst = Some((path.display().to_string(), frame, c, v, truth));
             }
         }
     }
