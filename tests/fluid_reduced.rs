@@ -121,7 +121,9 @@ fn check_tensors(set: &TrainingSet, model: &ReducedFluidModel, seed: u64) {
     }
     add_laplacian(topo, &uf, model.viscosity, &mut full);
     let want = project(bu, &full);
-    assert!(rel_diff(&ours, &want) < 1e-10, "Â, Â_h, Δ̂: {:e}", rel_diff(&ours, &want));
+    // The step holds Â and Â_h in f32 (each value rounded to 6e-8 relative; measured 2e-8 on
+    // K̂û): 1e-6 still fails on any wrong term of the tensors.
+    assert!(rel_diff(&ours, &want) < 1e-6, "Â, Â_h, Δ̂: {:e}", rel_diff(&ours, &want));
     // V̂(ĝ) û = B_uᵀ V(g) u and (P̂ ⊗ ĝ) f̂ = B_uᵀ (P ⊗ g) f.
     let v = fluid.volume_matrix(&g);
     let ours: Vec<f64> = (0..mu).map(|i| (0..mu).map(|j| v[(i, j)] * u[j]).sum()).collect();
@@ -251,6 +253,19 @@ fn advection_and_projection_never_increase_the_energy() {
                 assert!(e2 <= e1 * (1.0 + 1e-12), "projection: {e1} → {e2}");
             }
         }
+        // The Krylov exponential (L⁻¹K̂L⁻ᵀ applied through triangular solves, never formed)
+        // and Padé 13 (on the formed matrix) agree to 1e-10 of ‖û‖: the Krylov tolerance is
+        // 1e-12 and the triangular solves lose at most a few digits to L's conditioning
+        // (measured 5e-16 and 8e-14 on these two models).
+        let (u, f, h) = (rng.vec(mu), rng.vec(mf), rng.vec(mh));
+        let mut advected = Vec::new();
+        for exponential in [Exponential::Krylov(1e-12), Exponential::Pade] {
+            fluid.exponential = exponential;
+            let mut report = ReducedStepReport::default();
+            advected.push(fluid.advect(&u, &f, &g, &h, 10.0 * fluid.frame_time(), &mut report).unwrap());
+        }
+        let diff = rel_diff(&advected[0], &advected[1]);
+        assert!(diff < 1e-10, "{combination:?}: Krylov and Padé differ by {diff:e}");
     }
 }
 

@@ -242,8 +242,21 @@ pub struct ModelBench {
     pub particle_count: usize,
     /// Why the device could not run the particle pass, if it could not.
     pub device_refused: Option<String>,
-    /// Bytes the run-time model holds (reduced tensors and the bases the step and particles use).
-    pub model_bytes: usize,
+    /// Run-time memory in bytes: the reduced step's tensors as it holds them
+    /// ([`ReducedFluid::bytes`], Table 1's memory column), the model's reduced tensors as
+    /// stored (f64, every axis unfolded), and `B_f` and `B_g`, which the particles read.
+    pub memory: ModelMemory,
+}
+
+/// What a trained model's run time holds ([`ModelBench::memory`]), in bytes.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct ModelMemory {
+    /// The reduced step's tensors as it lays them out ([`ReducedFluid::bytes`]).
+    pub step: usize,
+    /// The model's reduced tensors as stored in the file (f64, symmetric axes unfolded).
+    pub stored: usize,
+    /// `B_f` and `B_g` (f64), read by the particles (§6.5).
+    pub particle_bases: usize,
 }
 
 /// Rounds of the motion in which [`trained_model`] times the reduced step alone.
@@ -427,7 +440,7 @@ pub fn trained_model(
         particles: (med(&mut particles_cpu), (!particles_gpu.is_empty()).then(|| med(&mut particles_gpu))),
         particle_count: particles,
         device_refused,
-        model_bytes: model.tensor_bytes() + bases,
+        memory: ModelMemory { step: fluid.bytes(), stored: model.tensor_bytes(), particle_bases: bases },
     })
 }
 
@@ -559,7 +572,9 @@ pub fn model_report(
          | reduced step, stepping and advecting particles in turn (median of {frames}) | {:.3} ms |\n\
          | particles t_pa, {} from the reduced state, 10 substeps a frame, CPU | {:.2} ms |\n\
          | the same on the device | {device} |\n\
-         | run-time model (reduced tensors, B_f and B_g) | {:.1} MB |\n",
+         | run-time memory of the reduced step (its tensors as it holds them) | {:.1} MB |\n\
+         | the model's reduced tensors as stored (f64, unfolded) | {:.1} MB |\n\
+         | B_f and B_g, read by the particles | {:.1} MB |\n",
         scene.display(),
         b.cells,
         STEP_ROUNDS * frames,
@@ -568,7 +583,9 @@ pub fn model_report(
         1e3 * b.reduced_with_particles,
         b.particle_count,
         1e3 * b.particles.0,
-        b.model_bytes as f64 / 1e6
+        b.memory.step as f64 / 1e6,
+        b.memory.stored as f64 / 1e6,
+        b.memory.particle_bases as f64 / 1e6
     ));
     Ok(())
 }

@@ -28,13 +28,13 @@ use std::time::Instant;
 
 use faer::linalg::matmul::matmul;
 use faer::linalg::triangular_solve::{solve_lower_triangular_in_place, solve_upper_triangular_in_place};
-use faer::{Accum, Mat, MatRef, Par};
+use faer::{Accum, Mat, Par};
 
 use crate::fluid::FluidError;
 use crate::tensor::expm_krylov;
 
 use super::dense::{
-    cholesky, cholesky_solve, fold_symmetric, matvec, matvec_split, row_major, transpose_times,
+    cholesky, cholesky_solve, fold_symmetric, matvec, matvec_f32_split, row_major, transpose_times,
 };
 use super::model::ReducedFluidModel;
 
@@ -132,14 +132,15 @@ pub struct ReducedFluid {
     mh: usize,
     viscosity: f64,
     frame_time: f64,
-    /// Â, row-major: when every `Â[:, :, j]` is skew (B_f divergence-free, B_u = B_p: §A.2)
-    /// only its strict upper triangle, `m_u(m_u−1)/2 × m_f` (half the memory traffic of the
-    /// step's largest contraction); otherwise all of it, `(m_u·m_u) × m_f`.
-    a: Vec<f64>,
+    /// Â, row-major, in f32 (see [`matvec_f32_split`]): when every `Â[:, :, j]` is skew (B_f
+    /// divergence-free, B_u = B_p: §A.2) only its strict upper triangle, `m_u(m_u−1)/2 × m_f`
+    /// (half the memory traffic, and K̂'s advective part skew whatever the rounding);
+    /// otherwise all of it, `(m_u·m_u) × m_f`.
+    a: Vec<f32>,
     /// Whether `a` holds the skew upper triangle.
     a_skew: bool,
-    /// Â_h as (m_u·m_u) × m_h.
-    ah: Vec<f64>,
+    /// Â_h as (m_u·m_u) × m_h, in f32.
+    ah: Vec<f32>,
     /// Δ̂ (m_u·m_u).
     lap: Vec<f64>,
     /// P̂ as (m_u·m_f) × m_g.
@@ -222,13 +223,13 @@ impl ReducedFluid {
             for p in 0..mu {
                 for u in p + 1..mu {
                     for j in 0..mf {
-                        packed.push(0.5 * (at[(p * mu + u) * mf + j] - at[(u * mu + p) * mf + j]));
+                        packed.push((0.5 * (at[(p * mu + u) * mf + j] - at[(u * mu + p) * mf + j])) as f32);
                     }
                 }
             }
             packed
         } else {
-            at.to_vec()
+            at.iter().map(|&x| x as f32).collect()
         };
         let (induced, induced_monomials) = match model.tensor("H") {
             Some(ht) if mh > 0 => fold_symmetric(ht.data(), mh, 2 * mg, dim),
@@ -255,7 +256,7 @@ impl ReducedFluid {
             frame_time: model.frame_time,
             a,
             a_skew,
-            ah: if mh > 0 { t("Ah")?.data().to_vec() } else { Vec::new() },
+            ah: if mh > 0 { t("Ah")?.data().iter().map(|&x| x as f32).collect() } else { Vec::new() },
             lap: t("L")?.data().to_vec(),
             p: t("P")?.data().to_vec(),
             v,
@@ -268,6 +269,26 @@ impl ReducedFluid {
             exponential: Exponential::default(),
             factor: FactorCache::default(),
         })
+    }
+
+    /// Bytes the step holds: its tensors as laid out here — `V̂` over its symmetric axes
+    /// folded to distinct monomials, `Â` (f32) to its skew upper triangle when it is skew,
+    /// `Â_h` (f32), `Ĥ` folded likewise, `Δ̂`, `P̂` — and the constraint's matrices. Table 1's memory
+    /// column counts the same thing, the reduced tensors the run-time simulation reads (not
+    /// the bases the particles read: see [`super::particles::ReducedParticles`]).
+    pub fn bytes(&self) -> usize {
+        let mat = |m: &Mat<f64>| m.nrows() * m.ncols();
+        let constraint = self
+            .constraint
+            .as_ref()
+            .map_or(0, |c| mat(&c.pinv) + mat(&c.null) + mat(&c.d) + c.dh.as_ref().map_or(0, mat));
+        let values = self.lap.len()
+            + self.p.len()
+            + self.v.len()
+            + self.induced.len()
+            + self.bf_bh.as_ref().map_or(0, mat)
+            + constraint;
+        4 * (self.a.len() + self.ah.len()) + 8 * values
     }
 
     /// Reduced dimensions (m_u, m_f, m_g, m_h).
@@ -358,7 +379,7 @@ impl ReducedFluid {
         };
         let mut k = Mat::from_fn(mu, mu, |i, j| self.viscosity * self.lap[i * mu + j]);
         if self.a_skew {
-            let packed = matvec_split(&self.a, mu * (mu - 1) / 2, self.mf, &fp);
+            let packed = matvec_f32_split(&self.a, mu * (mu - 1) / 2, self.mf, &fp);
             let mut row = 0;
             for p in 0..mu {
                 for u in p + 1..mu {
@@ -368,7 +389,7 @@ impl ReducedFluid {
                 }
             }
         } else {
-            let flat = matvec_split(&self.a, mu * mu, self.mf, &fp);
+            let flat = matvec_f32_split(&self.a, mu * mu, self.mf, &fp);
             for p in 0..mu {
                 for u in 0..mu {
                     k[(p, u)] += flat[p * mu + u];
@@ -376,7 +397,7 @@ impl ReducedFluid {
             }
         }
         if self.mh > 0 && self.combination == FluxCombination::Separate {
-            let kh = matvec_split(&self.ah, mu * mu, self.mh, h);
+            let kh = matvec_f32_split(&self.ah, mu * mu, self.mh, h);
             for p in 0..mu {
                 for u in 0..mu {
                     k[(p, u)] -= kh[p * mu + u];
@@ -435,19 +456,19 @@ impl ReducedFluid {
         for i in 0..self.mu {
             w[i] = (i..self.mu).map(|j| l[(j, i)] * u[j]).sum();
         }
-        // M = L⁻¹ K L⁻ᵀ, formed once (two triangular solves with m_u right-hand sides) so that
-        // each Krylov product is one m_u × m_u matrix–vector product.
-        let mut m = k;
-        solve_lower_triangular_in_place(l.as_ref(), m.as_mut(), Par::Seq);
-        let mut mt = m.transpose().to_owned();
-        solve_lower_triangular_in_place(l.as_ref(), mt.as_mut(), Par::Seq);
-        let m = mt.transpose().to_owned();
+        // M = L⁻¹ K L⁻ᵀ. The Krylov exponential applies it as two triangular solves and a
+        // product per vector (3 m_u² multiply–adds, about ten products a step) instead of
+        // forming it (two triangular solves with m_u right-hand sides, m_u³); Padé needs it
+        // formed.
         let w1 = match self.exponential {
             Exponential::Krylov(tol) => {
+                let mut x = Mat::<f64>::zeros(self.mu, 1);
                 let mut apply = |v: &[f64], y: &mut [f64]| {
+                    x.col_mut(0).iter_mut().zip(v).for_each(|(a, b)| *a = *b);
+                    solve_upper_triangular_in_place(l.transpose(), x.as_mut(), Par::Seq);
                     let mut out = faer::MatMut::from_column_major_slice_mut(y, self.mu, 1);
-                    let x = MatRef::from_column_major_slice(v, self.mu, 1);
-                    matmul(out.as_mut(), Accum::Replace, m.as_ref(), x, 1.0, Par::Seq);
+                    matmul(out.as_mut(), Accum::Replace, k.as_ref(), x.as_ref(), 1.0, Par::Seq);
+                    solve_lower_triangular_in_place(l.as_ref(), out, Par::Seq);
                 };
                 let (w1, kr) = expm_krylov("reduced advection", &mut apply, &w, dt, tol)
                     .map_err(|e| state_err(e.to_string()))?;
@@ -455,6 +476,11 @@ impl ReducedFluid {
                 w1
             }
             Exponential::Pade => {
+                let mut m = k;
+                solve_lower_triangular_in_place(l.as_ref(), m.as_mut(), Par::Seq);
+                let mut mt = m.transpose().to_owned();
+                solve_lower_triangular_in_place(l.as_ref(), mt.as_mut(), Par::Seq);
+                let m = mt.transpose().to_owned();
                 let e = crate::tensor::expm_faer("reduced advection", &(m * faer::Scale(dt)))
                     .map_err(|e| state_err(e.to_string()))?;
                 (0..self.mu).map(|i| (0..self.mu).map(|j| e[(i, j)] * w[j]).sum()).collect()
