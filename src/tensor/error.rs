@@ -96,4 +96,13 @@ pub enum TensorError {
         /// Where.
         detail: String,
     },
+    /// A tensor that cannot be stored as asked (the wrong order for the layout, or memory the
+    /// system will not map).
+    #[error("{what}: {detail}")]
+    Storage {
+        /// The operand.
+        what: String,
+        /// Why.
+        detail: String,
+    },
 }

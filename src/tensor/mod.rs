@@ -21,6 +21,7 @@ mod error;
 mod expm;
 pub mod gpu;
 mod linalg;
+mod row_table;
 mod sparse;
 mod sparse_symmetric;
 
@@ -30,5 +31,6 @@ pub use error::TensorError;
 pub use expm::{expm, expm_faer, expm_krylov, KrylovReport, KRYLOV_MAX_DIM, KRYLOV_MAX_STEPS};
 pub(crate) use linalg::{check_system, pivot_tolerance};
 pub use linalg::{dot, matmul, solve, solve_many, spd_power, spd_power_apply, symmetric_eigen, transpose};
+pub use row_table::RowTable;
 pub use sparse::{distinct_permutations, SparseTensor};
 pub use sparse_symmetric::{Factorisation, SparseSymmetricSolver, SymmetricPattern};

@@ -21,7 +21,7 @@ use crate::fluid::particles::{
 };
 use crate::fluid::FluidError;
 use crate::mesh::{Point, SimplexMesh, Topology};
-use crate::tensor::{dot, Tensor};
+use crate::tensor::{dot, RowTable};
 
 use super::model::ReducedFluidModel;
 
@@ -30,13 +30,13 @@ use super::model::ReducedFluidModel;
 #[derive(Clone, Copy)]
 pub struct ReducedFrame<'a> {
     /// `B_g` (d·vertices × m_g).
-    pub b_g: &'a Tensor,
+    pub b_g: &'a RowTable,
     /// ĝ at the frame's start.
     pub g0: &'a [f64],
     /// ĝ at its end.
     pub g1: &'a [f64],
     /// `B_f` (faces × m_f).
-    pub b_f: &'a Tensor,
+    pub b_f: &'a RowTable,
     /// f̂ of the end state.
     pub f: &'a [f64],
 }
@@ -93,8 +93,8 @@ fn prefetch_rows(row: &[f64]) {
 pub struct ReducedParticles {
     mesh: SimplexMesh,
     topology: Topology,
-    b_g: Tensor,
-    b_f: Tensor,
+    b_g: RowTable,
+    b_f: RowTable,
     boxes: Vec<(Point, Point)>,
     grid: OnceLock<GridHash>,
 }
@@ -106,7 +106,12 @@ impl ReducedParticles {
         let (mesh, topology) = model.mesh_and_topology()?;
         let basis =
             |n: &str| model.basis(n).ok_or_else(|| FluidError::State(format!("the model has no basis {n}")));
-        let (b_g, b_f) = (basis("g")?.matrix().clone(), basis("f")?.matrix().clone());
+        // Copies in huge pages: particles read their rows at random (see RowTable).
+        let table = |n: &str| -> Result<RowTable, FluidError> {
+            RowTable::from_tensor(basis(n)?.matrix(), &format!("basis {n}"))
+                .map_err(|e| FluidError::State(e.to_string()))
+        };
+        let (b_g, b_f) = (table("g")?, table("f")?);
         let d = model.dim;
         let inf = [f64::INFINITY; 3];
         let mut boxes = vec![(inf, inf.map(|x| -x)); mesh.vertex_count()];
@@ -134,12 +139,12 @@ impl ReducedParticles {
     }
 
     /// `B_g`.
-    pub fn geometry_basis(&self) -> &Tensor {
+    pub fn geometry_basis(&self) -> &RowTable {
         &self.b_g
     }
 
     /// `B_f`.
-    pub fn flux_basis(&self) -> &Tensor {
+    pub fn flux_basis(&self) -> &RowTable {
         &self.b_f
     }
 
