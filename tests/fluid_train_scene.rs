@@ -247,7 +247,22 @@ fn a_reduced_cavity_run_is_compared_with_the_full_run_of_the_same_motion() {
         );
         assert_eq!(c.cell_error.len(), scene.mesh.cell_count());
         assert!(c.csv().lines().count() == 8 && c.csv().starts_with("frame,time,"));
+        assert!(c.csv().lines().next().is_some_and(|h| h.ends_with("one_step_error,flux_projection_error")));
+        // One step from each full frame, and the full flux's truncation in B_f: errors, finite.
+        assert_eq!((c.one_step_error.len(), c.flux_projection_error.len()), (7, 7));
+        assert_eq!(c.one_step_error[0], 0.0);
+        assert!(c.one_step_error.iter().chain(&c.flux_projection_error).all(|e| e.is_finite() && *e >= 0.0));
+        assert!(c.flux_projection_error.iter().all(|e| *e <= 1.0 + 1e-12));
     }
+    // From rest, the replay's first step and the one-step error's first step are the same step
+    // (both from û = f̂ = 0 at the projected frame-0 geometry, to the replayed ĝ₁ and ĥ₁ = B_hᵀh₁).
+    assert!(replay.error[1] > 0.0, "the first frame moved");
+    assert!(
+        (replay.one_step_error[1] - replay.error[1]).abs() <= 1e-9,
+        "{} vs {}",
+        replay.one_step_error[1],
+        replay.error[1]
+    );
     // The training's own snapshots of run 0 read back instead of simulated again: the same
     // full run (the solver is deterministic; 1e-9 leaves room for summation order only).
     let full = dir.path().join("work/run-00");
@@ -259,6 +274,11 @@ fn a_reduced_cavity_run_is_compared_with_the_full_run_of_the_same_motion() {
     }
     for (a, b) in recorded.error.iter().zip(&replay.error) {
         assert!((a - b).abs() <= 1e-9, "{a} vs {b}");
+    }
+    // The one-step errors agree too: the induced flux read from the snapshots is the one the
+    // solver computes for the simulated run.
+    for (a, b) in recorded.one_step_error.iter().zip(&replay.one_step_error) {
+        assert!((a - b).abs() <= 1e-9, "one step: {a} vs {b}");
     }
     assert!(recorded.seconds.0.is_nan(), "nothing was simulated on the full side");
     let e =

@@ -375,6 +375,8 @@ pub fn compare(desc: &galerkin::gpu::GpuDesc, args: &CompareArgs) -> Result<()> 
     c.write_outputs(&gpu, &scene.mesh, &title, frames, &args.out)?;
     let (mean, worst) = c.error_summary();
     let (best_mean, best_worst) = c.projection_summary();
+    let (step_mean, step_worst) = c.one_step_summary();
+    let (flux_mean, flux_worst) = c.flux_projection_summary();
     let speed = if c.seconds.0.is_finite() {
         format!(
             "full frame {:.3} s, reduced step {:.3} ms ({:.0}×)",
@@ -386,11 +388,15 @@ pub fn compare(desc: &galerkin::gpu::GpuDesc, args: &CompareArgs) -> Result<()> 
         format!("reduced step {:.3} ms (the full run read back)", 1e3 * c.seconds.1)
     };
     println!(
-        "fluid compare: {title}, {frames} frames: relative velocity error in the energy norm mean {:.2} %, worst {:.2} % (the best fit in B_u: mean {:.2} %, worst {:.2} %); energy at the end full {:.4e}, reduced {:.4e}; {speed} → {}",
+        "fluid compare: {title}, {frames} frames: relative velocity error in the energy norm mean {:.2} %, worst {:.2} % (the best fit in B_u: mean {:.2} %, worst {:.2} %; one reduced step from the full run's previous frame: mean {:.2} %, worst {:.2} %; the full flux's truncation in B_f: mean {:.2} %, worst {:.2} %); energy at the end full {:.4e}, reduced {:.4e}; {speed} → {}",
         100.0 * mean,
         100.0 * worst,
         100.0 * best_mean,
         100.0 * best_worst,
+        100.0 * step_mean,
+        100.0 * step_worst,
+        100.0 * flux_mean,
+        100.0 * flux_worst,
         c.energy_full.last().copied().unwrap_or(0.0),
         c.energy_reduced.last().copied().unwrap_or(0.0),
         args.out.display()

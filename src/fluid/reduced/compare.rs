@@ -6,6 +6,14 @@
 //! relative velocity error in that energy norm, `‖u_full − u_reduced‖_V / ‖u_full‖_V`; at the
 //! last frame, the error of every cell (where it sits), for a picture.
 //!
+//! Two measures say where the error comes from. The **one-step error** (§7.1, Fig. 5's measure
+//! as a norm): one reduced step from the full run's previous frame projected into the bases
+//! (û by the energy projection of its momentum, f̂ = B_fᵀf, ĝ, ĥ), against the full run's frame
+//! — what a single step loses, before errors accumulate over the run. The **flux truncation**:
+//! `‖f − B_f B_fᵀ f‖ / ‖f‖` of the full run's flux — the reduced velocity after the projection
+//! (Eq. 12) is `V̂⁻¹(P̂ ⊗ ĝ) f̂`, so it lies in an m_f-dimensional subspace of `B_u`, and the
+//! flux basis, not `B_u`, bounds how close a reduced state can come.
+//!
 //! The full run is simulated again (the cavity, whose motion is a function of its
 //! compressions) or read back from the snapshot directory a training wrote (any scene — the
 //! bird — without simulating it again).
@@ -21,6 +29,7 @@ use super::model::ReducedFluidModel;
 use super::run::{run_driven, run_reduced, ReducedMotion};
 use super::step::ReducedFluid;
 use crate::fluid::snapshots::SnapshotReader;
+use crate::reduce::Basis;
 
 /// Most a simulated full run's substeps may be refined.
 pub const MAX_REFINE: usize = 64;
@@ -55,8 +64,13 @@ pub struct Comparison {
     /// Relative velocity error in the energy norm per frame (0 where the full run is at rest).
     pub error: Vec<f64>,
     /// The same error of the full run's best fit in the velocity basis, `B_u B_uᵀ u_full`:
-    /// what truncation alone costs, whatever the reduced dynamics do.
+    /// what truncating the velocity alone costs, whatever the reduced dynamics do.
     pub projection_error: Vec<f64>,
+    /// The one-step error per frame (0 at frame 0; see the module docs).
+    pub one_step_error: Vec<f64>,
+    /// The full run's flux truncation in `B_f` per frame, `‖f − B_f B_fᵀ f‖ / ‖f‖` (0 where
+    /// the flux is 0).
+    pub flux_projection_error: Vec<f64>,
     /// Each cell's error |u_full − u_reduced| at the last frame.
     pub cell_error: Vec<f64>,
     /// The full run's geometry at the last frame.
@@ -67,18 +81,24 @@ pub struct Comparison {
 }
 
 impl Comparison {
-    /// Frame, time, both energies, the error and the best fit's, as CSV with a header.
+    /// Frame, time, both energies, the error, the best fit's, the one-step error and the flux
+    /// truncation, as CSV with a header.
     pub fn csv(&self) -> String {
-        let mut out = String::from("frame,time,energy_full,energy_reduced,relative_error,projection_error\n");
-        for (k, (((ef, er), e), p)) in self
-            .energy_full
-            .iter()
-            .zip(&self.energy_reduced)
-            .zip(&self.error)
-            .zip(&self.projection_error)
-            .enumerate()
-        {
-            out += &format!("{k},{},{ef:e},{er:e},{e:e},{p:e}\n", k as f64 * self.frame_time);
+        let mut out = String::from(
+            "frame,time,energy_full,energy_reduced,relative_error,projection_error,one_step_error,flux_projection_error\n",
+        );
+        for k in 0..self.error.len() {
+            let at = |v: &[f64]| v.get(k).copied().unwrap_or(0.0);
+            out += &format!(
+                "{k},{},{:e},{:e},{:e},{:e},{:e},{:e}\n",
+                k as f64 * self.frame_time,
+                at(&self.energy_full),
+                at(&self.energy_reduced),
+                at(&self.error),
+                at(&self.projection_error),
+                at(&self.one_step_error),
+                at(&self.flux_projection_error)
+            );
         }
         out
     }
@@ -96,6 +116,16 @@ impl Comparison {
     /// [`Self::error_summary`] of the best fit in `B_u` ([`Self::projection_error`]).
     pub fn projection_summary(&self) -> (f64, f64) {
         summary(&self.projection_error)
+    }
+
+    /// [`Self::error_summary`] of the one-step error ([`Self::one_step_error`]).
+    pub fn one_step_summary(&self) -> (f64, f64) {
+        summary(&self.one_step_error)
+    }
+
+    /// [`Self::error_summary`] of the flux truncation ([`Self::flux_projection_error`]).
+    pub fn flux_projection_summary(&self) -> (f64, f64) {
+        summary(&self.flux_projection_error)
     }
 }
 
@@ -135,43 +165,102 @@ pub fn compare(
         }
         ComparedMotion::Driven(schedule) => run_driven(model, &fluid, schedule, frames, &mut |_| {})?,
     };
-    let bu = model.basis("u").ok_or_else(|| FluidError::State("the model has no basis u".into()))?;
-    let mut full = FullRun::new(scene, motion, frames, refine)?;
+    let basis =
+        |n: &str| model.basis(n).ok_or_else(|| FluidError::State(format!("the model has no basis {n}")));
+    let (bu, bf, bg) = (basis("u")?, basis("f")?, basis("g")?);
+    let bh = model.basis("h");
+    let mut full = FullRun::new(scene, motion, frames, refine, bh.is_some())?;
     let d = scene.mesh.dim();
     let mut out = Comparison { frame_time: model.frame_time, ..Comparison::default() };
     let mut full_seconds = Vec::new();
+    let mut previous: Option<FullFrame> = None;
     for t in 0..=frames {
         let start = Instant::now();
-        let (u_full, g_full) = full.frame(t)?;
+        let frame = full.frame(t)?;
         if t > 0 {
             if !full.is_recorded() {
                 full_seconds.push(start.elapsed().as_secs_f64());
             }
             on_frame(t);
         }
-        let vols = scene.mesh.volumes_at(&g_full);
+        let vols = scene.mesh.volumes_at(&frame.g);
+        let u_full = &frame.u;
         let u_reduced = bu.lift(&reduced.states[t].u);
         let energy = |u: &[f64]| {
             0.5 * u.chunks(d).zip(&vols).map(|(v, w)| w * v.iter().map(|x| x * x).sum::<f64>()).sum::<f64>()
         };
-        let diff: Vec<f64> = u_full.iter().zip(&u_reduced).map(|(a, b)| a - b).collect();
-        let fit = bu.lift(&bu.project(&u_full));
-        let fit_diff: Vec<f64> = u_full.iter().zip(&fit).map(|(a, b)| a - b).collect();
-        let (ef, er, ed) = (energy(&u_full), energy(&u_reduced), energy(&diff));
+        let error_of = |u: &[f64]| -> f64 {
+            let diff: Vec<f64> = u_full.iter().zip(u).map(|(a, b)| a - b).collect();
+            energy(&diff)
+        };
+        let ef = energy(u_full);
         let relative = |e: f64| if ef > 0.0 { (e / ef).sqrt() } else { 0.0 };
         out.energy_full.push(ef);
-        out.energy_reduced.push(er);
-        out.error.push(relative(ed));
-        out.projection_error.push(relative(energy(&fit_diff)));
+        out.energy_reduced.push(energy(&u_reduced));
+        out.error.push(relative(error_of(&u_reduced)));
+        out.projection_error.push(relative(error_of(&bu.lift(&bu.project(u_full)))));
+        let one_step = match &previous {
+            Some(p) => {
+                let next = one_step(&fluid, p, &frame, (bu, bf, bg, bh), &scene.mesh)?;
+                relative(error_of(&bu.lift(&next)))
+            }
+            None => 0.0,
+        };
+        out.one_step_error.push(one_step);
+        let f_norm = frame.f.iter().map(|x| x * x).sum::<f64>().sqrt();
+        let f_fit = bf.lift(&bf.project(&frame.f));
+        let f_err = frame.f.iter().zip(&f_fit).map(|(a, b)| (a - b).powi(2)).sum::<f64>().sqrt();
+        out.flux_projection_error.push(if f_norm > 0.0 { f_err / f_norm } else { 0.0 });
         if t == frames {
-            out.cell_error = diff.chunks(d).map(|v| v.iter().map(|x| x * x).sum::<f64>().sqrt()).collect();
-            out.last_geometry = g_full;
+            out.cell_error = u_full
+                .chunks(d)
+                .zip(u_reduced.chunks(d))
+                .map(|(a, b)| a.iter().zip(b).map(|(x, y)| (x - y).powi(2)).sum::<f64>().sqrt())
+                .collect();
+            out.last_geometry = frame.g.clone();
         }
+        previous = Some(frame);
     }
     let mut reduced_seconds: Vec<f64> = reduced.reports.iter().map(|r| r.total_seconds()).collect();
     out.seconds =
         (crate::bench::median_f64(&mut full_seconds), crate::bench::median_f64(&mut reduced_seconds));
     Ok(out)
+}
+
+/// A frame of the full run: velocity, geometry, flux, and the induced flux of the motion into
+/// it (when the model has `B_h`).
+struct FullFrame {
+    u: Vec<f64>,
+    g: Vec<f64>,
+    f: Vec<f64>,
+    h: Option<Vec<f64>>,
+}
+
+/// One reduced step from the full frame `from` projected into the bases (û by the energy
+/// projection of its momentum `V(g)u`, f̂ = B_fᵀf, ĝ = B_gᵀg) to `to`'s geometry and induced
+/// flux: the one-step error's reduced velocity û.
+fn one_step(
+    fluid: &ReducedFluid,
+    from: &FullFrame,
+    to: &FullFrame,
+    (bu, bf, bg, bh): (&Basis, &Basis, &Basis, Option<&Basis>),
+    mesh: &crate::mesh::SimplexMesh,
+) -> Result<Vec<f64>, FluidError> {
+    let d = mesh.dim();
+    let vols = mesh.volumes_at(&from.g);
+    let momentum: Vec<f64> = from.u.iter().enumerate().map(|(i, u)| vols[i / d] * u).collect();
+    let g0 = bg.project(&from.g);
+    let state = super::step::ReducedState {
+        u: fluid.project_velocity(&bu.project(&momentum), &g0)?,
+        f: bf.project(&from.f),
+        g: g0,
+    };
+    let h = match (bh, &to.h) {
+        (Some(b), Some(h)) => b.project(h),
+        (Some(b), None) => vec![0.0; b.matrix().shape()[1]],
+        (None, _) => Vec::new(),
+    };
+    Ok(fluid.step(&state, &bg.project(&to.g), &h)?.0.u)
 }
 
 /// The full side of a comparison, frame by frame: simulated (the cavity) or read back.
@@ -182,8 +271,9 @@ enum FullRun<'a> {
         solver: Box<FluidSolver>,
         state: Option<crate::fluid::FluidState>,
         schedule: Box<dyn Fn(usize) -> Result<[f64; 3], FluidError> + 'a>,
+        with_h: bool,
     },
-    Recorded(SnapshotReader),
+    Recorded(SnapshotReader, bool),
 }
 
 impl<'a> FullRun<'a> {
@@ -192,9 +282,10 @@ impl<'a> FullRun<'a> {
         motion: &'a ComparedMotion,
         frames: usize,
         refine: usize,
+        with_h: bool,
     ) -> Result<Self, FluidError> {
         if let ComparedMotion::Recorded { full, .. } = motion {
-            return Self::recorded(full, scene, frames);
+            return Self::recorded(full, scene, frames, with_h);
         }
         let Motion::Cavity { cavity, .. } = &scene.motion else {
             return Err(FluidError::State(
@@ -211,16 +302,21 @@ impl<'a> FullRun<'a> {
                 Box::new(move |t| Ok(crate::fluid::cavity::Cavity::compression(amounts, t, total)))
             }
             ComparedMotion::Driven(schedule) => Box::new(move |t| Ok(schedule.at(t))),
-            ComparedMotion::Recorded { full, .. } => return Self::recorded(full, scene, frames),
+            ComparedMotion::Recorded { full, .. } => return Self::recorded(full, scene, frames, with_h),
         };
         let solver = FluidSolver::new(scene.mesh.clone(), scene.topology.clone(), scene.params)?
             .with_substep_refinement(refine);
-        Ok(Self::Simulated { scene, cavity, solver: Box::new(solver), state: None, schedule })
+        Ok(Self::Simulated { scene, cavity, solver: Box::new(solver), state: None, schedule, with_h })
     }
 
     /// The full run read from the snapshot directory `full`, checked against the scene's mesh
     /// and the frames compared.
-    fn recorded(full: &std::path::Path, scene: &FluidScene, frames: usize) -> Result<Self, FluidError> {
+    fn recorded(
+        full: &std::path::Path,
+        scene: &FluidScene,
+        frames: usize,
+        with_h: bool,
+    ) -> Result<Self, FluidError> {
         let reader = SnapshotReader::open(full)?;
         let (meta, mesh) = (reader.meta(), &scene.mesh);
         if meta.cells != mesh.cell_count() || meta.dim != mesh.dim() {
@@ -240,24 +336,33 @@ impl<'a> FullRun<'a> {
                 meta.frames.saturating_sub(1)
             )));
         }
-        Ok(Self::Recorded(reader))
+        Ok(Self::Recorded(reader, with_h))
     }
 
     fn is_recorded(&self) -> bool {
-        matches!(self, Self::Recorded(_))
+        matches!(self, Self::Recorded(..))
     }
 
-    /// Frame `t`'s velocity and geometry; frames are asked for in order from 0.
-    fn frame(&mut self, t: usize) -> Result<(Vec<f64>, Vec<f64>), FluidError> {
+    /// Frame `t` (velocity, geometry, flux, and the induced flux into it if asked for);
+    /// frames are asked for in order from 0.
+    fn frame(&mut self, t: usize) -> Result<FullFrame, FluidError> {
         match self {
-            Self::Recorded(reader) => Ok((reader.frame("u", t)?, reader.frame("g", t)?)),
-            Self::Simulated { scene, cavity, solver, state, schedule } => {
+            Self::Recorded(reader, with_h) => Ok(FullFrame {
+                u: reader.frame("u", t)?,
+                g: reader.frame("g", t)?,
+                f: reader.frame("f", t)?,
+                h: if *with_h && t > 0 { Some(reader.frame("h", t)?) } else { None },
+            }),
+            Self::Simulated { scene, cavity, solver, state, schedule, with_h } => {
                 let g = cavity.mapped_for(schedule(t)?);
-                let next = match state.take() {
-                    None => solver.initial_state(g, &scene.initial_velocity)?,
-                    Some(s) => solver.step(&s, &g, t)?.0,
+                let (next, h) = match state.take() {
+                    None => (solver.initial_state(g, &scene.initial_velocity)?, None),
+                    Some(s) => {
+                        let h = with_h.then(|| solver.induced_flux(&s.g, &g));
+                        (solver.step(&s, &g, t)?.0, h)
+                    }
                 };
-                let out = (next.u.clone(), next.g.clone());
+                let out = FullFrame { u: next.u.clone(), g: next.g.clone(), f: next.f.clone(), h };
                 *state = Some(next);
                 Ok(out)
             }

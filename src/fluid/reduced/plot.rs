@@ -161,8 +161,9 @@ pub fn plot_comparison(
         root.fill(&WHITE).map_err(|e| plot_err(error_path, e))?;
         let positive =
             |v: &[f64]| -> Vec<(f64, f64)> { times(v).into_iter().filter(|(_, e)| *e > 0.0).collect() };
-        let (points, best) = (positive(&c.error), positive(&c.projection_error));
-        let (lo, hi) = log_range(points.iter().chain(&best).map(|p| p.1));
+        let (points, best, one) =
+            (positive(&c.error), positive(&c.projection_error), positive(&c.one_step_error));
+        let (lo, hi) = log_range(points.iter().chain(&best).chain(&one).map(|p| p.1));
         let mut chart = ChartBuilder::on(&root)
             .caption(format!("Velocity error of the reduced run — {title}"), ("sans-serif", 26))
             .margin(20)
@@ -179,14 +180,11 @@ pub fn plot_comparison(
             .y_label_formatter(&|v| format!("{v:.0e}"))
             .draw()
             .map_err(|e| plot_err(error_path, e))?;
-        for (k, (series, label)) in [
-            (points, "u = the reduced run, lifted"),
-            (best, "u = the full run's best fit in B_u (truncation alone)"),
-        ]
-        .into_iter()
-        .enumerate()
-        {
-            let colour = SERIES[3 - 2 * k];
+        for (colour, (series, label)) in [
+            (SERIES[3], (points, "u = the reduced run, lifted")),
+            (SERIES[2], (one, "u = one reduced step from the full run's previous frame")),
+            (SERIES[1], (best, "u = the full run's best fit in B_u (truncation alone)")),
+        ] {
             chart
                 .draw_series(LineSeries::new(series, colour.stroke_width(2)))
                 .map_err(|e| plot_err(error_path, e))?
