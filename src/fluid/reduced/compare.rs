@@ -27,7 +27,7 @@ use crate::fluid::{FluidError, FluidSolver};
 use super::cavity_motion::CompressionSchedule;
 use super::model::ReducedFluidModel;
 use super::run::{run_driven, run_reduced, ReducedMotion};
-use super::step::ReducedFluid;
+use super::step::{ReducedFluid, ReducedState};
 use crate::fluid::snapshots::SnapshotReader;
 use crate::reduce::Basis;
 
@@ -173,7 +173,8 @@ pub fn compare(
     let d = scene.mesh.dim();
     let mut out = Comparison { frame_time: model.frame_time, ..Comparison::default() };
     let mut full_seconds = Vec::new();
-    let mut previous: Option<FullFrame> = None;
+    // The previous full frame projected into the bases: the one-step error's start.
+    let mut previous: Option<ReducedState> = None;
     for t in 0..=frames {
         let start = Instant::now();
         let frame = full.frame(t)?;
@@ -199,10 +200,14 @@ pub fn compare(
         out.energy_reduced.push(energy(&u_reduced));
         out.error.push(relative(error_of(&u_reduced)));
         out.projection_error.push(relative(error_of(&bu.lift(&bu.project(u_full)))));
+        let g_hat = bg.project(&frame.g);
         let one_step = match &previous {
-            Some(p) => {
-                let next = one_step(&fluid, p, &frame, (bu, bf, bg, bh), &scene.mesh)?;
-                relative(error_of(&bu.lift(&next)))
+            Some(start) => {
+                let h = match (bh, &frame.h) {
+                    (Some(b), Some(h)) => b.project(h),
+                    _ => Vec::new(),
+                };
+                relative(error_of(&bu.lift(&fluid.step(start, &g_hat, &h)?.0.u)))
             }
             None => 0.0,
         };
@@ -219,7 +224,9 @@ pub fn compare(
                 .collect();
             out.last_geometry = frame.g.clone();
         }
-        previous = Some(frame);
+        if t < frames {
+            previous = Some(projected(&fluid, &frame, (d, &vols), g_hat, bu, bf)?);
+        }
     }
     let mut reduced_seconds: Vec<f64> = reduced.reports.iter().map(|r| r.total_seconds()).collect();
     out.seconds =
@@ -236,31 +243,19 @@ struct FullFrame {
     h: Option<Vec<f64>>,
 }
 
-/// One reduced step from the full frame `from` projected into the bases (û by the energy
-/// projection of its momentum `V(g)u`, f̂ = B_fᵀf, ĝ = B_gᵀg) to `to`'s geometry and induced
-/// flux: the one-step error's reduced velocity û.
-fn one_step(
+/// The full frame `frame` (`d`-dimensional, cell volumes `vols`, reduced geometry `g`) projected into the
+/// bases: û by the energy projection of its momentum `V(g)u`, f̂ = B_fᵀf — where the one-step
+/// error's reduced step starts.
+fn projected(
     fluid: &ReducedFluid,
-    from: &FullFrame,
-    to: &FullFrame,
-    (bu, bf, bg, bh): (&Basis, &Basis, &Basis, Option<&Basis>),
-    mesh: &crate::mesh::SimplexMesh,
-) -> Result<Vec<f64>, FluidError> {
-    let d = mesh.dim();
-    let vols = mesh.volumes_at(&from.g);
-    let momentum: Vec<f64> = from.u.iter().enumerate().map(|(i, u)| vols[i / d] * u).collect();
-    let g0 = bg.project(&from.g);
-    let state = super::step::ReducedState {
-        u: fluid.project_velocity(&bu.project(&momentum), &g0)?,
-        f: bf.project(&from.f),
-        g: g0,
-    };
-    let h = match (bh, &to.h) {
-        (Some(b), Some(h)) => b.project(h),
-        (Some(b), None) => vec![0.0; b.matrix().shape()[1]],
-        (None, _) => Vec::new(),
-    };
-    Ok(fluid.step(&state, &bg.project(&to.g), &h)?.0.u)
+    frame: &FullFrame,
+    (d, vols): (usize, &[f64]),
+    g: Vec<f64>,
+    bu: &Basis,
+    bf: &Basis,
+) -> Result<ReducedState, FluidError> {
+    let momentum: Vec<f64> = frame.u.iter().enumerate().map(|(i, u)| vols[i / d] * u).collect();
+    Ok(ReducedState { u: fluid.project_velocity(&bu.project(&momentum), &g)?, f: bf.project(&frame.f), g })
 }
 
 /// The full side of a comparison, frame by frame: simulated (the cavity) or read back.
