@@ -21,14 +21,14 @@ use crate::mesh::{FaceKind, Point, SimplexMesh, Topology};
 
 crate::push_constants! {
     struct Push {
-        dim: u32,
         count: u32,
         substeps: u32,
         frame_time: f32,
+        /// Reduced: the first face whose `B_f` row is in the second buffer.
+        split: u32,
         grid_lo: [f32; 4],
         grid_size: [f32; 4],
         grid_dims: [u32; 4],
-        reduced: [u32; 4],
     }
 }
 
@@ -86,7 +86,6 @@ enum Mode {
 pub struct GpuParticles {
     pipeline: ComputePipeline,
     mode: Mode,
-    dim: usize,
     count: usize,
     cells: Buffer<u32>,
     faces: Buffer<u32>,
@@ -97,11 +96,15 @@ pub struct GpuParticles {
     counts: Buffer<u32>,
     /// Full: the frame's geometries and fluxes (f32), rewritten per frame. Reduced: `B_g`, the
     /// reduced coordinates (rewritten per frame) and `B_f` (two buffers when it exceeds one
-    /// binding; the second is the first again otherwise).
-    g0: Buffer<f32>,
-    g1: Buffer<f32>,
-    flux: Buffer<f32>,
-    flux_high: Option<Buffer<f32>>,
+    /// binding; the second is the first again otherwise). All four are read as `vec4`s
+    /// ([`pack_vec4`], [`pack_rows_vec4`]): a row of `B_g` or `B_f` is a few 16-byte loads
+    /// instead of `m` scalar ones.
+    g0: Buffer<[f32; 4]>,
+    g1: Buffer<[f32; 4]>,
+    flux: Buffer<[f32; 4]>,
+    flux_high: Option<Buffer<[f32; 4]>>,
+    /// Full: the geometry's coordinates and the faces, as the frames must give them.
+    full_sizes: (usize, usize),
     /// The grid hash and descriptor set of the last geometries, kept while they repeat (a
     /// static mesh builds and uploads its grid once).
     frame: Option<FrameGeometry>,
@@ -116,8 +119,16 @@ struct FrameGeometry {
     set: DescriptorSet,
 }
 
-/// The particle pipeline, full (`reduced` false) or reduced.
-fn pipeline(gpu: &Gpu, reduced: bool) -> Result<ComputePipeline, FluidError> {
+/// The particle pipeline for a `dim`-dimensional mesh, full or reduced: the mode, the
+/// dimension and the bases' widths are its specialization constants.
+fn pipeline(gpu: &Gpu, mode: Mode, dim: usize) -> Result<ComputePipeline, FluidError> {
+    let (reduced, m_g, m_f) = match mode {
+        Mode::Full => (false, 0, 0),
+        Mode::Reduced { m_g, m_f, .. } => (true, m_g, m_f),
+    };
+    let width = |m: usize| {
+        u32::try_from(m).map_err(|_| FluidError::State(format!("reduced particles: a basis of {m} columns")))
+    };
     ComputePipeline::new(
         gpu,
         &ComputePipelineDesc {
@@ -125,7 +136,7 @@ fn pipeline(gpu: &Gpu, reduced: bool) -> Result<ComputePipeline, FluidError> {
             spirv: crate::fluid::shaders::PARTICLES,
             bindings: &[BindingKind::StorageBuffer; 12],
             push: crate::gpu::PushLayout::of::<Push>(),
-            specialization: &[u32::from(reduced)],
+            specialization: &[u32::from(reduced), dim as u32, width(m_g)?, width(m_f)?],
         },
     )
     .map_err(gpu_err)
@@ -159,9 +170,8 @@ impl GpuParticles {
         let d = mesh.dim();
         let links = walk_links(topo)?;
         Ok(Self {
-            pipeline: pipeline(gpu, false)?,
+            pipeline: pipeline(gpu, Mode::Full, d)?,
             mode: Mode::Full,
-            dim: d,
             count: particles.len(),
             cells: storage(gpu, "fluid cells", mesh.cells())?,
             faces: storage(gpu, "fluid cell faces", &face_info(mesh, topo))?,
@@ -169,10 +179,11 @@ impl GpuParticles {
             particles: storage(gpu, "fluid particles", &pack(particles))?,
             speeds: storage(gpu, "fluid particle speeds", &vec![0f32; particles.len().max(1)])?,
             counts: storage(gpu, "fluid particle counts", &[0u32; 3])?,
-            g0: storage(gpu, "fluid g0", &vec![0f32; mesh.g().len()])?,
-            g1: storage(gpu, "fluid g1", &vec![0f32; mesh.g().len()])?,
-            flux: storage(gpu, "fluid flux", &vec![0f32; topo.face_count()])?,
+            g0: storage(gpu, "fluid g0", &pack_vec4(&vec![0.0; mesh.g().len()]))?,
+            g1: storage(gpu, "fluid g1", &pack_vec4(&vec![0.0; mesh.g().len()]))?,
+            flux: storage(gpu, "fluid flux", &pack_vec4(&vec![0.0; topo.face_count()]))?,
             flux_high: None,
+            full_sizes: (mesh.g().len(), topo.face_count()),
             frame: None,
         })
     }
@@ -191,27 +202,26 @@ impl GpuParticles {
         let (b_g, b_f) = (model.geometry_basis(), model.flux_basis());
         let (m_g, m_f) = (b_g.shape()[1], b_f.shape()[1]);
         let faces = b_f.shape()[0];
-        let narrow = |x: &[f64]| x.iter().map(|&v| v as f32).collect::<Vec<f32>>();
-        let rows_per_binding = (gpu.max_binding_bytes() / (4 * m_f.max(1) as u64)) as usize;
+        let row_bytes = 16 * m_f.div_ceil(4).max(1) as u64;
+        let rows_per_binding = (gpu.max_binding_bytes() / row_bytes) as usize;
         if faces > 2 * rows_per_binding {
             return Err(FluidError::State(format!(
-                "reduced particles: B_f is {faces} × {m_f} floats; two storage bindings of {} bytes hold {} rows",
+                "reduced particles: B_f is {faces} rows of {m_f} floats ({row_bytes} bytes each, padded to whole vec4s); two storage bindings of {} bytes hold {} rows",
                 gpu.max_binding_bytes(),
                 2 * rows_per_binding
             )));
         }
         let split = faces.min(rows_per_binding);
-        let flux = storage(gpu, "fluid B_f", &narrow(&b_f.data()[..split * m_f]))?;
+        let flux = storage(gpu, "fluid B_f", &pack_rows_vec4(&b_f.data()[..split * m_f], m_f))?;
         let flux_high = if split < faces {
-            Some(storage(gpu, "fluid B_f (second part)", &narrow(&b_f.data()[split * m_f..]))?)
+            Some(storage(gpu, "fluid B_f (second part)", &pack_rows_vec4(&b_f.data()[split * m_f..], m_f))?)
         } else {
             None
         };
         let links = walk_links(topo)?;
         let mut pass = Self {
-            pipeline: pipeline(gpu, true)?,
+            pipeline: pipeline(gpu, Mode::Reduced { m_g, m_f, split }, mesh.dim())?,
             mode: Mode::Reduced { m_g, m_f, split },
-            dim: mesh.dim(),
             count: particles.len(),
             cells: storage(gpu, "fluid cells", mesh.cells())?,
             faces: storage(gpu, "fluid cell faces", &face_info(mesh, topo))?,
@@ -219,10 +229,15 @@ impl GpuParticles {
             particles: storage(gpu, "fluid particles", &pack(particles))?,
             speeds: storage(gpu, "fluid particle speeds", &vec![0f32; particles.len().max(1)])?,
             counts: storage(gpu, "fluid particle counts", &[0u32; 3])?,
-            g0: storage(gpu, "fluid B_g", &narrow(b_g.data()))?,
-            g1: storage(gpu, "fluid reduced coordinates", &vec![0f32; 2 * m_g + m_f])?,
+            g0: storage(gpu, "fluid B_g", &pack_rows_vec4(b_g.data(), m_g))?,
+            g1: storage(
+                gpu,
+                "fluid reduced coordinates",
+                &reduced_coordinates(&vec![0.0; m_g], &vec![0.0; m_g], &vec![0.0; m_f]),
+            )?,
             flux,
             flux_high,
+            full_sizes: (0, 0),
             frame: None,
         };
         pass.bind(gpu, model.grid(), None)?;
@@ -332,21 +347,19 @@ impl GpuParticles {
         if self.mode != Mode::Full {
             return Err(FluidError::State("particles: a reduced pass takes reduced frames".into()));
         }
-        if g0.len() != self.g0.len() as usize || g1.len() != g0.len() || f.len() != self.flux.len() as usize {
+        let (coordinates, faces) = self.full_sizes;
+        if g0.len() != coordinates || g1.len() != g0.len() || f.len() != faces {
             return Err(FluidError::State(format!(
-                "particles: geometries of {} and {} coordinates and {} fluxes for a mesh of {} and {}",
+                "particles: geometries of {} and {} coordinates and {} fluxes for a mesh of {coordinates} and {faces}",
                 g0.len(),
                 g1.len(),
                 f.len(),
-                self.g0.len(),
-                self.flux.len()
             )));
         }
-        let narrow = |x: &[f64]| x.iter().map(|&v| v as f32).collect::<Vec<f32>>();
-        self.flux.upload(gpu, 0, &narrow(f)).map_err(gpu_err)?;
+        self.flux.upload(gpu, 0, &pack_vec4(f)).map_err(gpu_err)?;
         if !self.frame.as_ref().is_some_and(|fr| fr.g0 == g0 && fr.g1 == g1) {
-            self.g0.upload(gpu, 0, &narrow(g0)).map_err(gpu_err)?;
-            self.g1.upload(gpu, 0, &narrow(g1)).map_err(gpu_err)?;
+            self.g0.upload(gpu, 0, &pack_vec4(g0)).map_err(gpu_err)?;
+            self.g1.upload(gpu, 0, &pack_vec4(g1)).map_err(gpu_err)?;
             let grid = GridHash::new(mesh, &[g0, g1]);
             self.bind(gpu, &grid, Some((g0.to_vec(), g1.to_vec())))?;
         }
@@ -376,8 +389,8 @@ impl GpuParticles {
                 f.len()
             )));
         }
-        let coefficients: Vec<f32> = g0.iter().chain(g1).chain(f).map(|&v| v as f32).collect();
-        if coefficients.len() * 4 > 65_536 {
+        let coefficients = reduced_coordinates(g0, g1, f);
+        if coefficients.len() * 16 > 65_536 {
             return Err(FluidError::State(format!(
                 "reduced particles: {} reduced coordinates exceed one command-buffer update",
                 coefficients.len()
@@ -434,16 +447,15 @@ impl GpuParticles {
         let (lo, size, dims) = frame.grid;
         let set = &frame.set;
         let push = Push {
-            dim: self.dim as u32,
             count: self.count as u32,
             substeps: substeps.max(1) as u32,
             frame_time: frame_time as f32,
             grid_lo: [lo[0] as f32, lo[1] as f32, lo[2] as f32, 0.0],
             grid_size: [size[0] as f32, size[1] as f32, size[2] as f32, 0.0],
             grid_dims: [dims[0] as u32, dims[1] as u32, dims[2] as u32, 0],
-            reduced: match self.mode {
-                Mode::Full => [0, 0, u32::MAX, 0],
-                Mode::Reduced { m_g, m_f, split } => [m_g as u32, m_f as u32, split as u32, 0],
+            split: match self.mode {
+                Mode::Full => u32::MAX,
+                Mode::Reduced { split, .. } => split as u32,
             },
         };
         let cs = vk::PipelineStageFlags::COMPUTE_SHADER;
@@ -495,6 +507,36 @@ impl GpuParticles {
             })
             .collect())
     }
+}
+
+/// `x` in f32, four to a `vec4`, the last one padded with zeros (the shader reads scalar `i`
+/// as `x[i >> 2][i & 3]`).
+fn pack_vec4(x: &[f64]) -> Vec<[f32; 4]> {
+    x.chunks(4)
+        .map(|c| {
+            let mut v = [0f32; 4];
+            for (o, &a) in v.iter_mut().zip(c) {
+                *o = a as f32;
+            }
+            v
+        })
+        .collect()
+}
+
+/// A row-major matrix of rows of `m` in f32, each row padded with zeros to whole `vec4`s
+/// (`m.div_ceil(4)` of them), so the shader dots a row with the reduced coordinates four at a
+/// time.
+fn pack_rows_vec4(rows: &[f64], m: usize) -> Vec<[f32; 4]> {
+    if m == 0 {
+        return Vec::new();
+    }
+    rows.chunks(m).flat_map(pack_vec4).collect()
+}
+
+/// The reduced coordinates a reduced frame writes: ĝ₀, ĝ₁ and f̂, each padded to whole `vec4`s
+/// as the rows of [`pack_rows_vec4`] are.
+fn reduced_coordinates(g0: &[f64], g1: &[f64], f: &[f64]) -> Vec<[f32; 4]> {
+    [g0, g1, f].iter().flat_map(|x| pack_vec4(x)).collect()
 }
 
 fn pack(particles: &[Particle]) -> Vec<[f32; 4]> {
