@@ -179,9 +179,9 @@ impl GpuParticles {
             particles: storage(gpu, "fluid particles", &pack(particles))?,
             speeds: storage(gpu, "fluid particle speeds", &vec![0f32; particles.len().max(1)])?,
             counts: storage(gpu, "fluid particle counts", &[0u32; 3])?,
-            g0: storage(gpu, "fluid g0", &pack_vec4(&vec![0.0; mesh.g().len()]))?,
-            g1: storage(gpu, "fluid g1", &pack_vec4(&vec![0.0; mesh.g().len()]))?,
-            flux: storage(gpu, "fluid flux", &pack_vec4(&vec![0.0; topo.face_count()]))?,
+            g0: storage(gpu, "fluid g0", &vec![[0f32; 4]; mesh.g().len().div_ceil(4)])?,
+            g1: storage(gpu, "fluid g1", &vec![[0f32; 4]; mesh.g().len().div_ceil(4)])?,
+            flux: storage(gpu, "fluid flux", &vec![[0f32; 4]; topo.face_count().div_ceil(4)])?,
             flux_high: None,
             full_sizes: (mesh.g().len(), topo.face_count()),
             frame: None,
@@ -233,7 +233,7 @@ impl GpuParticles {
             g1: storage(
                 gpu,
                 "fluid reduced coordinates",
-                &reduced_coordinates(&vec![0.0; m_g], &vec![0.0; m_g], &vec![0.0; m_f]),
+                &vec![[0f32; 4]; 2 * m_g.div_ceil(4) + m_f.div_ceil(4)],
             )?,
             flux,
             flux_high,
@@ -544,4 +544,31 @@ fn pack(particles: &[Particle]) -> Vec<[f32; 4]> {
         .iter()
         .map(|p| [p.position[0] as f32, p.position[1] as f32, p.position[2] as f32, f32::from_bits(p.cell)])
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rows_and_coordinates_are_padded_to_whole_vec4s() {
+        // Two rows of 5: each takes two vec4s, its last three floats zero.
+        let rows: Vec<f64> = (1..=10).map(f64::from).collect();
+        let packed = pack_rows_vec4(&rows, 5);
+        assert_eq!(
+            packed,
+            vec![[1.0, 2.0, 3.0, 4.0], [5.0, 0.0, 0.0, 0.0], [6.0, 7.0, 8.0, 9.0], [10.0, 0.0, 0.0, 0.0]]
+        );
+        // ĝ₀, ĝ₁ of 5 and f̂ of 3: the shader finds ĝ₁ at vec4 2 and f̂ at vec4 4.
+        let c = reduced_coordinates(&[1.0; 5], &[2.0; 5], &[3.0; 3]);
+        assert_eq!(c.len(), 5);
+        assert_eq!(
+            (c[1], c[2], c[3], c[4]),
+            ([1.0, 0.0, 0.0, 0.0], [2.0; 4], [2.0, 0.0, 0.0, 0.0], [3.0, 3.0, 3.0, 0.0])
+        );
+        // Scalar i of a full array is component i & 3 of vec4 i >> 2.
+        let x: Vec<f64> = (0..7).map(f64::from).collect();
+        let v = pack_vec4(&x);
+        assert!((0..7).all(|i| v[i >> 2][i & 3] == i as f32));
+    }
 }
