@@ -142,6 +142,40 @@ fn every_pixel_shows_the_cell_under_its_centre_and_particles_show_where_they_are
     }
     eprintln!("{shown} of {} particles show their own cell at their centre pixel", particles.len());
     assert!(shown * 10 >= particles.len() * 9, "later sprites may cover a few: at least 90 % visible");
+
+    // A sprite is the disc of radius sprite_px about its particle: around a particle with no
+    // other within reach, pixel centres nearer than the radius less 0.75 px show the particle,
+    // those from the radius plus 0.75 px to 3 px beyond do not (0.75: the disc's edge crosses a
+    // pixel's centre within half a pixel's diagonal of it, and f32 positions move it by far less).
+    let r = only.sprite_px;
+    let screen: Vec<[f64; 2]> =
+        particles.iter().map(|p| view.project([p.position[0], p.position[1]], size)).collect();
+    let (mut inside, mut outside) = (0, 0);
+    for (k, c) in screen.iter().enumerate() {
+        let near = |q: &[f64; 2]| ((q[0] - c[0]).powi(2) + (q[1] - c[1]).powi(2)).sqrt() < 2.0 * r + 4.0;
+        if screen.iter().enumerate().any(|(j, q)| j != k && near(q)) {
+            continue;
+        }
+        let (x0, y0) = ((c[0] - r - 3.0).floor() as i64, (c[1] - r - 3.0).floor() as i64);
+        for py in y0..=y0 + (2.0 * r + 6.0) as i64 {
+            for px in x0..=x0 + (2.0 * r + 6.0) as i64 {
+                if px < 0 || py < 0 || px >= i64::from(size.0) || py >= i64::from(size.1) {
+                    continue;
+                }
+                let d = ((px as f64 + 0.5 - c[0]).powi(2) + (py as f64 + 0.5 - c[1]).powi(2)).sqrt();
+                let covered = picture.raw[4 * (py as usize * size.0 as usize + px as usize) + 2] == 1.0;
+                if d < r - 0.75 {
+                    assert!(covered, "pixel ({px}, {py}) {d:.2} px from particle {k}: inside its sprite");
+                    inside += 1;
+                } else if d > r + 0.75 && d < r + 3.0 {
+                    assert!(!covered, "pixel ({px}, {py}) {d:.2} px from particle {k}: outside its sprite");
+                    outside += 1;
+                }
+            }
+        }
+    }
+    eprintln!("sprite discs: {inside} pixels inside, {outside} outside checked");
+    assert!(inside > 100 && outside > 1000);
 }
 
 #[test]

@@ -1,6 +1,8 @@
 #version 450
-// Particles as round sprites: six vertices per particle (two triangles of a square of
-// pc.sprite.xy half-size in clip units), read from the particle buffer the compute pass wrote;
+// Particles as round sprites: three vertices per particle, one triangle circumscribing the
+// circle of radius pc.sprite.xy in clip units (the fragment shader discards outside it; one
+// primitive a sprite instead of a square's two: a rasteriser's cost per primitive is most of
+// a few-pixel sprite's), read from the particle buffer the compute pass wrote;
 // coloured by the speed of the particle's cell (from the cells' speeds), or PER_PARTICLE by
 // the speed the particle pass wrote for each particle (no full flux needed).
 #include "push.glsl"
@@ -15,14 +17,16 @@ layout(location = 0) out vec2 v_corner;
 layout(location = 1) flat out float v_value;
 layout(location = 2) flat out uint v_cell;
 
-const vec2 CORNERS[6] = vec2[6](vec2(-1, -1), vec2(1, -1), vec2(1, 1), vec2(-1, -1), vec2(1, 1), vec2(-1, 1));
+// The equilateral triangle whose inscribed circle is the unit circle, counter-clockwise.
+const vec2 CORNERS[3] = vec2[3](vec2(-1.7320508, -1.0), vec2(1.7320508, -1.0), vec2(0.0, 2.0));
 
 void main() {
-    vec4 p = particles[gl_VertexIndex / 6];
-    vec2 corner = CORNERS[gl_VertexIndex % 6];
+    uint particle = gl_VertexIndex / 3;
+    vec4 p = particles[particle];
+    vec2 corner = CORNERS[gl_VertexIndex % 3];
     vec4 centre = pc.view_proj * vec4(p.xyz, 1.0);
     gl_Position = centre + vec4(corner * pc.sprite.xy * centre.w, 0.0, 0.0);
     v_corner = corner;
     v_cell = floatBitsToUint(p.w);
-    v_value = PER_PARTICLE ? speed[gl_VertexIndex / 6] : speed[v_cell];
+    v_value = PER_PARTICLE ? speed[particle] : speed[v_cell];
 }

@@ -384,7 +384,7 @@ impl FluidRenderer {
         if let Some((set, count)) = particles {
             if style.sprite_px > 0.0 && count > 0 {
                 let pipeline = if set.own_speeds { &self.sprites_own } else { &self.sprites };
-                pipeline.record_draw(rec, extent, &set.set, &push, None, (6 * count) as u32);
+                pipeline.record_draw(rec, extent, &set.set, &push, None, (3 * count) as u32);
             }
         }
     }
