@@ -158,9 +158,11 @@ impl CavityContent {
             .ok_or_else(|| anyhow!("the model has no induced-flux tensor H (retrain it)"))?;
         let (next, _) = self.fluid.step(&self.state, &g1, &h1)?;
         let g0 = std::mem::replace(&mut self.state, next).g;
+        // The walls are lifted and rebuilt only when the geometry moved (compressions settled
+        // leave ĝ unchanged).
+        self.walls_dirty |= g0 != self.state.g;
         self.pending = Some((g0, self.state.g.clone(), self.state.f.clone()));
         self.frame += 1;
-        self.walls_dirty = true;
         self.step_ms = start.elapsed().as_secs_f64() * 1e3;
         Ok(())
     }
