@@ -43,6 +43,8 @@ fn compare_measures_the_receiving_surfaces_all_faces_and_each_room() {
         timed_full: 1,
         out: dir.path().join("out"),
         full_form_factors: Default::default(),
+        random: 3,
+        random_seed: 11,
     };
     let report = compare(&scene, Path::new(SMALL), &model, &compare_options, &mut |_| {}).expect("compared");
 
@@ -86,6 +88,25 @@ fn compare_measures_the_receiving_surfaces_all_faces_and_each_room() {
                 let plain = plain_error(&b, &full.radiosity, areas, &|i| faces.contains(&i));
                 assert!((e.groups[k] - plain).abs() <= 1e-12 * plain, "group {k}");
             }
+            // The best fit: the full radiosity projected on B_b and lifted, written out plainly.
+            let basis = model.model().basis("b").expect("B_b").matrix();
+            let (rows, m) = (basis.shape()[0], basis.shape()[1]);
+            let n = rows / 3;
+            let stacked: Vec<f64> = (0..rows).map(|r| full.radiosity[r % n][r / n]).collect();
+            let coefficients: Vec<f64> =
+                (0..m).map(|k| (0..rows).map(|r| basis.data()[r * m + k] * stacked[r]).sum()).collect();
+            let fit: Vec<[f64; 3]> = (0..n)
+                .map(|i| {
+                    [0, 1, 2]
+                        .map(|c| (0..m).map(|k| basis.data()[(c * n + i) * m + k] * coefficients[k]).sum())
+                })
+                .collect();
+            let fit_error = plain_error(&fit, &full.radiosity, areas, &|i| mesh.kind[i] == FaceKind::Surface);
+            assert!(
+                (e.best_fit - fit_error).abs() <= 1e-10 * fit_error,
+                "best fit {} vs {fit_error}",
+                e.best_fit
+            );
             // The emitters hold most of the norm and are reproduced exactly: the receiving
             // surfaces' error is the larger.
             assert!(e.groups[0] > e.all, "seq {which} frame {f}: receiving {} ≤ all {}", e.groups[0], e.all);
@@ -95,9 +116,14 @@ fn compare_measures_the_receiving_surfaces_all_faces_and_each_room() {
     // The table: a header naming the measures and one row per frame.
     let csv = std::fs::read_to_string(&report.csv).expect("csv");
     let header = csv.lines().next().expect("header");
-    for column in
-        ["relative_error", "error_receiving", "error_living_room", "error_door_frame", "error_bedroom"]
-    {
+    for column in [
+        "relative_error",
+        "error_receiving",
+        "error_living_room",
+        "error_door_frame",
+        "error_bedroom",
+        "best_fit_receiving",
+    ] {
         assert!(header.split(',').any(|c| c == column), "{header}");
     }
     assert_eq!(csv.lines().count(), 1 + 3 + 2);
@@ -120,18 +146,37 @@ fn compare_measures_the_receiving_surfaces_all_faces_and_each_room() {
     assert!(report.corners.iter().any(|(p, e)| p.as_slice() == at && e.groups[0] == top));
     let corners_csv = std::fs::read_to_string(compare_options.out.join("corners.csv")).expect("corners.csv");
     assert_eq!(corners_csv.lines().count(), 1 + 16);
-    // Each corner's reduced-operator margin, in the report and the table's last column.
-    assert_eq!(report.corner_margins.len(), 16);
-    assert!(corners_csv.lines().next().is_some_and(|h| h.ends_with(",operator_margin")));
-    for ((p, _), (margin, line)) in
-        report.corners.iter().zip(report.corner_margins.iter().zip(corners_csv.lines().skip(1)))
-    {
-        let again = model.operator_margin(&space.mesh(p).expect("mesh")).expect("margin");
-        assert_eq!(*margin, again, "corner {p:?}");
-        let written: f64 = line.rsplit(',').next().and_then(|v| v.parse().ok()).expect("a margin");
-        assert!((written - margin).abs() <= 5e-7, "{line}");
-        assert!(*margin > 0.0, "corner {p:?}: the small model's reduced operator has a margin {margin}");
+    // Each corner's reduced-operator margin and error estimate, in the report and the table's
+    // last columns.
+    assert!(corners_csv
+        .lines()
+        .next()
+        .is_some_and(|h| h.ends_with(",estimated_error,operator_sigma_min,operator_margin")));
+    for ((p, e), line) in report.corners.iter().zip(corners_csv.lines().skip(1)) {
+        let mesh = space.mesh(p).expect("mesh");
+        let margin = model.operator_margin(&mesh).expect("margin");
+        assert!((e.estimate.margin - margin).abs() <= 1e-12 * margin.abs().max(1.0), "corner {p:?}");
+        assert_eq!(e.estimate, model.evaluate_estimated(&mesh).expect("estimated").2, "corner {p:?}");
+        let written: Vec<f64> = line.rsplit(',').take(3).map(|v| v.parse().expect("a number")).collect();
+        assert!((written[0] - margin).abs() <= 5e-7, "{line}");
+        assert!((written[2] - e.estimate.error).abs() <= 5e-7, "{line}");
+        assert!(margin > 0.0, "corner {p:?}: the small model's reduced operator has a margin {margin}");
+        assert!(e.estimate.error > 0.0 && e.estimate.error.is_finite(), "corner {p:?}: {:?}", e.estimate);
     }
+    // The random configurations: inside the box, each against a plain recomputation, one row
+    // each in random.csv.
+    assert_eq!(report.random.len(), 3);
+    for (p, e) in &report.random {
+        assert!(p.iter().zip(space.ranges()).all(|(v, r)| *v >= r[0] && *v <= r[1]), "{p:?}");
+        let mesh = space.mesh(p).expect("mesh");
+        let full = galerkin::radiosity::full_radiosity_of(mesh.clone(), space.lights()).expect("full");
+        let (b, _) = model.evaluate(&mesh).expect("reduced");
+        let recv =
+            plain_error(&b, &full.radiosity, &full.geometry.areas, &|i| mesh.kind[i] == FaceKind::Surface);
+        assert!((e.groups[0] - recv).abs() <= 1e-9 * recv, "random {p:?}: {} vs {recv}", e.groups[0]);
+    }
+    let random_csv = std::fs::read_to_string(compare_options.out.join("random.csv")).expect("random.csv");
+    assert_eq!(random_csv.lines().count(), 1 + 3);
 
     // A second run reads the kept full frames back: the same errors.
     let again = compare(&scene, Path::new(SMALL), &model, &compare_options, &mut |_| {}).expect("again");
@@ -160,7 +205,8 @@ fn compare_measures_the_receiving_surfaces_all_faces_and_each_room() {
 
 /// `radiosity render --faces FILE.csv` (and `FILE.npy`) writes the full radiosity of every
 /// face in f64 that reads back to the same bits as a plain solve of the same configuration in
-/// this process (the solve is deterministic), with each face's part, kind, area and centroid.
+/// this process with the exact near field — `render`'s default, the truth training trains
+/// against (the solve is deterministic) — with each face's part, kind, area and centroid.
 #[test]
 fn the_per_face_table_reads_back_to_the_solve() {
     let dir = tempfile::Builder::new().prefix("galerkin-faces-").tempdir().expect("scratch");
@@ -179,7 +225,12 @@ fn the_per_face_table_reads_back_to_the_solve() {
     let scene = AnyScene::load(Path::new(SMALL), None).expect("scene");
     let p = scene.parameters_from(&[("window_width".to_string(), 2.2)]).expect("params");
     let mesh = scene.space().mesh(&p).expect("mesh");
-    let full = galerkin::radiosity::full_radiosity_of(mesh.clone(), scene.space().lights()).expect("full");
+    // `render`'s full solve defaults to the exact near field (what training trains against).
+    let exact = galerkin::radiosity::near_field::FormFactorMethod::ExactNear {
+        reach: galerkin::radiosity::near_field::DEFAULT_REACH,
+    };
+    let full =
+        galerkin::radiosity::full_radiosity_with(mesh.clone(), scene.space().lights(), exact).expect("full");
     // The same numbers as NumPy's array: faces × 8 f64, kind and the CSV's numbers, bit for bit.
     let npy = dir.path().join("faces.npy");
     render_faces(&npy);

@@ -37,8 +37,15 @@ fn reduced_radiosity_reproduces_training_and_improves_with_larger_bases() {
     let samples = 12;
     let params = sample_parameters(&spec.ranges(), &spec.defaults(), samples, 7);
     assert_eq!(params.len(), samples);
-    // Centroid form factors throughout (the exact near field's test is below).
-    let options = TrainOptions { samples, near_correction: None, ..TrainOptions::default() };
+    // Table 2's chain alone, centroid form factors (the exact near field's and the operator
+    // correction's tests are below).
+    let options = TrainOptions {
+        samples,
+        near_correction: None,
+        operator_correction: false,
+        radiosity_energy: None,
+        ..TrainOptions::default()
+    };
     let configurations = solve_configurations(&spec, &params, &options, &|_| {}).unwrap();
     let unseen = [1.3, 0.9, 1.25, 11.0];
     let full = full_radiosity(&spec, &unseen).unwrap();
@@ -82,8 +89,9 @@ fn reduced_radiosity_reproduces_training_and_improves_with_larger_bases() {
 
 /// Sky lighting (§9's second way): the direct light is computed at run time outside the
 /// model, from the current geometry and the face–opening visibility blended with Eq. 17's
-/// weights. With spanning bases a training configuration comes back to within the reduction's
-/// own error, and the model survives a save and load unchanged.
+/// weights. With spanning bases and the operator correction a training configuration comes
+/// back exactly (the reduced operator is the exact one projected, the basis holds the
+/// radiosity), and the model survives a save and load unchanged.
 #[test]
 fn sky_lit_reduced_radiosity_reproduces_training_and_round_trips() {
     let mut spec = spec();
@@ -95,6 +103,7 @@ fn sky_lit_reduced_radiosity_reproduces_training_and_round_trips() {
         energy: 1.0,
         cap: 1000,
         radiosity_cap: 2000,
+        radiosity_energy: None,
         near_correction: None,
         ..TrainOptions::default()
     };
@@ -113,8 +122,10 @@ fn sky_lit_reduced_radiosity_reproduces_training_and_round_trips() {
     assert_eq!(model.light_mode(), galerkin::radiosity::LightMode::Sky);
     let worst = worst_training_error(&spec, &model, &configurations);
     eprintln!("sky, training configurations: worst relative error {worst:.2e}");
-    // As for area lights: exact but for the reduced inverse square root (measured 1.1 %).
-    assert!(worst < 2e-2, "{worst}");
+    // Exact but for rounding and the Jacobi tolerance of the training solves (10⁻¹⁰ relative
+    // change; measured 2.7e-10 — without the correction it was 1.1 %, the reduced inverse
+    // square root's, §4.2).
+    assert!(worst < 1e-8, "{worst}");
     let scratch = tempfile::Builder::new().prefix("galerkin-").tempdir().expect("a scratch directory");
     let dir = scratch.path().to_path_buf();
     model.save(&dir).unwrap();
@@ -158,34 +169,32 @@ fn the_geometry_basis_reproduces_every_configuration_exactly() {
     assert!(lost > 1e-4, "the truncated basis lost only {lost:.2e} m");
 }
 
-/// The exact near field inside the model (issue 28, `radiosity::near_correction`): trained
-/// with the correction, spanning bases bring every training configuration's corrected
-/// radiosity back as the centroid model brings back its own (within 2 %: the reduced inverse
-/// square root, §4.2); at a configuration it was not trained on, against the full solve with
-/// the exact near field over the receiving surfaces, the corrected model is at least five times
-/// as close as the centroid model (measured: 1.8 % against 21.3 %, the centroid form factors'
-/// bias); the model survives a save and load, Q and all.
+/// The exact near field inside the model (issue 28, `radiosity::near_correction`): the
+/// training solves use it, and the operator correction carries it into the model. At a
+/// configuration it was not trained on, against the full solve with the exact near field over
+/// the receiving surfaces, the model is at least five times as close as a model of centroid
+/// form factors (measured: 3.3 % against 19.1 % with 12 samples, the centroid form factors'
+/// bias); the model
+/// survives a save and load, Q and all, and says how it was trained.
 #[test]
-fn the_near_field_correction_brings_the_model_to_the_exact_full_solve() {
+fn the_exact_near_field_brings_the_model_to_the_exact_full_solve() {
     use galerkin::radiosity::near_field::{FormFactorMethod, DEFAULT_REACH};
+    use galerkin::radiosity::reduced::TrainedNearField;
     let spec = spec();
     let samples = 12;
     let params = sample_parameters(&spec.ranges(), &spec.defaults(), samples, 7);
-    let exact_options =
-        TrainOptions { samples, energy: 1.0, cap: 1000, radiosity_cap: 2000, ..TrainOptions::default() };
+    let exact_options = TrainOptions { samples, ..TrainOptions::default() };
     assert_eq!(exact_options.near_correction, Some(DEFAULT_REACH), "the default");
-    let spanning = TrainOptions { near_correction: None, ..exact_options };
+    let centroid_options = TrainOptions { near_correction: None, ..exact_options };
     let configurations = solve_configurations(&spec, &params, &exact_options, &|_| {}).unwrap();
     assert!(configurations.iter().all(|c| c.near_correction.len() > 1000), "near pairs corrected");
     let (model, _) = train(&spec, &configurations, &exact_options, &|_, _, _| {}).unwrap();
-    assert!(model.has_near_correction());
-    let worst = worst_training_error(&spec, &model, &configurations);
-    eprintln!("exact near field, training configurations: worst relative error {worst:.2e}");
-    assert!(worst < 2e-2, "training configurations reproduced only to {worst}");
+    assert!(model.has_operator_correction());
+    assert_eq!(model.trained_near_field(), TrainedNearField::Exact);
 
-    let centroid_configurations = solve_configurations(&spec, &params, &spanning, &|_| {}).unwrap();
-    let (centroid, _) = train(&spec, &centroid_configurations, &spanning, &|_, _, _| {}).unwrap();
-    assert!(!centroid.has_near_correction());
+    let centroid_configurations = solve_configurations(&spec, &params, &centroid_options, &|_| {}).unwrap();
+    let (centroid, _) = train(&spec, &centroid_configurations, &centroid_options, &|_, _, _| {}).unwrap();
+    assert_eq!(centroid.trained_near_field(), TrainedNearField::Centroid);
     let unseen = [1.3, 0.9, 1.25, 11.0];
     let mesh = spec.mesh(&unseen).unwrap();
     let truth = galerkin::radiosity::full_radiosity_with(
@@ -207,78 +216,113 @@ fn the_near_field_correction_brings_the_model_to_the_exact_full_solve() {
     };
     let (with, without) = (error(&model), error(&centroid));
     eprintln!(
-        "unseen configuration against the exact full solve: corrected {with:.4}, centroid {without:.4}"
+        "unseen configuration against the exact full solve: exact near field {with:.4}, centroid {without:.4}"
     );
-    assert!(with < 0.2 * without, "corrected {with}, centroid {without}");
+    assert!(with < 0.2 * without, "exact near field {with}, centroid {without}");
 
     let scratch = tempfile::Builder::new().prefix("galerkin-").tempdir().expect("a scratch directory");
     model.save(scratch.path()).unwrap();
     let back = galerkin::radiosity::reduced::ReducedRadiosity::load(scratch.path()).unwrap();
-    assert!(back.has_near_correction());
+    assert!(back.has_operator_correction());
+    assert_eq!(back.trained_near_field(), TrainedNearField::Exact);
     assert_eq!(model.evaluate(&mesh).unwrap().0, back.evaluate(&mesh).unwrap().0);
-
-    check_reduced_operator(&spec, &model, &params[0]);
 }
 
-/// The reduced operator `M̂` of `model` at a training configuration `p`: it is what the model
-/// inverts (`M̂ b̂ = ê` for the b̂ the chain returns for any ê), and with bases spanning the
-/// training data it is the exact operator projected on `B_b`, `B_bᵀ (I − ρF) B_b` with the
-/// exact near field — their smallest eigenvalue real parts (the operator margin) agree.
-fn check_reduced_operator(
-    spec: &SceneSpec,
-    model: &galerkin::radiosity::reduced::ReducedRadiosity,
-    p: &[f64],
-) {
-    use std::collections::BTreeMap;
-    let mesh = spec.mesh(p).unwrap();
-    let core = model.model();
-    let m = model.reduced_operator(&mesh).unwrap();
-    let mb = core.reduced_dim("b").unwrap();
-    assert_eq!(m.shape(), &[mb, mb]);
-    let ghat = core.project_input("g", &mesh.g()).unwrap();
-    let (vhat, x) = model.learned_visibility().predict(&ghat);
-    let e: Vec<f64> = (0..mb).map(|i| 1.0 + 0.37 * i as f64 - 0.01 * (i * i) as f64).collect();
-    let inputs: BTreeMap<&str, &[f64]> =
-        [("g", &ghat[..]), ("v", &vhat[..]), ("e", &e[..]), ("x", &x[..])].into();
-    let bhat = core.evaluate(&inputs).unwrap();
-    let back: Vec<f64> =
-        (0..mb).map(|i| (0..mb).map(|j| m.data()[i * mb + j] * bhat.data()[j]).sum()).collect();
-    let norm = e.iter().map(|v| v * v).sum::<f64>().sqrt();
-    let residual = back.iter().zip(&e).map(|(a, b)| (a - b) * (a - b)).sum::<f64>().sqrt() / norm;
-    // A solve of an m_b × m_b system with condition ~10: rounding, 1e-12.
-    assert!(residual < 1e-12, "M̂ b̂ − ê: {residual:e} of ê");
+/// The operator correction (issue 28, `radiosity::operator_correction`), with truncated bases
+/// (the default energy): the form factors regenerated for a training configuration are the
+/// ones its solve used (its radiosity solves again to the Jacobi tolerance); at every training
+/// configuration the corrected reduced operator is the exact operator projected on `B_b`,
+/// `B_bᵀ (I − ρF_t) B_b`, and the model's radiosity the Galerkin solution with it — to the
+/// rounding of m_b × m_b sums (measured: 1e-15; 1e-10 allowed, since the learned visibility's
+/// weight of a training configuration is 1 only to its non-negative least squares' rounding) —
+/// where Table 2's chain alone is 0.5 % off; at a configuration it was not trained on the
+/// corrected model is closer to the full solve than the chain alone (measured with 40 samples:
+/// 1.39 % against 2.40 %, receiving surfaces; with 12, too few to blend, it is not).
+#[test]
+fn the_operator_correction_makes_the_reduced_operator_exact_at_training_configurations() {
+    use galerkin::radiosity::operator_correction::{projected_reflection, training_form_factors};
+    use galerkin::radiosity::solve::solve_jacobi;
+    let spec = spec();
+    let samples = 40;
+    let params = sample_parameters(&spec.ranges(), &spec.defaults(), samples, 5);
+    let options = TrainOptions { samples, near_correction: None, ..TrainOptions::default() };
+    let configurations = solve_configurations(&spec, &params, &options, &|_| {}).unwrap();
+    let (model, report) = train(&spec, &configurations, &options, &|_, _, _| {}).unwrap();
+    let plain_options = TrainOptions { operator_correction: false, ..options };
+    let (plain, _) = train(&spec, &configurations, &plain_options, &|_, _, _| {}).unwrap();
+    assert!(model.has_operator_correction() && !plain.has_operator_correction());
+    let found = report.correction.expect("a correction report");
+    eprintln!("the chain before the correction: {found:?}");
+    assert!(found.worst_discrepancy > 1e-3, "the chain was already exact: {found:?}");
 
-    // The exact operator on B_b, channel by channel (rows c·n + i of B_b).
-    let (f, _) = galerkin::radiosity::near_field::form_factors_exact_near(
-        &mesh,
-        galerkin::radiosity::near_field::DEFAULT_REACH,
-    );
-    let n = mesh.len();
+    let core = model.model();
     let basis = core.basis("b").unwrap().matrix();
-    let b = basis.data();
-    let mut projected = vec![0.0; mb * mb];
-    for c in 0..3 {
-        for i in 0..n {
-            let (row, rho) = (f.row(i), mesh.albedo[i][c]);
-            for k in 0..mb {
-                let fb: f64 = (0..n).map(|j| row[j] * b[(c * n + j) * mb + k]).sum();
-                let applied = b[(c * n + i) * mb + k] - rho * fb;
-                for l in 0..mb {
-                    projected[l * mb + k] += b[(c * n + i) * mb + l] * applied;
-                }
-            }
+    let mb = basis.shape()[1];
+    assert!(mb < 3 * configurations[0].radiosity.len() / 10, "B_b is truncated ({mb} columns)");
+    let frobenius = |a: &[f64]| a.iter().map(|v| v * v).sum::<f64>().sqrt();
+    let mut worst_operator = 0.0f64;
+    let mut worst_chain = 0.0f64;
+    let mut worst_solution = 0.0f64;
+    for c in &configurations {
+        let mesh = DesignSpace::mesh(&spec, &c.params).unwrap();
+        let f = training_form_factors(c, options.near);
+        let (again, _) = solve_jacobi(&f, &mesh.albedo, &c.emission, 1e-12, 10_000).unwrap();
+        assert!(relative_error(&again, &c.radiosity, &c.geometry.areas) < 1e-9, "F regenerated");
+        let reflected = projected_reflection(&f, &mesh.albedo, basis);
+        let exact: Vec<f64> =
+            (0..mb * mb).map(|k| f64::from(u8::from(k / mb == k % mb)) - reflected[k]).collect();
+        let gap = |m: &galerkin::tensor::Tensor| {
+            let d: Vec<f64> = m.data().iter().zip(&exact).map(|(a, b)| a - b).collect();
+            frobenius(&d) / frobenius(&exact)
+        };
+        worst_operator = worst_operator.max(gap(&model.reduced_operator(&mesh).unwrap()));
+        worst_chain = worst_chain.max(gap(&plain.reduced_operator(&mesh).unwrap()));
+        // The Galerkin solution with the exact projected operator.
+        let ehat = basis_project(basis, &galerkin::radiosity::chain::stack_channels(&c.emission));
+        let a = faer::Mat::<f64>::from_fn(mb, mb, |i, j| exact[i * mb + j]);
+        let rhs = faer::Mat::<f64>::from_fn(mb, 1, |i, _| ehat[i]);
+        use faer::linalg::solvers::Solve;
+        let y = a.full_piv_lu().solve(&rhs);
+        let bhat: Vec<f64> = (0..mb).map(|i| y[(i, 0)]).collect();
+        let lifted = core.lift(&bhat).unwrap();
+        let n = c.radiosity.len();
+        let galerkin: Vec<[f64; 3]> = (0..n).map(|i| [lifted[i], lifted[n + i], lifted[2 * n + i]]).collect();
+        let (b, _) = model.evaluate(&mesh).unwrap();
+        worst_solution = worst_solution.max(relative_error(&b, &galerkin, &c.geometry.areas));
+    }
+    eprintln!(
+        "training configurations: corrected operator off the exact projection by {worst_operator:.2e}, \
+         the chain alone by {worst_chain:.2e}; radiosity off the Galerkin solution by {worst_solution:.2e}"
+    );
+    assert!(worst_operator < 1e-10, "corrected operator {worst_operator:e} off the exact projection");
+    assert!(worst_chain > 1e-3, "the chain alone {worst_chain:e}");
+    assert!(worst_solution < 1e-10, "radiosity {worst_solution:e} off the Galerkin solution");
+
+    let unseen = [1.3, 0.9, 1.25, 11.0];
+    let full = full_radiosity(&spec, &unseen).unwrap();
+    let receiving: Vec<usize> = (0..full.mesh.len()).filter(|&i| !full.mesh.kind[i].is_opening()).collect();
+    let error = |m: &galerkin::radiosity::reduced::ReducedRadiosity| {
+        let (b, _) = m.evaluate(&full.mesh).unwrap();
+        galerkin::radiosity::compare::relative_error_over(
+            &b,
+            &full.radiosity,
+            &full.geometry.areas,
+            &receiving,
+        )
+    };
+    let (corrected, alone) = (error(&model), error(&plain));
+    eprintln!("unseen configuration: corrected {corrected:.4}, the chain alone {alone:.4}");
+    assert!(corrected < alone, "corrected {corrected}, the chain alone {alone}");
+}
+
+/// `B_bᵀ x` for a row-major `3n × m` basis.
+fn basis_project(basis: &galerkin::tensor::Tensor, x: &[f64]) -> Vec<f64> {
+    let m = basis.shape()[1];
+    let mut out = vec![0.0; m];
+    for (row, v) in basis.data().chunks_exact(m).zip(x) {
+        for (o, b) in out.iter_mut().zip(row) {
+            *o += b * v;
         }
     }
-    let exact = faer::Mat::<f64>::from_fn(mb, mb, |i, j| projected[i * mb + j]);
-    let exact_margin = exact.eigenvalues().unwrap().iter().map(|z| z.re).fold(f64::INFINITY, f64::min);
-    let margin = model.operator_margin(&mesh).unwrap();
-    eprintln!(
-        "operator margin at a training configuration: reduced {margin:.6}, exact projected {exact_margin:.6}"
-    );
-    // The chain reproduces the training configurations' radiosity to 2 % (above: the reduced
-    // inverse square root's non-commutation, §4.2); the operator's eigenvalue within 2 % too.
-    assert!(
-        exact_margin > 0.0 && (margin - exact_margin).abs() < 0.02 * exact_margin,
-        "{margin} vs {exact_margin}"
-    );
+    out
 }

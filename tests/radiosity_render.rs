@@ -122,11 +122,12 @@ fn pixels_show_the_face_their_ray_meets_with_its_radiance() {
     }
 }
 
-/// `write_picture` with a reduced model reports the model's operator margin at the drawn
-/// parameters (the value `operator_margin` gives; positive for a sane model), and none for the
-/// full solve.
+/// `write_picture` with a reduced model reports the model's estimate and operator margin at the
+/// drawn parameters (what `evaluate_estimated` and `operator_margin` give; the margin positive
+/// for a sane model), none for the full solve, and refuses to draw where the estimate is above
+/// the threshold asked.
 #[test]
-fn a_picture_from_a_model_reports_its_operator_margin() {
+fn a_picture_from_a_model_reports_its_estimate_and_refuses_when_untrusted() {
     use galerkin::radiosity::any_scene::AnyScene;
     use galerkin::radiosity::picture::{write_picture, PictureRequest};
     use galerkin::radiosity::train::{
@@ -149,12 +150,28 @@ fn a_picture_from_a_model_reports_its_operator_margin() {
         size: (W, H),
         faces: None,
         form_factors: galerkin::radiosity::near_field::FormFactorMethod::Centroid,
+        trust_threshold: None,
     };
     let reduced =
         write_picture(&gpu, &scene, Some(&model), &request, &dir.path().join("reduced.png")).unwrap();
-    let want = model.operator_margin(&DesignSpace::mesh(&spec, &spec.defaults()).unwrap()).unwrap();
-    assert_eq!(reduced.operator_margin, Some(want));
+    let mesh = DesignSpace::mesh(&spec, &spec.defaults()).unwrap();
+    let want = model.operator_margin(&mesh).unwrap();
+    let estimate = reduced.estimate.expect("a reduced picture carries its estimate");
+    assert_eq!(estimate, model.evaluate_estimated(&mesh).unwrap().2);
+    assert!(
+        (estimate.margin - want).abs() <= 1e-12 * want.abs().max(1.0),
+        "{} against {want}",
+        estimate.margin
+    );
     assert!(want > 0.0, "a sane model's margin: {want}");
+    assert!(estimate.error.is_finite() && estimate.error > 0.0, "an estimate: {estimate:?}");
     let full = write_picture(&gpu, &scene, None, &request, &dir.path().join("full.png")).unwrap();
-    assert_eq!(full.operator_margin, None);
+    assert_eq!(full.estimate, None);
+    // Below the estimate, the picture is refused as untrusted, naming why, and nothing is
+    // written.
+    let strict = PictureRequest { trust_threshold: Some(0.5 * estimate.error), ..request };
+    let refused = dir.path().join("refused.png");
+    let err = write_picture(&gpu, &scene, Some(&model), &strict, &refused).unwrap_err().to_string();
+    assert!(err.contains("not to be trusted") && err.contains("estimated error"), "{err}");
+    assert!(!refused.exists(), "an untrusted picture was written");
 }

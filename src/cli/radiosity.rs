@@ -6,6 +6,7 @@ use anyhow::{bail, Context, Result};
 use clap::{Args, Subcommand};
 use galerkin::gpu::{Gpu, GpuDesc};
 use galerkin::radiosity::any_scene::AnyScene;
+use galerkin::radiosity::effectivity::Effectivity;
 use galerkin::radiosity::near_field::FormFactorMethod;
 use galerkin::radiosity::picture::{write_picture, PictureRequest};
 use galerkin::radiosity::reduced::ReducedRadiosity;
@@ -63,6 +64,11 @@ pub struct TrainArgs {
     /// Fraction of each quantity's variance its basis keeps (the paper: 0.999).
     #[arg(long, default_value_t = 0.999)]
     pub energy: f64,
+    /// Fraction of the radiosity's (and emission's) variance the radiosity basis B_b keeps (the
+    /// paper: 0.999 like the others; with the operator correction B_b's own truncation is most
+    /// of the error, and 0.9999 is not slower at run time).
+    #[arg(long, default_value_t = 0.9999)]
+    pub radiosity_energy: f64,
     /// Most vectors per quantity's basis (the paper: 60; the merged e/b basis gets twice).
     #[arg(long, default_value_t = 60)]
     pub cap: usize,
@@ -80,6 +86,12 @@ pub struct TrainArgs {
     /// where faces meet; the default and the only choice with sky lighting).
     #[arg(long, value_parser = ["centroid", "exact"])]
     pub near_field: Option<String>,
+    /// Table 2's chain alone: no correction of the reduced operator at the training
+    /// configurations (by default the model stores the chain's error in the reduced operator
+    /// at every sample, B_bᵀρF_tB_b − Ê⊗₂p̂_t, and blends it with Eq. 17's weights; it needs
+    /// --near-field centroid).
+    #[arg(long)]
+    pub no_operator_correction: bool,
 }
 
 /// Arguments of `galerkin radiosity view`.
@@ -144,6 +156,16 @@ pub struct CompareArgs {
     /// reduction's alone, not the centroid form factors' bias).
     #[arg(long, value_parser = ["centroid", "exact"])]
     pub full_near_field: Option<String>,
+    /// Also solve this many configurations drawn uniformly from the design space, full and
+    /// reduced (random.csv): the error and the model's estimate of it away from the sequences.
+    #[arg(long, default_value_t = 0, value_parser = crate::cli::args::count_up_to(galerkin::radiosity::effectivity::MAX_RANDOM))]
+    pub random: usize,
+    /// The random configurations' seed (unrelated to training's sampling).
+    #[arg(long, default_value_t = 2026)]
+    pub random_seed: u64,
+    /// The estimated error above which a frame counts as untrusted in the summary.
+    #[arg(long, value_name = "FRACTION", default_value_t = galerkin::radiosity::estimate::DEFAULT_THRESHOLD, value_parser = positive_fraction)]
+    pub trust_threshold: f64,
 }
 
 /// What a picture or window shows: the configuration and how it is looked at.
@@ -192,11 +214,23 @@ pub struct RenderArgs {
     /// radiosity R, G, B).
     #[arg(long, value_name = "FILE.csv|FILE.npy", value_parser = table_path)]
     pub faces: Option<PathBuf>,
-    /// The full solve's form factors for near pairs: `centroid` (Eq. 15 with the regularised
-    /// near field: what training and the reduced model use) or `exact` (exact polygon form
-    /// factors for pairs within 4 face diameters: the accurate ground truth, about 8× slower).
-    #[arg(long, value_parser = ["centroid", "exact"], default_value = "centroid")]
-    pub near_field: String,
+    /// The full solve's form factors for near pairs: `exact` (the default: exact polygon form
+    /// factors for pairs within 4 face diameters — the accurate radiosity, and what `radiosity
+    /// train` trains against by default with area lights) or `centroid` (Eq. 15 with the
+    /// regularised near field: Table 2 as printed, about 20 % low on the small scene's
+    /// receiving surfaces, about 8× faster). A model evaluates its own form factors: not with
+    /// --model.
+    #[arg(long, value_parser = ["centroid", "exact"], conflicts_with = "model")]
+    pub near_field: Option<String>,
+    /// With --model: the estimated relative error (receiving surfaces) above which the reduced
+    /// radiosity is reported untrusted and not drawn — so is a configuration whose reduced
+    /// operator has a non-positive eigenvalue, at any threshold.
+    #[arg(long, value_name = "FRACTION", default_value_t = galerkin::radiosity::estimate::DEFAULT_THRESHOLD, value_parser = positive_fraction, requires = "model")]
+    pub trust_threshold: f64,
+    /// With --model: draw the reduced radiosity even where it is untrusted (the estimate is
+    /// printed beside it).
+    #[arg(long, requires = "model")]
+    pub allow_untrusted: bool,
     /// --view opens the viewer at this configuration; --play sweeps the parameters.
     #[command(flatten)]
     pub viewer: crate::cli::args::ViewerArgs,
@@ -206,6 +240,16 @@ pub struct RenderArgs {
 fn table_path(s: &str) -> Result<PathBuf, String> {
     let path = PathBuf::from(s);
     galerkin::radiosity::face_table::TableFormat::of(&path).map(|_| path)
+}
+
+/// A fraction in (0, 1] (an error threshold).
+fn positive_fraction(s: &str) -> Result<f64, String> {
+    let v: f64 = s.trim().parse().map_err(|_| format!("{s:?} is not a number"))?;
+    if v.is_finite() && v > 0.0 && v <= 1.0 {
+        Ok(v)
+    } else {
+        Err(format!("{s}: expected a fraction in (0, 1], e.g. 0.05 for 5 %"))
+    }
 }
 
 fn parse_param(s: &str) -> Result<(String, f64), String> {
@@ -254,14 +298,12 @@ fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
         exposure: args.look.exposure,
         size,
         faces: args.faces.clone(),
-        form_factors: match args.near_field.as_str() {
-            "exact" => FormFactorMethod::ExactNear { reach: galerkin::radiosity::near_field::DEFAULT_REACH },
-            _ => FormFactorMethod::Centroid,
+        form_factors: match args.near_field.as_deref() {
+            Some("centroid") => FormFactorMethod::Centroid,
+            _ => FormFactorMethod::ExactNear { reach: galerkin::radiosity::near_field::DEFAULT_REACH },
         },
+        trust_threshold: (!args.allow_untrusted).then_some(args.trust_threshold),
     };
-    if model.is_some() && args.near_field == "exact" {
-        bail!("--near-field exact applies to the full solve; a model evaluates its own form factors");
-    }
     let gpu = Gpu::new(desc)?;
     let out = &args.image.out;
     let r =
@@ -272,10 +314,22 @@ fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
     if let Some(table) = &args.faces {
         println!("per-face table ({} faces, f64) → {}", r.faces, table.display());
     }
-    if let Some(margin) = r.operator_margin.filter(|m| *m <= 0.0) {
-        eprintln!(
-            "warning: the model's reduced operator has an eigenvalue with real part {margin:.3} here (the full operator's are positive): its radiosity at these parameters is not to be trusted; train with larger bases"
-        );
+    if let Some(e) = &r.estimate {
+        match e.error.is_finite() {
+            true => println!(
+                "estimated error over the receiving surfaces: {:.2} % (reduced operator: σ_min {:.3}, margin {:.3})",
+                100.0 * e.error,
+                e.stability,
+                e.margin
+            ),
+            false => println!(
+                "no error estimate (the model was trained without one: train again); reduced operator: σ_min {:.3}, margin {:.3}",
+                e.stability, e.margin
+            ),
+        }
+        if let Some(why) = e.untrusted(args.trust_threshold) {
+            eprintln!("warning: drawn with --allow-untrusted, but the reduced radiosity is not to be trusted here: {why}");
+        }
     }
     let p_text: Vec<String> = scene.names().iter().zip(&p).map(|(n, v)| format!("{n}={v}")).collect();
     println!(
@@ -304,9 +358,11 @@ fn train(args: &TrainArgs, ranks: &dyn Communicator) -> Result<()> {
     let options = TrainOptions {
         samples: args.samples,
         energy: args.energy,
+        radiosity_energy: Some(args.radiosity_energy),
         cap: args.cap,
         radiosity_cap: 2 * args.cap,
         seed: args.seed,
+        operator_correction: !args.no_operator_correction,
         near_correction: match (args.near_field.as_deref(), scene.space().lights().mode) {
             (Some("exact"), _) | (None, galerkin::radiosity::LightMode::Area) => {
                 Some(galerkin::radiosity::near_field::DEFAULT_REACH)
@@ -330,6 +386,7 @@ fn train(args: &TrainArgs, ranks: &dyn Communicator) -> Result<()> {
                 "gram" => "Gram matrices of the pair quantities (pairs)",
                 "pca" => "PCA of Table 2's quantities",
                 "orthonormalise" => "orthonormalising the pair bases (pairs)",
+                "correct" => "the reduced operator at every sample",
                 _ => "premultiplying tensors (chunks of pairs)",
             };
             let bar = bars.entry(stage.to_string()).or_insert_with(|| crate::progress_bar(total, label));
@@ -360,8 +417,16 @@ fn train(args: &TrainArgs, ranks: &dyn Communicator) -> Result<()> {
     for (name, m) in &t.report.merged {
         println!("merged basis {name}: {m} vectors");
     }
-    if t.model.has_near_correction() {
-        println!("the exact near field is in the model (Q: one correction per sample, blended by Eq. 17's weights)");
+    if let Some(c) = &t.report.correction {
+        println!(
+            "the reduced operator is corrected at every sample (Q: blended by Eq. 17's weights); before the correction, Table 2's chain was {:.3} % (mean) and {:.3} % (worst, sample {}) off the exact operator projected on B_b",
+            100.0 * c.mean_discrepancy,
+            100.0 * c.worst_discrepancy,
+            c.worst_configuration
+        );
+    }
+    if t.model.trained_near_field() == galerkin::radiosity::reduced::TrainedNearField::Exact {
+        println!("the training solves used the exact near field (the correction carries it into the model)");
     }
     println!("model size on disk: {:.1} MB", t.bytes_on_disk as f64 / 1e6);
     Ok(())
@@ -420,11 +485,15 @@ fn compare(args: &CompareArgs) -> Result<()> {
         model.set_eq17(galerkin::radiosity::visibility::Eq17::Printed);
     }
     let options = CompareOptions {
-        full_form_factors: method_for(model.has_near_correction()),
+        full_form_factors: method_for(
+            model.trained_near_field() == galerkin::radiosity::reduced::TrainedNearField::Exact,
+        ),
         frames: args.frames.clone(),
         full_frames: args.full_frames.clone(),
         timed_full: args.timed_full as usize,
         out: args.out.clone(),
+        random: args.random,
+        random_seed: args.random_seed,
     };
     let r = compare::compare(&scene, &args.scene, &model, &options, &mut progress)
         .with_context(|| format!("comparing {} with {}", args.model.display(), args.scene.display()))?;
@@ -435,7 +504,12 @@ fn compare(args: &CompareArgs) -> Result<()> {
             FormFactorMethod::Centroid => "centroid (regularised near field)",
             FormFactorMethod::ExactNear { .. } => "exact near-field",
         },
-        if model.has_near_correction() { "carries the exact near field" } else { "has centroid form factors only" }
+        match (model.trained_near_field(), model.has_operator_correction()) {
+            (galerkin::radiosity::reduced::TrainedNearField::Exact, _) =>
+                "was trained with the exact near field (its operator corrected at every sample)",
+            (_, true) => "was trained with centroid form factors (its operator corrected at every sample)",
+            (_, false) => "is Table 2's chain alone, with centroid form factors",
+        }
     );
     println!(
         "| sequence | frames | receiving surfaces: mean | worst frame | all faces, emitters included: mean | worst frame |\n|---|---:|---:|---:|---:|---:|"
@@ -448,6 +522,12 @@ fn compare(args: &CompareArgs) -> Result<()> {
         r.sequences.iter().map(|s| s.errors.len()).sum::<usize>(),
         pct(r.overall(Some(0))),
         pct(r.overall(None))
+    );
+    let (fit_mean, fit_worst) = r.overall_best_fit();
+    println!(
+        "the radiosity basis's own floor (the full radiosity projected on B_b, receiving surfaces): mean {:.2} %, worst {:.2} %",
+        100.0 * fit_mean,
+        100.0 * fit_worst
     );
     for (k, name) in r.groups.names.iter().enumerate().skip(1) {
         println!(
@@ -470,19 +550,52 @@ fn compare(args: &CompareArgs) -> Result<()> {
             100.0 * all_worst
         );
     }
-    if let Some((k, margin)) = r.corner_margins.iter().enumerate().min_by(|a, b| a.1.total_cmp(b.1)) {
-        let at: Vec<String> =
-            scene.names().iter().zip(&r.corners[k].0).map(|(n, v)| format!("{n}={v}")).collect();
+    if !r.random.is_empty() {
+        let (mean, worst) = compare::mean_worst(r.random.iter().map(|(_, e)| e.groups[0]));
         println!(
-            "reduced operator at the corners: smallest eigenvalue real part {margin:.3} (at {}){}",
-            at.join(","),
-            if *margin <= 0.0 {
-                " — the reduced system has left the physics there (the full operator's are positive): train with larger bases"
-            } else {
-                ""
-            }
+            "random configurations ({}, seed {}): receiving surfaces mean {:.2} %, worst {:.2} % → random.csv",
+            r.random.len(),
+            args.random_seed,
+            100.0 * mean,
+            100.0 * worst
         );
     }
+    let all_frames = || r.sequences.iter().flat_map(|s| &s.errors);
+    for (what, effectivity) in [
+        ("frames", Effectivity::of(all_frames())),
+        ("corners", Effectivity::of(r.corners.iter().map(|(_, e)| e))),
+        ("random configurations", Effectivity::of(r.random.iter().map(|(_, e)| e))),
+    ] {
+        match effectivity {
+            Some(e) => println!("error estimate, {what}: {e}"),
+            None if model.cross_validation().is_none() => {
+                println!("error estimate, {what}: none (the model was trained without it: train again)");
+                break;
+            }
+            None => {}
+        }
+    }
+    let every = all_frames()
+        .map(|e| (None, e))
+        .chain(r.corners.iter().map(|(p, e)| (Some(p), e)))
+        .chain(r.random.iter().map(|(p, e)| (Some(p), e)));
+    let (mut untrusted, mut least_margin) = (0, (f64::INFINITY, None));
+    for (p, e) in every {
+        untrusted += usize::from(e.estimate.untrusted(args.trust_threshold).is_some());
+        if e.estimate.margin < least_margin.0 {
+            least_margin = (e.estimate.margin, p);
+        }
+    }
+    let checked = all_frames().count() + r.corners.len() + r.random.len();
+    println!(
+        "untrusted at a threshold of {:.1} % (estimate above it, or a non-positive margin): {untrusted} of {checked}; least margin of the reduced operator {:.3}{}",
+        100.0 * args.trust_threshold,
+        least_margin.0,
+        least_margin.1.map_or(String::new(), |p| {
+            let at: Vec<String> = scene.names().iter().zip(p).map(|(n, v)| format!("{n}={v}")).collect();
+            format!(" (at {})", at.join(","))
+        })
+    );
     let (full, reduced) = (r.full_median_s, r.reduced_median_s);
     println!(
         "median frame: full {:.1} ms ({:.2} FPS, {} frames solved in this run), reduced {:.3} ms ({:.0} FPS, mesh build and lift included): {:.0}× faster",
@@ -496,11 +609,12 @@ fn compare(args: &CompareArgs) -> Result<()> {
     let total: f64 = r.stage_seconds.iter().sum();
     let share = |k: usize| 100.0 * r.stage_seconds[k] / total;
     println!(
-        "reduced frame: project g {:.0} %, learned visibility (Eq. 17, and the sky's direct light in sky mode) {:.0} %, Table 2 chain {:.0} %, lift b {:.0} % (of the model's own time)",
+        "reduced frame: project g {:.0} %, learned visibility (Eq. 17, and the sky's direct light in sky mode) {:.0} %, Table 2 chain and solve {:.0} %, error estimate {:.0} %, lift b {:.0} % (of the model's own time)",
         share(0),
         share(1),
         share(2),
-        share(3)
+        share(3),
+        share(4)
     );
     println!("→ {}, {} and corners.csv", r.csv.display(), r.plot.display());
     Ok(())

@@ -17,7 +17,7 @@
 //! | squared areas | `aᵢ = nᵢ·nᵢ` | `a = A ⊗₁ n ⊗₂ n` | A: a, n, n |
 //! | form factors | `p_k = d_k / √aᵢ` | `p = (P ⊗₂ a)^(−½) ⊗₁ d` | P: dp, dp, a |
 //! | radiosity | `b = (I − ρF)⁻¹ e` | `b = (I − E ⊗₂ p)⁻¹ ⊗₁ e` | I: b, b; E: b, b, dp |
-//! | with the exact near field | `b = (I − ρ(F + Σₜ xₜ ΔF_t))⁻¹ e` | `b = (I − E ⊗₂ p − Q ⊗₂ x)⁻¹ ⊗₁ e` | Q: b, b, x |
+//! | corrected at the training configurations | `b = (I − ρF̂(x))⁻¹ e` | `b = (I − E ⊗₂ p − Q ⊗₂ x)⁻¹ ⊗₁ e` | Q: b, b, x |
 //!
 //! The bases carry the paper's constraints in their names: `B_s = B_h` ("sh"), `B_d = B_p`
 //! ("dp"), `B_e = B_b` ("b") — §4's rule that an inverted or rooted matrix has one basis on
@@ -61,12 +61,17 @@ pub fn form_factors() -> Expr {
     Expr::tensor("P").times(2, a).inverse_sqrt().times(1, d)
 }
 
+/// The reflected part of Eq. 16's operator, `E ⊗₂ p` (axes b, b: `ρF` per channel).
+pub fn reflection() -> Expr {
+    Expr::tensor("E").times(2, form_factors())
+}
+
 /// The operator Eq. 16 inverts, `I − E ⊗₂ p` (axes b, b: `I − ρF` per channel), and with
-/// `near_corrected` `I − E ⊗₂ p − Q ⊗₂ x`.
-pub fn radiosity_operator(near_corrected: bool) -> Expr {
-    let reflected = Expr::tensor("E").times(2, form_factors());
+/// `corrected` `I − E ⊗₂ p − Q ⊗₂ x` ([`super::operator_correction`]).
+pub fn radiosity_operator(corrected: bool) -> Expr {
+    let reflected = reflection();
     let reflected =
-        if near_corrected { reflected.plus(Expr::tensor("Q").times(2, Expr::input("x"))) } else { reflected };
+        if corrected { reflected.plus(Expr::tensor("Q").times(2, Expr::input("x"))) } else { reflected };
     Expr::tensor("I").minus(reflected)
 }
 
@@ -75,10 +80,10 @@ pub fn radiosity() -> Expr {
     radiosity_operator(false).inverse().times(1, Expr::input("e"))
 }
 
-/// `b = (I − E ⊗₂ p − Q ⊗₂ x)⁻¹ ⊗₁ e`: Eq. 16 with the exact near field as a precomputed
-/// correction `Q` (axes b, b, x) blended by Eq. 17's weights `x`
-/// ([`super::near_correction`]).
-pub fn radiosity_near_corrected() -> Expr {
+/// `b = (I − E ⊗₂ p − Q ⊗₂ x)⁻¹ ⊗₁ e`: Eq. 16 with the reduced operator corrected at the
+/// training configurations, `Q` (axes b, b, x) blended by Eq. 17's weights `x`
+/// ([`super::operator_correction`]).
+pub fn radiosity_corrected() -> Expr {
     radiosity_operator(true).inverse().times(1, Expr::input("e"))
 }
 

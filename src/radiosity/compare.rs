@@ -20,6 +20,7 @@ use std::time::Instant;
 use anyhow::{bail, Context, Result};
 
 use super::any_scene::AnyScene;
+use super::estimate::Estimate;
 use super::full_frames::{save_due, FullFrame, FullFramesFile};
 use super::mesh::{FaceKind, SceneMesh};
 use super::reduced::ReducedRadiosity;
@@ -115,10 +116,32 @@ pub struct FrameError {
     pub all: f64,
     /// Per group, in [`FaceGroups::names`]' order (`receiving` first).
     pub groups: Vec<f64>,
+    /// The radiosity basis's own floor over the receiving surfaces: the full radiosity
+    /// projected on `B_b` ([`ReducedRadiosity::best_fit`]) against the full radiosity — what
+    /// the reduced solve would give with the exact operator, to within its quasi-optimality.
+    pub best_fit: f64,
+    /// The model's own estimate of its error over the receiving surfaces, and its stability
+    /// check ([`super::estimate`]).
+    pub estimate: Estimate,
 }
 
-/// The errors of reduced radiosity `b` against the full `frame`, over all faces and each group.
-fn frame_error(b: &[Rgb], frame: &FullFrame, groups: &FaceGroups) -> FrameError {
+impl FrameError {
+    /// The estimate's effectivity: estimated ÷ true error over the receiving surfaces.
+    pub fn effectivity(&self) -> f64 {
+        self.estimate.error / self.groups.first().copied().unwrap_or(f64::NAN)
+    }
+}
+
+/// The errors of reduced radiosity `b` against the full `frame`, over all faces and each group,
+/// `model`'s best fit of the frame, and the model's `estimate` beside them.
+pub fn frame_error(
+    b: &[Rgb],
+    frame: &FullFrame,
+    groups: &FaceGroups,
+    model: &ReducedRadiosity,
+    estimate: Estimate,
+) -> FrameError {
+    let fit = model.best_fit(&frame.radiosity);
     FrameError {
         all: super::reduced::relative_error(b, &frame.radiosity, &frame.areas),
         groups: groups
@@ -126,19 +149,43 @@ fn frame_error(b: &[Rgb], frame: &FullFrame, groups: &FaceGroups) -> FrameError 
             .iter()
             .map(|faces| relative_error_over(b, &frame.radiosity, &frame.areas, faces))
             .collect(),
+        best_fit: relative_error_over(&fit, &frame.radiosity, &frame.areas, &groups.faces[0]),
+        estimate,
     }
 }
 
-/// A row's parameters and errors for the tables (`compare.csv`, `corners.csv`): the
-/// parameters, the all-faces error, then each group's.
-fn csv_fields(p: &[f64], error: &FrameError) -> String {
+/// A row's parameters and errors for the tables (`compare.csv`, `corners.csv`,
+/// `random.csv`): the parameters, the all-faces error, each group's, the best fit's, then the
+/// estimate, the reduced operator's least singular value and its margin.
+pub fn csv_fields(p: &[f64], error: &FrameError) -> String {
     let values: Vec<String> = p.iter().map(|v| v.to_string()).collect();
     let group_values: Vec<String> = error.groups.iter().map(|e| format!("{e:.6}")).collect();
-    format!("{},{:.6},{}", values.join(","), error.all, group_values.join(","))
+    let e = &error.estimate;
+    format!(
+        "{},{:.6},{},{:.6},{:.6},{:.6},{:.6}",
+        values.join(","),
+        error.all,
+        group_values.join(","),
+        error.best_fit,
+        e.error,
+        e.stability,
+        e.margin
+    )
+}
+
+/// The header of [`csv_fields`]' columns for a scene's parameter `names` and error groups.
+pub fn csv_header(names: &[String], groups: &FaceGroups) -> String {
+    let group_columns: Vec<String> =
+        groups.names.iter().map(|n| format!("error_{}", n.replace(' ', "_"))).collect();
+    format!(
+        "{},relative_error,{},best_fit_receiving,estimated_error,operator_sigma_min,operator_margin",
+        names.join(","),
+        group_columns.join(",")
+    )
 }
 
 /// Mean and worst of a series.
-fn mean_worst(v: impl Iterator<Item = f64> + Clone) -> (f64, f64) {
+pub fn mean_worst(v: impl Iterator<Item = f64> + Clone) -> (f64, f64) {
     let n = v.clone().count().max(1) as f64;
     (v.clone().sum::<f64>() / n, v.fold(0.0f64, f64::max))
 }
@@ -160,6 +207,11 @@ impl SequenceReport {
     pub fn group(&self, k: usize) -> (f64, f64) {
         mean_worst(self.errors.iter().map(move |e| e.groups.get(k).copied().unwrap_or(f64::NAN)))
     }
+
+    /// Mean and worst of the radiosity basis's best fit over the receiving surfaces.
+    pub fn best_fit(&self) -> (f64, f64) {
+        mean_worst(self.errors.iter().map(|e| e.best_fit))
+    }
 }
 
 /// What a comparison measured, and where it wrote its table and plot.
@@ -172,10 +224,8 @@ pub struct CompareReport {
     /// The design space's corners ([`super::train::box_corners`]; in the training set, since
     /// the sampler takes them all): each corner's parameters and errors.
     pub corners: Vec<(Vec<f64>, FrameError)>,
-    /// At each corner, the smallest real part of the reduced operator's eigenvalues
-    /// ([`super::reduced::ReducedRadiosity::operator_margin`]; ≤ 0: the reduced system has
-    /// left the physics there).
-    pub corner_margins: Vec<f64>,
+    /// The random configurations' parameters and errors (`random.csv`).
+    pub random: Vec<(Vec<f64>, FrameError)>,
     /// Median seconds of a full frame solved in this run, and how many were.
     pub full_median_s: f64,
     /// Full frames solved in this run.
@@ -183,8 +233,9 @@ pub struct CompareReport {
     /// Median seconds of a reduced frame (mesh build and lift included).
     pub reduced_median_s: f64,
     /// Seconds in the reduced frame's stages, summed: projecting g, the learned visibility
-    /// (and the sky's direct light), Table 2's chain, lifting b.
-    pub stage_seconds: [f64; 4],
+    /// (and the sky's direct light), Table 2's chain and the solve, the error estimate and
+    /// stability check, lifting b.
+    pub stage_seconds: [f64; 5],
     /// The table written (one row per frame).
     pub csv: PathBuf,
     /// The plot written (error per frame per sequence).
@@ -196,6 +247,11 @@ impl CompareReport {
     pub fn overall(&self, k: Option<usize>) -> (f64, f64) {
         let all = self.sequences.iter().flat_map(|s| &s.errors);
         mean_worst(all.map(move |e| pick(e, k)))
+    }
+
+    /// Mean and worst of the best fit over every frame of every sequence (receiving surfaces).
+    pub fn overall_best_fit(&self) -> (f64, f64) {
+        mean_worst(self.sequences.iter().flat_map(|s| &s.errors).map(|e| e.best_fit))
     }
 
     /// Mean and worst over the corners, over group `k` (`None`: all faces), and the worst
@@ -229,6 +285,11 @@ pub struct CompareOptions {
     /// The full frames' form factors: centroid (what the model was trained on) or with the
     /// exact near field (the accurate ground truth: the error of the whole approximation).
     pub full_form_factors: super::near_field::FormFactorMethod,
+    /// Random configurations of the design space to solve full and reduced besides the
+    /// sequences and corners (`random.csv`; [`super::effectivity::random_parameters`]).
+    pub random: usize,
+    /// Their seed.
+    pub random_seed: u64,
 }
 
 /// The full-frames files' key for a lighting and a form-factor method (frames of another
@@ -284,16 +345,10 @@ pub fn compare(
     let ranges = spec.ranges();
     let first = sequence(&ranges, 0, 0, options.frames[0]);
     let groups = FaceGroups::of(scene, &spec.mesh(&first)?);
-    let group_columns: Vec<String> =
-        groups.names.iter().map(|n| format!("error_{}", n.replace(' ', "_"))).collect();
-    let mut rows = vec![format!(
-        "sequence,frame,{},relative_error,{},full_ms,reduced_ms",
-        scene.names().join(","),
-        group_columns.join(",")
-    )];
+    let mut rows = vec![format!("sequence,frame,{},full_ms,reduced_ms", csv_header(&scene.names(), &groups))];
     let mut sequences: Vec<SequenceReport> = Vec::new();
     let (mut full_times, mut reduced_times) = (Vec::new(), Vec::new());
-    let mut stages = [0.0f64; 4];
+    let mut stages = [0.0f64; 5];
     let lighting = frames_key(spec.lights().mode, options.full_form_factors);
     let csv = options.out.join("compare.csv");
     for (which, &frames) in options.frames.iter().enumerate() {
@@ -342,19 +397,20 @@ pub fn compare(
             };
             let t = Instant::now();
             let mesh = spec.mesh(p)?;
-            let (b, times) = model.evaluate(&mesh)?;
+            let (b, times, estimate) = model.evaluate_estimated(&mesh)?;
             let reduced_s = t.elapsed().as_secs_f64();
             stages[0] += times.project;
             stages[1] += times.visibility + times.direct;
             stages[2] += times.chain;
-            stages[3] += times.lift;
+            stages[3] += times.estimate;
+            stages[4] += times.lift;
             let full_ms = fresh.as_ref().map_or(String::new(), |frame| format!("{:.3}", frame.seconds * 1e3));
             let reference = match (&fresh, from_file) {
                 (_, true) => &kept[f],
                 (Some(frame), false) => frame,
                 (None, false) => bail!("frame {f} of sequence {} was neither kept nor solved", which + 1),
             };
-            let error = frame_error(&b, reference, &groups);
+            let error = frame_error(&b, reference, &groups, model, estimate);
             rows.push(format!(
                 "{},{f},{},{full_ms},{:.4}",
                 which + 1,
@@ -378,21 +434,41 @@ pub fn compare(
     }
     // The corners of the design space, solved in full and reduced like frames.
     let mut corners = Vec::new();
-    let mut corner_rows = vec![format!(
-        "{},relative_error,{},operator_margin",
-        scene.names().join(","),
-        group_columns.join(",")
-    )];
-    let mut corner_margins = Vec::new();
+    let mut corner_rows = vec![csv_header(&scene.names(), &groups)];
     for p in super::train::box_corners(&ranges) {
         let full = FullFrame::solve(spec, &p, options.full_form_factors)?;
         let mesh = spec.mesh(&p)?;
-        let (b, _) = model.evaluate(&mesh)?;
-        let margin = model.operator_margin(&mesh)?;
-        let error = frame_error(&b, &full, &groups);
-        corner_rows.push(format!("{},{margin:.6}", csv_fields(&p, &error)));
+        let (b, _, estimate) = model.evaluate_estimated(&mesh)?;
+        let error = frame_error(&b, &full, &groups, model, estimate);
+        corner_rows.push(csv_fields(&p, &error));
         corners.push((p, error));
-        corner_margins.push(margin);
+    }
+    // Random configurations from a seed unrelated to training.
+    if options.random > super::effectivity::MAX_RANDOM {
+        bail!("--random {}: at most {} configurations", options.random, super::effectivity::MAX_RANDOM);
+    }
+    let mut random = Vec::with_capacity(options.random);
+    let mut random_rows = vec![csv_header(&scene.names(), &groups)];
+    let random_csv = options.out.join("random.csv");
+    if options.random > 0 {
+        progress(Progress::Sequence(
+            options.frames.len(),
+            options.random,
+            "random configurations (full and reduced)",
+        ));
+    }
+    for p in super::effectivity::random_parameters(&ranges, options.random, options.random_seed) {
+        let full = FullFrame::solve(spec, &p, options.full_form_factors)?;
+        let mesh = spec.mesh(&p)?;
+        let (b, _, estimate) = model.evaluate_estimated(&mesh)?;
+        let error = frame_error(&b, &full, &groups, model, estimate);
+        random_rows.push(csv_fields(&p, &error));
+        random.push((p, error));
+        progress(Progress::Frame);
+    }
+    if options.random > 0 {
+        std::fs::write(&random_csv, random_rows.join("\n") + "\n")
+            .with_context(|| format!("writing {}", random_csv.display()))?;
     }
     let corners_csv = options.out.join("corners.csv");
     std::fs::write(&corners_csv, corner_rows.join("\n") + "\n")
@@ -425,7 +501,7 @@ pub fn compare(
         groups,
         sequences,
         corners,
-        corner_margins,
+        random,
         full_median_s: crate::bench::median_f64(&mut full_times),
         full_solved,
         reduced_median_s: crate::bench::median_f64(&mut reduced_times),

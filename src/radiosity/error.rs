@@ -47,6 +47,11 @@ pub enum RadiosityError {
     /// The linear solve failed (a singular `I − ρF`: albedo ≥ 1 in a closed scene).
     #[error("radiosity solve: {0}")]
     Solve(String),
+    /// A reduced model's answer that is not to be trusted at these parameters
+    /// ([`super::estimate::Estimate::untrusted`]: its reduced operator's margin, or its error
+    /// estimate above the threshold).
+    #[error("the reduced radiosity is not to be trusted here: {0}")]
+    Untrusted(String),
     /// Writing a picture failed (the message names the file).
     #[error(transparent)]
     Picture(#[from] crate::picture::PictureError),

@@ -1,4 +1,4 @@
-//! The exact near field inside the reduced model (issue 28; seed 000 §8.2–8.3, Table 2).
+//! The exact near field in the training solves (issue 28; seed 000 §8.2–8.3, Table 2).
 //!
 //! Table 2's chain computes centroid form factors (Eq. 15 with the regularised near field,
 //! [`super::form_factor`]): a product of quadratic forms in `g`, which is what makes it
@@ -8,27 +8,20 @@
 //!
 //! ```text
 //! ΔF_t(i, j) = F_exact(i, j) − F_centroid(i, j)    visible pairs within `reach` face diameters
-//! Q[c·n + i, c·n + j, t] = ρᵢᶜ ΔF_t(i, j)            (E's layout, one slice per configuration)
-//! b = (I − E ⊗₂ p − Q ⊗₂ x)⁻¹ ⊗₁ e                  (Eq. 16 with the correction)
 //! ```
 //!
-//! with `x` Eq. 17's weights — the convex blend of training configurations the learned
-//! visibility already computes. The training solves use `F_centroid + ΔF_t`, so `B_b` is built
-//! from the corrected radiosity.
-//!
-//! **Why this is still a Galerkin projection.** `Q` is premultiplied with `B_b` on both of its
-//! `b` axes, exactly as `E` is, so the reduced system `Î − Ê ⊗₂ p̂ − Q̂ ⊗₂ x` *is*
-//! `B_bᵀ (I − ρ(F + Σₜ xₜ ΔF_t)) B_b`: the projection of the full operator whose near field is
-//! the blend of the training configurations' exact near fields, solved in the span of `B_b`.
-//! The approximation beyond the projection is that blend (at a training configuration `x` is
-//! its indicator and the near field is exact), the same interpolation Eq. 17 applies to the
-//! visibility. `x` has the identity basis, so the axis is never truncated.
+//! The training solves use `F_centroid + ΔF_t`, so `B_b` is built from the corrected radiosity,
+//! and the model carries it through the operator correction
+//! ([`super::operator_correction`]): the exact operator projected at each training
+//! configuration is made from these same form factors, so at a training configuration the
+//! reduced operator has the exact near field, and between them the blend of the training
+//! configurations' (Eq. 17's weights).
 //!
 //! Storage: `ΔF_t` is kept per configuration for the pairs `i < j` only (`ΔF_ji = ΔF_ij Aᵢ/Aⱼ`,
 //! since both form factors obey reciprocity), as `(k = n·i + j, f32)`: eight bytes a near pair
 //! (2.7 MB a configuration at 4,876 faces). f32 rounds the correction by 6·10⁻⁸ of itself, far
-//! below the accuracy sought; the training solve applies the rounded value, so what `Q` holds is
-//! exactly what the training radiosity was solved with.
+//! below the accuracy sought; the training solve applies the rounded value, so what the
+//! operator correction regenerates is exactly what the training radiosity was solved with.
 
 use std::sync::Arc;
 
@@ -38,8 +31,6 @@ use rayon::prelude::*;
 use super::form_factor::FormFactors;
 use super::mesh::FaceGeometry;
 use super::near_field::{exact_form_factor, is_near};
-use crate::reduce::TensorChunks;
-use crate::tensor::SparseTensor;
 
 /// `ΔF(i, j)` at `k = n·i + j` for the pairs `i < j` that have one (see the module documentation).
 pub type NearCorrection = Arc<[(u32, f32)]>;
@@ -78,48 +69,5 @@ pub fn apply(f: &mut FormFactors, correction: &[(u32, f32)], areas: &[f64]) {
         let (i, j, delta) = (k as usize / n, k as usize % n, f64::from(delta));
         f.values[n * i + j] += delta;
         f.values[n * j + i] += delta * areas[i] / areas[j];
-    }
-}
-
-/// The tensor `Q` of the module documentation, one chunk per training configuration.
-pub struct NearCorrectionTensor {
-    faces: usize,
-    albedo: Vec<[f64; 3]>,
-    /// Per configuration: its correction and its face areas (for `ΔF_ji`).
-    samples: Vec<(NearCorrection, Arc<[f64]>)>,
-}
-
-impl NearCorrectionTensor {
-    /// `Q` for faces of `albedo` and the configurations' corrections and areas.
-    pub fn new(albedo: Vec<[f64; 3]>, samples: Vec<(NearCorrection, Arc<[f64]>)>) -> Self {
-        Self { faces: albedo.len(), albedo, samples }
-    }
-}
-
-impl TensorChunks for NearCorrectionTensor {
-    fn shape(&self) -> Vec<usize> {
-        vec![3 * self.faces, 3 * self.faces, self.samples.len()]
-    }
-
-    fn chunks(&self) -> usize {
-        self.samples.len()
-    }
-
-    fn chunk(&self, t: usize) -> SparseTensor {
-        let n = self.faces;
-        let (correction, areas) = &self.samples[t];
-        let mut coords = Vec::with_capacity(correction.len() * 18);
-        let mut values = Vec::with_capacity(correction.len() * 6);
-        for &(k, delta) in correction.iter() {
-            let (i, j, delta) = (k as usize / n, k as usize % n, f64::from(delta));
-            for (row, col, d) in [(i, j, delta), (j, i, delta * areas[i] / areas[j])] {
-                for c in 0..3 {
-                    coords.extend([(c * n + row) as u32, (c * n + col) as u32, t as u32]);
-                    values.push(self.albedo[row][c] * d);
-                }
-            }
-        }
-        SparseTensor::from_coords("the near-field correction Q", &self.shape(), coords, values)
-            .expect("indices of faces and configurations")
     }
 }

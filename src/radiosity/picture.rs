@@ -8,6 +8,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use super::any_scene::AnyScene;
+use super::estimate::Estimate;
 use super::reduced::ReducedRadiosity;
 use super::render::{default_exposure, display_radiance, draw_picture, scene_vertices, Shading, Viewpoint};
 use super::{LightMode, RadiosityError};
@@ -31,6 +32,10 @@ pub struct PictureRequest {
     pub faces: Option<PathBuf>,
     /// The full solve's form factors (ignored with a model).
     pub form_factors: super::near_field::FormFactorMethod,
+    /// With a model: the estimated error above which the configuration is untrusted and not
+    /// drawn ([`Estimate::untrusted`]); `None` draws it whatever the estimate says (the
+    /// report still carries it).
+    pub trust_threshold: Option<f64>,
 }
 
 /// What [`write_picture`] drew.
@@ -46,10 +51,9 @@ pub struct PictureReport {
     pub solve_seconds: f64,
     /// The exposure used.
     pub exposure: f64,
-    /// With a model: the smallest real part of its reduced operator's eigenvalues at these
-    /// parameters ([`super::reduced::ReducedRadiosity::operator_margin`]; not positive: the
-    /// reduced radiosity has left the physics and is not to be trusted).
-    pub operator_margin: Option<f64>,
+    /// With a model: its error estimate and stability check at these parameters
+    /// ([`super::estimate`]).
+    pub estimate: Option<Estimate>,
 }
 
 /// Solves `scene` at `request.params` — with `model` when given (its lighting must match the
@@ -69,6 +73,7 @@ pub fn write_picture(
     let lights = space.lights().clone();
     let start = Instant::now();
     let mesh = space.mesh(&request.params)?;
+    let mut estimate = None;
     let (mesh, geometry, radiosity, how) = match model {
         None => {
             let s = super::full_radiosity_with(mesh, &lights, request.form_factors)?;
@@ -86,13 +91,16 @@ pub fn write_picture(
                     lights.mode
                 )));
             }
-            let (b, _) = model.evaluate(&mesh)?;
+            let (b, _, found) = model.evaluate_estimated(&mesh)?;
+            if let Some(why) = request.trust_threshold.and_then(|t| found.untrusted(t)) {
+                return Err(RadiosityError::Untrusted(why));
+            }
+            estimate = Some(found);
             let geometry = mesh.geometry();
-            (mesh, geometry, b, "reduced model loaded and evaluated in".to_string())
+            (mesh, geometry, b, "reduced model loaded and evaluated (with its error estimate) in".to_string())
         }
     };
     let solve_seconds = start.elapsed().as_secs_f64();
-    let operator_margin = model.map(|m| m.operator_margin(&mesh)).transpose()?;
     let radiance = display_radiance(&mesh, &geometry, &lights, &radiosity);
     let exposure = request.exposure.unwrap_or_else(|| default_exposure(&mesh, &geometry, &radiance));
     let vertices = scene_vertices(&mesh, &geometry, &radiance, request.shading);
@@ -109,14 +117,7 @@ pub fn write_picture(
     if let Some(table) = &request.faces {
         super::face_table::write(table, &mesh, &geometry, &radiosity)?;
     }
-    Ok(PictureReport {
-        faces: mesh.len(),
-        lights: lights.mode,
-        how,
-        solve_seconds,
-        exposure,
-        operator_margin,
-    })
+    Ok(PictureReport { faces: mesh.len(), lights: lights.mode, how, solve_seconds, exposure, estimate })
 }
 
 /// The exposure a picture of `scene` at `params` gets by default: [`default_exposure`] of its

@@ -15,6 +15,7 @@ use std::time::Instant;
 use safetensors::tensor::{Dtype, SafeTensors, TensorView};
 
 use super::error::RadiosityError;
+use super::estimate::{sample_spacing, stability, CrossValidation, Estimate};
 use super::form_factor::{facing, unoccluded_form_factor, NearField};
 use super::lighting::sky_radiance;
 use super::mesh::SceneMesh;
@@ -32,6 +33,19 @@ pub struct ReducedRadiosity {
     emission_hat: Vec<f64>,
     faces: usize,
     sky: Option<SkyLight>,
+    trained_near: TrainedNearField,
+    /// The error estimate's offline part ([`super::estimate`]); `None` for models trained
+    /// without it.
+    validation: Option<CrossValidation>,
+}
+
+/// The form factors a model's training solves used: what its full-space ground truth is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TrainedNearField {
+    /// Centroid form factors (Eq. 15 with the regularised near field): Table 2 as printed.
+    Centroid,
+    /// The exact polygon form factors of near pairs ([`super::near_correction`]).
+    Exact,
 }
 
 /// The sky's direct light, computed at run time (see the module documentation).
@@ -97,6 +111,8 @@ pub struct ReducedTimes {
     pub lift: f64,
     /// The sky's direct light (sky mode only).
     pub direct: f64,
+    /// The error estimate and the stability check ([`ReducedRadiosity::evaluate_estimated`]).
+    pub estimate: f64,
 }
 
 impl ReducedRadiosity {
@@ -107,6 +123,7 @@ impl ReducedRadiosity {
         emission_hat: Vec<f64>,
         faces: usize,
         sky: Option<SkyLight>,
+        trained_near: TrainedNearField,
     ) -> Result<Self, RadiosityError> {
         let bad = |m: String| RadiosityError::Solve(format!("reduced radiosity model: {m}"));
         model.check().map_err(|e| bad(e.to_string()))?;
@@ -120,7 +137,7 @@ impl ReducedRadiosity {
         if let Some(q) = model.tensor("Q") {
             if q.shape().get(2) != Some(&t) {
                 return Err(bad(format!(
-                    "the near-field correction has {:?} configurations, the learned visibility {t}",
+                    "the operator correction has {:?} configurations, the learned visibility {t}",
                     q.shape().get(2)
                 )));
             }
@@ -133,7 +150,73 @@ impl ReducedRadiosity {
                 )));
             }
         }
-        Ok(Self { model, visibility, emission_hat, faces, sky })
+        Ok(Self { model, visibility, emission_hat, faces, sky, trained_near, validation: None })
+    }
+
+    /// The model with the error estimate's offline part ([`super::estimate`]), checked to have
+    /// one value per training configuration.
+    pub fn with_estimate(mut self, validation: CrossValidation) -> Result<Self, RadiosityError> {
+        let t = self.visibility.geometry().shape()[1];
+        if validation.samples() != t {
+            return Err(RadiosityError::Solve(format!(
+                "the error estimate has {} samples, the learned visibility {t}",
+                validation.samples()
+            )));
+        }
+        self.validation = Some(validation);
+        Ok(self)
+    }
+
+    /// The error estimate's offline part, if the model has one.
+    pub fn cross_validation(&self) -> Option<&CrossValidation> {
+        self.validation.as_ref()
+    }
+
+    /// The error estimate's offline part for this model ([`super::estimate`]): each training
+    /// configuration evaluated with itself left out of Eq. 17 against its own full solve, the
+    /// basis's floor there, and the samples' spacing. Errors are over the faces `receiving`.
+    /// A sky-lit model's left-out evaluation takes the configuration's own direct light
+    /// (projected), not the run time's blend of visibility bits.
+    pub fn cross_validate(
+        &self,
+        configurations: &[super::train::Configuration],
+        receiving: &[usize],
+    ) -> Result<CrossValidation, RadiosityError> {
+        use rayon::prelude::*;
+        let err = |e: crate::reduce::ReduceError| RadiosityError::Solve(e.to_string());
+        let basis = self.model.basis("b").ok_or_else(|| RadiosityError::Solve("no basis `b`".into()))?;
+        let results: Vec<(f64, f64)> = configurations
+            .par_iter()
+            .enumerate()
+            .map(|(t, c)| {
+                let ghat = self.model.project_input("g", &c.g).map_err(err)?;
+                let (vhat, x) = self.visibility.predict_without(&ghat, Some(t));
+                let ehat = match &self.sky {
+                    Some(_) => basis.project(&super::chain::stack_channels(&c.emission)),
+                    None => self.emission_hat.clone(),
+                };
+                let (bhat, _) = self.solve_reduced(&ghat, &vhat, &x, &ehat)?;
+                let b = self.unstack(&basis.lift(&bhat));
+                let areas = &c.geometry.areas;
+                let left_out = super::compare::relative_error_over(&b, &c.radiosity, areas, receiving);
+                let floor = super::compare::relative_error_over(
+                    &self.best_fit(&c.radiosity),
+                    &c.radiosity,
+                    areas,
+                    receiving,
+                );
+                Ok((left_out, floor))
+            })
+            .collect::<Result<_, RadiosityError>>()?;
+        let (left_out, floor) = results.into_iter().unzip();
+        CrossValidation::new(left_out, floor, sample_spacing(self.visibility.geometry()))
+            .map_err(|e| RadiosityError::Solve(format!("the error estimate: {e}")))
+    }
+
+    /// Per-face R, G, B from a vector stacked by channel.
+    fn unstack(&self, b: &[f64]) -> Vec<Rgb> {
+        let n = self.faces;
+        (0..n).map(|i| [b[i], b[n + i], b[2 * n + i]]).collect()
     }
 
     /// The core's reduced model.
@@ -164,10 +247,15 @@ impl ReducedRadiosity {
             .collect()
     }
 
-    /// Whether the model carries the exact near field as a correction
-    /// ([`super::near_correction`]).
-    pub fn has_near_correction(&self) -> bool {
+    /// Whether the model's reduced operator is corrected at the training configurations
+    /// ([`super::operator_correction`]).
+    pub fn has_operator_correction(&self) -> bool {
         self.model.tensor("Q").is_some()
+    }
+
+    /// The form factors the model's training solves used (its ground truth).
+    pub fn trained_near_field(&self) -> TrainedNearField {
+        self.trained_near
     }
 
     /// How the model was trained to be lit.
@@ -179,10 +267,8 @@ impl ReducedRadiosity {
         }
     }
 
-    /// Radiosity per face of `mesh` (the scene's topology at some parameters), and where the
-    /// time went.
-    pub fn evaluate(&self, mesh: &SceneMesh) -> Result<(Vec<Rgb>, ReducedTimes), RadiosityError> {
-        let err = |e: crate::reduce::ReduceError| RadiosityError::Solve(e.to_string());
+    /// Refuses a mesh of another face count than the model's.
+    fn check_faces(&self, mesh: &SceneMesh) -> Result<(), RadiosityError> {
         if mesh.len() != self.faces {
             return Err(RadiosityError::Mesh(format!(
                 "the model has {} faces, the mesh {}",
@@ -190,23 +276,36 @@ impl ReducedRadiosity {
                 mesh.len()
             )));
         }
+        Ok(())
+    }
+
+    /// `ê`: the area lights' stored projection, or the sky's direct light at `mesh` (Eq. 17's
+    /// weights `x`) projected on `B_b`.
+    fn reduced_emission(&self, mesh: &SceneMesh, x: &[f64]) -> Result<Vec<f64>, RadiosityError> {
+        match &self.sky {
+            Some(sky) => {
+                let e = sky.emission(mesh, x);
+                let basis =
+                    self.model.basis("b").ok_or_else(|| RadiosityError::Solve("no basis `b`".into()))?;
+                Ok(basis.project(&super::chain::stack_channels(&e)))
+            }
+            None => Ok(self.emission_hat.clone()),
+        }
+    }
+
+    /// Radiosity per face of `mesh` (the scene's topology at some parameters), and where the
+    /// time went.
+    pub fn evaluate(&self, mesh: &SceneMesh) -> Result<(Vec<Rgb>, ReducedTimes), RadiosityError> {
+        let err = |e: crate::reduce::ReduceError| RadiosityError::Solve(e.to_string());
+        self.check_faces(mesh)?;
         let mut times = ReducedTimes::default();
         let t0 = Instant::now();
         let ghat = self.model.project_input("g", &mesh.g()).map_err(err)?;
         let t1 = Instant::now();
         let (vhat, x) = self.visibility.predict(&ghat);
         let t2 = Instant::now();
-        let sky_hat;
-        let ehat = match &self.sky {
-            Some(sky) => {
-                let e = sky.emission(mesh, &x);
-                let basis =
-                    self.model.basis("b").ok_or_else(|| RadiosityError::Solve("no basis `b`".into()))?;
-                sky_hat = basis.project(&super::chain::stack_channels(&e));
-                sky_hat.as_slice()
-            }
-            None => self.emission_hat.as_slice(),
-        };
+        let ehat = self.reduced_emission(mesh, &x)?;
+        let ehat = ehat.as_slice();
         times.direct = t2.elapsed().as_secs_f64();
         let t2 = Instant::now();
         let mut inputs = self.chain_inputs(&ghat, &vhat, &x);
@@ -223,7 +322,16 @@ impl ReducedRadiosity {
         Ok(((0..n).map(|i| [b[i], b[n + i], b[2 * n + i]]).collect(), times))
     }
 
-    /// The chain's reduced inputs `ĝ`, `v̂` and, with the near-field correction, Eq. 17's
+    /// `b` projected on the radiosity basis and lifted back, `B_b B_bᵀ b`: the closest any
+    /// radiosity of the model can come to `b` (per face, R, G, B).
+    pub fn best_fit(&self, b: &[Rgb]) -> Vec<Rgb> {
+        let n = self.faces;
+        let Some(basis) = self.model.basis("b") else { return vec![[f64::NAN; 3]; b.len()] };
+        let fit = basis.lift(&basis.project(&super::chain::stack_channels(b)));
+        (0..n).map(|i| [fit[i], fit[n + i], fit[2 * n + i]]).collect()
+    }
+
+    /// The chain's reduced inputs `ĝ`, `v̂` and, with the operator correction, Eq. 17's
     /// weights `x` (the emission `ê` is added by the caller that needs it).
     fn chain_inputs<'a>(
         &self,
@@ -232,7 +340,7 @@ impl ReducedRadiosity {
         x: &'a [f64],
     ) -> BTreeMap<&'static str, &'a [f64]> {
         let mut inputs: BTreeMap<&str, &[f64]> = [("g", ghat), ("v", vhat)].into();
-        if self.has_near_correction() {
+        if self.has_operator_correction() {
             inputs.insert("x", x);
         }
         inputs
@@ -245,7 +353,7 @@ impl ReducedRadiosity {
         let err = |e: crate::reduce::ReduceError| RadiosityError::Solve(e.to_string());
         let ghat = self.model.project_input("g", &mesh.g()).map_err(err)?;
         let (vhat, x) = self.visibility.predict(&ghat);
-        let expr = super::chain::radiosity_operator(self.has_near_correction());
+        let expr = super::chain::radiosity_operator(self.has_operator_correction());
         self.model.evaluate_expression(&expr, &self.chain_inputs(&ghat, &vhat, &x)).map_err(err)
     }
 
@@ -254,20 +362,87 @@ impl ReducedRadiosity {
     /// below 1, rows of F summing to at most 1); a reduced operator whose smallest real part
     /// is near 0 or below has left the physics, and its radiosity is not to be trusted.
     pub fn operator_margin(&self, mesh: &SceneMesh) -> Result<f64, RadiosityError> {
-        let m = self.reduced_operator(mesh)?;
-        let n = m.shape()[0];
-        let a = faer::Mat::<f64>::from_fn(n, n, |i, j| m.data()[i * n + j]);
-        let values = a
-            .eigenvalues()
-            .map_err(|e| RadiosityError::Solve(format!("the reduced operator's eigenvalues: {e:?}")))?;
-        Ok(values.iter().map(|z| z.re).fold(f64::INFINITY, f64::min))
+        Ok(stability(&self.reduced_operator(mesh)?)?.1)
+    }
+
+    /// Eq. 16 on the reduced inputs: the chain's reduced form factors `p̂` (Table 2), the
+    /// reduced operator `M̂ = Î − Ê ⊗₂ p̂ (− Q̂ ⊗₂ x)` formed from them, and `b̂ = M̂⁻¹ ê` by LU —
+    /// the model's composition ([`super::chain::radiosity_corrected`]) with `M̂` kept for the
+    /// stability check. Returns `b̂` and `M̂`.
+    fn solve_reduced(
+        &self,
+        ghat: &[f64],
+        vhat: &[f64],
+        x: &[f64],
+        ehat: &[f64],
+    ) -> Result<(Vec<f64>, Tensor), RadiosityError> {
+        let err = |e: crate::reduce::ReduceError| RadiosityError::Solve(e.to_string());
+        let tensor_err = |e: crate::tensor::TensorError| RadiosityError::Solve(e.to_string());
+        let inputs = self.chain_inputs(ghat, vhat, x);
+        let phat = self.model.evaluate_expression(&super::chain::form_factors(), &inputs).map_err(err)?;
+        let tensor = |name: &str| {
+            self.model
+                .tensor(name)
+                .ok_or_else(|| RadiosityError::Solve(format!("the model has no tensor {name}")))
+        };
+        let mut operator = tensor("I")?.clone();
+        let reflection = tensor("E")?.contract_axes(&[(2, phat.data())]).map_err(tensor_err)?;
+        for (o, k) in operator.data_mut().iter_mut().zip(reflection.data()) {
+            *o -= k;
+        }
+        if let Some(q) = self.model.tensor("Q") {
+            let correction = q.contract_axes(&[(2, x)]).map_err(tensor_err)?;
+            for (o, c) in operator.data_mut().iter_mut().zip(correction.data()) {
+                *o -= c;
+            }
+        }
+        let bhat = crate::tensor::solve("the reduced operator M̂", &operator, ehat).map_err(tensor_err)?;
+        Ok((bhat, operator))
+    }
+
+    /// Radiosity per face of `mesh` as [`Self::evaluate`] computes it, with its error estimate
+    /// and stability check ([`super::estimate`]). `estimate.error` is `NaN` for a model
+    /// trained without the estimate (the margin is checked all the same).
+    pub fn evaluate_estimated(
+        &self,
+        mesh: &SceneMesh,
+    ) -> Result<(Vec<Rgb>, ReducedTimes, Estimate), RadiosityError> {
+        let err = |e: crate::reduce::ReduceError| RadiosityError::Solve(e.to_string());
+        self.check_faces(mesh)?;
+        let mut times = ReducedTimes::default();
+        let t0 = Instant::now();
+        let ghat = self.model.project_input("g", &mesh.g()).map_err(err)?;
+        let t1 = Instant::now();
+        let (vhat, x) = self.visibility.predict(&ghat);
+        let t2 = Instant::now();
+        let ehat = self.reduced_emission(mesh, &x)?;
+        times.direct = t2.elapsed().as_secs_f64();
+        let t2 = Instant::now();
+        let (bhat, operator) = self.solve_reduced(&ghat, &vhat, &x, &ehat)?;
+        let t3 = Instant::now();
+        let (stability, margin) = stability(&operator)?;
+        let error = match &self.validation {
+            Some(v) => v.estimate(&ghat, &x, self.visibility.geometry()),
+            None => f64::NAN,
+        };
+        let t4 = Instant::now();
+        let b = self.model.lift(&bhat).map_err(err)?;
+        times.project = (t1 - t0).as_secs_f64();
+        times.visibility = (t2 - t1).as_secs_f64();
+        times.chain = (t3 - t2).as_secs_f64();
+        times.estimate = (t4 - t3).as_secs_f64();
+        times.lift = t4.elapsed().as_secs_f64();
+        Ok((self.unstack(&b), times, Estimate { error, stability, margin }))
     }
 }
 
 /// The `format` metadata of a reduced radiosity's learned-visibility file.
 pub const FORMAT: &str = "galerkin-reduced-radiosity";
-/// Its version.
-pub const VERSION: u32 = 1;
+/// Its version (2: the training's near field is recorded; a version-1 file carrying `Q` was
+/// trained with the exact near field, one without it with centroid form factors. 3: the error
+/// estimate's offline part, `left_out_error`, `basis_floor` and `sample_spacing`, when training
+/// made it).
+pub const VERSION: u32 = 3;
 
 impl ReducedRadiosity {
     /// Writes `dir/model.safetensors` (the core's reduced model: Table 2's premultiplied
@@ -297,8 +472,16 @@ impl ReducedRadiosity {
             ("format".to_string(), FORMAT.to_string()),
             ("version".to_string(), VERSION.to_string()),
             ("faces".to_string(), self.faces.to_string()),
+            ("trained_near_field".to_string(), format!("{:?}", self.trained_near)),
         ]
         .into();
+        if let Some(v) = &self.validation {
+            for (name, series) in
+                [("left_out_error", &v.left_out), ("basis_floor", &v.floor), ("sample_spacing", &v.spacing)]
+            {
+                entries.push((name, Dtype::F64, bytes(series), vec![series.len()]));
+            }
+        }
         if let Some(sky) = &self.sky {
             let openings: Vec<f64> = sky.openings.iter().map(|&o| f64::from(o)).collect();
             entries.push(("sky_openings", Dtype::F64, bytes(&openings), vec![openings.len()]));
@@ -399,7 +582,26 @@ impl ReducedRadiosity {
                 Some(SkyLight { lights, openings, bits, near })
             }
         };
-        Self::new(model, learned, emission, faces, sky).map_err(|e| fail(e.to_string()))
+        let trained_near = match meta.get("trained_near_field").map(String::as_str) {
+            Some("Exact") => TrainedNearField::Exact,
+            Some("Centroid") => TrainedNearField::Centroid,
+            Some(other) => return Err(fail(format!("unknown trained_near_field {other:?}"))),
+            // Version 1: the near-field correction was the only Q.
+            None if model.tensor("Q").is_some() => TrainedNearField::Exact,
+            None => TrainedNearField::Centroid,
+        };
+        let loaded =
+            Self::new(model, learned, emission, faces, sky, trained_near).map_err(|e| fail(e.to_string()))?;
+        if file.names().iter().all(|n| *n != "left_out_error") {
+            return Ok(loaded);
+        }
+        let validation = CrossValidation::new(
+            read("left_out_error")?.into_data(),
+            read("basis_floor")?.into_data(),
+            read("sample_spacing")?.into_data(),
+        )
+        .map_err(&fail)?;
+        loaded.with_estimate(validation).map_err(|e| fail(e.to_string()))
     }
 }
 

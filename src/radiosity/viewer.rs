@@ -7,6 +7,7 @@
 //! exposure, space plays and pauses a sweep through the parameters. The title shows the mode,
 //! the parameters (the chosen one in brackets), the solve's time and the frame rate.
 
+use super::estimate::{Estimate, DEFAULT_THRESHOLD};
 use std::time::Instant;
 
 use anyhow::Result;
@@ -57,6 +58,8 @@ pub struct RadiosityContent {
     fps: f64,
     frames: u64,
     mesh_faces: usize,
+    /// The reduced solution's error estimate and stability check (reduced mode).
+    estimate: Option<Estimate>,
 }
 
 impl RadiosityContent {
@@ -90,6 +93,7 @@ impl RadiosityContent {
             fps: 0.0,
             frames: 0,
             mesh_faces: mesh.len(),
+            estimate: None,
         })
     }
 
@@ -99,11 +103,13 @@ impl RadiosityContent {
         let mesh: SceneMesh = self.scene.space().mesh(&self.params)?;
         let (mesh, geometry, b) = match (&self.model, self.reduced) {
             (Some(model), true) => {
-                let (b, _) = model.evaluate(&mesh)?;
+                let (b, _, estimate) = model.evaluate_estimated(&mesh)?;
+                self.estimate = Some(estimate);
                 let geometry = mesh.geometry();
                 (mesh, geometry, b)
             }
             _ => {
+                self.estimate = None;
                 let s = full_radiosity_of(mesh, self.scene.space().lights())?;
                 (s.mesh, s.geometry, s.radiosity)
             }
@@ -132,8 +138,17 @@ impl ViewerContent for RadiosityContent {
         let p: Vec<String> = (self.names.iter().zip(&self.params).enumerate())
             .map(|(a, (n, v))| if a == self.chosen { format!("[{n} {v:.2}]") } else { format!("{n} {v:.2}") })
             .collect();
+        // The reduced radiosity's trust, by name: its estimated error, or why it is untrusted.
+        let trust = match &self.estimate {
+            Some(e) => match e.untrusted(DEFAULT_THRESHOLD) {
+                Some(why) => format!(" — UNTRUSTED: {why}"),
+                None if e.error.is_finite() => format!(", est. error {:.1} %", 100.0 * e.error),
+                None => String::new(),
+            },
+            None => String::new(),
+        };
         format!(
-            "galerkin radiosity — {} ({:.1} ms) — {} — {:.0} FPS",
+            "galerkin radiosity — {} ({:.1} ms{trust}) — {} — {:.0} FPS",
             if self.reduced { "reduced" } else { "full" },
             self.solve_ms,
             p.join(", "),

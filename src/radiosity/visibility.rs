@@ -96,6 +96,13 @@ impl LearnedVisibility {
     /// by the Lawson–Hanson active set in normal-equation form (Bro & de Jong's FNNLS), whose
     /// inner solves are on the passive set only: independent of the mesh.
     pub fn weights(&self, ghat: &[f64]) -> Vec<f64> {
+        self.weights_without(ghat, None)
+    }
+
+    /// [`Self::weights`] with training configuration `left_out` not a candidate (its weight
+    /// 0): Eq. 17 as if it had not been trained on — the error estimate's cross-validation
+    /// ([`super::estimate`]).
+    pub fn weights_without(&self, ghat: &[f64], left_out: Option<usize>) -> Vec<f64> {
         let (m, t) = (self.geometry.shape()[0], self.geometry.shape()[1]);
         let a = self.geometry.data();
         // c_j = ĝ·ĝ_j, gram_ij = ĝ_i·ĝ_j.
@@ -109,8 +116,8 @@ impl LearnedVisibility {
             Eq17::Local => (CANDIDATES, LOCALITY),
             Eq17::Printed => (t, 0.0),
         };
-        let mut order: Vec<usize> = (0..t).collect();
-        if t > candidates {
+        let mut order: Vec<usize> = (0..t).filter(|&i| Some(i) != left_out).collect();
+        if order.len() > candidates {
             order.select_nth_unstable_by(candidates, |&p, &q| d[p].total_cmp(&d[q]));
             order.truncate(candidates);
         }
@@ -150,7 +157,13 @@ impl LearnedVisibility {
 
     /// `v̂ = (B_vᵀ V) x` for reduced geometry `ghat`, and the weights.
     pub fn predict(&self, ghat: &[f64]) -> (Vec<f64>, Vec<f64>) {
-        let x = self.weights(ghat);
+        self.predict_without(ghat, None)
+    }
+
+    /// [`Self::predict`] with training configuration `left_out` not a candidate
+    /// ([`Self::weights_without`]).
+    pub fn predict_without(&self, ghat: &[f64], left_out: Option<usize>) -> (Vec<f64>, Vec<f64>) {
+        let x = self.weights_without(ghat, left_out);
         let (mv, t) = (self.visibility.shape()[0], self.visibility.shape()[1]);
         let v = self.visibility.data();
         let vhat = (0..mv).map(|i| (0..t).map(|j| v[i * t + j] * x[j]).sum()).collect();

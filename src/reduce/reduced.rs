@@ -79,6 +79,31 @@ impl ReducedModel {
         self.tensors.insert(name.to_string(), ReducedTensor { axes, data });
     }
 
+    /// Replaces the composition by `output`, which may use `tensor` — a reduced tensor with no
+    /// full-space tensor behind it (computed in the reduced space, e.g. a correction fitted at
+    /// training points) — and `input`, an input always given reduced (its basis is not kept).
+    /// Checked like a premultiplied model: on an error the model is left unchanged.
+    pub(crate) fn extend(
+        &mut self,
+        output: Expr,
+        tensor: (&str, &[&str], Tensor),
+        input: (&str, &str),
+    ) -> Result<(), ReduceError> {
+        let mut next = self.clone();
+        next.insert_tensor(tensor.0, tensor.1, tensor.2);
+        next.inputs.insert(input.0.to_string(), input.1.to_string());
+        next.output = output;
+        let axes = next.check()?;
+        if axes != self.output_axes {
+            return Err(ReduceError::BadContraction {
+                what: next.output.to_string(),
+                detail: format!("its axes {axes:?} are not the model's {:?}", self.output_axes),
+            });
+        }
+        *self = next;
+        Ok(())
+    }
+
     /// Removes a reduced tensor and its basis, if present.
     pub(crate) fn remove(&mut self, tensor: &str, basis: Option<&str>) {
         self.tensors.remove(tensor);
