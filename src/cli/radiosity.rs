@@ -92,6 +92,25 @@ pub struct TrainArgs {
     /// --near-field centroid).
     #[arg(long)]
     pub no_operator_correction: bool,
+    /// Greedy training: start from every axis's extremes and the box's corners, then add full
+    /// solves where the model's own error estimate is worst over --candidates random
+    /// configurations (and the corners), --batch per round, retraining each round, until the
+    /// worst estimate is below --tolerance or --budget solves are spent (--samples is not
+    /// used). Writes greedy.csv and greedy.png beside the model.
+    #[arg(long)]
+    pub greedy: bool,
+    /// Greedy: stop once the worst estimated error over the candidates is below this fraction.
+    #[arg(long, default_value_t = 0.02, value_parser = positive_fraction, requires = "greedy")]
+    pub tolerance: f64,
+    /// Greedy: most full solves in all.
+    #[arg(long, default_value_t = 540, requires = "greedy", value_parser = crate::cli::args::count_up_to(crate::cli::args::MAX_FRAMES))]
+    pub budget: usize,
+    /// Greedy: random candidate configurations the estimate is evaluated at each round.
+    #[arg(long, default_value_t = 2000, requires = "greedy", value_parser = crate::cli::args::count_up_to(galerkin::radiosity::effectivity::MAX_RANDOM))]
+    pub candidates: usize,
+    /// Greedy: full solves added per round (each round retrains).
+    #[arg(long, default_value_t = 20, requires = "greedy", value_parser = crate::cli::args::count_up_to(crate::cli::args::MAX_FRAMES))]
+    pub batch: usize,
 }
 
 /// Arguments of `galerkin radiosity view`.
@@ -371,6 +390,9 @@ fn train(args: &TrainArgs, ranks: &dyn Communicator) -> Result<()> {
         },
         ..TrainOptions::default()
     };
+    if args.greedy {
+        return train_greedy(args, &scene, &options, ranks);
+    }
     let bars = std::sync::Mutex::new(std::collections::BTreeMap::<String, indicatif::ProgressBar>::new());
     let trained = train_and_save(
         scene.space(),
@@ -429,6 +451,65 @@ fn train(args: &TrainArgs, ranks: &dyn Communicator) -> Result<()> {
         println!("the training solves used the exact near field (the correction carries it into the model)");
     }
     println!("model size on disk: {:.1} MB", t.bytes_on_disk as f64 / 1e6);
+    Ok(())
+}
+
+/// `galerkin radiosity train --greedy` ([`galerkin::radiosity::greedy::greedy_train`]).
+fn train_greedy(
+    args: &TrainArgs,
+    scene: &AnyScene,
+    options: &TrainOptions,
+    ranks: &dyn Communicator,
+) -> Result<()> {
+    use galerkin::radiosity::greedy::{greedy_train, write_rounds, GreedyOptions};
+    if ranks.size() > 1 {
+        bail!(
+            "--greedy runs on one rank (its rounds retrain on the samples so far); start it without mpirun"
+        );
+    }
+    let greedy = GreedyOptions {
+        tolerance: args.tolerance,
+        budget: args.budget,
+        candidates: args.candidates,
+        batch: args.batch,
+        seed: args.seed.wrapping_add(1),
+    };
+    let bar = crate::progress_bar(args.budget as u64, "greedy training: full solves");
+    let start = std::time::Instant::now();
+    let result = greedy_train(scene.space(), options, &greedy, &|stage, done, _| {
+        if stage == "greedy" {
+            bar.set_position(done);
+        }
+    });
+    bar.finish();
+    let g = result.with_context(|| format!("greedy training of {}", args.scene.display()))?;
+    g.model.save(&args.out)?;
+    let (csv, plot) = write_rounds(&args.out, &scene.names(), &g.rounds)?;
+    println!("| round | full solves | worst estimate | median estimate | unstable candidates | seconds |\n|---:|---:|---:|---:|---:|---:|");
+    for (k, r) in g.rounds.iter().enumerate() {
+        println!(
+            "| {} | {} | {:.2} % | {:.2} % | {} | {:.1} |",
+            k + 1,
+            r.solves,
+            100.0 * r.worst_estimate,
+            100.0 * r.median_estimate,
+            r.unstable,
+            r.seconds
+        );
+    }
+    let last = g.rounds.last().map_or(f64::NAN, |r| r.worst_estimate);
+    println!(
+        "radiosity train --greedy: {} faces, {} full solves, worst estimated error {:.2} % ({} the tolerance {:.2} %), {:.1} s → {} ({} and {})",
+        g.model.faces(),
+        g.configurations.len(),
+        100.0 * last,
+        if last < args.tolerance { "below" } else { "not below: the budget ran out before" },
+        100.0 * args.tolerance,
+        start.elapsed().as_secs_f64(),
+        args.out.display(),
+        csv.display(),
+        plot.display()
+    );
     Ok(())
 }
 

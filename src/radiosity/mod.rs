@@ -26,6 +26,7 @@ pub mod face_table;
 pub mod form_factor;
 pub mod full_frames;
 pub mod gpu;
+pub mod greedy;
 pub mod lighting;
 pub mod mesh;
 pub mod near_correction;
