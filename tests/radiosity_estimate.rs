@@ -8,12 +8,12 @@
 use std::path::Path;
 
 use galerkin::radiosity::compare::relative_error_over;
-use galerkin::radiosity::effectivity::{random_parameters, EFFECTIVITY_HIGH, EFFECTIVITY_LOW};
 use galerkin::radiosity::estimate::{sample_spacing, CrossValidation};
 use galerkin::radiosity::near_field::{FormFactorMethod, DEFAULT_REACH};
 use galerkin::radiosity::reduced::ReducedRadiosity;
 use galerkin::radiosity::train::{sample_parameters, solve_configurations, train, DesignSpace, TrainOptions};
 use galerkin::radiosity::SceneSpec;
+use galerkin::reduce::effectivity::{random_parameters, EFFECTIVITY_HIGH, EFFECTIVITY_LOW};
 use galerkin::tensor::Tensor;
 
 const SMALL: &str = include_str!("../scenes/radiosity/two_rooms_small.toml");
@@ -24,7 +24,7 @@ fn plain_estimate(v: &CrossValidation, ghat: &[f64], x: &[f64], geometry: &Tenso
     let mut sum = 0.0;
     for s in 0..t {
         let d: f64 = (0..m).map(|i| (ghat[i] - geometry.data()[i * t + s]).powi(2)).sum::<f64>().sqrt();
-        sum += x[s] * (v.floor[s] + v.left_out[s] * (d / v.spacing[s]).min(1.0));
+        sum += x[s] * (v.floor[s] + v.left_out[s] * (d / v.spacing[s]).sqrt().min(2.0));
     }
     sum
 }

@@ -5,9 +5,10 @@
 
 use std::path::Path;
 
-use galerkin::radiosity::greedy::{greedy_train, starting_samples, write_rounds, GreedyOptions};
+use galerkin::radiosity::greedy::{greedy_train, starting_samples};
 use galerkin::radiosity::train::{box_corners, TrainOptions};
 use galerkin::radiosity::SceneSpec;
+use galerkin::reduce::greedy::{write_rounds, GreedyOptions};
 
 const SMALL: &str = include_str!("../scenes/radiosity/two_rooms_small.toml");
 

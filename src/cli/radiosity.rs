@@ -6,13 +6,13 @@ use anyhow::{bail, Context, Result};
 use clap::{Args, Subcommand};
 use galerkin::gpu::{Gpu, GpuDesc};
 use galerkin::radiosity::any_scene::AnyScene;
-use galerkin::radiosity::effectivity::Effectivity;
 use galerkin::radiosity::near_field::FormFactorMethod;
 use galerkin::radiosity::picture::{write_picture, PictureRequest};
 use galerkin::radiosity::reduced::ReducedRadiosity;
 use galerkin::radiosity::render::{Shading, Viewpoint};
 use galerkin::radiosity::train::{train_and_save, TrainOptions};
 use galerkin::radiosity::LightMode;
+use galerkin::reduce::effectivity::Effectivity;
 use galerkin::reduce::Communicator;
 
 /// `galerkin radiosity` subcommands.
@@ -106,7 +106,7 @@ pub struct TrainArgs {
     #[arg(long, default_value_t = 540, requires = "greedy", value_parser = crate::cli::args::count_up_to(crate::cli::args::MAX_FRAMES))]
     pub budget: usize,
     /// Greedy: random candidate configurations the estimate is evaluated at each round.
-    #[arg(long, default_value_t = 2000, requires = "greedy", value_parser = crate::cli::args::count_up_to(galerkin::radiosity::effectivity::MAX_RANDOM))]
+    #[arg(long, default_value_t = 2000, requires = "greedy", value_parser = crate::cli::args::count_up_to(galerkin::reduce::effectivity::MAX_RANDOM))]
     pub candidates: usize,
     /// Greedy: full solves added per round (each round retrains).
     #[arg(long, default_value_t = 20, requires = "greedy", value_parser = crate::cli::args::count_up_to(crate::cli::args::MAX_FRAMES))]
@@ -177,7 +177,7 @@ pub struct CompareArgs {
     pub full_near_field: Option<String>,
     /// Also solve this many configurations drawn uniformly from the design space, full and
     /// reduced (random.csv): the error and the model's estimate of it away from the sequences.
-    #[arg(long, default_value_t = 0, value_parser = crate::cli::args::count_up_to(galerkin::radiosity::effectivity::MAX_RANDOM))]
+    #[arg(long, default_value_t = 0, value_parser = crate::cli::args::count_up_to(galerkin::reduce::effectivity::MAX_RANDOM))]
     pub random: usize,
     /// The random configurations' seed (unrelated to training's sampling).
     #[arg(long, default_value_t = 2026)]
@@ -461,7 +461,8 @@ fn train_greedy(
     options: &TrainOptions,
     ranks: &dyn Communicator,
 ) -> Result<()> {
-    use galerkin::radiosity::greedy::{greedy_train, write_rounds, GreedyOptions};
+    use galerkin::radiosity::greedy::greedy_train;
+    use galerkin::reduce::greedy::{write_rounds, GreedyOptions};
     if ranks.size() > 1 {
         bail!(
             "--greedy runs on one rank (its rounds retrain on the samples so far); start it without mpirun"
@@ -484,7 +485,7 @@ fn train_greedy(
     bar.finish();
     let g = result.with_context(|| format!("greedy training of {}", args.scene.display()))?;
     g.model.save(&args.out)?;
-    let (csv, plot) = write_rounds(&args.out, &scene.names(), &g.rounds)?;
+    let (csv, plot) = write_rounds(&args.out, &scene.names(), &g.rounds).map_err(anyhow::Error::msg)?;
     println!("| round | full solves | worst estimate | median estimate | unstable candidates | seconds |\n|---:|---:|---:|---:|---:|---:|");
     for (k, r) in g.rounds.iter().enumerate() {
         println!(
@@ -642,10 +643,12 @@ fn compare(args: &CompareArgs) -> Result<()> {
         );
     }
     let all_frames = || r.sequences.iter().flat_map(|s| &s.errors);
+    // (estimate, true error) over the receiving surfaces.
+    let pair = |e: &compare::FrameError| (e.estimate.error, e.groups[0]);
     for (what, effectivity) in [
-        ("frames", Effectivity::of(all_frames())),
-        ("corners", Effectivity::of(r.corners.iter().map(|(_, e)| e))),
-        ("random configurations", Effectivity::of(r.random.iter().map(|(_, e)| e))),
+        ("frames", Effectivity::of(all_frames().map(pair))),
+        ("corners", Effectivity::of(r.corners.iter().map(|(_, e)| pair(e)))),
+        ("random configurations", Effectivity::of(r.random.iter().map(|(_, e)| pair(e)))),
     ] {
         match effectivity {
             Some(e) => println!("error estimate, {what}: {e}"),

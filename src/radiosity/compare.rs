@@ -125,13 +125,6 @@ pub struct FrameError {
     pub estimate: Estimate,
 }
 
-impl FrameError {
-    /// The estimate's effectivity: estimated ÷ true error over the receiving surfaces.
-    pub fn effectivity(&self) -> f64 {
-        self.estimate.error / self.groups.first().copied().unwrap_or(f64::NAN)
-    }
-}
-
 /// The errors of reduced radiosity `b` against the full `frame`, over all faces and each group,
 /// `model`'s best fit of the frame, and the model's `estimate` beside them.
 pub fn frame_error(
@@ -286,7 +279,7 @@ pub struct CompareOptions {
     /// exact near field (the accurate ground truth: the error of the whole approximation).
     pub full_form_factors: super::near_field::FormFactorMethod,
     /// Random configurations of the design space to solve full and reduced besides the
-    /// sequences and corners (`random.csv`; [`super::effectivity::random_parameters`]).
+    /// sequences and corners (`random.csv`; [`crate::reduce::effectivity::random_parameters`]).
     pub random: usize,
     /// Their seed.
     pub random_seed: u64,
@@ -444,8 +437,12 @@ pub fn compare(
         corners.push((p, error));
     }
     // Random configurations from a seed unrelated to training.
-    if options.random > super::effectivity::MAX_RANDOM {
-        bail!("--random {}: at most {} configurations", options.random, super::effectivity::MAX_RANDOM);
+    if options.random > crate::reduce::effectivity::MAX_RANDOM {
+        bail!(
+            "--random {}: at most {} configurations",
+            options.random,
+            crate::reduce::effectivity::MAX_RANDOM
+        );
     }
     let mut random = Vec::with_capacity(options.random);
     let mut random_rows = vec![csv_header(&scene.names(), &groups)];
@@ -457,7 +454,7 @@ pub fn compare(
             "random configurations (full and reduced)",
         ));
     }
-    for p in super::effectivity::random_parameters(&ranges, options.random, options.random_seed) {
+    for p in crate::reduce::effectivity::random_parameters(&ranges, options.random, options.random_seed) {
         let full = FullFrame::solve(spec, &p, options.full_form_factors)?;
         let mesh = spec.mesh(&p)?;
         let (b, _, estimate) = model.evaluate_estimated(&mesh)?;

@@ -19,7 +19,6 @@ pub mod architecture;
 pub use crate::mesh::bvh;
 pub mod chain;
 pub mod compare;
-pub mod effectivity;
 mod error;
 pub mod estimate;
 pub mod face_table;

@@ -34,6 +34,7 @@ use super::snapshots::{pair_values, PairSnapshots, PAIR_QUANTITIES};
 use super::solve::{solve_jacobi, Rgb};
 use super::visibility::LearnedVisibility;
 use super::{JACOBI_MAX_SWEEPS, JACOBI_TOLERANCE};
+use crate::reduce::effectivity::splitmix;
 use crate::reduce::{
     basis_grams, pca_across, snapshot_grams, Bases, Basis, BasisRows, Communicator, ReduceError,
     ReduceOptions, SingleRank, SnapshotBasis, SnapshotFn, SnapshotRows, Truncation,
@@ -141,16 +142,6 @@ impl Default for TrainOptions {
             estimate: true,
         }
     }
-}
-
-/// A uniform number in [0, 1) from the SplitMix64 sequence at `state` (advanced).
-pub(crate) fn splitmix(state: &mut u64) -> f64 {
-    *state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
-    let mut z = *state;
-    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    z ^= z >> 31;
-    (z >> 11) as f64 / (1u64 << 53) as f64
 }
 
 /// Most parameters whose box corners are sampled and measured (2¹⁰ corners).

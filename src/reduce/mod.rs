@@ -14,11 +14,13 @@
 //! This module knows nothing of fluids or radiosity: they use it.
 
 mod basis;
+pub mod effectivity;
 mod error;
 mod eval;
 mod expr;
 mod file;
 mod gpu_eval;
+pub mod greedy;
 mod model;
 mod pca;
 mod premultiply;
