@@ -1,7 +1,7 @@
 //! The trainings over real MPI ranks (`make test-mpi`: the `mpi` feature, OpenMPI's `mpirun`):
 //! `mpirun --oversubscribe -n 1/2/4 galerkin radiosity train` on the small radiosity scene and
 //! `galerkin fluid train` on two small tunnel runs, each against the same command run without
-//! MPI — reduced tensors to 1e-9 (radiosity) and 1e-10 (fluid) of their largest entry (the
+//! MPI — reduced tensors to 1e-8 (radiosity) and 1e-10 (fluid) of their largest entry (the
 //! threads-as-ranks tests, `tests/ranks.rs`, say why) — and a failing command stopping every
 //! rank with its message. Every `mpirun` has a hard timeout.
 #![cfg(feature = "mpi")]
@@ -82,7 +82,7 @@ fn radiosity_training_over_mpi_ranks_matches_one_process() {
         assert_eq!(stdout.matches("radiosity train:").count(), 1, "{stdout}");
         let model = ReducedRadiosity::load(Path::new(&to)).unwrap();
         let worst = compare_models(model.model(), alone.model()).worst;
-        assert!(worst < 1e-9, "{ranks} ranks: reduced tensors differ by {worst:e}");
+        assert!(worst < 1e-8, "{ranks} ranks: reduced tensors differ by {worst:e}");
     }
 }
 

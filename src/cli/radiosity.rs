@@ -116,8 +116,10 @@ pub struct TrainArgs {
 /// Arguments of `galerkin radiosity view`.
 #[derive(Args, Clone)]
 pub struct ViewArgs {
-    /// Scene file (TOML).
-    pub scene: PathBuf,
+    /// Scene file (TOML); with --model, by default the scene the model was trained on (a
+    /// scene given is checked to be that one).
+    #[arg(required_unless_present = "model")]
+    pub scene: Option<PathBuf>,
     /// A trained model's directory: start in reduced mode (f switches to full).
     #[arg(long)]
     pub model: Option<PathBuf>,
@@ -135,8 +137,10 @@ pub struct ViewArgs {
 /// Arguments of `galerkin radiosity compare`.
 #[derive(Args)]
 pub struct CompareArgs {
-    /// Scene file (TOML), the one the model was trained on.
-    pub scene: PathBuf,
+    /// Scene file (TOML); by default the one the model records it was trained on (a scene
+    /// given is checked to be that one: a changed scene is refused, naming both hashes).
+    /// Needed with --full-only.
+    pub scene: Option<PathBuf>,
     /// The trained model's directory.
     #[arg(long, default_value = "out/radiosity-model")]
     pub model: PathBuf,
@@ -214,8 +218,10 @@ pub struct RenderArgs {
     /// two_rooms_small.toml, 496) or an OBJ scene — a TOML file naming its base OBJ
     /// (`base = "room.obj"`), its deformation targets (one OBJ per parameter), albedos,
     /// openings (the objects light enters through) and lights; the format is in
-    /// docs/radiosity.md. An OBJ file itself is not a scene.
-    pub scene: PathBuf,
+    /// docs/radiosity.md. An OBJ file itself is not a scene. With --model, by default the
+    /// scene the model was trained on (a scene given is checked to be that one).
+    #[arg(required_unless_present = "model")]
+    pub scene: Option<PathBuf>,
     /// A trained model's directory (`galerkin radiosity train`): draw the reduced radiosity.
     #[arg(long)]
     pub model: Option<PathBuf>,
@@ -307,9 +313,10 @@ fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
         };
         return view(desc, &view_args);
     }
-    let scene = AnyScene::load(&args.scene, light_mode(args.lights.as_deref()))?;
-    let p = scene.parameters_from(&args.look.params).with_context(|| format!("{}", args.scene.display()))?;
     let model = args.model.as_deref().map(ReducedRadiosity::load).transpose()?;
+    let scene_path = scene_file(args.scene.as_deref(), model.as_ref())?;
+    let scene = AnyScene::load(&scene_path, light_mode(args.lights.as_deref()))?;
+    let p = scene.parameters_from(&args.look.params).with_context(|| format!("{}", scene_path.display()))?;
     let request = PictureRequest {
         params: p.clone(),
         viewpoint: args.look.viewpoint,
@@ -327,8 +334,8 @@ fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
     let out = &args.image.out;
     let r =
         write_picture(&gpu, &scene, model.as_ref(), &request, out).with_context(|| match &args.model {
-            Some(dir) => format!("{} with the model {}", args.scene.display(), dir.display()),
-            None => args.scene.display().to_string(),
+            Some(dir) => format!("{} with the model {}", scene_path.display(), dir.display()),
+            None => scene_path.display().to_string(),
         })?;
     if let Some(table) = &args.faces {
         println!("per-face table ({} faces, f64) → {}", r.faces, table.display());
@@ -365,6 +372,18 @@ fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
     Ok(())
 }
 
+/// The scene file a command uses: the one given, checked against `model`'s provenance, or the
+/// one `model` records ([`ReducedRadiosity::scene_file`]).
+fn scene_file(given: Option<&std::path::Path>, model: Option<&ReducedRadiosity>) -> Result<PathBuf> {
+    match (given, model) {
+        (given, Some(m)) => Ok(m.scene_file(given)?),
+        (Some(p), None) => Ok(p.to_path_buf()),
+        (None, None) => {
+            bail!("name a scene file, or a model (--model DIR) that records the scene it was trained on")
+        }
+    }
+}
+
 /// The `--lights` choice as a light mode (`None`: the scene file's own).
 fn light_mode(lights: Option<&str>) -> Option<LightMode> {
     lights.map(|l| if l == "sky" { LightMode::Sky } else { LightMode::Area })
@@ -394,10 +413,12 @@ fn train(args: &TrainArgs, ranks: &dyn Communicator) -> Result<()> {
         return train_greedy(args, &scene, &options, ranks);
     }
     let bars = std::sync::Mutex::new(std::collections::BTreeMap::<String, indicatif::ProgressBar>::new());
+    let source = Some((args.scene.as_path(), scene.content_sha256(&args.scene)?));
     let trained = train_and_save(
         scene.space(),
         &options,
         &args.out,
+        source,
         &|stage, done, total| {
             if !ranks.is_root() {
                 return;
@@ -484,7 +505,10 @@ fn train_greedy(
     });
     bar.finish();
     let g = result.with_context(|| format!("greedy training of {}", args.scene.display()))?;
-    g.model.save(&args.out)?;
+    let params: Vec<Vec<f64>> = g.configurations.iter().map(|c| c.params.clone()).collect();
+    let provenance = scene.provenance(&args.scene, format!("{options:?} {greedy:?}"), &params)?;
+    let model = g.model.with_provenance(provenance);
+    model.save(&args.out)?;
     let (csv, plot) = write_rounds(&args.out, &scene.names(), &g.rounds).map_err(anyhow::Error::msg)?;
     println!("| round | full solves | worst estimate | median estimate | unstable candidates | seconds |\n|---:|---:|---:|---:|---:|---:|");
     for (k, r) in g.rounds.iter().enumerate() {
@@ -501,7 +525,7 @@ fn train_greedy(
     let last = g.rounds.last().map_or(f64::NAN, |r| r.worst_estimate);
     println!(
         "radiosity train --greedy: {} faces, {} full solves, worst estimated error {:.2} % ({} the tolerance {:.2} %), {:.1} s → {} ({} and {})",
-        g.model.faces(),
+        model.faces(),
         g.configurations.len(),
         100.0 * last,
         if last < args.tolerance { "below" } else { "not below: the budget ran out before" },
@@ -526,7 +550,10 @@ fn compare(args: &CompareArgs) -> Result<()> {
         None if trained_exact => exact,
         None => FormFactorMethod::Centroid,
     };
-    let scene = AnyScene::load(&args.scene, light_mode(args.lights.as_deref()))?;
+    // The model (not with --full-only, which needs none) names its scene and checks one given.
+    let model = (!args.full_only).then(|| ReducedRadiosity::load(&args.model)).transpose()?;
+    let scene_path = scene_file(args.scene.as_deref(), model.as_ref())?;
+    let scene = AnyScene::load(&scene_path, light_mode(args.lights.as_deref()))?;
     let mut bar: Option<indicatif::ProgressBar> = None;
     let mut progress = |p: Progress| match p {
         Progress::Sequence(_, frames, label) => bar = Some(crate::progress_bar(frames as u64, label)),
@@ -556,13 +583,13 @@ fn compare(args: &CompareArgs) -> Result<()> {
     if args.full_only {
         let dir = args.full_frames.as_ref().context("--full-only needs --full-frames DIR")?;
         let method = method_for(scene.space().lights().mode == galerkin::radiosity::LightMode::Area);
-        for path in compare::keep_full_frames(&scene, &args.scene, &args.frames, dir, method, &mut progress)?
+        for path in compare::keep_full_frames(&scene, &scene_path, &args.frames, dir, method, &mut progress)?
         {
             eprintln!("full frames kept in {}", path.display());
         }
         return Ok(());
     }
-    let mut model = ReducedRadiosity::load(&args.model)?;
+    let mut model = model.context("a model is loaded unless --full-only")?;
     if args.eq17 == "printed" {
         model.set_eq17(galerkin::radiosity::visibility::Eq17::Printed);
     }
@@ -577,8 +604,8 @@ fn compare(args: &CompareArgs) -> Result<()> {
         random: args.random,
         random_seed: args.random_seed,
     };
-    let r = compare::compare(&scene, &args.scene, &model, &options, &mut progress)
-        .with_context(|| format!("comparing {} with {}", args.model.display(), args.scene.display()))?;
+    let r = compare::compare(&scene, &scene_path, &model, &options, &mut progress)
+        .with_context(|| format!("comparing {} with {}", args.model.display(), scene_path.display()))?;
     let pct = |(m, w): (f64, f64)| format!("{:.2} % | {:.2} %", 100.0 * m, 100.0 * w);
     println!(
         "Relative error against the full solve with {} form factors, area-weighted over faces and channels (emitters: the window and skylight faces); the model {}",
@@ -740,9 +767,10 @@ fn view(desc: &GpuDesc, args: &ViewArgs) -> Result<()> {
     use galerkin::radiosity::viewer::{RadiosityContent, ViewSettings};
     use galerkin::render::viewer::{run, ViewOptions};
     let model = args.model.as_deref().map(ReducedRadiosity::load).transpose()?;
+    let scene_path = scene_file(args.scene.as_deref(), model.as_ref())?;
     // A model fixes the lighting it was trained with.
-    let scene = AnyScene::load(&args.scene, model.as_ref().map(ReducedRadiosity::light_mode))?;
-    let p = scene.parameters_from(&args.look.params).with_context(|| format!("{}", args.scene.display()))?;
+    let scene = AnyScene::load(&scene_path, model.as_ref().map(ReducedRadiosity::light_mode))?;
+    let p = scene.parameters_from(&args.look.params).with_context(|| format!("{}", scene_path.display()))?;
     let mesh = scene.space().mesh(&p)?;
     if let (Some(m), Some(dir)) = (&model, &args.model) {
         check_model_faces(m, mesh.len()).with_context(|| dir.display().to_string())?;

@@ -53,6 +53,28 @@ impl AnyScene {
         }
     }
 
+    /// SHA-256 of the scene's content read from `path`: the scene file and, for an OBJ scene,
+    /// every OBJ file it names ([`crate::reduce::provenance::files_sha256`]).
+    pub fn content_sha256(&self, path: &Path) -> Result<String, RadiosityError> {
+        let mut files: Vec<&Path> = vec![path];
+        if let AnyScene::Obj(s) = self {
+            files.extend(s.files().iter().map(|p| p.as_path()));
+        }
+        crate::reduce::provenance::files_sha256(&files)
+            .map_err(|message| RadiosityError::File { path: path.to_path_buf(), message })
+    }
+
+    /// The provenance of a model of this scene (read from `path`) trained with `options` on
+    /// the samples `params`.
+    pub fn provenance(
+        &self,
+        path: &Path,
+        options: String,
+        params: &[Vec<f64>],
+    ) -> Result<crate::reduce::provenance::Provenance, RadiosityError> {
+        Ok(crate::reduce::provenance::Provenance::new(path, self.content_sha256(path)?, options, params))
+    }
+
     /// The parameters' names, in the design space's order.
     pub fn names(&self) -> Vec<String> {
         match self {

@@ -99,6 +99,8 @@ pub struct ObjScene {
     base: SceneMesh,
     targets: Vec<(TargetSpec, Vec<DVec3>)>,
     lights: Lights,
+    /// The OBJ files read: the base, then each target's.
+    files: Vec<PathBuf>,
 }
 
 fn read_obj(path: &Path) -> Result<Vec<tobj::Model>, RadiosityError> {
@@ -182,6 +184,7 @@ impl ObjScene {
             );
         }
         let mut targets = Vec::new();
+        let mut files = vec![base_path.clone()];
         for t in spec.targets {
             let [lo, hi] = t.range;
             if !(lo.is_finite() && hi.is_finite() && lo <= hi && (lo..=hi).contains(&t.default)) {
@@ -219,14 +222,20 @@ impl ObjScene {
                     ),
                 });
             }
+            files.push(target_path);
             targets.push((t, p));
         }
-        Ok(Self { base, targets, lights: spec.lights })
+        Ok(Self { base, targets, lights: spec.lights, files })
     }
 
     /// Lights the scene by area lights in its openings or by the sky through them.
     pub fn set_light_mode(&mut self, mode: super::scene::LightMode) {
         self.lights.mode = mode;
+    }
+
+    /// The OBJ files the scene was read from: the base, then each target's.
+    pub fn files(&self) -> &[PathBuf] {
+        &self.files
     }
 
     /// The parameters' names.

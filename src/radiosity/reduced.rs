@@ -22,6 +22,7 @@ use super::mesh::SceneMesh;
 use super::scene::{LightMode, Lights};
 use super::solve::Rgb;
 use super::visibility::LearnedVisibility;
+use crate::reduce::provenance::Provenance;
 use crate::reduce::ReducedModel;
 use crate::tensor::Tensor;
 
@@ -37,6 +38,8 @@ pub struct ReducedRadiosity {
     /// The error estimate's offline part ([`super::estimate`]); `None` for models trained
     /// without it.
     validation: Option<CrossValidation>,
+    /// Where the model came from (`None` for models saved before it was recorded).
+    provenance: Option<Provenance>,
 }
 
 /// The form factors a model's training solves used: what its full-space ground truth is.
@@ -150,7 +153,16 @@ impl ReducedRadiosity {
                 )));
             }
         }
-        Ok(Self { model, visibility, emission_hat, faces, sky, trained_near, validation: None })
+        Ok(Self {
+            model,
+            visibility,
+            emission_hat,
+            faces,
+            sky,
+            trained_near,
+            validation: None,
+            provenance: None,
+        })
     }
 
     /// The model with the error estimate's offline part ([`super::estimate`]), checked to have
@@ -165,6 +177,39 @@ impl ReducedRadiosity {
         }
         self.validation = Some(validation);
         Ok(self)
+    }
+
+    /// The model with its provenance: the scene file and its content's hash, the training
+    /// options and samples, the engine.
+    pub fn with_provenance(mut self, provenance: Provenance) -> Self {
+        self.provenance = Some(provenance);
+        self
+    }
+
+    /// Where the model came from, if recorded.
+    pub fn provenance(&self) -> Option<&Provenance> {
+        self.provenance.as_ref()
+    }
+
+    /// The scene file to use with this model: `given`, checked to be the scene the model was
+    /// trained on (its content's hash), or without one the scene file the model names. A
+    /// model that does not record its scene needs one given, and cannot check it.
+    pub fn scene_file(&self, given: Option<&Path>) -> Result<std::path::PathBuf, RadiosityError> {
+        let fail = |path: &Path, message: String| RadiosityError::File { path: path.to_path_buf(), message };
+        let path = match (given, &self.provenance) {
+            (Some(p), _) => p.to_path_buf(),
+            (None, Some(p)) => std::path::PathBuf::from(&p.scene),
+            (None, None) => {
+                return Err(RadiosityError::Mesh(
+                    "the model does not record the scene it was trained on (trained before models did): name the scene file".into(),
+                ))
+            }
+        };
+        if let Some(p) = &self.provenance {
+            let scene = super::any_scene::AnyScene::load(&path, None)?;
+            p.check_scene(&path, &scene.content_sha256(&path)?).map_err(|m| fail(&path, m))?;
+        }
+        Ok(path)
     }
 
     /// The error estimate's offline part, if the model has one.
@@ -475,6 +520,9 @@ impl ReducedRadiosity {
             ("trained_near_field".to_string(), format!("{:?}", self.trained_near)),
         ]
         .into();
+        if let Some(p) = &self.provenance {
+            meta.insert("provenance".into(), p.to_json());
+        }
         if let Some(v) = &self.validation {
             for (name, series) in
                 [("left_out_error", &v.left_out), ("basis_floor", &v.floor), ("sample_spacing", &v.spacing)]
@@ -592,6 +640,10 @@ impl ReducedRadiosity {
         };
         let loaded =
             Self::new(model, learned, emission, faces, sky, trained_near).map_err(|e| fail(e.to_string()))?;
+        let loaded = match meta.get("provenance") {
+            Some(text) => loaded.with_provenance(Provenance::from_json(text).map_err(&fail)?),
+            None => loaded,
+        };
         if file.names().iter().all(|n| *n != "left_out_error") {
             return Ok(loaded);
         }

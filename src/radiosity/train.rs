@@ -712,11 +712,14 @@ pub struct TrainedScene {
 /// Over several `ranks` (`mpirun -n N galerkin radiosity train …`), each rank solves its
 /// share of the samples and trains on its share of rows and chunks
 /// ([`super::train_ranks::solve_configurations_across`], [`train_across`]); rank 0 alone
-/// writes the model (the others report 0 bytes on disk).
+/// writes the model (the others report 0 bytes on disk). With `source` — the scene file and
+/// its content's hash ([`super::any_scene::AnyScene::content_sha256`]) — the model records its
+/// provenance ([`crate::reduce::provenance`]).
 pub fn train_and_save(
     space: &dyn DesignSpace,
     options: &TrainOptions,
     out: &Path,
+    source: Option<(&Path, String)>,
     progress: Progress<'_>,
     ranks: &dyn Communicator,
 ) -> Result<TrainedScene, RadiosityError> {
@@ -735,6 +738,15 @@ pub fn train_and_save(
     let solve_seconds = start.elapsed().as_secs_f64();
     tracing::info!(seconds = solve_seconds, sent_mb = sent_mb(ranks), "training: full solves, gathered");
     let (model, report) = train_across(space, &configurations, options, progress, ranks)?;
+    let model = match source {
+        Some((scene, sha256)) => model.with_provenance(crate::reduce::provenance::Provenance::new(
+            scene,
+            sha256,
+            format!("{options:?}"),
+            &params,
+        )),
+        None => model,
+    };
     let mut bytes_on_disk = 0;
     if ranks.is_root() {
         model.save(out)?;

@@ -24,6 +24,7 @@ pub mod greedy;
 mod model;
 mod pca;
 mod premultiply;
+pub mod provenance;
 pub mod ranks;
 mod reduced;
 mod snapshot_basis;
