@@ -38,7 +38,8 @@ fn main() -> Result<()> {
     let truth_column = column("error_receiving")?;
     // The parameters' columns, wherever they are (compare.csv starts with sequence and frame).
     let params: Vec<usize> = scene.names().iter().map(|n| column(n)).collect::<Result<_>>()?;
-    let forms: [(&str, &dyn Fn(f64, f64, f64) -> f64); 5] = [
+    type Form<'a> = (&'a str, &'a dyn Fn(f64, f64, f64) -> f64);
+    let forms: [Form; 5] = [
         ("floor + left-out × min(1, d/h)", &|f, e, r| f + e * r.min(1.0)),
         ("floor + left-out × d/h", &|f, e, r| f + e * r),
         ("floor + left-out × min(2, d/h)", &|f, e, r| f + e * r.min(2.0)),
@@ -55,19 +56,19 @@ fn main() -> Result<()> {
         let (_, x) = model.learned_visibility().predict(&ghat);
         for (k, (_, form)) in forms.iter().enumerate() {
             let mut eta = 0.0;
-            for s in 0..t {
-                if x[s] == 0.0 {
+            for (s, &weight) in x.iter().enumerate().take(t) {
+                if weight == 0.0 {
                     continue;
                 }
                 let dist = (0..m).map(|i| (ghat[i] - geometry.data()[i * t + s]).powi(2)).sum::<f64>().sqrt();
-                eta += x[s] * form(v.floor[s], v.left_out[s], dist / v.spacing[s]);
+                eta += weight * form(v.floor[s], v.left_out[s], dist / v.spacing[s]);
             }
             pairs[k].push((eta, truth));
         }
         // The largest over the samples Eq. 17 weights, of the built form and of √(d/h) ≤ 2.
         let mut worst = [0.0f64; 2];
-        for s in 0..t {
-            if x[s] == 0.0 {
+        for (s, &weight) in x.iter().enumerate().take(t) {
+            if weight == 0.0 {
                 continue;
             }
             let dist = (0..m).map(|i| (ghat[i] - geometry.data()[i * t + s]).powi(2)).sum::<f64>().sqrt();

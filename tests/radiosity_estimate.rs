@@ -22,9 +22,9 @@ const SMALL: &str = include_str!("../scenes/radiosity/two_rooms_small.toml");
 fn plain_estimate(v: &CrossValidation, ghat: &[f64], x: &[f64], geometry: &Tensor) -> f64 {
     let (m, t) = (geometry.shape()[0], geometry.shape()[1]);
     let mut sum = 0.0;
-    for s in 0..t {
+    for (s, &weight) in x.iter().enumerate().take(t) {
         let d: f64 = (0..m).map(|i| (ghat[i] - geometry.data()[i * t + s]).powi(2)).sum::<f64>().sqrt();
-        sum += x[s] * (v.floor[s] + v.left_out[s] * (d / v.spacing[s]).sqrt().min(2.0));
+        sum += weight * (v.floor[s] + v.left_out[s] * (d / v.spacing[s]).sqrt().min(2.0));
     }
     sum
 }

@@ -158,7 +158,7 @@ impl Estimate {
     /// Why this configuration is not to be trusted at `threshold` (estimated relative error),
     /// or `None`.
     pub fn untrusted(&self, threshold: f64) -> Option<String> {
-        if !(self.margin > 0.0) {
+        if self.margin.is_nan() || self.margin <= 0.0 {
             return Some(format!(
                 "the reduced operator has left the physics (its least eigenvalue's real part is {:.3}; the full operator's is positive)",
                 self.margin
