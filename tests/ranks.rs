@@ -22,7 +22,8 @@ use std::path::Path;
 
 use galerkin::fluid::reduced::{BasisSizes, ReducedFluidModel, TrainingSet};
 use galerkin::radiosity::any_scene::AnyScene;
-use galerkin::radiosity::train::{train_and_save, TrainOptions};
+use galerkin::radiosity::train::TrainOptions;
+use galerkin::radiosity::train_stages::{train_and_save, WorkOptions};
 use galerkin::reduce::{
     pca, pca_across, premultiply_streamed, Bases, Basis, BasisRows, Expr, FullTensor, Model,
     PremultiplyOptions, ReduceOptions, ReducedModel, SingleRank, SnapshotFn, TensorChunks, ThreadRanks,
@@ -228,13 +229,30 @@ fn radiosity_training_over_ranks_matches_one_rank() {
     let scene = AnyScene::load(&scene_path, None).unwrap();
     let options = TrainOptions { samples: 10, ..TrainOptions::default() };
     let dir = tempfile::tempdir().unwrap();
-    let one =
-        train_and_save(scene.space(), &options, &dir.path().join("one"), None, &|_, _, _| {}, &SingleRank)
-            .unwrap();
+    let one = train_and_save(
+        scene.space(),
+        &options,
+        &dir.path().join("one"),
+        None,
+        &WorkOptions::default(),
+        &|_, _, _| {},
+        &mut |_| {},
+        &SingleRank,
+    )
+    .unwrap();
     for size in [2, 3] {
         let out = dir.path().join(format!("ranks-{size}"));
         let results = ThreadRanks::run(size, |ranks| {
-            train_and_save(scene.space(), &options, &out, None, &|_, _, _| {}, ranks)
+            train_and_save(
+                scene.space(),
+                &options,
+                &out,
+                None,
+                &WorkOptions::default(),
+                &|_, _, _| {},
+                &mut |_| {},
+                ranks,
+            )
         });
         for (rank, r) in results.into_iter().enumerate() {
             let t = r.unwrap();

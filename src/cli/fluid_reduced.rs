@@ -317,9 +317,8 @@ pub fn train_scene(args: &TrainSceneArgs, ranks: &dyn Communicator) -> Result<()
             if let Some(b) = bar.take() {
                 b.finish_and_clear();
             }
-            let peak = peak_mb.map_or("?".into(), |m| format!("{m:.0} MB"));
-            let how = if resumed { "already in the work directory" } else { "done" };
-            println!("  {stage}: {how} in {seconds:.1} s, peak memory {peak}");
+            let report = galerkin::reduce::reductor::StageReport { stage, seconds, peak_mb, resumed };
+            println!("  {}", report.line());
         }
     };
     let model =

@@ -10,7 +10,8 @@ use galerkin::radiosity::near_field::FormFactorMethod;
 use galerkin::radiosity::picture::{write_picture, PictureRequest};
 use galerkin::radiosity::reduced::ReducedRadiosity;
 use galerkin::radiosity::render::{Shading, Viewpoint};
-use galerkin::radiosity::train::{train_and_save, TrainOptions};
+use galerkin::radiosity::train::TrainOptions;
+use galerkin::radiosity::train_stages::{train_and_save, WorkOptions};
 use galerkin::radiosity::LightMode;
 use galerkin::reduce::effectivity::Effectivity;
 use galerkin::reduce::Communicator;
@@ -111,6 +112,17 @@ pub struct TrainArgs {
     /// Greedy: full solves added per round (each round retrains).
     #[arg(long, default_value_t = 20, requires = "greedy", value_parser = crate::cli::args::count_up_to(crate::cli::args::MAX_FRAMES))]
     pub batch: usize,
+    /// Work directory: each finished stage of the training (samples, solves — each kept as it
+    /// finishes —, bases, tensors, correction, model) is kept here, so the same command run
+    /// again after a kill or a crash resumes where it stopped. Refused if it holds the work
+    /// of another scene or other options. Removed once the model is written unless
+    /// --keep-work [default: OUT/work]
+    #[arg(long, conflicts_with = "greedy")]
+    pub work: Option<PathBuf>,
+    /// Keep the work directory once the model is written (its solves take about 4 MB per
+    /// sample at 4,876 faces)
+    #[arg(long, conflicts_with = "greedy")]
+    pub keep_work: bool,
 }
 
 /// Arguments of `galerkin radiosity view`.
@@ -389,7 +401,7 @@ fn light_mode(lights: Option<&str>) -> Option<LightMode> {
     lights.map(|l| if l == "sky" { LightMode::Sky } else { LightMode::Area })
 }
 
-/// `galerkin radiosity train` ([`galerkin::radiosity::train::train_and_save`]), over MPI
+/// `galerkin radiosity train` ([`galerkin::radiosity::train_stages::train_and_save`]), over MPI
 /// ranks when `mpirun` started it: progress and results from rank 0 only.
 fn train(args: &TrainArgs, ranks: &dyn Communicator) -> Result<()> {
     let scene = AnyScene::load(&args.scene, light_mode(args.lights.as_deref()))?;
@@ -414,11 +426,13 @@ fn train(args: &TrainArgs, ranks: &dyn Communicator) -> Result<()> {
     }
     let bars = std::sync::Mutex::new(std::collections::BTreeMap::<String, indicatif::ProgressBar>::new());
     let source = Some((args.scene.as_path(), scene.content_sha256(&args.scene)?));
+    let work = WorkOptions { dir: args.work.clone(), keep: args.keep_work, stop_after: None };
     let trained = train_and_save(
         scene.space(),
         &options,
         &args.out,
         source,
+        &work,
         &|stage, done, total| {
             if !ranks.is_root() {
                 return;
@@ -435,6 +449,16 @@ fn train(args: &TrainArgs, ranks: &dyn Communicator) -> Result<()> {
             let bar = bars.entry(stage.to_string()).or_insert_with(|| crate::progress_bar(total, label));
             bar.set_length(total);
             bar.set_position(done);
+        },
+        // One line per stage, on stderr (also when it is a log file, not a terminal).
+        &mut |stage| {
+            if ranks.is_root() {
+                let mut bars = bars.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+                for bar in std::mem::take(&mut *bars).into_values() {
+                    bar.finish();
+                }
+                eprintln!("radiosity train: {}", stage.line());
+            }
         },
         ranks,
     );

@@ -40,6 +40,7 @@ pub mod snapshots;
 pub mod solve;
 pub mod train;
 pub mod train_ranks;
+pub mod train_stages;
 #[cfg(feature = "viewer")]
 pub mod viewer;
 pub mod visibility;

@@ -16,29 +16,24 @@
 //! energy of each quantity with at most 60 vectors, one 120-vector basis for `e` and `b`.
 
 use std::ops::Range;
-use std::path::Path;
 use std::sync::Arc;
 
 use rayon::prelude::*;
 
-use super::chain::{radiosity as radiosity_expr, radiosity_corrected, stack_channels, table2_model};
 use super::error::RadiosityError;
 use super::form_factor::{form_factors, NearField};
 use super::lighting::emission;
-use super::mesh::{FaceGeometry, FaceKind, SceneMesh};
+use super::mesh::{FaceGeometry, SceneMesh};
 use super::near_correction::{apply, near_corrections, NearCorrection};
-use super::operator_correction::{operator_corrections, CorrectionReport};
-use super::reduced::{ReducedRadiosity, SkyLight, TrainedNearField};
+use super::operator_correction::CorrectionReport;
+use super::reduced::ReducedRadiosity;
 use super::scene::{LightMode, Lights, SceneSpec};
-use super::snapshots::{pair_values, PairSnapshots, PAIR_QUANTITIES};
+use super::snapshots::{pair_values, PAIR_QUANTITIES};
 use super::solve::{solve_jacobi, Rgb};
-use super::visibility::LearnedVisibility;
+use super::train_stages::{assemble, basis_parts, correction, premultiplied};
 use super::{JACOBI_MAX_SWEEPS, JACOBI_TOLERANCE};
 use crate::reduce::effectivity::splitmix;
-use crate::reduce::{
-    basis_grams, pca_across, snapshot_grams, Bases, Basis, BasisRows, Communicator, ReduceError,
-    ReduceOptions, SingleRank, SnapshotBasis, SnapshotFn, SnapshotRows, Truncation,
-};
+use crate::reduce::{Communicator, SingleRank};
 use crate::tensor::Tensor;
 
 /// A family of meshes of one topology over a box of design parameters.
@@ -430,214 +425,22 @@ pub fn train_across(
     progress: Progress<'_>,
     ranks: &dyn Communicator,
 ) -> Result<(ReducedRadiosity, TrainingReport), RadiosityError> {
-    let Some(first) = configurations.first() else {
+    if configurations.is_empty() {
         return Err(RadiosityError::Solve("no training configurations".into()));
-    };
+    }
     options.check()?;
     options.check_lights(space.lights().mode)?;
-    let n = first.geometry.areas.len();
-    let vertices = first.g.len() / 3;
-    let reduce_err = |e: ReduceError| RadiosityError::Solve(e.to_string());
-    let mut report = TrainingReport { bases: Vec::new(), merged: Vec::new(), correction: None };
-    let truncation = |q: Quantity| Truncation {
-        energy: match q {
-            Quantity::G => options.geometry_energy,
-            Quantity::R => options.squared_distance_energy.unwrap_or(options.energy),
-            Quantity::E | Quantity::B => options.radiosity_energy.unwrap_or(options.energy),
-            _ => options.energy,
-        },
-        max_modes: if matches!(q, Quantity::E | Quantity::B) {
-            options.radiosity_cap / 2
-        } else {
-            options.cap
-        },
-        centred: true,
-    };
-    // Pair quantities: one pass over blocks of pairs for their Gram matrices; the bases are
-    // kept as snapshot coefficients.
-    let pairs = PairSnapshots::new(configurations, options.near);
-    let sources: Vec<_> =
-        PAIR_QUANTITIES.iter().map(|&q| pairs.quantity(q).expect("a pair quantity")).collect();
-    let refs: Vec<&dyn SnapshotRows> = sources.iter().map(|s| s as &dyn SnapshotRows).collect();
-    let slot = |q: Quantity| PAIR_QUANTITIES.iter().position(|&p| p == q).expect("a pair quantity");
-    let diagonal: Vec<(usize, usize)> = (0..PAIR_QUANTITIES.len()).map(|i| (i, i)).collect();
-    let gram_progress = |done: f64, total: f64| progress("gram", done as u64, total as u64);
-    let clock = std::time::Instant::now();
-    let grams = snapshot_grams(&refs, &diagonal, Some(&gram_progress), ranks).map_err(reduce_err)?;
-    tracing::info!(
-        seconds = clock.elapsed().as_secs_f64(),
-        sent_mb = sent_mb(ranks),
-        "training: Gram matrices of the pair quantities"
-    );
-    let mut pair_bases: std::collections::BTreeMap<&str, SnapshotBasis<'_>> =
-        std::collections::BTreeMap::new();
-    let mut stored: std::collections::BTreeMap<&str, Basis> = std::collections::BTreeMap::new();
-    let clock = std::time::Instant::now();
-    for (qi, q) in Quantity::ALL.iter().enumerate() {
-        progress("pca", qi as u64, Quantity::ALL.len() as u64);
-        let (vectors, energy) = if q.is_pair() {
-            let i = slot(*q);
-            let (basis, spectrum) =
-                SnapshotBasis::pca(q.name(), refs[i], &grams[i], truncation(*q)).map_err(reduce_err)?;
-            let m = basis.reduced_dim();
-            pair_bases.insert(q.name(), basis);
-            (m, spectrum.energy)
-        } else {
-            let mut source = SnapshotFn {
-                dim: q.dim(n, vertices),
-                count: configurations.len(),
-                rows: |rows: Range<usize>| snapshot_rows(*q, configurations, rows, options.near),
-            };
-            let p = pca_across(q.name(), &mut source, truncation(*q), ranks).map_err(reduce_err)?;
-            let m = p.basis.reduced_dim();
-            stored.insert(q.name(), p.basis);
-            (m, p.energy)
-        };
-        report.bases.push((q.name().to_string(), q.dim(n, vertices), vectors, energy));
-    }
-    progress("pca", Quantity::ALL.len() as u64, Quantity::ALL.len() as u64);
-    tracing::info!(seconds = clock.elapsed().as_secs_f64(), sent_mb = sent_mb(ranks), "training: PCA");
-    // A second pass: the Gram matrices of the modes themselves, to orthonormalise and merge
-    // them to rounding.
-    let order: Vec<&str> = PAIR_QUANTITIES.iter().map(|q| q.name()).collect();
-    let rows: Vec<&dyn BasisRows> = order.iter().map(|q| &pair_bases[q] as &dyn BasisRows).collect();
-    let own_progress = |done: f64, total: f64| progress("orthonormalise", done as u64, total as u64);
-    let mut wanted = diagonal.clone();
-    wanted.push((slot(Quantity::S), slot(Quantity::H)));
-    wanted.push((slot(Quantity::D), slot(Quantity::P)));
-    let clock = std::time::Instant::now();
-    let own = basis_grams(&rows, &wanted, Some(&own_progress), ranks).map_err(reduce_err)?;
-    tracing::info!(
-        seconds = clock.elapsed().as_secs_f64(),
-        sent_mb = sent_mb(ranks),
-        "training: Gram matrices of the pair modes"
-    );
-    let merge_pairs = |name: &str, a: Quantity, b: Quantity, cross: &Tensor| {
-        let (a, b) = (slot(a), slot(b));
-        SnapshotBasis::merge(name, (&pair_bases[order[a]], &own[a]), (&pair_bases[order[b]], &own[b]), cross)
-            .map_err(reduce_err)
-    };
-    let sh = merge_pairs("sh", Quantity::S, Quantity::H, &own[PAIR_QUANTITIES.len()])?;
-    let dp = merge_pairs("dp", Quantity::D, Quantity::P, &own[PAIR_QUANTITIES.len() + 1])?;
-    let mut finished: std::collections::BTreeMap<&str, SnapshotBasis<'_>> = std::collections::BTreeMap::new();
-    for name in ["r", "c", "v"] {
-        let i = order.iter().position(|q| *q == name).expect("a pair quantity");
-        let basis =
-            pair_bases.remove(name).expect("made above").orthonormalized(&own[i]).map_err(reduce_err)?;
-        finished.insert(name, basis);
-    }
-    let mut bases = Bases::new();
-    for name in ["g", "n", "a"] {
-        bases.insert(name.to_string(), stored[name].clone());
-    }
-    bases.insert("b".into(), Basis::merge("b", &stored["e"], &stored["b"]).map_err(reduce_err)?);
-    let mut row_bases: std::collections::BTreeMap<String, &dyn BasisRows> = std::collections::BTreeMap::new();
-    row_bases.insert("sh".into(), &sh);
-    row_bases.insert("dp".into(), &dp);
-    for name in ["r", "c", "v"] {
-        row_bases.insert(name.into(), &finished[name]);
-    }
-    report.merged.push(("sh".into(), sh.reduced_dim()));
-    report.merged.push(("dp".into(), dp.reduced_dim()));
-    report.merged.push(("b".into(), bases["b"].reduced_dim()));
-    // Premultiply Table 2's tensors (topology and albedo: any configuration's mesh); the pair
-    // tensors chunk by chunk against basis rows regenerated from the snapshots.
-    let mesh = space.mesh(&first.params)?;
-    let model = table2_model(&mesh, options.near, radiosity_expr());
-    let premultiply_progress = |done: f64, total: f64| progress("premultiply", done as u64, total as u64);
-    let clock = std::time::Instant::now();
-    let mut reduced = model
-        .reduce_with_rows(
-            &bases,
-            &row_bases,
-            &ReduceOptions { progress: Some(&premultiply_progress), ranks, ..ReduceOptions::default() },
-        )
-        .map_err(reduce_err)?;
-    tracing::info!(
-        seconds = clock.elapsed().as_secs_f64(),
-        sent_mb = sent_mb(ranks),
-        "training: premultiplication"
-    );
-    // The visibility is always given reduced (Eq. 17): its n²-row basis stays out of the model.
-    reduced.forget_input_basis("v").map_err(reduce_err)?;
-    // The learned visibility: B_gᵀ G, and B_vᵀ V from the visibility's Gram matrix.
-    let t = configurations.len();
-    let bg = &bases["g"];
-    let mut gt = vec![0.0; bg.reduced_dim() * t];
-    for (c, conf) in configurations.iter().enumerate() {
-        for (i, x) in bg.project(&conf.g).into_iter().enumerate() {
-            gt[i * t + c] = x;
-        }
-    }
-    let vt = finished["v"].project_snapshots(&grams[slot(Quantity::V)]).map_err(reduce_err)?;
-    let learned =
-        LearnedVisibility::new(Tensor::from_vec(&[bg.reduced_dim(), t], gt).expect("shape matches"), vt)
-            .map_err(|e| RadiosityError::Solve(e.to_string()))?;
-    if options.operator_correction {
-        let clock = std::time::Instant::now();
-        let correct_progress = |done: usize, total: usize| progress("correct", done as u64, total as u64);
-        let (q, found) = operator_corrections(
-            &reduced,
-            &learned,
-            configurations,
-            &mesh.albedo,
-            options.near,
-            &correct_progress,
-            ranks,
-        )?;
-        // Q's configuration axis has the identity basis: Eq. 17's weights are given whole.
-        reduced.extend(radiosity_corrected(), ("Q", &["b", "b", "x"], q), ("x", "x")).map_err(reduce_err)?;
-        tracing::info!(
-            seconds = clock.elapsed().as_secs_f64(),
-            mean_discrepancy = found.mean_discrepancy,
-            worst_discrepancy = found.worst_discrepancy,
-            "training: the operator correction"
-        );
+    let parts = basis_parts(configurations, options, progress, ranks)?;
+    let tensors = premultiplied(space, configurations, options, &parts, progress, ranks)?;
+    let mut report = TrainingReport { bases: parts.report, merged: tensors.merged.clone(), correction: None };
+    let q = if options.operator_correction {
+        let (q, found) = correction(space, configurations, options, &tensors, progress, ranks)?;
         report.correction = Some(found);
-    }
-    let emission_hat = bases["b"].project(&stack_channels(&first.emission));
-    // Sky lighting: the face–opening visibility of every configuration, for the run time's
-    // direct light.
-    let sky = (space.lights().mode == LightMode::Sky).then(|| {
-        let openings: Vec<u32> = (0..n as u32).filter(|&j| mesh.kind[j as usize].is_opening()).collect();
-        let no = openings.len();
-        let bits = configurations
-            .iter()
-            .map(|c| {
-                let mut b = vec![0u64; (n * no).div_ceil(64)];
-                for i in 0..n {
-                    for (o, &j) in openings.iter().enumerate() {
-                        if c.visible(n * i + j as usize) {
-                            let k = i * no + o;
-                            b[k / 64] |= 1 << (k % 64);
-                        }
-                    }
-                }
-                b
-            })
-            .collect();
-        SkyLight { lights: space.lights().clone(), openings, bits, near: options.near }
-    });
-    let trained_near =
-        if options.near_correction.is_some() { TrainedNearField::Exact } else { TrainedNearField::Centroid };
-    let model = ReducedRadiosity::new(reduced, learned, emission_hat, n, sky, trained_near)?;
-    if !options.estimate {
-        return Ok((model, report));
-    }
-    let clock = std::time::Instant::now();
-    let receiving: Vec<usize> = (0..n).filter(|&i| mesh.kind[i] == FaceKind::Surface).collect();
-    let validation = model.cross_validate(configurations, &receiving)?;
-    tracing::info!(
-        seconds = clock.elapsed().as_secs_f64(),
-        median_left_out_error = validation.median_left_out(),
-        "training: the error estimate (each sample left out of Eq. 17)"
-    );
-    Ok((model.with_estimate(validation)?, report))
-}
-
-/// Megabytes this rank has sent in collectives so far (for the stage logs).
-fn sent_mb(ranks: &dyn Communicator) -> f64 {
-    ranks.bytes_sent() as f64 / 1e6
+        Some(q)
+    } else {
+        None
+    };
+    Ok((assemble(space, configurations, options, tensors, q)?, report))
 }
 
 impl TrainOptions {
@@ -687,81 +490,4 @@ impl TrainOptions {
         }
         Ok(())
     }
-}
-
-/// A model trained and saved by [`train_and_save`].
-pub struct TrainedScene {
-    /// The model.
-    pub model: ReducedRadiosity,
-    /// Its bases.
-    pub report: TrainingReport,
-    /// Configurations solved in full.
-    pub configurations: usize,
-    /// Seconds of the full solves.
-    pub solve_seconds: f64,
-    /// Seconds of the PCA, premultiplication and visibility learning.
-    pub train_seconds: f64,
-    /// The saved model's size on disk, bytes.
-    pub bytes_on_disk: u64,
-}
-
-/// The whole precompute of §8.2–8.3 and §9: samples the design space of `space`
-/// ([`sample_parameters`]), solves every sample in full ([`solve_configurations`]; progress
-/// stage `"solve"`), trains ([`train`]) and saves the model to `out`.
-///
-/// Over several `ranks` (`mpirun -n N galerkin radiosity train …`), each rank solves its
-/// share of the samples and trains on its share of rows and chunks
-/// ([`super::train_ranks::solve_configurations_across`], [`train_across`]); rank 0 alone
-/// writes the model (the others report 0 bytes on disk). With `source` — the scene file and
-/// its content's hash ([`super::any_scene::AnyScene::content_sha256`]) — the model records its
-/// provenance ([`crate::reduce::provenance`]).
-pub fn train_and_save(
-    space: &dyn DesignSpace,
-    options: &TrainOptions,
-    out: &Path,
-    source: Option<(&Path, String)>,
-    progress: Progress<'_>,
-    ranks: &dyn Communicator,
-) -> Result<TrainedScene, RadiosityError> {
-    options.check()?;
-    options.check_lights(space.lights().mode)?;
-    let start = std::time::Instant::now();
-    let params = sample_parameters(&space.ranges(), &space.defaults(), options.samples, options.seed);
-    let total = ranks.share(params.len()).len() as u64;
-    let configurations = super::train_ranks::solve_configurations_across(
-        space,
-        &params,
-        options,
-        &|done| progress("solve", done as u64, total),
-        ranks,
-    )?;
-    let solve_seconds = start.elapsed().as_secs_f64();
-    tracing::info!(seconds = solve_seconds, sent_mb = sent_mb(ranks), "training: full solves, gathered");
-    let (model, report) = train_across(space, &configurations, options, progress, ranks)?;
-    let model = match source {
-        Some((scene, sha256)) => model.with_provenance(crate::reduce::provenance::Provenance::new(
-            scene,
-            sha256,
-            format!("{options:?}"),
-            &params,
-        )),
-        None => model,
-    };
-    let mut bytes_on_disk = 0;
-    if ranks.is_root() {
-        model.save(out)?;
-        bytes_on_disk = ["model.safetensors", "visibility.safetensors"]
-            .iter()
-            .filter_map(|f| std::fs::metadata(out.join(f)).ok())
-            .map(|m| m.len())
-            .sum();
-    }
-    Ok(TrainedScene {
-        model,
-        report,
-        configurations: configurations.len(),
-        solve_seconds,
-        train_seconds: start.elapsed().as_secs_f64() - solve_seconds,
-        bytes_on_disk,
-    })
 }

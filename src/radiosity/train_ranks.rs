@@ -37,10 +37,7 @@ pub fn solve_configurations_across(
         .map_err(|cause| RadiosityError::Solve(format!("gathering the solved configurations: {cause}")))?;
     let mut all = Vec::with_capacity(params.len());
     for (rank, part) in parts.iter().enumerate() {
-        let mut reader = Reader { bytes: part, rank };
-        while !reader.bytes.is_empty() {
-            all.push(reader.configuration()?);
-        }
+        all.extend(decode(part, &format!("rank {rank}"))?);
     }
     if all.len() != params.len() {
         return Err(RadiosityError::Solve(format!(
@@ -62,8 +59,9 @@ fn vec3s(v: &[DVec3]) -> impl Iterator<Item = f64> + '_ {
     v.iter().flat_map(|p| p.to_array())
 }
 
-/// Appends `c` to `out`.
-fn encode(c: &Configuration, out: &mut Vec<u8>) {
+/// Appends `c` to `out` (the bytes that cross between ranks and that a training's work
+/// directory keeps per solved configuration, [`super::train_stages`]).
+pub(crate) fn encode(c: &Configuration, out: &mut Vec<u8>) {
     let n = c.geometry.areas.len();
     for count in [c.params.len(), c.g.len(), n, c.visibility.len(), c.near_correction.len()] {
         out.extend_from_slice(&(count as u64).to_le_bytes());
@@ -84,14 +82,24 @@ fn encode(c: &Configuration, out: &mut Vec<u8>) {
     }
 }
 
+/// Every configuration [`encode`] wrote into `bytes`; errors name `source` (a rank, a file).
+pub(crate) fn decode(bytes: &[u8], source: &str) -> Result<Vec<Configuration>, RadiosityError> {
+    let mut reader = Reader { bytes, source };
+    let mut all = Vec::new();
+    while !reader.bytes.is_empty() {
+        all.push(reader.configuration()?);
+    }
+    Ok(all)
+}
+
 struct Reader<'a> {
     bytes: &'a [u8],
-    rank: usize,
+    source: &'a str,
 }
 
 impl Reader<'_> {
     fn bad(&self, what: &str) -> RadiosityError {
-        RadiosityError::Solve(format!("configuration bytes from rank {}: {what}", self.rank))
+        RadiosityError::Solve(format!("configuration bytes from {}: {what}", self.source))
     }
 
     fn word(&mut self) -> Result<u64, RadiosityError> {
@@ -187,14 +195,14 @@ mod tests {
         let good = configuration(n, vec![(1, 0.125), (2, -0.5), (5, 1e-3)]);
         let mut bytes = Vec::new();
         encode(&good, &mut bytes);
-        let back = Reader { bytes: &bytes, rank: 1 }.configuration().expect("read back");
+        let back = Reader { bytes: &bytes, source: "rank 1" }.configuration().expect("read back");
         assert_eq!(back.near_correction, good.near_correction);
         assert_eq!((back.g, back.radiosity, back.visibility), (good.g, good.radiosity, good.visibility));
         // (k = 4: i = j = 1; k = 3: i = 1 > j = 0; k = 9: beyond n²; a NaN.)
         for bad in [vec![(4, 0.1)], vec![(3, 0.1)], vec![(9, 0.1)], vec![(1, f32::NAN)]] {
             let mut bytes = Vec::new();
             encode(&configuration(n, bad.clone()), &mut bytes);
-            let e = Reader { bytes: &bytes, rank: 2 }.configuration().expect_err("refused");
+            let e = Reader { bytes: &bytes, source: "rank 2" }.configuration().expect_err("refused");
             assert!(e.to_string().contains("rank 2") && e.to_string().contains("near-field"), "{bad:?}: {e}");
         }
     }

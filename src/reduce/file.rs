@@ -181,11 +181,37 @@ pub fn save_arrays(
         .map(|(n, b, s)| TensorView::new(Dtype::F64, s.clone(), b).map(|v| (n.clone(), v)))
         .collect::<Result<Vec<_>, _>>()
         .map_err(|e| fail(e.to_string()))?;
-    let buffer = safetensors::serialize(views, Some(metadata)).map_err(|e| fail(e.to_string()))?;
+    let buffer = serialize(views, metadata).map_err(|e| fail(e.to_string()))?;
     if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).map_err(|e| fail(e.to_string()))?;
     }
     crate::atomic_file::write(path, &buffer).map_err(|e| fail(e.to_string()))
+}
+
+/// `safetensors::serialize` with the header's keys in sorted order, so the same arrays and
+/// metadata always make the same bytes (the crate writes the metadata map in hash order; a
+/// training resumed from its work directory is checked bit for bit against a straight one).
+/// The header stays padded with spaces to a multiple of 8 bytes, as the format asks.
+pub fn serialize<'a>(
+    views: Vec<(String, TensorView<'a>)>,
+    metadata: HashMap<String, String>,
+) -> Result<Vec<u8>, String> {
+    let buffer = safetensors::serialize(views, Some(metadata)).map_err(|e| e.to_string())?;
+    let header_len = buffer
+        .first_chunk::<8>()
+        .and_then(|n| usize::try_from(u64::from_le_bytes(*n)).ok())
+        .filter(|&n| n <= buffer.len() - 8)
+        .ok_or("safetensors wrote no header")?;
+    let header: serde_json::Value =
+        serde_json::from_slice(&buffer[8..8 + header_len]).map_err(|e| format!("header: {e}"))?;
+    // serde_json's map is ordered by key (no `preserve_order`): writing it back sorts it.
+    let mut text = serde_json::to_vec(&header).map_err(|e| format!("header: {e}"))?;
+    text.resize(text.len().div_ceil(8) * 8, b' ');
+    let mut out = Vec::with_capacity(8 + text.len() + buffer.len() - 8 - header_len);
+    out.extend_from_slice(&(text.len() as u64).to_le_bytes());
+    out.extend_from_slice(&text);
+    out.extend_from_slice(&buffer[8 + header_len..]);
+    Ok(out)
 }
 
 /// What [`load_arrays`] reads: the metadata and the arrays by name.

@@ -27,6 +27,7 @@ mod premultiply;
 pub mod provenance;
 pub mod ranks;
 mod reduced;
+pub mod reductor;
 mod snapshot_basis;
 pub mod synthetic;
 
@@ -34,7 +35,7 @@ pub use basis::{Bases, Basis};
 pub use error::ReduceError;
 pub use expr::Expr;
 pub(crate) use file::erased;
-pub use file::{load_arrays, save_arrays, ModelExtras, FORMAT, VERSION};
+pub use file::{load_arrays, save_arrays, serialize, ModelExtras, FORMAT, VERSION};
 pub use gpu_eval::{Backend, GpuReducedModel};
 pub use model::{FullTensor, Model, ReduceOptions, StreamedTensor, TensorDecl};
 pub use pca::{pca, pca_across, pca_on, pca_with, Pca, SnapshotFile, SnapshotFn, SnapshotSource, Truncation};

@@ -7,26 +7,25 @@
 //! stopped: a run whose snapshot directory already holds all its frames is not simulated again
 //! (one that holds fewer — the process stopped mid-run — is simulated again from its start),
 //! and bases built from the same runs and sizes are read back instead of rebuilt. The work
-//! directory remembers the scene and frames it was made for (`work.json`) and refuses another.
+//! directory remembers the scene and frames it was made for (`work.json`, the reduction
+//! workflow's key, [`crate::reduce::reductor`]) and refuses another.
 //! Nothing of size cells × frames is held in memory: runs stream to disk frame by frame, and
 //! the bases and trajectories stream from it ([`super::training`]).
 //!
 //! A cavity's model also gets its motion model ([`super::cavity_motion`]), so it can be
 //! driven by compressions at run time.
 //!
-//! Each stage reports its wall time and the process's peak memory during it.
+//! Each stage reports its wall time and the process's peak memory during it
+//! ([`crate::reduce::reductor::StageReport`]).
 
 use std::path::{Path, PathBuf};
-use std::time::Instant;
-
-use serde::{Deserialize, Serialize};
 
 use crate::fluid::cavity::TRAINING_RUNS;
 use crate::fluid::run::simulate_run;
 use crate::fluid::scene::{FluidScene, Motion};
 use crate::fluid::snapshots::SnapshotReader;
 use crate::fluid::FluidError;
-use crate::process::{peak_memory_mb, reset_peak_memory};
+use crate::reduce::reductor::{fingerprint, Reductor, StageClock, StageReport};
 use crate::reduce::{Communicator, RanksError, SingleRank};
 
 use super::bases::{BasisSizes, FluidBases};
@@ -78,15 +77,6 @@ pub enum TrainingEvent {
     /// A part of the bases or tensors started (`f`, `u`, `g`, `h`, `d`, `trajectories`,
     /// `premultiply`).
     Part(String),
-}
-
-/// What a work directory was made for.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-struct WorkKey {
-    scene: PathBuf,
-    /// The scene file's text.
-    scene_text: String,
-    frames: usize,
 }
 
 /// The training runs of `scene`: the cavity's asked-for or all 14; otherwise the one.
@@ -153,7 +143,10 @@ pub fn train_scene_across(
     let waiting = |e: RanksError| FluidError::State(format!("waiting for the other ranks: {e}"));
     // Rank 0 checks or writes the work directory's key; the others wait for it.
     if ranks.is_root() {
-        check_work_key(scene_path, &scene_text, frames, work)?;
+        let made_for = format!("{} with {frames} frames per run", scene_path.display());
+        let key = fingerprint(&[scene_text.as_bytes(), &(frames as u64).to_le_bytes()]);
+        Reductor::open(work, &made_for, &key, true, |_: &StageReport| {})
+            .map_err(|e| FluidError::State(e.to_string()))?;
     }
     ranks.barrier().map_err(waiting)?;
 
@@ -166,7 +159,7 @@ pub fn train_scene_across(
         if !share.contains(&index) {
             continue;
         }
-        let stage = Stage::start();
+        let stage = StageClock::start();
         let done = SnapshotReader::open(&dir).is_ok_and(|r| r.meta().frames == frames + 1);
         if !done {
             on_event(TrainingEvent::RunStarted { run, index, of: runs.len(), frames });
@@ -179,7 +172,7 @@ pub fn train_scene_across(
                 on_event(TrainingEvent::Frame(k))
             })?;
         }
-        on_event(stage.done(format!("run {run}"), done));
+        on_event(stage.done(&format!("run {run}"), done).into());
     }
     ranks.barrier().map_err(waiting)?;
 
@@ -187,7 +180,7 @@ pub fn train_scene_across(
     let set = TrainingSet::open(&dirs)?;
     let bases_path = work.join("bases.safetensors");
     let bases_key = format!("{:?} {:?} {frames}", runs, options.sizes);
-    let stage = Stage::start();
+    let stage = StageClock::start();
     let kept = if bases_path.exists() { FluidBases::load(&bases_path, &bases_key)? } else { None };
     let resumed = kept.is_some();
     let bases = match kept {
@@ -205,10 +198,10 @@ pub fn train_scene_across(
             b
         }
     };
-    on_event(stage.done("bases".into(), resumed));
+    on_event(stage.done("bases", resumed).into());
 
     // The trajectories and the premultiplied tensors: the model.
-    let stage = Stage::start();
+    let stage = StageClock::start();
     let mut model = ReducedFluidModel::train(
         &set,
         bases,
@@ -224,54 +217,17 @@ pub fn train_scene_across(
     if ranks.is_root() {
         model.save(model_path)?;
     }
-    on_event(stage.done("tensors".into(), false));
+    on_event(stage.done("tensors", false).into());
     Ok(model)
 }
 
-/// Refuses a work directory that holds the training of another scene or frame count, and
-/// marks a new one as this training's.
-fn check_work_key(scene_path: &Path, scene_text: &str, frames: usize, work: &Path) -> Result<(), FluidError> {
-    std::fs::create_dir_all(work).map_err(|e| io(work, e))?;
-    let key = WorkKey { scene: scene_path.to_path_buf(), scene_text: scene_text.to_string(), frames };
-    let key_path = work.join("work.json");
-    match std::fs::read_to_string(&key_path) {
-        Ok(text) => {
-            let old: WorkKey = serde_json::from_str(&text).map_err(|e| io(&key_path, e))?;
-            if old.scene_text != key.scene_text || old.frames != key.frames {
-                return Err(io(
-                    work,
-                    format!(
-                        "holds the training of {} with {} frames per run; give another --work or remove it",
-                        old.scene.display(),
-                        old.frames
-                    ),
-                ));
-            }
-        }
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
-            let text = serde_json::to_string_pretty(&key).map_err(|e| io(&key_path, e))?;
-            std::fs::write(&key_path, text).map_err(|e| io(&key_path, e))?;
-        }
-        Err(e) => return Err(io(&key_path, e)),
-    }
-    Ok(())
-}
-
-/// A stage's start: its clock, and the peak memory reset.
-struct Stage(Instant);
-
-impl Stage {
-    fn start() -> Self {
-        reset_peak_memory();
-        Self(Instant::now())
-    }
-
-    fn done(self, stage: String, resumed: bool) -> TrainingEvent {
+impl From<StageReport> for TrainingEvent {
+    fn from(r: StageReport) -> Self {
         TrainingEvent::StageDone {
-            stage,
-            seconds: self.0.elapsed().as_secs_f64(),
-            peak_mb: peak_memory_mb(),
-            resumed,
+            stage: r.stage,
+            seconds: r.seconds,
+            peak_mb: r.peak_mb,
+            resumed: r.resumed,
         }
     }
 }

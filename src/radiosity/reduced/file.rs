@@ -86,7 +86,7 @@ impl ReducedRadiosity {
             .map(|(n, d, b, s)| TensorView::new(*d, s.clone(), b).map(|v| (n.to_string(), v)))
             .collect::<Result<Vec<_>, _>>()
             .map_err(|e| fail(e.to_string()))?;
-        let buffer = safetensors::serialize(views, Some(meta)).map_err(|e| fail(e.to_string()))?;
+        let buffer = crate::reduce::serialize(views, meta).map_err(fail)?;
         let path = dir.join("visibility.safetensors");
         crate::atomic_file::write(&path, &buffer).map_err(|e| fail(e.to_string()))
     }
