@@ -27,7 +27,7 @@ fn a_model_names_its_scene_and_refuses_a_changed_one() {
     let (model, _) = train(space, &configurations, &options, &|_, _, _| {}).unwrap();
     let provenance = scene.provenance(&scene_path, format!("{options:?}"), &params).unwrap();
     let model_dir = dir.path().join("model");
-    model.with_provenance(provenance.clone()).save(&model_dir).unwrap();
+    model.clone().with_provenance(provenance.clone()).save(&model_dir).unwrap();
 
     let back = ReducedRadiosity::load(&model_dir).unwrap();
     let p = back.provenance().expect("recorded");
@@ -40,6 +40,14 @@ fn a_model_names_its_scene_and_refuses_a_changed_one() {
     // No scene given: the one recorded; the same scene given: accepted.
     assert_eq!(back.scene_file(None).unwrap(), std::path::absolute(&scene_path).unwrap());
     assert_eq!(back.scene_file(Some(&scene_path)).unwrap(), scene_path);
+
+    // A model another engine version trained: refused at load, naming both versions and the file.
+    let mut foreign = provenance.clone();
+    foreign.engine = "galerkin 0.0.9".into();
+    let foreign_dir = dir.path().join("foreign");
+    model.clone().with_provenance(foreign).save(&foreign_dir).unwrap();
+    let e = ReducedRadiosity::load(&foreign_dir).err().expect("refused").to_string();
+    assert!(e.contains("galerkin 0.0.9") && e.contains(ENGINE) && e.contains("foreign"), "{e}");
 
     // `render --model DIR` without a scene draws the recorded scene's configuration.
     let picture = dir.path().join("reduced.png");

@@ -58,6 +58,18 @@ impl Provenance {
         ))
     }
 
+    /// Refuses a model another engine version trained (its tensors, their layout and the
+    /// estimate's meaning belong to that engine), naming both versions.
+    pub fn check_engine(&self) -> Result<(), String> {
+        if self.engine == ENGINE {
+            return Ok(());
+        }
+        Err(format!(
+            "trained by {} but this is {}: a model is read by the engine that trained it; train it again",
+            self.engine, ENGINE
+        ))
+    }
+
     /// As stored in a model file's metadata (JSON).
     pub fn to_json(&self) -> String {
         serde_json::to_string(self).unwrap_or_default()

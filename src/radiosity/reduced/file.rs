@@ -178,7 +178,11 @@ impl ReducedRadiosity {
         let loaded =
             Self::new(model, learned, emission, faces, sky, trained_near).map_err(|e| fail(e.to_string()))?;
         let loaded = match meta.get("provenance") {
-            Some(text) => loaded.with_provenance(Provenance::from_json(text).map_err(&fail)?),
+            Some(text) => {
+                let provenance = Provenance::from_json(text).map_err(&fail)?;
+                provenance.check_engine().map_err(&fail)?;
+                loaded.with_provenance(provenance)
+            }
             None => loaded,
         };
         if file.names().iter().all(|n| *n != "left_out_error") {
