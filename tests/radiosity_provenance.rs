@@ -46,7 +46,7 @@ fn a_model_names_its_scene_and_refuses_a_changed_one() {
     foreign.engine = "galerkin 0.0.9".into();
     let foreign_dir = dir.path().join("foreign");
     model.clone().with_provenance(foreign).save(&foreign_dir).unwrap();
-    let e = ReducedRadiosity::load(&foreign_dir).err().expect("refused").to_string();
+    let e = ReducedRadiosity::load(&foreign_dir).expect_err("refused").to_string();
     assert!(e.contains("galerkin 0.0.9") && e.contains(ENGINE) && e.contains("foreign"), "{e}");
 
     // `render --model DIR` without a scene draws the recorded scene's configuration.

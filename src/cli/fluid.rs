@@ -145,6 +145,12 @@ pub struct SimulateArgs {
     /// Cavity scenes: the training run (0 to 13) instead of the scene's `run`.
     #[arg(long)]
     pub run: Option<usize>,
+    /// Cavity scenes: drive the three small cavities by compressions no training run made
+    /// instead — FRAME=A1/A2/A3 keyframes, comma-separated, interpolated linearly and held
+    /// after the last (see `fluid reduced --drive`); frames default to the last keyframe's.
+    /// The full run `fluid compare --full` compares a driven reduced run with.
+    #[arg(long, conflicts_with = "run")]
+    pub drive: Option<galerkin::fluid::reduced::CompressionSchedule>,
 }
 
 /// Arguments of `galerkin fluid render`.
@@ -280,7 +286,7 @@ fn simulate(args: &SimulateArgs) -> Result<()> {
     if let Some(run) = args.run {
         scene.set_run(run)?;
     }
-    let frames = args.frames.unwrap_or(scene.frames);
+    let frames = args.frames.unwrap_or(args.drive.as_ref().map_or(scene.frames, |d| d.last_frame()));
     let (mesh, topo) = (&scene.mesh, &scene.topology);
     println!(
         "fluid: {} ({}) — {}D, {} cells, {} faces ({} on the boundary), {} vertices",
@@ -293,10 +299,22 @@ fn simulate(args: &SimulateArgs) -> Result<()> {
         mesh.vertex_count(),
     );
     let bar = crate::progress_bar(frames as u64, "simulating");
-    let summary = simulate_run(&mut scene, frames, &args.out, args.force, &mut |_, solver, state, _| {
-        bar.set_message(format!("energy {:.4}", solver.energy(state)));
-        bar.inc(1);
-    })?;
+    let mut on_frame =
+        |_: usize, solver: &galerkin::fluid::FluidSolver, state: &galerkin::fluid::FluidState, _: &_| {
+            bar.set_message(format!("energy {:.4}", solver.energy(state)));
+            bar.inc(1);
+        };
+    let summary = match &args.drive {
+        Some(schedule) => galerkin::fluid::run::simulate_driven(
+            &mut scene,
+            schedule,
+            frames,
+            &args.out,
+            args.force,
+            &mut on_frame,
+        )?,
+        None => simulate_run(&mut scene, frames, &args.out, args.force, &mut on_frame)?,
+    };
     bar.finish_and_clear();
     if frames == 0 {
         println!("the initial state only (0 frames simulated) → {}", args.out.display());

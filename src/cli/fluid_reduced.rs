@@ -90,13 +90,15 @@ pub struct CompareArgs {
     /// The scene it was trained on.
     #[arg(long, default_value = "scenes/fluid/cavity.toml")]
     pub scene: PathBuf,
-    /// Compare on training run K (replayed; the cavity's full run is simulated again) …
+    /// Compare on training run K (replayed at the pace it was trained at; the cavity's full run
+    /// is simulated again) …
     #[arg(long, conflicts_with = "drive")]
     pub run: Option<usize>,
-    /// … reading the full run from this snapshot directory instead of simulating it (the
-    /// training's own, e.g. out/cavity.work/run-00; any scene, the bird's too). Implies
-    /// --run 0 unless --run is given.
-    #[arg(long, conflicts_with = "drive")]
+    /// … or on the full run in this snapshot directory, read instead of simulated: the
+    /// reduced run follows that run's own geometry and induced flux from its frame 0 — a
+    /// training run (e.g. out/cavity.work/run-00), a held-out obstacle of the same mesh, a
+    /// driven cavity (`fluid simulate --drive`); any scene, the bird's too.
+    #[arg(long, conflicts_with_all = ["drive", "run"])]
     pub full: Option<PathBuf>,
     /// … or on compressions no run made (keyframes, see `fluid reduced --drive`).
     #[arg(long, default_value = "0=0/0/0,30=0.5/0/0,60=0.5/0/0.4,90=0/0/0.4")]
@@ -139,6 +141,12 @@ pub struct ReducedArgs {
     /// reduced tensor (the bird's wingbeat slowed down or sped up).
     #[arg(long, conflicts_with = "drive")]
     pub pace: Option<f64>,
+    /// Follow the motion of the full run in this snapshot directory instead — any run of the
+    /// model's mesh: a held-out obstacle, a driven cavity (`fluid simulate --drive`), a
+    /// training run — its geometry and induced flux projected into the model's bases, from
+    /// its frame 0.
+    #[arg(long, value_name = "DIR", conflicts_with_all = ["motion", "drive", "pace"])]
+    pub geometry: Option<PathBuf>,
     /// Snapshot directory to write, lifted to the full space (for `fluid render`).
     #[arg(long, default_value = "out/fluid-reduced")]
     pub out: PathBuf,
@@ -352,13 +360,19 @@ pub fn compare(desc: &galerkin::gpu::GpuDesc, args: &CompareArgs) -> Result<()> 
     let model = ReducedFluidModel::load(&args.model)?;
     let scene = galerkin::fluid::scene::FluidScene::load(&args.scene)?;
     let (motion, frames, title) = match (args.run, &args.full) {
-        (run, Some(full)) => {
-            let k = run.unwrap_or(0);
-            let motion = ComparedMotion::Recorded { full: full.clone(), run: k };
-            (motion, args.frames.unwrap_or(scene.frames), format!("training run {k}"))
+        (_, Some(full)) => {
+            let motion = ComparedMotion::Recorded { full: full.clone() };
+            let recorded = galerkin::fluid::snapshots::SnapshotReader::open(full)?.meta().frames;
+            (
+                motion,
+                args.frames.unwrap_or(recorded.saturating_sub(1)),
+                format!("the run in {}", full.display()),
+            )
         }
         (Some(k), None) => {
-            (ComparedMotion::Training(k), args.frames.unwrap_or(scene.frames), format!("training run {k}"))
+            // The run's own frame count (a model trained with --frames N), not the scene's.
+            let trained = model.trajectories.get(k).map_or(scene.frames, |t| t.frames());
+            (ComparedMotion::Training(k), args.frames.unwrap_or(trained), format!("training run {k}"))
         }
         (None, None) => (
             ComparedMotion::Driven(warn_beyond(&model, &args.drive)),
@@ -408,21 +422,37 @@ pub fn reduced(args: &ReducedArgs) -> Result<()> {
     let model = ReducedFluidModel::load(&args.model)?;
     let fluid = ReducedFluid::new(&model)?;
     let k = args.motion.run();
-    let available = match &args.drive {
-        Some(schedule) => schedule.last_frame(),
-        None => {
+    let recorded = match &args.geometry {
+        Some(dir) => {
+            let reader = galerkin::fluid::snapshots::SnapshotReader::open(dir)?;
+            Some(galerkin::fluid::reduced::Trajectory::recorded(&model, &reader, dir)?)
+        }
+        None => None,
+    };
+    let available = match (&args.drive, &recorded) {
+        (Some(schedule), _) => schedule.last_frame(),
+        (None, Some(traj)) => traj.frames(),
+        (None, None) => {
             let frames = model.trajectories.get(k).map_or(0, |t| t.g.shape()[0].saturating_sub(1));
             (frames as f64 / args.pace.unwrap_or(1.0) + 1e-9).floor() as usize
         }
     };
     let frames = args.frames.unwrap_or(available);
     let bar = crate::progress_bar(frames as u64, "reduced steps");
-    let run = match &args.drive {
-        Some(schedule) => {
+    let run = match (&args.drive, &recorded, &args.geometry) {
+        (Some(schedule), _, _) => {
             let schedule = warn_beyond(&model, schedule);
             galerkin::fluid::reduced::run_driven(&model, &fluid, &schedule, frames, &mut |_| bar.inc(1))?
         }
-        None => match args.pace {
+        (None, Some(traj), Some(dir)) => galerkin::fluid::reduced::run::follow(
+            &fluid,
+            traj,
+            true,
+            frames,
+            &dir.display().to_string(),
+            &mut |_| bar.inc(1),
+        )?,
+        _ => match args.pace {
             Some(pace) => {
                 galerkin::fluid::reduced::run_paced(&model, &fluid, k, pace, frames, &mut |_| bar.inc(1))?
             }

@@ -70,6 +70,35 @@ pub fn simulate_run(
     simulate_with(&setup, frames, &mut |k| scene.geometry(k), out, overwrite, on_frame)
 }
 
+/// Simulates the cavity scene `scene` driven by `schedule` — its three compressions per frame,
+/// a motion no training run needs to have made — for `frames` frames into the snapshot
+/// directory `out` (as [`simulate_run`]): the full run a driven reduced run
+/// ([`super::reduced::run_driven`]) is compared with. Refused for a scene that is not a cavity.
+pub fn simulate_driven(
+    scene: &mut FluidScene,
+    schedule: &super::reduced::CompressionSchedule,
+    frames: usize,
+    out: &Path,
+    overwrite: bool,
+    on_frame: &mut dyn FnMut(usize, &FluidSolver, &FluidState, &StepReport),
+) -> Result<RunSummary, FluidError> {
+    let super::scene::Motion::Cavity { cavity, .. } = &mut scene.motion else {
+        return Err(FluidError::State(
+            "--drive moves the cavity's small cavities: give a cavity scene (e.g. scenes/fluid/cavity_small.toml)"
+                .into(),
+        ));
+    };
+    let setup = RunSetup {
+        mesh: scene.mesh.clone(),
+        topology: scene.topology.clone(),
+        params: scene.params,
+        initial_velocity: scene.initial_velocity.clone(),
+        periodic_axis: scene.periodic_axis,
+    };
+    let mut geometry = |k: usize| Ok(cavity.geometry(schedule.at(k), k)?);
+    simulate_with(&setup, frames, &mut geometry, out, overwrite, on_frame)
+}
+
 /// What a run starts from: the mesh at frame 0, its topology, parameters and initial velocity.
 #[derive(Clone, Debug)]
 pub struct RunSetup {

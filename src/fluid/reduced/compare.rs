@@ -26,7 +26,7 @@ use crate::fluid::{FluidError, FluidSolver};
 
 use super::cavity_motion::CompressionSchedule;
 use super::model::ReducedFluidModel;
-use super::run::{run_driven, run_reduced, ReducedMotion};
+use super::run::{follow, run_driven, run_reduced, ReducedMotion};
 use super::step::{ReducedFluid, ReducedState};
 use crate::fluid::snapshots::SnapshotReader;
 use crate::reduce::Basis;
@@ -42,13 +42,14 @@ pub enum ComparedMotion {
     Training(usize),
     /// The cavity driven by compressions (the reduced run's ĥ from the induced-flux tensor).
     Driven(CompressionSchedule),
-    /// Training run `run` of any scene, the full run read from its snapshot directory `full`
-    /// (e.g. `run-00` of the training's work directory) instead of simulated again.
+    /// Any recorded full run of the model's mesh, read from its snapshot directory — a training
+    /// run (`run-00` of the training's work directory), a held-out obstacle, a driven cavity
+    /// (`fluid simulate --drive`) — the reduced run following the geometry and induced flux
+    /// of that run's own files ([`super::model::Trajectory::recorded`]), never a training
+    /// run's.
     Recorded {
         /// The full run's snapshot directory.
         full: PathBuf,
-        /// The model's training run it holds (replayed by the reduced run).
-        run: usize,
     },
 }
 
@@ -160,8 +161,13 @@ pub fn compare(
     model.check_mesh(&fingerprint)?;
     let fluid = ReducedFluid::new(model)?;
     let reduced = match motion {
-        ComparedMotion::Training(k) | ComparedMotion::Recorded { run: k, .. } => {
+        ComparedMotion::Training(k) => {
             run_reduced(model, &fluid, ReducedMotion::Replay(*k), frames, &mut |_| {})?
+        }
+        ComparedMotion::Recorded { full } => {
+            let reader = SnapshotReader::open(full)?;
+            let traj = super::model::Trajectory::recorded(model, &reader, full)?;
+            follow(&fluid, &traj, true, frames, &full.display().to_string(), &mut |_| {})?
         }
         ComparedMotion::Driven(schedule) => run_driven(model, &fluid, schedule, frames, &mut |_| {})?,
     };
@@ -169,7 +175,7 @@ pub fn compare(
         |n: &str| model.basis(n).ok_or_else(|| FluidError::State(format!("the model has no basis {n}")));
     let (bu, bf, bg) = (basis("u")?, basis("f")?, basis("g")?);
     let bh = model.basis("h");
-    let mut full = FullRun::new(scene, motion, frames, refine, bh.is_some())?;
+    let mut full = FullRun::new(scene, model, motion, frames, refine, bh.is_some())?;
     let d = scene.mesh.dim();
     let mut out = Comparison { frame_time: model.frame_time, ..Comparison::default() };
     let mut full_seconds = Vec::new();
@@ -274,6 +280,7 @@ enum FullRun<'a> {
 impl<'a> FullRun<'a> {
     fn new(
         scene: &'a FluidScene,
+        model: &ReducedFluidModel,
         motion: &'a ComparedMotion,
         frames: usize,
         refine: usize,
@@ -293,7 +300,9 @@ impl<'a> FullRun<'a> {
                 let amounts = crate::fluid::cavity::training_run(*k).ok_or_else(|| {
                     FluidError::State(format!("training run {k}: the cavity has runs 0 to 13"))
                 })?;
-                let total = scene.frames;
+                // The compressions at the pace the model's run was trained at (its own frame
+                // count, which `train-scene --frames` may have set), not the scene's.
+                let total = model.trajectories.get(*k).map_or(scene.frames, |t| t.frames());
                 Box::new(move |t| Ok(crate::fluid::cavity::Cavity::compression(amounts, t, total)))
             }
             ComparedMotion::Driven(schedule) => Box::new(move |t| Ok(schedule.at(t))),

@@ -512,21 +512,78 @@ fn project_run(
     run: &crate::fluid::snapshots::SnapshotReader,
     bases: &FluidBases,
 ) -> Result<Trajectory, FluidError> {
+    project_with(run, [&bases.u, &bases.f, &bases.g], bases.h.as_ref())
+}
+
+/// A run's frames projected into `B_u`, `B_f`, `B_g` (and `B_h`): ĝ and ĥ per frame, û and f̂ of
+/// frame 0.
+fn project_with(
+    run: &crate::fluid::snapshots::SnapshotReader,
+    [bu, bf, bg]: [&Basis; 3],
+    bh: Option<&Basis>,
+) -> Result<Trajectory, FluidError> {
     let frames = run.meta().frames;
-    let mg = bases.g.reduced_dim();
-    let mh = bases.h.as_ref().map_or(0, Basis::reduced_dim);
+    let mg = bg.reduced_dim();
+    let mh = bh.map_or(0, Basis::reduced_dim);
     let mut g = Vec::with_capacity(frames * mg);
     let mut h = Vec::with_capacity(frames * mh);
     for k in 0..frames {
-        g.extend(bases.g.project(&run.frame("g", k)?));
-        if let Some(bh) = &bases.h {
+        g.extend(bg.project(&run.frame("g", k)?));
+        if let Some(bh) = bh {
             h.extend(bh.project(&run.frame("h", k)?));
         }
     }
     Ok(Trajectory {
         g: Tensor::from_vec(&[frames, mg], g).expect("frames × m_g"),
         h: Tensor::from_vec(&[frames, mh], h).expect("frames × m_h"),
-        u0: bases.u.project(&run.frame("u", 0)?),
-        f0: bases.f.project(&run.frame("f", 0)?),
+        u0: bu.project(&run.frame("u", 0)?),
+        f0: bf.project(&run.frame("f", 0)?),
     })
+}
+
+/// Relative difference of frame times above which a recorded run is refused as not the
+/// model's pace (both are decimal numbers written and read back, so equal ones agree to
+/// rounding).
+const FRAME_TIME_TOLERANCE: f64 = 1e-9;
+
+impl Trajectory {
+    /// The motion a recorded full run made — any snapshot directory of the model's mesh: a
+    /// training run, a held-out obstacle, a driven cavity — projected into `model`'s bases, so
+    /// the reduced model can follow exactly the geometry (and induced flux) of that run from its
+    /// frame 0 (seed 000 §6.2's replayed trajectories, for a run the model never saw). Refused,
+    /// naming `run`'s directory, when it is another mesh or topology (the mesh fingerprint of
+    /// its frame 0), another frame time, or holds no frame after the first.
+    pub fn recorded(
+        model: &ReducedFluidModel,
+        run: &crate::fluid::snapshots::SnapshotReader,
+        dir: &std::path::Path,
+    ) -> Result<Self, FluidError> {
+        let (mesh, topo) = run.mesh_at(0)?;
+        let fingerprint = MeshFingerprint::of(&mesh, &topo, run.meta().periodic_axis);
+        model.check_mesh(&fingerprint).map_err(|e| {
+            FluidError::State(format!("{}: a run of another mesh than the model's: {e}", dir.display()))
+        })?;
+        let (dt, model_dt) = (run.meta().frame_time, model.frame_time);
+        let same_pace = (dt - model_dt).abs() <= FRAME_TIME_TOLERANCE * model_dt.abs();
+        if !same_pace {
+            return Err(FluidError::State(format!(
+                "{}: frames {dt} s apart, the model steps {model_dt} s a frame (trained at that pace)",
+                dir.display()
+            )));
+        }
+        if run.meta().frames < 2 {
+            return Err(FluidError::State(format!(
+                "{}: the run holds its initial state only, no motion to follow",
+                dir.display()
+            )));
+        }
+        let basis =
+            |n: &str| model.basis(n).ok_or_else(|| FluidError::State(format!("the model has no basis {n}")));
+        project_with(run, [basis("u")?, basis("f")?, basis("g")?], model.basis("h"))
+    }
+
+    /// Frames of motion after the initial state.
+    pub fn frames(&self) -> usize {
+        self.g.shape()[0].saturating_sub(1)
+    }
 }

@@ -82,18 +82,29 @@ pub fn run_reduced(
 ) -> Result<ReducedRun, FluidError> {
     let k = motion.run();
     let traj = trajectory(model, k, &format!("replay:{k}"))?;
-    let available = traj.g.shape()[0].saturating_sub(1);
+    follow(fluid, traj, matches!(motion, ReducedMotion::Replay(_)), frames, &format!("replay:{k}"), on_frame)
+}
+
+/// Runs `frames` reduced steps along `traj` — a training run's motion, or a recorded run's
+/// ([`Trajectory::recorded`]: a held-out obstacle, a driven cavity) — from its initial state:
+/// frame t's ĝ is the trajectory's, its ĥ the trajectory's too when `replay_h`, otherwise from
+/// the reduced induced-flux tensor. `what` names the motion in errors.
+pub fn follow(
+    fluid: &ReducedFluid,
+    traj: &Trajectory,
+    replay_h: bool,
+    frames: usize,
+    what: &str,
+    on_frame: &mut dyn FnMut(usize),
+) -> Result<ReducedRun, FluidError> {
+    let available = traj.frames();
     if frames > available {
-        return Err(FluidError::State(format!(
-            "replay:{k}: {frames} frames asked, training run {k} has a motion of {available}"
-        )));
+        return Err(FluidError::State(format!("{what}: {frames} frames asked, the motion has {available}")));
     }
     let (mg, mh) = (traj.g.shape()[1], traj.h.shape()[1]);
     let row = |t: &crate::tensor::Tensor, m: usize, i: usize| t.data()[i * m..(i + 1) * m].to_vec();
     let start = ReducedState { u: traj.u0.clone(), f: traj.f0.clone(), g: row(&traj.g, mg, 0) };
-    let replay = |t: usize| -> Option<Vec<f64>> {
-        matches!(motion, ReducedMotion::Replay(_)).then(|| row(&traj.h, mh, t))
-    };
+    let replay = |t: usize| -> Option<Vec<f64>> { replay_h.then(|| row(&traj.h, mh, t)) };
     step_through(fluid, start, frames, &mut |t| Ok((row(&traj.g, mg, t), replay(t))), on_frame)
 }
 
