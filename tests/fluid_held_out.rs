@@ -85,6 +85,42 @@ fn a_model_follows_and_is_compared_on_a_driven_run_it_was_not_trained_on() {
     assert!(c.error.iter().all(|e| e.is_finite()) && c.error[6] > 0.0);
     eprintln!("driven, held out: mean error {:.3}", c.error_summary().0);
 
+    // The error indicator, without the full run, tracks the true error: estimate ÷ error within
+    // [0.5, 10] on every frame (issue 48's band), the residual measured every step; measured
+    // every third step it is the same on the measured steps' frames up to the first gap.
+    let mut c = c;
+    c.add_indicator(&model, 1, &mut |_| {}).unwrap();
+    let every_step = c.estimate.clone();
+    let (lo, hi) = c.effectivity_range();
+    eprintln!("driven, held out: effectivity {lo:.2} to {hi:.2}");
+    assert!(lo >= 0.5 && hi <= 10.0, "effectivity {lo} to {hi}");
+    assert!(c.csv().lines().next().is_some_and(|h| h.ends_with("error_estimate,effectivity")));
+    c.add_indicator(&model, 3, &mut |_| {}).unwrap();
+    assert_eq!(c.estimate[1], every_step[1], "step 1 is measured both ways");
+    assert!(c.estimate[2] != every_step[2], "step 2 reuses step 1's residual");
+    assert!(c.add_indicator(&model, 0, &mut |_| {}).is_err());
+
+    // The reduced step reports its energy at the start, after advection, after the projection.
+    let report = &run.reports[2];
+    let (e0, e2) =
+        (fluid.energy(&run.states[2].u, &run.states[2].g), fluid.energy(&run.states[3].u, &run.states[3].g));
+    assert!((report.energy[0] - e0).abs() <= 1e-10 * e0, "{} vs {e0}", report.energy[0]);
+    assert!((report.energy[2] - e2).abs() <= 1e-10 * e2, "{} vs {e2}", report.energy[2]);
+
+    // The step split: its whole step is compare's one-step error, computed the same way along
+    // another path (1e-9: summation order only); each stage's error finite and at most 1.
+    let splits =
+        galerkin::fluid::reduced::diagnose::split_steps(&model, &scene, &driven, 6, &mut |_| {}).unwrap();
+    assert_eq!(splits.len(), 6);
+    for s in &splits {
+        let one_step = c.one_step_error[s.frame];
+        assert!((s.step_error - one_step).abs() <= 1e-9, "frame {}: {} vs {one_step}", s.frame, s.step_error);
+        assert!(s.step_error_in_basis <= s.step_error + 1e-12, "the part inside B_u is at most the whole");
+        for e in [s.advection_error, s.advected_truncation, s.projection_error] {
+            assert!(e.is_finite() && e >= 0.0);
+        }
+    }
+
     // More frames than recorded: refused naming the run.
     let e = compare(&model, &scene, &ComparedMotion::Recorded { full: driven.clone() }, 7, 1, &mut |_| {})
         .unwrap_err()

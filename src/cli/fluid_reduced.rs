@@ -114,6 +114,16 @@ pub struct CompareArgs {
     /// Directory for comparison.csv, energy.png, error.png and error-section.png.
     #[arg(long, default_value = "out/fluid-compare")]
     pub out: PathBuf,
+    /// With --full: also split each reduced step into its stages, each against the full
+    /// solver's from the same start (advection, the advected velocity's distance from B_u,
+    /// projection; energies after each) → split.csv. One full step per frame.
+    #[arg(long, requires = "full")]
+    pub split: bool,
+    /// Also estimate the reduced run's error without the full run (the error indicator:
+    /// the full step from the lifted reduced state, measured every K-th step) and compare
+    /// the estimate with the true error: columns error_estimate and effectivity.
+    #[arg(long, value_name = "K", value_parser = crate::cli::args::count_up_to(galerkin::fluid::reduced::indicator::MAX_EVERY))]
+    pub indicator_every: Option<usize>,
 }
 
 /// Arguments of `galerkin fluid reduced`.
@@ -147,6 +157,11 @@ pub struct ReducedArgs {
     /// its frame 0.
     #[arg(long, value_name = "DIR", conflicts_with_all = ["motion", "drive", "pace"])]
     pub geometry: Option<PathBuf>,
+    /// Estimate the run's error per frame without a full run (the error indicator: the full
+    /// step from the lifted reduced state, measured every K-th step; one full step each) →
+    /// indicator.csv in the output directory, shown by the viewer.
+    #[arg(long, value_name = "K", value_parser = crate::cli::args::count_up_to(galerkin::fluid::reduced::indicator::MAX_EVERY))]
+    pub indicator_every: Option<usize>,
     /// Snapshot directory to write, lifted to the full space (for `fluid render`).
     #[arg(long, default_value = "out/fluid-reduced")]
     pub out: PathBuf,
@@ -382,8 +397,13 @@ pub fn compare(desc: &galerkin::gpu::GpuDesc, args: &CompareArgs) -> Result<()> 
     };
     let bar =
         crate::progress_bar(frames as u64, if args.full.is_some() { "full run (read)" } else { "full run" });
-    let c = compare(&model, &scene, &motion, frames, args.refine, &mut |k| bar.set_position(k as u64))?;
+    let mut c = compare(&model, &scene, &motion, frames, args.refine, &mut |k| bar.set_position(k as u64))?;
     bar.finish_and_clear();
+    if let Some(every) = args.indicator_every {
+        let bar = crate::progress_bar(frames as u64, "error indicator");
+        c.add_indicator(&model, every, &mut |k| bar.set_position(k as u64))?;
+        bar.finish_and_clear();
+    }
     let gpu = galerkin::gpu::Gpu::new(desc)?;
     c.write_outputs(&gpu, &scene.mesh, &title, frames, &args.out)?;
     let (mean, worst) = c.error_summary();
@@ -415,6 +435,52 @@ pub fn compare(desc: &galerkin::gpu::GpuDesc, args: &CompareArgs) -> Result<()> 
         args.out.display()
     );
     drop(gpu);
+    if !c.estimate.is_empty() {
+        let (lo, hi) = c.effectivity_range();
+        println!(
+            "error indicator: estimate at the end {:.2} % (true {:.2} %); effectivity (estimate ÷ true error) from {lo:.2} to {hi:.2} over frames 1 to {frames}",
+            100.0 * c.estimate.last().copied().unwrap_or(0.0),
+            100.0 * c.error.last().copied().unwrap_or(0.0)
+        );
+    }
+    let (adv, proj) = c.reduced_energy_loss.iter().fold((0.0, 0.0), |(a, p), l| (a + l[0], p + l[1]));
+    println!(
+        "the reduced run's energy lost over its steps: in advection and diffusion {adv:.4e}, in the projection {proj:.4e}"
+    );
+    if let (true, Some(full)) = (args.split, &args.full) {
+        use galerkin::fluid::reduced::diagnose::{split_means, split_steps, StepSplit};
+        let bar = crate::progress_bar(frames as u64, "split steps");
+        let splits = split_steps(&model, &scene, full, frames, &mut |k| bar.set_position(k as u64))?;
+        bar.finish_and_clear();
+        let mut csv = String::from(StepSplit::CSV_HEADER);
+        for s in &splits {
+            csv += "\n";
+            csv += &s.csv_row();
+        }
+        csv += "\n";
+        let path = args.out.join("split.csv");
+        galerkin::atomic_file::write(&path, csv.as_bytes())?;
+        let [adv, trunc, proj, step, in_basis] = split_means(&splits);
+        let (mut lost_full_adv, mut lost_red_adv, mut lost_full_proj, mut lost_red_proj, mut lost_start) =
+            (0.0, 0.0, 0.0, 0.0, 0.0);
+        for s in &splits {
+            let e = s.energy;
+            lost_start += e[0] - e[1];
+            lost_full_adv += e[0] - e[2];
+            lost_red_adv += e[1] - e[3];
+            lost_full_proj += e[2] - e[4];
+            lost_red_proj += e[3] - e[5];
+        }
+        println!(
+            "fluid compare --split: one step from each full frame, means over {frames} frames: advection {:.2} %, the advected velocity outside B_u {:.2} %, projection {:.2} %, whole step {:.2} % ({:.2} % of it inside B_u, what a run carries on); energy lost, summed over the steps (each from the full frame): projecting the full frame into the bases {lost_start:.4e}; advection full {lost_full_adv:.4e}, reduced {lost_red_adv:.4e}; projection full {lost_full_proj:.4e}, reduced {lost_red_proj:.4e} → {}",
+            100.0 * adv,
+            100.0 * trunc,
+            100.0 * proj,
+            100.0 * step,
+            100.0 * in_basis,
+            path.display()
+        );
+    }
     Ok(())
 }
 
@@ -471,6 +537,20 @@ pub fn reduced(args: &ReducedArgs) -> Result<()> {
     );
     write_lifted(&model, &run, &args.out, args.force)?;
     println!("lifted to the full space → {}", args.out.display());
+    if let Some(every) = args.indicator_every {
+        use galerkin::fluid::reduced::indicator::{indicate, indicator_csv};
+        let bar = crate::progress_bar(frames as u64, "error indicator");
+        let frames_out = indicate(&model, &fluid, &run, every, &mut |k| bar.set_position(k as u64))?;
+        bar.finish_and_clear();
+        let path = args.out.join("indicator.csv");
+        galerkin::atomic_file::write(&path, indicator_csv(&frames_out).as_bytes())?;
+        let last = frames_out.last().map_or(0.0, |f| f.estimate);
+        println!(
+            "error indicator: estimated error at frame {frames} {:.2} % → {}",
+            100.0 * last,
+            path.display()
+        );
+    }
     Ok(())
 }
 

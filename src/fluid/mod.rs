@@ -43,4 +43,4 @@ pub mod viewer;
 pub mod viewer_cavity;
 
 pub use error::FluidError;
-pub use solver::{FluidParams, FluidSolver, FluidState, StepReport};
+pub use solver::{Advected, FluidParams, FluidSolver, FluidState, StepReport};

@@ -32,6 +32,21 @@ use super::operators::{divergence, CellOperators};
 use super::projection::{Projection, ProjectionReport};
 use super::FluidError;
 
+/// A frame's velocity after advection and diffusion, before the projection
+/// ([`FluidSolver::advect`]).
+pub struct Advected {
+    /// The advected velocity u' (d per cell).
+    pub u: Vec<f64>,
+    /// The induced flux of the motion g_t → g_{t+1}, per face.
+    pub h: Vec<f64>,
+    /// RK4 substeps taken.
+    pub substeps: usize,
+    /// Seconds of the advection and diffusion (Table 1's t_a).
+    pub seconds: f64,
+    /// The operators at g_{t+1}.
+    ops_next: CellOperators,
+}
+
 /// RK4's stable radius used for the substep count (see the module docs).
 pub const RK4_RADIUS: f64 = 2.5;
 
@@ -250,6 +265,29 @@ impl FluidSolver {
         g_next: &[f64],
         frame: usize,
     ) -> Result<(FluidState, StepReport), FluidError> {
+        let advected = self.advect(state, g_next, frame)?;
+        let advection_seconds = advected.seconds;
+        let t1 = Instant::now();
+        let h = advected.h;
+        let hb: Vec<f64> = self.topo.boundary_faces().iter().map(|&f| h[f as usize]).collect();
+        let (f, projection) =
+            self.projection.project(&self.topo, &advected.ops_next, &advected.u, &hb, frame)?;
+        let u = advected.ops_next.flux_to_velocity(&self.topo, &f);
+        let projection_seconds = t1.elapsed().as_secs_f64();
+        let next = FluidState { g: g_next.to_vec(), u, f };
+        let substeps = advected.substeps;
+        Ok((next, StepReport { h, substeps, advection_seconds, projection_seconds, projection }))
+    }
+
+    /// Stages 1–2 of a frame (see the module docs): the induced flux of g_t → g_{t+1} and the
+    /// velocity advected and diffused over the frame, before the projection — what
+    /// [`crate::fluid::reduced::compare`] splits a reduced step's error with.
+    pub fn advect(
+        &mut self,
+        state: &FluidState,
+        g_next: &[f64],
+        frame: usize,
+    ) -> Result<Advected, FluidError> {
         self.check_len("geometry", g_next.len(), self.mesh.g().len())?;
         self.mesh.check_coordinates(g_next)?;
         // The next geometry's operators (its volumes refuse an inverted frame before any work).
@@ -284,19 +322,31 @@ impl FluidSolver {
                 u[i] += dt / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
             }
         }
-        let advection_seconds = t0.elapsed().as_secs_f64();
         if u.iter().any(|v| !v.is_finite()) {
             return Err(FluidError::State(format!(
                 "frame {frame}: the velocity is not finite after advection"
             )));
         }
-        let t1 = Instant::now();
+        Ok(Advected { u, h, substeps, seconds: t0.elapsed().as_secs_f64(), ops_next })
+    }
+
+    /// Stages 3–4 of a frame: the projection (Eq. 10) of the velocity `u` at g_{t+1} with the
+    /// induced flux `h` of the motion into it, and the velocity of the projected flux:
+    /// returns (u, f).
+    pub fn project_at(
+        &mut self,
+        u: &[f64],
+        g_next: &[f64],
+        h: &[f64],
+        frame: usize,
+    ) -> Result<(Vec<f64>, Vec<f64>), FluidError> {
+        self.check_len("velocity", u.len(), self.mesh.cell_count() * self.mesh.dim())?;
+        self.check_len("induced flux", h.len(), self.topo.face_count())?;
+        let ops_next = CellOperators::new(&self.mesh, &self.topo, g_next);
+        refuse_inverted(&ops_next.volumes, Some(frame))?;
         let hb: Vec<f64> = self.topo.boundary_faces().iter().map(|&f| h[f as usize]).collect();
-        let (f, projection) = self.projection.project(&self.topo, &ops_next, &u, &hb, frame)?;
-        let u = ops_next.flux_to_velocity(&self.topo, &f);
-        let projection_seconds = t1.elapsed().as_secs_f64();
-        let next = FluidState { g: g_next.to_vec(), u, f };
-        Ok((next, StepReport { h, substeps, advection_seconds, projection_seconds, projection }))
+        let (f, _) = self.projection.project(&self.topo, &ops_next, u, &hb, frame)?;
+        Ok((ops_next.flux_to_velocity(&self.topo, &f), f))
     }
 
     /// ⌈Δt ρ / 2.5⌉ with ρ the Gershgorin radius of the advection–diffusion operator, times

@@ -26,7 +26,7 @@ use crate::fluid::{FluidError, FluidSolver};
 
 use super::cavity_motion::CompressionSchedule;
 use super::model::ReducedFluidModel;
-use super::run::{follow, run_driven, run_reduced, ReducedMotion};
+use super::run::{follow, run_driven, run_reduced, ReducedMotion, ReducedRun};
 use super::step::{ReducedFluid, ReducedState};
 use crate::fluid::snapshots::SnapshotReader;
 use crate::reduce::Basis;
@@ -76,6 +76,14 @@ pub struct Comparison {
     pub cell_error: Vec<f64>,
     /// The full run's geometry at the last frame.
     pub last_geometry: Vec<f64>,
+    /// The reduced run's energy lost per step in advection and diffusion, and in the
+    /// projection (index t − 1 for the step to frame t; [`super::step::ReducedStepReport::energy`]).
+    pub reduced_energy_loss: Vec<[f64; 2]>,
+    /// The error indicator per frame ([`super::indicator`]; empty until
+    /// [`Self::add_indicator`]).
+    pub estimate: Vec<f64>,
+    /// The reduced run compared.
+    pub reduced: Option<ReducedRun>,
     /// Median seconds of a full frame (NaN where the full run was read back, not simulated)
     /// and of a reduced step.
     pub seconds: (f64, f64),
@@ -86,8 +94,9 @@ impl Comparison {
     /// truncation, as CSV with a header.
     pub fn csv(&self) -> String {
         let mut out = String::from(
-            "frame,time,energy_full,energy_reduced,relative_error,projection_error,one_step_error,flux_projection_error\n",
+            "frame,time,energy_full,energy_reduced,relative_error,projection_error,one_step_error,flux_projection_error",
         );
+        out += if self.estimate.is_empty() { "\n" } else { ",error_estimate,effectivity\n" };
         for k in 0..self.error.len() {
             let at = |v: &[f64]| v.get(k).copied().unwrap_or(0.0);
             out += &format!(
@@ -100,8 +109,48 @@ impl Comparison {
                 at(&self.one_step_error),
                 at(&self.flux_projection_error)
             );
+            if !self.estimate.is_empty() {
+                out.pop();
+                out += &format!(
+                    ",{:e},{:e}\n",
+                    at(&self.estimate),
+                    self.effectivity().get(k).copied().unwrap_or(0.0)
+                );
+            }
         }
         out
+    }
+
+    /// Computes the error indicator of the reduced run ([`super::indicator::indicate`], the
+    /// residual measured every `every`-th step) into [`Self::estimate`].
+    pub fn add_indicator(
+        &mut self,
+        model: &ReducedFluidModel,
+        every: usize,
+        on_frame: &mut dyn FnMut(usize),
+    ) -> Result<Vec<super::indicator::IndicatorFrame>, FluidError> {
+        let run =
+            self.reduced.as_ref().ok_or_else(|| FluidError::State("no reduced run to indicate".into()))?;
+        let fluid = ReducedFluid::new(model)?;
+        let frames = super::indicator::indicate(model, &fluid, run, every, on_frame)?;
+        self.estimate = frames.iter().map(|f| f.estimate).collect();
+        Ok(frames)
+    }
+
+    /// Estimate ÷ true error per frame (0 where the true error is 0, and at frame 0).
+    pub fn effectivity(&self) -> Vec<f64> {
+        self.estimate
+            .iter()
+            .zip(&self.error)
+            .enumerate()
+            .map(|(k, (e, t))| if k > 0 && *t > 0.0 { e / t } else { 0.0 })
+            .collect()
+    }
+
+    /// The smallest and largest effectivity over the frames after the first.
+    pub fn effectivity_range(&self) -> (f64, f64) {
+        let eff = self.effectivity();
+        eff.iter().skip(1).fold((f64::INFINITY, 0.0f64), |(lo, hi), e| (lo.min(*e), hi.max(*e)))
     }
 
     /// The mean and largest relative error over the frames after the first.
@@ -234,9 +283,12 @@ pub fn compare(
             previous = Some(projected(&fluid, &frame, (d, &vols), g_hat, bu, bf)?);
         }
     }
+    out.reduced_energy_loss =
+        reduced.reports.iter().map(|r| [r.energy[0] - r.energy[1], r.energy[1] - r.energy[2]]).collect();
     let mut reduced_seconds: Vec<f64> = reduced.reports.iter().map(|r| r.total_seconds()).collect();
     out.seconds =
         (crate::bench::median_f64(&mut full_seconds), crate::bench::median_f64(&mut reduced_seconds));
+    out.reduced = Some(reduced);
     Ok(out)
 }
 

@@ -93,6 +93,10 @@ pub struct ReducedStepReport {
     pub constraint_residual: f64,
     /// `‖D̂_h ĥ‖`, the scale of that residual.
     pub constraint_target: f64,
+    /// The energy `½ûᵀV̂û` at the step's start, after advection and diffusion (both at ĝ_t),
+    /// and after the projection (at ĝ_{t+1}): where a reduced run's energy goes (read off the
+    /// factors the step computes anyway, `½‖Lᵀû‖²`).
+    pub energy: [f64; 3],
     /// Wall seconds of the whole step ([`ReducedFluid::step`]; the stage times above are each
     /// stage's own, and two of them run at once).
     pub seconds: f64,
@@ -456,6 +460,8 @@ impl ReducedFluid {
         for i in 0..self.mu {
             w[i] = (i..self.mu).map(|j| l[(j, i)] * u[j]).sum();
         }
+        let half_square = |v: &[f64]| 0.5 * v.iter().map(|x| x * x).sum::<f64>();
+        report.energy[0] = half_square(&w);
         // M = L⁻¹ K L⁻ᵀ. The Krylov exponential applies it as two triangular solves and a
         // product per vector (3 m_u² multiply–adds, about ten products a step) instead of
         // forming it (two triangular solves with m_u right-hand sides, m_u³); Padé needs it
@@ -486,6 +492,7 @@ impl ReducedFluid {
                 (0..self.mu).map(|i| (0..self.mu).map(|j| e[(i, j)] * w[j]).sum()).collect()
             }
         };
+        report.energy[1] = half_square(&w1);
         // u' = L⁻ᵀ w'.
         let mut x = Mat::from_fn(self.mu, 1, |i, _| w1[i]);
         solve_upper_triangular_in_place(l.transpose(), x.as_mut(), Par::Seq);
@@ -544,8 +551,9 @@ impl ReducedFluid {
                 f
             }
         };
-        // û = L⁻ᵀ (Y f).
+        // û = L⁻ᵀ (Y f), and Y f = Lᵀû gives its energy.
         let mut x = &y * &f;
+        report.energy[2] = 0.5 * (0..x.nrows()).map(|i| x[(i, 0)].powi(2)).sum::<f64>();
         solve_upper_triangular_in_place(l.transpose(), x.as_mut(), Par::Seq);
         report.projection_seconds += t.elapsed().as_secs_f64();
         let u1: Vec<f64> = (0..self.mu).map(|i| x[(i, 0)]).collect();

@@ -1,0 +1,174 @@
+//! A per-frame error indicator for reduced fluid runs: how far a reduced run is from the full
+//! run of the same motion, estimated without the full run (the a-posteriori residual estimate
+//! of reduced-basis practice, for the seed 000 §6 step).
+//!
+//! The **residual** of a reduced step: the full solver's step
+//! ([`crate::fluid::FluidSolver::step`]) from the full state the reduced flux stands for —
+//! flux `B_f f̂_t`, its velocity `V⁻¹(P ⊗ g_t) B_f f̂_t`, geometry `g_t = B_g ĝ_t` — to
+//! `B_g ĝ_{t+1}`, `s_{t+1}`, against the lifted reduced result `u_r = B_u û_{t+1}`. It splits, with Π the V-orthogonal projection onto `B_u`, into
+//!
+//! - the **truncation** `τ = ‖s − Π s‖_V`: what the full step does outside the basis, which no
+//!   reduced state can hold — the truth's distance from the basis, felt once, not accumulated;
+//! - the **in-basis residual** `ρ = ‖Π s − u_r‖_V`: what the reduced step gets wrong inside the
+//!   basis, which the run carries on to every later step.
+//!
+//! The estimate at frame t is `(τ_t + Σ_{k ≤ t} ρ_k) / ‖u_r,t‖_V` — the error a stable step
+//! would accumulate (each step's error carried forward undamped, the truncation of the latest
+//! step added). A full step costs what the full solver costs, so the residual is measured
+//! every `every`-th step only and the last measured `ρ` and `τ` stand for the steps between;
+//! `every = 1` measures every step. Effectivity (estimate ÷ true error) measured on the tunnel,
+//! the small cavity and the bird: BENCHMARKS.md.
+
+use crate::fluid::{FluidError, FluidParams, FluidSolver, FluidState};
+use crate::mesh::SimplexMesh;
+use crate::reduce::Basis;
+
+use super::model::ReducedFluidModel;
+use super::run::ReducedRun;
+use super::step::{ReducedFluid, ReducedState};
+
+/// Most steps between two measured residuals.
+pub const MAX_EVERY: usize = 1_000_000;
+
+/// One frame's indicator.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct IndicatorFrame {
+    /// The frame.
+    pub frame: usize,
+    /// Whether this step's residual was measured (otherwise the last measured one stands).
+    pub measured: bool,
+    /// The step's truncation `τ`, relative to `‖u_r‖_V`.
+    pub truncation: f64,
+    /// The step's in-basis residual `ρ`, relative to `‖u_r‖_V`.
+    pub in_basis: f64,
+    /// The estimated relative error of the reduced run at this frame.
+    pub estimate: f64,
+}
+
+/// The indicator of one reduced run, fed its states in order ([`Self::observe`]).
+pub struct ErrorIndicator<'a> {
+    model: &'a ReducedFluidModel,
+    fluid: &'a ReducedFluid,
+    solver: FluidSolver,
+    mesh: SimplexMesh,
+    every: usize,
+    steps: usize,
+    /// Σ ρ_k in absolute energy-norm units, and the last measured (τ, ρ) in the same units.
+    accumulated: f64,
+    last: Option<(f64, f64)>,
+}
+
+impl<'a> ErrorIndicator<'a> {
+    /// An indicator measuring the residual every `every`-th step (1 to [`MAX_EVERY`]) with a
+    /// full solver on the model's mesh (its viscosity and frame time; no body force, as the
+    /// reduced step has none).
+    pub fn new(
+        model: &'a ReducedFluidModel,
+        fluid: &'a ReducedFluid,
+        every: usize,
+    ) -> Result<Self, FluidError> {
+        if every == 0 || every > MAX_EVERY {
+            return Err(FluidError::State(format!(
+                "the indicator's residual every {every} steps: give 1 to {MAX_EVERY}"
+            )));
+        }
+        let (mesh, topo) = model.mesh_and_topology()?;
+        let params =
+            FluidParams { viscosity: model.viscosity, forcing: [0.0; 3], frame_time: model.frame_time };
+        let solver = FluidSolver::new(mesh.clone(), topo, params)?;
+        Ok(Self { model, fluid, solver, mesh, every, steps: 0, accumulated: 0.0, last: None })
+    }
+
+    fn basis(&self, n: &str) -> Result<&'a Basis, FluidError> {
+        self.model.basis(n).ok_or_else(|| FluidError::State(format!("the model has no basis {n}")))
+    }
+
+    /// The indicator at frame `frame`, reached by the reduced step `from` → `to`.
+    pub fn observe(
+        &mut self,
+        from: &ReducedState,
+        to: &ReducedState,
+        frame: usize,
+    ) -> Result<IndicatorFrame, FluidError> {
+        let (bu, bf, bg) = (self.basis("u")?, self.basis("f")?, self.basis("g")?);
+        let d = self.mesh.dim();
+        let g1 = bg.lift(&to.g);
+        let vols = self.mesh.volumes_at(&g1);
+        let energy_norm = |u: &[f64]| {
+            u.chunks(d).zip(&vols).map(|(v, w)| w * v.iter().map(|x| x * x).sum::<f64>()).sum::<f64>().sqrt()
+        };
+        let u_r = bu.lift(&to.u);
+        let scale = energy_norm(&u_r);
+        let measured = self.steps.is_multiple_of(self.every) || self.last.is_none();
+        self.steps += 1;
+        if measured {
+            let (f0, g0) = (bf.lift(&from.f), bg.lift(&from.g));
+            // The full state the reduced flux stands for: its velocity `V⁻¹(P ⊗ g) B_f f̂`,
+            // divergence-free as the full solver's states are (`B_u û` is that velocity's
+            // Galerkin image, which the full projection would first have to repair: lifting
+            // it doubles the measured residual on the tunnel, BENCHMARKS.md).
+            let topo = self.solver.topology();
+            let u0 = crate::fluid::operators::CellOperators::new(&self.mesh, topo, &g0)
+                .flux_to_velocity(topo, &f0);
+            let start = FluidState { u: u0, f: f0, g: g0 };
+            let s = self.solver.step(&start, &g1, frame)?.0.u;
+            // Π s: the energy projection of its momentum V(g)s at ĝ_{t+1}.
+            let momentum: Vec<f64> = s.iter().enumerate().map(|(i, x)| vols[i / d] * x).collect();
+            let fit = bu.lift(&self.fluid.project_velocity(&bu.project(&momentum), &to.g)?);
+            let diff = |a: &[f64], b: &[f64]| -> Vec<f64> { a.iter().zip(b).map(|(x, y)| x - y).collect() };
+            let tau = energy_norm(&diff(&s, &fit));
+            let rho = energy_norm(&diff(&fit, &u_r));
+            self.last = Some((tau, rho));
+        }
+        let (tau, rho) = self.last.unwrap_or((0.0, 0.0));
+        self.accumulated += rho;
+        let relative = |x: f64| if scale > 0.0 { x / scale } else { 0.0 };
+        let out = IndicatorFrame {
+            frame,
+            measured,
+            truncation: relative(tau),
+            in_basis: relative(rho),
+            estimate: relative(tau + self.accumulated),
+        };
+        if !out.estimate.is_finite() {
+            return Err(FluidError::State(format!("the error indicator at frame {frame} is not finite")));
+        }
+        Ok(out)
+    }
+}
+
+/// The indicator of every frame of `run` (frame 0 first, estimate 0 there: the run starts
+/// from the motion's own initial state), measuring the residual every `every`-th step;
+/// `on_frame(t)` hears the progress.
+pub fn indicate(
+    model: &ReducedFluidModel,
+    fluid: &ReducedFluid,
+    run: &ReducedRun,
+    every: usize,
+    on_frame: &mut dyn FnMut(usize),
+) -> Result<Vec<IndicatorFrame>, FluidError> {
+    let mut indicator = ErrorIndicator::new(model, fluid, every)?;
+    let mut out = vec![IndicatorFrame { measured: true, ..IndicatorFrame::default() }];
+    for (t, pair) in run.states.windows(2).enumerate() {
+        out.push(indicator.observe(&pair[0], &pair[1], t + 1)?);
+        on_frame(t + 1);
+    }
+    Ok(out)
+}
+
+/// The indicator as CSV with a header (frame, measured, truncation, in-basis residual,
+/// estimate).
+pub fn indicator_csv(frames: &[IndicatorFrame]) -> String {
+    let mut out = String::from("frame,measured,truncation,in_basis_residual,error_estimate\n");
+    for f in frames {
+        out += &format!(
+            "{},{},{:e},{:e},{:e}\n",
+            f.frame,
+            u8::from(f.measured),
+            f.truncation,
+            f.in_basis,
+            f.estimate
+        );
+    }
+    out
+}
