@@ -67,6 +67,13 @@ fn a_model_follows_and_is_compared_on_a_driven_run_it_was_not_trained_on() {
     assert!(run.states.iter().all(|s| s.u.iter().all(|x| x.is_finite())));
     assert!(fluid.energy(&run.states[6].u, &run.states[6].g) > 0.0);
 
+    // With the projection's normal matrix from the full space it runs too, computing M(g)
+    // once per frame on this moving mesh (each frame's geometry is new).
+    let exact = ReducedFluid::new(&model).unwrap().with_exact_projection(&model).unwrap();
+    let exact_run = follow(&exact, &traj, true, 6, "driven", &mut |_| {}).unwrap();
+    assert!(exact_run.states.iter().all(|s| s.u.iter().all(|x| x.is_finite())));
+    assert_eq!(exact.exact_projection().map(|e| e.computed()), Some(6));
+
     // The comparison's full side is the recorded run: its energies computed here plainly from
     // the files (½ Σ vol_c |u_c|² at each frame's geometry), to rounding.
     let c = compare(&model, &scene, &ComparedMotion::Recorded { full: driven.clone() }, 6, 1, &mut |_| {})
@@ -110,7 +117,8 @@ fn a_model_follows_and_is_compared_on_a_driven_run_it_was_not_trained_on() {
     // The step split: its whole step is compare's one-step error, computed the same way along
     // another path (1e-9: summation order only); each stage's error finite and at most 1.
     let splits =
-        galerkin::fluid::reduced::diagnose::split_steps(&model, &scene, &driven, 6, &mut |_| {}).unwrap();
+        galerkin::fluid::reduced::diagnose::split_steps(&model, &scene, &driven, 6, false, &mut |_| {})
+            .unwrap();
     assert_eq!(splits.len(), 6);
     for s in &splits {
         let one_step = c.one_step_error[s.frame];

@@ -220,6 +220,47 @@ fn the_reduced_constraint_holds_iff_the_full_one_does() {
     }
 }
 
+/// `M(g)` of the exact projection against a plain sum over cells of the flux modes'
+/// velocities `V⁻¹P B_f e_j` (1e-10 of its largest entry: two summation orders); it exceeds
+/// the Galerkin `P̂ᵀV̂⁻¹P̂` by a positive semidefinite matrix (each mode's velocity outside B_u).
+fn exact_gram_is_the_full_one(model: &ReducedFluidModel, g_hat: &[f64]) {
+    use galerkin::fluid::operators::CellOperators;
+    use galerkin::fluid::reduced::exact_projection::ExactProjection;
+    let exact = ExactProjection::new(model).unwrap();
+    let m = exact.gram(g_hat).unwrap();
+    let _ = exact.gram(g_hat).unwrap();
+    assert_eq!(exact.computed(), 1, "the same geometry is computed once");
+    let (mesh, topo) = model.mesh_and_topology().unwrap();
+    let g = basis(model, "g").lift(g_hat);
+    let ops = CellOperators::new(&mesh, &topo, &g);
+    let (bf, d) = (basis(model, "f"), mesh.dim());
+    let mf = bf.reduced_dim();
+    let vel: Vec<Vec<f64>> = (0..mf)
+        .map(|j| {
+            let mut e = vec![0.0; mf];
+            e[j] = 1.0;
+            ops.flux_to_velocity(&topo, &bf.lift(&e))
+        })
+        .collect();
+    let scale = (0..mf).map(|i| m[(i, i)].abs()).fold(0.0, f64::max);
+    for i in 0..mf {
+        for j in 0..mf {
+            let plain: f64 = (0..mesh.cell_count())
+                .map(|c| ops.volumes[c] * (0..d).map(|k| vel[i][d * c + k] * vel[j][d * c + k]).sum::<f64>())
+                .sum();
+            assert!((m[(i, j)] - plain).abs() <= 1e-10 * scale, "M[{i},{j}] {} vs {plain}", m[(i, j)]);
+        }
+    }
+    let fluid = ReducedFluid::new(model).unwrap();
+    let (l, p) = (fluid.volume_matrix(g_hat), fluid.flux_to_momentum(g_hat));
+    use faer::linalg::solvers::Solve;
+    let galerkin = p.transpose() * l.partial_piv_lu().solve(&p);
+    let gap = &m - &galerkin;
+    let gap = faer::Mat::from_fn(mf, mf, |i, j| 0.5 * (gap[(i, j)] + gap[(j, i)]));
+    let eig = gap.self_adjoint_eigenvalues(faer::Side::Lower).unwrap();
+    assert!(eig.iter().all(|&e| e >= -1e-9 * scale), "M − P̂ᵀV̂⁻¹P̂ has eigenvalue {:e}", eig[0]);
+}
+
 #[test]
 fn advection_and_projection_never_increase_the_energy() {
     let dir = tempfile::tempdir().expect("temp dir");
@@ -232,8 +273,10 @@ fn advection_and_projection_never_increase_the_energy() {
     {
         let mut fluid = ReducedFluid::new(model).unwrap();
         fluid.combination = combination;
+        let exact = ReducedFluid::new(model).unwrap().with_exact_projection(model).unwrap();
         let (mu, mf, _, mh) = fluid.dims();
         let g = model.trajectories[0].g.data()[..model.dim_of("g")].to_vec();
+        exact_gram_is_the_full_one(model, &g);
         let mut rng = Lcg(5);
         for exponential in [Exponential::Krylov(1e-12), Exponential::Pade] {
             fluid.exponential = exponential;
@@ -251,6 +294,11 @@ fn advection_and_projection_never_increase_the_energy() {
                 let (u2, _) = fluid.project(&u1, &g, &zero, &mut report).unwrap();
                 let e2 = fluid.energy(&u2, &g);
                 assert!(e2 <= e1 * (1.0 + 1e-12), "projection: {e1} → {e2}");
+                // So is it with the normal matrix from the full space, M(g) ≥ P̂ᵀV̂⁻¹P̂
+                // (exact_projection's energy argument).
+                let (u3, _) = exact.project(&u1, &g, &zero, &mut report).unwrap();
+                let e3 = fluid.energy(&u3, &g);
+                assert!(e3 <= e1 * (1.0 + 1e-12), "exact projection: {e1} → {e3}");
             }
         }
         // The Krylov exponential (L⁻¹K̂L⁻ᵀ applied through triangular solves, never formed)

@@ -7,7 +7,7 @@ use std::time::Instant;
 use anyhow::Result;
 use clap::Args;
 use galerkin::fluid::reduced::{
-    run_reduced, write_lifted, BasisSizes, ReducedFluid, ReducedFluidModel, ReducedMotion, TrainingSet,
+    run_reduced, write_lifted, BasisSizes, ReducedFluidModel, ReducedMotion, TrainingSet,
 };
 use galerkin::reduce::Communicator;
 
@@ -124,6 +124,11 @@ pub struct CompareArgs {
     /// the estimate with the true error: columns error_estimate and effectivity.
     #[arg(long, value_name = "K", value_parser = crate::cli::args::count_up_to(galerkin::fluid::reduced::indicator::MAX_EVERY))]
     pub indicator_every: Option<usize>,
+    /// The reduced projection's normal matrix from the full space, M(g) = B_fᵀPᵀV⁻¹PB_f,
+    /// instead of its Galerkin image P̂ᵀV̂⁻¹P̂: computed once per run on a static mesh (the
+    /// tunnel), every frame on a moving one at full-space cost.
+    #[arg(long)]
+    pub exact_projection: bool,
 }
 
 /// Arguments of `galerkin fluid reduced`.
@@ -162,6 +167,10 @@ pub struct ReducedArgs {
     /// indicator.csv in the output directory, shown by the viewer.
     #[arg(long, value_name = "K", value_parser = crate::cli::args::count_up_to(galerkin::fluid::reduced::indicator::MAX_EVERY))]
     pub indicator_every: Option<usize>,
+    /// The reduced projection's normal matrix from the full space (see `fluid compare
+    /// --exact-projection`).
+    #[arg(long)]
+    pub exact_projection: bool,
     /// Snapshot directory to write, lifted to the full space (for `fluid render`).
     #[arg(long, default_value = "out/fluid-reduced")]
     pub out: PathBuf,
@@ -371,7 +380,7 @@ fn warn_beyond(
 }
 
 pub fn compare(desc: &galerkin::gpu::GpuDesc, args: &CompareArgs) -> Result<()> {
-    use galerkin::fluid::reduced::compare::{compare, ComparedMotion};
+    use galerkin::fluid::reduced::compare::ComparedMotion;
     let model = ReducedFluidModel::load(&args.model)?;
     let scene = galerkin::fluid::scene::FluidScene::load(&args.scene)?;
     let (motion, frames, title) = match (args.run, &args.full) {
@@ -397,7 +406,13 @@ pub fn compare(desc: &galerkin::gpu::GpuDesc, args: &CompareArgs) -> Result<()> 
     };
     let bar =
         crate::progress_bar(frames as u64, if args.full.is_some() { "full run (read)" } else { "full run" });
-    let mut c = compare(&model, &scene, &motion, frames, args.refine, &mut |k| bar.set_position(k as u64))?;
+    let mut c = galerkin::fluid::reduced::compare::compare_with(
+        &model,
+        &scene,
+        &motion,
+        (frames, args.refine, args.exact_projection),
+        &mut |k| bar.set_position(k as u64),
+    )?;
     bar.finish_and_clear();
     if let Some(every) = args.indicator_every {
         let bar = crate::progress_bar(frames as u64, "error indicator");
@@ -450,7 +465,9 @@ pub fn compare(desc: &galerkin::gpu::GpuDesc, args: &CompareArgs) -> Result<()> 
     if let (true, Some(full)) = (args.split, &args.full) {
         use galerkin::fluid::reduced::diagnose::{split_means, split_steps, StepSplit};
         let bar = crate::progress_bar(frames as u64, "split steps");
-        let splits = split_steps(&model, &scene, full, frames, &mut |k| bar.set_position(k as u64))?;
+        let splits = split_steps(&model, &scene, full, frames, args.exact_projection, &mut |k| {
+            bar.set_position(k as u64)
+        })?;
         bar.finish_and_clear();
         let mut csv = String::from(StepSplit::CSV_HEADER);
         for s in &splits {
@@ -486,7 +503,7 @@ pub fn compare(desc: &galerkin::gpu::GpuDesc, args: &CompareArgs) -> Result<()> 
 
 pub fn reduced(args: &ReducedArgs) -> Result<()> {
     let model = ReducedFluidModel::load(&args.model)?;
-    let fluid = ReducedFluid::new(&model)?;
+    let fluid = galerkin::fluid::reduced::compare::reduced_fluid(&model, args.exact_projection)?;
     let k = args.motion.run();
     let recorded = match &args.geometry {
         Some(dir) => {

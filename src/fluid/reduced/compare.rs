@@ -84,6 +84,8 @@ pub struct Comparison {
     pub estimate: Vec<f64>,
     /// The reduced run compared.
     pub reduced: Option<ReducedRun>,
+    /// Whether its step took the projection from the full space.
+    pub exact_projection: bool,
     /// Median seconds of a full frame (NaN where the full run was read back, not simulated)
     /// and of a reduced step.
     pub seconds: (f64, f64),
@@ -131,7 +133,7 @@ impl Comparison {
     ) -> Result<Vec<super::indicator::IndicatorFrame>, FluidError> {
         let run =
             self.reduced.as_ref().ok_or_else(|| FluidError::State("no reduced run to indicate".into()))?;
-        let fluid = ReducedFluid::new(model)?;
+        let fluid = reduced_fluid(model, self.exact_projection)?;
         let frames = super::indicator::indicate(model, &fluid, run, every, on_frame)?;
         self.estimate = frames.iter().map(|f| f.estimate).collect();
         Ok(frames)
@@ -198,6 +200,18 @@ pub fn compare(
     refine: usize,
     on_frame: &mut dyn FnMut(usize),
 ) -> Result<Comparison, FluidError> {
+    compare_with(model, scene, motion, (frames, refine, false), on_frame)
+}
+
+/// [`compare`] with the reduced step's projection from the full space when `exact_projection`
+/// ([`super::exact_projection`]).
+pub fn compare_with(
+    model: &ReducedFluidModel,
+    scene: &FluidScene,
+    motion: &ComparedMotion,
+    (frames, refine, exact_projection): (usize, usize, bool),
+    on_frame: &mut dyn FnMut(usize),
+) -> Result<Comparison, FluidError> {
     if refine == 0 || refine > MAX_REFINE {
         return Err(FluidError::State(format!("refine {refine}: give 1 to {MAX_REFINE}")));
     }
@@ -208,7 +222,7 @@ pub fn compare(
     }
     let fingerprint = super::model::MeshFingerprint::of(&scene.mesh, &scene.topology, scene.periodic_axis);
     model.check_mesh(&fingerprint)?;
-    let fluid = ReducedFluid::new(model)?;
+    let fluid = reduced_fluid(model, exact_projection)?;
     let reduced = match motion {
         ComparedMotion::Training(k) => {
             run_reduced(model, &fluid, ReducedMotion::Replay(*k), frames, &mut |_| {})?
@@ -226,7 +240,7 @@ pub fn compare(
     let bh = model.basis("h");
     let mut full = FullRun::new(scene, model, motion, frames, refine, bh.is_some())?;
     let d = scene.mesh.dim();
-    let mut out = Comparison { frame_time: model.frame_time, ..Comparison::default() };
+    let mut out = Comparison { frame_time: model.frame_time, exact_projection, ..Comparison::default() };
     let mut full_seconds = Vec::new();
     // The previous full frame projected into the bases: the one-step error's start.
     let mut previous: Option<ReducedState> = None;
@@ -290,6 +304,16 @@ pub fn compare(
         (crate::bench::median_f64(&mut full_seconds), crate::bench::median_f64(&mut reduced_seconds));
     out.reduced = Some(reduced);
     Ok(out)
+}
+
+/// The reduced step of `model`, its projection from the full space when `exact_projection`.
+pub fn reduced_fluid(model: &ReducedFluidModel, exact_projection: bool) -> Result<ReducedFluid, FluidError> {
+    let fluid = ReducedFluid::new(model)?;
+    if exact_projection {
+        fluid.with_exact_projection(model)
+    } else {
+        Ok(fluid)
+    }
 }
 
 /// A frame of the full run: velocity, geometry, flux, and the induced flux of the motion into

@@ -21,7 +21,7 @@ use crate::fluid::snapshots::SnapshotReader;
 use crate::fluid::{FluidError, FluidSolver, FluidState};
 
 use super::model::ReducedFluidModel;
-use super::step::{ReducedFluid, ReducedState, ReducedStepReport};
+use super::step::{ReducedState, ReducedStepReport};
 
 /// One frame's split ([`split_steps`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -74,12 +74,14 @@ impl StepSplit {
 
 /// Splits the reduced step on every frame 1..=`frames` of the recorded full run `full` (a
 /// snapshot directory of `scene`'s mesh) into its stages (see the module docs); `on_frame(t)`
-/// hears the progress. Costs one full advection and projection per frame.
+/// hears the progress; `exact_projection` as [`super::compare::compare_with`]. Costs one full
+/// advection and projection per frame.
 pub fn split_steps(
     model: &ReducedFluidModel,
     scene: &FluidScene,
     full: &std::path::Path,
     frames: usize,
+    exact_projection: bool,
     on_frame: &mut dyn FnMut(usize),
 ) -> Result<Vec<StepSplit>, FluidError> {
     let reader = SnapshotReader::open(full)?;
@@ -92,7 +94,7 @@ pub fn split_steps(
             traj.frames()
         )));
     }
-    let fluid = ReducedFluid::new(model)?;
+    let fluid = super::compare::reduced_fluid(model, exact_projection)?;
     let basis =
         |n: &str| model.basis(n).ok_or_else(|| FluidError::State(format!("the model has no basis {n}")));
     let (bu, bf, bg) = (basis("u")?, basis("f")?, basis("g")?);

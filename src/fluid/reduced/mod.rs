@@ -8,6 +8,7 @@
 //! - [`indicator`]: a per-frame error indicator of a reduced run, without the full run;
 //! - [`induced`]: the induced flux as a tensor in the stacked geometry, for driven motions;
 //! - [`compare`]: a reduced run against the full run of the same motion (energy, error);
+//! - [`exact_projection`]: the projection's normal matrix from the full space;
 //! - [`diagnose`]: a reduced step split into its stages, each against the full solver's;
 //! - [`cavity_motion`]: the cavity's reduced geometry from its compressions, at run time;
 //! - [`model`]: §6.2's reduced tensors premultiplied by the core, and the model file;
@@ -27,6 +28,7 @@ pub mod cavity_motion;
 pub mod compare;
 mod dense;
 pub mod diagnose;
+pub mod exact_projection;
 pub mod example;
 pub mod indicator;
 pub mod induced;

@@ -36,6 +36,7 @@ use crate::tensor::expm_krylov;
 use super::dense::{
     cholesky, cholesky_solve, fold_symmetric, matvec, matvec_f32_split, row_major, transpose_times,
 };
+use super::exact_projection::ExactProjection;
 use super::model::ReducedFluidModel;
 
 /// How the induced flux enters advection (see the module docs).
@@ -166,6 +167,9 @@ pub struct ReducedFluid {
     pub combination: FluxCombination,
     /// How the exponential is applied.
     pub exponential: Exponential,
+    /// The projection's normal matrix from the full space ([`super::exact_projection`])
+    /// instead of `P̂ᵀV̂⁻¹P̂`.
+    exact: Option<std::sync::Arc<ExactProjection>>,
     /// The last Cholesky factor of V̂(ĝ) and its ĝ: a step's end geometry is the next step's
     /// start.
     factor: FactorCache,
@@ -271,8 +275,21 @@ impl ReducedFluid {
             constraint,
             combination: FluxCombination::default(),
             exponential: Exponential::default(),
+            exact: None,
             factor: FactorCache::default(),
         })
+    }
+
+    /// The step with the projection's normal matrix computed in the full space, `M(g)`
+    /// ([`super::exact_projection`]): once per run on a static mesh, every frame on a moving one.
+    pub fn with_exact_projection(mut self, model: &ReducedFluidModel) -> Result<Self, FluidError> {
+        self.exact = Some(std::sync::Arc::new(ExactProjection::new(model)?));
+        Ok(self)
+    }
+
+    /// The full-space projection, when on.
+    pub fn exact_projection(&self) -> Option<&ExactProjection> {
+        self.exact.as_deref()
     }
 
     /// Bytes the step holds: its tensors as laid out here — `V̂` over its symmetric axes
@@ -521,8 +538,15 @@ impl ReducedFluid {
         // Y = L⁻¹ P, so Pᵀ V̂⁻¹ P = YᵀY.
         let mut y = p.clone();
         solve_lower_triangular_in_place(l.as_ref(), y.as_mut(), Par::Seq);
-        let mut n = Mat::<f64>::zeros(self.mf, self.mf);
-        matmul(n.as_mut(), Accum::Replace, y.transpose(), y.as_ref(), 1.0, Par::Seq);
+        let n = match &self.exact {
+            // M(g), the flux modes' velocities' Gram matrix in the full space.
+            Some(exact) => exact.gram(g)?,
+            None => {
+                let mut n = Mat::<f64>::zeros(self.mf, self.mf);
+                matmul(n.as_mut(), Accum::Replace, y.transpose(), y.as_ref(), 1.0, Par::Seq);
+                n
+            }
+        };
         let uc = Mat::from_fn(self.mu, 1, |i, _| u[i]);
         let rhs = p.transpose() * &uc;
         let f = match &self.constraint {
@@ -661,6 +685,7 @@ mod tests {
             constraint: None,
             combination: FluxCombination::Separate,
             exponential: Exponential::default(),
+            exact: None,
             factor: FactorCache::default(),
         };
         let state = ReducedState { u: vec![1.0, 0.5], f: vec![0.0, 0.0], g: vec![1.0] };
