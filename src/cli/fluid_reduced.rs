@@ -164,7 +164,7 @@ pub struct ReducedArgs {
     pub geometry: Option<PathBuf>,
     /// Estimate the run's error per frame without a full run (the error indicator: the full
     /// step from the lifted reduced state, measured every K-th step; one full step each) →
-    /// indicator.csv in the output directory, shown by the viewer.
+    /// indicator.csv in the output directory.
     #[arg(long, value_name = "K", value_parser = crate::cli::args::count_up_to(galerkin::fluid::reduced::indicator::MAX_EVERY))]
     pub indicator_every: Option<usize>,
     /// The reduced projection's normal matrix from the full space (see `fluid compare

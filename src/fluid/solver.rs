@@ -330,25 +330,6 @@ impl FluidSolver {
         Ok(Advected { u, h, substeps, seconds: t0.elapsed().as_secs_f64(), ops_next })
     }
 
-    /// Stages 3–4 of a frame: the projection (Eq. 10) of the velocity `u` at g_{t+1} with the
-    /// induced flux `h` of the motion into it, and the velocity of the projected flux:
-    /// returns (u, f).
-    pub fn project_at(
-        &mut self,
-        u: &[f64],
-        g_next: &[f64],
-        h: &[f64],
-        frame: usize,
-    ) -> Result<(Vec<f64>, Vec<f64>), FluidError> {
-        self.check_len("velocity", u.len(), self.mesh.cell_count() * self.mesh.dim())?;
-        self.check_len("induced flux", h.len(), self.topo.face_count())?;
-        let ops_next = CellOperators::new(&self.mesh, &self.topo, g_next);
-        refuse_inverted(&ops_next.volumes, Some(frame))?;
-        let hb: Vec<f64> = self.topo.boundary_faces().iter().map(|&f| h[f as usize]).collect();
-        let (f, _) = self.projection.project(&self.topo, &ops_next, u, &hb, frame)?;
-        Ok((ops_next.flux_to_velocity(&self.topo, &f), f))
-    }
-
     /// ⌈Δt ρ / 2.5⌉ with ρ the Gershgorin radius of the advection–diffusion operator, times
     /// the refinement; refused above [`MAX_SUBSTEPS`] (or for a non-finite ρ).
     fn substeps(

@@ -1,8 +1,8 @@
 //! Where a reduced step loses what it loses: one frame of a recorded full run, split into
 //! the step's two stages (seed 000 Fig. 2: advection–diffusion by the matrix exponential, then
 //! the projection of Eq. 12), each stage of the reduced step against the same stage of the
-//! full solver ([`crate::fluid::FluidSolver::advect`], [`crate::fluid::FluidSolver::project_at`])
-//! from the same start — the full frame t projected into the bases.
+//! full solver ([`crate::fluid::FluidSolver::advect`]; the full frame t + 1 for the
+//! projection) from the same start — the full frame t projected into the bases.
 //!
 //! Per frame t → t + 1, with Π the V-orthogonal projection onto `B_u` (`û = V̂⁻¹B_uᵀV u`) and
 //! every norm the energy norm at the stage's geometry:
@@ -20,6 +20,7 @@ use crate::fluid::scene::FluidScene;
 use crate::fluid::snapshots::SnapshotReader;
 use crate::fluid::{FluidError, FluidSolver, FluidState};
 
+use super::compare::{best_fit, kinetic_energy};
 use super::model::ReducedFluidModel;
 use super::step::{ReducedState, ReducedStepReport};
 
@@ -107,19 +108,13 @@ pub fn split_steps(
         let (u1, g1) = (reader.frame("u", t + 1)?, reader.frame("g", t + 1)?);
         let vols0 = scene.mesh.volumes_at(&g);
         let vols1 = scene.mesh.volumes_at(&g1);
-        let energy = |u: &[f64], vols: &[f64]| {
-            0.5 * u.chunks(d).zip(vols).map(|(v, w)| w * v.iter().map(|x| x * x).sum::<f64>()).sum::<f64>()
-        };
+        let energy = |u: &[f64], vols: &[f64]| kinetic_energy(u, vols, d);
         let distance = |a: &[f64], b: &[f64], vols: &[f64]| {
             let diff: Vec<f64> = a.iter().zip(b).map(|(x, y)| x - y).collect();
             energy(&diff, vols)
         };
         let relative = |e: f64, of: f64| if of > 0.0 { (e / of).sqrt() } else { 0.0 };
-        // Π u at geometry ĝ: the energy projection of the momentum V(g)u.
-        let best_fit = |u: &[f64], vols: &[f64], g_hat: &[f64]| -> Result<Vec<f64>, FluidError> {
-            let momentum: Vec<f64> = u.iter().enumerate().map(|(i, x)| vols[i / d] * x).collect();
-            fluid.project_velocity(&bu.project(&momentum), g_hat)
-        };
+        let best_fit = |u: &[f64], vols: &[f64], g_hat: &[f64]| best_fit(&fluid, bu, u, (d, vols), g_hat);
         let (g_hat, g1_hat) = (bg.project(&g), bg.project(&g1));
         let start = ReducedState { u: best_fit(&u, &vols0, &g_hat)?, f: bf.project(&f), g: g_hat.clone() };
         // The full stages from the full frame t.
@@ -136,8 +131,10 @@ pub fn split_steps(
         let (u_proj, _) = fluid.project(&adv_fit, &g1_hat, &h_hat, &mut report)?;
         let e1 = energy(&u1, &vols1);
         let projection_error = relative(distance(&u1, &bu.lift(&u_proj), &vols1), e1);
-        let (next, _) = fluid.step(&start, &g1_hat, &h_hat)?;
-        let u_next = bu.lift(&next.u);
+        // The whole reduced step: its own advection, then its projection (what
+        // `ReducedFluid::step` does).
+        let (next_u, _) = fluid.project(&u_adv, &g1_hat, &h_hat, &mut report)?;
+        let u_next = bu.lift(&next_u);
         let step_error = relative(distance(&u1, &u_next, &vols1), e1);
         let next_fit = bu.lift(&best_fit(&u1, &vols1, &g1_hat)?);
         let step_error_in_basis = relative(distance(&next_fit, &u_next, &vols1), e1);

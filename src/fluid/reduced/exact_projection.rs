@@ -81,23 +81,18 @@ impl ExactProjection {
         let ops = CellOperators::new(&self.mesh, &self.topo, &g);
         crate::mesh::refuse_inverted(&ops.volumes, None)?;
         let mf = self.bf.reduced_dim();
-        if mf == 0 {
-            return Ok(Mat::zeros(0, 0));
-        }
         let d = self.mesh.dim();
-        // Each flux mode's momentum P B_f e_j, scaled by V^{-1/2} so that M = ΣᵀΣ.
-        let mut columns: Vec<Vec<f64>> = Vec::with_capacity(mf);
+        // Column j: flux mode j's momentum P B_f e_j scaled by V^{-1/2}, so that M = ΣᵀΣ.
+        let scale: Vec<f64> = ops.volumes.iter().map(|v| v.sqrt().recip()).collect();
+        let mut sigma = Mat::<f64>::zeros(d * ops.volumes.len(), mf);
         for j in 0..mf {
             let mut e = vec![0.0; mf];
             e[j] = 1.0;
-            let mut p = ops.flux_to_momentum(&self.topo, &self.bf.lift(&e));
-            for (c, v) in ops.volumes.iter().enumerate() {
-                let s = v.sqrt().recip();
-                p[d * c..d * (c + 1)].iter_mut().for_each(|x| *x *= s);
+            let p = ops.flux_to_momentum(&self.topo, &self.bf.lift(&e));
+            for (i, x) in p.iter().enumerate() {
+                sigma[(i, j)] = x * scale[i / d];
             }
-            columns.push(p);
         }
-        let sigma = Mat::from_fn(columns[0].len(), mf, |i, j| columns[j][i]);
         let m = sigma.transpose() * &sigma;
         if let Ok(mut cache) = self.cache.lock() {
             *cache = Some((g_hat.to_vec(), m.clone()));

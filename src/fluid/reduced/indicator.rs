@@ -16,13 +16,14 @@
 //! would accumulate (each step's error carried forward undamped, the truncation of the latest
 //! step added). A full step costs what the full solver costs, so the residual is measured
 //! every `every`-th step only and the last measured `ρ` and `τ` stand for the steps between;
-//! `every = 1` measures every step. Effectivity (estimate ÷ true error) measured on the tunnel,
-//! the small cavity and the bird: BENCHMARKS.md.
+//! `every = 1` measures every step. Effectivity (estimate ÷ true error) measured on the tunnel
+//! and the small cavity: BENCHMARKS.md.
 
 use crate::fluid::{FluidError, FluidParams, FluidSolver, FluidState};
 use crate::mesh::SimplexMesh;
 use crate::reduce::Basis;
 
+use super::compare::{best_fit, kinetic_energy};
 use super::model::ReducedFluidModel;
 use super::run::ReducedRun;
 use super::step::{ReducedFluid, ReducedState};
@@ -94,12 +95,10 @@ impl<'a> ErrorIndicator<'a> {
         let d = self.mesh.dim();
         let g1 = bg.lift(&to.g);
         let vols = self.mesh.volumes_at(&g1);
-        let energy_norm = |u: &[f64]| {
-            u.chunks(d).zip(&vols).map(|(v, w)| w * v.iter().map(|x| x * x).sum::<f64>()).sum::<f64>().sqrt()
-        };
+        let energy_norm = |u: &[f64]| (2.0 * kinetic_energy(u, &vols, d)).sqrt();
         let u_r = bu.lift(&to.u);
         let scale = energy_norm(&u_r);
-        let measured = self.steps.is_multiple_of(self.every) || self.last.is_none();
+        let measured = self.steps.is_multiple_of(self.every);
         self.steps += 1;
         if measured {
             let (f0, g0) = (bf.lift(&from.f), bg.lift(&from.g));
@@ -112,9 +111,7 @@ impl<'a> ErrorIndicator<'a> {
                 .flux_to_velocity(topo, &f0);
             let start = FluidState { u: u0, f: f0, g: g0 };
             let s = self.solver.step(&start, &g1, frame)?.0.u;
-            // Π s: the energy projection of its momentum V(g)s at ĝ_{t+1}.
-            let momentum: Vec<f64> = s.iter().enumerate().map(|(i, x)| vols[i / d] * x).collect();
-            let fit = bu.lift(&self.fluid.project_velocity(&bu.project(&momentum), &to.g)?);
+            let fit = bu.lift(&best_fit(self.fluid, bu, &s, (d, &vols), &to.g)?);
             let diff = |a: &[f64], b: &[f64]| -> Vec<f64> { a.iter().zip(b).map(|(x, y)| x - y).collect() };
             let tau = energy_norm(&diff(&s, &fit));
             let rho = energy_norm(&diff(&fit, &u_r));
