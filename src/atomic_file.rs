@@ -24,14 +24,21 @@ pub const INTERRUPTED_EXIT: i32 = 130;
 /// so on stderr and exits with [`INTERRUPTED_EXIT`]. Call once, early (the command line does).
 pub fn remove_on_interrupt() -> Result<(), String> {
     ctrlc::set_handler(|| {
-        let removed = match UNFINISHED.try_lock() {
-            Ok(list) => list.iter().filter(|p| std::fs::remove_file(p).is_ok()).count(),
-            Err(_) => 0,
-        };
+        // The handler runs on its own thread: waiting for the list is safe, and the lock is held
+        // across every creation, rename and removal of a temporary, so each listed path is
+        // either still a temporary or already gone, and no temporary exists unlisted.
+        let list = unfinished();
+        let removed = list.iter().filter(|p| std::fs::remove_file(p).is_ok()).count();
         eprintln!("interrupted: {removed} unfinished file(s) removed");
         std::process::exit(INTERRUPTED_EXIT);
     })
     .map_err(|e| format!("cannot handle SIGINT/SIGTERM: {e}"))
+}
+
+/// The list of unfinished temporaries, locked (a writer that panicked holding it leaves it
+/// usable: the list itself is always consistent).
+fn unfinished() -> std::sync::MutexGuard<'static, Vec<PathBuf>> {
+    UNFINISHED.lock().unwrap_or_else(std::sync::PoisonError::into_inner)
 }
 
 /// Removes temporaries of `name` in `dir` left by processes that no longer exist.
@@ -71,10 +78,10 @@ impl AtomicFile {
         // owner-only default: a result is as readable as a file written directly.
         #[cfg(unix)]
         builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666));
+        let mut list = unfinished();
         let (file, temp) = builder.tempfile_in(dir)?.into_parts();
-        if let Ok(mut list) = UNFINISHED.lock() {
-            list.push(temp.to_path_buf());
-        }
+        list.push(temp.to_path_buf());
+        drop(list);
         Ok(Self { file, temp: Some(temp), target: target.to_path_buf() })
     }
 
@@ -97,23 +104,23 @@ impl AtomicFile {
     pub fn commit(mut self) -> std::io::Result<()> {
         self.file.sync_all()?;
         let temp = self.temp.take().ok_or_else(|| std::io::Error::other("committed twice"))?;
-        forget(&temp);
-        temp.persist(&self.target).map_err(|e| e.error)
-    }
-}
-
-/// Takes `temp` off the list of unfinished temporaries.
-fn forget(temp: &Path) {
-    if let Ok(mut list) = UNFINISHED.lock() {
-        list.retain(|p| p != temp);
+        let mut list = unfinished();
+        let path = temp.to_path_buf();
+        // On failure the returned TempPath drops here, under the lock, removing the temporary.
+        let renamed = temp.persist(&self.target).map_err(|e| e.error);
+        list.retain(|p| *p != path);
+        renamed
     }
 }
 
 impl Drop for AtomicFile {
     fn drop(&mut self) {
-        // Unfinished: the TempPath removes the file as it drops.
-        if let Some(temp) = &self.temp {
-            forget(temp);
+        // Unfinished: the TempPath removes the file as it drops, under the lock.
+        if let Some(temp) = self.temp.take() {
+            let mut list = unfinished();
+            let path = temp.to_path_buf();
+            drop(temp);
+            list.retain(|p| *p != path);
         }
     }
 }
@@ -196,6 +203,6 @@ mod tests {
         assert!(!dead.exists(), "a dead process's temporary of this name stayed");
         assert!(alive.exists(), "a live process's temporary was removed");
         assert!(other.exists(), "another name's temporary was removed");
-        assert!(UNFINISHED.lock().expect("list").iter().all(|p| !p.starts_with(dir.path())));
+        assert!(unfinished().iter().all(|p| !p.starts_with(dir.path())));
     }
 }
