@@ -35,6 +35,26 @@ pub fn vec_for<T>(n: usize, what: &str) -> Result<Vec<T>, String> {
     Ok(v)
 }
 
+/// The largest magnitude a physical value read from input may have: 10¹⁵⁰. Its square is
+/// 10³⁰⁰, so energies, norms and Gram matrices summed over up to 10⁸ such values stay finite;
+/// a value past it (a 1e308 in a velocity) is a damaged file, not a state to simulate.
+pub const MAX_MAGNITUDE: f64 = 1e150;
+
+/// The first of `values` that is not finite or exceeds [`MAX_MAGNITUDE`], as `(index, value)`.
+pub fn first_out_of_range(values: &[f64]) -> Option<(usize, f64)> {
+    values.iter().position(|v| v.is_nan() || v.abs() > MAX_MAGNITUDE).map(|i| (i, values[i]))
+}
+
+/// What is wrong with a value [`first_out_of_range`] found: "NaN (not finite)", "1e308 (past
+/// the limit of 1e150)".
+pub fn out_of_range_reason(value: f64) -> String {
+    if value.is_finite() {
+        format!("{value:e} (past the limit of ±{MAX_MAGNITUDE:e})")
+    } else {
+        format!("{value} (not finite)")
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -53,5 +73,15 @@ mod tests {
         assert!(vec_for::<u64>(1000, "nodes").expect("small").capacity() >= 1000);
         let e = vec_for::<u64>(usize::MAX / 4, "the node tags").expect_err("too large");
         assert!(e.contains("the node tags") && e.contains("cannot be allocated"), "{e}");
+    }
+
+    #[test]
+    fn values_past_the_magnitude_limit_or_not_finite_are_found() {
+        assert_eq!(first_out_of_range(&[0.0, -1e150, 1e150]), None);
+        assert_eq!(first_out_of_range(&[0.0, 1e308, f64::NAN]), Some((1, 1e308)));
+        assert!(first_out_of_range(&[f64::NAN]).is_some_and(|(i, v)| i == 0 && v.is_nan()));
+        assert_eq!(first_out_of_range(&[1.0, f64::NEG_INFINITY]), Some((1, f64::NEG_INFINITY)));
+        assert!(out_of_range_reason(1e308).contains("past the limit"));
+        assert!(out_of_range_reason(f64::NAN).contains("not finite"));
     }
 }

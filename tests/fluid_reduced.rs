@@ -416,11 +416,12 @@ fn bad_training_input_is_refused_naming_the_run_frame_or_basis() {
     // geometry — all a one-column B_g holds — is the centre point.
     let turned = dir.path().join("turned");
     std::fs::create_dir_all(&turned).unwrap();
+    // 30 of the 31 frames, so that as many are turned as not and the mean is the centre point.
     for q in ["u", "p", "f", "h"] {
-        std::fs::copy(wavy[0].join(format!("{q}.f64")), turned.join(format!("{q}.f64"))).unwrap();
+        let bytes = std::fs::read(wavy[0].join(format!("{q}.f64"))).unwrap();
+        std::fs::write(turned.join(format!("{q}.f64")), &bytes[..bytes.len() / 31 * 30]).unwrap();
     }
     std::fs::copy(wavy[0].join("mesh.json"), turned.join("mesh.json")).unwrap();
-    // 30 of the 31 frames, so that as many are turned as not and the mean is the centre point.
     let header = std::fs::read_to_string(wavy[0].join("snapshots.json")).unwrap();
     assert!(header.contains("\"frames\": 31"), "{header}");
     std::fs::write(turned.join("snapshots.json"), header.replace("\"frames\": 31", "\"frames\": 30"))
@@ -435,6 +436,7 @@ fn bad_training_input_is_refused_naming_the_run_frame_or_basis() {
             x[1] = 1.0 - x[1];
         }
     }
+    g.truncate(30 * frame_len);
     std::fs::write(turned.join("g.f64"), g.iter().flat_map(|v| v.to_le_bytes()).collect::<Vec<u8>>())
         .unwrap();
     let set = TrainingSet::open(std::slice::from_ref(&turned)).unwrap();

@@ -63,6 +63,18 @@ pub fn count_up_to(max: usize) -> impl Fn(&str) -> Result<usize, String> + Clone
     }
 }
 
+/// A parser for a count of 1 to `max`: for steps of a run whose summary divides by them (0 is
+/// an argument error, not a "NaN ms per step").
+pub fn count_from_one_up_to(
+    max: usize,
+) -> impl Fn(&str) -> Result<usize, String> + Clone + Send + Sync + 'static {
+    let up_to = count_up_to(max);
+    move |s: &str| match up_to(s)? {
+        0 => Err("0: at least 1".into()),
+        n => Ok(n),
+    }
+}
+
 /// Image output: where the picture goes and how large it is.
 #[derive(Args, Clone, Debug)]
 pub struct ImageArgs {

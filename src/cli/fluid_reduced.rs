@@ -104,7 +104,7 @@ pub struct CompareArgs {
     #[arg(long, default_value = "0=0/0/0,30=0.5/0/0,60=0.5/0/0.4,90=0/0/0.4")]
     pub drive: galerkin::fluid::reduced::CompressionSchedule,
     /// Frames (default: the motion's).
-    #[arg(long, value_parser = crate::cli::args::count_up_to(crate::cli::args::MAX_FRAMES))]
+    #[arg(long, value_parser = crate::cli::args::count_from_one_up_to(crate::cli::args::MAX_FRAMES))]
     pub frames: Option<usize>,
     /// Simulate the full run with this many times the RK4 substeps its stability needs (the
     /// reduced exponential is exact; refining shows how much of the difference is the full
@@ -137,7 +137,7 @@ pub struct ReducedArgs {
     /// Model file written by `galerkin fluid train`.
     pub model: PathBuf,
     /// Frames to run (default: the replayed run's whole motion).
-    #[arg(long, value_parser = crate::cli::args::count_up_to(crate::cli::args::MAX_FRAMES))]
+    #[arg(long, value_parser = crate::cli::args::count_from_one_up_to(crate::cli::args::MAX_FRAMES))]
     pub frames: Option<usize>,
     /// The motion: replay:K replays training run K's reduced geometry and induced flux
     /// (runs numbered from 0 in the order given to `train`), starting from its initial state;
@@ -521,6 +521,12 @@ pub fn reduced(args: &ReducedArgs) -> Result<()> {
         }
     };
     let frames = args.frames.unwrap_or(available);
+    if frames == 0 {
+        return Err(galerkin::fluid::FluidError::State(
+            "the motion has no steps to run: give --frames N (at least 1)".into(),
+        )
+        .into());
+    }
     let bar = crate::progress_bar(frames as u64, "reduced steps");
     let run = match (&args.drive, &recorded, &args.geometry) {
         (Some(schedule), _, _) => {

@@ -60,6 +60,7 @@ pub fn simulate_run(
     overwrite: bool,
     on_frame: &mut dyn FnMut(usize, &FluidSolver, &FluidState, &StepReport),
 ) -> Result<RunSummary, FluidError> {
+    scene.check_frames(frames)?;
     let setup = RunSetup {
         mesh: scene.mesh.clone(),
         topology: scene.topology.clone(),
@@ -82,6 +83,7 @@ pub fn simulate_driven(
     overwrite: bool,
     on_frame: &mut dyn FnMut(usize, &FluidSolver, &FluidState, &StepReport),
 ) -> Result<RunSummary, FluidError> {
+    scene.check_frames(frames)?;
     let super::scene::Motion::Cavity { cavity, .. } = &mut scene.motion else {
         return Err(FluidError::State(
             "--drive moves the cavity's small cavities: give a cavity scene (e.g. scenes/fluid/cavity_small.toml)"

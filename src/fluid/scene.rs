@@ -282,6 +282,17 @@ pub struct FluidScene {
     pub description: String,
 }
 
+/// The most frames a scene runs (each a full solve): `frames = 2^40`, a typo, is refused where
+/// it is read rather than run until someone stops it (the command line's `--frames` has the
+/// same cap).
+pub const MAX_FRAMES: usize = 1_000_000;
+
+/// The most frames a bird's generated animation has, and the most rings of its body (each
+/// frame is a surface of rings × segments triangles, all kept in memory).
+pub const MAX_BIRD_FRAMES: usize = 100_000;
+/// See [`MAX_BIRD_FRAMES`].
+pub const MAX_BIRD_RINGS: usize = 10_000;
+
 type Fail<'a> = Box<dyn Fn(&str, String) -> FluidError + 'a>;
 
 /// What each kind of scene builds; [`FluidScene::parse`] adds the `[flow]` keys.
@@ -319,6 +330,9 @@ impl FluidScene {
         let fail: Fail =
             Box::new(|key: &str, message: String| scene_file::error_at(text, path, key, message).into());
         require_positive(&fail, &[("frame_time", spec.flow.frame_time)])?;
+        if spec.flow.frames > MAX_FRAMES {
+            return Err(fail("frames", format!("frames = {}: at most {MAX_FRAMES}", spec.flow.frames)));
+        }
         if !(spec.flow.viscosity.is_finite() && spec.flow.viscosity >= 0.0) {
             return Err(fail("viscosity", format!("viscosity = {}: must be ≥ 0", spec.flow.viscosity)));
         }
@@ -531,6 +545,12 @@ impl FluidScene {
             if bird.frames < 2 || bird.rings < 3 {
                 return Err(fail("frames", "a bird needs at least 2 frames and 3 rings".into()));
             }
+            if bird.frames > MAX_BIRD_FRAMES {
+                return Err(fail("frames", format!("frames = {}: at most {MAX_BIRD_FRAMES}", bird.frames)));
+            }
+            if bird.rings > MAX_BIRD_RINGS {
+                return Err(fail("rings", format!("rings = {}: at most {MAX_BIRD_RINGS}", bird.rings)));
+            }
             let what = format!("flying bird ({} frames, {} wingbeats)", bird.frames, bird.flaps);
             (bird.animation(), 0, what)
         } else {
@@ -575,6 +595,31 @@ impl FluidScene {
             Motion::Embedded(domain) => Some(&domain.animation),
             _ => None,
         }
+    }
+
+    /// The most frames the scene can run: [`MAX_FRAMES`], and for a surface animation (the
+    /// bird, an OBJ sequence) one less than its frame count — every step moves to the next
+    /// animation frame.
+    pub fn max_frames(&self) -> usize {
+        self.animation().map_or(MAX_FRAMES, |a| a.frame_count().saturating_sub(1).min(MAX_FRAMES))
+    }
+
+    /// Refuses `frames` beyond [`Self::max_frames`] before any step is taken, naming the
+    /// scene and the limit (a `--frames` over an animation's length used to run every frame
+    /// the animation has, then fail).
+    pub fn check_frames(&self, frames: usize) -> Result<(), FluidError> {
+        let most = self.max_frames();
+        if frames <= most {
+            return Ok(());
+        }
+        Err(FluidError::State(match self.animation() {
+            Some(a) => format!(
+                "{frames} frames asked of {}: its surface animation has {} frames, so at most {most} steps",
+                self.description,
+                a.frame_count()
+            ),
+            None => format!("{frames} frames asked of {}: at most {most}", self.description),
+        }))
     }
 
     /// Chooses the cavity's training run (0 to 13); refused for other scenes.

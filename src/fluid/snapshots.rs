@@ -7,9 +7,13 @@
 //! - `snapshots.json`: `{"format": "galerkin-fluid-snapshots", "version": 1, "dim": d,
 //!   "cells": n_c, "faces": n_f, "vertices": n_v, "frame_time": Δt, "frames": k,
 //!   "periodic_axis": a | null, "viscosity": μ, "forcing": [e₀, e₁, e₂]}` (the last two
-//!   optional), rewritten (atomically) after every frame is flushed, so an interrupted run is
-//!   a valid shorter one; it is written last when a run starts and removed first when one is
-//!   overwritten;
+//!   optional) and `"complete": true | false`, rewritten (atomically) after every frame is
+//!   flushed, so an interrupted run is a valid shorter one; it is written last when a run
+//!   starts and removed first when one is overwritten. `complete` is false while a writer
+//!   runs and set when it finishes (the files then hold exactly `frames` frames); a run stopped
+//!   by a signal keeps `false`, and its files may hold part of one frame more, which readers
+//!   ignore. Every other length is refused, as is a value that is not finite or past
+//!   [`crate::limits::MAX_MAGNITUDE`];
 //! - `mesh.json`: the topology, `{"dim": d, "cells": [v₀, v₁, …]}` (d + 1 indices per cell);
 //! - one file per quantity, `u.f64 p.f64 f.f64 g.f64 h.f64`: little-endian f64, one frame
 //!   after another (frame k of quantity q starts at byte `8·k·len_q`). u and p have d
@@ -67,6 +71,13 @@ pub struct SnapshotMeta {
     /// The run's body acceleration e (absent in older headers).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub forcing: Option<[f64; 3]>,
+    /// Whether the writer finished (see the module docs; absent in older headers: finished).
+    #[serde(default = "finished")]
+    pub complete: bool,
+}
+
+fn finished() -> bool {
+    true
 }
 
 impl SnapshotMeta {
@@ -84,6 +95,7 @@ impl SnapshotMeta {
             periodic_axis,
             viscosity: None,
             forcing: None,
+            complete: false,
         }
     }
 
@@ -103,6 +115,47 @@ impl SnapshotMeta {
             "g" => self.dim * self.vertices,
             _ => 0,
         }
+    }
+
+    /// Checks what the header declares (`path` names it in errors): the format and version,
+    /// a dimension of 2 or 3, counts within [`crate::limits::MAX_COUNT`] whose files' sizes fit
+    /// in a `u64`, a positive finite frame time, a periodic axis inside the dimension, a finite
+    /// non-negative viscosity and a finite forcing.
+    pub fn check(&self, path: &Path) -> Result<(), FluidError> {
+        let bad = |m: String| Err(io(path, m));
+        if self.format != FORMAT || self.version != VERSION {
+            return bad(format!(
+                "format {} version {}: not a galerkin fluid snapshot directory",
+                self.format, self.version
+            ));
+        }
+        if !(2..=3).contains(&self.dim) {
+            return bad(format!("dim {}: 2 or 3", self.dim));
+        }
+        for (what, n) in [("cells", self.cells), ("faces", self.faces), ("vertices", self.vertices)] {
+            if n as u64 > crate::limits::MAX_COUNT {
+                return bad(format!("{what} {n}: over the limit of {}", crate::limits::MAX_COUNT));
+            }
+        }
+        if QUANTITIES
+            .iter()
+            .any(|q| self.len(q).checked_mul(self.frames).and_then(|n| n.checked_mul(8)).is_none())
+        {
+            return bad(format!("frames {}: the files would be larger than any file can be", self.frames));
+        }
+        if !(self.frame_time.is_finite() && self.frame_time > 0.0) {
+            return bad(format!("frame_time {}: must be positive and finite", self.frame_time));
+        }
+        if let Some(axis) = self.periodic_axis.filter(|&a| a >= self.dim) {
+            return bad(format!("periodic_axis {axis}: the mesh is {}D", self.dim));
+        }
+        if let Some(mu) = self.viscosity.filter(|mu| !(mu.is_finite() && *mu >= 0.0)) {
+            return bad(format!("viscosity {mu}: must be finite and ≥ 0"));
+        }
+        if let Some(e) = self.forcing.filter(|e| e.iter().any(|v| !v.is_finite())) {
+            return bad(format!("forcing {e:?}: must be finite"));
+        }
+        Ok(())
     }
 }
 
@@ -176,8 +229,12 @@ impl SnapshotWriter {
             let path = dir.join(format!("{q}.f64"));
             files.push(File::create(&path).map_err(|e| io(&path, e))?);
         }
-        let mut writer =
-            Self { dir: dir.to_path_buf(), meta: SnapshotMeta { frames: 0, ..meta }, files, _lock: lock };
+        let mut writer = Self {
+            dir: dir.to_path_buf(),
+            meta: SnapshotMeta { frames: 0, complete: false, ..meta },
+            files,
+            _lock: lock,
+        };
         writer.write_meta()?;
         Ok(writer)
     }
@@ -205,6 +262,18 @@ impl SnapshotWriter {
         &self.meta
     }
 
+    /// Cuts each file to the frames the header counts (a push that failed part way may have
+    /// written some quantities of a frame) and marks the run complete.
+    fn finish(&mut self) -> Result<(), FluidError> {
+        for (q, file) in QUANTITIES.iter().zip(&mut self.files) {
+            let path = self.dir.join(format!("{q}.f64"));
+            file.flush().map_err(|e| io(&path, e))?;
+            file.set_len((8 * self.meta.len(q) * self.meta.frames) as u64).map_err(|e| io(&path, e))?;
+        }
+        self.meta.complete = true;
+        self.write_meta()
+    }
+
     fn write_meta(&mut self) -> Result<(), FluidError> {
         for (q, file) in QUANTITIES.iter().zip(&mut self.files) {
             file.flush().map_err(|e| io(&self.dir.join(format!("{q}.f64")), e))?;
@@ -212,6 +281,16 @@ impl SnapshotWriter {
         let path = self.dir.join("snapshots.json");
         let text = serde_json::to_string_pretty(&self.meta).map_err(|e| io(&path, e))?;
         crate::atomic_file::write(&path, text.as_bytes()).map_err(|e| io(&path, e))
+    }
+}
+
+impl Drop for SnapshotWriter {
+    /// A writer that goes out of scope (the run finished, or returned an error) leaves exactly
+    /// its frames and says so; one stopped by a signal never gets here and stays incomplete.
+    fn drop(&mut self) {
+        if let Err(e) = self.finish() {
+            tracing::warn!("snapshots in {} not marked complete: {e}", self.dir.display());
+        }
     }
 }
 
@@ -229,15 +308,7 @@ impl SnapshotReader {
         let path = dir.join("snapshots.json");
         let text = std::fs::read_to_string(&path).map_err(|e| io(&path, e))?;
         let meta: SnapshotMeta = serde_json::from_str(&text).map_err(|e| io(&path, e))?;
-        if meta.format != FORMAT || meta.version != VERSION {
-            return Err(io(
-                &path,
-                format!(
-                    "format {} version {}: not a galerkin fluid snapshot directory",
-                    meta.format, meta.version
-                ),
-            ));
-        }
+        meta.check(&path)?;
         let mpath = dir.join("mesh.json");
         let mesh: MeshFile = serde_json::from_slice(&std::fs::read(&mpath).map_err(|e| io(&mpath, e))?)
             .map_err(|e| io(&mpath, e))?;
@@ -256,8 +327,18 @@ impl SnapshotReader {
             let qpath = dir.join(format!("{q}.f64"));
             let len = std::fs::metadata(&qpath).map_err(|e| io(&qpath, e))?.len();
             let need = (8 * meta.len(q) * meta.frames) as u64;
-            if len < need {
-                return Err(io(&qpath, format!("{len} bytes, {} frames need {need}", meta.frames)));
+            // A run stopped by a signal may have written part of its next frame.
+            let slack = if meta.complete { 0 } else { 8 * meta.len(q) as u64 - 1 };
+            if len < need || len > need + slack {
+                return Err(io(
+                    &qpath,
+                    format!(
+                        "{len} bytes: {} frames of {} values need {need}{}",
+                        meta.frames,
+                        meta.len(q),
+                        if meta.complete { "" } else { " (and part of one more, an unfinished run's)" }
+                    ),
+                ));
             }
         }
         Ok(Self { dir: dir.to_path_buf(), meta, cells: mesh.cells })
@@ -285,8 +366,11 @@ impl SnapshotReader {
         }
         let mut file = File::open(&path).map_err(|e| io(&path, e))?;
         let values = read_f64(&mut file, (8 * len * k) as u64, len).map_err(|e| io(&path, e))?;
-        if let Some(i) = values.iter().position(|v| !v.is_finite()) {
-            return Err(io(&path, format!("frame {k}: value {i} is {} (not finite)", values[i])));
+        if let Some((i, v)) = crate::limits::first_out_of_range(&values) {
+            return Err(io(
+                &path,
+                format!("frame {k}: value {i} is {}", crate::limits::out_of_range_reason(v)),
+            ));
         }
         Ok(values)
     }
@@ -365,6 +449,16 @@ impl SnapshotSource for FrameSnapshots {
                 basis: format!("snapshots {}", self.path.display()),
                 detail: e.to_string(),
             })?;
+            if let Some((i, v)) = crate::limits::first_out_of_range(&col) {
+                return Err(ReduceError::BadBasis {
+                    basis: format!("snapshots {}", self.path.display()),
+                    detail: format!(
+                        "frame {frame}: row {} is {}",
+                        rows.start + i,
+                        crate::limits::out_of_range_reason(v)
+                    ),
+                });
+            }
             for (i, v) in col.into_iter().enumerate() {
                 out[i * k + frame] = v;
             }

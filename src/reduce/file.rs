@@ -7,6 +7,12 @@
 //!
 //! A capability built on the core (the reduced fluid) may store [`ModelExtras`] beside the
 //! model: metadata strings as `extra/<key>` and f64 arrays as `data/<name>`.
+//!
+//! Every array file ([`save_arrays`]) carries the SHA-256 of each array's bytes in the metadata
+//! key `sha256` (a JSON object, name → hex), and [`load_arrays`] refuses an array whose bytes
+//! do not match (a flipped bit), or any value that is not finite or past
+//! [`crate::limits::MAX_MAGNITUDE`], naming the file, the array and the entry. Files written
+//! before the checksums load with the value check alone.
 
 use std::collections::{BTreeMap, HashMap};
 use std::path::Path;
@@ -176,6 +182,9 @@ pub fn save_arrays(
     let fail = |detail: String| ReduceError::File { path: path.to_path_buf(), detail };
     let bytes: Vec<(String, Vec<u8>, Vec<usize>)> =
         arrays.iter().map(|(n, t)| (n.clone(), f64_bytes(t), t.shape().to_vec())).collect();
+    let sums: BTreeMap<&str, String> = bytes.iter().map(|(n, b, _)| (n.as_str(), sha256_hex(b))).collect();
+    let mut metadata = metadata;
+    metadata.insert(CHECKSUMS.into(), serde_json::to_string(&sums).map_err(|e| fail(e.to_string()))?);
     let views = bytes
         .iter()
         .map(|(n, b, s)| TensorView::new(Dtype::F64, s.clone(), b).map(|v| (n.clone(), v)))
@@ -214,6 +223,15 @@ pub fn serialize<'a>(
     Ok(out)
 }
 
+/// The metadata key of the arrays' checksums (see the module docs).
+const CHECKSUMS: &str = "sha256";
+
+/// The SHA-256 of `bytes`, hex.
+fn sha256_hex(bytes: &[u8]) -> String {
+    use sha2::{Digest, Sha256};
+    Sha256::digest(bytes).iter().map(|b| format!("{b:02x}")).collect()
+}
+
 /// What [`load_arrays`] reads: the metadata and the arrays by name.
 pub type ArrayFile = (HashMap<String, String>, BTreeMap<String, Tensor>);
 
@@ -226,17 +244,47 @@ pub fn load_arrays(path: &Path) -> Result<ArrayFile, ReduceError> {
         .map_err(|e| fail(format!("not a readable safetensors file ({e})")))?;
     let file = SafeTensors::deserialize(&buffer)
         .map_err(|e| fail(format!("not a readable safetensors file ({e})")))?;
+    let mut metadata = header.metadata().clone().unwrap_or_default();
+    let sums: Option<BTreeMap<String, String>> = match metadata.remove(CHECKSUMS) {
+        Some(text) => {
+            Some(serde_json::from_str(&text).map_err(|e| fail(format!("metadata `{CHECKSUMS}`: {e}")))?)
+        }
+        None => None,
+    };
     let mut arrays = BTreeMap::new();
     for (name, view) in file.tensors() {
         if view.dtype() != Dtype::F64 {
             return Err(fail(format!("`{name}` is {:?}, expected F64", view.dtype())));
         }
+        if let Some(sums) = &sums {
+            match sums.get(&name) {
+                Some(sum) if *sum == sha256_hex(view.data()) => {}
+                Some(_) => {
+                    return Err(fail(format!(
+                        "`{name}`: its bytes do not match the checksum written with it (the file is damaged)"
+                    )))
+                }
+                None => return Err(fail(format!("`{name}` has no checksum (the file is damaged)"))),
+            }
+        }
         let data =
             view.data().chunks_exact(8).map(|b| f64::from_le_bytes(b.try_into().expect("8 bytes"))).collect();
         let t = Tensor::from_vec(view.shape(), data).map_err(|e| fail(format!("`{name}`: {e}")))?;
+        if let Some((i, v)) = crate::limits::first_out_of_range(t.data()) {
+            return Err(fail(format!(
+                "`{name}` entry {i} (of shape {:?}) is {}",
+                t.shape(),
+                crate::limits::out_of_range_reason(v)
+            )));
+        }
         arrays.insert(name, t);
     }
-    Ok((header.metadata().clone().unwrap_or_default(), arrays))
+    if let Some(missing) = sums.iter().flat_map(|s| s.keys()).find(|n| !arrays.contains_key(*n)) {
+        return Err(fail(format!(
+            "`{missing}` is listed in the checksums but missing (the file is damaged)"
+        )));
+    }
+    Ok((metadata, arrays))
 }
 
 /// `serde_json::to_string` behind a trait object, so one closure serves every type.

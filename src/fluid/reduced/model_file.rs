@@ -68,6 +68,12 @@ impl ReducedFluidModel {
         let viscosity: f64 = serde_json::from_value(parse("viscosity")?).map_err(|e| fail(e.to_string()))?;
         let frame_time: f64 =
             serde_json::from_value(parse("frame_time")?).map_err(|e| fail(e.to_string()))?;
+        if !(viscosity.is_finite() && viscosity >= 0.0) {
+            return Err(fail(format!("metadata `viscosity` is {viscosity}: must be finite and ≥ 0")));
+        }
+        if !(frame_time.is_finite() && frame_time > 0.0) {
+            return Err(fail(format!("metadata `frame_time` is {frame_time}: must be positive and finite")));
+        }
         let provenance: Provenance =
             serde_json::from_value(parse("provenance")?).map_err(|e| fail(format!("provenance: {e}")))?;
         let mut trajectories = Vec::new();
@@ -105,6 +111,11 @@ impl ReducedFluidModel {
             (Some(map), Some(volume)) => {
                 let rest_volume: f64 = serde_json::from_value(parse("cavity_rest_volume")?)
                     .map_err(|e| fail(format!("cavity_rest_volume: {e}")))?;
+                if !(f64::is_finite(rest_volume) && rest_volume > 0.0) {
+                    return Err(fail(format!(
+                        "metadata `cavity_rest_volume` is {rest_volume}: must be positive"
+                    )));
+                }
                 if map.shape() != [provenance_dim(&core, "g"), 5] || volume.shape() != [5, 5, 5] {
                     return Err(fail(format!(
                         "the cavity's motion model has shapes {:?} and {:?}",

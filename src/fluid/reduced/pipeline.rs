@@ -137,6 +137,7 @@ pub fn train_scene_across(
     if frames == 0 {
         return Err(FluidError::State("0 frames: a training run needs at least one".into()));
     }
+    scene.check_frames(frames)?;
     let runs = runs_of(&scene, options.runs.as_deref())?;
     drop(scene);
     let work = &options.work;

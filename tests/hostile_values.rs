@@ -1,0 +1,244 @@
+//! Values, lengths and options checked where they are read (issue 49): the hostile-input
+//! leftovers, a case per class — endless runs, values accepted that must be refused, and
+//! errors too vague to act on. Every file here is made by the engine's own generators and then
+//! damaged; each case must be refused, quickly, naming the file and the line, element, array
+//! or option.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+use std::time::{Duration, Instant};
+
+/// Runs `f`, which must fail within 20 s with an error containing every one of `words`.
+fn refused<E: std::fmt::Display>(what: &str, f: impl FnOnce() -> Result<(), E>, words: &[&str]) -> String {
+    let start = Instant::now();
+    let e = match f() {
+        Ok(()) => panic!("{what}: accepted"),
+        Err(e) => e.to_string(),
+    };
+    assert!(start.elapsed() < Duration::from_secs(20), "{what}: took {:?}", start.elapsed());
+    for w in words {
+        assert!(e.contains(w), "{what}: {e:?} does not mention {w:?}");
+    }
+    e
+}
+
+fn galerkin(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_galerkin")).args(args).output().expect("galerkin runs")
+}
+
+/// Runs the binary, which must succeed.
+fn made(args: &[&str]) {
+    let out = galerkin(args);
+    assert!(out.status.success(), "galerkin {args:?}: {}", String::from_utf8_lossy(&out.stderr));
+}
+
+/// Runs the binary, which must fail with exit code `code` within 20 s, its stderr containing
+/// every one of `words`.
+fn cli_refused(args: &[&str], code: i32, words: &[&str]) {
+    let start = Instant::now();
+    let out = galerkin(args);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(code), "galerkin {args:?}: {stderr}");
+    assert!(start.elapsed() < Duration::from_secs(20), "galerkin {args:?} took {:?}", start.elapsed());
+    for w in words {
+        assert!(stderr.contains(w), "galerkin {args:?}: {stderr:?} does not mention {w:?}");
+    }
+}
+
+fn repo(path: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join(path)
+}
+
+fn text(p: &Path) -> &str {
+    p.to_str().expect("utf-8 path")
+}
+
+/// A shipped scene with one line edited (which must be there).
+fn edited(scene: &str, find: &str, replace: &str) -> String {
+    let text = std::fs::read_to_string(repo(scene)).expect("a shipped scene");
+    assert!(text.contains(find), "{scene} has no {find:?}");
+    text.replacen(find, replace, 1)
+}
+
+/// A small bird (about 20,000 cells) with `frames` animation frames.
+fn bird_scene(frames: usize) -> String {
+    format!(
+        "[bird]\nframes = {frames}\n[box]\nlo = [-1.4, -1.8, -1.3]\nhi = [1.4, 1.8, 1.3]\nspacing = 0.25\n\
+         [flow]\ninitial_velocity = [0.0, 0.0, 0.0]\nviscosity = 1e-3\nframe_time = 0.02\nframes = 2\n"
+    )
+}
+
+/// Endless runs: a scene's frame count of 2⁴⁰ is refused where it is read, and frames past a
+/// surface animation's end are refused before the first step, by the library and the CLI.
+#[test]
+fn endless_runs_are_refused_before_the_first_step() {
+    use galerkin::fluid::scene::FluidScene;
+    let huge = edited("scenes/fluid/tunnel_small.toml", "frames = ", "frames = 1099511627776 #");
+    refused(
+        "frames = 2^40",
+        || FluidScene::parse(&huge, Path::new("tunnel.toml")).map(|_| ()),
+        &["tunnel.toml", "frames", "at most 1000000"],
+    );
+    let scratch = tempfile::Builder::new().prefix("galerkin-values-").tempdir().expect("scratch");
+    let bird = scratch.path().join("bird.toml");
+    std::fs::write(&bird, bird_scene(12)).expect("written");
+    let mut scene = FluidScene::load(&bird).expect("the small bird");
+    assert_eq!(scene.max_frames(), 11);
+    let out = scratch.path().join("run");
+    refused(
+        "400 frames of a 12-frame animation",
+        || galerkin::fluid::run::simulate_run(&mut scene, 400, &out, false, &mut |_, _, _, _| {}).map(|_| ()),
+        &["400 frames", "12 frames", "at most 11 steps"],
+    );
+    assert!(!out.join("snapshots.json").exists(), "a run was started");
+    cli_refused(
+        &["fluid", "simulate", text(&bird), "--frames", "400", "--out", text(&out)],
+        1,
+        &["400 frames", "at most 11 steps"],
+    );
+}
+
+/// A tunnel run of 2 frames and a model trained on it, written by the engine.
+fn tunnel_run(scratch: &Path) -> (PathBuf, PathBuf) {
+    let sim = scratch.join("sim");
+    made(&[
+        "fluid",
+        "simulate",
+        text(&repo("scenes/fluid/tunnel_small.toml")),
+        "--frames",
+        "2",
+        "--out",
+        text(&sim),
+    ]);
+    let model = scratch.join("model.safetensors");
+    made(&["fluid", "train", text(&sim), "--out", text(&model)]);
+    (sim, model)
+}
+
+/// Copies the snapshot directory `from` to `to`.
+fn copy_run(from: &Path, to: &Path) {
+    std::fs::create_dir_all(to).expect("dir");
+    for e in std::fs::read_dir(from).expect("run").flatten() {
+        if e.path().is_file() {
+            std::fs::copy(e.path(), to.join(e.file_name())).expect("copied");
+        }
+    }
+}
+
+/// Snapshots: a NaN or 1e308 in a velocity, an array a byte too long, a negative frame time —
+/// each refused where read, naming the file and the frame or key; a run stopped by a signal
+/// (its header says `"complete": false`) keeps a part-written frame without being refused.
+#[test]
+fn snapshot_values_and_lengths_are_checked_where_read() {
+    use galerkin::fluid::snapshots::SnapshotReader;
+    use galerkin::reduce::SnapshotSource;
+    let scratch = tempfile::Builder::new().prefix("galerkin-values-").tempdir().expect("scratch");
+    let (sim, _) = tunnel_run(scratch.path());
+    let header = std::fs::read_to_string(sim.join("snapshots.json")).expect("header");
+    assert!(header.contains("\"complete\": true"), "a finished run is marked complete: {header}");
+    let run = SnapshotReader::open(&sim).expect("the valid run");
+    let len = run.meta().len("u");
+    for (what, value, reason) in [("NaN", f64::NAN, "not finite"), ("1e308", 1e308, "past the limit")] {
+        let dir = scratch.path().join(format!("u-{what}"));
+        copy_run(&sim, &dir);
+        let mut bytes = std::fs::read(dir.join("u.f64")).expect("u");
+        // Frame 1, value 3.
+        let at = 8 * (len + 3);
+        bytes[at..at + 8].copy_from_slice(&value.to_le_bytes());
+        std::fs::write(dir.join("u.f64"), bytes).expect("written");
+        let damaged = SnapshotReader::open(&dir).expect("the header and lengths are fine");
+        refused(
+            &format!("{what} in u (frame)"),
+            || damaged.frame("u", 1).map(|_| ()),
+            &["u.f64", "frame 1", "value 3", reason],
+        );
+        refused(
+            &format!("{what} in u (rows for the PCA)"),
+            || -> Result<(), String> {
+                let mut source = damaged.source("u").map_err(|e| e.to_string())?;
+                source.rows(0..len).map(|_| ()).map_err(|e| e.to_string())
+            },
+            &["u.f64", "frame 1", "row 3", reason],
+        );
+    }
+    let long = scratch.path().join("long");
+    copy_run(&sim, &long);
+    let mut bytes = std::fs::read(long.join("f.f64")).expect("f");
+    bytes.push(0);
+    std::fs::write(long.join("f.f64"), &bytes).expect("written");
+    refused("f.f64 a byte too long", || SnapshotReader::open(&long).map(|_| ()), &["f.f64", "bytes"]);
+    // The same extra bytes after an interrupt: part of a frame the run did not finish.
+    let header_path = long.join("snapshots.json");
+    std::fs::write(&header_path, header.replace("\"complete\": true", "\"complete\": false"))
+        .expect("written");
+    assert!(SnapshotReader::open(&long).is_ok(), "an unfinished run's partial frame is refused");
+    let negative = scratch.path().join("negative");
+    copy_run(&sim, &negative);
+    let dt = serde_json::from_str::<serde_json::Value>(&header).expect("json")["frame_time"].clone();
+    let edit = header.replacen(&format!("\"frame_time\": {dt}"), "\"frame_time\": -0.02", 1);
+    assert_ne!(edit, header);
+    std::fs::write(negative.join("snapshots.json"), edit).expect("written");
+    refused(
+        "a negative frame time",
+        || SnapshotReader::open(&negative).map(|_| ()),
+        &["snapshots.json", "frame_time -0.02"],
+    );
+}
+
+/// Reduced models: a flipped bit inside a tensor, a NaN or 1e308 in one (written with valid
+/// checksums, as a buggy writer would), a negative frame time — refused at load, naming the
+/// file and the tensor or key, not later as a singular Padé denominator.
+#[test]
+fn reduced_model_values_are_checked_at_load() {
+    use galerkin::fluid::reduced::ReducedFluidModel;
+    use galerkin::reduce::{load_arrays, save_arrays};
+    let scratch = tempfile::Builder::new().prefix("galerkin-values-").tempdir().expect("scratch");
+    let (_, model) = tunnel_run(scratch.path());
+    ReducedFluidModel::load(&model).expect("the valid model");
+    // A bit flipped in the middle of the data (past the header: inside some array).
+    let mut bytes = std::fs::read(&model).expect("model");
+    let at = bytes.len() - bytes.len() / 4;
+    bytes[at] ^= 0x10;
+    let flipped = scratch.path().join("flipped.safetensors");
+    std::fs::write(&flipped, &bytes).expect("written");
+    let e = refused(
+        "a flipped bit",
+        || ReducedFluidModel::load(&flipped).map(|_| ()),
+        &["flipped.safetensors", "do not match the checksum"],
+    );
+    assert!(e.contains('`'), "the array is not named: {e}");
+    let (meta, arrays) = load_arrays(&model).expect("arrays");
+    let name = "tensor/A";
+    for (what, value, reason) in [("NaN", f64::NAN, "not finite"), ("1e308", 1e308, "past the limit")] {
+        let mut arrays = arrays.clone();
+        let mut data = arrays[name].data().to_vec();
+        data[5] = value;
+        let shape = arrays[name].shape().to_vec();
+        arrays.insert(name.to_string(), galerkin::tensor::Tensor::from_vec(&shape, data).expect("tensor"));
+        let path = scratch.path().join(format!("{what}.safetensors"));
+        let list: Vec<(String, &galerkin::tensor::Tensor)> =
+            arrays.iter().map(|(n, t)| (n.clone(), t)).collect();
+        save_arrays(&path, meta.clone(), &list).expect("written");
+        refused(
+            &format!("{what} in {name}"),
+            || ReducedFluidModel::load(&path).map(|_| ()),
+            &[&format!("{what}.safetensors"), "`tensor/A` entry 5", reason],
+        );
+    }
+    let mut meta = meta;
+    meta.insert("extra/frame_time".into(), "-0.02".into());
+    let path = scratch.path().join("dt.safetensors");
+    let list: Vec<(String, &galerkin::tensor::Tensor)> = arrays.iter().map(|(n, t)| (n.clone(), t)).collect();
+    save_arrays(&path, meta, &list).expect("written");
+    refused(
+        "a negative frame time",
+        || ReducedFluidModel::load(&path).map(|_| ()),
+        &["dt.safetensors", "frame_time", "-0.02"],
+    );
+    // --frames 0 on a reduced run is an argument error, not "NaN ms per step".
+    cli_refused(
+        &["fluid", "reduced", text(&model), "--frames", "0", "--out", text(&scratch.path().join("r"))],
+        2,
+        &["--frames", "at least 1"],
+    );
+}
