@@ -151,7 +151,16 @@ fn main() {
     for note in notes.iter().filter(|_| ranks.is_root()) {
         eprintln!("note: {note}");
     }
-    let cli = Cli::parse_from(args);
+    let matches = <Cli as clap::CommandFactory>::command().get_matches_from(args);
+    if let Some(message) = cli::args::inapplicable(&matches) {
+        <Cli as clap::CommandFactory>::command()
+            .error(clap::error::ErrorKind::ArgumentConflict, message)
+            .exit();
+    }
+    let cli = match <Cli as clap::FromArgMatches>::from_arg_matches(&matches) {
+        Ok(cli) => cli,
+        Err(e) => e.exit(),
+    };
     let desc = desc(&cli);
     let result = run(&desc, cli.command, &*ranks);
     // Validation is checked once, here, after every device of the command is dropped (their

@@ -4,6 +4,8 @@
 //! damaged; each case must be refused, quickly, naming the file and the line, element, array
 //! or option.
 
+mod common;
+
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 use std::time::{Duration, Instant};
@@ -241,4 +243,148 @@ fn reduced_model_values_are_checked_at_load() {
         2,
         &["--frames", "at least 1"],
     );
+}
+
+/// Values accepted that must be refused: a linear quadrilateral with 25 points, a NaN Lamé
+/// parameter in one element of a material others define well, a negative exitance in an OBJ
+/// scene, a camera whose up vector is zero or along its line of sight.
+#[test]
+fn out_of_range_values_are_refused_where_read() {
+    let scratch = tempfile::Builder::new().prefix("galerkin-values-").tempdir().expect("scratch");
+    // VTK_QUAD (9) of 25 points: an order-4 cell that must be VTK_LAGRANGE_QUADRILATERAL (70).
+    let gen = scratch.path().join("grid.vtu");
+    made(&["spectral", "gen", "--generate", "grid", "--order", "4", "--out", text(&gen)]);
+    let quad = scratch.path().join("quad25.vtu");
+    let cells = galerkin::spectral::vtu::read(&gen).expect("the generated file").elements();
+    // The writer's appended raw types array: `cells` bytes of 70 in a row (no run of 32 'F's
+    // occurs in the XML); each becomes 9.
+    let mut bytes = std::fs::read(&gen).expect("bytes");
+    let run = bytes.windows(cells).position(|w| w.iter().all(|&b| b == 70)).expect("the types run");
+    bytes[run..run + cells].fill(9);
+    std::fs::write(&quad, &bytes).expect("written");
+    refused(
+        "VTK_QUAD with 25 points",
+        || galerkin::spectral::vtu::read(&quad).map(|_| ()),
+        &["quad25.vtu", "element 0", "VTK_QUAD", "has 4 points, not 25"],
+    );
+
+    // Two tetrahedra of material 0; the second's λ is NaN.
+    let tet = |nan: bool| {
+        format!(
+            r#"<?xml version="1.0"?>
+<VTKFile type="UnstructuredGrid" version="0.1" byte_order="LittleEndian">
+  <UnstructuredGrid>
+    <Piece NumberOfPoints="5" NumberOfCells="2">
+      <Points><DataArray type="Float64" NumberOfComponents="3" format="ascii">0 0 0  1 0 0  0 1 0  0 0 1  1 1 1</DataArray></Points>
+      <Cells>
+        <DataArray type="Int32" Name="connectivity" format="ascii">0 1 2 3  1 2 3 4</DataArray>
+        <DataArray type="Int32" Name="offsets" format="ascii">4 8</DataArray>
+        <DataArray type="UInt8" Name="types" format="ascii">10 10</DataArray>
+      </Cells>
+      <CellData>
+        <DataArray type="Float64" Name="coefficients" NumberOfComponents="40" format="ascii">{}</DataArray>
+        <DataArray type="Float64" Name="lambda" format="ascii">2 {}</DataArray>
+        <DataArray type="Float64" Name="mu" format="ascii">1 1</DataArray>
+        <DataArray type="Int32" Name="material" format="ascii">0 0</DataArray>
+      </CellData>
+    </Piece>
+  </UnstructuredGrid>
+</VTKFile>"#,
+            vec!["0"; 80].join(" "),
+            if nan { "nan" } else { "2" }
+        )
+    };
+    let lame = scratch.path().join("lame.vtu");
+    std::fs::write(&lame, tet(false)).expect("written");
+    galerkin::spacetime::vtu::read(&lame).expect("the valid pair");
+    std::fs::write(&lame, tet(true)).expect("written");
+    refused(
+        "NaN λ",
+        || galerkin::spacetime::vtu::read(&lame).map(|_| ()),
+        &["lame.vtu", "element 1", "finite"],
+    );
+
+    // A negative exitance (and albedo ≥ 1) in an OBJ radiosity scene.
+    use common::obj_box::{box_obj, write_scene, SCENE};
+    let dir = scratch.path().join("obj");
+    let negative =
+        SCENE.replace("window_exitance = [10.0, 10.0, 10.0]", "window_exitance = [10.0, -1.0, 10.0]");
+    let path = write_scene(&dir, &negative, &box_obj(1.5));
+    refused(
+        "negative exitance",
+        || galerkin::radiosity::obj::ObjScene::load(&path).map(|_| ()),
+        &["scene.toml:", "window_exitance", "channel 1 (green)"],
+    );
+    let bright = SCENE.replace("floor = [0.4, 0.3, 0.2]", "floor = [0.4, 1.3, 0.2]");
+    let path = write_scene(&dir, &bright, &box_obj(1.5));
+    refused(
+        "albedo 1.3",
+        || galerkin::radiosity::obj::ObjScene::load(&path).map(|_| ()),
+        &["scene.toml", "floor", "[0, 1)"],
+    );
+
+    // A camera with no view.
+    let camera = galerkin::render::Camera { eye: [0.0, 0.0, 5.0], ..Default::default() };
+    let zero = galerkin::render::Camera { up: [0.0; 3], ..Default::default() };
+    assert!(galerkin::render::Camera::default().check().is_ok());
+    refused("up along the line of sight", || camera.check(), &["up vector", "line of sight"]);
+    refused("zero up", || zero.check(), &["up vector is zero"]);
+}
+
+/// Options that do not apply to the input chosen are usage errors (exit 2), not ignored.
+#[test]
+fn options_that_do_not_apply_are_refused() {
+    let vtu = repo("tests/data/vtk/quad_ascii.vtu");
+    let scratch = tempfile::Builder::new().prefix("galerkin-values-").tempdir().expect("scratch");
+    let png = scratch.path().join("x.png");
+    cli_refused(
+        &["spectral", "render", text(&vtu), "--order", "3", "--out", text(&png)],
+        2,
+        &["--order", "generated"],
+    );
+    cli_refused(
+        &["spectral", "render", text(&vtu), "--geometry-order", "2", "--out", text(&png)],
+        2,
+        &["--geometry-order"],
+    );
+    cli_refused(&["spectral", "gen", "--out", text(&scratch.path().join("x.txt"))], 2, &["x.txt", ".vtu"]);
+    cli_refused(
+        &["spacetime", "render", "--generate", "bar1d", "--elements", "500", "--out", text(&png)],
+        2,
+        &["--elements", "bar1d"],
+    );
+    assert!(!png.exists(), "a picture was written");
+}
+
+/// OBJ errors name the file and the line; a vertex at 1e308 is named as such, not as the
+/// degenerate triangle it makes.
+#[test]
+fn obj_errors_name_the_line() {
+    let scratch = tempfile::Builder::new().prefix("galerkin-values-").tempdir().expect("scratch");
+    let obj = common::obj_box::box_obj(1.0);
+    for (what, find, replace, words) in [
+        (
+            "a face index out of range",
+            "f 1 2 3\n",
+            "f 1 2 99\n",
+            vec!["line", "face vertex 99 does not exist"],
+        ),
+        (
+            "a coordinate that is no number",
+            "v 0 0 0\n",
+            "v 0 zero 0\n",
+            vec!["line 2", "\"zero\" is not a number"],
+        ),
+        ("a vertex at 1e308", "v 0 0 0\n", "v 0 1e308 0\n", vec!["line 2", "past the limit"]),
+    ] {
+        let path = scratch.path().join("frame_0.obj");
+        std::fs::write(&path, obj.replacen(find, replace, 1)).expect("written");
+        let mut w = words.clone();
+        w.push("frame_0.obj");
+        refused(
+            what,
+            || galerkin::mesh::animation::SurfaceAnimation::read_sequence(std::slice::from_ref(&path)).map(|_| ()),
+            &w,
+        );
+    }
 }

@@ -75,6 +75,57 @@ pub fn count_from_one_up_to(
     }
 }
 
+/// Options that a verb accepts but that do nothing for the input chosen — refused as usage
+/// errors (exit 2) instead of ignored: `(verb path, option, what makes it inapplicable)`.
+/// An option counts as given when it is on the command line (not a default).
+pub fn inapplicable(matches: &clap::ArgMatches) -> Option<String> {
+    let mut path = Vec::new();
+    let mut m = matches;
+    while let Some((name, sub)) = m.subcommand() {
+        path.push(name);
+        m = sub;
+    }
+    let given = |id: &str| {
+        m.try_contains_id(id).unwrap_or(false)
+            && m.value_source(id) == Some(clap::parser::ValueSource::CommandLine)
+    };
+    let file = m.try_contains_id("file").unwrap_or(false)
+        && m.try_get_one::<std::path::PathBuf>("file").ok().flatten().is_some();
+    let generating: &[&str] = match path.as_slice() {
+        ["spectral", "render" | "view"] => &["generate", "order", "geometry_order", "nodes"],
+        ["spacetime", "render" | "view"] => &["generate", "elements"],
+        _ => &[],
+    };
+    if file {
+        if let Some(id) = generating.iter().find(|id| given(id)) {
+            return Some(format!(
+                "--{} applies to a generated data set (without FILE); a file brings its own",
+                id.replace('_', "-")
+            ));
+        }
+    }
+    if matches!(path.as_slice(), ["spacetime", "render" | "view"])
+        && !file
+        && m.try_get_one::<String>("generate").ok().flatten().is_some_and(|g| g == "bar1d")
+        && given("elements")
+    {
+        return Some(
+            "--elements: bar1d is the seed's fixed 1D bar (its triangles are given), it has no element count"
+                .into(),
+        );
+    }
+    None
+}
+
+/// A `.vtu` output path (the only format `spectral gen` writes).
+pub fn vtu_path(s: &str) -> Result<PathBuf, String> {
+    let p = PathBuf::from(s);
+    match p.extension().and_then(|e| e.to_str()) {
+        Some(e) if e.eq_ignore_ascii_case("vtu") => Ok(p),
+        _ => Err(format!("{s:?}: the output is a VTK .vtu file (give NAME.vtu)")),
+    }
+}
+
 /// Image output: where the picture goes and how large it is.
 #[derive(Args, Clone, Debug)]
 pub struct ImageArgs {

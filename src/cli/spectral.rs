@@ -213,7 +213,7 @@ pub struct GenArgs {
     #[command(flatten)]
     pub source: Source,
     /// Output `.vtu` (VTK Lagrange cells, equispaced, every time step as `NAME_t<k>`).
-    #[arg(long)]
+    #[arg(long, value_parser = crate::cli::args::vtu_path)]
     pub out: PathBuf,
 }
 

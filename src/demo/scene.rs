@@ -114,15 +114,8 @@ impl DemoScene {
         if scene.colormap.log && lo <= 0.0 {
             return fail("range", format!("a logarithmic colour range needs lo > 0, got {lo}"));
         }
-        let c = &scene.camera;
-        if (0..3).all(|i| c.eye[i] == c.target[i])
-            || !(1.0..179.0).contains(&c.fov_y_degrees)
-            || !(0.0 < c.near && c.near < c.far)
-        {
-            return fail(
-                "[camera]",
-                "camera needs eye != target, 1 < fov_y_degrees < 179 and 0 < near < far".into(),
-            );
+        if let Err(e) = scene.camera.check() {
+            return fail("[camera]", e);
         }
         if !(1..=MAX_AXPY_LEN).contains(&scene.axpy.n) || !scene.axpy.a.is_finite() {
             return fail("[axpy]", format!("axpy needs 1 <= n <= {MAX_AXPY_LEN} and a finite a"));

@@ -143,11 +143,7 @@ impl SurfaceAnimation {
 type ObjContents = (Vec<[u32; 3]>, Vec<(String, Range<usize>)>, Vec<[f64; 3]>);
 
 fn read_obj(path: &Path) -> Result<ObjContents, MeshError> {
-    let options = tobj::LoadOptions { triangulate: true, single_index: true, ..Default::default() };
-    let (models, _) = tobj::load_obj(path, &options).map_err(|e| file_error(path, e))?;
-    if models.is_empty() {
-        return Err(file_error(path, "no objects"));
-    }
+    let models = super::obj::load(path).map_err(|e| file_error(path, e))?;
     let (mut triangles, mut parts, mut positions) = (Vec::new(), Vec::new(), Vec::new());
     for m in &models {
         let offset = positions.len() as u32;

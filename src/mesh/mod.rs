@@ -18,6 +18,7 @@ mod error;
 pub mod geometry;
 pub mod gmsh;
 pub mod kuhn;
+pub mod obj;
 pub mod sdf;
 pub mod stuffing;
 mod topology;

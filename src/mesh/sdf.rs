@@ -172,9 +172,8 @@ impl ObjSurface {
 
     /// Reads every object of an OBJ file (triangulated) as one surface; errors name the file.
     pub fn load(path: &std::path::Path) -> Result<Self, MeshError> {
-        let options = tobj::LoadOptions { triangulate: true, single_index: true, ..Default::default() };
-        let (models, _) = tobj::load_obj(path, &options)
-            .map_err(|e| MeshError::Generation(format!("{}: {e}", path.display())))?;
+        let models =
+            super::obj::load(path).map_err(|e| MeshError::Generation(format!("{}: {e}", path.display())))?;
         let mut triangles = Vec::new();
         for m in &models {
             let pos = &m.mesh.positions;

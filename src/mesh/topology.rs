@@ -127,6 +127,9 @@ impl Topology {
                 FaceKind::Wrap
             });
         }
+        if let Some(p) = periodic {
+            check_sides_paired(mesh, p.axis, &boundary, &face_cells, &face_local)?;
+        }
         Ok(Self { dim, face_cells, face_local, kinds, cell_faces, cell_signs, boundary, representative })
     }
 
@@ -194,11 +197,44 @@ impl Topology {
     }
 }
 
+/// Refuses a boundary face lying in either periodic side: its vertices are matched with the
+/// other side's, but no face there joins the same vertices (the two sides are triangulated
+/// differently), so the flow would see a wall where the mesh says it wraps.
+fn check_sides_paired(
+    mesh: &SimplexMesh,
+    axis: usize,
+    boundary: &[u32],
+    face_cells: &[[u32; 2]],
+    face_local: &[[u8; 2]],
+) -> Result<(), MeshError> {
+    let dim = mesh.dim();
+    let (lo, hi) = mesh.bounds();
+    let extent = (0..dim).map(|k| hi[k] - lo[k]).fold(0.0, f64::max);
+    let tol = 1e-9 * extent.max(f64::MIN_POSITIVE);
+    for &f in boundary {
+        let [c, _] = face_cells[f as usize];
+        let k = face_local[f as usize][0] as usize;
+        let vertices: Vec<u32> =
+            mesh.cell(c as usize).iter().enumerate().filter(|&(i, _)| i != k).map(|(_, &v)| v).collect();
+        for side in [lo[axis], hi[axis]] {
+            if vertices.iter().all(|&v| (mesh.point(v as usize)[axis] - side).abs() <= tol) {
+                return Err(MeshError::Structure(format!(
+                    "periodic axis {axis}: the face of vertices {vertices:?} on the side at {side} has no matching face on the other side (its vertices match, but the two sides' faces differ)"
+                )));
+            }
+        }
+    }
+    Ok(())
+}
+
 /// Pairs the vertices on the upper side of `axis` with those on the lower side.
 fn match_periodic(mesh: &SimplexMesh, axis: usize) -> Result<Vec<u32>, MeshError> {
     let dim = mesh.dim();
     if axis >= dim {
-        return Err(MeshError::Structure(format!("periodic axis {axis} in a {dim}D mesh")));
+        return Err(MeshError::Structure(format!(
+            "periodic axis {axis} in a {dim}D mesh (the axes are 0 to {})",
+            dim - 1
+        )));
     }
     let (lo, hi) = mesh.bounds();
     let extent = (0..dim).map(|k| hi[k] - lo[k]).fold(0.0, f64::max);
@@ -255,4 +291,46 @@ fn match_periodic(mesh: &SimplexMesh, axis: usize) -> Result<Vec<u32>, MeshError
         });
     }
     Ok(representative)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Three unit cubes in a row along x, each in five tetrahedra (four corners cut off a
+    /// central one), the middle one mirrored so the faces between them conform: the x = 0 side
+    /// is split along (0,0,0)–(0,1,1), the x = 3 side along (3,1,0)–(3,0,1), so the sides'
+    /// vertices match across x but their faces do not.
+    fn five_tet_cubes() -> SimplexMesh {
+        let v = |i: u32, j: u32, k: u32| i + 4 * (j + 2 * k);
+        let g =
+            (0..16u32).flat_map(|n| [f64::from(n % 4), f64::from((n / 4) % 2), f64::from(n / 8)]).collect();
+        let local = [
+            [[0, 0, 0], [1, 1, 0], [1, 0, 1], [0, 1, 1]],
+            [[1, 0, 0], [0, 0, 0], [1, 1, 0], [1, 0, 1]],
+            [[0, 1, 0], [0, 0, 0], [1, 1, 0], [0, 1, 1]],
+            [[0, 0, 1], [0, 0, 0], [1, 0, 1], [0, 1, 1]],
+            [[1, 1, 1], [1, 1, 0], [1, 0, 1], [0, 1, 1]],
+        ];
+        let mut cells = Vec::new();
+        for cube in 0..3u32 {
+            for tet in &local {
+                for [a, b, c] in tet {
+                    let a = if cube == 1 { 1 - a } else { *a };
+                    cells.push(v(cube + a, *b, *c));
+                }
+            }
+        }
+        SimplexMesh::new(3, g, cells).expect("the cubes")
+    }
+
+    #[test]
+    fn periodic_sides_must_pair_faces_not_only_vertices() {
+        let cube = five_tet_cubes();
+        assert_eq!(Topology::new(&cube, None).expect("open").boundary_faces().len(), 28);
+        let e = Topology::new(&cube, Some(Periodic { axis: 0 })).expect_err("sides differ").to_string();
+        assert!(e.contains("periodic axis 0") && e.contains("no matching face"), "{e}");
+        let e = Topology::new(&cube, Some(Periodic { axis: 5 })).expect_err("no axis 5").to_string();
+        assert!(e.contains("axes are 0 to 2"), "{e}");
+    }
 }

@@ -104,13 +104,7 @@ pub struct ObjScene {
 }
 
 fn read_obj(path: &Path) -> Result<Vec<tobj::Model>, RadiosityError> {
-    let options = tobj::LoadOptions { triangulate: true, single_index: true, ..Default::default() };
-    let (models, _) = tobj::load_obj(path, &options)
-        .map_err(|e| RadiosityError::File { path: path.to_path_buf(), message: e.to_string() })?;
-    if models.is_empty() {
-        return Err(RadiosityError::File { path: path.to_path_buf(), message: "no objects".into() });
-    }
-    Ok(models)
+    crate::mesh::obj::load(path).map_err(|message| RadiosityError::File { path: path.to_path_buf(), message })
 }
 
 fn positions(models: &[tobj::Model]) -> Vec<DVec3> {
@@ -129,6 +123,17 @@ impl ObjScene {
         let fail = |key: &str, message: String| {
             RadiosityError::from(scene_file::error_at(&text, path, key, message))
         };
+        spec.lights.check().map_err(|e| fail("[lights]", e))?;
+        let albedos = std::iter::once(("default", &spec.materials.default))
+            .chain(spec.materials.by_object.iter().map(|(k, v)| (k.as_str(), v)));
+        for (name, albedo) in albedos {
+            if albedo.iter().any(|a| !(a.is_finite() && (0.0..1.0).contains(a))) {
+                return Err(fail(
+                    name,
+                    format!("albedo {name} = {albedo:?}: every channel must be in [0, 1)"),
+                ));
+            }
+        }
         let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
         let base_path = dir.join(&spec.base);
         let models = read_obj(&base_path)?;

@@ -114,6 +114,26 @@ impl Default for Lights {
     }
 }
 
+impl Lights {
+    /// Refuses a negative or non-finite exitance or zenith radiance (naming the key and the
+    /// channel) and a ground albedo outside [0, 1): light a scene cannot emit.
+    pub fn check(&self) -> Result<(), String> {
+        for (key, rgb) in [("window_exitance", self.window_exitance), ("sky_zenith", self.sky_zenith)] {
+            if let Some(c) = rgb.iter().position(|v| !(v.is_finite() && *v >= 0.0)) {
+                return Err(format!(
+                    "{key} = {rgb:?}: channel {} ({}) must be finite and ≥ 0",
+                    c,
+                    ["red", "green", "blue"][c]
+                ));
+            }
+        }
+        if !(self.ground_albedo.is_finite() && (0.0..1.0).contains(&self.ground_albedo)) {
+            return Err(format!("ground_albedo = {}: must be in [0, 1)", self.ground_albedo));
+        }
+        Ok(())
+    }
+}
+
 /// A whole radiosity scene.
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -225,13 +245,8 @@ impl SceneSpec {
         if albedos.iter().flatten().any(|a| !(a.is_finite() && (0.0..1.0).contains(a))) {
             return fail("[materials]", "every albedo must be in [0, 1)".into());
         }
-        let l = &spec.lights;
-        let light = [l.window_exitance, l.sky_zenith].concat();
-        if light.iter().any(|v| !(v.is_finite() && *v >= 0.0)) || !(0.0..1.0).contains(&l.ground_albedo) {
-            return fail(
-                "[lights]",
-                "light values must be finite and non-negative, ground_albedo in [0, 1)".into(),
-            );
+        if let Err(e) = spec.lights.check() {
+            return fail("[lights]", e);
         }
         // Every corner of the parameter box must give a valid mesh.
         for corner in 0..16u32 {

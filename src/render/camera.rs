@@ -54,6 +54,37 @@ impl Default for Camera {
 }
 
 impl Camera {
+    /// Refuses a camera that has no view: a coordinate that is not finite, the eye on its
+    /// target, an up vector that is zero or along the line of sight (the view's right axis
+    /// `f × up` would be NaN), a field of view outside (0°, 180°), or not `0 < near < far`.
+    pub fn check(&self) -> Result<(), String> {
+        let all = self.eye.iter().chain(&self.target).chain(&self.up);
+        if all.chain([&self.fov_y_degrees, &self.near, &self.far]).any(|v| !v.is_finite()) {
+            return Err(format!("camera {self:?}: every value must be finite"));
+        }
+        let f = DVec3::from(self.target) - DVec3::from(self.eye);
+        let up = DVec3::from(self.up);
+        if f.length() == 0.0 {
+            return Err(format!("camera: eye and target are the same point {:?}", self.eye));
+        }
+        if up.length() == 0.0 {
+            return Err("camera: the up vector is zero".into());
+        }
+        if f.normalize().cross(up.normalize()).length() < 1e-6 {
+            return Err(format!(
+                "camera: the up vector {:?} is along the line of sight (eye {:?} → target {:?}); give one across it",
+                self.up, self.eye, self.target
+            ));
+        }
+        if !(self.fov_y_degrees > 0.0 && self.fov_y_degrees < 180.0) {
+            return Err(format!("camera: fov_y_degrees {} must be in (0, 180)", self.fov_y_degrees));
+        }
+        if !(self.near > 0.0 && self.near < self.far) {
+            return Err(format!("camera: needs 0 < near < far, got near {} and far {}", self.near, self.far));
+        }
+        Ok(())
+    }
+
     /// World → clip matrix in f64: right-handed view, perspective with depth in [0, 1], y
     /// flipped so that clip +y is framebuffer down (Vulkan).
     pub fn view_proj(&self, aspect: f64) -> DMat4 {

@@ -83,10 +83,12 @@ pub struct Material {
 
 impl Material {
     /// What makes this material unusable, if anything: the strain energy of plane strain is
-    /// positive definite and the wave speeds real only for μ > 0, λ + μ > 0 and ρ > 0.
+    /// positive definite and the wave speeds real only for μ > 0, λ + μ > 0 and ρ > 0 (and
+    /// each finite).
     pub fn problem(&self) -> Option<String> {
-        (!(self.mu > 0.0 && self.lambda + self.mu > 0.0 && self.density > 0.0))
-            .then(|| format!("needs μ > 0, λ + μ > 0 and ρ > 0 (got {self:?})"))
+        let finite = [self.lambda, self.mu, self.density].iter().all(|v| v.is_finite());
+        (!(finite && self.mu > 0.0 && self.lambda + self.mu > 0.0 && self.density > 0.0))
+            .then(|| format!("needs μ > 0, λ + μ > 0 and ρ > 0, each finite (got {self:?})"))
     }
 
     /// Pressure-wave speed `√((λ + 2μ)/ρ)`.

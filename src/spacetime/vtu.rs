@@ -140,6 +140,11 @@ pub fn read(path: &Path) -> Result<SpacetimeMesh, SpacetimeError> {
         }
         mesh.tets.push(tet);
         let m = Material { lambda: lambda[e], mu: mu[e], density: density.as_ref().map_or(1.0, |d| d[e]) };
+        // Each element's own values, before materials are merged (a NaN in one element of a
+        // material others define well would otherwise be dropped silently).
+        if let Some(problem) = m.problem() {
+            return Err(cell(format!("lambda, mu, density: {problem}")));
+        }
         let index = match &material {
             Some(ids) => {
                 let id = ids[e];
@@ -148,7 +153,7 @@ pub fn read(path: &Path) -> Result<SpacetimeMesh, SpacetimeError> {
                 }
                 let id = id as u32;
                 let known = *materials.entry(id).or_insert(m);
-                if known != m && !(known.lambda.is_nan() || m.lambda.is_nan()) {
+                if known != m {
                     return Err(cell(format!("material {id} is {m:?} here but {known:?} elsewhere")));
                 }
                 id

@@ -44,6 +44,9 @@ pub enum SpectralError {
     /// A field or time step that does not exist.
     #[error("{0}")]
     Missing(String),
+    /// A view setting that cannot be drawn (a camera without a view).
+    #[error("{0}")]
+    View(String),
     /// A derived field (`--expr`) that does not parse, type-check, compile or suit the view.
     #[error("{0}")]
     Expression(String),

@@ -41,6 +41,9 @@ pub fn check_view(mesh: &SpectralMesh, view: &SpectralView) -> Result<(), Spectr
             steps.saturating_sub(1)
         )));
     }
+    if let Some(camera) = &view.camera {
+        camera.check().map_err(SpectralError::View)?;
+    }
     if let Some(d) = &view.expression {
         d.check_step(mesh, view.field, view.step)?;
     }

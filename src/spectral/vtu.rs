@@ -177,6 +177,17 @@ pub fn read(path: &Path) -> Result<SpectralMesh, SpectralError> {
                 offsets[e]
             )));
         }
+        // The linear cells have their corners only.
+        let linear = matches!(types[e] as u8, VTK_QUAD | VTK_HEXAHEDRON);
+        if linear && per_cell != 1 << dim {
+            return Err(file(format!(
+                "element {e}: cell type {} ({}) has {} points, not {per_cell}; higher orders are VTK_LAGRANGE_{}",
+                types[e],
+                if dim == 2 { "VTK_QUAD" } else { "VTK_HEXAHEDRON" },
+                1 << dim,
+                if dim == 2 { "QUADRILATERAL = 70" } else { "HEXAHEDRON = 72" }
+            )));
+        }
     }
     if conn.values.len() != cells * per_cell {
         return Err(file(format!(
