@@ -147,7 +147,7 @@ fn runs_of_another_mesh_or_pace_and_bad_drives_are_refused_naming_them() {
     simulate_run(&mut other, 1, &tunnel, false, &mut |_, _, _, _| {}).unwrap();
     let reader = SnapshotReader::open(&tunnel).unwrap();
     let e = Trajectory::recorded(&model, &reader, &tunnel).unwrap_err().to_string();
-    assert!(e.contains("tunnel") && e.contains("another mesh"), "{e}");
+    assert!(e.contains("tunnel") && e.contains("not the mesh the model was trained on"), "{e}");
 
     // Another pace: a training run whose header says twice the frame time.
     let work_run = dir.path().join("work/run-00");

@@ -237,6 +237,35 @@ fn reduced_model_values_are_checked_at_load() {
         || ReducedFluidModel::load(&path).map(|_| ()),
         &["dt.safetensors", "frame_time", "-0.02"],
     );
+    // A motion of a training run the model does not have names the motion asked for.
+    let reduced = scratch.path().join("r");
+    cli_refused(
+        &["fluid", "reduced", text(&model), "--motion", "computed:1000000", "--out", text(&reduced)],
+        1,
+        &["computed:1000000", "training runs 0 to 0"],
+    );
+    // A run of another mesh: two fingerprints and what differs, not a debug dump of both.
+    let coarse = scratch.path().join("coarse.toml");
+    std::fs::write(&coarse, edited("scenes/fluid/tunnel_small.toml", "cell = 0.1", "cell = 0.2"))
+        .expect("written");
+    let other = scratch.path().join("other");
+    made(&["fluid", "simulate", text(&coarse), "--frames", "2", "--out", text(&other)]);
+    cli_refused(
+        &["fluid", "reduced", text(&model), "--geometry", text(&other), "--out", text(&reduced)],
+        1,
+        &[
+            "other",
+            "not the mesh the model was trained on",
+            "cells",
+            "against",
+            "trained on [2D,",
+            "given [2D,",
+        ],
+    );
+    let out =
+        galerkin(&["fluid", "reduced", text(&model), "--geometry", text(&other), "--out", text(&reduced)]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!stderr.contains("MeshFingerprint {"), "a debug dump: {stderr}");
     // --frames 0 on a reduced run is an argument error, not "NaN ms per step".
     cli_refused(
         &["fluid", "reduced", text(&model), "--frames", "0", "--out", text(&scratch.path().join("r"))],
@@ -349,6 +378,11 @@ fn options_that_do_not_apply_are_refused() {
     );
     cli_refused(&["spectral", "gen", "--out", text(&scratch.path().join("x.txt"))], 2, &["x.txt", ".vtu"]);
     cli_refused(
+        &["spectral", "render", "--geometry-order", "13", "--out", text(&png)],
+        2,
+        &["--geometry-order", "13", "orders run from 1 to 12"],
+    );
+    cli_refused(
         &["spacetime", "render", "--generate", "bar1d", "--elements", "500", "--out", text(&png)],
         2,
         &["--elements", "bar1d"],
@@ -383,8 +417,48 @@ fn obj_errors_name_the_line() {
         w.push("frame_0.obj");
         refused(
             what,
-            || galerkin::mesh::animation::SurfaceAnimation::read_sequence(std::slice::from_ref(&path)).map(|_| ()),
+            || {
+                galerkin::mesh::animation::SurfaceAnimation::read_sequence(std::slice::from_ref(&path))
+                    .map(|_| ())
+            },
             &w,
         );
     }
+}
+
+/// A radiosity model's visibility file: without its face count, or with a NaN inside a tensor,
+/// refused at load naming the file and the key or tensor and entry.
+#[test]
+fn radiosity_visibility_files_are_checked_at_load() {
+    use galerkin::radiosity::reduced::ReducedRadiosity;
+    let scratch = tempfile::Builder::new().prefix("galerkin-values-").tempdir().expect("scratch");
+    let model = scratch.path().join("model");
+    let scene = repo("scenes/radiosity/two_rooms_small.toml");
+    made(&["radiosity", "train", text(&scene), "--samples", "6", "--out", text(&model)]);
+    ReducedRadiosity::load(&model).expect("the valid model");
+    let path = model.join("visibility.safetensors");
+    let bytes = std::fs::read(&path).expect("visibility");
+    // safetensors: an 8-byte header length, the JSON header, then the tensors' bytes.
+    let n = u64::from_le_bytes(bytes[..8].try_into().expect("8 bytes")) as usize;
+    let header: serde_json::Value = serde_json::from_slice(&bytes[8..8 + n]).expect("json header");
+    let header_text = std::str::from_utf8(&bytes[8..8 + n]).expect("utf-8");
+    let faces = header_text.find("\"faces\"").expect("a face count");
+    let mut no_faces = bytes.clone();
+    no_faces[8 + faces + 2] = b'x'; // "fxces": same length, the key gone.
+    std::fs::write(&path, &no_faces).expect("written");
+    refused(
+        "no face count",
+        || ReducedRadiosity::load(&model).map(|_| ()),
+        &["visibility.safetensors", "\"faces\""],
+    );
+    let start = header["emission"]["data_offsets"][0].as_u64().expect("emission offsets") as usize;
+    let mut nan = bytes.clone();
+    let at = 8 + n + start + 8; // emission entry 1
+    nan[at..at + 8].copy_from_slice(&f64::NAN.to_le_bytes());
+    std::fs::write(&path, &nan).expect("written");
+    refused(
+        "a NaN emission",
+        || ReducedRadiosity::load(&model).map(|_| ()),
+        &["visibility.safetensors", "emission: entry 1", "not finite"],
+    );
 }

@@ -63,6 +63,18 @@ pub fn count_up_to(max: usize) -> impl Fn(&str) -> Result<usize, String> + Clone
     }
 }
 
+/// A parser for a polynomial order of a basis: 1 to [`galerkin::spectral::MAX_ORDER`] (seed
+/// 002's bases; the shaders keep `MAX_ORDER + 1` values per axis), so `--order 13` is an
+/// argument error naming the option's range, not a basis error after loading.
+pub fn polynomial_order(s: &str) -> Result<usize, String> {
+    let max = galerkin::spectral::MAX_ORDER;
+    match s.trim().parse::<usize>() {
+        Ok(n) if (1..=max).contains(&n) => Ok(n),
+        Ok(n) => Err(format!("{n}: orders run from 1 to {max}")),
+        Err(_) => Err(format!("{s:?} is not a whole number from 1 to {max}")),
+    }
+}
+
 /// A parser for a count of 1 to `max`: for steps of a run whose summary divides by them (0 is
 /// an argument error, not a "NaN ms per step").
 pub fn count_from_one_up_to(

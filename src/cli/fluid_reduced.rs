@@ -516,7 +516,8 @@ pub fn reduced(args: &ReducedArgs) -> Result<()> {
         (Some(schedule), _) => schedule.last_frame(),
         (None, Some(traj)) => traj.frames(),
         (None, None) => {
-            let frames = model.trajectories.get(k).map_or(0, |t| t.g.shape()[0].saturating_sub(1));
+            let run = galerkin::fluid::reduced::run::trajectory(&model, k, &args.motion.to_string())?;
+            let frames = run.g.shape()[0].saturating_sub(1);
             (frames as f64 / args.pace.unwrap_or(1.0) + 1e-9).floor() as usize
         }
     };

@@ -23,10 +23,10 @@ pub struct Source {
     #[arg(long, default_value = "annulus")]
     pub generate: String,
     /// Without FILE: the fields' polynomial order (1 to 12).
-    #[arg(long, default_value_t = 4)]
+    #[arg(long, default_value_t = 4, value_parser = crate::cli::args::polynomial_order)]
     pub order: usize,
     /// Without FILE: the geometry's order for the curved data sets (1 to 12).
-    #[arg(long, default_value_t = 3)]
+    #[arg(long, default_value_t = 3, value_parser = crate::cli::args::polynomial_order)]
     pub geometry_order: usize,
     /// Without FILE: the fields' node set: gll, equispaced, gauss, or bernstein (coefficients).
     #[arg(long, default_value = "gll")]

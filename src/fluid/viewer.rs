@@ -84,7 +84,7 @@ impl FluidContent {
         let run = motion.run();
         let traj = model.trajectories.get(run).ok_or_else(|| {
             anyhow::anyhow!(
-                "replay:{run}: the model has training runs 0 to {}",
+                "{motion}: the model has training runs 0 to {}",
                 model.trajectories.len().saturating_sub(1)
             )
         })?;

@@ -42,6 +42,16 @@ impl Compressor {
         }
     }
 
+    /// VTK's class name of the compressor (`vtkLZ4DataCompressor`), for errors.
+    pub fn vtk_name(self) -> &'static str {
+        match self {
+            Self::None => "uncompressed",
+            Self::Zlib => "vtkZLibDataCompressor",
+            Self::Lz4 => "vtkLZ4DataCompressor",
+            Self::Lzma => "vtkLZMADataCompressor",
+        }
+    }
+
     /// Inflates `z` to exactly `size` bytes, never more.
     fn inflate(self, z: &[u8], size: usize) -> Result<Vec<u8>, String> {
         let out = match self {
@@ -147,7 +157,18 @@ impl Framing {
                 .ok_or_else(|| format!("truncated: a block of {n} bytes is cut short"))?;
             return Ok((data.to_vec(), h + n));
         }
-        let word = |k: usize| self.word(b, k).ok_or("truncated compression header");
+        // A compressed array starts with words of `h` bytes: block count, block size, last
+        // block's size, then each block's compressed size (vtkXMLWriter's block header).
+        let short = |words: usize| {
+            format!(
+                "the {} block header is cut short: {words} words of {h} bytes (header_type={}) need {} bytes, the array has {}",
+                self.compressor.vtk_name(),
+                if self.header_u64 { "UInt64" } else { "UInt32" },
+                words.saturating_mul(h),
+                b.len()
+            )
+        };
+        let word = |k: usize| self.word(b, k).ok_or_else(|| short(k + 1));
         let (blocks, block_size, last_size) = (word(0)?, word(1)?, word(2)?);
         // The uncompressed total the header declares, checked before the sizes are read.
         let total = match blocks {
@@ -168,10 +189,9 @@ impl Framing {
         if total > limit {
             return Err(too_big(total));
         }
-        let mut at =
-            blocks.checked_add(3).and_then(|w| w.checked_mul(h)).ok_or("truncated compression header")?;
+        let mut at = blocks.checked_add(3).and_then(|w| w.checked_mul(h)).ok_or_else(|| short(blocks))?;
         if b.len() < at {
-            return Err("truncated compression header".into());
+            return Err(short(blocks + 3));
         }
         let mut out = Vec::with_capacity(total);
         for k in 0..blocks {
@@ -259,5 +279,25 @@ mod tests {
         }
         b.extend_from_slice(&z);
         assert!(framing.block(&b, 1 << 20).is_err());
+    }
+
+    #[test]
+    fn a_cut_short_block_header_names_the_compressor_and_the_sizes() {
+        // Two LZ4 blocks declared with 32-bit words, but only the first four words present.
+        let framing = Framing { header_u64: false, compressor: Compressor::Lz4 };
+        let mut b = Vec::new();
+        for w in [2u32, 64, 0, 10] {
+            b.extend_from_slice(&w.to_le_bytes());
+        }
+        let e = framing.block(&b, 1 << 20).unwrap_err();
+        for word in
+            ["vtkLZ4DataCompressor", "cut short", "5 words of 4 bytes", "header_type=UInt32", "has 16"]
+        {
+            assert!(e.contains(word), "{e:?} does not say {word:?}");
+        }
+        // Fewer bytes than the three leading words.
+        let framing = Framing { header_u64: true, compressor: Compressor::Zlib };
+        let e = framing.block(&[1, 0, 0], 1 << 20).unwrap_err();
+        assert!(e.contains("vtkZLibDataCompressor") && e.contains("UInt64") && e.contains("has 3"), "{e}");
     }
 }

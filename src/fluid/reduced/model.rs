@@ -88,6 +88,51 @@ impl MeshFingerprint {
             cells_hash: format!("{h:016x}"),
         }
     }
+
+    /// What differs between `self` and `other`, one phrase each ("cells 120 here, 96 there");
+    /// empty when they are the same mesh.
+    pub fn differences(&self, other: &Self) -> Vec<String> {
+        let axis = |a: Option<usize>| a.map_or("none".to_string(), |a| a.to_string());
+        let mut out = Vec::new();
+        let mut count = |what: &str, a: usize, b: usize| {
+            if a != b {
+                out.push(format!("{what} {a} against {b}"));
+            }
+        };
+        count("dimension", self.dim, other.dim);
+        count("cells", self.cells, other.cells);
+        count("faces", self.faces, other.faces);
+        count("vertices", self.vertices, other.vertices);
+        count("boundary faces", self.boundary_faces, other.boundary_faces);
+        if self.periodic_axis != other.periodic_axis {
+            out.push(format!(
+                "periodic axis {} against {}",
+                axis(self.periodic_axis),
+                axis(other.periodic_axis)
+            ));
+        }
+        if self.cells_hash != other.cells_hash && out.is_empty() {
+            out.push("the same counts, but other cells (their vertex lists differ)".into());
+        }
+        out
+    }
+}
+
+/// One line: "2D, 120 cells, 200 faces, 81 vertices, 40 boundary faces, not periodic, cells
+/// 0123456789abcdef".
+impl std::fmt::Display for MeshFingerprint {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{}D, {} cells, {} faces, {} vertices, {} boundary faces, ",
+            self.dim, self.cells, self.faces, self.vertices, self.boundary_faces
+        )?;
+        match self.periodic_axis {
+            Some(a) => write!(f, "periodic along axis {a}, ")?,
+            None => write!(f, "not periodic, ")?,
+        }
+        write!(f, "cells hash {}", self.cells_hash)
+    }
 }
 
 /// Where a model came from.
@@ -500,8 +545,10 @@ impl ReducedFluidModel {
             Ok(())
         } else {
             Err(FluidError::State(format!(
-                "the model was trained on mesh {:?}, this one is {:?}",
-                self.provenance.mesh, fingerprint
+                "not the mesh the model was trained on (model's against this: {}): trained on [{}], given [{}]",
+                self.provenance.mesh.differences(fingerprint).join("; "),
+                self.provenance.mesh,
+                fingerprint
             )))
         }
     }
@@ -560,9 +607,7 @@ impl Trajectory {
     ) -> Result<Self, FluidError> {
         let (mesh, topo) = run.mesh_at(0)?;
         let fingerprint = MeshFingerprint::of(&mesh, &topo, run.meta().periodic_axis);
-        model.check_mesh(&fingerprint).map_err(|e| {
-            FluidError::State(format!("{}: a run of another mesh than the model's: {e}", dir.display()))
-        })?;
+        model.check_mesh(&fingerprint).map_err(|e| FluidError::State(format!("{}: {e}", dir.display())))?;
         let (dt, model_dt) = (run.meta().frame_time, model.frame_time);
         let same_pace = (dt - model_dt).abs() <= FRAME_TIME_TOLERANCE * model_dt.abs();
         if !same_pace {

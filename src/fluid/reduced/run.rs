@@ -37,6 +37,16 @@ impl ReducedMotion {
     }
 }
 
+/// `replay:K` or `computed:K`, as `--motion` spells it (errors name the motion asked for).
+impl std::fmt::Display for ReducedMotion {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            ReducedMotion::Replay(k) => write!(f, "replay:{k}"),
+            ReducedMotion::Computed(k) => write!(f, "computed:{k}"),
+        }
+    }
+}
+
 impl std::str::FromStr for ReducedMotion {
     type Err = String;
     fn from_str(s: &str) -> Result<Self, String> {
@@ -80,9 +90,9 @@ pub fn run_reduced(
     frames: usize,
     on_frame: &mut dyn FnMut(usize),
 ) -> Result<ReducedRun, FluidError> {
-    let k = motion.run();
-    let traj = trajectory(model, k, &format!("replay:{k}"))?;
-    follow(fluid, traj, matches!(motion, ReducedMotion::Replay(_)), frames, &format!("replay:{k}"), on_frame)
+    let what = motion.to_string();
+    let traj = trajectory(model, motion.run(), &what)?;
+    follow(fluid, traj, matches!(motion, ReducedMotion::Replay(_)), frames, &what, on_frame)
 }
 
 /// Runs `frames` reduced steps along `traj` — a training run's motion, or a recorded run's
@@ -176,7 +186,13 @@ pub fn run_driven(
 }
 
 /// Training run `k`'s trajectory; `what` names the request in the error.
-fn trajectory<'a>(model: &'a ReducedFluidModel, k: usize, what: &str) -> Result<&'a Trajectory, FluidError> {
+/// Training run `k`'s trajectory in `model`, or an error naming the motion asked for (`what`,
+/// e.g. `computed:7`) and the runs the model has.
+pub fn trajectory<'a>(
+    model: &'a ReducedFluidModel,
+    k: usize,
+    what: &str,
+) -> Result<&'a Trajectory, FluidError> {
     model.trajectories.get(k).ok_or_else(|| {
         FluidError::State(format!(
             "{what}: the model has training runs 0 to {}",

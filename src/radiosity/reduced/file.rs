@@ -111,8 +111,17 @@ impl ReducedRadiosity {
                 meta.get("version")
             )));
         }
-        let faces: usize =
-            meta.get("faces").and_then(|v| v.parse().ok()).ok_or_else(|| fail("no face count".into()))?;
+        let faces: usize = match meta.get("faces") {
+            None => return Err(fail("its metadata has no \"faces\" entry (the scene's face count)".into())),
+            Some(v) => v.parse().ok().filter(|&n| n > 0 && n as u64 <= crate::limits::MAX_COUNT).ok_or_else(
+                || {
+                    fail(format!(
+                        "metadata \"faces\" is {v:?}, not a face count from 1 to {}",
+                        crate::limits::MAX_COUNT
+                    ))
+                },
+            )?,
+        };
         let file = SafeTensors::deserialize(&bytes).map_err(|e| fail(e.to_string()))?;
         let read = |name: &str| -> Result<Tensor, RadiosityError> {
             let v = file.tensor(name).map_err(|e| fail(format!("{name}: {e}")))?;
@@ -123,7 +132,10 @@ impl ReducedRadiosity {
                 .data()
                 .chunks_exact(8)
                 .map(|b| f64::from_le_bytes(b.try_into().expect("8 bytes")))
-                .collect();
+                .collect::<Vec<f64>>();
+            if let Some((i, x)) = crate::limits::first_out_of_range(&data) {
+                return Err(fail(format!("{name}: entry {i} is {}", crate::limits::out_of_range_reason(x))));
+            }
             Tensor::from_vec(v.shape(), data).map_err(|e| fail(format!("{name}: {e}")))
         };
         let learned = LearnedVisibility::new(read("geometry")?, read("visibility")?)
