@@ -1,7 +1,7 @@
 //! `galerkin`: the command-line front end, `galerkin <capability> <verb> [args]`: `spectral`,
 //! `spacetime`, `radiosity` and `fluid` with their verbs (`render`, `view`, `gen`, `bench`, …),
 //! plus `info`, `demo` and `bench gpu|reduce|all`. It parses and prints; the work is the
-//! library's. Old spellings are rewritten by `cli::legacy` with a deprecation note.
+//! library's. A capability without a verb prints its help (exit 0); argument errors exit 2.
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -12,7 +12,6 @@ mod cli {
     pub mod args;
     pub mod fluid;
     pub mod fluid_reduced;
-    pub mod legacy;
     pub mod radiosity;
     pub mod ranks;
     pub mod spacetime;
@@ -30,7 +29,7 @@ use galerkin::reduce::Communicator;
 /// turns on the Khronos validation layer; VK_DRIVER_FILES selects Vulkan drivers (e.g.
 /// /usr/share/vulkan/icd.d/lvp_icd.json for lavapipe); GALERKIN_LOG=debug shows diagnostics.
 #[derive(Parser)]
-#[command(version, about, long_about)]
+#[command(version, about, long_about, arg_required_else_help = true)]
 struct Cli {
     /// Use the first device whose name contains this (overrides GALERKIN_DEVICE).
     #[arg(long, global = true, value_name = "SUBSTRING")]
@@ -52,23 +51,27 @@ enum Command {
     Demo(DemoArgs),
     /// Spectral elements drawn per pixel (seed 002): VTK Lagrange/Bézier cells, MFEM and GLVis
     /// files or generated data sets, planar, surfaces in 3D, hexahedra by cut planes.
+    #[command(arg_required_else_help = true)]
     Spectral {
         #[command(subcommand)]
         verb: cli::spectral::Verb,
     },
     /// Time slices of spacetime discontinuous-Galerkin data sets (seed 003): .gst and .vtu.
+    #[command(arg_required_else_help = true)]
     Spacetime {
         #[command(subcommand)]
         verb: cli::spacetime::Verb,
     },
     /// Radiosity on deforming scenes (seed 000 §8–9): full and reduced, pictures, a viewer,
     /// training, the reduced model's error and speed.
+    #[command(arg_required_else_help = true)]
     Radiosity {
         #[command(subcommand)]
         action: cli::radiosity::Action,
     },
     /// Fluids on deforming simplicial meshes (seed 000 §5–7): the full-space solver, reduced
     /// models (training, runs, comparisons), pictures, viewers, ParaView export.
+    #[command(arg_required_else_help = true)]
     Fluid {
         #[command(subcommand)]
         action: cli::fluid::Action,
@@ -76,6 +79,7 @@ enum Command {
     /// The engine's own benchmarks (the device's ceilings, the reduction core) and `all`,
     /// which runs every capability's benchmark in one go. Each capability's benchmark is its
     /// `bench` verb, e.g. `galerkin spectral bench`.
+    #[command(arg_required_else_help = true)]
     Bench {
         #[command(subcommand)]
         what: BenchWhat,
@@ -147,11 +151,15 @@ fn main() {
     if let Err(e) = galerkin::atomic_file::remove_on_interrupt() {
         tracing::warn!("{e}");
     }
-    let (args, notes) = cli::legacy::translate(std::env::args_os().collect());
-    for note in notes.iter().filter(|_| ranks.is_root()) {
-        eprintln!("note: {note}");
-    }
-    let matches = <Cli as clap::CommandFactory>::command().get_matches_from(args);
+    let matches = match <Cli as clap::CommandFactory>::command().try_get_matches() {
+        Ok(matches) => matches,
+        // `galerkin spectral` (a capability without its verb): its help, as --help gives it.
+        Err(e) if e.kind() == clap::error::ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand => {
+            print!("{}", e.render());
+            std::process::exit(0);
+        }
+        Err(e) => e.exit(),
+    };
     if let Some(message) = cli::args::inapplicable(&matches) {
         <Cli as clap::CommandFactory>::command()
             .error(clap::error::ErrorKind::ArgumentConflict, message)

@@ -1,5 +1,5 @@
 //! The command line's grammar, `galerkin <capability> <verb> [args]`: every capability lists
-//! its verbs, the old spellings still run with a deprecation note, image outputs are checked
+//! its verbs (and prints them when given no verb), bad values are usage errors (exit 2), image outputs are checked
 //! before any work, and a file of the wrong kind is named as such.
 
 use std::process::{Command, Output};
@@ -35,29 +35,48 @@ fn every_capability_lists_its_verbs() {
 }
 
 #[test]
-fn old_spellings_run_with_a_deprecation_note() {
+fn a_capability_without_its_verb_prints_its_help_and_writes_nothing() {
     let dir = tempfile::Builder::new().prefix("galerkin-").tempdir().expect("scratch");
-    let vtu = dir.path().join("grid.vtu");
-    let vtu_text = vtu.to_string_lossy();
-    let out = galerkin(&["spectral-gen", "--generate", "grid", "--order", "2", "--out", &vtu_text]);
-    assert!(out.status.success(), "{}", stderr(&out));
-    assert!(vtu.exists(), "the old spelling wrote nothing");
-    let err = stderr(&out);
-    assert!(err.contains("deprecated") && err.contains("galerkin spectral gen"), "{err}");
-    // The current spelling writes the same file, without a note.
-    let again = dir.path().join("again.vtu");
-    let out = galerkin(&[
-        "spectral",
-        "gen",
-        "--generate",
-        "grid",
-        "--order",
-        "2",
-        "--out",
-        &again.to_string_lossy(),
-    ]);
-    assert!(out.status.success() && stderr(&out).is_empty(), "{}", stderr(&out));
-    assert_eq!(std::fs::read(&vtu).expect("old"), std::fs::read(&again).expect("new"));
+    for (capability, verb) in [
+        ("spectral", "render"),
+        ("spacetime", "convert"),
+        ("radiosity", "train"),
+        ("fluid", "simulate"),
+        ("bench", "gpu"),
+    ] {
+        let out = Command::new(env!("CARGO_BIN_EXE_galerkin"))
+            .arg(capability)
+            .current_dir(dir.path())
+            .output()
+            .expect("ran");
+        let help = String::from_utf8_lossy(&out.stdout);
+        assert_eq!(out.status.code(), Some(0), "galerkin {capability}: {}", stderr(&out));
+        assert!(help.contains(&format!("galerkin {capability}")) && help.contains(verb), "{help}");
+        assert!(!help.contains('\x1b'), "escape codes in redirected help: {help:?}");
+    }
+    let out = Command::new(env!("CARGO_BIN_EXE_galerkin")).current_dir(dir.path()).output().expect("ran");
+    assert_eq!(out.status.code(), Some(0), "bare galerkin: {}", stderr(&out));
+    assert!(String::from_utf8_lossy(&out.stdout).contains("spectral"));
+    assert_eq!(std::fs::read_dir(dir.path()).expect("dir").count(), 0, "a bare capability wrote something");
+}
+
+#[test]
+fn bad_enumerated_values_and_old_spellings_are_usage_errors() {
+    let cases: [(&[&str], &[&str]); 5] = [
+        (&["spectral", "render", "--generate", "foo"], &["--generate", "foo", "annulus"]),
+        (&["spectral", "gen", "--nodes", "lobatto"], &["--nodes", "lobatto", "gll"]),
+        (&["spacetime", "render", "--generate", "tornado"], &["--generate", "tornado", "bar1d"]),
+        (&["spacetime", "gen", "--generate", "bar1d"], &["--generate", "bar1d", "pulses"]),
+        (&["spectral-gen", "--generate", "grid"], &["spectral-gen"]),
+    ];
+    for (args, words) in cases {
+        let out = galerkin(args);
+        let err = stderr(&out);
+        assert_eq!(out.status.code(), Some(2), "galerkin {args:?}: {err}");
+        for w in words {
+            assert!(err.contains(w), "galerkin {args:?}: {err:?} does not name {w:?}");
+        }
+    }
 }
 
 #[test]

@@ -79,7 +79,7 @@ pub struct RenderArgs {
     /// `bar1d`, the seed's Fig. 3: a 1D bar fixed at its left end over (x, t) triangles, the
     /// whole spacetime shown as one image (x to the right, t upwards; EXR channels U, speed, u
     /// and s, the colour coordinate shown).
-    #[arg(long, default_value = "pulses")]
+    #[arg(long, default_value = "pulses", value_parser = clap::builder::PossibleValuesParser::new(galerkin::spacetime::dataset::RENDERABLE))]
     pub generate: String,
     /// Without FILE: about this many tetrahedra (built in memory: at most 50,000,000).
     #[arg(long, default_value_t = 60_000, value_parser = crate::cli::args::count_up_to(crate::cli::args::MAX_ELEMENTS))]
@@ -138,7 +138,7 @@ pub struct GenArgs {
     /// stiff circular fibres: three materials), `booster` (a sector of a rocket-booster cross
     /// section with a star-shaped bore). All fields are analytic travelling and reflecting
     /// pulses L2-projected per element — not solved.
-    #[arg(long, default_value = "pulses")]
+    #[arg(long, default_value = "pulses", value_parser = clap::builder::PossibleValuesParser::new(galerkin::spacetime::dataset::DATA_SETS))]
     pub generate: String,
     /// About this many tetrahedra (at most 200,000,000 streamed to .gst, 50,000,000 to .vtu,
     /// which is built in memory).
@@ -205,7 +205,7 @@ pub fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
         per_vertex: args.per_vertex,
         ..SpacetimeView::looking_at(data.summary(), time)
     };
-    picture::check_view(&data, &view).context("--time, --umax, --subdivide, --height-scale")?;
+    picture::check_view(&data, &view)?;
     let derived = match &args.expr {
         Some(text) => {
             if args.viewer.view {
@@ -267,7 +267,7 @@ pub struct BenchArgs {
     pub frames: usize,
     /// The data sets to generate: `pulses` (structured) or a tent-pitched scenario (`crack`,
     /// `inclusions`, `booster`); the out-of-core file is always `pulses`.
-    #[arg(long, default_value = "pulses")]
+    #[arg(long, default_value = "pulses", value_parser = clap::builder::PossibleValuesParser::new(galerkin::spacetime::dataset::DATA_SETS))]
     pub generate: String,
     /// Only these data-set sizes (comma-separated element counts), no out-of-core run: for
     /// A/B runs at one size, e.g. `--elements 5000000 --frames 21`.

@@ -20,7 +20,7 @@ pub struct Source {
     /// seed's 3332-element helix), both surfaces in 3D with field `pressure`, or `shell` (3 × 6
     /// × 4 curved hexahedra with field `temperature`, shown by --cut planes). Analytic fields
     /// with several time steps, sampled at the nodes — not solved.
-    #[arg(long, default_value = "annulus")]
+    #[arg(long, default_value = "annulus", value_parser = clap::builder::PossibleValuesParser::new(generate::DATA_SETS))]
     pub generate: String,
     /// Without FILE: the fields' polynomial order (1 to 12).
     #[arg(long, default_value_t = 4, value_parser = crate::cli::args::polynomial_order)]
@@ -29,7 +29,7 @@ pub struct Source {
     #[arg(long, default_value_t = 3, value_parser = crate::cli::args::polynomial_order)]
     pub geometry_order: usize,
     /// Without FILE: the fields' node set: gll, equispaced, gauss, or bernstein (coefficients).
-    #[arg(long, default_value = "gll")]
+    #[arg(long, default_value = "gll", value_parser = clap::builder::PossibleValuesParser::new(NodeSet::NAMES))]
     pub nodes: String,
 }
 
@@ -256,7 +256,7 @@ pub fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
         expression,
         ..SpectralView::default()
     };
-    check_view(&mesh, &view).context("--step, --log, --range, --max-error, --expr")?;
+    check_view(&mesh, &view)?;
     if args.viewer.view {
         return open_viewer(desc, mesh, view, args);
     }

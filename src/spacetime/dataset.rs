@@ -16,6 +16,11 @@ pub const MAX_IN_MEMORY: usize = 50_000_000;
 
 /// The names [`generated`] and [`generate_file`] know.
 pub const NAMES: &str = "pulses, crack, inclusions, booster";
+/// The generated tetrahedral data sets by name (the command line's `--generate` values).
+pub const DATA_SETS: [&str; 4] = ["pulses", "crack", "inclusions", "booster"];
+/// What `spacetime render|view --generate` accepts: [`DATA_SETS`] and `bar1d` (seed 003's
+/// Fig. 3, a 1D bar over (x, t) triangles, drawn as one image).
+pub const RENDERABLE: [&str; 5] = ["pulses", "crack", "inclusions", "booster", "bar1d"];
 
 fn extension(path: &Path) -> String {
     path.extension().and_then(|e| e.to_str()).unwrap_or_default().to_ascii_lowercase()

@@ -44,9 +44,9 @@ pub fn colour_bar(colormap: &Colormap, u_max: f64) -> ColourBar<'_> {
 /// when given) and its time against the data's span.
 pub fn check_view(data: &SpacetimeData, view: &SpacetimeView) -> Result<(), SpacetimeError> {
     for (name, v) in [
-        ("the subdivision area", view.subdivide),
-        ("U_max", view.u_max),
-        ("the height scale", view.height_scale),
+        ("--subdivide (the subdivision area)", view.subdivide),
+        ("--umax (U_max)", view.u_max),
+        ("--height-scale", view.height_scale),
     ] {
         if let Some(v) = v.filter(|v| !(v.is_finite() && *v > 0.0)) {
             return Err(SpacetimeError::Request(format!("{name} must be a positive number, got {v}")));
@@ -55,7 +55,7 @@ pub fn check_view(data: &SpacetimeData, view: &SpacetimeView) -> Result<(), Spac
     let [t0, t1] = data.summary().time;
     if !(t0..=t1).contains(&view.time) {
         return Err(SpacetimeError::Request(format!(
-            "time {} is outside the data set's time span [{t0}, {t1}]",
+            "--time {} is outside the data set's time span [{t0}, {t1}]",
             view.time
         )));
     }

@@ -34,6 +34,9 @@ pub enum NodeSet {
 }
 
 impl NodeSet {
+    /// Every node set's [`NodeSet::name`], in the command line's order.
+    pub const NAMES: [&str; 4] = ["gll", "equispaced", "gauss", "bernstein"];
+
     /// The name used on the command line and in errors.
     pub fn name(self) -> &'static str {
         match self {

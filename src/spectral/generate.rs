@@ -244,6 +244,9 @@ pub fn sample(mesh: &SpectralMesh, f: impl Fn(usize, [f64; 3]) -> f64) -> Vec<f6
     out
 }
 
+/// The generated data sets by name (the command line's `--generate` values), for [`by_name`].
+pub const DATA_SETS: [&str; 5] = ["grid", "annulus", "artery", "coil", "shell"];
+
 /// The generated data sets by name (`galerkin spectral render --generate`): `grid` (8 × 4 straight,
 /// skewed quadrilaterals), `annulus` (4 × 12 curved), `artery` (704 curved surface elements),
 /// `coil` (3332) and `shell` (3 × 6 × 4 curved hexahedra, shown by cut planes), with geometry of `geometry_order` (curved sets) and fields of `order` on

@@ -35,7 +35,7 @@ pub fn check_view(mesh: &SpectralMesh, view: &SpectralView) -> Result<(), Spectr
     let steps = field.steps.len();
     if view.step >= steps {
         return Err(SpectralError::Missing(format!(
-            "step {}: field {:?} has {steps} time steps (0 to {})",
+            "--step {}: field {:?} has {steps} time steps (0 to {})",
             view.step,
             field.name,
             steps.saturating_sub(1)
@@ -50,7 +50,7 @@ pub fn check_view(mesh: &SpectralMesh, view: &SpectralView) -> Result<(), Spectr
     if view.log {
         match view.range {
             Some((lo, _)) if lo <= 0.0 => {
-                return Err(SpectralError::Missing("a log scale needs a positive range (LO > 0)".into()))
+                return Err(SpectralError::Missing("--log needs a positive --range (LO > 0)".into()))
             }
             Some(_) => {}
             None => {
@@ -63,7 +63,7 @@ pub fn check_view(mesh: &SpectralMesh, view: &SpectralView) -> Result<(), Spectr
                 };
                 if lo.is_nan() || lo <= 0.0 {
                     return Err(SpectralError::Missing(format!(
-                        "a log scale: {what} at step {} spans [{lo}, {hi}], not above 0; give a range LO,HI with LO > 0",
+                        "--log: {what} at step {} spans [{lo}, {hi}], not above 0; give --range LO,HI with LO > 0",
                         view.step
                     )));
                 }
@@ -72,7 +72,7 @@ pub fn check_view(mesh: &SpectralMesh, view: &SpectralView) -> Result<(), Spectr
     }
     if !(view.max_error_px.is_finite() && view.max_error_px > 0.0) {
         return Err(SpectralError::Missing(
-            "the tessellation's error budget must be a positive number of pixels".into(),
+            "--max-error (the tessellation's error budget) must be a positive number of pixels".into(),
         ));
     }
     Ok(())
