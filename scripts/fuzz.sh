@@ -2,7 +2,8 @@
 # make fuzz: runs every loader's fuzz target (fuzz/fuzz_targets: VTU and .pvd, .gst, MFEM,
 # Gmsh, OBJ sequences and OBJ scenes, scene TOML, reduced models, snapshot directories, the
 # command line's value parsers) under libFuzzer and AddressSanitizer, FUZZ_SECONDS each
-# (default 600), FUZZ_JOBS at a time (default 2). Needs the nightly toolchain and cargo-fuzz
+# (default 600) or until FUZZ_RUNS executions (when set; whichever comes first), FUZZ_JOBS at a
+# time (default 2). Needs the nightly toolchain and cargo-fuzz
 # (`cargo install cargo-fuzz`). Not part of `make test`.
 #
 # Corpora start from valid files: the VTK and MFEM fixtures under tests/data, and files the
@@ -13,6 +14,7 @@
 set -eu
 cd "$(dirname "$0")/.."
 SECONDS_EACH=${FUZZ_SECONDS:-600}
+RUNS=${FUZZ_RUNS:-}
 JOBS=${FUZZ_JOBS:-2}
 ALL="vtu gst mfem gmsh obj scene_toml reduced_model snapshots cli_values"
 TARGETS=${FUZZ_TARGETS:-$ALL}
@@ -22,9 +24,15 @@ SEP='
 command -v cargo-fuzz >/dev/null || { echo "fuzz: cargo-fuzz is not installed (cargo install cargo-fuzz)" >&2; exit 1; }
 rustup run nightly rustc --version >/dev/null 2>&1 || { echo "fuzz: no nightly toolchain (rustup toolchain list)" >&2; exit 1; }
 
-TARGET_DIR=${CARGO_TARGET_DIR:-target}
-cargo build --release --bin galerkin
-G="$TARGET_DIR/release/galerkin"
+# The engine writes some of the seeds: GALERKIN_BIN names a built binary to use, else it is
+# built here.
+if [ -n "${GALERKIN_BIN:-}" ]; then
+    G=$GALERKIN_BIN
+else
+    TARGET_DIR=${CARGO_TARGET_DIR:-target}
+    cargo build --release --bin galerkin
+    G="$TARGET_DIR/release/galerkin"
+fi
 C=fuzz/corpus
 mkdir -p fuzz/logs
 for t in $ALL; do mkdir -p "$C/$t"; done
@@ -81,7 +89,7 @@ run() {
     timeout=20
     [ "$1" = scene_toml ] && timeout=90
     cargo +nightly fuzz run -O --debug-assertions "$1" "corpus/$1" -- \
-        -max_total_time="$SECONDS_EACH" -rss_limit_mb=2048 -timeout=$timeout -max_len=262144 \
+        -max_total_time="$SECONDS_EACH" ${RUNS:+-runs=$RUNS} -rss_limit_mb=2048 -timeout=$timeout -max_len=262144 \
         -print_final_stats=1 > "logs/$1.log" 2>&1 || echo "fuzz: $1 stopped with a finding: see fuzz/logs/$1.log" >&2
     runs=$(grep -o 'Done [0-9]* runs in [0-9]* second' "logs/$1.log" | tail -1)
     echo "fuzz: $1: ${runs:-no summary (see fuzz/logs/$1.log)}"

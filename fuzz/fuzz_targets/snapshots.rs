@@ -2,7 +2,7 @@
 //! quantity), read as `fluid export`, `fluid train` and `fluid render` read them.
 #![no_main]
 use galerkin_fuzz::{parts, scratch_dir, scratch_file};
-use libfuzzer_sys::fuzz_target;
+use libfuzzer_sys::{fuzz_mutator, fuzz_target};
 
 fuzz_target!(|data: &[u8]| {
     let [header, mesh, frames] = parts(data, 3)[..] else { return };
@@ -18,4 +18,9 @@ fuzz_target!(|data: &[u8]| {
             let _ = reader.frame(q, k);
         }
     }
+});
+
+// Value mutations (NaN, ±inf, 1e308, negative sizes) beside libFuzzer's byte mutations.
+fuzz_mutator!(|data: &mut [u8], size: usize, max_size: usize, seed: u32| {
+    galerkin_fuzz::value_mutation(data, size, max_size, seed)
 });
