@@ -12,6 +12,7 @@ mod cli {
     pub mod args;
     pub mod fluid;
     pub mod fluid_reduced;
+    pub mod progress;
     pub mod radiosity;
     pub mod ranks;
     pub mod spacetime;
@@ -146,7 +147,12 @@ fn main() {
             .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("warn,winit=error")),
         false => tracing_subscriber::EnvFilter::new("off"),
     };
-    tracing_subscriber::fmt().with_env_filter(filter).with_writer(std::io::stderr).init();
+    // Escape codes only on a terminal: a log file gets plain text.
+    tracing_subscriber::fmt()
+        .with_env_filter(filter)
+        .with_writer(std::io::stderr)
+        .with_ansi(cli::progress::to_terminal())
+        .init();
     // Ctrl-C and SIGTERM remove the unfinished files a command was writing, then exit 130.
     if let Err(e) = galerkin::atomic_file::remove_on_interrupt() {
         tracing::warn!("{e}");
@@ -271,18 +277,7 @@ fn bench_all(desc: &GpuDesc, quick: bool) -> Result<()> {
     Ok(())
 }
 
-/// A progress bar with an ETA for long work (`what` on the left, a message after the ETA);
-/// indicatif hides it when stderr is not a terminal.
-pub(crate) fn progress_bar(len: u64, what: &str) -> indicatif::ProgressBar {
-    let bar = indicatif::ProgressBar::new(len);
-    bar.set_style(
-        indicatif::ProgressStyle::with_template(&format!(
-            "{what:<28} {{bar:30}} {{pos}}/{{len}} eta {{eta}} {{msg}}"
-        ))
-        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
-    );
-    bar
-}
+pub(crate) use cli::progress::progress_bar;
 
 fn info(desc: &GpuDesc) -> Result<()> {
     let gpu = Gpu::new(desc)?;
@@ -370,11 +365,7 @@ fn bench_gpu(desc: &GpuDesc, quick: bool) -> Result<()> {
     let gpu = Gpu::new(desc)?;
     let config =
         if quick { galerkin::bench::BenchConfig::quick() } else { galerkin::bench::BenchConfig::full() };
-    let bar = indicatif::ProgressBar::new(5);
-    bar.set_style(
-        indicatif::ProgressStyle::with_template("{bar:30} {pos}/{len} {msg}")
-            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
-    );
+    let bar = progress_bar(5, "device ceilings");
     let mut step = 0;
     let rows = galerkin::bench::run(&gpu, &config, |name| {
         bar.set_position(step);
@@ -395,11 +386,7 @@ fn bench_gpu(desc: &GpuDesc, quick: bool) -> Result<()> {
 
 fn bench_reduce(desc: &GpuDesc, quick: bool) -> Result<()> {
     let gpu = Gpu::new(desc).ok();
-    let bar = indicatif::ProgressBar::new(1000);
-    bar.set_style(
-        indicatif::ProgressStyle::with_template("premultiplying V {bar:30} {percent}% eta {eta}")
-            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
-    );
+    let bar = progress_bar(1000, "premultiplying V (per mille)");
     let progress = |done: f64, total: f64| bar.set_position((1000.0 * done / total.max(1.0)) as u64);
     let mut emit = |section: &str| {
         bar.suspend(|| print!("{section}"));

@@ -186,3 +186,28 @@ fn a_log_scale_over_a_range_reaching_zero_and_a_directory_as_output_are_refused_
     assert_eq!(out.status.code(), Some(2), "{err}");
     assert!(err.contains("is a directory"), "{err}");
 }
+
+/// Long work in a log (stderr not a terminal): progress as plain lines — what, how far,
+/// elapsed, the estimate left — and no escape codes anywhere, logs included.
+#[test]
+fn redirected_training_output_has_progress_lines_and_no_escape_codes() {
+    let dir = tempfile::Builder::new().prefix("galerkin-").tempdir().expect("scratch");
+    let scene =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/radiosity/two_rooms_small.toml");
+    let out = Command::new(env!("CARGO_BIN_EXE_galerkin"))
+        .args(["radiosity", "train", &scene.to_string_lossy(), "--samples", "6", "--out"])
+        .arg(dir.path().join("model"))
+        .env("GALERKIN_LOG", "galerkin=info")
+        .output()
+        .expect("ran");
+    let err = stderr(&out);
+    assert!(out.status.success(), "{err}");
+    assert!(!err.contains('\u{1b}'), "escape codes in a log: {err:?}");
+    let progress: Vec<&str> = err.lines().filter(|l| l.starts_with("full radiosity of samples: ")).collect();
+    assert!(!progress.is_empty(), "no progress line for the full solves: {err}");
+    assert!(
+        progress.iter().any(|l| l.contains("6/6 (100 %)") && l.contains("elapsed") && l.contains("left")),
+        "{progress:?}"
+    );
+    assert!(err.contains("radiosity train: "), "no stage lines: {err}");
+}

@@ -289,7 +289,7 @@ pub fn bench(desc: &GpuDesc, args: &BenchArgs) -> Result<()> {
         bench.out_of_core = None;
     }
     let gpu = Gpu::new(desc)?;
-    let bar = indicatif::ProgressBar::new_spinner();
+    let bar = crate::cli::progress::spinner();
     let result = report(
         &gpu,
         &bench,
