@@ -350,3 +350,42 @@ fn a_training_motion_is_replayed_faster_or_slower() {
     }
     assert!(run_paced(&model, &fluid, 5, 1.0, 1, &mut |_| {}).unwrap_err().to_string().contains("run 5"));
 }
+
+/// A model trained from a scene names it (absolute path and content hash): `fluid compare`
+/// needs no --scene, from any working directory, and refuses the scene once it changed,
+/// naming both hashes.
+#[test]
+fn compare_finds_the_model_s_scene_from_any_directory_and_refuses_a_changed_one() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let scene = dir.path().join("cavity.toml");
+    std::fs::copy(SCENE, &scene).expect("scene copied");
+    let model_path = dir.path().join("m.safetensors");
+    let model =
+        train_scene(&scene, &model_path, &options(&dir.path().join("work")), &mut |_| {}).expect("training");
+    let source = model.provenance.source.as_ref().expect("the model names its scene");
+    assert_eq!(Path::new(&source.scene), std::path::absolute(&scene).unwrap());
+    assert_eq!(model.scene_file(None).expect("the scene, unchanged"), Path::new(&source.scene));
+    let elsewhere = tempfile::tempdir().expect("another working directory");
+    let compare = || {
+        std::process::Command::new(env!("CARGO_BIN_EXE_galerkin"))
+            .args(["fluid", "compare"])
+            .arg(&model_path)
+            .args(["--run", "0", "--frames", "2", "--out"])
+            .arg(dir.path().join("compare"))
+            .current_dir(elsewhere.path())
+            .output()
+            .expect("ran")
+    };
+    let out = compare();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    // The scene edited since: refused, naming the file and both hashes.
+    let text = std::fs::read_to_string(&scene).unwrap();
+    std::fs::write(&scene, format!("{text}\n# edited\n")).unwrap();
+    let out = compare();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("changed since the model was trained") && err.contains(&source.scene_sha256),
+        "{err}"
+    );
+}

@@ -244,6 +244,8 @@ fn reduced_model_values_are_checked_at_load() {
         1,
         &["computed:1000000", "training runs 0 to 0"],
     );
+    // A model trained from snapshot directories names no scene: compare asks for one.
+    cli_refused(&["fluid", "compare", text(&model), "--out", text(&reduced)], 1, &["give --scene"]);
     // A run of another mesh: two fingerprints and what differs, not a debug dump of both.
     let coarse = scratch.path().join("coarse.toml");
     std::fs::write(&coarse, edited("scenes/fluid/tunnel_small.toml", "cell = 0.1", "cell = 0.2"))

@@ -87,9 +87,9 @@ pub struct TrainSceneArgs {
 pub struct CompareArgs {
     /// A model written by `galerkin fluid train-scene`.
     pub model: PathBuf,
-    /// The scene it was trained on.
-    #[arg(long, default_value = "scenes/fluid/cavity.toml")]
-    pub scene: PathBuf,
+    /// The scene (default: the one the model was trained from, refused if it changed since).
+    #[arg(long)]
+    pub scene: Option<PathBuf>,
     /// Compare on training run K (replayed at the pace it was trained at; the cavity's full run
     /// is simulated again) …
     #[arg(long, conflicts_with = "drive")]
@@ -382,7 +382,7 @@ fn warn_beyond(
 pub fn compare(desc: &galerkin::gpu::GpuDesc, args: &CompareArgs) -> Result<()> {
     use galerkin::fluid::reduced::compare::ComparedMotion;
     let model = ReducedFluidModel::load(&args.model)?;
-    let scene = galerkin::fluid::scene::FluidScene::load(&args.scene)?;
+    let scene = galerkin::fluid::scene::FluidScene::load(&model.scene_file(args.scene.as_deref())?)?;
     let (motion, frames, title) = match (args.run, &args.full) {
         (_, Some(full)) => {
             let motion = ComparedMotion::Recorded { full: full.clone() };

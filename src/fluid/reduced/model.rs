@@ -148,6 +148,11 @@ pub struct Provenance {
     pub bases: Vec<BasisReport>,
     /// The mesh the model was trained on.
     pub mesh: MeshFingerprint,
+    /// The scene file it was trained from (`fluid train-scene`), with its content hash, the
+    /// training's frames and runs and the engine; `None` for a model trained from snapshot
+    /// directories (`fluid train`), which may come from any scene.
+    #[serde(default)]
+    pub source: Option<crate::reduce::provenance::Provenance>,
 }
 
 /// A mesh with its topology and periodic axis, as [`ReducedFluidModel::from_bases`] takes it.
@@ -398,6 +403,7 @@ impl ReducedFluidModel {
             caps: [sizes.m_f, sizes.m_u, sizes.m_g, sizes.m_h],
             bases: bases.reports.clone(),
             mesh: MeshFingerprint::of(mesh, topo, periodic_axis),
+            source: None,
         };
         let out = Self {
             core,
@@ -537,6 +543,29 @@ impl ReducedFluidModel {
         let axis = self.provenance.mesh.periodic_axis;
         let topo = Topology::new(&mesh, axis.map(|axis| crate::mesh::Periodic { axis }))?;
         Ok((mesh, topo))
+    }
+
+    /// The scene file to use with this model: `given` when there is one, else the scene the
+    /// model was trained from (its provenance), refused when its content changed since
+    /// training (naming the stored and the current SHA-256) or when the model does not name
+    /// one (trained from snapshot directories).
+    pub fn scene_file(&self, given: Option<&std::path::Path>) -> Result<std::path::PathBuf, FluidError> {
+        if let Some(path) = given {
+            return Ok(path.to_path_buf());
+        }
+        let Some(source) = &self.provenance.source else {
+            return Err(FluidError::State(
+                "the model does not name its scene (it was trained from snapshot directories by `fluid train`): give --scene FILE".into(),
+            ));
+        };
+        let path = std::path::PathBuf::from(&source.scene);
+        let now = crate::reduce::provenance::files_sha256(&[&path]).map_err(|e| {
+            FluidError::State(format!(
+                "the scene the model was trained from cannot be read ({e}): give --scene FILE"
+            ))
+        })?;
+        source.check_scene(&path, &now).map_err(FluidError::State)?;
+        Ok(path)
     }
 
     /// Refuses a mesh other than the one the model was trained on, naming both.

@@ -215,6 +215,15 @@ pub fn train_scene_across(
         let b_g = model.basis("g").ok_or_else(|| FluidError::State("the model has no basis g".into()))?;
         model.cavity = Some(CavityMotion::new(cavity, b_g));
     }
+    // Its scene, so that `fluid compare` needs no --scene (the scene file's content hashed).
+    let scene_sha256 = crate::reduce::provenance::files_sha256(&[scene_path]).map_err(FluidError::State)?;
+    let runs_as_samples: Vec<Vec<f64>> = runs.iter().map(|&r| vec![r as f64]).collect();
+    model.provenance.source = Some(crate::reduce::provenance::Provenance::new(
+        scene_path,
+        scene_sha256,
+        format!("{frames} frames per run, runs {runs:?}, sizes {:?}", options.sizes),
+        &runs_as_samples,
+    ));
     if ranks.is_root() {
         model.save(model_path)?;
     }
