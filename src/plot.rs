@@ -71,6 +71,35 @@ pub fn log_range(values: impl Iterator<Item = f64>) -> (f64, f64) {
     (10f64.powf(lo.log10().floor()), 10f64.powf(hi.log10().ceil().max(lo.log10().floor() + 1.0)))
 }
 
+/// A tick's value as a reader writes it: as many decimals as ticks `step` apart need, no
+/// trailing zeros, and a short exponent below 0.01 and from 10⁵ on — 0.8, 18, 0.25,
+/// 1e-3, 2.5e5 (not 8.000e-1 or 1.800e1).
+pub fn tick_label(v: f64, step: f64) -> String {
+    if v == 0.0 || !v.is_finite() {
+        return if v.is_finite() { "0".into() } else { v.to_string() };
+    }
+    let step = if step.is_finite() && step > 0.0 { step } else { v.abs() * 0.1 };
+    let step_exp = step.log10().floor() as i32;
+    let trim = |s: String| -> String {
+        if s.contains('.') {
+            s.trim_end_matches('0').trim_end_matches('.').to_string()
+        } else {
+            s
+        }
+    };
+    let magnitude = v.abs().log10().floor() as i32;
+    if (-2..5).contains(&magnitude) {
+        let decimals = (-step_exp).clamp(0, 8) as usize;
+        return trim(format!("{v:.decimals$}"));
+    }
+    let digits = (magnitude - step_exp).clamp(0, 6) as usize;
+    let text = format!("{v:.digits$e}");
+    match text.split_once('e') {
+        Some((mantissa, exp)) => format!("{}e{exp}", trim(mantissa.to_string())),
+        None => text,
+    }
+}
+
 /// The legend, in one style for every plot.
 pub fn draw_legend<'a, X, Y>(
     chart: &mut ChartContext<'a, BitMapBackend<'a>, Cartesian2d<X, Y>>,
@@ -125,8 +154,11 @@ pub fn line_chart(
     }
     let x_hi = all().map(|p| p.0).fold(0.0f64, f64::max).max(1.0);
     let y_hi = all().map(|p| p.1).fold(0.0f64, f64::max);
-    let y_hi = if y_hi > 0.0 { 1.1 * y_hi } else { 1.0 };
     let (w, h) = (1200u32, 600u32);
+    // Headroom for the legend (upper right, about 26 px a line of the ~480 px plot area), so
+    // that it sits above the data instead of over it.
+    let legend = (26.0 * lines.len() as f64 + 24.0) / 480.0;
+    let y_hi = if y_hi > 0.0 { y_hi * 1.05 / (1.0 - legend.min(0.6)) } else { 1.0 };
     let mut buf = vec![0u8; 3 * (w * h) as usize];
     {
         let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
@@ -277,7 +309,9 @@ fn draw_colour_bar(
         // A tick at zero comes out of the axis's arithmetic as ±1e-16: shown as 0.
         .y_label_formatter(&|y: &f64| {
             let v = value(*y) - shift;
-            format!("{:.3e}", if v.abs() < 1e-12 * (hi - lo).abs().max(hi.abs()) { 0.0 } else { v })
+            let v = if v.abs() < 1e-12 * (hi - lo).abs().max(hi.abs()) { 0.0 } else { v };
+            // Ticks about a tenth of the range apart (on a log scale, of the value itself).
+            tick_label(v, if log { 0.1 * v.abs() } else { 0.1 * (hi - lo) })
         })
         .draw()
         .map_err(|e| plot_err(path, e))?;
@@ -296,6 +330,24 @@ fn draw_colour_bar(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn tick_labels_read_as_people_write_them() {
+        for (v, step, want) in [
+            (0.8, 0.1, "0.8"),
+            (18.0, 2.0, "18"),
+            (0.25, 0.05, "0.25"),
+            (1e-3, 1e-4, "1e-3"),
+            (1.5e-4, 1e-5, "1.5e-4"),
+            (250_000.0, 50_000.0, "2.5e5"),
+            (-0.5, 0.1, "-0.5"),
+            (0.0, 0.1, "0"),
+            (3.0, 0.25, "3"),
+            (1234.4, 1.0, "1234"),
+        ] {
+            assert_eq!(tick_label(v, step), want, "{v} with ticks {step} apart");
+        }
+    }
 
     #[test]
     fn a_line_chart_has_its_lines_and_refuses_nothing_or_nan() {
