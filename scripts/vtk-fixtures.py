@@ -11,7 +11,9 @@ quadrilaterals with their time in the field data (`TimeValue` 2.5); `tri_lagrang
 quadratic Lagrange triangle (a cell the renderer refuses by name); `bezier_{quad,hex}.vtu`
 and `bezier_{quad,hex}_rational.vtu`, two order-3 Bezier cells each (the latter with
 RationalWeights), with VTK's own evaluation of their geometry and field at parametric points
-in the `.json` beside them. Also `hex_legacy.vtu`: the same hexahedra with the node order VTK used before file
+in the `.json` beside them; `quad_cells.vtu`, the quadrilaterals with cell data only (a scalar
+`pressure` = 1.5 + 2c, a vector `flux`), and `quad_vectors.vtu`, with only a vector point
+array (nothing to draw). Also `hex_legacy.vtu`: the same hexahedra with the node order VTK used before file
 version 2.2 (vertical edges 2-6 and 3-7 swapped) and the version attribute set to 1.0, checked
 by reading it back with VTK. Run from the repository root: python3 scripts/vtk-fixtures.py
 """
@@ -211,6 +213,33 @@ def main():
         write(rational, f"bezier_{shape}_rational.vtu", "ascii", "none", False)
         with open(os.path.join(OUT, f"bezier_{shape}_rational.json"), "w") as f:
             json.dump(evaluations(rational, pts), f)
+
+    # Cell data only (a solver's per-element values): the quadrilaterals without their point
+    # field, a scalar `pressure` of 1.5 + 2c on cell c and a vector `flux` (not drawable);
+    # and a file whose only array is a 3-component point vector (nothing to draw).
+    cells_only = vtk.vtkUnstructuredGrid()
+    cells_only.DeepCopy(quads)
+    cells_only.GetPointData().RemoveArray("u")
+    pressure, flux = vtk.vtkDoubleArray(), vtk.vtkDoubleArray()
+    pressure.SetName("pressure")
+    flux.SetName("flux")
+    flux.SetNumberOfComponents(3)
+    for c in range(cells_only.GetNumberOfCells()):
+        pressure.InsertNextValue(1.5 + 2 * c)
+        flux.InsertNextTuple3(c, -c, 0.5)
+    cells_only.GetCellData().AddArray(pressure)
+    cells_only.GetCellData().AddArray(flux)
+    write(cells_only, "quad_cells.vtu", "appended", "zlib", False)
+    vectors = vtk.vtkUnstructuredGrid()
+    vectors.DeepCopy(quads)
+    vectors.GetPointData().RemoveArray("u")
+    velocity = vtk.vtkDoubleArray()
+    velocity.SetName("velocity")
+    velocity.SetNumberOfComponents(3)
+    for i in range(vectors.GetNumberOfPoints()):
+        velocity.InsertNextTuple3(1.0, 0.0, i)
+    vectors.GetPointData().AddArray(velocity)
+    write(vectors, "quad_vectors.vtu", "appended", "zlib", False)
 
     # The legacy order: vertical edges 2-6 and 3-7 swapped, version 1.0.
     legacy = vtk.vtkUnstructuredGrid()

@@ -464,3 +464,48 @@ fn vtk_written_bezier_hexahedra_render_pixel_exact_through_cut_planes() {
         }
     }
 }
+
+/// Cell data as VTK writes it (quad_cells.vtu: no point data, a scalar `pressure` of 1.5 + 2c
+/// on cell c, a vector `flux`): the scalar is a piecewise-constant field, drawn so that every
+/// covered pixel shows its element's value within the pixel's f32 rounding bound; the vector
+/// is not a field. A file whose only array is a vector (quad_vectors.vtu) is refused naming
+/// the file and listing its arrays.
+#[test]
+fn vtk_written_cell_data_draws_as_piecewise_constant_fields() {
+    let mesh = Arc::new(vtu::read(&fixture("quad_cells.vtu")).expect("cell data only"));
+    let names: Vec<&str> = mesh.fields.iter().map(|f| f.name.as_str()).collect();
+    assert_eq!(names, ["pressure"]);
+    let gpu = common::gpu();
+    let (w, h) = (256, 128);
+    let mut r = SpectralRenderer::new(&gpu, mesh.clone(), &Colormap::viridis()).expect("renderer");
+    let target = RenderTarget::new(&gpu, "cell data", w, h, ColorFormat::Rgba32F).expect("target");
+    let Pixels::Rgba32F(px) = r.render(&target, &SpectralView::default()).expect("rendered") else {
+        panic!("a float target returned bytes")
+    };
+    let view = View2d::fit(&mesh, w, h);
+    let mut covered = [0usize; 2];
+    for y in 0..h {
+        for x in 0..w {
+            let t = &px[4 * (y * w + x) as usize..][..4];
+            if t[3].is_nan() || t[3] < 0.0 {
+                continue;
+            }
+            let e = t[3] as usize;
+            covered[e] += 1;
+            let p = view.pixel_centre(x, y, w, h);
+            let q = mesh.inverse_map(e, p, [0.5, 0.5]).expect("inside").map(|c| c.clamp(0.0, 1.0));
+            let exact = 1.5 + 2.0 * e as f64;
+            let bound = rounding_bound(&mesh, 0, 0, e, q) + 1e-12;
+            assert!(
+                (f64::from(t[0]) - exact).abs() <= bound,
+                "pixel ({x}, {y}) of element {e}: {} vs {exact}",
+                t[0]
+            );
+        }
+    }
+    assert!(covered.iter().all(|&c| c > 2_000), "{covered:?} pixels covered per element");
+    let err = vtu::read(&fixture("quad_vectors.vtu")).expect_err("nothing to draw").to_string();
+    for word in ["quad_vectors.vtu", "no field to draw", "velocity (3 components)", "cell data none"] {
+        assert!(err.contains(word), "{err:?} does not say {word:?}");
+    }
+}

@@ -104,7 +104,9 @@ pub struct RenderArgs {
     pub grid_functions: Vec<PathBuf>,
     #[command(flatten)]
     pub source: Source,
-    /// The field to show (default: the first).
+    /// The field to show (default: the first): a one-component array of the file's point data,
+    /// or of its cell data (drawn constant on each element; `NAME (cells)` where a point array
+    /// has the same name). An unknown name lists the fields there are.
     #[arg(long)]
     pub field: Option<String>,
     /// Its time step (0 = first).

@@ -11,7 +11,10 @@
 //! vertical edges 0–4, 1–5, 2–6, 3–7; earlier ones 0–4, 1–5, 3–7, 2–6
 //! ([`HexEdgeOrder`], chosen by the file's `version` as VTK's reader does). We write 2.2.
 //!
-//! Every one-component point-data array is a field. Arrays named `NAME_t0`, `NAME_t1`, … are
+//! Every one-component point-data array is a field, and so is every one-component cell-data
+//! array — piecewise constant, each element's coefficients all its cell's value (exact: the
+//! bases are partitions of unity), named `NAME (cells)` where a point field has its name; a
+//! file with neither is refused listing the arrays it has. Arrays named `NAME_t0`, `NAME_t1`, … are
 //! the time steps of field `NAME` (this is how [`fn@write`] stores several steps; ParaView shows
 //! them as separate arrays). All cells must be of one shape and one order. The container
 //! (encodings, compression) is [`crate::vtk`]'s. Errors name the file and the element or array.
@@ -214,8 +217,15 @@ pub fn read(path: &Path) -> Result<SpectralMesh, SpectralError> {
     }
     let geometry: Vec<[f64; 3]> =
         order.iter().map(|&p| [points[3 * p], points[3 * p + 1], points[3 * p + 2]]).collect();
-    // Fields: one-component point data, NAME_t<k> grouped into steps.
+    // Fields: one-component point data and cell data, NAME_t<k> grouped into steps.
     let mut grouped: BTreeMap<String, Vec<(usize, &[f64])>> = BTreeMap::new();
+    let mut cell_grouped: BTreeMap<String, Vec<(usize, &[f64])>> = BTreeMap::new();
+    let step_of = |name: &str| match name.rsplit_once("_t") {
+        Some((base, k)) if !base.is_empty() && k.parse::<usize>().is_ok() => {
+            (base.to_string(), k.parse().unwrap_or(0))
+        }
+        _ => (name.to_string(), 0),
+    };
     // Rational Bézier cells: weights not all 1 (VTK reads RationalWeights of Bézier cells only).
     let weights = match grid.optional("PointData", "RationalWeights", 1, grid.points)? {
         Some(w) if bezier && order.iter().any(|&p| w[p] != 1.0) => {
@@ -235,16 +245,30 @@ pub fn read(path: &Path) -> Result<SpectralMesh, SpectralError> {
                 grid.points
             )));
         }
-        let (name, step) = match a.name.rsplit_once("_t") {
-            Some((base, k)) if !base.is_empty() && k.parse::<usize>().is_ok() => {
-                (base.to_string(), k.parse().unwrap_or(0))
-            }
-            _ => (a.name.clone(), 0),
-        };
+        let (name, step) = step_of(&a.name);
         grouped.entry(name).or_default().push((step, &a.values));
     }
+    // Cell data: one value per element, drawn as a piecewise-constant field (every coefficient
+    // of the element the cell's value: exact, the bases being partitions of unity).
+    for a in grid.arrays.iter().filter(|a| a.section == "CellData" && a.components == 1) {
+        if a.values.len() != cells {
+            return Err(file(format!("cell array {}: {} values for {cells} cells", a.name, a.values.len())));
+        }
+        let (name, step) = step_of(&a.name);
+        cell_grouped.entry(name).or_default().push((step, &a.values));
+    }
+    if grouped.is_empty() && cell_grouped.is_empty() {
+        return Err(file(no_drawable_field(&grid)));
+    }
     let mut fields = Vec::new();
-    for (name, mut steps) in grouped {
+    // A cell field named like a point field is told apart by a suffix.
+    let taken: Vec<String> = grouped.keys().cloned().collect();
+    let point_fields = grouped.into_iter().map(|(name, steps)| (name, steps, false));
+    let cell_fields = cell_grouped.into_iter().map(|(name, steps)| {
+        let name = if taken.contains(&name) { format!("{name} (cells)") } else { name };
+        (name, steps, true)
+    });
+    for (name, mut steps, per_cell_value) in point_fields.chain(cell_fields) {
         steps.sort_by_key(|s| s.0);
         if steps.iter().enumerate().any(|(k, s)| s.0 != k) {
             return Err(file(format!(
@@ -258,11 +282,13 @@ pub fn read(path: &Path) -> Result<SpectralMesh, SpectralError> {
             (1, Some(t)) => vec![t],
             (n, _) => (0..n).map(|k| k as f64).collect(),
         };
-        fields.push(Field {
-            name,
-            times,
-            steps: steps.iter().map(|(_, v)| order.iter().map(|&p| v[p]).collect()).collect(),
-        });
+        let coefficients = |v: &[f64]| -> Vec<f64> {
+            match per_cell_value {
+                false => order.iter().map(|&p| v[p]).collect(),
+                true => v.iter().flat_map(|&c| std::iter::repeat_n(c, per_cell)).collect(),
+            }
+        };
+        fields.push(Field { name, times, steps: steps.iter().map(|(_, v)| coefficients(v)).collect() });
     }
     let nodes = if bezier { NodeSet::Bernstein } else { NodeSet::Equispaced };
     let basis = Basis1d::new(nodes, n)?;
@@ -272,6 +298,29 @@ pub fn read(path: &Path) -> Result<SpectralMesh, SpectralError> {
         Some(w) => mesh.with_weights(w).map_err(|e| file(e.to_string())),
         None => Ok(mesh),
     }
+}
+
+/// Why a file has nothing to draw: the arrays it has, with their components (only
+/// one-component point or cell data is drawn as a field).
+fn no_drawable_field(grid: &vtk::UnstructuredGrid) -> String {
+    let list = |section: &str| -> String {
+        let names: Vec<String> = grid
+            .arrays
+            .iter()
+            .filter(|a| a.section == section && a.name != "RationalWeights")
+            .map(|a| format!("{} ({} components)", a.name, a.components))
+            .collect();
+        if names.is_empty() {
+            "none".into()
+        } else {
+            names.join(", ")
+        }
+    };
+    format!(
+        "no field to draw: point data {}; cell data {} — a field is a one-component (scalar) array of point or cell data",
+        list("PointData"),
+        list("CellData")
+    )
 }
 
 /// The VTK name of the cell types a user is likeliest to hand the spectral renderer by mistake
