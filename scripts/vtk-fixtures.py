@@ -13,7 +13,8 @@ and `bezier_{quad,hex}_rational.vtu`, two order-3 Bezier cells each (the latter 
 RationalWeights), with VTK's own evaluation of their geometry and field at parametric points
 in the `.json` beside them; `quad_cells.vtu`, the quadrilaterals with cell data only (a scalar
 `pressure` = 1.5 + 2c, a vector `flux`), and `quad_vectors.vtu`, with only a vector point
-array (nothing to draw). Also `hex_legacy.vtu`: the same hexahedra with the node order VTK used before file
+array (nothing to draw); `hex_pieces.pvtu`, the hexahedra in two pieces written by
+vtkXMLPUnstructuredGridWriter. Also `hex_legacy.vtu`: the same hexahedra with the node order VTK used before file
 version 2.2 (vertical edges 2-6 and 3-7 swapped) and the version attribute set to 1.0, checked
 by reading it back with VTK. Run from the repository root: python3 scripts/vtk-fixtures.py
 """
@@ -240,6 +241,21 @@ def main():
         velocity.InsertNextTuple3(1.0, 0.0, i)
     vectors.GetPointData().AddArray(velocity)
     write(vectors, "quad_vectors.vtu", "appended", "zlib", False)
+
+    # A partitioned data set as a parallel run writes it: the hexahedra split into two pieces
+    # by VTK's own piece extractor, written by the parallel writer (hex_pieces.pvtu and
+    # hex_pieces_0.vtu, hex_pieces_1.vtu, a cell each).
+    p = vtk.vtkXMLPUnstructuredGridWriter()
+    split = vtk.vtkExtractUnstructuredGridPiece()
+    split.SetInputData(hexes)
+    p.SetInputConnection(split.GetOutputPort())
+    p.SetFileName(os.path.join(OUT, "hex_pieces.pvtu"))
+    p.SetNumberOfPieces(2)
+    p.SetStartPiece(0)
+    p.SetEndPiece(1)
+    p.SetDataModeToAppended()
+    if not p.Write():
+        sys.exit("VTK failed to write hex_pieces.pvtu")
 
     # The legacy order: vertical edges 2-6 and 3-7 swapped, version 1.0.
     legacy = vtk.vtkUnstructuredGrid()

@@ -114,7 +114,11 @@ fn read_entries(path: &Path, mut sets: Vec<(f64, String, String)>) -> Result<Spe
     let mut mesh: Option<SpectralMesh> = None;
     let mut times = Vec::with_capacity(sets.len());
     for (time, _, file) in &sets {
-        let step = vtu::read(&base.join(file))?;
+        let step_path = base.join(file);
+        let step = match step_path.extension().and_then(|e| e.to_str()) {
+            Some(e) if e.eq_ignore_ascii_case("pvtu") => super::pvtu::read(&step_path)?,
+            _ => vtu::read(&step_path)?,
+        };
         let step_file = |detail: String| SpectralError::File { path: base.join(file), detail };
         if let Some(f) = step.fields.iter().find(|f| f.steps.len() != 1) {
             return Err(step_file(format!(

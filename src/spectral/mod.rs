@@ -30,6 +30,7 @@ pub mod mesh;
 pub mod mfem;
 pub mod picture;
 pub mod proxy;
+pub mod pvtu;
 pub mod reference;
 pub mod render;
 #[cfg(feature = "viewer")]
@@ -41,7 +42,8 @@ pub use error::SpectralError;
 pub use mesh::{Field, Shape, SpectralMesh};
 pub use render::{fit_camera, SpectralRenderer, SpectralView, View2d, INSIDE_TOLERANCE, MAX_TESSELLATION};
 
-/// Loads a data set: a `.vtu` file (VTK Lagrange cells), a `.pvd` collection or `.vtu.series`
+/// Loads a data set: a `.vtu` file (VTK Lagrange cells), a `.pvtu` of `.vtu` pieces
+/// ([`pvtu`]), a `.pvd` collection or `.vtu.series`
 /// of them (a time series, [`collection`]), a GLVis "solution" stream (a file
 /// starting with `solution`), or an MFEM mesh with `grid_functions` as the time steps of one
 /// field named after the first GridFunction file's stem.
@@ -51,13 +53,18 @@ pub fn load(
 ) -> Result<SpectralMesh, SpectralError> {
     let name = path.to_string_lossy().to_ascii_lowercase();
     let series = name.ends_with(".pvd") || name.ends_with(".vtu.series");
-    if series || name.ends_with(".vtu") {
+    let partitioned = name.ends_with(".pvtu");
+    if series || partitioned || name.ends_with(".vtu") {
         if !grid_functions.is_empty() {
             return Err(SpectralError::Missing(
-                "GridFunction files go with MFEM meshes, not .vtu, .pvd or .vtu.series files".into(),
+                "GridFunction files go with MFEM meshes, not .vtu, .pvtu, .pvd or .vtu.series files".into(),
             ));
         }
-        return if series { collection::read_collection(path) } else { vtu::read(path) };
+        return match (series, partitioned) {
+            (true, _) => collection::read_collection(path),
+            (_, true) => pvtu::read(path),
+            _ => vtu::read(path),
+        };
     }
     let head = std::fs::read(path)
         .map_err(|e| SpectralError::File { path: path.to_path_buf(), detail: e.to_string() })?;
@@ -86,7 +93,7 @@ pub fn load(
     Err(SpectralError::File {
         path: path.to_path_buf(),
         detail:
-            "not a .vtu or .pvd file, an MFEM mesh (\"MFEM mesh v1.0\") or a GLVis solution stream (\"solution\")"
+            "not a .vtu, .pvtu or .pvd file, an MFEM mesh (\"MFEM mesh v1.0\") or a GLVis solution stream (\"solution\")"
                 .into(),
     })
 }

@@ -128,12 +128,23 @@ pub fn vtk_point_index(shape: Shape, n: usize, i: usize, j: usize, k: usize, edg
 
 /// Reads spectral elements from a `.vtu` file (see the module docs).
 pub fn read(path: &Path) -> Result<SpectralMesh, SpectralError> {
+    read_piece(path)?
+        .ok_or_else(|| SpectralError::File { path: path.to_path_buf(), detail: "no cells".into() })
+}
+
+/// [`read`], but a file of no cells is `None` (a piece of a partitioned data set may be
+/// empty).
+pub fn read_piece(path: &Path) -> Result<Option<SpectralMesh>, SpectralError> {
     let grid = vtk::read(path)?;
+    if grid.cells == 0 {
+        return Ok(None);
+    }
+    read_grid(path, &grid).map(Some)
+}
+
+fn read_grid(path: &Path, grid: &vtk::UnstructuredGrid) -> Result<SpectralMesh, SpectralError> {
     let file = |detail: String| SpectralError::File { path: path.to_path_buf(), detail };
     let cells = grid.cells;
-    if cells == 0 {
-        return Err(file("no cells".into()));
-    }
     let points = grid.require("Points", "Points", 3, grid.points)?;
     let types = grid.require("Cells", "types", 1, cells)?;
     let offsets = grid.require("Cells", "offsets", 1, cells)?;
