@@ -269,7 +269,7 @@ fn read_grid(path: &Path, grid: &vtk::UnstructuredGrid) -> Result<SpectralMesh, 
         cell_grouped.entry(name).or_default().push((step, &a.values));
     }
     if grouped.is_empty() && cell_grouped.is_empty() {
-        return Err(file(no_drawable_field(&grid)));
+        return Err(file(no_drawable_field(grid)));
     }
     let mut fields = Vec::new();
     // A cell field named like a point field is told apart by a suffix.
