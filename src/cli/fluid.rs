@@ -22,8 +22,9 @@ pub enum Action {
     /// Draw one frame of a snapshot directory: in 2D the cells by speed or plain, in 3D the
     /// domain's walls as a cutaway (far walls shaded, near ones culled); marker particles
     /// advected from frame 0 on the device (Eq. 13, 10 Euler substeps per frame) on top; to PNG
-    /// or EXR (EXR: the raw value, cell index and kind — 0 cell, 1 particle, 2 wall — beside
-    /// the colour).
+    /// (with a title — run, frame, time — and a colour bar of the speed beside the picture,
+    /// unless --no-legend) or EXR (EXR: the raw value, cell index and kind — 0 cell, 1
+    /// particle, 2 wall — beside the colour).
     #[command(mut_arg("out", |a| a.default_value("out/fluid.png")), mut_arg("size", |a| a.help("Image size, WIDTHxHEIGHT [default: 1600x500 for 2D runs, 1024x768 for 3D]")))]
     Render(RenderArgs),
     /// Play a 2D scene in a window (the full simulation steps every frame, the particles are
@@ -173,6 +174,9 @@ pub struct RenderArgs {
     pub colour: crate::cli::args::ColourArgs,
     #[command(flatten)]
     pub image: crate::cli::args::ImageArgs,
+    /// A PNG without its title and colour bar (the bare picture).
+    #[arg(long)]
+    pub no_legend: bool,
     /// Particle sprite radius in pixels.
     #[arg(long, default_value_t = 1.6)]
     pub sprite: f64,
@@ -348,6 +352,7 @@ fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
         colour_cells: args.cells,
         sprite_px: args.sprite,
         size: args.image.size,
+        legend: !args.no_legend,
     };
     let gpu = Gpu::new(desc)?;
     let start = Instant::now();

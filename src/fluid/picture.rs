@@ -32,6 +32,9 @@ pub struct FrameRequest {
     pub sprite_px: f64,
     /// Image size (`None`: 1600×500 for 2D runs, 1024×768 for 3D).
     pub size: Option<(u32, u32)>,
+    /// A PNG gets a title (run, frame, time) above the picture and a colour bar of the speed
+    /// beside it ([`crate::picture::Legend`]); `false`: the bare picture.
+    pub legend: bool,
 }
 
 /// What [`write_frame`] drew.
@@ -104,8 +107,23 @@ pub fn write_frame(
     };
     let picture =
         draw_picture(gpu, (&mesh, &topo), &g, &speeds, particles.as_ref(), &style, &projection, size)?;
+    let legend = picture::Legend {
+        title: format!(
+            "{}: frame {frame} of {}, t = {} s",
+            dir.display(),
+            meta.frames - 1,
+            crate::plot::tick_label(frame as f64 * meta.frame_time, meta.frame_time)
+        ),
+        bar: crate::plot::ColourBar {
+            colormap: &style.colormap,
+            range,
+            log: false,
+            label: if request.colour_cells { "cell speed (m/s)" } else { "particle speed (m/s)" },
+            shift: 0.0,
+        },
+    };
     match format {
-        ImageFormat::Png => picture::write_png(out, size, &picture.rgba, None)?,
+        ImageFormat::Png => picture::write_png(out, size, &picture.rgba, request.legend.then_some(&legend))?,
         ImageFormat::Exr => {
             let channels = picture::float_channels(&picture.raw, &["speed", "cell", "kind"]);
             picture::write_exr(out, size, Some(&picture.rgba), channels)?;

@@ -1,0 +1,81 @@
+//! Every `render` of a scalar field writes its picture with a title above it and a colour bar
+//! beside it (issue "What a new user meets"): the PNG is the asked width plus the legend's
+//! panel, at least the asked height plus the title strip, and the bar's panel shows both ends
+//! of the colour map; `--no-legend` gives the bare picture.
+
+use std::path::Path;
+use std::process::Command;
+
+use galerkin::plot::{BAR_WIDTH, TITLE_HEIGHT};
+
+fn galerkin(args: &[&str]) {
+    let out = Command::new(env!("CARGO_BIN_EXE_galerkin")).args(args).output().expect("ran galerkin");
+    assert!(out.status.success(), "galerkin {args:?}: {}", String::from_utf8_lossy(&out.stderr));
+}
+
+/// The PNG at `path` is `size` plus the legend, and its bar panel (right of the picture)
+/// holds viridis's two ends.
+fn has_colour_bar(path: &Path, size: (u32, u32)) {
+    let (w, h, rgba) = galerkin::render::read_png_rgba8(path).expect("a PNG");
+    // A short picture gets a taller canvas, so that the bar stays readable.
+    assert!(w == size.0 + BAR_WIDTH && h >= size.1 + TITLE_HEIGHT, "{}: {w}x{h}", path.display());
+    let map = galerkin::render::Colormap::by_name("viridis").expect("viridis");
+    let panel: Vec<[u8; 3]> = (0..h)
+        .flat_map(|y| (size.0..w).map(move |x| (y, x)))
+        .map(|(y, x)| {
+            let p = 4 * (y * w + x) as usize;
+            [rgba[p], rgba[p + 1], rgba[p + 2]]
+        })
+        .collect();
+    for t in [0.0f64, 1.0] {
+        let c = map.sample((t + 0.5 / 256.0).min(1.0 - 0.5 / 256.0));
+        let want = [(255.0 * c[0]) as u8, (255.0 * c[1]) as u8, (255.0 * c[2]) as u8];
+        // Within 8 of 255 per channel: a bar shorter than the map's 256 steps draws some steps
+        // over others, so the very end may be its neighbour (viridis moves < 4 a step).
+        let near = |p: &[u8; 3]| (0..3).all(|c| p[c].abs_diff(want[c]) <= 8);
+        assert!(panel.iter().any(near), "{}: end {t} of the map is not in the bar", path.display());
+    }
+}
+
+#[test]
+fn every_scalar_render_has_a_title_and_a_colour_bar() {
+    let dir = tempfile::Builder::new().prefix("galerkin-pictures-").tempdir().expect("scratch");
+    let out = |name: &str| dir.path().join(name).to_string_lossy().into_owned();
+    let tunnel = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/fluid/tunnel_small.toml");
+    galerkin(&["fluid", "simulate", &tunnel.to_string_lossy(), "--frames", "2", "--out", &out("run")]);
+    for (args, size) in [
+        (
+            vec!["fluid", "render", &out("run"), "--cells", "--size", "320x100", "--out", &out("fluid.png")],
+            (320, 100),
+        ),
+        (vec!["spectral", "render", "--size", "200x160", "--out", &out("spectral.png")], (200, 160)),
+        (
+            vec![
+                "spacetime",
+                "render",
+                "--elements",
+                "2000",
+                "--size",
+                "200x160",
+                "--out",
+                &out("spacetime.png"),
+            ],
+            (200, 160),
+        ),
+    ] {
+        galerkin(&args);
+        has_colour_bar(Path::new(args[args.len() - 1]), size);
+    }
+    galerkin(&[
+        "fluid",
+        "render",
+        &out("run"),
+        "--size",
+        "320x100",
+        "--no-legend",
+        "--out",
+        &out("bare.png"),
+    ]);
+    let (w, h, _) = galerkin::render::read_png_rgba8(Path::new(&out("bare.png"))).expect("a PNG");
+    assert_eq!((w, h), (320, 100));
+}
