@@ -79,3 +79,42 @@ fn every_scalar_render_has_a_title_and_a_colour_bar() {
     let (w, h, _) = galerkin::render::read_png_rgba8(Path::new(&out("bare.png"))).expect("a PNG");
     assert_eq!((w, h), (320, 100));
 }
+
+/// `--camera AZ,EL[,DIST]` moves a surface's camera (the picture changes); a planar mesh drawn
+/// flat, an elevation of 90° and the viewer refuse it.
+#[test]
+fn the_camera_of_a_surface_picture_is_the_user_s() {
+    let dir = tempfile::Builder::new().prefix("galerkin-pictures-").tempdir().expect("scratch");
+    let out = |name: &str| dir.path().join(name).to_string_lossy().into_owned();
+    let render = |camera: Option<&str>, name: &str| {
+        let mut args =
+            vec!["spectral", "render", "--generate", "artery", "--order", "2", "--size", "160x120"];
+        args.extend(["--no-legend", "--out"]);
+        let path = out(name);
+        let mut all: Vec<String> = args.iter().map(|s| s.to_string()).collect();
+        all.push(path.clone());
+        if let Some(c) = camera {
+            all.extend(["--camera".to_string(), c.to_string()]);
+        }
+        let refs: Vec<&str> = all.iter().map(String::as_str).collect();
+        galerkin(&refs);
+        galerkin::render::read_png_rgba8(Path::new(&path)).expect("a PNG").2
+    };
+    let default = render(None, "default.png");
+    let side = render(Some("0,10,1.5"), "side.png");
+    assert_ne!(default, side, "--camera did not move the camera");
+    let refused = |args: &[&str], word: &str| {
+        let out = Command::new(env!("CARGO_BIN_EXE_galerkin")).args(args).output().expect("ran");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success() && err.contains(word), "galerkin {args:?}: {err}");
+    };
+    refused(
+        &["spectral", "render", "--generate", "grid", "--camera", "30,20", "--out", &out("flat.png")],
+        "planar",
+    );
+    refused(
+        &["spectral", "render", "--generate", "artery", "--camera", "0,90", "--out", &out("up.png")],
+        "elevation",
+    );
+    refused(&["spectral", "view", "--generate", "artery", "--camera", "0,10"], "--camera");
+}

@@ -116,6 +116,11 @@ pub fn inapplicable(matches: &clap::ArgMatches) -> Option<String> {
             ));
         }
     }
+    let viewing =
+        matches!(path.as_slice(), [_, "view"]) || m.try_get_one::<bool>("view").ok().flatten() == Some(&true);
+    if viewing && given("camera") {
+        return Some("--camera sets a picture's camera; in the viewer the arrow keys and +/- move it".into());
+    }
     if matches!(path.as_slice(), ["spacetime", "render" | "view"])
         && !file
         && m.try_get_one::<String>("generate").ok().flatten().is_some_and(|g| g == "bar1d")

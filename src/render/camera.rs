@@ -158,13 +158,71 @@ impl Camera {
     }
 }
 
+/// Where a camera looks at a box from (`--camera AZ,EL[,DIST]`): the azimuth in degrees from +x
+/// towards +y, the elevation in degrees above the x–y plane (z up), and the distance as a
+/// multiple of the distance at which the box's bounding sphere fills the view (1: fitted).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Orbit {
+    /// Degrees from +x towards +y.
+    pub azimuth: f64,
+    /// Degrees above the x–y plane, within ±89 (at ±90 the up vector would be the line of sight).
+    pub elevation: f64,
+    /// Multiple of the fitted distance, (0, 100].
+    pub distance: f64,
+}
+
+impl Orbit {
+    /// Parses `AZ,EL` or `AZ,EL,DIST` (degrees, degrees, multiple of the fitted distance; DIST
+    /// defaults to 1); the message names what is out of range.
+    pub fn parse(s: &str) -> Result<Self, String> {
+        let parts: Vec<&str> = s.split(',').map(str::trim).collect();
+        if !(2..=3).contains(&parts.len()) {
+            return Err(format!("{s:?} is not AZ,EL or AZ,EL,DIST"));
+        }
+        let num = |v: &str, what: &str| {
+            v.parse::<f64>()
+                .ok()
+                .filter(|v| v.is_finite())
+                .ok_or_else(|| format!("{what} {v:?} is not a number"))
+        };
+        let azimuth = num(parts[0], "azimuth")?;
+        let elevation = num(parts[1], "elevation")?;
+        if elevation.abs() > 89.0 {
+            return Err(format!("elevation {elevation}: give −89 to 89 degrees (z is up)"));
+        }
+        let distance = match parts.get(2) {
+            Some(d) => num(d, "distance")?,
+            None => 1.0,
+        };
+        if !(distance > 0.0 && distance <= 100.0) {
+            return Err(format!(
+                "distance {distance}: a multiple of the fitted distance above 0, at most 100"
+            ));
+        }
+        Ok(Self { azimuth, elevation, distance })
+    }
+
+    /// The camera looking at the centre of the box [`lo`, `hi`] from this direction, at this
+    /// multiple of the distance at which the box's bounding sphere fills a 40° view.
+    pub fn camera(&self, lo: [f64; 3], hi: [f64; 3]) -> Camera {
+        let (az, el) = (self.azimuth.to_radians(), self.elevation.to_radians());
+        let dir = [el.cos() * az.cos(), el.cos() * az.sin(), el.sin()];
+        camera_along(lo, hi, dir, self.distance)
+    }
+}
+
 /// A camera that shows the box [`lo`, `hi`] (its bounding sphere) from above the x–y diagonal.
 pub fn camera_for_box(lo: [f64; 3], hi: [f64; 3]) -> Camera {
+    camera_along(lo, hi, [0.45, -0.75, 0.55], 1.0)
+}
+
+/// A camera on the line through the box's centre along `dir`, at `scale` times the distance at
+/// which the box's bounding sphere fills a 40° view.
+fn camera_along(lo: [f64; 3], hi: [f64; 3], dir: [f64; 3], scale: f64) -> Camera {
     let centre: [f64; 3] = std::array::from_fn(|c| 0.5 * (lo[c] + hi[c]));
     let radius = (0..3).map(|c| (hi[c] - lo[c]).powi(2)).sum::<f64>().sqrt().max(1e-12) * 0.5;
     let fov: f64 = 40.0;
-    let distance = 1.05 * radius / (0.5 * fov.to_radians()).sin();
-    let dir: [f64; 3] = [0.45, -0.75, 0.55];
+    let distance = scale * 1.05 * radius / (0.5 * fov.to_radians()).sin();
     let n = (dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]).sqrt();
     Camera {
         eye: std::array::from_fn(|c| centre[c] + distance * dir[c] / n),
@@ -173,5 +231,31 @@ pub fn camera_for_box(lo: [f64; 3], hi: [f64; 3]) -> Camera {
         fov_y_degrees: fov,
         near: (distance - 1.5 * radius).max(1e-3 * distance),
         far: distance + 1.5 * radius,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_orbit_parses_its_angles_and_places_the_eye_along_them() {
+        let o = Orbit::parse("0, 0").expect("AZ,EL");
+        assert_eq!(o, Orbit { azimuth: 0.0, elevation: 0.0, distance: 1.0 });
+        let (lo, hi) = ([-1.0, -1.0, -1.0], [1.0, 1.0, 1.0]);
+        let c = o.camera(lo, hi);
+        // On +x, level with the centre, looking at it, z up.
+        assert!(c.eye[0] > 1.0 && c.eye[1].abs() < 1e-12 && c.eye[2].abs() < 1e-12, "{:?}", c.eye);
+        assert_eq!(c.target, [0.0; 3]);
+        assert!(c.check().is_ok());
+        // From above at 60°, twice as far.
+        let far = Orbit::parse("90,60,2").expect("AZ,EL,DIST").camera(lo, hi);
+        let d = |c: &Camera| c.eye.iter().map(|v| v * v).sum::<f64>().sqrt();
+        assert!((d(&far) - 2.0 * d(&c)).abs() < 1e-12);
+        assert!((far.eye[2] / d(&far) - 60f64.to_radians().sin()).abs() < 1e-12);
+        assert!(far.eye[0].abs() < 1e-12 && far.eye[1] > 0.0);
+        for bad in ["10", "1,2,3,4", "x,1", "0,90", "0,0,0", "0,0,-1", "nan,0"] {
+            assert!(Orbit::parse(bad).is_err(), "{bad} accepted");
+        }
     }
 }

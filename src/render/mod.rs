@@ -16,7 +16,7 @@ pub mod viewer;
 /// Background of the engine's colour images and windows (linear RGBA, opaque dark grey).
 pub const BACKGROUND: [f32; 4] = [0.12, 0.12, 0.14, 1.0];
 
-pub use camera::{camera_for_box, Camera};
+pub use camera::{camera_for_box, Camera, Orbit};
 pub use colormap::{ramp_coordinate, ramp_texcoord, Colormap, ColormapTexture, RAMP_TEXELS};
 pub use draw_target::DrawTarget;
 pub use error::RenderError;

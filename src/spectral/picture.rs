@@ -43,6 +43,11 @@ pub fn check_view(mesh: &SpectralMesh, view: &SpectralView) -> Result<(), Spectr
     }
     if let Some(camera) = &view.camera {
         camera.check().map_err(SpectralError::View)?;
+        if mesh.is_planar() && view.height.is_none() && view.cuts.is_empty() {
+            return Err(SpectralError::View(
+                "--camera: this mesh is planar and drawn flat, seen from above; give --height to see it as a height field in 3D".into(),
+            ));
+        }
     }
     if let Some(d) = &view.expression {
         d.check_step(mesh, view.field, view.step)?;
