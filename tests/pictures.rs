@@ -118,3 +118,16 @@ fn the_camera_of_a_surface_picture_is_the_user_s() {
     );
     refused(&["spectral", "view", "--generate", "artery", "--camera", "0,10"], "--camera");
 }
+
+/// Spacetime slices take the same `--camera`.
+#[test]
+fn a_spacetime_slice_takes_the_camera_too() {
+    let dir = tempfile::Builder::new().prefix("galerkin-pictures-").tempdir().expect("scratch");
+    let png = |name: &str| dir.path().join(name).to_string_lossy().into_owned();
+    let base = ["spacetime", "render", "--elements", "2000", "--size", "160x120", "--no-legend", "--out"];
+    let (a, b) = (png("default.png"), png("orbit.png"));
+    galerkin(&[&base[..], &[a.as_str()]].concat());
+    galerkin(&[&base[..], &[b.as_str(), "--camera", "-120,35,1.3"]].concat());
+    let read = |p: &str| galerkin::render::read_png_rgba8(Path::new(p)).expect("a PNG").2;
+    assert_ne!(read(&a), read(&b), "--camera did not move the camera");
+}

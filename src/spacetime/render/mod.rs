@@ -146,6 +146,13 @@ impl SpacetimeView {
         }
     }
 
+    /// The camera looking at the data set from `orbit`: at its box — the slice's spatial extent,
+    /// and heights up to a quarter of its size when the height field is on.
+    pub fn orbit(&self, data: &DataSummary, orbit: crate::render::Orbit) -> Camera {
+        let top = if self.height { 0.25 * data.size() } else { 0.0 };
+        orbit.camera([data.space_lo[0], data.space_lo[1], 0.0], [data.space_hi[0], data.space_hi[1], top])
+    }
+
     /// Looking straight down at the data set so that it fills the image (height off): every pixel
     /// centre sees the point (x, y) of the slice plane, as the pixel-exactness tests want.
     pub fn from_above(data: &DataSummary, time: f64) -> Self {
