@@ -379,6 +379,20 @@ fn options_that_do_not_apply_are_refused() {
         &["--geometry-order"],
     );
     cli_refused(&["spectral", "gen", "--out", text(&scratch.path().join("x.txt"))], 2, &["x.txt", ".vtu"]);
+    // Combinations and values the parser can judge are usage errors too, not errors of the work.
+    let small = repo("scenes/radiosity/two_rooms_small.toml");
+    cli_refused(
+        &["radiosity", "render", text(&small), "--view", "--lights", "sky"],
+        2,
+        &["--lights", "viewer"],
+    );
+    cli_refused(
+        &["radiosity", "render", text(&small), "--exposure", "-1", "--out", text(&png)],
+        2,
+        &["--exposure", "positive"],
+    );
+    cli_refused(&["spacetime", "view", "--expr", "U"], 2, &["--expr", "viewer"]);
+    cli_refused(&["fluid", "bench-reduced", "--sizes", "1,2"], 2, &["--sizes", "four numbers"]);
     cli_refused(
         &["spectral", "render", "--geometry-order", "13", "--out", text(&png)],
         2,

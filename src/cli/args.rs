@@ -121,6 +121,14 @@ pub fn inapplicable(matches: &clap::ArgMatches) -> Option<String> {
     if viewing && given("camera") {
         return Some("--camera sets a picture's camera; in the viewer the arrow keys and +/- move it".into());
     }
+    if viewing && matches!(path.as_slice(), ["radiosity", _]) && given("lights") {
+        return Some(
+            "--lights applies to pictures; the viewer takes the scene's (or the model's) lighting".into(),
+        );
+    }
+    if viewing && matches!(path.as_slice(), ["spacetime", _]) && given("expr") {
+        return Some("--expr is drawn by `spacetime render`; the viewer shows U".into());
+    }
     if matches!(path.as_slice(), ["spacetime", "render" | "view"])
         && !file
         && m.try_get_one::<String>("generate").ok().flatten().is_some_and(|g| g == "bar1d")
@@ -132,6 +140,26 @@ pub fn inapplicable(matches: &clap::ArgMatches) -> Option<String> {
         );
     }
     None
+}
+
+/// A parser for a positive finite number (an exposure, a scale): 0, negatives, NaN and
+/// infinities are argument errors.
+pub fn positive_number(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
+        Ok(v) => Err(format!("{v}: give a positive number")),
+        Err(_) => Err(format!("{s:?} is not a number")),
+    }
+}
+
+/// A parser for `A,B,C,D`: exactly four counts (comma-separated), e.g. basis sizes
+/// m_u,m_f,m_g,m_h.
+pub fn four_counts(s: &str) -> Result<[usize; 4], String> {
+    let v: Vec<usize> = s
+        .split(',')
+        .map(|p| p.trim().parse::<usize>().map_err(|_| format!("{p:?} is not a whole number")))
+        .collect::<Result<_, _>>()?;
+    <[usize; 4]>::try_from(v).map_err(|v| format!("{s:?}: four numbers, not {}", v.len()))
 }
 
 /// A `.vtu` output path (the only format `spectral gen` writes).

@@ -591,8 +591,8 @@ pub struct BenchArgs {
     #[arg(long, value_parser = crate::cli::args::count_up_to(crate::cli::args::MAX_FRAMES))]
     pub energy_steps: Option<usize>,
     /// Basis sizes m_u,m_f,m_g,m_h of the cavity step (Table 1's cavity: 128,64,5; m_h ours).
-    #[arg(long, value_delimiter = ',', default_value = "128,64,5,16")]
-    pub sizes: Vec<usize>,
+    #[arg(long, default_value = "128,64,5,16", value_parser = crate::cli::args::four_counts)]
+    pub sizes: [usize; 4],
     /// Measure a trained model instead (Table 1's reduced rows): the full step on --scene and
     /// the reduced step under the same motion (a cavity model driven by --drive, any other
     /// model replaying a training run, --replay), and reduced particles on the CPU and the
@@ -650,9 +650,7 @@ pub fn bench(desc: &galerkin::gpu::GpuDesc, args: &BenchArgs) -> Result<()> {
         drop(gpu);
         return Ok(());
     }
-    let [mu, mf, mg, mh] = args.sizes[..] else {
-        anyhow::bail!("--sizes needs four numbers m_u,m_f,m_g,m_h");
-    };
+    let [mu, mf, mg, mh] = args.sizes;
     let mut bench = StepBench::new(args.quick);
     bench.sizes = (mu, mf, mg, mh);
     bench.steps = args.steps;

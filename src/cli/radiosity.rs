@@ -218,8 +218,9 @@ pub struct Look {
     /// Flat (each face's radiosity) or smooth (averaged to the vertices) shading.
     #[arg(long, value_enum, default_value_t = Shading::Flat)]
     pub shading: Shading,
-    /// Exposure (1 / radiance shown at 63 % of white); default: automatic from the solution.
-    #[arg(long)]
+    /// Exposure (1 / radiance shown at 63 % of white, positive); default: automatic from the
+    /// solution.
+    #[arg(long, value_parser = crate::cli::args::positive_number, allow_hyphen_values = true)]
     pub exposure: Option<f64>,
 }
 
@@ -313,9 +314,6 @@ pub fn run(desc: &GpuDesc, action: &Action, ranks: &dyn Communicator) -> Result<
 fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
     let size = args.image.size_or((1024, 768));
     if args.viewer.view {
-        if args.lights.is_some() {
-            bail!("--lights applies to pictures; the viewer takes the scene's (or the model's) lighting");
-        }
         let view_args = ViewArgs {
             scene: args.scene.clone(),
             model: args.model.clone(),
@@ -800,8 +798,7 @@ fn view(desc: &GpuDesc, args: &ViewArgs) -> Result<()> {
         check_model_faces(m, mesh.len()).with_context(|| dir.display().to_string())?;
     }
     let exposure = match args.look.exposure {
-        Some(e) if e.is_finite() && e > 0.0 => e,
-        Some(e) => bail!("--exposure must be positive, got {e}"),
+        Some(e) => e,
         None => automatic_exposure(&scene, &p)?,
     };
     let settings = ViewSettings {

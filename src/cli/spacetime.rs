@@ -216,15 +216,10 @@ pub fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
     };
     picture::check_view(&data, &view)?;
     let derived = match &args.expr {
-        Some(text) => {
-            if args.viewer.view {
-                anyhow::bail!("--expr is drawn by `spacetime render`; the viewer shows U");
-            }
-            Some((
-                std::sync::Arc::new(galerkin::expression::spacetime::SpacetimeExpression::new(text)?),
-                args.range,
-            ))
-        }
+        Some(text) => Some((
+            std::sync::Arc::new(galerkin::expression::spacetime::SpacetimeExpression::new(text)?),
+            args.range,
+        )),
         None => None,
     };
     if args.viewer.view {
