@@ -4,6 +4,8 @@ cells evaluated at each cell's parametric centre and at its nodes give the point
 and every cell's Jacobian determinant (VTK's vtkCellQuality is not defined for Lagrange cells,
 so by finite differences of VTK's EvaluateLocation) keeps one sign. A node in the wrong
 place (e.g. a hexahedron's vertical edges swapped) folds the cell.
+A spacetime .vtu (linear tetrahedra in (x, y, t)) is checked with vtkMeshQuality instead:
+every tetrahedron must have positive volume by VTK's convention.
 A .pvd collection is checked file by file (each dataset it lists must exist and read).
 Usage: python3 scripts/vtk-check-output.py FILE.vtu|FILE.pvd   (pip install vtk)
 """
@@ -19,6 +21,17 @@ def main(path):
     g = r.GetOutput()
     if g.GetNumberOfCells() == 0:
         sys.exit(f"{path}: VTK read no cells")
+    if g.GetCellType(0) == vtk.VTK_TETRA:
+        q = vtk.vtkMeshQuality()
+        q.SetInputData(g)
+        q.SetTetQualityMeasureToVolume()
+        q.Update()
+        a = q.GetOutput().GetCellData().GetArray("Quality")
+        negative = [i for i in range(a.GetNumberOfTuples()) if a.GetValue(i) <= 0]
+        if negative:
+            sys.exit(f"{path}: {len(negative)} of {a.GetNumberOfTuples()} tetrahedra have volume <= 0 in VTK (first: cell {negative[0]})")
+        print(f"{path}: VTK {vtk.vtkVersion.GetVTKVersion()} reads {g.GetNumberOfCells()} tetrahedra, all of positive volume")
+        return
     signs = set()
     for c in range(g.GetNumberOfCells()):
         cell = g.GetCell(c)
