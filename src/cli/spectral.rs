@@ -29,7 +29,7 @@ pub struct Source {
     #[arg(long, default_value_t = 3, value_parser = crate::cli::args::polynomial_order)]
     pub geometry_order: usize,
     /// Without FILE: the fields' node set: gll, equispaced, gauss, or bernstein (coefficients).
-    #[arg(long, default_value = "gll", value_parser = clap::builder::PossibleValuesParser::new(NodeSet::NAMES))]
+    #[arg(long, default_value = "gll", value_parser = clap::builder::PossibleValuesParser::new(NodeSet::ALL.map(NodeSet::name)))]
     pub nodes: String,
 }
 

@@ -14,9 +14,8 @@ use super::{generate, gst, vtu, ElementRecord, SpacetimeData, SpacetimeError};
 /// about 7 GB of mesh and records at this count.
 pub const MAX_IN_MEMORY: usize = 50_000_000;
 
-/// The names [`generated`] and [`generate_file`] know.
-pub const NAMES: &str = "pulses, crack, inclusions, booster";
-/// The generated tetrahedral data sets by name (the command line's `--generate` values).
+/// The generated tetrahedral data sets by name, as [`generated`] and [`generate_file`] know
+/// them (the command line's `--generate` values).
 pub const DATA_SETS: [&str; 4] = ["pulses", "crack", "inclusions", "booster"];
 /// What `spacetime render|view --generate` accepts: [`DATA_SETS`] and `bar1d` (seed 003's
 /// Fig. 3, a 1D bar over (x, t) triangles, drawn as one image).
@@ -82,7 +81,8 @@ fn parse_scenario(name: &str) -> Result<Scenario, SpacetimeError> {
                 .into(),
         ));
     }
-    name.parse::<Scenario>().map_err(|_| request(format!("unknown data set {name:?} (available: {NAMES})")))
+    name.parse::<Scenario>()
+        .map_err(|_| request(format!("unknown data set {name:?} (available: {})", DATA_SETS.join(", "))))
 }
 
 fn check_count(elements: usize) -> Result<(), SpacetimeError> {
@@ -218,7 +218,7 @@ mod tests {
     fn unknown_names_and_extensions_are_refused_before_any_work() {
         let dir = tempfile::tempdir().expect("temp dir");
         let e = generate_file("tornado", 1000, &dir.path().join("a.gst"), &mut |_| {}).unwrap_err();
-        assert!(e.to_string().contains("tornado") && e.to_string().contains(NAMES), "{e}");
+        assert!(e.to_string().contains("tornado") && e.to_string().contains(&DATA_SETS.join(", ")), "{e}");
         let e = generate_file("pulses", 1000, &dir.path().join("a.txt"), &mut |_| {}).unwrap_err();
         assert!(e.to_string().contains("a.txt"), "{e}");
         let e = generate_file("pulses", 0, &dir.path().join("a.gst"), &mut |_| {}).unwrap_err();

@@ -34,8 +34,8 @@ pub enum NodeSet {
 }
 
 impl NodeSet {
-    /// Every node set's [`NodeSet::name`], in the command line's order.
-    pub const NAMES: [&str; 4] = ["gll", "equispaced", "gauss", "bernstein"];
+    /// Every node set, in the command line's order.
+    pub const ALL: [NodeSet; 4] = [Self::GaussLobatto, Self::Equispaced, Self::Gauss, Self::Bernstein];
 
     /// The name used on the command line and in errors.
     pub fn name(self) -> &'static str {
@@ -49,9 +49,7 @@ impl NodeSet {
 
     /// Parses [`NodeSet::name`].
     pub fn by_name(name: &str) -> Option<Self> {
-        [Self::GaussLobatto, Self::Equispaced, Self::Gauss, Self::Bernstein]
-            .into_iter()
-            .find(|s| s.name() == name)
+        Self::ALL.into_iter().find(|s| s.name() == name)
     }
 
     /// Whether the element's corner values are degrees of freedom (so that a boundary node

@@ -9,7 +9,7 @@ use std::path::Path;
 
 use super::error::SpectralError;
 use super::mesh::SpectralMesh;
-use super::vtu;
+use super::pvtu::read_vtu_or_pieces;
 
 /// The most data sets a collection may list (each is a file read in turn).
 pub const MAX_DATASETS: usize = 100_000;
@@ -115,11 +115,8 @@ fn read_entries(path: &Path, mut sets: Vec<(f64, String, String)>) -> Result<Spe
     let mut times = Vec::with_capacity(sets.len());
     for (time, _, file) in &sets {
         let step_path = base.join(file);
-        let step = match step_path.extension().and_then(|e| e.to_str()) {
-            Some(e) if e.eq_ignore_ascii_case("pvtu") => super::pvtu::read(&step_path)?,
-            _ => vtu::read(&step_path)?,
-        };
-        let step_file = |detail: String| SpectralError::File { path: base.join(file), detail };
+        let step = read_vtu_or_pieces(&step_path)?;
+        let step_file = |detail: String| SpectralError::File { path: step_path.clone(), detail };
         if let Some(f) = step.fields.iter().find(|f| f.steps.len() != 1) {
             return Err(step_file(format!(
                 "field {:?} has {} time steps in one file of a collection (one each)",

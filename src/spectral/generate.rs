@@ -264,7 +264,8 @@ pub fn by_name(
         "coil" => coil(238, 14, geometry_order, order, set),
         "shell" => hex_shell(3, 6, 4, geometry_order, order, set),
         other => Err(SpectralError::Missing(format!(
-            "unknown data set {other:?} (available: grid, annulus, artery, coil, shell)"
+            "unknown data set {other:?} (available: {})",
+            DATA_SETS.join(", ")
         ))),
     }
 }

@@ -53,18 +53,13 @@ pub fn load(
 ) -> Result<SpectralMesh, SpectralError> {
     let name = path.to_string_lossy().to_ascii_lowercase();
     let series = name.ends_with(".pvd") || name.ends_with(".vtu.series");
-    let partitioned = name.ends_with(".pvtu");
-    if series || partitioned || name.ends_with(".vtu") {
+    if series || name.ends_with(".pvtu") || name.ends_with(".vtu") {
         if !grid_functions.is_empty() {
             return Err(SpectralError::Missing(
                 "GridFunction files go with MFEM meshes, not .vtu, .pvtu, .pvd or .vtu.series files".into(),
             ));
         }
-        return match (series, partitioned) {
-            (true, _) => collection::read_collection(path),
-            (_, true) => pvtu::read(path),
-            _ => vtu::read(path),
-        };
+        return if series { collection::read_collection(path) } else { pvtu::read_vtu_or_pieces(path) };
     }
     let head = std::fs::read(path)
         .map_err(|e| SpectralError::File { path: path.to_path_buf(), detail: e.to_string() })?;

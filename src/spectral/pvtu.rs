@@ -58,6 +58,15 @@ fn pieces(text: &str) -> Result<Vec<String>, String> {
     Ok(sources)
 }
 
+/// A `.pvtu` ([`read`]) or, by any other extension, a `.vtu` ([`vtu::read`]): one data set as
+/// a single file or in pieces (what `spectral::load` and a collection's entries read).
+pub fn read_vtu_or_pieces(path: &Path) -> Result<SpectralMesh, SpectralError> {
+    match path.extension().and_then(|e| e.to_str()) {
+        Some(e) if e.eq_ignore_ascii_case("pvtu") => read(path),
+        _ => vtu::read(path),
+    }
+}
+
 /// `first` with `piece`'s elements after its own; the message says what differs.
 fn join(mut first: SpectralMesh, piece: SpectralMesh) -> Result<SpectralMesh, String> {
     if piece.shape != first.shape {

@@ -185,7 +185,6 @@ pub fn run_driven(
     step_through(fluid, start, frames, &mut |t| Ok((motion.geometry(schedule.at(t))?, None)), on_frame)
 }
 
-/// Training run `k`'s trajectory; `what` names the request in the error.
 /// Training run `k`'s trajectory in `model`, or an error naming the motion asked for (`what`,
 /// e.g. `computed:7`) and the runs the model has.
 pub fn trajectory<'a>(
