@@ -120,7 +120,7 @@ impl<'a> Reader<'a> {
     fn skip_section(&mut self, name: &str) -> Result<(), MeshError> {
         let marker = format!("$End{name}");
         let hay = &self.bytes[self.pos..];
-        match hay.windows(marker.len()).position(|w| w == marker.as_bytes()) {
+        match memchr::memmem::find(hay, marker.as_bytes()) {
             Some(i) => {
                 self.pos += i + marker.len();
                 Ok(())
