@@ -1,9 +1,10 @@
-#!/bin/sh
+#!/bin/bash
 # make fuzz: runs every loader's fuzz target (fuzz/fuzz_targets: VTU and .pvd, .gst, MFEM,
 # Gmsh, OBJ sequences and OBJ scenes, scene TOML, reduced models, snapshot directories, the
 # command line's value parsers) under libFuzzer and AddressSanitizer, FUZZ_SECONDS each
 # (default 600) or until FUZZ_RUNS executions (when set; whichever comes first), FUZZ_JOBS at a
-# time (default 2). Needs the nightly toolchain and cargo-fuzz
+# time (default 2; a pool: the next target starts as soon as any one ends, so list the slow
+# targets first). Needs the nightly toolchain and cargo-fuzz
 # (`cargo install cargo-fuzz`). Not part of `make test`.
 #
 # Corpora start from valid files: the VTK and MFEM fixtures under tests/data, and files the
@@ -16,7 +17,7 @@ cd "$(dirname "$0")/.."
 SECONDS_EACH=${FUZZ_SECONDS:-600}
 RUNS=${FUZZ_RUNS:-}
 JOBS=${FUZZ_JOBS:-2}
-ALL="vtu gst mfem gmsh obj scene_toml reduced_model snapshots cli_values"
+ALL="vtu reduced_model scene_toml snapshots obj mfem gst gmsh cli_values"  # slowest first
 TARGETS=${FUZZ_TARGETS:-$ALL}
 SEP='
 --8<--
@@ -94,16 +95,16 @@ run() {
     runs=$(grep -o 'Done [0-9]* runs in [0-9]* second' "logs/$1.log" | tail -1)
     echo "fuzz: $1: ${runs:-no summary (see fuzz/logs/$1.log)}"
 }
-set -- $TARGETS
-while [ $# -gt 0 ]; do
-    i=0
-    while [ $i -lt "$JOBS" ] && [ $# -gt 0 ]; do
-        run "$1" &
-        shift
-        i=$((i + 1))
-    done
-    wait
+running=0
+for t in $TARGETS; do
+    if [ "$running" -ge "$JOBS" ]; then
+        wait -n || true
+        running=$((running - 1))
+    fi
+    run "$t" &
+    running=$((running + 1))
 done
+wait
 # crash-*, timeout-*, oom-*, leak-* are findings; slow-unit-* are valid inputs that took over
 # 10 s under AddressSanitizer (e.g. a scene asking for a large mesh within the limits): a
 # report, not a failure.
