@@ -5,7 +5,8 @@
 # make test-shaderc: derived fields (--expr) compiled at run time (installs the system's
 #   shaderc and glslang, builds with --features runtime-shaderc).
 # Also: make bench (the device's ceilings), make bench-all (every benchmark in one run, its
-# tables also written to out/benchmarks.md; QUICK=1 for the quick sizes), make lint,
+# tables also written to out/benchmarks.md, or spliced into OUT=BENCHMARKS.md between its
+# markers; QUICK=1 for the quick sizes), make lint,
 # make fuzz (every loader's fuzz target, FUZZ_SECONDS each; nightly + cargo-fuzz; not in CI).
 
 CARGO ?= cargo
@@ -50,8 +51,7 @@ bench: deps
 
 bench-all: deps
 	@mkdir -p out
-	bash -o pipefail -c '$(CARGO) run --release --quiet -- bench all $(if $(QUICK),--quick,) | tee out/benchmarks.md'
-	@echo "tables written to out/benchmarks.md"
+	$(CARGO) run --release --quiet -- bench all $(if $(QUICK),--quick,) --out $(or $(OUT),out/benchmarks.md)
 
 lint:
 	$(CARGO) fmt --check

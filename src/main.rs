@@ -4,7 +4,6 @@
 //! library's. A capability without a verb prints its help (exit 0); argument errors exit 2.
 
 use std::path::{Path, PathBuf};
-use std::time::Instant;
 
 use anyhow::{bail, Context, Result};
 
@@ -123,13 +122,22 @@ enum BenchWhat {
         quick: bool,
     },
     /// Every benchmark in one run, one after another, each under its command line as a
-    /// heading (the commands BENCHMARKS.md gives): gpu, reduce, spectral, spacetime, radiosity,
-    /// fluid and fluid's reduced step. With --quick, each at its quick sizes (minutes instead
-    /// of hours); without, the full-size runs take several hours on two cores.
+    /// heading: gpu, reduce, spectral, spacetime, radiosity, fluid and fluid's reduced step.
+    /// The full sizes take about 15 minutes on two cores, plus generating the spacetime data
+    /// sets (6 GB, into out/bench-data/) the first time; --quick takes a few minutes. With
+    /// --out, the tables are also written into FILE between the lines
+    /// `<!-- begin: galerkin bench all -->` and `<!-- end: galerkin bench all -->` (the rest of
+    /// FILE is kept; a FILE that does not exist is created), under one line naming the commit,
+    /// date, device, driver and CPU: `galerkin bench all --out BENCHMARKS.md` regenerates the
+    /// reference tables.
     All {
         /// Each benchmark at its quick sizes.
         #[arg(long)]
         quick: bool,
+        /// Write the tables into this Markdown file, between its markers (atomically, after
+        /// every benchmark has succeeded).
+        #[arg(long, value_name = "FILE")]
+        out: Option<PathBuf>,
     },
 }
 
@@ -236,7 +244,7 @@ fn run(desc: &GpuDesc, command: Command, ranks: &dyn Communicator) -> Result<()>
         Command::Fluid { action } => cli::fluid::run(desc, &action, ranks),
         Command::Bench { what: BenchWhat::Gpu { quick } } => bench_gpu(desc, quick),
         Command::Bench { what: BenchWhat::Reduce { quick } } => bench_reduce(desc, quick),
-        Command::Bench { what: BenchWhat::All { quick } } => bench_all(desc, quick),
+        Command::Bench { what: BenchWhat::All { quick, out } } => bench_all(desc, quick, out.as_deref()),
     }
 }
 
@@ -265,15 +273,52 @@ fn bench_all_commands(quick: bool) -> Vec<&'static str> {
     }
 }
 
-fn bench_all(desc: &GpuDesc, quick: bool) -> Result<()> {
+/// Runs each benchmark as its own process (the `galerkin` being run, with this run's
+/// `--device` and `--validation`), echoing and capturing its tables; with `out`, writes them
+/// into that file between its markers once every benchmark has succeeded.
+fn bench_all(desc: &GpuDesc, quick: bool, out: Option<&Path>) -> Result<()> {
+    use galerkin::bench::report;
+    // The file's markers are checked before the benchmarks, and the file is read again after
+    // them, so edits made to it meanwhile are kept.
+    let read = |path: &Path| std::fs::read_to_string(path).with_context(|| format!("{}", path.display()));
+    if let Some(path) = out.filter(|p| p.exists()) {
+        report::splice(&read(path)?, "", path).map_err(anyhow::Error::msg)?;
+    }
+    let exe = std::env::current_exe().context("cannot find the running galerkin binary")?;
+    let mut global = Vec::new();
+    if let Some(name) = &desc.device_name {
+        global.extend(["--device".to_string(), name.clone()]);
+    }
+    if desc.validation {
+        global.push("--validation".to_string());
+    }
     let commands = bench_all_commands(quick);
+    let mut runs = Vec::with_capacity(commands.len());
     for (k, line) in commands.iter().enumerate() {
         println!("\n# `galerkin {line}` ({} of {})\n", k + 1, commands.len());
-        let cli = Cli::try_parse_from(std::iter::once("galerkin").chain(line.split_whitespace()))?;
-        let start = Instant::now();
-        run(desc, cli.command, &galerkin::reduce::SingleRank).with_context(|| format!("galerkin {line}"))?;
-        println!("\n(`galerkin {line}`: {:.0} s)", start.elapsed().as_secs_f64());
+        let args: Vec<String> =
+            global.iter().cloned().chain(line.split_whitespace().map(String::from)).collect();
+        let run = report::run_captured(&exe, &args, line).map_err(anyhow::Error::msg)?;
+        println!("\n(`galerkin {line}`: {:.0} s)", run.seconds);
+        runs.push(run);
     }
+    let Some(out) = out else { return Ok(()) };
+    let caps = Gpu::new(desc)?.caps().clone();
+    // The commit is the source tree the binary was built in (target/release/ lies inside it).
+    let provenance =
+        report::Provenance::read(exe.parent().unwrap_or(Path::new(".")), &caps.device_name, &caps.driver);
+    let all = if quick { "bench all --quick" } else { "bench all" };
+    let generated = report::generated_section(&provenance, all, &runs);
+    let doc = match out.exists() {
+        true => report::splice(&read(out)?, &generated, out).map_err(anyhow::Error::msg)?,
+        false => report::new_document(&generated),
+    };
+    galerkin::atomic_file::write(out, doc.as_bytes()).with_context(|| format!("{}", out.display()))?;
+    eprintln!(
+        "tables written to {} ({})",
+        out.display(),
+        provenance.line(&format!("galerkin {all}"), runs.iter().map(|r| r.seconds).sum())
+    );
     Ok(())
 }
 

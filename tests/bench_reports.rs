@@ -143,3 +143,25 @@ fn the_reduced_fluid_benchmark_reports_both_exponentials_and_the_energy() {
     }
     assert!(text.contains("Energy over 50 reduced steps"), "{text}");
 }
+
+/// `galerkin bench all --out FILE` on a file without the generated part's markers refuses at
+/// once — naming the file and the marker, exit 1 — before an hour of benchmarks, and leaves the
+/// file as it was.
+#[test]
+fn bench_all_refuses_an_out_file_without_markers_before_running() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let file = dir.path().join("notes.md");
+    std::fs::write(&file, "# My notes\n\nno markers here\n").expect("wrote");
+    let start = std::time::Instant::now();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_galerkin"))
+        .args(["bench", "all", "--quick", "--out"])
+        .arg(&file)
+        .output()
+        .expect("ran galerkin");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("notes.md") && stderr.contains(galerkin::bench::report::BEGIN_MARKER), "{stderr}");
+    assert!(out.stdout.is_empty(), "a benchmark ran: {}", String::from_utf8_lossy(&out.stdout));
+    assert!(start.elapsed().as_secs() < 30, "refused only after {:?}", start.elapsed());
+    assert_eq!(std::fs::read_to_string(&file).expect("read"), "# My notes\n\nno markers here\n");
+}

@@ -15,6 +15,7 @@ pub mod fluid_reduced;
 pub mod kernels;
 pub mod radiosity;
 pub mod reduce;
+pub mod report;
 pub mod spacetime;
 pub mod spectral;
 pub mod spectral_derived;

@@ -772,7 +772,7 @@ pub struct BenchArgs {
 pub fn bench(desc: &GpuDesc, args: &BenchArgs) -> Result<()> {
     let gpu = if args.cpu_only { None } else { Some(Gpu::new(desc)?) };
     if let Some(g) = &gpu {
-        println!("device: {}", g.caps().device_name);
+        println!("device: {}\n", g.caps().device_name);
     }
     let rows = galerkin::bench::radiosity::run(&args.scenes, args.runs, gpu.as_ref())?;
     print!("{}", galerkin::bench::radiosity::table(&rows));
