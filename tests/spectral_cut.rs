@@ -35,6 +35,25 @@ fn render(mesh: &Arc<SpectralMesh>, cut: [f64; 4], size: (u32, u32)) -> Vec<f32>
     }
 }
 
+/// Renders `cut` through `mesh` and counts the pixels drawn and the pixels left undrawn whose
+/// point on the plane lies in an element (`locate_hex` at 1e-9 in reference units).
+fn covered_and_missing(mesh: &Arc<SpectralMesh>, cut: [f64; 4], size: (u32, u32)) -> (usize, usize) {
+    let camera = fit_camera(mesh);
+    let px = render(mesh, cut, size);
+    let (mut covered, mut missing) = (0, 0);
+    for y in 0..size.1 {
+        for x in 0..size.0 {
+            let t = &px[4 * (y * size.0 + x) as usize..][..4];
+            if !t[3].is_nan() {
+                covered += 1;
+            } else if mesh.locate_hex(plane_point(&camera, cut, x, y, size), 1e-9).is_some() {
+                missing += 1;
+            }
+        }
+    }
+    (covered, missing)
+}
+
 /// Planes lying on faces — between the layers (z = ½), between two columns of elements
 /// (θ = π/6, through the axis), on the mesh's top and bottom — draw every pixel whose point on
 /// the plane lies in the mesh. (Their control points lie on the plane only to rounding: a
@@ -42,26 +61,44 @@ fn render(mesh: &Arc<SpectralMesh>, cut: [f64; 4], size: (u32, u32)) -> Vec<f32>
 #[test]
 fn a_plane_on_element_faces_leaves_no_hole() {
     let mesh = shell();
-    let camera = fit_camera(&mesh);
     let size = (200u32, 150u32);
     let (s, c) = (std::f64::consts::FRAC_PI_6.sin(), std::f64::consts::FRAC_PI_6.cos());
     for cut in [[0.0, 0.0, 1.0, 0.5], [-s, c, 0.0, 0.0], [0.0, 0.0, 1.0, 1.0], [0.0, 0.0, 1.0, 0.0]] {
-        let px = render(&mesh, cut, size);
-        let (mut covered, mut missing) = (0, 0);
-        for y in 0..size.1 {
-            for x in 0..size.0 {
-                let t = &px[4 * (y * size.0 + x) as usize..][..4];
-                if !t[3].is_nan() {
-                    covered += 1;
-                } else if mesh.locate_hex(plane_point(&camera, cut, x, y, size), 1e-9).is_some() {
-                    missing += 1;
-                }
-            }
-        }
+        let (covered, missing) = covered_and_missing(&mesh, cut, size);
         eprintln!("plane {cut:?}: {covered} covered, {missing} missing");
         assert!(covered > 1500, "plane {cut:?}: {covered} covered");
         assert_eq!(missing, 0, "plane {cut:?}: pixels inside the mesh left undrawn");
     }
+}
+
+/// A sweep of planes across the curved shell's shared faces: parallel to the layer faces at
+/// z = ½ + δ and to the column faces at θ = π/6 + δ and π/3 + δ (rotated about the axis), and
+/// tilted by δ across z = ½, for δ = 0, ±10⁻⁷ (f32 rounding of the plane), ±10⁻⁵ (the
+/// neighbours' acceptance tolerance) and ±10⁻³. No plane leaves an undrawn pixel whose point
+/// lies in an element: a hole on an element boundary shows as a missing pixel here.
+#[test]
+fn planes_swept_across_shared_faces_leave_no_hole() {
+    let mesh = shell();
+    let size = (160u32, 120u32);
+    let offsets = [0.0, 1e-7, -1e-7, 1e-5, -1e-5, 1e-3, -1e-3];
+    let mut cuts = Vec::new();
+    for d in offsets {
+        cuts.push([0.0, 0.0, 1.0, 0.5 + d]);
+        cuts.push([-d, 0.0, 1.0, 0.5 - d * 0.6]);
+        for theta in [std::f64::consts::FRAC_PI_6, std::f64::consts::FRAC_PI_3] {
+            let (s, c) = (theta + d).sin_cos();
+            cuts.push([-s, c, 0.0, 0.0]);
+        }
+    }
+    let mut failures = Vec::new();
+    for cut in cuts {
+        let (covered, missing) = covered_and_missing(&mesh, cut, size);
+        assert!(covered > 1000, "plane {cut:?}: only {covered} pixels drawn");
+        if missing > 0 {
+            failures.push(format!("plane {cut:?}: {missing} pixels inside the mesh undrawn"));
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
 
 /// A plane tilted by 10⁻³ across the faces at z = ½: along the line where it crosses them, a
