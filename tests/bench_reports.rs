@@ -160,7 +160,10 @@ fn bench_all_refuses_an_out_file_without_markers_before_running() {
         .expect("ran galerkin");
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(1), "{stderr}");
-    assert!(stderr.contains("notes.md") && stderr.contains(galerkin::bench::report::BEGIN_MARKER), "{stderr}");
+    assert!(
+        stderr.contains("notes.md") && stderr.contains(galerkin::bench::report::BEGIN_MARKER),
+        "{stderr}"
+    );
     assert!(out.stdout.is_empty(), "a benchmark ran: {}", String::from_utf8_lossy(&out.stdout));
     assert!(start.elapsed().as_secs() < 30, "refused only after {:?}", start.elapsed());
     assert_eq!(std::fs::read_to_string(&file).expect("read"), "# My notes\n\nno markers here\n");
