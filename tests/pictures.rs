@@ -37,6 +37,39 @@ fn has_colour_bar(path: &Path, size: (u32, u32)) {
     }
 }
 
+/// The PNG at `path` is `size` plus the legend, and its bar panel holds the tone map's grey
+/// ramp: a column whose greys rise (or fall) steadily from near black to near white over at
+/// least 100 rows (text in the panel has no such run).
+fn has_grey_ramp(path: &Path, size: (u32, u32)) {
+    let (w, h, rgba) = galerkin::render::read_png_rgba8(path).expect("a PNG");
+    assert!(w == size.0 + BAR_WIDTH && h >= size.1 + TITLE_HEIGHT, "{}: {w}x{h}", path.display());
+    let grey = |x: u32, y: u32| {
+        let p = 4 * (y * w + x) as usize;
+        (rgba[p] == rgba[p + 1] && rgba[p + 1] == rgba[p + 2]).then_some(rgba[p])
+    };
+    let ramp = (size.0..w).any(|x| {
+        let column: Vec<Option<u8>> = (0..h).map(|y| grey(x, y)).collect();
+        // The longest run of greys that never step back, and the span of levels it covers.
+        let mut best = (0usize, 0u8, 0u8);
+        for dir in [1i16, -1] {
+            let mut start = 0;
+            for y in 1..=column.len() {
+                let ok = y < column.len()
+                    && matches!((column[y - 1], column[y]), (Some(a), Some(b)) if dir * (i16::from(b) - i16::from(a)) >= 0);
+                if !ok {
+                    let run: Vec<u8> = column[start..y].iter().flatten().copied().collect();
+                    if run.len() > best.0 {
+                        best = (run.len(), *run.iter().min().unwrap_or(&0), *run.iter().max().unwrap_or(&0));
+                    }
+                    start = y;
+                }
+            }
+        }
+        best.0 >= 100 && best.1 <= 16 && best.2 >= 230
+    });
+    assert!(ramp, "{}: no grey ramp from black to white in the bar panel", path.display());
+}
+
 #[test]
 fn every_scalar_render_has_a_title_and_a_colour_bar() {
     let dir = tempfile::Builder::new().prefix("galerkin-pictures-").tempdir().expect("scratch");
@@ -66,6 +99,20 @@ fn every_scalar_render_has_a_title_and_a_colour_bar() {
         galerkin(&args);
         has_colour_bar(Path::new(args[args.len() - 1]), size);
     }
+    // Radiosity: a tone-mapped radiance picture, its bar the tone map's radiance scale.
+    let rooms = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/radiosity/two_rooms_small.toml");
+    galerkin(&[
+        "radiosity",
+        "render",
+        &rooms.to_string_lossy(),
+        "--near-field",
+        "centroid",
+        "--size",
+        "200x160",
+        "--out",
+        &out("radiosity.png"),
+    ]);
+    has_grey_ramp(Path::new(&out("radiosity.png")), (200, 160));
     galerkin(&[
         "fluid",
         "render",

@@ -151,6 +151,7 @@ fn a_picture_from_a_model_reports_its_estimate_and_refuses_when_untrusted() {
         faces: None,
         form_factors: galerkin::radiosity::near_field::FormFactorMethod::Centroid,
         trust_threshold: None,
+        legend: true,
     };
     let reduced =
         write_picture(&gpu, &scene, Some(&model), &request, &dir.path().join("reduced.png")).unwrap();

@@ -246,6 +246,10 @@ pub struct RenderArgs {
     pub look: Look,
     #[command(flatten)]
     pub image: crate::cli::args::ImageArgs,
+    /// A PNG without its title and colour bar (the bare picture; the bar is the tone map's
+    /// radiance scale).
+    #[arg(long)]
+    pub no_legend: bool,
     /// Also write the per-face result as a table, to check it outside the engine: CSV (face,
     /// part, kind, area, centroid, radiosity R, G, B — f64 that reads back to the same bits)
     /// or NumPy .npy (faces × 8 f64: kind 0 surface / 1 window / 2 skylight, area, centroid,
@@ -339,6 +343,7 @@ fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
             _ => FormFactorMethod::ExactNear { reach: galerkin::radiosity::near_field::DEFAULT_REACH },
         },
         trust_threshold: (!args.allow_untrusted).then_some(args.trust_threshold),
+        legend: !args.no_legend,
     };
     let gpu = Gpu::new(desc)?;
     let out = &args.image.out;

@@ -36,7 +36,16 @@ pub struct PictureRequest {
     /// drawn ([`Estimate::untrusted`]); `None` draws it whatever the estimate says (the
     /// report still carries it).
     pub trust_threshold: Option<f64>,
+    /// A PNG gets a title above it (how the radiosity was found, faces, with a model its
+    /// estimated error) and a colour bar beside it: the tone map's grey levels over radiance 0
+    /// to [`LEGEND_WHITE`]`/exposure` ([`crate::render::Colormap::tone_ramp`]). `false`: the
+    /// bare picture.
+    pub legend: bool,
 }
+
+/// The top of a radiosity picture's colour bar, in units of 1/exposure: the tone map shows
+/// radiance `LEGEND_WHITE / exposure` at `1 − e^{-4}` ≈ 98 % of white.
+pub const LEGEND_WHITE: f64 = 4.0;
 
 /// What [`write_picture`] drew.
 #[derive(Clone, Debug)]
@@ -106,8 +115,36 @@ pub fn write_picture(
     let vertices = scene_vertices(&mesh, &geometry, &radiance, request.shading);
     let camera = scene.camera(&mesh, request.viewpoint);
     let picture = draw_picture(gpu, &vertices, &camera, exposure, request.size)?;
+    let tone = crate::render::Colormap::tone_ramp(exposure, LEGEND_WHITE / exposure);
+    let title = match &estimate {
+        Some(e) if e.error.is_finite() => {
+            format!("radiance: reduced model, {} faces, estimated error {:.2} %", mesh.len(), 100.0 * e.error)
+        }
+        Some(_) => {
+            format!("radiance: reduced model (trained without an error estimate), {} faces", mesh.len())
+        }
+        None => {
+            let near = match request.form_factors {
+                super::near_field::FormFactorMethod::Centroid => "centroid form factors",
+                super::near_field::FormFactorMethod::ExactNear { .. } => "exact near field",
+            };
+            format!("radiance: full solve, {near}, {} faces", mesh.len())
+        }
+    };
+    let legend = picture::Legend {
+        title,
+        bar: crate::plot::ColourBar {
+            colormap: &tone,
+            range: (0.0, LEGEND_WHITE / exposure),
+            log: false,
+            label: "radiance (W/m²/sr), tone-mapped",
+            shift: 0.0,
+        },
+    };
     match format {
-        ImageFormat::Png => picture::write_png(out, request.size, &picture.rgba, None)?,
+        ImageFormat::Png => {
+            picture::write_png(out, request.size, &picture.rgba, request.legend.then_some(&legend))?
+        }
         ImageFormat::Exr => {
             let channels =
                 picture::float_channels(&picture.raw, &["radiance.R", "radiance.G", "radiance.B", "face"]);

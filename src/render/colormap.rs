@@ -62,6 +62,19 @@ impl Colormap {
         Self { name: "grey".into(), texels }
     }
 
+    /// The grey levels the radiosity tone map gives radiances 0 to `max_radiance` at
+    /// `exposure` ([`super::tone_map`]): the colour bar of a tone-mapped picture, read as a
+    /// radiance scale (a neutral radiance L shows as the texel at L / `max_radiance`).
+    pub fn tone_ramp(exposure: f64, max_radiance: f64) -> Self {
+        let texels = (0..RAMP_TEXELS)
+            .map(|k| {
+                let radiance = max_radiance * k as f64 / (RAMP_TEXELS - 1) as f64;
+                quantise(super::tone_map([radiance; 3], exposure))
+            })
+            .collect();
+        Self { name: "tone map".into(), texels }
+    }
+
     /// A ramp read from an image: its middle row, left (t = 0) to right (t = 1), at least 2
     /// pixels wide and at most `maxImageDimension1D` (4096 is safe everywhere).
     pub fn from_ramp_image(path: &Path) -> Result<Self, RenderError> {
