@@ -50,6 +50,11 @@ pub fn format_of(path: &Path) -> Result<ImageFormat, PictureError> {
     ImageFormat::of(path).ok_or_else(|| PictureError::Format(path.to_path_buf()))
 }
 
+/// The picture size every `render` and viewer window uses unless `--size` says otherwise
+/// (WIDTH, HEIGHT): one default across capabilities; a 2D fluid run or a planar mesh is fitted
+/// into it, keeping its aspect.
+pub const DEFAULT_SIZE: (u32, u32) = (1280, 720);
+
 /// The legend of a PNG picture: a title above it and a colour bar beside it.
 pub struct Legend<'a> {
     /// The title (data set, field, time).

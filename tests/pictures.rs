@@ -178,3 +178,35 @@ fn a_spacetime_slice_takes_the_camera_too() {
     let read = |p: &str| galerkin::render::read_png_rgba8(Path::new(p)).expect("a PNG").2;
     assert_ne!(read(&a), read(&b), "--camera did not move the camera");
 }
+
+/// One default picture size across capabilities (`galerkin::picture::DEFAULT_SIZE`): every
+/// `render` without `--size` writes a bare picture of that size — a 2D fluid run and a planar
+/// mesh are fitted into it.
+#[test]
+fn every_render_defaults_to_one_size() {
+    let dir = tempfile::Builder::new().prefix("galerkin-sizes-").tempdir().expect("scratch");
+    let out = |name: &str| dir.path().join(name).to_string_lossy().into_owned();
+    let tunnel = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/fluid/tunnel_small.toml");
+    let rooms = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/radiosity/two_rooms_small.toml");
+    galerkin(&["fluid", "simulate", &tunnel.to_string_lossy(), "--frames", "1", "--out", &out("run")]);
+    let renders: [Vec<String>; 4] = [
+        vec!["fluid".into(), "render".into(), out("run"), "--cells".into()],
+        vec!["spectral".into(), "render".into()],
+        vec!["spacetime".into(), "render".into(), "--elements".into(), "2000".into()],
+        vec![
+            "radiosity".into(),
+            "render".into(),
+            rooms.to_string_lossy().into(),
+            "--near-field".into(),
+            "centroid".into(),
+        ],
+    ];
+    for (k, args) in renders.iter().enumerate() {
+        let png = out(&format!("{k}.png"));
+        let mut args: Vec<&str> = args.iter().map(String::as_str).collect();
+        args.extend(["--no-legend", "--out", &png]);
+        galerkin(&args);
+        let (w, h, _) = galerkin::render::read_png_rgba8(Path::new(&png)).expect("a PNG");
+        assert_eq!((w, h), galerkin::picture::DEFAULT_SIZE, "galerkin {args:?}");
+    }
+}

@@ -178,15 +178,15 @@ pub struct ImageArgs {
     /// work). The verb's description says what each holds.
     #[arg(long, required = false, value_parser = image_path)]
     pub out: PathBuf,
-    /// Image size, WIDTHxHEIGHT.
+    /// Image size, WIDTHxHEIGHT [default: 1280x720, the same for every picture and window].
     #[arg(long, value_name = "WxH", value_parser = parse_size)]
     pub size: Option<(u32, u32)>,
 }
 
 impl ImageArgs {
-    /// The size, or the verb's default where it has none fixed.
-    pub fn size_or(&self, default: (u32, u32)) -> (u32, u32) {
-        self.size.unwrap_or(default)
+    /// The size asked, or [`galerkin::picture::DEFAULT_SIZE`].
+    pub fn size(&self) -> (u32, u32) {
+        self.size.unwrap_or(galerkin::picture::DEFAULT_SIZE)
     }
 }
 

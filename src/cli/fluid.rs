@@ -25,7 +25,7 @@ pub enum Action {
     /// (with a title — run, frame, time — and a colour bar of the speed beside the picture,
     /// unless --no-legend) or EXR (EXR: the raw value, cell index and kind — 0 cell, 1
     /// particle, 2 wall — beside the colour).
-    #[command(mut_arg("out", |a| a.default_value("out/fluid.png")), mut_arg("size", |a| a.help("Image size, WIDTHxHEIGHT [default: 1600x500 for 2D runs, 1024x768 for 3D]")))]
+    #[command(mut_arg("out", |a| a.default_value("out/fluid.png")), mut_arg("size", |a| a.help("Image size, WIDTHxHEIGHT [default: 1280x720; a 2D run is fitted into it]")))]
     Render(RenderArgs),
     /// Play a 2D scene in a window (the full simulation steps every frame, the particles are
     /// advected on the device; keys: space plays/pauses, c colours cells by speed, r
@@ -117,7 +117,7 @@ pub struct ViewArgs {
     /// Marker particles.
     #[arg(long, default_value_t = 8000, value_parser = crate::cli::args::count_up_to(crate::cli::args::MAX_PARTICLES))]
     pub particles: usize,
-    /// Window size (default 1200x400 for 2D, 1024x768 for a 3D cavity model).
+    /// Window size, WIDTHxHEIGHT [default: 1280x720; a 2D run is fitted into it].
     #[arg(long, value_name = "WxH", value_parser = crate::cli::args::parse_size)]
     pub size: Option<(u32, u32)>,
     /// --play starts the simulation or the motion.
@@ -250,7 +250,7 @@ fn view(desc: &GpuDesc, args: &ViewArgs) -> Result<()> {
                 Box::new(CavityContent::new(
                     model,
                     args.particles,
-                    args.size.unwrap_or((1024, 768)),
+                    args.size.unwrap_or(galerkin::picture::DEFAULT_SIZE),
                     args.viewer.play,
                 )?)
             } else {
@@ -258,7 +258,7 @@ fn view(desc: &GpuDesc, args: &ViewArgs) -> Result<()> {
                     model,
                     args.motion,
                     args.particles,
-                    args.size.unwrap_or((1200, 400)),
+                    args.size.unwrap_or(galerkin::picture::DEFAULT_SIZE),
                     args.viewer.play,
                 )?)
             }
@@ -266,7 +266,7 @@ fn view(desc: &GpuDesc, args: &ViewArgs) -> Result<()> {
         (Some(scene), None) => Box::new(FluidContent::new(
             FluidScene::load(scene)?,
             args.particles,
-            args.size.unwrap_or((1200, 400)),
+            args.size.unwrap_or(galerkin::picture::DEFAULT_SIZE),
             args.viewer.play,
         )?),
         (None, None) => bail!("give a scene file or a model"),

@@ -25,7 +25,6 @@ pub enum Action {
     /// the colour). With --view, open the viewer at this configuration instead.
     #[command(
         mut_arg("out", |a| a.default_value("out/radiosity.png")),
-        mut_arg("size", |a| a.default_value("1024x768")),
         mut_arg("screenshot", |a| a.default_value("out/radiosity-screenshot.png"))
     )]
     Render(RenderArgs),
@@ -139,7 +138,7 @@ pub struct ViewArgs {
     #[command(flatten)]
     pub look: Look,
     /// Window size, WIDTHxHEIGHT.
-    #[arg(long, value_name = "WxH", value_parser = crate::cli::args::parse_size, default_value = "1024x768")]
+    #[arg(long, value_name = "WxH", value_parser = crate::cli::args::parse_size, default_value = "1280x720")]
     pub size: (u32, u32),
     /// --play sweeps the parameters (space toggles).
     #[command(flatten)]
@@ -316,7 +315,7 @@ pub fn run(desc: &GpuDesc, action: &Action, ranks: &dyn Communicator) -> Result<
 }
 
 fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
-    let size = args.image.size_or((1024, 768));
+    let size = args.image.size();
     if args.viewer.view {
         let view_args = ViewArgs {
             scene: args.scene.clone(),

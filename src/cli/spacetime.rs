@@ -20,8 +20,7 @@ pub enum Verb {
     /// streamed) and .vtu files, or generates a data set (analytic elastodynamic pulses
     /// projected per element, not solved). With --view, open the viewer instead.
     #[command(
-        mut_arg("out", |a| a.default_value("out/spacetime.png")),
-        mut_arg("size", |a| a.default_value("1280x720"))
+        mut_arg("out", |a| a.default_value("out/spacetime.png"))
     )]
     Render(RenderArgs),
     /// Open the interactive viewer: space plays/pauses t, `.`/`,` step, `]`/`[` speed ×2/÷2,
@@ -29,7 +28,7 @@ pub enum Verb {
     /// screenshot, Esc quits.
     #[command(
         mut_arg("out", |a| a.default_value("out/spacetime.png").hide(true)),
-        mut_arg("size", |a| a.default_value("1280x720").help("Window size, WIDTHxHEIGHT"))
+        mut_arg("size", |a| a.help("Window size, WIDTHxHEIGHT [default: 1280x720]"))
     )]
     View(RenderArgs),
     /// Generate a spacetime data set to a .gst or .vtu file (analytic fields, not solved).
@@ -239,7 +238,7 @@ pub fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
         None => format!("{source}: t = {time:.4}"),
     };
     let title = (!args.no_legend).then_some(title.as_str());
-    let size = args.image.size_or((1280, 720));
+    let size = args.image.size();
     let r = picture::write_slice(&gpu, data, &view, &colormap, (size, out), title, derived)?;
     println!(
         "spacetime: {elements} elements, t = {time:.4}: {} active ({} streamed to the device), {} triangles, {} edge lines; load {open_ms:.1} ms, slice {:.1} ms, render + readback {:.1} ms, peak RSS {} → {}",
@@ -310,7 +309,7 @@ fn render_bar(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
     let gpu = Gpu::new(desc)?;
     let colormap = Colormap::by_name(&args.colormap)?;
     let out = &args.image.out;
-    let size = args.image.size_or((1280, 720));
+    let size = args.image.size();
     let r = picture::write_bar(&gpu, args.elements, &colormap, args.umax, args.per_vertex, size, out)?;
     println!(
         "bar1d (seed 003 Fig. 3): {} triangles over x ∈ [0, 1], t ∈ [{:.3}, {:.3}], U_max {:.3e}, {} → {}",
@@ -332,7 +331,7 @@ fn open_viewer(desc: &GpuDesc, data: SpacetimeData, view: SpacetimeView, args: &
         data,
         view,
         Colormap::by_name(&args.colormap)?,
-        args.image.size_or((1280, 720)),
+        args.image.size(),
         args.viewer.play,
     );
     let options = ViewOptions {

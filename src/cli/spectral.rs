@@ -54,8 +54,7 @@ pub enum Verb {
     /// element, element −(e + 1) where only edge overdraw drew; data only, no legend). With
     /// --view, open the viewer instead.
     #[command(
-        mut_arg("out", |a| a.default_value("out/spectral.png")),
-        mut_arg("size", |a| a.default_value("1024x768"))
+        mut_arg("out", |a| a.default_value("out/spectral.png"))
     )]
     Render(RenderArgs),
     /// Open the interactive viewer: space plays/pauses the time steps, `.`/`,` step, l log
@@ -65,7 +64,7 @@ pub enum Verb {
     /// orbit (surfaces, cut planes), +/- zoom, S screenshot, Esc quits.
     #[command(
         mut_arg("out", |a| a.default_value("out/spectral.png").hide(true)),
-        mut_arg("size", |a| a.default_value("1024x768").help("Window size, WIDTHxHEIGHT"))
+        mut_arg("size", |a| a.help("Window size, WIDTHxHEIGHT [default: 1280x720]"))
     )]
     View(RenderArgs),
     /// Generate a spectral-element data set to a .vtu file (analytic fields, not solved).
@@ -179,7 +178,7 @@ fn open_viewer(desc: &GpuDesc, mesh: Arc<SpectralMesh>, view: SpectralView, args
         mesh,
         view,
         &args.colour.colormap,
-        args.image.size_or((1024, 768)),
+        args.image.size(),
         args.viewer.play,
     );
     let options = ViewOptions {
@@ -286,7 +285,7 @@ pub fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
     let time = mesh.fields[field].times.get(args.step).copied().unwrap_or(0.0);
     let title = format!("{source}: {name}, step {} (t = {time})", args.step);
     let out = &args.image.out;
-    let size = args.image.size_or((1024, 768));
+    let size = args.image.size();
     let r = write_picture(
         &gpu,
         mesh.clone(),

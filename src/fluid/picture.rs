@@ -30,7 +30,7 @@ pub struct FrameRequest {
     pub colour_cells: bool,
     /// Particle sprite radius, pixels.
     pub sprite_px: f64,
-    /// Image size (`None`: 1600×500 for 2D runs, 1024×768 for 3D).
+    /// Image size (`None`: [`picture::DEFAULT_SIZE`]).
     pub size: Option<(u32, u32)>,
     /// A PNG gets a title (run, frame, time) above the picture and a colour bar of the speed
     /// beside it ([`crate::picture::Legend`]); `false`: the bare picture.
@@ -99,7 +99,7 @@ pub fn write_frame(
         sprite_px: request.sprite_px,
     };
     let (lo, hi) = mesh.bounds();
-    let size = request.size.unwrap_or(if meta.dim == 2 { (1600, 500) } else { (1024, 768) });
+    let size = request.size.unwrap_or(picture::DEFAULT_SIZE);
     let projection = if meta.dim == 2 {
         Projection::Plane(View2d::fit([lo[0], lo[1]], [hi[0], hi[1]], size, 0.02))
     } else {
