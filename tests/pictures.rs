@@ -210,3 +210,62 @@ fn every_render_defaults_to_one_size() {
         assert_eq!((w, h), galerkin::picture::DEFAULT_SIZE, "galerkin {args:?}");
     }
 }
+
+/// `--fit` (shared by every render): the tight fit draws the same surface larger than the
+/// bounding sphere's fit (more pixels covered) from the same direction, and still whole (no
+/// covered pixel on the picture's border); a 2D fluid run refuses a camera, radiosity refuses
+/// --camera beside --viewpoint (exit 2), and the viewer refuses --fit.
+#[test]
+fn fit_tightens_the_camera_and_is_refused_where_it_cannot_apply() {
+    let dir = tempfile::Builder::new().prefix("galerkin-fit-").tempdir().expect("scratch");
+    let out = |name: &str| dir.path().join(name).to_string_lossy().into_owned();
+    let (w, h) = (200u32, 150u32);
+    let covered = |extra: &[&str], name: &str| {
+        let path = out(name);
+        let mut args =
+            vec!["spectral", "render", "--generate", "artery", "--order", "2", "--size", "200x150"];
+        args.extend(extra);
+        args.extend(["--no-legend", "--out", &path]);
+        galerkin(&args);
+        let (_, _, rgba) = galerkin::render::read_png_rgba8(Path::new(&path)).expect("a PNG");
+        let background = [rgba[0], rgba[1], rgba[2]];
+        let drawn = |x: u32, y: u32| {
+            let p = 4 * (y * w + x) as usize;
+            [rgba[p], rgba[p + 1], rgba[p + 2]] != background
+        };
+        let count = (0..h).flat_map(|y| (0..w).map(move |x| (x, y))).filter(|&(x, y)| drawn(x, y)).count();
+        let on_border =
+            (0..w).any(|x| drawn(x, 1) || drawn(x, h - 2)) || (0..h).any(|y| drawn(1, y) || drawn(w - 2, y));
+        (count, on_border)
+    };
+    let (loose, _) = covered(&["--camera", "20,30"], "loose.png");
+    let (tight, border) = covered(&["--camera", "20,30", "--fit"], "tight.png");
+    assert!(tight as f64 > 1.3 * loose as f64, "--fit covered {tight} pixels against {loose}");
+    assert!(!border, "--fit cut the surface at the picture's border");
+    let (alone, _) = covered(&["--fit"], "fit.png");
+    assert!(alone > loose, "--fit alone covered {alone} pixels");
+
+    let code = |args: &[&str]| {
+        let o = Command::new(env!("CARGO_BIN_EXE_galerkin")).args(args).output().expect("ran");
+        (o.status.code(), String::from_utf8_lossy(&o.stderr).into_owned())
+    };
+    let tunnel = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/fluid/tunnel_small.toml");
+    galerkin(&["fluid", "simulate", &tunnel.to_string_lossy(), "--frames", "1", "--out", &out("run")]);
+    let (c, err) = code(&["fluid", "render", &out("run"), "--fit", "--out", &out("f.png")]);
+    assert!(c == Some(1) && err.contains("3D runs"), "{c:?} {err}");
+    let rooms = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/radiosity/two_rooms_small.toml");
+    let (c, err) = code(&[
+        "radiosity",
+        "render",
+        &rooms.to_string_lossy(),
+        "--viewpoint",
+        "bedroom",
+        "--camera",
+        "0,20",
+        "--out",
+        &out("r.png"),
+    ]);
+    assert!(c == Some(2) && err.contains("--viewpoint"), "{c:?} {err}");
+    let (c, err) = code(&["spectral", "view", "--generate", "artery", "--fit"]);
+    assert!(c == Some(2) && err.contains("--fit"), "{c:?} {err}");
+}

@@ -145,6 +145,7 @@ fn a_picture_from_a_model_reports_its_estimate_and_refuses_when_untrusted() {
     let request = PictureRequest {
         params: spec.defaults().to_vec(),
         viewpoint: Viewpoint::Living,
+        orbit: None,
         shading: Shading::Flat,
         exposure: None,
         size: (W, H),

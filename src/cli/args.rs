@@ -118,8 +118,13 @@ pub fn inapplicable(matches: &clap::ArgMatches) -> Option<String> {
     }
     let viewing =
         matches!(path.as_slice(), [_, "view"]) || m.try_get_one::<bool>("view").ok().flatten() == Some(&true);
-    if viewing && given("camera") {
-        return Some("--camera sets a picture's camera; in the viewer the arrow keys and +/- move it".into());
+    if let Some(id) = ["camera", "fit"].iter().find(|id| viewing && given(id)) {
+        return Some(format!("--{id} sets a picture's camera; in the viewer the arrow keys and +/- move it"));
+    }
+    if matches!(path.as_slice(), ["radiosity", "render"]) && given("viewpoint") {
+        if let Some(id) = ["camera", "fit"].iter().find(|id| given(id)) {
+            return Some(format!("--{id} and --viewpoint both place the camera; give one"));
+        }
     }
     if viewing && matches!(path.as_slice(), ["radiosity", _]) && given("lights") {
         return Some(
@@ -187,6 +192,38 @@ impl ImageArgs {
     /// The size asked, or [`galerkin::picture::DEFAULT_SIZE`].
     pub fn size(&self) -> (u32, u32) {
         self.size.unwrap_or(galerkin::picture::DEFAULT_SIZE)
+    }
+}
+
+/// Where a picture's camera stands, shared by every `render` of a 3D view: `--camera
+/// AZ,EL[,DIST]` ([`galerkin::render::Orbit`]) and `--fit`.
+#[derive(Args, Clone, Debug)]
+pub struct CameraArgs {
+    /// The camera's direction and distance, AZ,EL[,DIST]: azimuth in degrees from +x towards
+    /// +y, elevation in degrees above the x–y plane (z up, ±89 at most), distance as a multiple
+    /// of the fitted one (default 1). Default: fitted, from above the x–y diagonal.
+    #[arg(long, value_name = "AZ,EL[,DIST]", value_parser = galerkin::render::Orbit::parse, allow_hyphen_values = true)]
+    pub camera: Option<galerkin::render::Orbit>,
+    /// Fit the camera tightly: the closest distance at which every corner of the data's
+    /// bounding box lies inside the picture (instead of the bounding sphere's, which leaves a
+    /// margin that depends on the shape); with --camera, from its direction.
+    #[arg(long)]
+    pub fit: bool,
+}
+
+impl CameraArgs {
+    /// The orbit asked for a picture of `size`: `--camera` (tightened by `--fit`), the default
+    /// direction tightened by `--fit` alone, or `None` for the renderer's own default camera.
+    pub fn orbit(&self, size: (u32, u32)) -> Option<galerkin::render::Orbit> {
+        let aspect = f64::from(size.0) / f64::from(size.1.max(1));
+        match (self.camera, self.fit) {
+            (Some(o), fit) => Some(galerkin::render::Orbit { tight_aspect: fit.then_some(aspect), ..o }),
+            (None, true) => Some(galerkin::render::Orbit {
+                tight_aspect: Some(aspect),
+                ..galerkin::render::Orbit::default_view()
+            }),
+            (None, false) => None,
+        }
     }
 }
 

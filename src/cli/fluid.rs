@@ -174,6 +174,9 @@ pub struct RenderArgs {
     pub colour: crate::cli::args::ColourArgs,
     #[command(flatten)]
     pub image: crate::cli::args::ImageArgs,
+    /// A 3D run's camera (--camera, --fit; a 2D run is drawn flat).
+    #[command(flatten)]
+    pub view_from: crate::cli::args::CameraArgs,
     /// A PNG without its title and colour bar (the bare picture).
     #[arg(long)]
     pub no_legend: bool,
@@ -352,6 +355,7 @@ fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
         colour_cells: args.cells,
         sprite_px: args.sprite,
         size: args.image.size,
+        orbit: args.view_from.orbit(args.image.size()),
         legend: !args.no_legend,
     };
     let gpu = Gpu::new(desc)?;

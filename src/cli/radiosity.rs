@@ -245,6 +245,9 @@ pub struct RenderArgs {
     pub look: Look,
     #[command(flatten)]
     pub image: crate::cli::args::ImageArgs,
+    /// The camera orbiting the scene's bounding box (--camera, --fit), instead of --viewpoint.
+    #[command(flatten)]
+    pub view_from: crate::cli::args::CameraArgs,
     /// A PNG without its title and colour bar (the bare picture; the bar is the tone map's
     /// radiance scale).
     #[arg(long)]
@@ -333,6 +336,7 @@ fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
     let request = PictureRequest {
         params: p.clone(),
         viewpoint: args.look.viewpoint,
+        orbit: args.view_from.orbit(size),
         shading: args.look.shading,
         exposure: args.look.exposure,
         size,

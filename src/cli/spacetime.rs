@@ -83,11 +83,10 @@ pub struct RenderArgs {
     /// Without FILE: about this many tetrahedra (built in memory: at most 50,000,000).
     #[arg(long, default_value_t = 60_000, value_parser = crate::cli::args::count_up_to(crate::cli::args::MAX_ELEMENTS))]
     pub elements: usize,
-    /// The camera's direction and distance, AZ,EL[,DIST] — azimuth in degrees from +x towards
-    /// +y, elevation in degrees above the slice plane (±89 at most), distance as a multiple of
-    /// the one that fits the data set (default 1). Default: above and in front (from −y).
-    #[arg(long, value_name = "AZ,EL[,DIST]", value_parser = galerkin::render::Orbit::parse, allow_hyphen_values = true)]
-    pub camera: Option<galerkin::render::Orbit>,
+    /// The camera (--camera, --fit; the slice plane is the x–y plane). Default: above and in
+    /// front (from −y).
+    #[command(flatten)]
+    pub view_from: crate::cli::args::CameraArgs,
     /// Time of the slice (default: the middle of the data set's time span).
     #[arg(long)]
     pub time: Option<f64>,
@@ -209,7 +208,7 @@ pub fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
         per_vertex: args.per_vertex,
         ..SpacetimeView::looking_at(data.summary(), time)
     };
-    let view = match args.camera {
+    let view = match args.view_from.orbit(args.image.size()) {
         Some(orbit) => SpacetimeView { camera: view.orbit(data.summary(), orbit), ..view },
         None => view,
     };

@@ -104,12 +104,9 @@ pub struct RenderArgs {
     pub grid_functions: Vec<PathBuf>,
     #[command(flatten)]
     pub source: Source,
-    /// Surfaces, height fields and cut planes: the camera's direction and distance, AZ,EL[,DIST]
-    /// — azimuth in degrees from +x towards +y, elevation in degrees above the x–y plane (z up,
-    /// ±89 at most), distance as a multiple of the fitted one (default 1). Default: fitted,
-    /// from above the x–y diagonal.
-    #[arg(long, value_name = "AZ,EL[,DIST]", value_parser = galerkin::render::Orbit::parse, allow_hyphen_values = true)]
-    pub camera: Option<galerkin::render::Orbit>,
+    /// Surfaces, height fields and cut planes: the camera (--camera, --fit).
+    #[command(flatten)]
+    pub view_from: crate::cli::args::CameraArgs,
     /// The field to show (default: the first): a one-component array of the file's point data,
     /// or of its cell data (drawn constant on each element; `NAME (cells)` where a point array
     /// has the same name). An unknown name lists the fields there are.
@@ -262,7 +259,7 @@ pub fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
         cuts: args.cuts.clone(),
         height: args.height,
         expression,
-        camera: args.camera.map(|orbit| {
+        camera: args.view_from.orbit(args.image.size()).map(|orbit| {
             let (lo, hi) = mesh.bounds();
             orbit.camera(lo, hi)
         }),

@@ -32,6 +32,9 @@ pub struct FrameRequest {
     pub sprite_px: f64,
     /// Image size (`None`: [`picture::DEFAULT_SIZE`]).
     pub size: Option<(u32, u32)>,
+    /// A 3D run's camera orbiting the domain's bounding box (`--camera`, `--fit`; `None`: the
+    /// fitted default). A 2D run is drawn flat and refuses one.
+    pub orbit: Option<crate::render::Orbit>,
     /// A PNG gets a title (run, frame, time) above the picture and a colour bar of the speed
     /// beside it ([`crate::picture::Legend`]); `false`: the bare picture.
     pub legend: bool,
@@ -67,6 +70,12 @@ pub fn write_frame(
     if meta.frames == 0 {
         return Err(state(dir, "no frames".into()));
     }
+    if meta.dim == 2 && request.orbit.is_some() {
+        return Err(state(
+            dir,
+            "a 2D run is drawn flat, fitted to the picture: --camera and --fit apply to 3D runs".into(),
+        ));
+    }
     let frame = request.frame.unwrap_or(meta.frames - 1);
     if frame >= meta.frames {
         return Err(state(dir, format!("frame {frame} asked, the run has frames 0 to {}", meta.frames - 1)));
@@ -100,10 +109,10 @@ pub fn write_frame(
     };
     let (lo, hi) = mesh.bounds();
     let size = request.size.unwrap_or(picture::DEFAULT_SIZE);
-    let projection = if meta.dim == 2 {
-        Projection::Plane(View2d::fit([lo[0], lo[1]], [hi[0], hi[1]], size, 0.02))
-    } else {
-        Projection::Perspective(crate::render::camera_for_box(lo, hi))
+    let projection = match (meta.dim, request.orbit) {
+        (2, _) => Projection::Plane(View2d::fit([lo[0], lo[1]], [hi[0], hi[1]], size, 0.02)),
+        (_, Some(orbit)) => Projection::Perspective(orbit.camera(lo, hi)),
+        (_, None) => Projection::Perspective(crate::render::camera_for_box(lo, hi)),
     };
     let picture =
         draw_picture(gpu, (&mesh, &topo), &g, &speeds, particles.as_ref(), &style, &projection, size)?;

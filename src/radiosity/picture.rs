@@ -22,6 +22,9 @@ pub struct PictureRequest {
     pub params: Vec<f64>,
     /// The viewpoint (the two rooms; an OBJ scene is seen from outside its bounds).
     pub viewpoint: Viewpoint,
+    /// A camera orbiting the scene's bounding box instead (`--camera`, `--fit`), overriding
+    /// the viewpoint.
+    pub orbit: Option<crate::render::Orbit>,
     /// Flat or smooth shading.
     pub shading: Shading,
     /// Exposure (`None`: automatic from the solution, [`default_exposure`]).
@@ -113,7 +116,13 @@ pub fn write_picture(
     let radiance = display_radiance(&mesh, &geometry, &lights, &radiosity);
     let exposure = request.exposure.unwrap_or_else(|| default_exposure(&mesh, &geometry, &radiance));
     let vertices = scene_vertices(&mesh, &geometry, &radiance, request.shading);
-    let camera = scene.camera(&mesh, request.viewpoint);
+    let camera = match request.orbit {
+        Some(orbit) => {
+            let (lo, hi) = mesh.bounds();
+            orbit.camera(lo.to_array(), hi.to_array())
+        }
+        None => scene.camera(&mesh, request.viewpoint),
+    };
     let picture = draw_picture(gpu, &vertices, &camera, exposure, request.size)?;
     let tone = crate::render::Colormap::tone_ramp(exposure, LEGEND_WHITE / exposure);
     let title = match &estimate {

@@ -169,7 +169,14 @@ pub struct Orbit {
     pub elevation: f64,
     /// Multiple of the fitted distance, (0, 100].
     pub distance: f64,
+    /// `Some(width / height)` (`--fit`): the fitted distance is the closest at which the box's
+    /// eight corners all lie inside a picture of this aspect; `None`: the distance at which the
+    /// box's bounding sphere fills the view (looser, the same from every direction).
+    pub tight_aspect: Option<f64>,
 }
+
+/// The direction the default cameras look from ([`camera_for_box`]): above the x–y diagonal.
+const DEFAULT_DIRECTION: [f64; 3] = [0.45, -0.75, 0.55];
 
 impl Orbit {
     /// Parses `AZ,EL` or `AZ,EL,DIST` (degrees, degrees, multiple of the fitted distance; DIST
@@ -199,21 +206,72 @@ impl Orbit {
                 "distance {distance}: a multiple of the fitted distance above 0, at most 100"
             ));
         }
-        Ok(Self { azimuth, elevation, distance })
+        Ok(Self { azimuth, elevation, distance, tight_aspect: None })
+    }
+
+    /// The default cameras' direction ([`camera_for_box`]) as an orbit at the fitted distance:
+    /// what `--fit` alone starts from.
+    pub fn default_view() -> Self {
+        let [x, y, z] = DEFAULT_DIRECTION;
+        let n = (x * x + y * y + z * z).sqrt();
+        Self {
+            azimuth: y.atan2(x).to_degrees(),
+            elevation: (z / n).asin().to_degrees(),
+            distance: 1.0,
+            tight_aspect: None,
+        }
     }
 
     /// The camera looking at the centre of the box [`lo`, `hi`] from this direction, at this
     /// multiple of the distance at which the box's bounding sphere fills a 40° view.
+    /// With [`Orbit::tight_aspect`], the distance is instead the closest at which every corner
+    /// of the box projects inside the picture (2 % margin), times `distance`.
     pub fn camera(&self, lo: [f64; 3], hi: [f64; 3]) -> Camera {
         let (az, el) = (self.azimuth.to_radians(), self.elevation.to_radians());
         let dir = [el.cos() * az.cos(), el.cos() * az.sin(), el.sin()];
-        camera_along(lo, hi, dir, self.distance)
+        let mut camera = camera_along(lo, hi, dir, self.distance);
+        if let Some(aspect) = self.tight_aspect.filter(|a| a.is_finite() && *a > 0.0) {
+            let d = self.distance * tight_distance(lo, hi, dir, camera.fov_y_degrees, aspect);
+            let centre: [f64; 3] = std::array::from_fn(|c| 0.5 * (lo[c] + hi[c]));
+            let radius = (0..3).map(|c| (hi[c] - lo[c]).powi(2)).sum::<f64>().sqrt().max(1e-12) * 0.5;
+            camera.eye = std::array::from_fn(|c| centre[c] + d * dir[c]);
+            camera.near = (d - 1.5 * radius).max(1e-3 * d);
+            camera.far = d + 1.5 * radius;
+        }
+        camera
     }
+}
+
+/// The least distance from the box's centre along the unit vector `dir` at which a camera
+/// looking at the centre (z up, vertical field of view `fov_y` degrees, `aspect` = width /
+/// height) sees all eight corners of the box, with a 2 % margin: for a corner at offset `c`
+/// from the centre, its depth is `d − c·dir` and it must satisfy |c·right| ≤ tan(½fov_x)·depth
+/// and |c·up| ≤ tan(½fov_y)·depth.
+fn tight_distance(lo: [f64; 3], hi: [f64; 3], dir: [f64; 3], fov_y: f64, aspect: f64) -> f64 {
+    let v = |a: [f64; 3]| glam::DVec3::from_array(a);
+    let forward = -v(dir).normalize();
+    let right = forward.cross(glam::DVec3::Z).normalize_or(glam::DVec3::X);
+    let up = right.cross(forward);
+    let tan_y = (0.5 * fov_y.to_radians()).tan() / 1.02;
+    let tan_x = tan_y * aspect;
+    let centre = 0.5 * (v(lo) + v(hi));
+    let mut d: f64 = 1e-12;
+    for k in 0..8 {
+        let corner = glam::DVec3::new(
+            if k & 1 == 0 { lo[0] } else { hi[0] },
+            if k & 2 == 0 { lo[1] } else { hi[1] },
+            if k & 4 == 0 { lo[2] } else { hi[2] },
+        );
+        let c = corner - centre;
+        let toward_eye = -c.dot(forward);
+        d = d.max(toward_eye + c.dot(right).abs() / tan_x).max(toward_eye + c.dot(up).abs() / tan_y);
+    }
+    d
 }
 
 /// A camera that shows the box [`lo`, `hi`] (its bounding sphere) from above the x–y diagonal.
 pub fn camera_for_box(lo: [f64; 3], hi: [f64; 3]) -> Camera {
-    camera_along(lo, hi, [0.45, -0.75, 0.55], 1.0)
+    camera_along(lo, hi, DEFAULT_DIRECTION, 1.0)
 }
 
 /// A camera on the line through the box's centre along `dir`, at `scale` times the distance at
@@ -241,7 +299,7 @@ mod tests {
     #[test]
     fn an_orbit_parses_its_angles_and_places_the_eye_along_them() {
         let o = Orbit::parse("0, 0").expect("AZ,EL");
-        assert_eq!(o, Orbit { azimuth: 0.0, elevation: 0.0, distance: 1.0 });
+        assert_eq!(o, Orbit { azimuth: 0.0, elevation: 0.0, distance: 1.0, tight_aspect: None });
         let (lo, hi) = ([-1.0, -1.0, -1.0], [1.0, 1.0, 1.0]);
         let c = o.camera(lo, hi);
         // On +x, level with the centre, looking at it, z up.
@@ -256,6 +314,55 @@ mod tests {
         assert!(far.eye[0].abs() < 1e-12 && far.eye[1] > 0.0);
         for bad in ["10", "1,2,3,4", "x,1", "0,90", "0,0,0", "0,0,-1", "nan,0"] {
             assert!(Orbit::parse(bad).is_err(), "{bad} accepted");
+        }
+    }
+
+    /// `--fit`: every corner of the box projects inside the picture, and at least one touches
+    /// its margin (the fit is tight), for boxes of several shapes, directions and aspects; the
+    /// default view's direction is the default camera's.
+    #[test]
+    fn a_tight_fit_keeps_every_corner_inside_and_touches_an_edge() {
+        let default = camera_for_box([-1.0; 3], [1.0; 3]);
+        let again = Orbit::default_view().camera([-1.0; 3], [1.0; 3]);
+        for c in 0..3 {
+            assert!((default.eye[c] - again.eye[c]).abs() < 1e-9, "{:?} {:?}", default.eye, again.eye);
+        }
+        for (lo, hi) in [
+            ([0.0, 0.0, 0.0], [1.0, 1.0, 1.0]),
+            ([-3.0, 0.0, 0.0], [3.0, 0.5, 0.2]),
+            ([0.0; 3], [0.1, 2.0, 0.0]),
+        ] {
+            for (az, el) in [(0.0, 0.0), (-59.0, 32.0), (135.0, 70.0), (90.0, -30.0)] {
+                for (w, h) in [(1280u32, 720u32), (400, 800)] {
+                    let orbit = Orbit {
+                        azimuth: az,
+                        elevation: el,
+                        distance: 1.0,
+                        tight_aspect: Some(f64::from(w) / f64::from(h)),
+                    };
+                    let camera = orbit.camera(lo, hi);
+                    assert!(camera.check().is_ok());
+                    let mut touches = false;
+                    for k in 0..8 {
+                        let p = glam::DVec3::new(
+                            if k & 1 == 0 { lo[0] } else { hi[0] },
+                            if k & 2 == 0 { lo[1] } else { hi[1] },
+                            if k & 4 == 0 { lo[2] } else { hi[2] },
+                        );
+                        let (x, y) = camera.project(p, w, h);
+                        let (fx, fy) = (x / f64::from(w), y / f64::from(h));
+                        assert!(
+                            (0.0..=1.0).contains(&fx) && (0.0..=1.0).contains(&fy),
+                            "corner {p} at ({fx}, {fy})"
+                        );
+                        touches |= fx < 0.015 || fx > 0.985 || fy < 0.015 || fy > 0.985;
+                    }
+                    assert!(
+                        touches,
+                        "box {lo:?}..{hi:?} from ({az}, {el}) at {w}x{h}: no corner near an edge"
+                    );
+                }
+            }
         }
     }
 }
