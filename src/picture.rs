@@ -133,3 +133,112 @@ mod tests {
         assert_eq!(m[0], ("sum", vec![5.0, 13.0]));
     }
 }
+
+/// What is drawn over a PNG picture besides the data (`--outline`, `--axes`; issue 50): the
+/// edges of the data's bounding box, and an axis triad in the lower left corner showing where
+/// +x (red), +y (green) and +z (blue) point. EXR files hold data only and get neither.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Overlay {
+    /// The bounding box's twelve edges (a planar view: its rectangle), in grey.
+    pub outline: bool,
+    /// The axis triad.
+    pub axes: bool,
+}
+
+/// What a PNG shows besides the data: its legend's title (`None`: no legend) and the overlay.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Decor<'a> {
+    /// The title above the picture; with it comes the colour bar beside it.
+    pub title: Option<&'a str>,
+    /// The outline and axis triad drawn over the picture.
+    pub overlay: Overlay,
+}
+
+/// How world points land on a picture's pixels (x right, y down), for [`draw_overlay`].
+#[derive(Clone, Copy, Debug)]
+pub enum Projector<'a> {
+    /// A perspective camera ([`crate::render::Camera::project`]).
+    Camera(&'a crate::render::Camera),
+    /// A planar view from above: the world (x, y) at the picture's centre and the world size
+    /// of a pixel (z is ignored).
+    Plane {
+        /// World (x, y) at the centre of the picture.
+        centre: [f64; 2],
+        /// World units per pixel.
+        pixel_size: f64,
+    },
+}
+
+impl Projector<'_> {
+    /// Pixel coordinates of `p` in a picture of `size`; `None` behind the camera.
+    pub fn project(&self, p: [f64; 3], size: (u32, u32)) -> Option<(f64, f64)> {
+        match self {
+            Projector::Camera(camera) => {
+                let aspect = f64::from(size.0) / f64::from(size.1.max(1));
+                let clip = camera.view_proj(aspect) * glam::DVec4::new(p[0], p[1], p[2], 1.0);
+                (clip.w > 1e-12).then(|| camera.project(glam::DVec3::from_array(p), size.0, size.1))
+            }
+            Projector::Plane { centre, pixel_size } => Some((
+                0.5 * f64::from(size.0) + (p[0] - centre[0]) / pixel_size,
+                0.5 * f64::from(size.1) - (p[1] - centre[1]) / pixel_size,
+            )),
+        }
+    }
+}
+
+/// Draws `overlay` over the picture `rgba` of `size` in place: the box [`lo`, `hi`]'s edges and
+/// the axis triad, projected by `projector` (`name` stands for the file in errors). An edge with
+/// an end behind the camera is left out; an axis seen end-on is left out of the triad.
+pub fn draw_overlay(
+    rgba: &mut [u8],
+    size: (u32, u32),
+    projector: Projector<'_>,
+    (lo, hi): ([f64; 3], [f64; 3]),
+    overlay: Overlay,
+    name: &Path,
+) -> Result<(), PictureError> {
+    let mut lines = Vec::new();
+    let mut labels = Vec::new();
+    let corner =
+        |k: usize| -> [f64; 3] { std::array::from_fn(|c| if k >> c & 1 == 0 { lo[c] } else { hi[c] }) };
+    if overlay.outline {
+        // Edges join corners that differ in one axis; a flat box's repeated edges are harmless.
+        for a in 0..8usize {
+            for axis in 0..3 {
+                let b = a | 1 << axis;
+                if b != a {
+                    if let (Some(p), Some(q)) =
+                        (projector.project(corner(a), size), projector.project(corner(b), size))
+                    {
+                        lines.push((p, q, [150, 150, 150]));
+                    }
+                }
+            }
+        }
+    }
+    if overlay.axes {
+        let centre: [f64; 3] = std::array::from_fn(|c| 0.5 * (lo[c] + hi[c]));
+        let extent = (0..3).map(|c| hi[c] - lo[c]).fold(0.0f64, f64::max).max(1e-12);
+        let origin = (44.0, f64::from(size.1) - 44.0);
+        for (axis, (label, colour)) in
+            [("x", [220, 40, 40]), ("y", [40, 170, 40]), ("z", [50, 90, 230])].into_iter().enumerate()
+        {
+            let mut tip = centre;
+            tip[axis] += 0.1 * extent;
+            let (Some(a), Some(b)) = (projector.project(centre, size), projector.project(tip, size)) else {
+                continue;
+            };
+            let (dx, dy) = (b.0 - a.0, b.1 - a.1);
+            let len = (dx * dx + dy * dy).sqrt();
+            if len < 1e-9 * extent.max(1.0) || (matches!(projector, Projector::Plane { .. }) && axis == 2) {
+                continue;
+            }
+            let (ux, uy) = (dx / len, dy / len);
+            let end = (origin.0 + 30.0 * ux, origin.1 + 30.0 * uy);
+            lines.push((origin, end, colour));
+            labels.push(((end.0 + 8.0 * ux - 5.0, end.1 + 8.0 * uy - 9.0), label.to_string(), colour));
+        }
+    }
+    crate::plot::draw_over_picture(rgba, size, &lines, &labels, name)?;
+    Ok(())
+}

@@ -327,6 +327,55 @@ fn draw_colour_bar(
     Ok(())
 }
 
+/// A line segment over a picture: pixel coordinates (x right, y down) of its ends, its colour.
+pub type OverlayLine = ((f64, f64), (f64, f64), [u8; 3]);
+
+/// A text label over a picture: pixel position of its top-left corner, the text, its colour.
+pub type OverlayLabel = ((f64, f64), String, [u8; 3]);
+
+/// Draws `lines` (2 px wide) and `labels` over the RGBA picture `rgba` of `size`, in place (the
+/// outline and axis triad of [`crate::picture::draw_overlay`]); `name` stands for the file in
+/// errors. Parts outside the picture are clipped.
+pub fn draw_over_picture(
+    rgba: &mut [u8],
+    size: (u32, u32),
+    lines: &[OverlayLine],
+    labels: &[OverlayLabel],
+    name: &Path,
+) -> Result<(), PlotError> {
+    let (w, h) = size;
+    if rgba.len() != 4 * (w as usize) * (h as usize) {
+        return Err(plot_err(
+            name,
+            format!("a {w}×{h} picture needs {} bytes, got {}", 4 * w * h, rgba.len()),
+        ));
+    }
+    if !labels.is_empty() {
+        font(name)?;
+    }
+    let mut buf: Vec<u8> = rgba.chunks_exact(4).flat_map(|p| [p[0], p[1], p[2]]).collect();
+    {
+        let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
+        // Far outside the picture a coordinate would overflow i32: clamp first (a clipped end
+        // keeps the segment's direction only approximately, and lines that far out are not
+        // visible anyway).
+        let px = |(x, y): (f64, f64)| (x.clamp(-1e5, 1e5).round() as i32, y.clamp(-1e5, 1e5).round() as i32);
+        for &(a, b, [r, g, bl]) in lines {
+            let style = RGBColor(r, g, bl).stroke_width(2);
+            root.draw(&PathElement::new(vec![px(a), px(b)], style)).map_err(|e| plot_err(name, e))?;
+        }
+        for (at, text, [r, g, bl]) in labels {
+            let style = ("sans-serif", 16).into_font().color(&RGBColor(*r, *g, *bl));
+            root.draw_text(text, &style, px(*at)).map_err(|e| plot_err(name, e))?;
+        }
+        root.present().map_err(|e| plot_err(name, e))?;
+    }
+    for (d, s) in rgba.chunks_exact_mut(4).zip(buf.chunks_exact(3)) {
+        d[..3].copy_from_slice(s);
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -269,3 +269,73 @@ fn fit_tightens_the_camera_and_is_refused_where_it_cannot_apply() {
     let (c, err) = code(&["spectral", "view", "--generate", "artery", "--fit"]);
     assert!(c == Some(2) && err.contains("--fit"), "{c:?} {err}");
 }
+
+/// `--outline --axes` on every render: the picture gains the outline's grey and the triad's
+/// red x axis in its lower left corner (absent without them); the viewer refuses them.
+#[test]
+fn outline_and_axes_are_drawn_over_every_render() {
+    let dir = tempfile::Builder::new().prefix("galerkin-overlay-").tempdir().expect("scratch");
+    let out = |name: &str| dir.path().join(name).to_string_lossy().into_owned();
+    let tunnel = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/fluid/tunnel_small.toml");
+    let rooms = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/radiosity/two_rooms_small.toml");
+    galerkin(&["fluid", "simulate", &tunnel.to_string_lossy(), "--frames", "1", "--out", &out("run")]);
+    let (w, h) = (240u32, 180u32);
+    let renders: [Vec<String>; 5] = [
+        vec!["fluid".into(), "render".into(), out("run"), "--cells".into()],
+        vec![
+            "spectral".into(),
+            "render".into(),
+            "--generate".into(),
+            "artery".into(),
+            "--order".into(),
+            "2".into(),
+        ],
+        vec![
+            "spectral".into(),
+            "render".into(),
+            "--generate".into(),
+            "annulus".into(),
+            "--order".into(),
+            "2".into(),
+        ],
+        vec!["spacetime".into(), "render".into(), "--elements".into(), "2000".into()],
+        vec![
+            "radiosity".into(),
+            "render".into(),
+            rooms.to_string_lossy().into(),
+            "--near-field".into(),
+            "centroid".into(),
+            "--camera".into(),
+            "30,40,1.3".into(),
+        ],
+    ];
+    let triad_red = |rgba: &[u8]| {
+        (h - 80..h).any(|y| {
+            (0..80).any(|x| {
+                let p = 4 * (y * w + x) as usize;
+                rgba[p] > 180 && rgba[p + 1] < 90 && rgba[p + 2] < 90
+            })
+        })
+    };
+    for (k, args) in renders.iter().enumerate() {
+        let draw = |extra: &[&str], name: &str| {
+            let png = out(name);
+            let mut all: Vec<&str> = args.iter().map(String::as_str).collect();
+            all.extend(["--size", "240x180", "--no-legend", "--out", &png]);
+            all.extend(extra);
+            galerkin(&all);
+            galerkin::render::read_png_rgba8(Path::new(&png)).expect("a PNG").2
+        };
+        let plain = draw(&[], &format!("{k}-plain.png"));
+        let decorated = draw(&["--outline", "--axes"], &format!("{k}-decorated.png"));
+        assert!(!triad_red(&plain) || k == 4, "render {k}: red in the corner without --axes");
+        assert!(triad_red(&decorated), "render {k} ({args:?}): no red x axis in the lower left corner");
+        let changed = plain.chunks_exact(4).zip(decorated.chunks_exact(4)).filter(|(a, b)| a != b).count();
+        assert!(changed > 200, "render {k}: only {changed} pixels changed by --outline --axes");
+    }
+    let o = Command::new(env!("CARGO_BIN_EXE_galerkin"))
+        .args(["spectral", "view", "--generate", "artery", "--outline"])
+        .output()
+        .expect("ran");
+    assert_eq!(o.status.code(), Some(2), "{}", String::from_utf8_lossy(&o.stderr));
+}

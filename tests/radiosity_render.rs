@@ -146,6 +146,7 @@ fn a_picture_from_a_model_reports_its_estimate_and_refuses_when_untrusted() {
         params: spec.defaults().to_vec(),
         viewpoint: Viewpoint::Living,
         orbit: None,
+        overlay: Default::default(),
         shading: Shading::Flat,
         exposure: None,
         size: (W, H),

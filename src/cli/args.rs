@@ -118,6 +118,9 @@ pub fn inapplicable(matches: &clap::ArgMatches) -> Option<String> {
     }
     let viewing =
         matches!(path.as_slice(), [_, "view"]) || m.try_get_one::<bool>("view").ok().flatten() == Some(&true);
+    if let Some(id) = ["outline", "axes"].iter().find(|id| viewing && given(id)) {
+        return Some(format!("--{id} is drawn over pictures (render); the viewer does not draw it"));
+    }
     if let Some(id) = ["camera", "fit"].iter().find(|id| viewing && given(id)) {
         return Some(format!("--{id} sets a picture's camera; in the viewer the arrow keys and +/- move it"));
     }
@@ -224,6 +227,26 @@ impl CameraArgs {
             }),
             (None, false) => None,
         }
+    }
+}
+
+/// What a PNG picture shows besides the data (every `render`): `--outline`, `--axes`.
+#[derive(Args, Clone, Debug)]
+pub struct OverlayArgs {
+    /// Draw the edges of the data's bounding box over the picture (a planar view: its
+    /// rectangle). PNG only.
+    #[arg(long)]
+    pub outline: bool,
+    /// Draw an axis triad in the picture's lower left corner: where +x (red), +y (green) and
+    /// +z (blue) point. PNG only.
+    #[arg(long)]
+    pub axes: bool,
+}
+
+impl OverlayArgs {
+    /// The overlay asked for.
+    pub fn overlay(&self) -> galerkin::picture::Overlay {
+        galerkin::picture::Overlay { outline: self.outline, axes: self.axes }
     }
 }
 

@@ -177,6 +177,9 @@ pub struct RenderArgs {
     /// A 3D run's camera (--camera, --fit; a 2D run is drawn flat).
     #[command(flatten)]
     pub view_from: crate::cli::args::CameraArgs,
+    /// The domain's outline and axis triad (--outline, --axes).
+    #[command(flatten)]
+    pub overlay: crate::cli::args::OverlayArgs,
     /// A PNG without its title and colour bar (the bare picture).
     #[arg(long)]
     pub no_legend: bool,
@@ -356,6 +359,7 @@ fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
         sprite_px: args.sprite,
         size: args.image.size,
         orbit: args.view_from.orbit(args.image.size()),
+        overlay: args.overlay.overlay(),
         legend: !args.no_legend,
     };
     let gpu = Gpu::new(desc)?;

@@ -248,6 +248,9 @@ pub struct RenderArgs {
     /// The camera orbiting the scene's bounding box (--camera, --fit), instead of --viewpoint.
     #[command(flatten)]
     pub view_from: crate::cli::args::CameraArgs,
+    /// The scene's outline and axis triad (--outline, --axes).
+    #[command(flatten)]
+    pub overlay: crate::cli::args::OverlayArgs,
     /// A PNG without its title and colour bar (the bare picture; the bar is the tone map's
     /// radiance scale).
     #[arg(long)]
@@ -337,6 +340,7 @@ fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
         params: p.clone(),
         viewpoint: args.look.viewpoint,
         orbit: args.view_from.orbit(size),
+        overlay: args.overlay.overlay(),
         shading: args.look.shading,
         exposure: args.look.exposure,
         size,

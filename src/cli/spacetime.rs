@@ -87,6 +87,9 @@ pub struct RenderArgs {
     /// front (from −y).
     #[command(flatten)]
     pub view_from: crate::cli::args::CameraArgs,
+    /// The outline and axis triad (--outline, --axes).
+    #[command(flatten)]
+    pub overlay: crate::cli::args::OverlayArgs,
     /// Time of the slice (default: the middle of the data set's time span).
     #[arg(long)]
     pub time: Option<f64>,
@@ -238,7 +241,8 @@ pub fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
     };
     let title = (!args.no_legend).then_some(title.as_str());
     let size = args.image.size();
-    let r = picture::write_slice(&gpu, data, &view, &colormap, (size, out), title, derived)?;
+    let decor = galerkin::picture::Decor { title, overlay: args.overlay.overlay() };
+    let r = picture::write_slice(&gpu, data, &view, &colormap, (size, out), decor, derived)?;
     println!(
         "spacetime: {elements} elements, t = {time:.4}: {} active ({} streamed to the device), {} triangles, {} edge lines; load {open_ms:.1} ms, slice {:.1} ms, render + readback {:.1} ms, peak RSS {} → {}",
         r.stats.active,

@@ -107,6 +107,9 @@ pub struct RenderArgs {
     /// Surfaces, height fields and cut planes: the camera (--camera, --fit).
     #[command(flatten)]
     pub view_from: crate::cli::args::CameraArgs,
+    /// The outline and axis triad (--outline, --axes).
+    #[command(flatten)]
+    pub overlay: crate::cli::args::OverlayArgs,
     /// The field to show (default: the first): a one-component array of the file's point data,
     /// or of its cell data (drawn constant on each element; `NAME (cells)` where a point array
     /// has the same name). An unknown name lists the fields there are.
@@ -290,7 +293,10 @@ pub fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
         &colormap,
         size,
         out,
-        (!args.no_legend).then_some(title.as_str()),
+        galerkin::picture::Decor {
+            title: (!args.no_legend).then_some(title.as_str()),
+            overlay: args.overlay.overlay(),
+        },
     )?;
     let (lo, hi) = r.range;
     println!(

@@ -35,6 +35,8 @@ pub struct FrameRequest {
     /// A 3D run's camera orbiting the domain's bounding box (`--camera`, `--fit`; `None`: the
     /// fitted default). A 2D run is drawn flat and refuses one.
     pub orbit: Option<crate::render::Orbit>,
+    /// The domain's outline and the axis triad drawn over a PNG ([`picture::Overlay`]).
+    pub overlay: picture::Overlay,
     /// A PNG gets a title (run, frame, time) above the picture and a colour bar of the speed
     /// beside it ([`crate::picture::Legend`]); `false`: the bare picture.
     pub legend: bool,
@@ -114,8 +116,18 @@ pub fn write_frame(
         (_, Some(orbit)) => Projection::Perspective(orbit.camera(lo, hi)),
         (_, None) => Projection::Perspective(crate::render::camera_for_box(lo, hi)),
     };
-    let picture =
+    let mut picture =
         draw_picture(gpu, (&mesh, &topo), &g, &speeds, particles.as_ref(), &style, &projection, size)?;
+    if request.overlay != picture::Overlay::default() && format == ImageFormat::Png {
+        let projector = match &projection {
+            Projection::Plane(v) => picture::Projector::Plane {
+                centre: [0.5 * (v.lo[0] + v.hi[0]), 0.5 * (v.lo[1] + v.hi[1])],
+                pixel_size: (v.hi[0] - v.lo[0]) / f64::from(size.0.max(1)),
+            },
+            Projection::Perspective(camera) => picture::Projector::Camera(camera),
+        };
+        picture::draw_overlay(&mut picture.rgba, size, projector, (lo, hi), request.overlay, out)?;
+    }
     let legend = picture::Legend {
         title: format!(
             "{}: frame {frame} of {}, t = {} s",

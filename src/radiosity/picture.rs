@@ -25,6 +25,8 @@ pub struct PictureRequest {
     /// A camera orbiting the scene's bounding box instead (`--camera`, `--fit`), overriding
     /// the viewpoint.
     pub orbit: Option<crate::render::Orbit>,
+    /// The scene's outline and the axis triad drawn over a PNG ([`picture::Overlay`]).
+    pub overlay: picture::Overlay,
     /// Flat or smooth shading.
     pub shading: Shading,
     /// Exposure (`None`: automatic from the solution, [`default_exposure`]).
@@ -123,7 +125,19 @@ pub fn write_picture(
         }
         None => scene.camera(&mesh, request.viewpoint),
     };
-    let picture = draw_picture(gpu, &vertices, &camera, exposure, request.size)?;
+    let mut picture = draw_picture(gpu, &vertices, &camera, exposure, request.size)?;
+    if request.overlay != picture::Overlay::default() && format == ImageFormat::Png {
+        let (lo, hi) = mesh.bounds();
+        let projector = picture::Projector::Camera(&camera);
+        picture::draw_overlay(
+            &mut picture.rgba,
+            request.size,
+            projector,
+            (lo.to_array(), hi.to_array()),
+            request.overlay,
+            out,
+        )?;
+    }
     let tone = crate::render::Colormap::tone_ramp(exposure, LEGEND_WHITE / exposure);
     let title = match &estimate {
         Some(e) if e.error.is_finite() => {

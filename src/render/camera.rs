@@ -355,7 +355,7 @@ mod tests {
                             (0.0..=1.0).contains(&fx) && (0.0..=1.0).contains(&fy),
                             "corner {p} at ({fx}, {fy})"
                         );
-                        touches |= fx < 0.015 || fx > 0.985 || fy < 0.015 || fy > 0.985;
+                        touches |= !(0.015..=0.985).contains(&fx) || !(0.015..=0.985).contains(&fy);
                     }
                     assert!(
                         touches,

@@ -76,10 +76,12 @@ pub fn write_slice(
     view: &SpacetimeView,
     colormap: &Colormap,
     (size, out): ((u32, u32), &Path),
-    title: Option<&str>,
+    decor: picture::Decor<'_>,
     derived: Option<Derived>,
 ) -> Result<SliceReport, SpacetimeError> {
     check_view(&data, view)?;
+    let title = decor.title;
+    let bounds = view.shown_box(data.summary());
     let exr = picture::format_of(out)? == ImageFormat::Exr;
     let dev = SpacetimeError::device;
     let mut renderer = SpacetimeRenderer::new(gpu, data, colormap)?;
@@ -109,8 +111,14 @@ pub fn write_slice(
     } else if legend && view.u_max.is_none() {
         view.u_max = Some(renderer.u_max_for(&target, &view)?);
     }
-    let pixels = renderer.render(&target, &view)?;
+    let mut pixels = renderer.render(&target, &view)?;
     let render_ms = start.elapsed().as_secs_f64() * 1e3;
+    if let Pixels::Rgba8(rgba) = &mut pixels {
+        if decor.overlay != picture::Overlay::default() {
+            let projector = picture::Projector::Camera(&view.camera);
+            picture::draw_overlay(rgba, size, projector, bounds, decor.overlay, out)?;
+        }
+    }
     if let (Pixels::Rgba8(rgba), Some(title), Some((label, range))) = (&pixels, title, &derived_range) {
         let bar = ColourBar { colormap, range: *range, log: false, label, shift: 0.0 };
         let legend = Legend { title: title.to_string(), bar };

@@ -7,6 +7,7 @@ use std::path::Path;
 use std::sync::Arc;
 use std::time::Instant;
 
+use super::render::PictureView;
 use super::{Shape, SpectralError, SpectralMesh, SpectralRenderer, SpectralView};
 use crate::gpu::Gpu;
 use crate::picture::{self, ImageFormat, Legend};
@@ -116,7 +117,7 @@ pub fn write_picture(
     colormap: &Colormap,
     size: (u32, u32),
     out: &Path,
-    title: Option<&str>,
+    decor: picture::Decor<'_>,
 ) -> Result<PictureReport, SpectralError> {
     check_view(&mesh, view)?;
     let format = picture::format_of(out)?;
@@ -126,15 +127,23 @@ pub fn write_picture(
     let start = Instant::now();
     let colour =
         RenderTarget::new(gpu, "spectral", w, h, ColorFormat::Rgba8).map_err(dev("the colour target"))?;
-    let Pixels::Rgba8(rgba) = renderer.render(&colour, view)? else {
+    let Pixels::Rgba8(mut rgba) = renderer.render(&colour, view)? else {
         return Err(SpectralError::Missing("an RGBA8 target returned floats".into()));
     };
+    if decor.overlay != picture::Overlay::default() && format == ImageFormat::Png {
+        let shown = renderer.picture_view(view, w, h);
+        let projector = match &shown {
+            PictureView::Plane(v) => picture::Projector::Plane { centre: v.centre, pixel_size: v.pixel_size },
+            PictureView::Camera(camera) => picture::Projector::Camera(camera),
+        };
+        picture::draw_overlay(&mut rgba, size, projector, mesh.bounds(), decor.overlay, out)?;
+    }
     let render_ms = start.elapsed().as_secs_f64() * 1e3;
     let range = renderer.range(view);
     let label = shown_label(&mesh, view);
     match format {
         ImageFormat::Png => {
-            let legend = title.map(|title| Legend {
+            let legend = decor.title.map(|title| Legend {
                 title: title.to_string(),
                 bar: colour_bar(colormap, range, view.log, &label),
             });

@@ -149,8 +149,16 @@ impl SpacetimeView {
     /// The camera looking at the data set from `orbit`: at its box — the slice's spatial extent,
     /// and heights up to a quarter of its size when the height field is on.
     pub fn orbit(&self, data: &DataSummary, orbit: crate::render::Orbit) -> Camera {
+        let (lo, hi) = self.shown_box(data);
+        orbit.camera(lo, hi)
+    }
+
+    /// The box this view shows of `data`: its spatial extent in x and y, and in z from the
+    /// slice plane up to the height field's top (a quarter of the data set's size) when the
+    /// height is on.
+    pub fn shown_box(&self, data: &DataSummary) -> ([f64; 3], [f64; 3]) {
         let top = if self.height { 0.25 * data.size() } else { 0.0 };
-        orbit.camera([data.space_lo[0], data.space_lo[1], 0.0], [data.space_hi[0], data.space_hi[1], top])
+        ([data.space_lo[0], data.space_lo[1], 0.0], [data.space_hi[0], data.space_hi[1], top])
     }
 
     /// Looking straight down at the data set so that it fills the image (height off): every pixel

@@ -50,6 +50,15 @@ pub use crate::render::camera_for_box;
 pub use cut::plane_span;
 pub use view::{fit_camera, SpectralView, View2d};
 
+/// How a spectral picture maps the world onto its pixels ([`SpectralRenderer::picture_view`]).
+#[derive(Clone, Copy, Debug)]
+pub enum PictureView {
+    /// A planar mesh drawn flat: its 2D view.
+    Plane(View2d),
+    /// Surfaces, height fields, cut planes: the camera.
+    Camera(crate::render::Camera),
+}
+
 type Result<T> = std::result::Result<T, SpectralError>;
 fn dev(context: &str) -> impl Fn(crate::gpu::GpuError) -> SpectralError + '_ {
     SpectralError::device(context)
@@ -425,29 +434,39 @@ impl SpectralRenderer {
         ])
     }
 
+    /// How `view` maps the world onto a picture of `width` × `height`: a planar mesh drawn
+    /// flat through its 2D view (the view's, or fitted), anything else through a camera (the
+    /// view's, the height field's, or fitted to the mesh's box) — what the draw uses, and what
+    /// a picture's overlay is projected with.
+    pub fn picture_view(&mut self, view: &SpectralView, width: u32, height: u32) -> PictureView {
+        let scale = self.height_scale(view);
+        if self.planar && scale.is_none() {
+            let (lo, hi) = self.bounds;
+            return PictureView::Plane(view.view.unwrap_or_else(|| View2d::fit_box(lo, hi, width, height)));
+        }
+        PictureView::Camera(match (view.camera, scale) {
+            (Some(c), _) => c,
+            (None, Some(s)) => self.height_camera(view, s),
+            (None, None) => camera_for_box(self.bounds.0, self.bounds.1),
+        })
+    }
+
     fn push(&mut self, target: &DrawTarget<'_>, view: &SpectralView) -> SpectralPush {
         let e = target.extent();
         let (lo, hi) = self.range(view);
-        let height = self.height_scale(view);
-        let flat = self.planar && height.is_none();
-        let (view_proj, pixel_to_world) = if flat {
-            let (lo, hi) = self.bounds;
-            let v2 = view.view.unwrap_or_else(|| View2d::fit_box(lo, hi, e.width, e.height));
-            (v2.view_proj(e.width, e.height), v2.pixel_to_world(e.width, e.height))
-        } else {
-            let camera = match (view.camera, height) {
-                (Some(c), _) => c,
-                (None, Some(s)) => self.height_camera(view, s),
-                (None, None) => camera_for_box(self.bounds.0, self.bounds.1),
-            };
-            let aspect = target.aspect();
-            let tan_half = (0.5 * camera.fov_y_degrees.to_radians()).tan();
-            // Pixels per world unit at view depth 1 (the tessellation adds each element's
-            // off-axis factor).
-            let pixels = 0.5 * f64::from(e.height) / tan_half;
-            let eye = camera.eye.map(|c| c as f32);
-            (camera.view_proj_f32(aspect), [eye[0], eye[1], eye[2], pixels as f32])
+        let (view_proj, pixel_to_world) = match self.picture_view(view, e.width, e.height) {
+            PictureView::Plane(v2) => (v2.view_proj(e.width, e.height), v2.pixel_to_world(e.width, e.height)),
+            PictureView::Camera(camera) => {
+                let aspect = target.aspect();
+                let tan_half = (0.5 * camera.fov_y_degrees.to_radians()).tan();
+                // Pixels per world unit at view depth 1 (the tessellation adds each element's
+                // off-axis factor).
+                let pixels = 0.5 * f64::from(e.height) / tan_half;
+                let eye = camera.eye.map(|c| c as f32);
+                (camera.view_proj_f32(aspect), [eye[0], eye[1], eye[2], pixels as f32])
+            }
         };
+        let flat = self.planar && self.height_scale(view).is_none();
         SpectralPush {
             view_proj: view_proj.to_cols_array(),
             pixel_to_world,
