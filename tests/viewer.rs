@@ -241,6 +241,65 @@ fn wide_viewers_show_the_colour_legend_beside_the_picture() {
     }
 }
 
+/// The fluid and radiosity viewers show their legends too: the fluid's speed on viridis (both
+/// ends in the strip), the radiosity's tone-map grey ramp (a column of greys rising from near
+/// black to near white over 100 rows or more).
+#[test]
+fn fluid_and_radiosity_viewers_show_their_legend() {
+    use galerkin::plot::BAR_WIDTH;
+    let x = Xvfb::start();
+    let tunnel = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/fluid/tunnel_small.toml");
+    let rooms = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/radiosity/two_rooms_small.toml");
+    let strip_of = |w: u32, h: u32, rgba: &[u8]| -> Vec<Vec<[u8; 3]>> {
+        (w - BAR_WIDTH..w)
+            .map(|x| {
+                (0..h)
+                    .map(|y| {
+                        let p = &rgba[4 * (y * w + x) as usize..][..3];
+                        [p[0], p[1], p[2]]
+                    })
+                    .collect()
+            })
+            .collect()
+    };
+    let (_, w, h, rgba) = run_view(
+        &x,
+        "fluid-legend",
+        &["fluid", "view", &tunnel.to_string_lossy(), "--play", "--quit-after", "3"],
+        "800x400",
+    );
+    let columns = strip_of(w, h, &rgba);
+    let map = Colormap::viridis();
+    for t in [0.0, 1.0] {
+        let c = map.sample((t + 0.5 / 256.0f64).min(1.0 - 0.5 / 256.0));
+        let want = [(255.0 * c[0]) as u8, (255.0 * c[1]) as u8, (255.0 * c[2]) as u8];
+        let near = |p: &[u8; 3]| (0..3).all(|k| p[k].abs_diff(want[k]) <= 8);
+        assert!(columns.iter().flatten().any(near), "fluid view: end {t} of viridis is not in the legend");
+    }
+    let (_, w, h, rgba) = run_view(
+        &x,
+        "radiosity-legend",
+        &["radiosity", "view", &rooms.to_string_lossy(), "--quit-after", "3"],
+        "800x400",
+    );
+    let ramp = strip_of(w, h, &rgba).iter().any(|column| {
+        let greys: Vec<u8> = column.iter().filter(|p| p[0] == p[1] && p[1] == p[2]).map(|p| p[0]).collect();
+        // The longest run of non-increasing greys (the bar runs from white at the top down).
+        let (mut best, mut start) = ((0, 0u8, 0u8), 0);
+        for k in 1..=greys.len() {
+            if k == greys.len() || greys[k] > greys[k - 1] {
+                let run = &greys[start..k];
+                if run.len() > best.0 {
+                    best = (run.len(), *run.last().unwrap_or(&0), *run.first().unwrap_or(&0));
+                }
+                start = k;
+            }
+        }
+        best.0 >= 100 && best.1 <= 16 && best.2 >= 230
+    });
+    assert!(ramp, "radiosity view: no tone-map grey ramp in the legend");
+}
+
 #[test]
 fn the_spectral_viewer_shows_a_surface() {
     let x = Xvfb::start();

@@ -189,6 +189,16 @@ impl FluidContent {
 }
 
 impl ViewerContent for FluidContent {
+    fn legend(&self) -> Option<crate::plot::ColourBar<'_>> {
+        Some(crate::plot::ColourBar {
+            colormap: &self.style.colormap,
+            range: self.style.range,
+            log: self.style.log,
+            label: "speed (m/s)",
+            shift: 0.0,
+        })
+    }
+
     fn title(&self) -> String {
         format!(
             "galerkin fluid — {} — frame {} (step {:.2} ms) — {:.0} FPS{}",

@@ -177,6 +177,16 @@ impl CavityContent {
 }
 
 impl ViewerContent for CavityContent {
+    fn legend(&self) -> Option<crate::plot::ColourBar<'_>> {
+        Some(crate::plot::ColourBar {
+            colormap: &self.style.colormap,
+            range: self.style.range,
+            log: self.style.log,
+            label: "speed (m/s)",
+            shift: 0.0,
+        })
+    }
+
     fn title(&self) -> String {
         let a = self.amounts;
         let beyond = self.trained.and_then(|t| super::reduced::cavity_motion::beyond_training(t, a));

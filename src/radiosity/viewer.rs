@@ -60,6 +60,9 @@ pub struct RadiosityContent {
     mesh_faces: usize,
     /// The reduced solution's error estimate and stability check (reduced mode).
     estimate: Option<Estimate>,
+    /// The legend's ramp: the tone map's grey levels at the current exposure
+    /// ([`crate::render::Colormap::tone_ramp`], as `radiosity render`'s PNG shows it).
+    tone: crate::render::Colormap,
 }
 
 impl RadiosityContent {
@@ -94,6 +97,7 @@ impl RadiosityContent {
             frames: 0,
             mesh_faces: mesh.len(),
             estimate: None,
+            tone: tone_ramp(exposure),
         })
     }
 
@@ -133,7 +137,23 @@ impl RadiosityContent {
     }
 }
 
+/// The legend's ramp at `exposure`: the tone map's grey levels over radiance 0 to
+/// [`super::picture::LEGEND_WHITE`]` / exposure`.
+fn tone_ramp(exposure: f64) -> crate::render::Colormap {
+    crate::render::Colormap::tone_ramp(exposure, super::picture::LEGEND_WHITE / exposure)
+}
+
 impl ViewerContent for RadiosityContent {
+    fn legend(&self) -> Option<crate::plot::ColourBar<'_>> {
+        Some(crate::plot::ColourBar {
+            colormap: &self.tone,
+            range: (0.0, super::picture::LEGEND_WHITE / self.exposure),
+            log: false,
+            label: "radiance (W/m²/sr), tone-mapped",
+            shift: 0.0,
+        })
+    }
+
     fn title(&self) -> String {
         let p: Vec<String> = (self.names.iter().zip(&self.params).enumerate())
             .map(|(a, (n, v))| if a == self.chosen { format!("[{n} {v:.2}]") } else { format!("{n} {v:.2}") })
@@ -230,10 +250,12 @@ impl ViewerContent for RadiosityContent {
             }
             "e" => {
                 self.exposure /= 1.25;
+                self.tone = tone_ramp(self.exposure);
                 return true;
             }
             "E" => {
                 self.exposure *= 1.25;
+                self.tone = tone_ramp(self.exposure);
                 return true;
             }
             " " => {

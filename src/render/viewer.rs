@@ -62,7 +62,7 @@ pub trait ViewerContent {
         None
     }
     /// What the picture's colours mean, shown as a colour bar beside it (the one the PNG
-    /// pictures carry) when the window is wide enough. Default: none (e.g. radiance).
+    /// pictures carry) when the window is wide enough. Default: none.
     fn legend(&self) -> Option<ColourBar<'_>> {
         None
     }
