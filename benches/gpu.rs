@@ -3,7 +3,7 @@
 
 fn main() {
     let quick = std::env::args().any(|a| a == "--quick");
-    let gpu = match galerkin::gpu::Gpu::new(&galerkin::gpu::GpuDesc::default()) {
+    let gpu = match galerkin::gpu::Gpu::new(&galerkin::gpu::GpuDesc::from_env()) {
         Ok(g) => g,
         Err(e) => {
             eprintln!("error: {e}");

@@ -202,7 +202,7 @@ fn main() {
 }
 
 fn desc(cli: &Cli) -> GpuDesc {
-    let mut d = GpuDesc::default();
+    let mut d = GpuDesc::from_env();
     if let Some(name) = &cli.device {
         d.device_name = Some(name.clone());
     }

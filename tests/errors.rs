@@ -116,3 +116,17 @@ fn radiosity_compare_refuses_empty_sequences_before_any_work() {
         assert!(!err.contains("panicked"), "{err}");
     }
 }
+
+/// `GpuDesc::default()` is the same in every process (an embedding host's environment does not
+/// change it); `GpuDesc::from_env()` reads the `GALERKIN_*` variables (`make test` sets
+/// GALERKIN_VALIDATION=1, so there the two differ).
+#[test]
+fn the_default_description_reads_nothing_from_the_environment() {
+    let d = GpuDesc::default();
+    assert!(!d.validation && d.device_name.is_none() && d.loader_path.is_none());
+    assert!(d.fail_allocation.is_none() && d.lose_device.is_none());
+    let flag = std::env::var("GALERKIN_VALIDATION").is_ok_and(|v| !v.trim().is_empty() && v != "0");
+    assert_eq!(GpuDesc::from_env().validation, flag);
+    let device = std::env::var("GALERKIN_DEVICE").ok().filter(|v| !v.trim().is_empty());
+    assert_eq!(GpuDesc::from_env().device_name, device);
+}

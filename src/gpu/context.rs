@@ -23,10 +23,14 @@ use super::debug::ValidationLog;
 use super::error::{GpuError, GpuResult, VkContext};
 use super::instance;
 
-/// How to create a [`Gpu`]. `Default` reads the environment:
+/// How to create a [`Gpu`]. `Default` is the same everywhere and reads nothing from the
+/// environment (what an embedding host wants: its process's variables do not change the
+/// engine's behaviour); [`GpuDesc::from_env`] adds what the command line reads:
 /// `GALERKIN_VALIDATION=1` turns on the Khronos validation layer,
+/// `GALERKIN_SYNC_VALIDATION=0` leaves out its synchronization checks,
 /// `GALERKIN_DEVICE=<substring>` picks a device by name,
-/// `GALERKIN_VULKAN_LIBRARY=<path>` loads a specific Vulkan loader.
+/// `GALERKIN_VULKAN_LIBRARY=<path>` loads a specific Vulkan loader, and the fault injection of
+/// the tests (`GALERKIN_FAIL_ALLOCATION=N`, `GALERKIN_LOSE_DEVICE=N`).
 #[derive(Clone, Debug)]
 pub struct GpuDesc {
     /// Application name given to the driver.
@@ -65,23 +69,43 @@ pub struct GpuDesc {
 }
 
 impl Default for GpuDesc {
+    /// No validation (synchronization validation on when validation is), the first suitable
+    /// device, the system's loader, a 600 s fence timeout, no fault injection.
     fn default() -> Self {
-        let flag = |k: &str| std::env::var(k).is_ok_and(|v| !v.is_empty() && v != "0");
         Self {
             app_name: "galerkin".into(),
-            validation: flag("GALERKIN_VALIDATION"),
-            sync_validation: std::env::var("GALERKIN_SYNC_VALIDATION").map_or(true, |v| v != "0"),
-            device_name: std::env::var("GALERKIN_DEVICE").ok().filter(|s| !s.is_empty()),
+            validation: false,
+            sync_validation: true,
+            device_name: None,
             instance_extensions: Vec::new(),
             swapchain: false,
             fence_timeout: Duration::from_secs(600),
             max_binding_bytes: None,
-            loader_path: std::env::var_os("GALERKIN_VULKAN_LIBRARY").map(PathBuf::from),
+            loader_path: None,
             validation_log: None,
-            fail_allocation: std::env::var("GALERKIN_FAIL_ALLOCATION")
-                .ok()
-                .and_then(|v| v.trim().parse().ok()),
-            lose_device: std::env::var("GALERKIN_LOSE_DEVICE").ok().and_then(|v| v.trim().parse().ok()),
+            fail_allocation: None,
+            lose_device: None,
+        }
+    }
+}
+
+impl GpuDesc {
+    /// [`GpuDesc::default`] with the `GALERKIN_*` environment variables applied (the command
+    /// line's description; see [`GpuDesc`]). A variable that is unset, empty or unparsable
+    /// leaves the default.
+    pub fn from_env() -> Self {
+        let var = |k: &str| std::env::var(k).ok().filter(|v| !v.trim().is_empty());
+        let d = Self::default();
+        Self {
+            validation: var("GALERKIN_VALIDATION").is_some_and(|v| v != "0"),
+            sync_validation: var("GALERKIN_SYNC_VALIDATION").map_or(d.sync_validation, |v| v != "0"),
+            device_name: var("GALERKIN_DEVICE"),
+            loader_path: std::env::var_os("GALERKIN_VULKAN_LIBRARY")
+                .filter(|p| !p.is_empty())
+                .map(PathBuf::from),
+            fail_allocation: var("GALERKIN_FAIL_ALLOCATION").and_then(|v| v.trim().parse().ok()),
+            lose_device: var("GALERKIN_LOSE_DEVICE").and_then(|v| v.trim().parse().ok()),
+            ..d
         }
     }
 }

@@ -39,7 +39,7 @@ impl Drop for TestGpu {
 
 /// A `Gpu` with validation on; `configure` may adjust the description.
 pub fn gpu_with(configure: impl FnOnce(&mut GpuDesc)) -> TestGpu {
-    let mut desc = GpuDesc { validation: true, ..GpuDesc::default() };
+    let mut desc = GpuDesc { validation: true, ..GpuDesc::from_env() };
     configure(&mut desc);
     let gpu = match Gpu::new(&desc) {
         Ok(g) => g,
