@@ -55,6 +55,15 @@ pub fn out_of_range_reason(value: f64) -> String {
     }
 }
 
+/// The machine's physical memory in bytes (`MemTotal` of `/proc/meminfo`); `None` where it
+/// cannot be read (then checks that need it are skipped).
+pub fn memory_total() -> Option<u64> {
+    let text = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = text.lines().find(|l| l.starts_with("MemTotal:"))?;
+    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    kb.checked_mul(1024)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
