@@ -135,13 +135,7 @@ pub fn write_frame(
             meta.frames - 1,
             crate::plot::tick_label(frame as f64 * meta.frame_time, meta.frame_time)
         ),
-        bar: crate::plot::ColourBar {
-            colormap: &style.colormap,
-            range,
-            log: false,
-            label: if request.colour_cells { "cell speed (m/s)" } else { "particle speed (m/s)" },
-            shift: 0.0,
-        },
+        bar: style.colour_bar(),
     };
     match format {
         ImageFormat::Png => picture::write_png(out, size, &picture.rgba, request.legend.then_some(&legend))?,

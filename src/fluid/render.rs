@@ -168,6 +168,20 @@ pub struct DrawStyle {
     pub sprite_px: f64,
 }
 
+impl DrawStyle {
+    /// The colour bar of this style (the PNG's legend and the viewers'): the ramp over the
+    /// speed range, labelled by what carries the colour (cells or particles).
+    pub fn colour_bar(&self) -> crate::plot::ColourBar<'_> {
+        crate::plot::ColourBar {
+            colormap: &self.colormap,
+            range: self.range,
+            log: self.log,
+            label: if self.colour_cells { "cell speed (m/s)" } else { "particle speed (m/s)" },
+            shift: 0.0,
+        }
+    }
+}
+
 crate::push_constants! {
     struct Push {
         view_proj: [f32; 16],

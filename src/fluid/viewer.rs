@@ -190,13 +190,7 @@ impl FluidContent {
 
 impl ViewerContent for FluidContent {
     fn legend(&self) -> Option<crate::plot::ColourBar<'_>> {
-        Some(crate::plot::ColourBar {
-            colormap: &self.style.colormap,
-            range: self.style.range,
-            log: self.style.log,
-            label: "speed (m/s)",
-            shift: 0.0,
-        })
+        Some(self.style.colour_bar())
     }
 
     fn title(&self) -> String {

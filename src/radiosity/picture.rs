@@ -52,6 +52,24 @@ pub struct PictureRequest {
 /// radiance `LEGEND_WHITE / exposure` at `1 − e^{-4}` ≈ 98 % of white.
 pub const LEGEND_WHITE: f64 = 4.0;
 
+/// The legend's ramp at `exposure`: the tone map's grey levels over radiance 0 to
+/// [`LEGEND_WHITE`]` / exposure` ([`crate::render::Colormap::tone_ramp`]).
+pub fn tone_ramp(exposure: f64) -> crate::render::Colormap {
+    crate::render::Colormap::tone_ramp(exposure, LEGEND_WHITE / exposure)
+}
+
+/// The colour bar of a radiosity picture or window at `exposure`, drawn with `tone`
+/// ([`tone_ramp`] of the same exposure): the tone map's radiance scale.
+pub fn tone_bar(tone: &crate::render::Colormap, exposure: f64) -> crate::plot::ColourBar<'_> {
+    crate::plot::ColourBar {
+        colormap: tone,
+        range: (0.0, LEGEND_WHITE / exposure),
+        log: false,
+        label: "radiance (W/m²/sr), tone-mapped",
+        shift: 0.0,
+    }
+}
+
 /// What [`write_picture`] drew.
 #[derive(Clone, Debug)]
 pub struct PictureReport {
@@ -88,13 +106,11 @@ pub fn write_picture(
     let start = Instant::now();
     let mesh = space.mesh(&request.params)?;
     let mut estimate = None;
+    let exact_near = matches!(request.form_factors, super::near_field::FormFactorMethod::ExactNear { .. });
     let (mesh, geometry, radiosity, how) = match model {
         None => {
             let s = super::full_radiosity_with(mesh, &lights, request.form_factors)?;
-            let near = match request.form_factors {
-                super::near_field::FormFactorMethod::Centroid => "",
-                super::near_field::FormFactorMethod::ExactNear { .. } => ", exact near field",
-            };
+            let near = if exact_near { ", exact near field" } else { "" };
             (s.mesh, s.geometry, s.radiosity, format!("full solve ({} Jacobi sweeps{near})", s.sweeps))
         }
         Some(model) => {
@@ -138,7 +154,7 @@ pub fn write_picture(
             out,
         )?;
     }
-    let tone = crate::render::Colormap::tone_ramp(exposure, LEGEND_WHITE / exposure);
+    let tone = tone_ramp(exposure);
     let title = match &estimate {
         Some(e) if e.error.is_finite() => {
             format!("radiance: reduced model, {} faces, estimated error {:.2} %", mesh.len(), 100.0 * e.error)
@@ -147,23 +163,11 @@ pub fn write_picture(
             format!("radiance: reduced model (trained without an error estimate), {} faces", mesh.len())
         }
         None => {
-            let near = match request.form_factors {
-                super::near_field::FormFactorMethod::Centroid => "centroid form factors",
-                super::near_field::FormFactorMethod::ExactNear { .. } => "exact near field",
-            };
+            let near = if exact_near { "exact near field" } else { "centroid form factors" };
             format!("radiance: full solve, {near}, {} faces", mesh.len())
         }
     };
-    let legend = picture::Legend {
-        title,
-        bar: crate::plot::ColourBar {
-            colormap: &tone,
-            range: (0.0, LEGEND_WHITE / exposure),
-            log: false,
-            label: "radiance (W/m²/sr), tone-mapped",
-            shift: 0.0,
-        },
-    };
+    let legend = picture::Legend { title, bar: tone_bar(&tone, exposure) };
     match format {
         ImageFormat::Png => {
             picture::write_png(out, request.size, &picture.rgba, request.legend.then_some(&legend))?

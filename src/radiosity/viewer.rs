@@ -97,7 +97,7 @@ impl RadiosityContent {
             frames: 0,
             mesh_faces: mesh.len(),
             estimate: None,
-            tone: tone_ramp(exposure),
+            tone: super::picture::tone_ramp(exposure),
         })
     }
 
@@ -137,21 +137,9 @@ impl RadiosityContent {
     }
 }
 
-/// The legend's ramp at `exposure`: the tone map's grey levels over radiance 0 to
-/// [`super::picture::LEGEND_WHITE`]` / exposure`.
-fn tone_ramp(exposure: f64) -> crate::render::Colormap {
-    crate::render::Colormap::tone_ramp(exposure, super::picture::LEGEND_WHITE / exposure)
-}
-
 impl ViewerContent for RadiosityContent {
     fn legend(&self) -> Option<crate::plot::ColourBar<'_>> {
-        Some(crate::plot::ColourBar {
-            colormap: &self.tone,
-            range: (0.0, super::picture::LEGEND_WHITE / self.exposure),
-            log: false,
-            label: "radiance (W/m²/sr), tone-mapped",
-            shift: 0.0,
-        })
+        Some(super::picture::tone_bar(&self.tone, self.exposure))
     }
 
     fn title(&self) -> String {
@@ -250,12 +238,12 @@ impl ViewerContent for RadiosityContent {
             }
             "e" => {
                 self.exposure /= 1.25;
-                self.tone = tone_ramp(self.exposure);
+                self.tone = super::picture::tone_ramp(self.exposure);
                 return true;
             }
             "E" => {
                 self.exposure *= 1.25;
-                self.tone = tone_ramp(self.exposure);
+                self.tone = super::picture::tone_ramp(self.exposure);
                 return true;
             }
             " " => {
