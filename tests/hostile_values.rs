@@ -129,7 +129,7 @@ fn copy_run(from: &Path, to: &Path) {
 
 /// Snapshots: a NaN or 1e308 in a velocity, an array a byte too long, a negative frame time —
 /// each refused where read, naming the file and the frame or key; a run stopped by a signal
-/// (its header says `"complete": false`) keeps a part-written frame without being refused.
+/// (its header says `"complete": false`) keeps up to one frame more without being refused.
 #[test]
 fn snapshot_values_and_lengths_are_checked_where_read() {
     use galerkin::fluid::snapshots::SnapshotReader;
@@ -174,6 +174,20 @@ fn snapshot_values_and_lengths_are_checked_where_read() {
     std::fs::write(&header_path, header.replace("\"complete\": true", "\"complete\": false"))
         .expect("written");
     assert!(SnapshotReader::open(&long).is_ok(), "an unfinished run's partial frame is refused");
+    // A signal after push wrote a whole quantity of the next frame, before the header counted
+    // it: one whole frame more is an unfinished run's; one byte past that is not.
+    let f_len = 8 * run.meta().len("f");
+    bytes.truncate(bytes.len() - 1);
+    bytes.extend(std::iter::repeat_n(0u8, f_len));
+    std::fs::write(long.join("f.f64"), &bytes).expect("written");
+    assert!(SnapshotReader::open(&long).is_ok(), "an unfinished run's whole next frame is refused");
+    bytes.push(0);
+    std::fs::write(long.join("f.f64"), &bytes).expect("written");
+    refused(
+        "an unfinished run's f.f64 past one frame more",
+        || SnapshotReader::open(&long).map(|_| ()),
+        &["f.f64", "at most one more"],
+    );
     let negative = scratch.path().join("negative");
     copy_run(&sim, &negative);
     let dt = serde_json::from_str::<serde_json::Value>(&header).expect("json")["frame_time"].clone();

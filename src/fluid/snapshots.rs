@@ -11,8 +11,8 @@
 //!   flushed, so an interrupted run is a valid shorter one; it is written last when a run
 //!   starts and removed first when one is overwritten. `complete` is false while a writer
 //!   runs and set when it finishes (the files then hold exactly `frames` frames); a run stopped
-//!   by a signal keeps `false`, and its files may hold part of one frame more, which readers
-//!   ignore. Every other length is refused, as is a value that is not finite or past
+//!   by a signal keeps `false`, and its files may hold up to one frame more (written before the
+//!   header counted it), which readers ignore. Every other length is refused, as is a value that is not finite or past
 //!   [`crate::limits::MAX_MAGNITUDE`];
 //! - `mesh.json`: the topology, `{"dim": d, "cells": [v₀, v₁, …]}` (d + 1 indices per cell);
 //! - one file per quantity, `u.f64 p.f64 f.f64 g.f64 h.f64`: little-endian f64, one frame
@@ -327,8 +327,9 @@ impl SnapshotReader {
             let qpath = dir.join(format!("{q}.f64"));
             let len = std::fs::metadata(&qpath).map_err(|e| io(&qpath, e))?.len();
             let need = (8 * meta.len(q) * meta.frames) as u64;
-            // A run stopped by a signal may have written part of its next frame.
-            let slack = if meta.complete { 0 } else { 8 * meta.len(q) as u64 - 1 };
+            // A run stopped by a signal may have written its next frame, whole or in part, before
+            // the header counted it (push writes every quantity, then the header).
+            let slack = if meta.complete { 0 } else { 8 * meta.len(q) as u64 };
             if len < need || len > need + slack {
                 return Err(io(
                     &qpath,
@@ -336,7 +337,7 @@ impl SnapshotReader {
                         "{len} bytes: {} frames of {} values need {need}{}",
                         meta.frames,
                         meta.len(q),
-                        if meta.complete { "" } else { " (and part of one more, an unfinished run's)" }
+                        if meta.complete { "" } else { " (and at most one more, an unfinished run's)" }
                     ),
                 ));
             }
