@@ -96,8 +96,8 @@ fn command_line_counts_are_bounded_before_any_work() {
 /// Scene files whose sizes ask for meshes past the documented limits are refused before the
 /// mesh is built, naming the key: a radiosity room of 10⁶ m (it used to reach 3.7 GB before
 /// failing elsewhere), a fluid stuffing spacing of 10⁻⁹ (the lattice count used to overflow),
-/// a fluid mesh whose simulation would not fit the machine's memory, a tunnel obstacle refined
-/// to 10⁻¹² of a cell.
+/// a fluid mesh whose simulation would not fit the machine's memory, the fuzzer's slow scene
+/// under the fuzzer's cell budget, a tunnel obstacle refined to 10⁻¹² of a cell.
 #[test]
 fn scene_sizes_are_bounded_before_any_mesh_is_built() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
@@ -128,6 +128,22 @@ fn scene_sizes_are_bounded_before_any_mesh_is_built() {
         "spacing 0.009",
         || galerkin::fluid::scene::FluidScene::parse(&big, Path::new("cavity.toml")).map(|_| ()),
         &["cavity.toml", "GB to simulate", "raise the spacing"],
+    );
+    // The scene the fuzzer's scene target timed out on (a valid 2.2·10⁶-cell bird: 10 s to mesh
+    // natively, over 90 s under AddressSanitizer): within this machine's budget, but refused
+    // at once under the fuzzer's budget of 20,000 cells, naming the spacing.
+    let timeout = edited("fluid/bird.toml", "lo = [-1.4, -1.8, -1.3]", "lo = [-3.6, -3.0, -2.2]")
+        .replacen("hi = [1.4, 1.8, 1.3]", "hi = [2.6, 3.0, 2.6]", 1)
+        .replacen("spacing = 0.1025", "spacing = 0.1", 1);
+    assert!(timeout.contains("spacing = 0.1\n") && timeout.contains("hi = [2.6, 3.0, 2.6]"));
+    refused(
+        "the fuzzer's timeout scene under its budget",
+        || {
+            let budget = galerkin::mesh::budget::CellBudget::cells(20_000.0);
+            galerkin::fluid::scene::FluidScene::parse_within(&timeout, Path::new("bird.toml"), &budget)
+                .map(|_| ())
+        },
+        &["bird.toml", "spacing 0.1", "past the budget of 2.000e4", "raise the spacing"],
     );
     let refined =
         edited("fluid/tunnel_small.toml", "obstacle_refinement = 0.5", "obstacle_refinement = 1e-12");

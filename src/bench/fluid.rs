@@ -10,6 +10,7 @@ use crate::fluid::gpu::GpuParticles;
 use crate::fluid::particles::{advect_particles, seed_particles};
 use crate::fluid::FluidSolver;
 use crate::gpu::Gpu;
+use crate::mesh::budget::CellBudget;
 use crate::mesh::{SimplexMesh, Topology};
 
 /// A line of Markdown through `emit`.
@@ -109,7 +110,7 @@ pub fn report(gpu: &Gpu, quick: bool, frames: usize, emit: &mut dyn FnMut(&str))
     for &h in spacings {
         let spec = CavitySpec { spacing: h, tunnel_radius: 0.16f64.max(1.1 * h), ..CavitySpec::default() };
         let t0 = Instant::now();
-        let mut cavity = Cavity::new(&spec)?;
+        let mut cavity = Cavity::new(&spec, &CellBudget::machine())?;
         let (mesh, topo) = (cavity.mesh.clone(), cavity.topology.clone());
         let amounts = training_run(0).unwrap_or([0.3, 0.0, 0.0]);
         let geometry = |frame: usize| -> Result<Vec<f64>> {
@@ -125,7 +126,7 @@ pub fn report(gpu: &Gpu, quick: bool, frames: usize, emit: &mut dyn FnMut(&str))
     for &h in bird_spacings {
         let spec = EmbeddedSpec { lo: [-1.4, -1.8, -1.3], hi: [1.4, 1.8, 1.3], spacing: h, base_frame: 0 };
         let t0 = Instant::now();
-        let mut domain = Embedded::new(animation.clone(), &spec)?;
+        let mut domain = Embedded::new(animation.clone(), &spec, &CellBudget::machine())?;
         let (mesh, topo) = (domain.mesh.clone(), domain.topology.clone());
         bird_rows.push(bench_row(mesh, topo, frames, 8, t0, |frame| Ok(domain.geometry(frame)?), emit)?);
     }

@@ -23,6 +23,7 @@
 //! deeper amount (2); every run compresses over the first half of its frames and re-inflates
 //! over the second.
 
+use crate::mesh::budget::CellBudget;
 use crate::mesh::sdf::{Capsule, Sdf, Sphere, Union};
 use crate::mesh::stuffing::stuff;
 use crate::mesh::volume::enclosed_volume;
@@ -127,9 +128,9 @@ pub struct Cavity {
 }
 
 impl Cavity {
-    /// Stuffs the cavity of `spec`.
-    pub fn new(spec: &CavitySpec) -> Result<Self, MeshError> {
-        let stuffed = stuff(&spec.sdf(), spec.spacing)?;
+    /// Stuffs the cavity of `spec` (refused past `budget`).
+    pub fn new(spec: &CavitySpec, budget: &CellBudget) -> Result<Self, MeshError> {
+        let stuffed = stuff(&spec.sdf(), spec.spacing, budget)?;
         let topology = Topology::new(&stuffed.mesh, None)?;
         let rest_volume = enclosed_volume(&stuffed.mesh, &topology, stuffed.mesh.g());
         Ok(Self { spec: spec.clone(), mesh: stuffed.mesh, topology, surface: stuffed.surface, rest_volume })

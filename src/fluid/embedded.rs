@@ -23,6 +23,7 @@
 //! box (reported by [`Embedded::lid_offset`]).
 
 use crate::mesh::animation::SurfaceAnimation;
+use crate::mesh::budget::CellBudget;
 use crate::mesh::bvh::{closest_point_weights, Bvh};
 use crate::mesh::deform::HarmonicDeformation;
 use crate::mesh::sdf::{Cuboid, Difference, Sdf};
@@ -133,8 +134,12 @@ impl Embedded {
     /// Stuffs the box minus the surface at `spec.base_frame` and attaches the surface
     /// vertices. Refused: a base frame past the animation, a box that does not hold the
     /// surface with a margin of two lattice spacings at every frame (naming the frame), a
-    /// spacing too coarse to resolve the surface.
-    pub fn new(animation: SurfaceAnimation, spec: &EmbeddedSpec) -> Result<Self, MeshError> {
+    /// spacing too coarse to resolve the surface, a mesh past `budget`.
+    pub fn new(
+        animation: SurfaceAnimation,
+        spec: &EmbeddedSpec,
+        budget: &CellBudget,
+    ) -> Result<Self, MeshError> {
         let n = animation.frame_count();
         if spec.base_frame >= n {
             return Err(MeshError::Generation(format!(
@@ -158,7 +163,7 @@ impl Embedded {
         }
         let boxed = Cuboid { lo: spec.lo, hi: spec.hi };
         let domain = Difference { outer: Box::new(boxed), hole: Box::new(animation.sdf(spec.base_frame)?) };
-        let stuffed = stuff(&domain, spec.spacing)?;
+        let stuffed = stuff(&domain, spec.spacing, budget)?;
         let mesh = stuffed.mesh;
         let topology = Topology::new(&mesh, None)?;
         let base = spec.base_frame;

@@ -608,7 +608,11 @@ mod tests {
     #[test]
     fn a_grid_of_far_swept_cells_stays_within_its_list_budget() {
         use crate::mesh::tunnel::{tunnel, TunnelSpec};
-        let t = tunnel(&TunnelSpec { cell: 0.1, ..Default::default() }).expect("tunnel");
+        let t = tunnel(
+            &TunnelSpec { cell: 0.1, ..Default::default() },
+            &crate::mesh::budget::CellBudget::machine(),
+        )
+        .expect("tunnel");
         let mesh = &t.mesh;
         let still: Vec<(Point, Point)> =
             (0..mesh.vertex_count()).map(|v| (mesh.point(v), mesh.point(v))).collect();

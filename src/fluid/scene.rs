@@ -120,6 +120,7 @@ use super::bird::BirdSpec;
 use super::cavity::{training_run, Cavity, CavitySpec, TRAINING_RUNS};
 use super::embedded::{Embedded, EmbeddedSpec};
 use crate::mesh::animation::SurfaceAnimation;
+use crate::mesh::budget::CellBudget;
 use crate::mesh::deform::HarmonicDeformation;
 use crate::mesh::gmsh::read_msh;
 use crate::mesh::tunnel::{tunnel, TunnelSpec};
@@ -324,8 +325,15 @@ impl FluidScene {
         Self::parse(&scene_file::read(path)?, path)
     }
 
-    /// Builds the scene from TOML `text` (`path` names it in errors).
+    /// Builds the scene from TOML `text` (`path` names it in errors), its mesh within what this
+    /// machine can simulate ([`CellBudget::machine`]).
     pub fn parse(text: &str, path: &Path) -> Result<Self, FluidError> {
+        Self::parse_within(text, path, &CellBudget::machine())
+    }
+
+    /// [`Self::parse`] with a generated mesh (tunnel, cavity, bird or surface) refused past
+    /// `budget` before it is built.
+    pub fn parse_within(text: &str, path: &Path, budget: &CellBudget) -> Result<Self, FluidError> {
         let spec: SceneSpec = scene_file::parse(text, path)?;
         let fail: Fail =
             Box::new(|key: &str, message: String| scene_file::error_at(text, path, key, message).into());
@@ -376,7 +384,7 @@ impl FluidScene {
             ));
         }
         let built = if spec.bird.is_some() || spec.surface.is_some() {
-            Self::embedded(&spec, path, &fail)?
+            Self::embedded(&spec, path, &fail, budget)?
         } else if let (Some(mesh), Some(keys)) = (user_mesh, &spec.mesh) {
             if keys.periodic_axis.is_some_and(|a| a >= mesh.dim()) {
                 return Err(fail(
@@ -397,8 +405,8 @@ impl FluidScene {
             }
         } else {
             match (&spec.tunnel, &spec.cavity) {
-                (Some(t), _) => Self::tunnel(t, &spec, &fail)?,
-                (_, Some(c)) => Self::cavity(c, &fail)?,
+                (Some(t), _) => Self::tunnel(t, &spec, &fail, budget)?,
+                (_, Some(c)) => Self::cavity(c, &fail, budget)?,
                 (None, None) => unreachable!("one kind, checked above"),
             }
         };
@@ -418,7 +426,12 @@ impl FluidScene {
         })
     }
 
-    fn tunnel(t: &TunnelKeys, spec: &SceneSpec, fail: &Fail) -> Result<Built, FluidError> {
+    fn tunnel(
+        t: &TunnelKeys,
+        spec: &SceneSpec,
+        fail: &Fail,
+        budget: &CellBudget,
+    ) -> Result<Built, FluidError> {
         require_positive(
             fail,
             &[
@@ -441,7 +454,7 @@ impl FluidScene {
             cell: t.cell,
             obstacle_refinement: t.obstacle_refinement,
         };
-        let meshed = tunnel(&tunnel_spec).map_err(|e| fail("tunnel", e.to_string()))?;
+        let meshed = tunnel(&tunnel_spec, budget).map_err(|e| fail("tunnel", e.to_string()))?;
         let mesh = if s != 1.0 {
             let prescribed: Vec<u32> = meshed.obstacle.iter().chain(&meshed.outer).copied().collect();
             let mut deform = HarmonicDeformation::new(&meshed.mesh, &prescribed)?;
@@ -469,7 +482,7 @@ impl FluidScene {
         })
     }
 
-    fn cavity(c: &CavityKeys, fail: &Fail) -> Result<Built, FluidError> {
+    fn cavity(c: &CavityKeys, fail: &Fail, budget: &CellBudget) -> Result<Built, FluidError> {
         require_positive(
             fail,
             &[
@@ -496,7 +509,7 @@ impl FluidScene {
             tunnel_radius: c.tunnel_radius,
             spacing: c.spacing,
         };
-        let cavity = Cavity::new(&cavity_spec).map_err(|e| fail("cavity", e.to_string()))?;
+        let cavity = Cavity::new(&cavity_spec, budget).map_err(|e| fail("cavity", e.to_string()))?;
         Ok(Built {
             base: cavity.mesh.clone(),
             mesh: cavity.mesh.clone(),
@@ -508,7 +521,12 @@ impl FluidScene {
         })
     }
 
-    fn embedded(spec: &SceneSpec, path: &Path, fail: &Fail) -> Result<Built, FluidError> {
+    fn embedded(
+        spec: &SceneSpec,
+        path: &Path,
+        fail: &Fail,
+        budget: &CellBudget,
+    ) -> Result<Built, FluidError> {
         let Some(b) = &spec.domain_box else {
             return Err(fail("flow", "[bird] and [surface] scenes need a [box] (lo, hi, spacing)".into()));
         };
@@ -574,7 +592,8 @@ impl FluidScene {
             ));
         }
         let embedded_spec = EmbeddedSpec { lo: b.lo, hi: b.hi, spacing: b.spacing, base_frame };
-        let mut domain = Embedded::new(animation, &embedded_spec).map_err(|e| fail("box", e.to_string()))?;
+        let mut domain =
+            Embedded::new(animation, &embedded_spec, budget).map_err(|e| fail("box", e.to_string()))?;
         let base = domain.mesh.clone();
         let g0 = domain.geometry(0)?;
         let mesh = base.with_g(g0, Some(0))?;

@@ -253,7 +253,11 @@ mod tests {
 
     #[test]
     fn scaling_the_obstacle_moves_the_interior_smoothly_and_keeps_the_walls() {
-        let t = tunnel(&TunnelSpec { cell: 0.1, ..Default::default() }).expect("tunnel");
+        let t = tunnel(
+            &TunnelSpec { cell: 0.1, ..Default::default() },
+            &crate::mesh::budget::CellBudget::machine(),
+        )
+        .expect("tunnel");
         let prescribed: Vec<u32> = t.obstacle.iter().chain(&t.outer).copied().collect();
         let mut h = HarmonicDeformation::new(&t.mesh, &prescribed).expect("prepare");
         // No boundary motion: no motion at all.

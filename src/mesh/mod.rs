@@ -12,6 +12,7 @@
 #![allow(clippy::needless_range_loop)]
 
 pub mod animation;
+pub mod budget;
 pub mod bvh;
 pub mod deform;
 mod error;

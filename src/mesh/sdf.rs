@@ -256,7 +256,7 @@ mod tests {
             outer: Box::new(Cuboid { lo: [-0.6, -0.6, -0.6], hi: [1.6, 1.6, 1.6] }),
             hole: Box::new(surface),
         };
-        let s = stuff(&domain, 0.1).expect("stuffed");
+        let s = stuff(&domain, 0.1, &crate::mesh::budget::CellBudget::machine()).expect("stuffed");
         let vol: f64 = s.mesh.volumes().iter().sum();
         let want = 2.2f64.powi(3) - 1.0;
         assert!((vol - want).abs() < 0.02 * want, "volume {vol} vs {want}");

@@ -27,6 +27,7 @@
 
 use std::collections::HashMap;
 
+use super::budget::CellBudget;
 use super::geometry::{face_area_normal, signed_volume, Point};
 use super::sdf::Sdf;
 use super::{MeshError, SimplexMesh};
@@ -106,19 +107,56 @@ fn dist(a: Point, b: Point) -> f64 {
     ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
 }
 
-/// Tetrahedra a lattice cell of the bounding box becomes at most, about (measured: the bird in
-/// a 6.2 × 6 × 4.8 box at spacing 0.1 gave 2,179,370 cells from 219,648 lattice cells).
+/// Tetrahedra a lattice cell of the domain becomes at most, about (measured: the bird in a
+/// 6.2 × 6 × 4.8 box at spacing 0.1 gave 2,179,370 cells from 219,648 lattice cells, nearly all
+/// of them inside).
 pub const CELLS_PER_LATTICE_CELL: f64 = 10.0;
 
-/// Memory the fluid solver holds per cell of a stuffed mesh, about (measured: 15 GB peak for
-/// `fluid simulate` of those 2,179,370 cells).
-pub const SIMULATION_BYTES_PER_CELL: f64 = 7_000.0;
+/// Sample points per axis of the coarse grid [`stuff`] estimates the domain's share of its box
+/// on (20³ distance evaluations, milliseconds even for a mesh surface's distance).
+const ESTIMATE_SAMPLES: usize = 20;
+
+/// The share of the box `lo`–`hi` that the inside of `sdf` may reach: the fraction of the
+/// cells of a coarse `samples`³ grid whose centre lies within half the cell's diagonal of the
+/// inside. An upper bound for exact distances and for the lower bounds CSG distances give
+/// (a cell the domain touches always counts), so a thin tube is never missed.
+fn touched_fraction(sdf: &dyn Sdf, lo: Point, hi: Point, samples: [usize; 3]) -> f64 {
+    let size: [f64; 3] = std::array::from_fn(|k| (hi[k] - lo[k]) / samples[k] as f64);
+    let reach = 0.5 * dist([0.0; 3], size);
+    let mut touched = 0usize;
+    for k in 0..samples[2] {
+        for j in 0..samples[1] {
+            for i in 0..samples[0] {
+                let centre = [
+                    lo[0] + (i as f64 + 0.5) * size[0],
+                    lo[1] + (j as f64 + 0.5) * size[1],
+                    lo[2] + (k as f64 + 0.5) * size[2],
+                ];
+                // NaN distances count as touched: never an under-estimate.
+                let d = sdf.distance(centre);
+                if d < reach || d.is_nan() {
+                    touched += 1;
+                }
+            }
+        }
+    }
+    touched as f64 / samples.iter().product::<usize>() as f64
+}
+
+/// About how many cells [`stuff`] makes of `sdf` at spacing `h`, from above:
+/// [`CELLS_PER_LATTICE_CELL`] for each lattice cell of the share of the box the domain reaches
+/// (sampled on a coarse grid, at most 20³ distance evaluations).
+pub fn cell_estimate(sdf: &dyn Sdf, h: f64) -> f64 {
+    let (lo, hi) = sdf.bounds();
+    let per_axis: [f64; 3] = std::array::from_fn(|k| ((hi[k] - lo[k]) / h).ceil() + 4.0);
+    let samples = per_axis.map(|c| (c as usize).clamp(1, ESTIMATE_SAMPLES));
+    CELLS_PER_LATTICE_CELL * per_axis.iter().product::<f64>() * touched_fraction(sdf, lo, hi, samples)
+}
 
 /// Stuffs the inside of `sdf` with tetrahedra of lattice spacing `h`. Refused before anything
-/// is built: more than 6·10⁷ lattice cells, or a mesh of up to
-/// [`CELLS_PER_LATTICE_CELL`] cells per lattice cell whose simulation
-/// ([`SIMULATION_BYTES_PER_CELL`]) would not fit the machine's memory.
-pub fn stuff(sdf: &dyn Sdf, h: f64) -> Result<Stuffed, MeshError> {
+/// is built: more than 6·10⁷ lattice cells, or more cells than `budget` allows by
+/// [`cell_estimate`].
+pub fn stuff(sdf: &dyn Sdf, h: f64, budget: &CellBudget) -> Result<Stuffed, MeshError> {
     let (lo, hi) = sdf.bounds();
     if !(h.is_finite() && h > 0.0) || lo.iter().chain(&hi).any(|v| !v.is_finite()) {
         return Err(MeshError::Generation(format!(
@@ -133,19 +171,11 @@ pub fn stuff(sdf: &dyn Sdf, h: f64) -> Result<Stuffed, MeshError> {
             "isosurface stuffing: {per_axis:?} lattice cells (at most 60,000,000): raise the spacing"
         )));
     }
-    // A stuffed mesh is what the fluid solver simulates; refuse one whose simulation cannot fit
-    // the machine's memory before building it (building it alone can exhaust memory too).
-    let cells = CELLS_PER_LATTICE_CELL * per_axis.iter().product::<f64>();
-    if let Some(total) = crate::limits::memory_total() {
-        let need = cells * SIMULATION_BYTES_PER_CELL;
-        if need > total as f64 {
-            return Err(MeshError::Generation(format!(
-                "isosurface stuffing at spacing {h}: up to about {cells:.3e} cells, which would need about {:.0} GB to simulate (about {:.0} kB a cell); this machine has {:.0} GB: raise the spacing",
-                need / 1e9,
-                SIMULATION_BYTES_PER_CELL / 1e3,
-                total as f64 / 1e9
-            )));
-        }
+    // A stuffed mesh is what the fluid solver simulates; refuse one past the budget (by default
+    // what the machine's memory can simulate) before building it (building it alone can
+    // exhaust memory too).
+    if CELLS_PER_LATTICE_CELL * per_axis.iter().product::<f64>() > budget.max_cells() {
+        budget.check(&format!("isosurface stuffing at spacing {h}"), cell_estimate(sdf, h), "the spacing")?;
     }
     let n: [usize; 3] = per_axis.map(|c| c as usize);
     let lattice = Lattice { n, h, origin };
@@ -412,7 +442,7 @@ mod tests {
     #[test]
     fn a_stuffed_ball_is_a_closed_manifold_of_the_right_volume() {
         let ball = Sphere { centre: [0.1, -0.2, 0.05], radius: 1.0 };
-        let s = stuff(&ball, 0.15).expect("stuffed");
+        let s = stuff(&ball, 0.15, &CellBudget::machine()).expect("stuffed");
         let vol: f64 = s.mesh.volumes().iter().sum();
         let exact = 4.0 / 3.0 * std::f64::consts::PI;
         // The surface is interpolated by triangles of size ~h: volume within 2 %.
@@ -445,7 +475,7 @@ mod tests {
             Box::new(Capsule { a: [0.5, 0.0, 0.0], b: [2.0, 0.3, 0.0], radius: 0.18 }),
         ]);
         for h in [0.1, 0.137] {
-            let s = stuff(&shape, h).expect("stuffed");
+            let s = stuff(&shape, h, &CellBudget::machine()).expect("stuffed");
             let (lo, hi) = angle_range(&s.mesh);
             eprintln!(
                 "union at h = {h}: {} tetrahedra, dihedral angles {lo:.2}° … {hi:.2}°",
@@ -461,10 +491,35 @@ mod tests {
         for i in 0..12 {
             let t = i as f64 / 12.0;
             let ball = Sphere { centre: [0.37 * t, 0.61 * t * t, -0.23 * t], radius: 0.7 + 0.05 * t };
-            let s = stuff(&ball, 0.1).expect("stuffed");
+            let s = stuff(&ball, 0.1, &CellBudget::machine()).expect("stuffed");
             let (lo, hi) = angle_range(&s.mesh);
             assert!(lo >= 10.7 && hi <= 164.8, "offset {i}: dihedral angles {lo}° … {hi}°");
             assert_eq!(s.dropped_flat, 0);
+        }
+    }
+
+    /// The estimate a budget is checked against bounds the cells built from above, for a ball
+    /// filling its box and for a union that fills a small share of it (thin capsule
+    /// included), without over-counting the latter by the empty box; a budget below it refuses
+    /// the mesh before it is built.
+    #[test]
+    fn the_cell_estimate_bounds_the_mesh_from_above() {
+        let union = Union(vec![
+            Box::new(Sphere { centre: [0.0, 0.0, 0.0], radius: 1.0 }),
+            Box::new(Sphere { centre: [2.2, 0.3, 0.0], radius: 0.5 }),
+            Box::new(Capsule { a: [0.5, 0.0, 0.0], b: [2.0, 0.3, 0.0], radius: 0.05 }),
+        ]);
+        let ball = Sphere { centre: [0.1, -0.2, 0.05], radius: 1.0 };
+        for (what, sdf, h) in [("ball", &ball as &dyn Sdf, 0.15), ("union", &union, 0.1)] {
+            let built = stuff(sdf, h, &CellBudget::machine()).expect("stuffed").mesh.cell_count() as f64;
+            let estimate = cell_estimate(sdf, h);
+            let (lo, hi) = sdf.bounds();
+            let whole_box: f64 = (0..3).map(|k| ((hi[k] - lo[k]) / h).ceil() + 4.0).product();
+            eprintln!("{what}: {built} cells, estimate {estimate:.0}, whole box {:.0}", 10.0 * whole_box);
+            assert!(estimate >= built, "{what}: estimate {estimate} below the {built} cells built");
+            assert!(estimate < 4.0 * built, "{what}: estimate {estimate} for {built} cells");
+            let e = stuff(sdf, h, &CellBudget::cells(0.5 * built)).unwrap_err().to_string();
+            assert!(e.contains(&format!("spacing {h}")) && e.contains("raise the spacing"), "{e}");
         }
     }
 }

@@ -12,6 +12,7 @@ use std::collections::HashSet;
 
 use spade::{AngleLimit, ConstrainedDelaunayTriangulation, Point2, RefinementParameters, Triangulation};
 
+use super::budget::CellBudget;
 use super::{MeshError, SimplexMesh};
 
 /// The tunnel's shape and resolution.
@@ -57,8 +58,10 @@ pub struct TunnelMesh {
     pub outer: Vec<u32>,
 }
 
-/// Meshes the tunnel of `spec`.
-pub fn tunnel(spec: &TunnelSpec) -> Result<TunnelMesh, MeshError> {
+/// Meshes the tunnel of `spec`; refused before meshing when the estimated triangle count
+/// (the tunnel's area over the largest triangle's, plus the refinement along the obstacle) is
+/// past `budget`.
+pub fn tunnel(spec: &TunnelSpec, budget: &CellBudget) -> Result<TunnelMesh, MeshError> {
     let s = spec;
     let bad = |m: &str| Err(MeshError::Generation(format!("tunnel: {m}")));
     if ![s.length, s.height, s.radius, s.cell, s.obstacle_refinement]
@@ -81,6 +84,13 @@ pub fn tunnel(spec: &TunnelSpec) -> Result<TunnelMesh, MeshError> {
     if 3f64.sqrt() * s.radius / (s.cell * s.obstacle_refinement) > 100_000.0 {
         return bad("more than 100,000 points along an obstacle edge: raise `obstacle_refinement`");
     }
+    let max_area = 3f64.sqrt() / 4.0 * s.cell * s.cell;
+    let obstacle_points = 3.0 * 3f64.sqrt() * s.radius / (s.cell * s.obstacle_refinement);
+    budget.check(
+        &format!("tunnel at cell {}", s.cell),
+        s.length * s.height / max_area + 20.0 * obstacle_points,
+        "`cell`",
+    )?;
     let mut cdt = ConstrainedDelaunayTriangulation::<Point2<f64>>::new();
     let insert = |cdt: &mut ConstrainedDelaunayTriangulation<Point2<f64>>, p: [f64; 2]| {
         cdt.insert(Point2::new(p[0], p[1])).map_err(|e| MeshError::Generation(format!("tunnel: {e:?}")))
@@ -118,7 +128,6 @@ pub fn tunnel(spec: &TunnelSpec) -> Result<TunnelMesh, MeshError> {
             cdt.add_constraint(handles[i], handles[(i + 1) % handles.len()]);
         }
     }
-    let max_area = 3f64.sqrt() / 4.0 * s.cell * s.cell;
     let result = cdt.refine(
         RefinementParameters::<f64>::new()
             .exclude_outer_faces(true)
@@ -191,7 +200,7 @@ mod tests {
     #[test]
     fn the_tunnel_covers_the_domain_minus_the_obstacle_and_wraps_in_x() {
         let spec = TunnelSpec { cell: 0.1, ..Default::default() };
-        let t = tunnel(&spec).expect("tunnel");
+        let t = tunnel(&spec, &CellBudget::machine()).expect("tunnel");
         let area: f64 = t.mesh.volumes().iter().sum();
         let obstacle_area = 3.0 * 3f64.sqrt() / 4.0 * spec.radius * spec.radius;
         assert!((area - (spec.length * spec.height - obstacle_area)).abs() < 1e-12, "area {area}");
@@ -220,8 +229,8 @@ mod tests {
 
     #[test]
     fn bad_tunnels_are_refused() {
-        assert!(tunnel(&TunnelSpec { radius: 0.6, ..Default::default() }).is_err());
-        assert!(tunnel(&TunnelSpec { cell: -1.0, ..Default::default() }).is_err());
-        assert!(tunnel(&TunnelSpec { cell: f64::NAN, ..Default::default() }).is_err());
+        assert!(tunnel(&TunnelSpec { radius: 0.6, ..Default::default() }, &CellBudget::machine()).is_err());
+        assert!(tunnel(&TunnelSpec { cell: -1.0, ..Default::default() }, &CellBudget::machine()).is_err());
+        assert!(tunnel(&TunnelSpec { cell: f64::NAN, ..Default::default() }, &CellBudget::machine()).is_err());
     }
 }
