@@ -18,7 +18,7 @@ use ash::vk;
 use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
 
 use super::caps::Capabilities;
-use super::commands::Tracker;
+use super::commands::{Retirement, Tracker};
 use super::debug::ValidationLog;
 use super::error::{GpuError, GpuResult, VkContext};
 use super::instance;
@@ -151,6 +151,10 @@ pub(crate) struct DeviceShared {
     pub(crate) lost: std::sync::atomic::AtomicBool,
     pub(crate) allocator: Mutex<ManuallyDrop<Allocator>>,
     pub(crate) tracker: Mutex<Tracker>,
+    /// Destructors of objects whose last reference went while this device was being torn
+    /// down (they can no longer reach it); its teardown runs them. Every [`super::lifetime::Lifetime`]
+    /// made on this device holds it.
+    pub(crate) graveyard: Arc<Mutex<Vec<Retirement>>>,
     debug_names: Option<ash::ext::debug_utils::Device>,
     messenger: Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>,
     log: Option<Arc<ValidationLog>>,
@@ -190,7 +194,7 @@ impl Drop for DeviceShared {
         // left (bounded: every object is destroyed once).
         loop {
             let mut leftovers = self.tracker.get_mut().map(|t| t.take_all()).unwrap_or_default();
-            leftovers.extend(super::lifetime::take_teardown(self as *const Self));
+            leftovers.extend(self.graveyard.lock().unwrap_or_else(|p| p.into_inner()).drain(..));
             if leftovers.is_empty() {
                 break;
             }
@@ -380,6 +384,7 @@ impl Gpu {
                 lost: std::sync::atomic::AtomicBool::new(false),
                 allocator: Mutex::new(ManuallyDrop::new(allocator)),
                 tracker: Mutex::new(Tracker::default()),
+                graveyard: Arc::default(),
                 debug_names: p.debug_names,
                 messenger: p.messenger,
                 log: p.log,

@@ -29,6 +29,9 @@ use super::context::DeviceShared;
 /// queue for that teardown to run.
 pub struct Lifetime {
     shared: Weak<DeviceShared>,
+    /// Where the destructor goes if the device is being torn down when the last reference
+    /// goes ([`DeviceShared::graveyard`]).
+    graveyard: Arc<Mutex<Vec<Retirement>>>,
     name: String,
     destroy: Mutex<Option<Retirement>>,
     pending: AtomicUsize,
@@ -50,6 +53,7 @@ impl Lifetime {
     ) -> Arc<Self> {
         Arc::new(Self {
             shared: Arc::downgrade(shared),
+            graveyard: shared.graveyard.clone(),
             name: name.to_string(),
             destroy: Mutex::new(Some(Box::new(destroy))),
             pending: AtomicUsize::new(0),
@@ -79,25 +83,10 @@ impl Drop for Lifetime {
             match self.shared.upgrade() {
                 Some(shared) => shared.retire(destroy),
                 // Only while the device itself is being torn down (see `DeviceShared::drop`).
-                None => TEARDOWN
-                    .lock()
-                    .unwrap_or_else(|p| p.into_inner())
-                    .push((self.shared.as_ptr() as usize, destroy)),
+                None => self.graveyard.lock().unwrap_or_else(|p| p.into_inner()).push(destroy),
             }
         }
     }
-}
-
-/// Destructors of objects whose last reference went while their device was being torn down,
-/// keyed by the device's address; the device's teardown runs them.
-static TEARDOWN: Mutex<Vec<(usize, Retirement)>> = Mutex::new(Vec::new());
-
-/// Takes the destructors [`TEARDOWN`] holds for the device at `device`.
-pub(crate) fn take_teardown(device: *const DeviceShared) -> Vec<Retirement> {
-    let mut all = TEARDOWN.lock().unwrap_or_else(|p| p.into_inner());
-    let (mine, others): (Vec<_>, Vec<_>) = all.drain(..).partition(|(d, _)| *d == device as usize);
-    *all = others;
-    mine.into_iter().map(|(_, f)| f).collect()
 }
 
 /// One pending recording's use of an object: holds the object alive and counts as pending
