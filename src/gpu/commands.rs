@@ -1,21 +1,12 @@
-//! Submitting work and retiring resources.
+//! Submitting work.
 //!
 //! Passes record through a [`Recorder`] they are handed and never submit. [`Gpu::run`] is the
 //! convenience that records, submits to the engine's queue with its own fence, and waits on
 //! that fence only (never `vkDeviceWaitIdle`, which would also wait on a host's work).
 //! [`Gpu::submit`] returns a [`Submission`] to wait on later; it holds every object the
-//! recording used (see [`super::lifetime`]) until its fence is seen signalled.
-//!
-//! Deferred destruction: every engine submission also gets a serial that is "in flight" from
-//! the moment its recording begins until its fence is seen signalled. A resource whose last
-//! reference goes while any serial is in flight is not destroyed at once: its destructor is
-//! queued with the newest serial and runs when no serial at or below it is in flight.
-//!
-//! A submission that times out is not forgotten: dropping it hands its fence, serial and
-//! objects to the device, which polls the fence at every later submission and retires them
-//! when it signals (or at teardown).
+//! recording used (see [`super::lifetime`]) until its fence is seen signalled; what happens to
+//! objects dropped meanwhile and to submissions that time out is [`super::retire`]'s.
 
-use std::collections::BTreeSet;
 use std::sync::Arc;
 use std::time::Duration;
 
@@ -23,176 +14,10 @@ use ash::vk;
 
 use super::context::{DeviceShared, Gpu};
 use super::error::{vk_error, GpuError, GpuResult, VkContext};
+use super::fault::{INJECTED_SUBMIT, INJECTED_WAIT};
 use super::lifetime::Use;
 use super::recorder::Recorder;
-
-/// One submission's command pool (its own, so recording on several threads needs no lock),
-/// its one command buffer and its fence.
-#[derive(Clone, Copy)]
-pub(crate) struct Slot {
-    pub pool: vk::CommandPool,
-    pub cmd: vk::CommandBuffer,
-    pub fence: vk::Fence,
-}
-
-impl Slot {
-    fn new(shared: &DeviceShared) -> GpuResult<Self> {
-        let info = vk::CommandPoolCreateInfo::default().queue_family_index(shared.queue_family);
-        // SAFETY: plain object creation on this device.
-        let pool = unsafe { shared.raw.create_command_pool(&info, None) }.vk("vkCreateCommandPool")?;
-        let alloc = vk::CommandBufferAllocateInfo::default()
-            .command_pool(pool)
-            .level(vk::CommandBufferLevel::PRIMARY)
-            .command_buffer_count(1);
-        // SAFETY: `pool` is new and used by this thread only.
-        let cmd = match unsafe { shared.raw.allocate_command_buffers(&alloc) } {
-            Ok(c) => c[0],
-            Err(e) => {
-                // SAFETY: nothing else uses the new pool.
-                unsafe { shared.raw.destroy_command_pool(pool, None) };
-                return Err(vk_error("vkAllocateCommandBuffers", e));
-            }
-        };
-        // SAFETY: plain object creation.
-        match unsafe { shared.raw.create_fence(&vk::FenceCreateInfo::default(), None) } {
-            Ok(fence) => Ok(Self { pool, cmd, fence }),
-            Err(e) => {
-                // SAFETY: the pool (and its buffer) were never submitted.
-                unsafe { shared.raw.destroy_command_pool(pool, None) };
-                Err(vk_error("vkCreateFence", e))
-            }
-        }
-    }
-
-    /// Resets the pool (and so the buffer) for reuse; the fence must already be unsignalled.
-    fn reset(&self, shared: &DeviceShared) -> bool {
-        // SAFETY: the slot's work is finished or was never submitted.
-        unsafe { shared.raw.reset_command_pool(self.pool, vk::CommandPoolResetFlags::empty()) }.is_ok()
-    }
-
-    /// Destroys the slot's objects.
-    pub(crate) fn destroy(self, shared: &DeviceShared) {
-        // SAFETY: the slot's work is finished or was never submitted.
-        unsafe {
-            shared.raw.destroy_fence(self.fence, None);
-            shared.raw.destroy_command_pool(self.pool, None);
-        }
-    }
-}
-
-/// A destructor waiting for in-flight work.
-pub(crate) type Retirement = Box<dyn FnOnce(&DeviceShared) + Send>;
-
-/// Submission serials in flight and the destructors waiting for them.
-#[derive(Default)]
-pub(crate) struct Tracker {
-    next_serial: u64,
-    in_flight: BTreeSet<u64>,
-    retired: Vec<(u64, Retirement)>,
-    /// Reusable slots, each with an unsignalled fence and a reset pool.
-    pub(crate) free: Vec<Slot>,
-    /// Timed-out submissions: their slot, serial and objects, until their fence signals.
-    pub(crate) abandoned: Vec<(Slot, u64, Vec<Use>)>,
-    /// Objects of host recordings dropped without [`Recorder::finish`], kept until teardown.
-    pub(crate) orphans: Vec<Use>,
-}
-
-impl Tracker {
-    /// Everything still waiting (used at teardown, when nothing can be in flight).
-    pub(crate) fn take_all(&mut self) -> Vec<Retirement> {
-        self.retired.drain(..).map(|(_, f)| f).collect()
-    }
-
-    /// Marks `serial` finished and returns the destructors that may now run.
-    fn complete(&mut self, serial: u64) -> Vec<Retirement> {
-        self.in_flight.remove(&serial);
-        let oldest = self.in_flight.first().copied().unwrap_or(u64::MAX);
-        let (ready, keep): (Vec<_>, Vec<_>) = self.retired.drain(..).partition(|(s, _)| *s < oldest);
-        self.retired = keep;
-        ready.into_iter().map(|(_, f)| f).collect()
-    }
-}
-
-impl DeviceShared {
-    /// Destroys an object now, or after the engine's in-flight work if there is any.
-    pub(crate) fn retire(&self, destroy: impl FnOnce(&DeviceShared) + Send + 'static) {
-        let mut t = self.tracker.lock().unwrap_or_else(|p| p.into_inner());
-        if let Some(&newest) = t.in_flight.last() {
-            t.retired.push((newest, Box::new(destroy)));
-        } else {
-            drop(t);
-            destroy(self);
-        }
-    }
-
-    /// Keeps a host recording's objects until the device goes.
-    pub(crate) fn orphan(&self, uses: Vec<Use>) {
-        let mut t = self.tracker.lock().unwrap_or_else(|p| p.into_inner());
-        t.orphans.extend(uses);
-    }
-
-    /// Retires every timed-out submission whose fence has signalled since.
-    fn poll_abandoned(&self) {
-        let done: Vec<(Slot, u64, Vec<Use>)> = {
-            let mut t = self.tracker.lock().unwrap_or_else(|p| p.into_inner());
-            if t.abandoned.is_empty() {
-                return;
-            }
-            let (done, waiting): (Vec<_>, Vec<_>) = t
-                .abandoned
-                .drain(..)
-                // SAFETY: the fence belongs to this device and was submitted.
-                .partition(|(slot, _, _)| unsafe { self.raw.get_fence_status(slot.fence) }.unwrap_or(true));
-            t.abandoned = waiting;
-            done
-        };
-        for (slot, serial, uses) in done {
-            // SAFETY: the fence is signalled (or the device is lost): the queue no longer uses it.
-            let fence_reset = unsafe { self.raw.reset_fences(&[slot.fence]) }.is_ok();
-            let reuse = (fence_reset && slot.reset(self)).then_some(slot);
-            if reuse.is_none() {
-                slot.destroy(self);
-            }
-            drop(uses);
-            self.finish(serial, reuse);
-        }
-    }
-
-    /// At teardown: waits (up to the fence timeout each) for timed-out submissions and returns
-    /// their slots and objects; a fence that never signals leaves its slot undestroyed.
-    pub(crate) fn drain_abandoned(&mut self) -> (Vec<Slot>, Vec<Use>) {
-        let nanos = u64::try_from(self.fence_timeout.as_nanos()).unwrap_or(u64::MAX);
-        let abandoned = self.tracker.get_mut().map(|t| std::mem::take(&mut t.abandoned)).unwrap_or_default();
-        let (mut slots, mut released) = (Vec::new(), Vec::new());
-        for (slot, _, uses) in abandoned {
-            // SAFETY: the fence belongs to this device.
-            match unsafe { self.raw.wait_for_fences(&[slot.fence], true, nanos) } {
-                Ok(()) | Err(vk::Result::ERROR_DEVICE_LOST) => {
-                    slots.push(slot);
-                    released.extend(uses);
-                }
-                Err(e) => {
-                    tracing::error!("a timed-out submission is still running at teardown ({e}); leaking it");
-                    std::mem::forget(uses);
-                }
-            }
-        }
-        (slots, released)
-    }
-
-    fn finish(&self, serial: u64, reuse: Option<Slot>) {
-        let ready = {
-            let mut t = self.tracker.lock().unwrap_or_else(|p| p.into_inner());
-            if let Some(pair) = reuse {
-                t.free.push(pair);
-            }
-            t.complete(serial)
-        };
-        for f in ready {
-            f(self);
-        }
-    }
-}
+use super::slot::Slot;
 
 /// Work submitted with [`Gpu::submit`]. Waiting (or dropping) it waits on its own fence.
 #[must_use = "a submission is waited on when dropped; call wait() to see its errors"]
@@ -235,7 +60,7 @@ impl Submission {
         let nanos = u64::try_from(timeout.as_nanos()).unwrap_or(u64::MAX);
         // SAFETY: the fence was submitted with this work and is owned by the engine.
         let r = unsafe { self.shared.raw.wait_for_fences(&[self.slot.fence], true, nanos) };
-        let r = match (r, self.shared.inject_loss()) {
+        let r = match (r, self.shared.fault.lose_at_wait()) {
             // Injected (GpuDesc::lose_device): the work has finished, so the lost path below
             // may destroy what it used, as after a real loss.
             (Ok(()), true) => Err(vk::Result::ERROR_DEVICE_LOST),
@@ -265,29 +90,12 @@ impl Submission {
                 self.uses.clear();
                 self.slot.destroy(&self.shared);
                 self.shared.finish(self.serial, None);
-                if self.shared.lost.load(std::sync::atomic::Ordering::Relaxed) {
+                if self.shared.fault.is_lost() {
                     return Err(GpuError::DeviceLost { during: INJECTED_WAIT });
                 }
                 Err(vk_error("vkWaitForFences (Gpu::run)", e))
             }
         }
-    }
-}
-
-/// What an injected device loss ([`crate::gpu::GpuDesc::lose_device`]) reports.
-const INJECTED_WAIT: &str = "vkWaitForFences (Gpu::run; lost by fault injection, GALERKIN_LOSE_DEVICE)";
-const INJECTED_SUBMIT: &str = "vkQueueSubmit (the device was lost by fault injection, GALERKIN_LOSE_DEVICE)";
-
-impl DeviceShared {
-    /// Counts a wait for a submission; true if [`crate::gpu::GpuDesc::lose_device`] says the
-    /// device is lost from this one on (the flag then fails every later submission).
-    fn inject_loss(&self) -> bool {
-        let Some(n) = self.lose_device else { return false };
-        let count = self.waits.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
-        if count >= n {
-            self.lost.store(true, std::sync::atomic::Ordering::Relaxed);
-        }
-        count >= n
     }
 }
 
@@ -390,7 +198,7 @@ impl Gpu {
             .wait_semaphores(&wait_semaphores)
             .wait_dst_stage_mask(&wait_stages)
             .signal_semaphores(signal);
-        if shared.lost.load(std::sync::atomic::Ordering::Relaxed) {
+        if shared.fault.is_lost() {
             return Err(GpuError::DeviceLost { during: INJECTED_SUBMIT });
         }
         {

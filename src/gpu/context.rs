@@ -18,10 +18,11 @@ use ash::vk;
 use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
 
 use super::caps::Capabilities;
-use super::commands::{Retirement, Tracker};
 use super::debug::ValidationLog;
 use super::error::{GpuError, GpuResult, VkContext};
+use super::fault::FaultInjection;
 use super::instance;
+use super::retire::{Retirement, Tracker};
 
 /// How to create a [`Gpu`]. `Default` is the same everywhere and reads nothing from the
 /// environment (what an embedding host wants: its process's variables do not change the
@@ -141,14 +142,8 @@ pub(crate) struct DeviceShared {
     pub caps: Capabilities,
     pub max_binding_bytes: u64,
     pub fence_timeout: Duration,
-    /// [`GpuDesc::fail_allocation`], and the allocations made so far.
-    pub(crate) fail_allocation: Option<u64>,
-    pub(crate) allocations: std::sync::atomic::AtomicU64,
-    /// [`GpuDesc::lose_device`], the submissions waited for so far, and whether the device
-    /// counts as lost.
-    pub(crate) lose_device: Option<u64>,
-    pub(crate) waits: std::sync::atomic::AtomicU64,
-    pub(crate) lost: std::sync::atomic::AtomicBool,
+    /// [`GpuDesc::fail_allocation`] and [`GpuDesc::lose_device`] with their counts.
+    pub(crate) fault: FaultInjection,
     pub(crate) allocator: Mutex<ManuallyDrop<Allocator>>,
     pub(crate) tracker: Mutex<Tracker>,
     /// Destructors of objects whose last reference went while this device was being torn
@@ -377,11 +372,7 @@ impl Gpu {
                 caps,
                 max_binding_bytes,
                 fence_timeout: p.desc.fence_timeout,
-                fail_allocation: p.desc.fail_allocation,
-                allocations: std::sync::atomic::AtomicU64::new(0),
-                lose_device: p.desc.lose_device,
-                waits: std::sync::atomic::AtomicU64::new(0),
-                lost: std::sync::atomic::AtomicBool::new(false),
+                fault: FaultInjection::new(p.desc.fail_allocation, p.desc.lose_device),
                 allocator: Mutex::new(ManuallyDrop::new(allocator)),
                 tracker: Mutex::new(Tracker::default()),
                 graveyard: Arc::default(),

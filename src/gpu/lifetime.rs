@@ -17,8 +17,8 @@
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex, Weak};
 
-use super::commands::Retirement;
 use super::context::DeviceShared;
+use super::retire::Retirement;
 
 /// The destructor of one Vulkan object and the count of pending recordings that use it.
 ///

@@ -48,14 +48,7 @@ impl DeviceShared {
                 unit: "bytes",
             });
         }
-        let count = self.allocations.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
-        if self.fail_allocation.is_some_and(|n| count >= n) {
-            return Err(GpuError::OutOfMemory {
-                name: name.to_string(),
-                bytes: requirements.size,
-                detail: format!("allocation {count} failed by fault injection (GALERKIN_FAIL_ALLOCATION)"),
-            });
-        }
+        self.fault.allocation(name, requirements.size)?;
         let desc = AllocationCreateDesc {
             name,
             requirements,
