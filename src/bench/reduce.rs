@@ -237,10 +237,8 @@ pub fn report(
         let mut gpu_out = None;
         for _ in 0..3 {
             let (run, result) = premultiply_volume(cells_gpu, m, m_g, Some(g), None)?;
-            let (ceiling, ..) =
-                crate::bench::sgemm_ceiling(g, if quick { 512 } else { 1024 }, 3).map_err(|e| {
-                    ReduceError::Device { context: "SGEMM ceiling".into(), detail: e.to_string() }
-                })?;
+            let (ceiling, ..) = crate::bench::sgemm_ceiling(g, if quick { 512 } else { 1024 }, 3)
+                .map_err(ReduceError::device("SGEMM ceiling"))?;
             pairs.push((run, ceiling));
             gpu_out = Some(result);
         }

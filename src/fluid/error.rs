@@ -42,6 +42,22 @@ pub enum FluidError {
     /// Writing a picture failed (the message names the file).
     #[error(transparent)]
     Picture(#[from] crate::picture::PictureError),
+    /// The device failed (out of memory, device lost) or a request exceeds its limits.
+    #[error("device: {0}")]
+    Gpu(#[from] crate::gpu::GpuError),
+    /// The reduction core failed (a basis, a tensor, a model file, the device under it).
+    #[error(transparent)]
+    Reduce(#[from] crate::reduce::ReduceError),
+}
+
+impl crate::gpu::GpuFailure for FluidError {
+    fn gpu_error(&self) -> Option<&crate::gpu::GpuError> {
+        match self {
+            Self::Gpu(e) => Some(e),
+            Self::Reduce(e) => e.gpu_error(),
+            _ => None,
+        }
+    }
 }
 
 impl FluidError {

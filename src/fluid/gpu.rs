@@ -32,12 +32,8 @@ crate::push_constants! {
     }
 }
 
-fn gpu_err(e: crate::gpu::GpuError) -> FluidError {
-    FluidError::State(format!("device: {e}"))
-}
-
 fn storage<T: Pod>(gpu: &Gpu, name: &str, data: &[T]) -> Result<Buffer<T>, FluidError> {
-    Buffer::from_slice(gpu, name, data, vk::BufferUsageFlags::STORAGE_BUFFER).map_err(gpu_err)
+    Buffer::from_slice(gpu, name, data, vk::BufferUsageFlags::STORAGE_BUFFER).map_err(FluidError::from)
 }
 
 /// Per (cell, local face) links for the walk: neighbour + 1 (bits 0–27, 0 for a wall), the
@@ -139,7 +135,7 @@ fn pipeline(gpu: &Gpu, mode: Mode, dim: usize) -> Result<ComputePipeline, FluidE
             specialization: &[u32::from(reduced), dim as u32, width(m_g)?, width(m_f)?],
         },
     )
-    .map_err(gpu_err)
+    .map_err(FluidError::from)
 }
 
 /// Per (cell, local face): the face's index, bit 31 set if the cell's sign σ is −1.
@@ -256,7 +252,7 @@ impl GpuParticles {
         let sb = storage(gpu, "fluid grid start", start)?;
         let cb = storage(gpu, "fluid grid cells", grid_cells)?;
         fn bind<T: Pod>(x: &Buffer<T>) -> Result<Resource<'_>, FluidError> {
-            x.binding().map(Resource::Storage).map_err(gpu_err)
+            x.binding().map(Resource::Storage).map_err(FluidError::from)
         }
         let set = self
             .pipeline
@@ -277,7 +273,7 @@ impl GpuParticles {
                     bind(&self.speeds)?,
                 ],
             )
-            .map_err(gpu_err)?;
+            .map_err(FluidError::from)?;
         let (g0, g1) = geometries.unwrap_or_default();
         self.frame = Some(FrameGeometry { g0, g1, grid: (lo, size, dims), _grid_buffers: (sb, cb), set });
         Ok(())
@@ -308,7 +304,7 @@ impl GpuParticles {
                 self.count
             )));
         }
-        self.particles.upload(gpu, 0, &pack(particles)).map_err(gpu_err)
+        self.particles.upload(gpu, 0, &pack(particles)).map_err(FluidError::from)
     }
 
     /// Advects through one frame (see [`super::particles::advect_particles`]): the
@@ -329,7 +325,7 @@ impl GpuParticles {
             return Ok(AdvectReport::default());
         }
         self.prepare(gpu, mesh, g0, g1, f)?;
-        gpu.run(|rec| self.record_advect(rec, frame_time, substeps)).map_err(gpu_err)??;
+        gpu.run(|rec| self.record_advect(rec, frame_time, substeps)).map_err(FluidError::from)??;
         self.report(gpu)
     }
 
@@ -356,10 +352,10 @@ impl GpuParticles {
                 f.len(),
             )));
         }
-        self.flux.upload(gpu, 0, &pack_vec4(f)).map_err(gpu_err)?;
+        self.flux.upload(gpu, 0, &pack_vec4(f)).map_err(FluidError::from)?;
         if !self.frame.as_ref().is_some_and(|fr| fr.g0 == g0 && fr.g1 == g1) {
-            self.g0.upload(gpu, 0, &pack_vec4(g0)).map_err(gpu_err)?;
-            self.g1.upload(gpu, 0, &pack_vec4(g1)).map_err(gpu_err)?;
+            self.g0.upload(gpu, 0, &pack_vec4(g0)).map_err(FluidError::from)?;
+            self.g1.upload(gpu, 0, &pack_vec4(g1)).map_err(FluidError::from)?;
             let grid = GridHash::new(mesh, &[g0, g1]);
             self.bind(gpu, &grid, Some((g0.to_vec(), g1.to_vec())))?;
         }
@@ -422,7 +418,7 @@ impl GpuParticles {
             self.record_reduced_frame(rec, g0, g1, f)?;
             self.record_advect(rec, frame_time, substeps)
         })
-        .map_err(gpu_err)??;
+        .map_err(FluidError::from)??;
         self.report(gpu)
     }
 
@@ -488,7 +484,7 @@ impl GpuParticles {
 
     /// What the last recorded advection counted (read once its work has finished).
     pub fn report(&self, gpu: &Gpu) -> Result<AdvectReport, FluidError> {
-        let counts = self.counts.download(gpu).map_err(gpu_err)?;
+        let counts = self.counts.download(gpu).map_err(FluidError::from)?;
         Ok(AdvectReport {
             walked: counts[0] as usize,
             hashed: counts[1] as usize,
@@ -498,7 +494,7 @@ impl GpuParticles {
 
     /// Reads the particles back.
     pub fn download(&self, gpu: &Gpu) -> Result<Vec<Particle>, FluidError> {
-        let v = self.particles.download(gpu).map_err(gpu_err)?;
+        let v = self.particles.download(gpu).map_err(FluidError::from)?;
         Ok(v.into_iter()
             .take(self.count)
             .map(|p| Particle {

@@ -22,10 +22,6 @@ use crate::gpu::{
 use crate::mesh::{SimplexMesh, Topology};
 use crate::render::{ColorFormat, Colormap, ColormapTexture, Pixels, RenderTarget, BACKGROUND};
 
-fn gpu_err(e: crate::gpu::GpuError) -> FluidError {
-    FluidError::State(format!("device: {e}"))
-}
-
 /// The visible rectangle of the plane: the mesh's bounds with a margin, widened to the
 /// image's aspect ratio. Maps world (x, y) to clip space (y down, Vulkan) and pixel centres
 /// back to the world.
@@ -268,12 +264,12 @@ impl FluidRenderer {
         ];
         desc.bindings = &[BindingKind::Texture];
         desc.specialization = &spec;
-        let cell_pipeline = GraphicsPipeline::new(gpu, &desc).map_err(gpu_err)?;
+        let cell_pipeline = GraphicsPipeline::new(gpu, &desc).map_err(FluidError::from)?;
         // The 3D surface: the same stages, front faces culled, so from outside one sees the
         // far walls through the near ones (a cutaway) with the particles in front of them.
         desc.name = "fluid surface";
         desc.cull_mode = vk::CullModeFlags::FRONT;
-        let surface = GraphicsPipeline::new(gpu, &desc).map_err(gpu_err)?;
+        let surface = GraphicsPipeline::new(gpu, &desc).map_err(FluidError::from)?;
         let mut desc = GraphicsPipelineDesc::new(
             "fluid particles",
             crate::fluid::shaders::SPRITES_VERT,
@@ -283,13 +279,13 @@ impl FluidRenderer {
         desc.push = crate::gpu::PushLayout::of::<Push>();
         desc.bindings = &[BindingKind::Texture, BindingKind::StorageBuffer, BindingKind::StorageBuffer];
         desc.specialization = &spec;
-        let sprites = GraphicsPipeline::new(gpu, &desc).map_err(gpu_err)?;
+        let sprites = GraphicsPipeline::new(gpu, &desc).map_err(FluidError::from)?;
         let per_particle_spec = [spec[0], 1];
         desc.name = "fluid particles (their own speeds)";
         desc.specialization = &per_particle_spec;
-        let sprites_own = GraphicsPipeline::new(gpu, &desc).map_err(gpu_err)?;
-        let colormap = colormap.upload(gpu).map_err(gpu_err)?;
-        let cell_set = cell_pipeline.bind(gpu, &[colormap.resource()]).map_err(gpu_err)?;
+        let sprites_own = GraphicsPipeline::new(gpu, &desc).map_err(FluidError::from)?;
+        let colormap = colormap.upload(gpu).map_err(FluidError::from)?;
+        let cell_set = cell_pipeline.bind(gpu, &[colormap.resource()]).map_err(FluidError::from)?;
         let vertices = Buffer::new(
             gpu,
             "fluid cell vertices",
@@ -297,7 +293,7 @@ impl FluidRenderer {
             vk::BufferUsageFlags::VERTEX_BUFFER,
             MemoryKind::CpuToGpu,
         )
-        .map_err(gpu_err)?;
+        .map_err(FluidError::from)?;
         let speeds = Buffer::new(
             gpu,
             "fluid cell speeds",
@@ -305,7 +301,7 @@ impl FluidRenderer {
             vk::BufferUsageFlags::STORAGE_BUFFER,
             MemoryKind::CpuToGpu,
         )
-        .map_err(gpu_err)?;
+        .map_err(FluidError::from)?;
         Ok(Self {
             cells: cell_pipeline,
             surface,
@@ -322,11 +318,11 @@ impl FluidRenderer {
     /// Replaces the cells and their speeds (no draw of the previous ones may be in flight).
     /// An error if a recorded draw of the previous ones is not yet known to be finished.
     pub fn update(&mut self, vertices: &[CellVertex], speeds: &[f64]) -> Result<(), FluidError> {
-        let dst = self.vertices.mapped_mut().map_err(gpu_err)?;
+        let dst = self.vertices.mapped_mut().map_err(FluidError::from)?;
         let n = vertices.len().min(dst.len());
         dst[..n].copy_from_slice(&vertices[..n]);
         self.count = n as u32;
-        let dst = self.speeds.mapped_mut().map_err(gpu_err)?;
+        let dst = self.speeds.mapped_mut().map_err(FluidError::from)?;
         for (d, s) in dst.iter_mut().zip(speeds) {
             *d = *s as f32;
         }
@@ -359,11 +355,11 @@ impl FluidRenderer {
                 gpu,
                 &[
                     self.colormap.resource(),
-                    Resource::Storage(particles.buffer().binding().map_err(gpu_err)?),
-                    Resource::Storage(speeds.binding().map_err(gpu_err)?),
+                    Resource::Storage(particles.buffer().binding().map_err(FluidError::from)?),
+                    Resource::Storage(speeds.binding().map_err(FluidError::from)?),
                 ],
             )
-            .map_err(gpu_err)?;
+            .map_err(FluidError::from)?;
         Ok(ParticleSet { set, own_speeds })
     }
 
@@ -502,9 +498,10 @@ pub fn draw_triangles(
     projection: &Projection,
     (width, height): (u32, u32),
 ) -> Result<FluidPicture, FluidError> {
-    let colour =
-        RenderTarget::new(gpu, "fluid colour", width, height, ColorFormat::Rgba8).map_err(gpu_err)?;
-    let raw = RenderTarget::new(gpu, "fluid raw", width, height, ColorFormat::Rgba32F).map_err(gpu_err)?;
+    let colour = RenderTarget::new(gpu, "fluid colour", width, height, ColorFormat::Rgba8)
+        .map_err(FluidError::from)?;
+    let raw =
+        RenderTarget::new(gpu, "fluid raw", width, height, ColorFormat::Rgba32F).map_err(FluidError::from)?;
     let mut out = Vec::new();
     for (target, output, clear) in
         [(&colour, Output::Colour, BACKGROUND), (&raw, Output::Raw, [0.0, -1.0, 0.0, 0.0])]
@@ -523,7 +520,7 @@ pub fn draw_triangles(
         out.push(
             target
                 .render(gpu, clear, |rec| r.record(rec, target.extent(), projection, style, pset))
-                .map_err(gpu_err)?,
+                .map_err(FluidError::from)?,
         );
     }
     let raw_pixels = match out.pop() {

@@ -6,7 +6,7 @@
 use ash::vk;
 
 /// Everything that can go wrong in [`crate::gpu`].
-#[derive(Debug, thiserror::Error)]
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum GpuError {
     /// The Vulkan loader library could not be opened.
     #[error(
@@ -110,6 +110,30 @@ pub enum GpuError {
 
 /// Result alias of the Vulkan layer.
 pub type GpuResult<T> = Result<T, GpuError>;
+
+/// An error of any capability (spectral, spacetime, fluid, radiosity, the reduction core, the
+/// render layer) that may stand for a device failure: how a host embedding galerkin tells
+/// device loss and out-of-memory from a bad input, whichever capability returned it.
+pub trait GpuFailure {
+    /// The device error underneath, if this is one.
+    fn gpu_error(&self) -> Option<&GpuError>;
+
+    /// True if the Vulkan device was lost (the host must recreate it).
+    fn is_device_lost(&self) -> bool {
+        matches!(self.gpu_error(), Some(GpuError::DeviceLost { .. }))
+    }
+
+    /// True if device or host memory ran out.
+    fn is_out_of_memory(&self) -> bool {
+        matches!(self.gpu_error(), Some(GpuError::OutOfMemory { .. }))
+    }
+}
+
+impl GpuFailure for GpuError {
+    fn gpu_error(&self) -> Option<&GpuError> {
+        Some(self)
+    }
+}
 
 /// Adds the name of the failing Vulkan call to a raw `VkResult`, mapping out-of-memory and
 /// device loss to their own variants.

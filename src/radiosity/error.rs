@@ -58,4 +58,18 @@ pub enum RadiosityError {
     /// A device error.
     #[error(transparent)]
     Gpu(#[from] crate::gpu::GpuError),
+    /// The reduction core failed while training or loading a model (a basis, a tensor, the
+    /// device under it).
+    #[error("reduced model: {0}")]
+    Reduce(#[from] crate::reduce::ReduceError),
+}
+
+impl crate::gpu::GpuFailure for RadiosityError {
+    fn gpu_error(&self) -> Option<&crate::gpu::GpuError> {
+        match self {
+            Self::Gpu(e) => Some(e),
+            Self::Reduce(e) => e.gpu_error(),
+            _ => None,
+        }
+    }
 }

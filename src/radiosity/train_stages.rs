@@ -36,7 +36,7 @@ use super::visibility::LearnedVisibility;
 use crate::reduce::reductor::{fingerprint, Reductor, ReductorError, StageReport};
 use crate::reduce::{
     basis_grams, load_arrays, pca_across, save_arrays, snapshot_grams, Bases, Basis, BasisRows, Communicator,
-    ReduceError, ReduceOptions, ReducedModel, SnapshotBasis, SnapshotFn, SnapshotRows, Truncation,
+    ReduceOptions, ReducedModel, SnapshotBasis, SnapshotFn, SnapshotRows, Truncation,
 };
 use crate::tensor::Tensor;
 
@@ -44,10 +44,6 @@ impl From<ReductorError> for RadiosityError {
     fn from(e: ReductorError) -> Self {
         RadiosityError::Solve(e.to_string())
     }
-}
-
-fn reduce_err(e: ReduceError) -> RadiosityError {
-    RadiosityError::Solve(e.to_string())
 }
 
 fn file_err(path: &Path, e: impl std::fmt::Display) -> RadiosityError {
@@ -114,7 +110,7 @@ fn pair_bases<'a>(
         .enumerate()
         .map(|(i, q)| {
             let (basis, spectrum) = SnapshotBasis::pca(q.name(), refs[i], &grams[i], truncation(options, *q))
-                .map_err(reduce_err)?;
+                .map_err(RadiosityError::from)?;
             Ok((basis, spectrum.energy))
         })
         .collect()
@@ -139,7 +135,8 @@ pub fn basis_parts(
     let diagonal: Vec<(usize, usize)> = (0..PAIR_QUANTITIES.len()).map(|i| (i, i)).collect();
     let gram_progress = |done: f64, total: f64| progress("gram", done as u64, total as u64);
     let clock = std::time::Instant::now();
-    let grams = snapshot_grams(&refs, &diagonal, Some(&gram_progress), ranks).map_err(reduce_err)?;
+    let grams =
+        snapshot_grams(&refs, &diagonal, Some(&gram_progress), ranks).map_err(RadiosityError::from)?;
     tracing::info!(
         seconds = clock.elapsed().as_secs_f64(),
         sent_mb = sent_mb(ranks),
@@ -160,7 +157,8 @@ pub fn basis_parts(
                 count: configurations.len(),
                 rows: |rows: Range<usize>| snapshot_rows(*q, configurations, rows, options.near),
             };
-            let p = pca_across(q.name(), &mut source, truncation(options, *q), ranks).map_err(reduce_err)?;
+            let p = pca_across(q.name(), &mut source, truncation(options, *q), ranks)
+                .map_err(RadiosityError::from)?;
             let m = p.basis.reduced_dim();
             stored.insert(q.name().to_string(), p.basis);
             (m, p.energy)
@@ -173,7 +171,7 @@ pub fn basis_parts(
     let own_progress = |done: f64, total: f64| progress("orthonormalise", done as u64, total as u64);
     let clock = std::time::Instant::now();
     let mode_grams =
-        basis_grams(&rows, &wanted_mode_grams(), Some(&own_progress), ranks).map_err(reduce_err)?;
+        basis_grams(&rows, &wanted_mode_grams(), Some(&own_progress), ranks).map_err(RadiosityError::from)?;
     tracing::info!(
         seconds = clock.elapsed().as_secs_f64(),
         sent_mb = sent_mb(ranks),
@@ -198,12 +196,12 @@ impl BasisParts {
             "report".to_string(),
             serde_json::to_string(&self.report).map_err(|e| file_err(path, e))?,
         );
-        save_arrays(path, meta, &arrays).map_err(reduce_err)
+        save_arrays(path, meta, &arrays).map_err(RadiosityError::from)
     }
 
     /// Reads what [`Self::save`] wrote.
     pub fn load(path: &Path) -> Result<Self, RadiosityError> {
-        let (meta, mut arrays) = load_arrays(path).map_err(reduce_err)?;
+        let (meta, mut arrays) = load_arrays(path).map_err(RadiosityError::from)?;
         if meta.get("format").map(String::as_str) != Some(STAGE_FORMAT) {
             return Err(file_err(path, "not a radiosity training stage file"));
         }
@@ -219,7 +217,10 @@ impl BasisParts {
         let mut stored = BTreeMap::new();
         for q in Quantity::ALL.iter().filter(|q| !q.is_pair()) {
             let matrix = take(format!("basis/{}", q.name()))?;
-            stored.insert(q.name().to_string(), Basis::new(q.name(), matrix, 1e-9).map_err(reduce_err)?);
+            stored.insert(
+                q.name().to_string(),
+                Basis::new(q.name(), matrix, 1e-9).map_err(RadiosityError::from)?,
+            );
         }
         Ok(Self { grams, mode_grams, stored, report })
     }
@@ -249,7 +250,7 @@ fn merge_pair<'a>(
     let (Some(ba), Some(bb)) = (&pair[a], &pair[b]) else {
         return Err(RadiosityError::Solve(format!("basis {name}: a merged basis is missing")));
     };
-    SnapshotBasis::merge(name, (ba, &own[a]), (bb, &own[b]), cross).map_err(reduce_err)
+    SnapshotBasis::merge(name, (ba, &own[a]), (bb, &own[b]), cross).map_err(RadiosityError::from)
 }
 
 /// Stage `tensors`: every basis rebuilt from `parts` (merging `B_s = B_h`, `B_d = B_p`,
@@ -277,14 +278,18 @@ pub fn premultiplied(
     let mut finished: BTreeMap<&str, SnapshotBasis<'_>> = BTreeMap::new();
     for q in [Quantity::R, Quantity::C, Quantity::V] {
         let i = slot(q);
-        let basis = pair[i].take().expect("made above").orthonormalized(&own[i]).map_err(reduce_err)?;
+        let basis =
+            pair[i].take().expect("made above").orthonormalized(&own[i]).map_err(RadiosityError::from)?;
         finished.insert(q.name(), basis);
     }
     let mut bases = Bases::new();
     for name in ["g", "n", "a"] {
         bases.insert(name.to_string(), parts.stored[name].clone());
     }
-    bases.insert("b".into(), Basis::merge("b", &parts.stored["e"], &parts.stored["b"]).map_err(reduce_err)?);
+    bases.insert(
+        "b".into(),
+        Basis::merge("b", &parts.stored["e"], &parts.stored["b"]).map_err(RadiosityError::from)?,
+    );
     let mut row_bases: BTreeMap<String, &dyn BasisRows> = BTreeMap::new();
     row_bases.insert("sh".into(), &sh);
     row_bases.insert("dp".into(), &dp);
@@ -307,14 +312,14 @@ pub fn premultiplied(
             &row_bases,
             &ReduceOptions { progress: Some(&premultiply_progress), ranks, ..ReduceOptions::default() },
         )
-        .map_err(reduce_err)?;
+        .map_err(RadiosityError::from)?;
     tracing::info!(
         seconds = clock.elapsed().as_secs_f64(),
         sent_mb = sent_mb(ranks),
         "training: premultiplication"
     );
     // The visibility is always given reduced (Eq. 17): its n²-row basis stays out of the model.
-    reduced.forget_input_basis("v").map_err(reduce_err)?;
+    reduced.forget_input_basis("v").map_err(RadiosityError::from)?;
     // The learned visibility: B_gᵀ G, and B_vᵀ V from the visibility's Gram matrix.
     let t = configurations.len();
     let bg = &bases["g"];
@@ -324,7 +329,8 @@ pub fn premultiplied(
             gt[i * t + c] = x;
         }
     }
-    let vt = finished["v"].project_snapshots(&parts.grams[slot(Quantity::V)]).map_err(reduce_err)?;
+    let vt =
+        finished["v"].project_snapshots(&parts.grams[slot(Quantity::V)]).map_err(RadiosityError::from)?;
     let geometry =
         Tensor::from_vec(&[bg.reduced_dim(), t], gt).map_err(|e| RadiosityError::Solve(e.to_string()))?;
     let learned = LearnedVisibility::new(geometry, vt).map_err(|e| RadiosityError::Solve(e.to_string()))?;
@@ -334,7 +340,7 @@ pub fn premultiplied(
 impl Premultiplied {
     /// Writes `dir/model.safetensors` and `dir/visibility.safetensors`.
     pub fn save(&self, dir: &Path) -> Result<(), RadiosityError> {
-        self.reduced.save(&dir.join("model.safetensors")).map_err(reduce_err)?;
+        self.reduced.save(&dir.join("model.safetensors")).map_err(RadiosityError::from)?;
         let path = dir.join("visibility.safetensors");
         let mut meta = HashMap::new();
         meta.insert("format".to_string(), STAGE_FORMAT.to_string());
@@ -346,14 +352,14 @@ impl Premultiplied {
             ("geometry".to_string(), self.learned.geometry()),
             ("visibility".to_string(), self.learned.visibility()),
         ];
-        save_arrays(&path, meta, &arrays).map_err(reduce_err)
+        save_arrays(&path, meta, &arrays).map_err(RadiosityError::from)
     }
 
     /// Reads what [`Self::save`] wrote.
     pub fn load(dir: &Path) -> Result<Self, RadiosityError> {
-        let reduced = ReducedModel::load(&dir.join("model.safetensors")).map_err(reduce_err)?;
+        let reduced = ReducedModel::load(&dir.join("model.safetensors")).map_err(RadiosityError::from)?;
         let path = dir.join("visibility.safetensors");
-        let (meta, mut arrays) = load_arrays(&path).map_err(reduce_err)?;
+        let (meta, mut arrays) = load_arrays(&path).map_err(RadiosityError::from)?;
         let merged = serde_json::from_str(meta.get("merged").map_or("", String::as_str))
             .map_err(|e| file_err(&path, format!("merged: {e}")))?;
         let mut take =
@@ -401,11 +407,11 @@ fn save_correction(path: &Path, (q, found): &(Tensor, CorrectionReport)) -> Resu
     meta.insert("format".to_string(), STAGE_FORMAT.to_string());
     let numbers = [found.mean_discrepancy, found.worst_discrepancy, found.worst_configuration as f64];
     meta.insert("report".to_string(), serde_json::to_string(&numbers).map_err(|e| file_err(path, e))?);
-    save_arrays(path, meta, &[("Q".to_string(), q)]).map_err(reduce_err)
+    save_arrays(path, meta, &[("Q".to_string(), q)]).map_err(RadiosityError::from)
 }
 
 fn load_correction(path: &Path) -> Result<(Tensor, CorrectionReport), RadiosityError> {
-    let (meta, mut arrays) = load_arrays(path).map_err(reduce_err)?;
+    let (meta, mut arrays) = load_arrays(path).map_err(RadiosityError::from)?;
     let [mean, worst, at]: [f64; 3] = serde_json::from_str(meta.get("report").map_or("", String::as_str))
         .map_err(|e| file_err(path, format!("report: {e}")))?;
     let q = arrays.remove("Q").ok_or_else(|| file_err(path, "no array Q"))?;
@@ -436,7 +442,9 @@ pub fn assemble(
     let Premultiplied { mut reduced, learned, .. } = tensors;
     if let Some(q) = correction {
         // Q's configuration axis has the identity basis: Eq. 17's weights are given whole.
-        reduced.extend(radiosity_corrected(), ("Q", &["b", "b", "x"], q), ("x", "x")).map_err(reduce_err)?;
+        reduced
+            .extend(radiosity_corrected(), ("Q", &["b", "b", "x"], q), ("x", "x"))
+            .map_err(RadiosityError::from)?;
     }
     let b = reduced.basis("b").ok_or_else(|| RadiosityError::Solve("the model has no basis b".into()))?;
     let emission_hat = b.project(&stack_channels(&first.emission));

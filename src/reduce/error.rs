@@ -108,12 +108,13 @@ pub enum ReduceError {
         detail: String,
     },
     /// The device failed (out of memory, device lost) or a request exceeds its limits.
-    #[error("{context}: {detail}")]
+    #[error("{context}: {cause}")]
     Device {
         /// What was being done.
         context: String,
-        /// What the device layer said.
-        detail: String,
+        /// The device layer's error, typed so a host can tell device loss and out-of-memory
+        /// from a bad input ([`crate::gpu::GpuFailure`]).
+        cause: crate::gpu::GpuError,
     },
     /// A tensor operation failed (singular matrix, non-SPD root, …).
     #[error("{context}: {cause}")]
@@ -131,4 +132,20 @@ pub enum ReduceError {
         /// The rank and its message (shown in the message, so not also the error's `source`).
         cause: super::ranks::RanksError,
     },
+}
+
+impl crate::gpu::GpuFailure for ReduceError {
+    fn gpu_error(&self) -> Option<&crate::gpu::GpuError> {
+        match self {
+            Self::Device { cause, .. } => Some(cause),
+            _ => None,
+        }
+    }
+}
+
+impl ReduceError {
+    /// Wraps a device failure met while doing `context` (for `map_err`).
+    pub fn device(context: &str) -> impl FnOnce(crate::gpu::GpuError) -> Self + '_ {
+        move |cause| Self::Device { context: context.to_string(), cause }
+    }
 }

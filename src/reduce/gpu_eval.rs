@@ -21,7 +21,7 @@ use super::error::ReduceError;
 use super::eval::{evaluate, Operands};
 use super::reduced::ReducedModel;
 
-use crate::gpu::{Buffer, Gpu, GpuError, MemoryKind, Submitter};
+use crate::gpu::{Buffer, Gpu, MemoryKind, Submitter};
 use crate::tensor::gpu::{BatchedSolve, Gemm, GemmShape};
 use crate::tensor::{Tensor, TensorError};
 
@@ -47,11 +47,6 @@ impl Backend {
             Backend::Auto => gpu.is_some_and(|g| !g.caps().is_cpu()),
         }
     }
-}
-
-/// Maps a device error to [`ReduceError::Device`] with what was being done.
-pub(crate) fn gpu_err(context: &str) -> impl FnOnce(GpuError) -> ReduceError + '_ {
-    move |e| ReduceError::Device { context: context.to_string(), detail: e.to_string() }
 }
 
 /// A reduced tensor on the device, permuted for one contraction pattern: `K × R` in column
@@ -81,8 +76,8 @@ impl GpuReducedModel {
     /// Makes the model resident on `gpu` (tensors are uploaded on first use, in the layout
     /// their contraction needs).
     pub fn new(gpu: &Gpu, model: ReducedModel) -> Result<Self, ReduceError> {
-        let gemm = Gemm::new(gpu).map_err(gpu_err("building the GEMM pipeline"))?;
-        let solver = BatchedSolve::new(gpu).map_err(gpu_err("building the solve pipeline"))?;
+        let gemm = Gemm::new(gpu).map_err(ReduceError::device("building the GEMM pipeline"))?;
+        let solver = BatchedSolve::new(gpu).map_err(ReduceError::device("building the solve pipeline"))?;
         Ok(Self { gpu: gpu.clone(), model, gemm, solver, contractions: Mutex::new(HashMap::new()) })
     }
 
@@ -148,7 +143,7 @@ impl GpuReducedModel {
                     &data,
                     vk::BufferUsageFlags::STORAGE_BUFFER,
                 )
-                .map_err(gpu_err("uploading a reduced tensor"))?;
+                .map_err(ReduceError::device("uploading a reduced tensor"))?;
             blocks.push((start, cols, buf));
         }
         let c = std::sync::Arc::new(DeviceContraction {
@@ -200,7 +195,7 @@ impl GpuReducedModel {
                     &kr[b0 * dc.k..(b0 + rows) * dc.k],
                     vk::BufferUsageFlags::STORAGE_BUFFER,
                 )
-                .map_err(gpu_err("uploading inputs"))?;
+                .map_err(ReduceError::device("uploading inputs"))?;
             let mut results = Vec::new();
             let mut bindings = Vec::new();
             for (start, cols, t) in &dc.blocks {
@@ -211,7 +206,7 @@ impl GpuReducedModel {
                     vk::BufferUsageFlags::STORAGE_BUFFER,
                     MemoryKind::GpuOnly,
                 )
-                .map_err(gpu_err("allocating results"))?;
+                .map_err(ReduceError::device("allocating results"))?;
                 let whole = |b| Buffer::<f32>::whole(b);
                 let binding = self
                     .gemm
@@ -222,21 +217,21 @@ impl GpuReducedModel {
                         whole(&c),
                         GemmShape { m: rows as u32, n: *cols as u32, k: dc.k as u32 },
                     )
-                    .map_err(gpu_err("binding"))?;
+                    .map_err(ReduceError::device("binding"))?;
                 bindings.push(binding);
                 results.push((*start, *cols, c));
             }
             submitter
                 .submit(&mut |rec| bindings.iter().for_each(|b| self.gemm.record(rec, b, false)))
-                .map_err(gpu_err("contracting on the device"))?;
+                .map_err(ReduceError::device("contracting on the device"))?;
             let readbacks = results
                 .iter()
                 .map(|(_, _, c)| submitter.record_readback(c, 0, c.len()))
                 .collect::<Result<Vec<_>, _>>()
-                .map_err(gpu_err("reading results"))?;
-            submitter.complete().map_err(gpu_err("contracting on the device"))?;
+                .map_err(ReduceError::device("reading results"))?;
+            submitter.complete().map_err(ReduceError::device("contracting on the device"))?;
             for ((start, cols, _), readback) in results.iter().zip(&readbacks) {
-                let vals = readback.read().map_err(gpu_err("reading results"))?;
+                let vals = readback.read().map_err(ReduceError::device("reading results"))?;
                 for i in 0..rows {
                     for j in 0..*cols {
                         out[(b0 + i) * r_total + start + j] = f64::from(vals[i * cols + j]);
@@ -289,7 +284,7 @@ impl GpuReducedModel {
         let yt: Vec<f32> = (0..m).flat_map(|j| yhat.iter().map(move |y| y[j] as f32)).collect();
         let ytb = submitter
             .buffer_from_slice("Ŷᵀ", &yt, vk::BufferUsageFlags::STORAGE_BUFFER)
-            .map_err(gpu_err("uploading ŷ"))?;
+            .map_err(ReduceError::device("uploading ŷ"))?;
         let mut out = vec![vec![0.0f64; n]; batch];
         for r0 in (0..n).step_by(rows_per_block) {
             let rows = rows_per_block.min(n - r0);
@@ -297,7 +292,7 @@ impl GpuReducedModel {
                 b.matrix().data()[r0 * m..(r0 + rows) * m].iter().map(|&v| v as f32).collect();
             let bb = submitter
                 .buffer_from_slice("basis rows", &block, vk::BufferUsageFlags::STORAGE_BUFFER)
-                .map_err(gpu_err("uploading the basis"))?;
+                .map_err(ReduceError::device("uploading the basis"))?;
             let c = Buffer::<f32>::new(
                 &self.gpu,
                 "lifted rows",
@@ -305,7 +300,7 @@ impl GpuReducedModel {
                 vk::BufferUsageFlags::STORAGE_BUFFER,
                 MemoryKind::GpuOnly,
             )
-            .map_err(gpu_err("allocating results"))?;
+            .map_err(ReduceError::device("allocating results"))?;
             let whole = |x| Buffer::<f32>::whole(x);
             let binding = self
                 .gemm
@@ -316,11 +311,11 @@ impl GpuReducedModel {
                     whole(&c),
                     GemmShape { m: rows as u32, n: batch as u32, k: m as u32 },
                 )
-                .map_err(gpu_err("binding"))?;
+                .map_err(ReduceError::device("binding"))?;
             submitter
                 .submit(&mut |rec| self.gemm.record(rec, &binding, false))
-                .map_err(gpu_err("lifting"))?;
-            let vals = submitter.download(&c).map_err(gpu_err("reading results"))?;
+                .map_err(ReduceError::device("lifting"))?;
+            let vals = submitter.download(&c).map_err(ReduceError::device("reading results"))?;
             for i in 0..rows {
                 for (k, y) in out.iter_mut().enumerate() {
                     y[r0 + i] = f64::from(vals[i * batch + k]);
@@ -369,7 +364,7 @@ impl Operands for GpuOperands<'_, '_> {
     ) -> Result<Vec<Result<Vec<f64>, TensorError>>, ReduceError> {
         let refs: Vec<&Tensor> = matrices.iter().collect();
         let mut submitter = self.submitter.lock().unwrap_or_else(|p| p.into_inner());
-        self.owner.solver.solve_with(&mut **submitter, what, &refs, rhs).map_err(gpu_err(what))
+        self.owner.solver.solve_with(&mut **submitter, what, &refs, rhs).map_err(ReduceError::device(what))
     }
 
     fn batch(&self) -> usize {

@@ -401,7 +401,7 @@ struct DeviceGram<'s> {
 }
 
 fn device_err(e: crate::gpu::GpuError) -> ReduceError {
-    ReduceError::Device { context: "PCA on the device".into(), detail: e.to_string() }
+    ReduceError::device("PCA on the device")(e)
 }
 
 impl<'s> DeviceGram<'s> {

@@ -36,3 +36,12 @@ pub enum RenderError {
     #[error(transparent)]
     Gpu(#[from] GpuError),
 }
+
+impl crate::gpu::GpuFailure for RenderError {
+    fn gpu_error(&self) -> Option<&GpuError> {
+        match self {
+            Self::Gpu(e) => Some(e),
+            _ => None,
+        }
+    }
+}

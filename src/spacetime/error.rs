@@ -94,6 +94,15 @@ pub enum SpacetimeError {
     },
 }
 
+impl crate::gpu::GpuFailure for SpacetimeError {
+    fn gpu_error(&self) -> Option<&crate::gpu::GpuError> {
+        match self {
+            Self::Device { cause, .. } => Some(cause),
+            _ => None,
+        }
+    }
+}
+
 impl SpacetimeError {
     /// Wraps a device failure met while doing `context` (for `map_err`).
     pub fn device(context: &str) -> impl FnOnce(crate::gpu::GpuError) -> Self + '_ {

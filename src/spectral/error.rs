@@ -71,6 +71,15 @@ pub enum SpectralError {
     },
 }
 
+impl crate::gpu::GpuFailure for SpectralError {
+    fn gpu_error(&self) -> Option<&crate::gpu::GpuError> {
+        match self {
+            Self::Device { cause, .. } => Some(cause),
+            _ => None,
+        }
+    }
+}
+
 impl SpectralError {
     /// Wraps a device error with what the renderer was doing.
     pub fn device(context: &str) -> impl Fn(crate::gpu::GpuError) -> Self + '_ {

@@ -28,7 +28,7 @@ use std::collections::HashMap;
 use std::path::Path;
 
 use crate::reduce::{
-    load_arrays, pca_across, save_arrays, Basis, Communicator, Pca, ReduceError, SnapshotSource, Truncation,
+    load_arrays, pca_across, save_arrays, Basis, Communicator, Pca, SnapshotSource, Truncation,
 };
 use crate::tensor::Tensor;
 
@@ -110,13 +110,13 @@ impl FluidBases {
         meta.insert("key".to_string(), key.to_string());
         let reports = serde_json::to_string(&self.reports).map_err(|e| FluidError::State(e.to_string()))?;
         meta.insert("reports".to_string(), reports);
-        save_arrays(path, meta, &arrays).map_err(reduce_err)
+        save_arrays(path, meta, &arrays).map_err(FluidError::from)
     }
 
     /// Reads bases written by [`Self::save`] if they were built from `key`; `Ok(None)` if the
     /// file holds bases of something else (a training asked for other runs or sizes).
     pub fn load(path: &Path, key: &str) -> Result<Option<Self>, FluidError> {
-        let (meta, mut arrays) = load_arrays(path).map_err(reduce_err)?;
+        let (meta, mut arrays) = load_arrays(path).map_err(FluidError::from)?;
         let fail = |m: String| FluidError::State(format!("{}: {m}", path.display()));
         if meta.get("format").map(String::as_str) != Some(BASES_FORMAT) {
             return Err(fail("not a galerkin fluid bases file".into()));
@@ -146,10 +146,6 @@ const BASES_FORMAT: &str = "galerkin-fluid-bases";
 
 fn truncation(sizes: &BasisSizes, cap: Option<usize>, centred: bool) -> Truncation {
     Truncation { energy: sizes.energy, max_modes: cap.unwrap_or(usize::MAX), centred }
-}
-
-fn reduce_err(e: ReduceError) -> FluidError {
-    FluidError::State(e.to_string())
 }
 
 fn check_cap(name: &str, cap: Option<usize>, snapshots: usize) -> Result<(), FluidError> {
@@ -185,13 +181,13 @@ impl FluidBases {
         // bases are built.
         stage("g");
         let pg = pca_across("g", &mut set.source("g")?, truncation(sizes, sizes.m_g, true), ranks)
-            .map_err(reduce_err)?;
+            .map_err(FluidError::from)?;
         let projected = check_projected_volumes(set, mesh, &pg.basis)?;
         reports.push(report("g", &pg, projected.note()));
 
         stage("f");
         let mut pf = pca_across("f", &mut set.source("f")?, truncation(sizes, sizes.m_f, false), ranks)
-            .map_err(reduce_err)?;
+            .map_err(FluidError::from)?;
         let mut div = relative_divergence(topo, &pf.basis);
         if div > DIVERGENCE_TOLERANCE {
             // Modes of small σ amplify the snapshots' rounding-level divergence (B = S V Σ⁻¹).
@@ -209,9 +205,9 @@ impl FluidBases {
 
         stage("u");
         let pu = pca_across("u", &mut set.source("u")?, truncation(sizes, sizes.m_u, false), ranks)
-            .map_err(reduce_err)?;
+            .map_err(FluidError::from)?;
         let pp = pca_across("p", &mut set.source("p")?, truncation(sizes, sizes.m_u, false), ranks)
-            .map_err(reduce_err)?;
+            .map_err(FluidError::from)?;
         let u = interleave_merge("u", &pu.basis, &pp.basis, sizes.m_u)?;
         reports.push(BasisReport {
             name: "u".into(),
@@ -230,7 +226,7 @@ impl FluidBases {
         stage("h");
         let h = if any_nonzero(&mut set.source("h")?)? {
             let ph = pca_across("h", &mut set.source("h")?, truncation(sizes, sizes.m_h, false), ranks)
-                .map_err(reduce_err)?;
+                .map_err(FluidError::from)?;
             reports.push(report("h", &ph, String::new()));
             Some(ph.basis)
         } else {
@@ -323,7 +319,7 @@ pub fn remove_divergence(topo: &Topology, b: &Basis) -> Result<Basis, FluidError
             data[i * m + j] -= correction[i];
         }
     }
-    Basis::orthonormalize("f", &Tensor::from_vec(&[nf, m], data).expect("n_f × m")).map_err(reduce_err)
+    Basis::orthonormalize("f", &Tensor::from_vec(&[nf, m], data).expect("n_f × m")).map_err(FluidError::from)
 }
 
 /// Columns of `a` and `b` interleaved (a₁, b₁, a₂, b₂, …), orthonormalised, at most `cap`.
@@ -343,7 +339,7 @@ fn interleave_merge(name: &str, a: &Basis, b: &Basis, cap: Option<usize>) -> Res
     }
     // Gram–Schmidt stops at the cap: the first m columns of the whole merged basis.
     let columns = Tensor::from_vec(&[n, k], data).expect("n×k");
-    Basis::orthonormalize_at_most(name, &columns, cap.unwrap_or(usize::MAX)).map_err(reduce_err)
+    Basis::orthonormalize_at_most(name, &columns, cap.unwrap_or(usize::MAX)).map_err(FluidError::from)
 }
 
 /// How well a geometry basis holds the training frames: the worst relative geometry error
@@ -430,7 +426,7 @@ fn any_nonzero(source: &mut impl SnapshotSource) -> Result<bool, FluidError> {
     let mut start = 0;
     while start < n {
         let end = (start + 4096).min(n);
-        let block = source.rows(start..end).map_err(reduce_err)?;
+        let block = source.rows(start..end).map_err(FluidError::from)?;
         if block.data().iter().any(|v| *v != 0.0) {
             return Ok(true);
         }
@@ -478,7 +474,7 @@ pub fn constraint_basis(
     }
     let u = svd.U();
     let cols: Vec<f64> = (0..nb).flat_map(|i| (0..r).map(move |j| u[(i, j)])).collect();
-    let basis =
-        Basis::orthonormalize("d", &Tensor::from_vec(&[nb, r], cols).expect("n_b×r")).map_err(reduce_err)?;
+    let basis = Basis::orthonormalize("d", &Tensor::from_vec(&[nb, r], cols).expect("n_b×r"))
+        .map_err(FluidError::from)?;
     Ok(Some(basis))
 }

@@ -274,11 +274,8 @@ fn stacked(bg: &Basis) -> Result<Basis, FluidError> {
             data[(n + i) * 2 * m + m + j] = v;
         }
     }
-    Basis::new("gg", Tensor::from_vec(&[2 * n, 2 * m], data).expect("2n × 2m"), 1e-9).map_err(core_err)
-}
-
-pub(super) fn core_err(e: crate::reduce::ReduceError) -> FluidError {
-    FluidError::State(e.to_string())
+    Basis::new("gg", Tensor::from_vec(&[2 * n, 2 * m], data).expect("2n × 2m"), 1e-9)
+        .map_err(FluidError::from)
 }
 
 impl ReducedFluidModel {
@@ -394,7 +391,7 @@ impl ReducedFluidModel {
             core_bases.insert("d".into(), d.clone());
         }
         let options = ReduceOptions { ranks, ..ReduceOptions::default() };
-        let mut core = model.reduce_with(&core_bases, &options).map_err(core_err)?;
+        let mut core = model.reduce_with(&core_bases, &options).map_err(FluidError::from)?;
         // The core keeps the bases of inputs and outputs; the step needs B_h and B_d too.
         core.bases.extend(core_bases.into_iter().filter(|(k, _)| k == "h" || k == "d"));
         let provenance = Provenance {
@@ -488,7 +485,7 @@ impl ReducedFluidModel {
         if self.dim_of("h") > 0 {
             dims.insert("h".to_string(), mh.max(1));
         }
-        let mut core = self.core.truncated(&dims).map_err(core_err)?;
+        let mut core = self.core.truncated(&dims).map_err(FluidError::from)?;
         let (bf, bh) = (core.basis("f").cloned(), core.basis("h").cloned());
         let bf = bf.ok_or_else(|| FluidError::State("the model has no basis f".into()))?;
         core.remove("D", Some("d"));

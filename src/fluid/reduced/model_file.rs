@@ -10,7 +10,7 @@ use crate::reduce::{ModelExtras, ReducedModel};
 use crate::tensor::Tensor;
 
 use super::cavity_motion::CavityMotion;
-use super::model::{core_err, Provenance, ReducedFluidModel, Trajectory, FLUID_FORMAT, FLUID_VERSION};
+use super::model::{Provenance, ReducedFluidModel, Trajectory, FLUID_FORMAT, FLUID_VERSION};
 
 impl ReducedFluidModel {
     /// Writes the model (see the module docs; never half-written).
@@ -38,14 +38,14 @@ impl ReducedFluidModel {
             extras.arrays.insert("cavity/volume".into(), c.volume.clone());
             extras.metadata.insert("cavity_rest_volume".into(), json(&c.rest_volume)?);
         }
-        self.core.save_with(path, &extras).map_err(core_err)
+        self.core.save_with(path, &extras).map_err(FluidError::from)
     }
 
     /// Reads a model written by [`ReducedFluidModel::save`], checking its format, version and
     /// every tensor's shape.
     pub fn load(path: &Path) -> Result<Self, FluidError> {
         let fail = |m: String| FluidError::File { path: path.to_path_buf(), message: m };
-        let (core, extras) = ReducedModel::load_with(path).map_err(core_err)?;
+        let (core, extras) = ReducedModel::load_with(path).map_err(FluidError::from)?;
         let get = |k: &str| {
             extras.metadata.get(k).ok_or_else(|| fail(format!("not a reduced fluid model (no `{k}`)")))
         };

@@ -57,10 +57,6 @@ crate::push_constants! {
     }
 }
 
-fn dev(context: &str) -> impl FnOnce(GpuError) -> ReduceError + '_ {
-    move |e| ReduceError::Device { context: context.to_string(), detail: e.to_string() }
-}
-
 fn whole<T: Pod>(b: &Buffer<T>) -> BufferBinding<'_> {
     b.whole()
 }
@@ -109,8 +105,8 @@ impl Ctx<'_> {
             vk::BufferUsageFlags::STORAGE_BUFFER,
             MemoryKind::GpuOnly,
         )
-        .map_err(dev(name))?;
-        self.sub.borrow_mut().upload(&b, 0, data).map_err(dev(name))?;
+        .map_err(ReduceError::device(name))?;
+        self.sub.borrow_mut().upload(&b, 0, data).map_err(ReduceError::device(name))?;
         Ok(b)
     }
 
@@ -127,16 +123,19 @@ impl Ctx<'_> {
             vk::BufferUsageFlags::STORAGE_BUFFER,
             MemoryKind::GpuOnly,
         )
-        .map_err(dev(name))
+        .map_err(ReduceError::device(name))
     }
 
     fn over_limit(&self, what: &str, floats: usize) -> ReduceError {
         ReduceError::Device {
-            context: format!("premultiplying on the device: {what}"),
-            detail: format!(
-                "needs {floats} f32 values in one storage binding, the device allows {} (use the CPU backend)",
-                self.floats
-            ),
+            context: "premultiplying on the device (use the CPU backend)".into(),
+            cause: GpuError::OverLimit {
+                name: what.to_string(),
+                requested: floats as u64,
+                limit: self.floats as u64,
+                limit_name: "one storage binding",
+                unit: "f32 values",
+            },
         }
     }
 
@@ -173,9 +172,9 @@ impl Ctx<'_> {
             .k
             .gather
             .bind(self.gpu, &[whole(src), whole(&pb), whole(&sb), whole(&dst)].map(Resource::Storage))
-            .map_err(dev("binding the gather"))?;
+            .map_err(ReduceError::device("binding the gather"))?;
         self.submit(&mut |rec| self.record_gather(rec, &set, perm.len(), block))
-            .map_err(dev("gathering rows"))?;
+            .map_err(ReduceError::device("gathering rows"))?;
         Ok(dst)
     }
 
@@ -288,7 +287,7 @@ impl Ctx<'_> {
                         Resource::Storage(whole(&out_b)),
                     ],
                 )
-                .map_err(dev("binding a stage"))?;
+                .map_err(ReduceError::device("binding a stage"))?;
             let push = StagePush {
                 groups: (g1 - g0) as u32,
                 size: size as u32,
@@ -307,7 +306,7 @@ impl Ctx<'_> {
                 );
                 rec.copy_buffer(&out_b, 0, &out, dst_first, n as u64);
             })
-            .map_err(dev("running a stage"))?;
+            .map_err(ReduceError::device("running a stage"))?;
             g0 = g1;
         }
         let coords: Vec<u32> = group_rows[..groups].iter().flat_map(|&r| key(idx[row_starts[r]])).collect();
@@ -528,7 +527,7 @@ impl Ctx<'_> {
                             &[whole(src), whole(pb), whole(sb), whole(scratch.rows.get())]
                                 .map(Resource::Storage),
                         )
-                        .map_err(dev("binding the gather"))?;
+                        .map_err(ReduceError::device("binding the gather"))?;
                     Some(set)
                 }
             };
@@ -540,7 +539,7 @@ impl Ctx<'_> {
                     &[whole(fb), whole(frb), whole(lb), whole(lrb), whole(scratch.rows.get()), whole(out)]
                         .map(Resource::Storage),
                 )
-                .map_err(dev("binding the final GEMM"))?;
+                .map_err(ReduceError::device("binding the final GEMM"))?;
             let push = FusedPush {
                 m: size as u32,
                 k: n_rows as u32,
@@ -560,7 +559,7 @@ impl Ctx<'_> {
                 }
                 self.k.fused.record_dispatch(rec, &set, &push, groups);
             })
-            .map_err(dev("the final GEMM"))?;
+            .map_err(ReduceError::device("the final GEMM"))?;
             accumulate = true;
             r0 = r1;
             progress(r0 as f64 / rows as f64);
@@ -601,7 +600,7 @@ impl<T: Pod> Reused<T> {
                     vk::BufferUsageFlags::STORAGE_BUFFER,
                     MemoryKind::GpuOnly,
                 )
-                .map_err(dev(name))?,
+                .map_err(ReduceError::device(name))?,
             );
         }
         Ok(self.get())
@@ -611,7 +610,7 @@ impl<T: Pod> Reused<T> {
     fn fill(&mut self, ctx: &Ctx<'_>, name: &str, data: &[T]) -> Result<&Buffer<T>, ReduceError> {
         self.reserve(ctx, name, data.len())?;
         let b = self.get();
-        ctx.sub.borrow_mut().upload(b, 0, data).map_err(dev(name))?;
+        ctx.sub.borrow_mut().upload(b, 0, data).map_err(ReduceError::device(name))?;
         Ok(b)
     }
 
@@ -666,7 +665,7 @@ pub fn premultiply_sparse_on(
     }
     let stage = |name: &str, spirv: &[u32], bindings: &[BindingKind], push: PushLayout| {
         ComputePipeline::new(gpu, &ComputePipelineDesc { name, spirv, bindings, push, specialization: &[] })
-            .map_err(dev("building a premultiply pipeline"))
+            .map_err(ReduceError::device("building a premultiply pipeline"))
     };
     let kernels = Kernels {
         stage: stage(
@@ -724,7 +723,9 @@ pub fn premultiply_sparse_on(
         done += flops;
     }
     let values: Vec<f64> = match &part.values {
-        Values::Device(b) => ctx.sub.borrow_mut().download(b).map_err(dev("reading the result"))?,
+        Values::Device(b) => {
+            ctx.sub.borrow_mut().download(b).map_err(ReduceError::device("reading the result"))?
+        }
         Values::Host(v) => v.clone(),
     }
     .into_iter()
