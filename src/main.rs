@@ -352,8 +352,8 @@ fn info(desc: &GpuDesc) -> Result<()> {
         None => println!("  timestamps                      not supported"),
     }
     println!(
-        "features      shaderFloat64 {}, geometryShader {}, fillModeNonSolid {}",
-        c.shader_float64, c.geometry_shader, c.fill_mode_non_solid
+        "features      shaderFloat64 {}, geometryShader {}, fillModeNonSolid {}, dynamicRendering {}",
+        c.shader_float64, c.geometry_shader, c.fill_mode_non_solid, c.dynamic_rendering
     );
     println!("memory heaps");
     for (i, (size, flags)) in c.memory_heaps.iter().enumerate() {

@@ -268,6 +268,8 @@ pub fn run_host(require_validation: bool) -> Result<HostReport, String> {
                 queue_family: family,
                 queue,
                 enabled_features: features_enabled,
+                // This host draws in render-pass objects only.
+                dynamic_rendering: false,
             },
             &GpuDesc { validation: false, ..GpuDesc::default() },
         )

@@ -59,6 +59,10 @@ pub struct Capabilities {
     pub tessellation_shader: bool,
     /// `fillModeNonSolid` was enabled (wireframe overdraw).
     pub fill_mode_non_solid: bool,
+    /// Dynamic rendering was enabled (Vulkan 1.3's `dynamicRendering`, or
+    /// `VK_KHR_dynamic_rendering`): galerkin's pipelines can then be built for a host's
+    /// `vkCmdBeginRendering` ([`crate::gpu::RenderPass::dynamic`]).
+    pub dynamic_rendering: bool,
     /// Memory types: (property flags, heap index).
     pub memory_types: Vec<(vk::MemoryPropertyFlags, u32)>,
     /// Memory heaps: (size in bytes, flags).
@@ -67,12 +71,14 @@ pub struct Capabilities {
 
 impl Capabilities {
     /// Reads everything from `physical`. `enabled` is the feature set the device was created
-    /// with (for an adopted device, what the host says it enabled).
+    /// with and `dynamic_rendering` whether dynamic rendering was enabled (for an adopted
+    /// device, what the host says it enabled).
     pub(crate) fn read(
         instance: &ash::Instance,
         physical: vk::PhysicalDevice,
         queue_family: u32,
         enabled: &vk::PhysicalDeviceFeatures,
+        dynamic_rendering: bool,
     ) -> Self {
         let mut driver = vk::PhysicalDeviceDriverProperties::default();
         let mut subgroup = vk::PhysicalDeviceSubgroupProperties::default();
@@ -143,6 +149,7 @@ impl Capabilities {
             geometry_shader: enabled.geometry_shader == vk::TRUE,
             tessellation_shader: enabled.tessellation_shader == vk::TRUE,
             fill_mode_non_solid: enabled.fill_mode_non_solid == vk::TRUE,
+            dynamic_rendering,
             memory_types: memory
                 .memory_types_as_slice()
                 .iter()

@@ -129,6 +129,10 @@ pub struct RawDevice {
     pub queue: vk::Queue,
     /// The core features the host enabled on `device` (the engine only uses what is enabled).
     pub enabled_features: vk::PhysicalDeviceFeatures,
+    /// True if the host enabled dynamic rendering (Vulkan 1.3's `dynamicRendering` or
+    /// `VK_KHR_dynamic_rendering`): galerkin's draws can then be recorded inside the host's
+    /// `vkCmdBeginRendering` ([`super::RenderPass::dynamic`]).
+    pub dynamic_rendering: bool,
 }
 
 /// State shared by the context and every resource made on it.
@@ -270,7 +274,8 @@ impl Gpu {
         let mut guard = InstanceGuard(Some(created));
         let inst = &guard.0.as_ref().expect("guard holds the instance").instance;
         let choice = instance::choose_device(inst, desc)?;
-        let (device, enabled) = instance::create_device(inst, &choice, desc)?;
+        let api = guard.0.as_ref().expect("guard holds the instance").api;
+        let (device, enabled, dynamic_rendering) = instance::create_device(inst, api, &choice, desc)?;
         // SAFETY: queue 0 of the family was requested in `create_device`.
         let queue = unsafe { device.get_device_queue(choice.queue_family, 0) };
         let created = guard.0.take().expect("guard holds the instance");
@@ -284,6 +289,7 @@ impl Gpu {
             queue_family: choice.queue_family,
             queue,
             enabled,
+            dynamic_rendering,
             messenger: created.messenger,
             debug_names,
             log,
@@ -304,7 +310,8 @@ impl Gpu {
     /// - `raw.queue` is a queue of family `raw.queue_family` of `raw.device`, that family
     ///   supports graphics and compute, and the host does not access the queue concurrently
     ///   with [`Gpu::run`]/[`Gpu::submit`] (Vulkan requires external synchronisation).
-    /// - `raw.enabled_features` is a subset of what the device was created with.
+    /// - `raw.enabled_features` is a subset of what the device was created with, and
+    ///   `raw.dynamic_rendering` is true only if dynamic rendering was enabled.
     /// - The host keeps the instance and device alive until this `Gpu`, its clones and every
     ///   resource made from it have been dropped.
     /// - Work the host submits that uses engine resources has completed before those resources
@@ -318,6 +325,7 @@ impl Gpu {
             queue_family: raw.queue_family,
             queue: raw.queue,
             enabled: raw.enabled_features,
+            dynamic_rendering: raw.dynamic_rendering,
             messenger: None,
             debug_names: None,
             log: None,
@@ -327,7 +335,8 @@ impl Gpu {
     }
 
     fn assemble(p: Parts<'_>) -> GpuResult<Self> {
-        let caps = Capabilities::read(&p.instance, p.physical, p.queue_family, &p.enabled);
+        let caps =
+            Capabilities::read(&p.instance, p.physical, p.queue_family, &p.enabled, p.dynamic_rendering);
         let mut debug = gpu_allocator::AllocatorDebugSettings::default();
         debug.log_leaks_on_shutdown = true;
         let allocator = match Allocator::new(&AllocatorCreateDesc {
@@ -450,6 +459,7 @@ struct Parts<'a> {
     queue_family: u32,
     queue: vk::Queue,
     enabled: vk::PhysicalDeviceFeatures,
+    dynamic_rendering: bool,
     messenger: Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>,
     debug_names: Option<ash::ext::debug_utils::Device>,
     log: Option<Arc<ValidationLog>>,

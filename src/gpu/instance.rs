@@ -34,6 +34,8 @@ pub(crate) fn load_entry(desc: &GpuDesc) -> GpuResult<ash::Entry> {
 pub(crate) struct CreatedInstance {
     pub instance: ash::Instance,
     pub messenger: Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>,
+    /// The API version the instance was created for.
+    pub api: u32,
 }
 
 /// Creates the instance: Vulkan 1.3 where the loader has it (1.2 at least), the caller's
@@ -130,7 +132,7 @@ pub(crate) fn create_instance(
     } else {
         None
     };
-    Ok(CreatedInstance { instance, messenger })
+    Ok(CreatedInstance { instance, messenger, api })
 }
 
 /// The chosen device and the family of its one queue.
@@ -215,14 +217,29 @@ pub(crate) fn has_device_extension(
 
 /// Creates the logical device with one queue of `choice.queue_family`, enabling the optional
 /// core features galerkin uses when the device has them (f64 in shaders, geometry and
-/// tessellation shaders, wireframe fill). Returns the device and the features actually enabled.
+/// tessellation shaders, wireframe fill, and on Vulkan 1.3 dynamic rendering). Returns the
+/// device, the core features actually enabled and whether dynamic rendering was.
 pub(crate) fn create_device(
     instance: &ash::Instance,
+    instance_api: u32,
     choice: &Choice,
     desc: &GpuDesc,
-) -> GpuResult<(ash::Device, vk::PhysicalDeviceFeatures)> {
+) -> GpuResult<(ash::Device, vk::PhysicalDeviceFeatures, bool)> {
     // SAFETY: plain instance query.
     let supported = unsafe { instance.get_physical_device_features(choice.physical) };
+    // Vulkan 1.3's features, on a 1.3 device under a 1.3 instance (create_instance asks for 1.3
+    // whenever the loader has it).
+    // SAFETY: plain instance query.
+    let api = unsafe { instance.get_physical_device_properties(choice.physical) }.api_version;
+    let has_13 = api >= vk::API_VERSION_1_3 && instance_api >= vk::API_VERSION_1_3;
+    let mut supported13 = vk::PhysicalDeviceVulkan13Features::default();
+    if has_13 {
+        let mut features2 = vk::PhysicalDeviceFeatures2::default().push_next(&mut supported13);
+        // SAFETY: Vulkan 1.1 core query on a device of this instance; the chain outlives it.
+        unsafe { instance.get_physical_device_features2(choice.physical, &mut features2) };
+    }
+    let dynamic_rendering = has_13 && supported13.dynamic_rendering == vk::TRUE;
+    let mut enabled13 = vk::PhysicalDeviceVulkan13Features::default().dynamic_rendering(dynamic_rendering);
     let enabled = vk::PhysicalDeviceFeatures {
         shader_float64: supported.shader_float64,
         geometry_shader: supported.geometry_shader,
@@ -239,11 +256,14 @@ pub(crate) fn create_device(
     if desc.swapchain {
         extensions.push(ash::khr::swapchain::NAME.as_ptr());
     }
-    let info = vk::DeviceCreateInfo::default()
+    let mut info = vk::DeviceCreateInfo::default()
         .queue_create_infos(&queues)
         .enabled_extension_names(&extensions)
         .enabled_features(&enabled);
+    if has_13 {
+        info = info.push_next(&mut enabled13);
+    }
     // SAFETY: `info` points at locals that outlive the call; `choice.physical` is of `instance`.
     let device = unsafe { instance.create_device(choice.physical, &info, None) }.vk("vkCreateDevice")?;
-    Ok((device, enabled))
+    Ok((device, enabled, dynamic_rendering))
 }

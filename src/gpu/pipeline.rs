@@ -510,6 +510,11 @@ impl GraphicsPipeline {
         let blend = vk::PipelineColorBlendStateCreateInfo::default().attachments(&attachments);
         let dynamic_states = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
         let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic_states);
+        // A host's dynamic rendering: the attachment formats instead of a render pass.
+        let color_formats = vec![desc.render_pass.color_format(); desc.color_attachments as usize];
+        let mut rendering = vk::PipelineRenderingCreateInfo::default()
+            .color_attachment_formats(&color_formats)
+            .depth_attachment_format(desc.render_pass.depth_format().unwrap_or(vk::Format::UNDEFINED));
         let info = vk::GraphicsPipelineCreateInfo::default()
             .stages(&shader_stages)
             .vertex_input_state(&vertex_input)
@@ -524,6 +529,7 @@ impl GraphicsPipeline {
             .render_pass(desc.render_pass.raw())
             .subpass(desc.render_pass.subpass());
         let info = if tess.is_some() { info.tessellation_state(&tessellation_state) } else { info };
+        let info = if desc.render_pass.is_dynamic() { info.push_next(&mut rendering) } else { info };
         // SAFETY: every pointer in `info` refers to locals alive during the call.
         let raw = unsafe { device.create_graphics_pipelines(vk::PipelineCache::null(), &[info], None) }
             .map_err(|(_, e)| vk_error("vkCreateGraphicsPipelines", e))?[0];

@@ -3,8 +3,9 @@
 //! end — ready to be read back, written to a file, or blitted to a window. The same render pass
 //! serves the offscreen path, the viewer (which blits the result to its swapchain) and a host's
 //! own image. A host's own render pass is described to the engine by
-//! [`RenderPass::from_host`]: galerkin's pipelines are then built for it and draw inside it,
-//! begun, ended and owned by the host.
+//! [`RenderPass::from_host`], and a host's dynamic rendering (`vkCmdBeginRendering`) by its
+//! attachment formats with [`RenderPass::dynamic`]: galerkin's pipelines are then built for it
+//! and draw inside it, begun, ended and owned by the host.
 
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;
@@ -31,6 +32,8 @@ pub struct RenderPass {
     /// `None` for the engine's own passes (all compatible when their formats agree); a unique
     /// number for each host pass (whose compatibility the engine cannot see).
     host_id: Option<u64>,
+    /// True for a host's dynamic rendering (no render-pass object: `raw` is null).
+    dynamic: bool,
 }
 
 /// What the engine must know of a host's render pass to draw in it (see
@@ -57,6 +60,9 @@ pub enum PassKey {
     Engine(vk::Format, Option<vk::Format>),
     /// The host render pass with this number.
     Host(u64),
+    /// A host's dynamic rendering with these colour and depth formats (pipelines built with
+    /// `VkPipelineRenderingCreateInfo`, compatible whenever the formats agree).
+    Dynamic(vk::Format, Option<vk::Format>),
 }
 
 /// True for the colour formats galerkin's pipelines write: 8-bit UNORM RGBA or BGRA (colours,
@@ -157,6 +163,48 @@ impl RenderPass {
             depth_format,
             subpass: 0,
             host_id: None,
+            dynamic: false,
+        })
+    }
+
+    /// Describes a host's dynamic rendering (`vkCmdBeginRendering`, Vulkan 1.3 or
+    /// `VK_KHR_dynamic_rendering`) by the formats of its one colour attachment and its depth
+    /// attachment, so that galerkin's pipelines are built for it (with
+    /// `VkPipelineRenderingCreateInfo`) and record their draws between the host's
+    /// `vkCmdBeginRendering` and `vkCmdEndRendering`. No Vulkan object is made; keep it, as
+    /// pipelines are cached per format pair.
+    ///
+    /// [`GpuError::Unsupported`] if the device was not created with dynamic rendering enabled
+    /// ([`super::Capabilities::dynamic_rendering`]) or the colour format is not one galerkin
+    /// writes (`R8G8B8A8_UNORM`, `B8G8R8A8_UNORM`, `R32G32B32A32_SFLOAT`). The host's
+    /// rendering must be single-sampled with exactly that one colour attachment (location 0)
+    /// and a depth attachment of `depth_format` (none if `None`), without multiview.
+    pub fn dynamic(gpu: &Gpu, color_format: vk::Format, depth_format: Option<vk::Format>) -> GpuResult<Self> {
+        if !gpu.caps().dynamic_rendering {
+            return Err(GpuError::Unsupported(
+                "dynamic rendering (enable Vulkan 1.3's dynamicRendering or VK_KHR_dynamic_rendering \
+                 on the device, and say so in RawDevice::dynamic_rendering)"
+                    .into(),
+            ));
+        }
+        if !is_drawable_color_format(color_format) {
+            return Err(GpuError::Unsupported(format!(
+                "drawing into a host colour attachment of format {color_format:?} (galerkin writes \
+                 R8G8B8A8_UNORM, B8G8R8A8_UNORM or R32G32B32A32_SFLOAT)"
+            )));
+        }
+        let life = Lifetime::new(&gpu.shared, "a host's dynamic rendering", |_| {
+            // Nothing to destroy.
+        });
+        Ok(Self {
+            life,
+            _device: gpu.shared.clone(),
+            raw: vk::RenderPass::null(),
+            color_format,
+            depth_format,
+            subpass: 0,
+            host_id: None,
+            dynamic: true,
         })
     }
 
@@ -194,6 +242,7 @@ impl RenderPass {
             depth_format: desc.depth_format,
             subpass: desc.subpass,
             host_id: Some(NEXT_HOST_PASS.fetch_add(1, Ordering::Relaxed)),
+            dynamic: false,
         })
     }
 
@@ -201,6 +250,7 @@ impl RenderPass {
     pub fn key(&self) -> PassKey {
         match self.host_id {
             Some(id) => PassKey::Host(id),
+            None if self.dynamic => PassKey::Dynamic(self.color_format, self.depth_format),
             None => PassKey::Engine(self.color_format, self.depth_format),
         }
     }
@@ -210,12 +260,17 @@ impl RenderPass {
         self.subpass
     }
 
-    /// True for a host's render pass.
+    /// True for a host's render pass or dynamic rendering (begun and ended by the host).
     pub fn is_host(&self) -> bool {
-        self.host_id.is_some()
+        self.host_id.is_some() || self.dynamic
     }
 
-    /// The Vulkan handle (pipelines are built against it).
+    /// True for a host's dynamic rendering ([`RenderPass::dynamic`]).
+    pub fn is_dynamic(&self) -> bool {
+        self.dynamic
+    }
+
+    /// The Vulkan handle (pipelines are built against it); null for dynamic rendering.
     pub fn raw(&self) -> vk::RenderPass {
         self.raw
     }
@@ -269,6 +324,7 @@ impl std::fmt::Debug for RenderPass {
             .field("depth_format", &self.depth_format)
             .field("subpass", &self.subpass)
             .field("host", &self.is_host())
+            .field("dynamic", &self.dynamic)
             .finish()
     }
 }

@@ -1,0 +1,190 @@
+//! Drawing inside a host's dynamic rendering (`RenderPass::dynamic` + `DrawTarget`, Vulkan 1.3
+//! `vkCmdBeginRendering`): the host begins rendering on its own BGRA colour image and D32
+//! depth image (cleared grey and far), galerkin's spectral elements draw in a viewport away
+//! from the corner, and the result must be what the same renderer draws offscreen — covered
+//! pixels bit for bit, uncovered ones the host's clear, nothing outside the viewport — with
+//! synchronization validation on. The depth attachment is the host's: its clear value is
+//! what galerkin's depth test starts from. Then what is refused: a colour format galerkin does
+//! not write, and a spectral draw in rendering without depth.
+
+mod common;
+
+use std::sync::Arc;
+
+use common::host::HostCommands;
+use galerkin::gpu::{
+    record_image_barrier, vk, Buffer, GpuError, Image, ImageDesc, MemoryKind, Recorder, RenderPass, Viewport,
+};
+use galerkin::render::{ColorFormat, Colormap, DrawTarget, Pixels, RenderTarget};
+use galerkin::spectral::generate::quad_grid;
+use galerkin::spectral::{NodeSet, SpectralError, SpectralRenderer, SpectralView, View2d};
+
+const FB: vk::Extent2D = vk::Extent2D { width: 200, height: 150 };
+const VIEWPORT: Viewport = Viewport { x: 41, y: 17, width: 120, height: 90 };
+/// The host's clear colour, exactly representable in 8 bits (100 / 255).
+const GREY: u8 = 100;
+
+#[test]
+fn spectral_elements_draw_inside_a_host_dynamic_rendering_in_its_viewport() {
+    let gpu = common::gpu();
+    assert!(gpu.caps().dynamic_rendering, "lavapipe is a Vulkan 1.3 device: dynamic rendering is enabled");
+    let bgra = vk::Format::B8G8R8A8_UNORM;
+    let d32 = vk::Format::D32_SFLOAT;
+    let colour = Image::new(&gpu, "host colour", ImageDesc::color_target(FB.width, FB.height, bgra)).unwrap();
+    let depth = Image::new(&gpu, "host depth", ImageDesc::depth_target(FB.width, FB.height, d32)).unwrap();
+    let pass = RenderPass::dynamic(&gpu, bgra, Some(d32)).unwrap();
+    assert!(pass.is_dynamic() && pass.is_host());
+    let target = DrawTarget::new(&pass, VIEWPORT).unwrap();
+    let mesh = Arc::new(quad_grid(4, 3, 0.2, 6, NodeSet::GaussLobatto).unwrap());
+    let mut spectral = SpectralRenderer::new(&gpu, mesh.clone(), &Colormap::viridis()).unwrap();
+    let view = SpectralView {
+        view: Some(View2d::fit(&mesh, VIEWPORT.width, VIEWPORT.height)),
+        edges: true,
+        ..SpectralView::default()
+    };
+    let readback = Buffer::<u8>::new(
+        &gpu,
+        "host readback",
+        u64::from(4 * FB.width * FB.height),
+        vk::BufferUsageFlags::empty(),
+        MemoryKind::GpuToCpu,
+    )
+    .unwrap();
+    let host = HostCommands::new(&gpu);
+    // SAFETY: the host's buffer is recording on this device, used by this thread only, and the
+    // Recording is kept until its fence was waited for.
+    let mut rec = unsafe { Recorder::from_host(&gpu, host.cmd) };
+    spectral.record_prepass(&mut rec, target, &view).unwrap();
+    // SAFETY: the host's images are live engine images with one level and layer, kept alive
+    // until the recording finishes (they outlive it).
+    unsafe {
+        record_image_barrier(
+            &mut rec,
+            colour.raw(),
+            vk::ImageAspectFlags::COLOR,
+            (vk::ImageLayout::UNDEFINED, vk::PipelineStageFlags::TOP_OF_PIPE, vk::AccessFlags::empty()),
+            (
+                vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
+                vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT,
+                vk::AccessFlags::COLOR_ATTACHMENT_WRITE,
+            ),
+        );
+        record_image_barrier(
+            &mut rec,
+            depth.raw(),
+            vk::ImageAspectFlags::DEPTH,
+            (vk::ImageLayout::UNDEFINED, vk::PipelineStageFlags::TOP_OF_PIPE, vk::AccessFlags::empty()),
+            (
+                vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL,
+                vk::PipelineStageFlags::EARLY_FRAGMENT_TESTS | vk::PipelineStageFlags::LATE_FRAGMENT_TESTS,
+                vk::AccessFlags::DEPTH_STENCIL_ATTACHMENT_READ
+                    | vk::AccessFlags::DEPTH_STENCIL_ATTACHMENT_WRITE,
+            ),
+        );
+    }
+    let g = f32::from(GREY) / 255.0;
+    let colour_attachment = [vk::RenderingAttachmentInfo::default()
+        .image_view(colour.view())
+        .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
+        .load_op(vk::AttachmentLoadOp::CLEAR)
+        .store_op(vk::AttachmentStoreOp::STORE)
+        .clear_value(vk::ClearValue { color: vk::ClearColorValue { float32: [g, g, g, 1.0] } })];
+    let depth_attachment = vk::RenderingAttachmentInfo::default()
+        .image_view(depth.view())
+        .image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
+        .load_op(vk::AttachmentLoadOp::CLEAR)
+        .store_op(vk::AttachmentStoreOp::DONT_CARE)
+        .clear_value(vk::ClearValue { depth_stencil: vk::ClearDepthStencilValue { depth: 1.0, stencil: 0 } });
+    let rendering = vk::RenderingInfo::default()
+        .render_area(vk::Rect2D { offset: vk::Offset2D::default(), extent: FB })
+        .layer_count(1)
+        .color_attachments(&colour_attachment)
+        .depth_attachment(&depth_attachment);
+    // SAFETY: the host's own dynamic rendering on its images, in the layouts just set.
+    unsafe { gpu.device().cmd_begin_rendering(host.cmd, &rendering) };
+    spectral.record_draw_into(&mut rec, target, &view).unwrap();
+    // SAFETY: ends the rendering begun above; then the colour image goes to TRANSFER_SRC with
+    // its attachment writes visible to the copy.
+    unsafe {
+        gpu.device().cmd_end_rendering(host.cmd);
+        record_image_barrier(
+            &mut rec,
+            colour.raw(),
+            vk::ImageAspectFlags::COLOR,
+            (
+                vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
+                vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT,
+                vk::AccessFlags::COLOR_ATTACHMENT_WRITE,
+            ),
+            (
+                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                vk::PipelineStageFlags::TRANSFER,
+                vk::AccessFlags::TRANSFER_READ,
+            ),
+        );
+    }
+    colour.record_copy_to_buffer(&mut rec, &readback);
+    let recording = rec.finish();
+    host.submit_and_wait();
+    drop(recording);
+    let got = readback.mapped().unwrap().to_vec();
+
+    let offscreen =
+        RenderTarget::new(&gpu, "reference", VIEWPORT.width, VIEWPORT.height, ColorFormat::Rgba8).unwrap();
+    let Pixels::Rgba8(want) = spectral.render(&offscreen, &view).unwrap() else { panic!("RGBA8 target") };
+    let uncovered = want[..4].to_vec();
+    let (mut covered, mut differing) = (0, 0);
+    for y in 0..FB.height {
+        for x in 0..FB.width {
+            let i = 4 * (y * FB.width + x) as usize;
+            // The host's attachment is BGRA: swap back to RGBA.
+            let px = [got[i + 2], got[i + 1], got[i], got[i + 3]];
+            let inside = (VIEWPORT.x..VIEWPORT.x + VIEWPORT.width).contains(&x)
+                && (VIEWPORT.y..VIEWPORT.y + VIEWPORT.height).contains(&y);
+            let expected = if inside {
+                let j = 4 * ((y - VIEWPORT.y) * VIEWPORT.width + (x - VIEWPORT.x)) as usize;
+                let w = &want[j..j + 4];
+                if w == uncovered.as_slice() {
+                    [GREY, GREY, GREY, 255]
+                } else {
+                    covered += 1;
+                    [w[0], w[1], w[2], w[3]]
+                }
+            } else {
+                [GREY, GREY, GREY, 255]
+            };
+            differing += usize::from(px != expected);
+        }
+    }
+    assert!(covered > 5_000, "the elements cover most of the viewport: {covered}");
+    assert_eq!(differing, 0, "pixels that differ from the offscreen render or the host's clear");
+}
+
+#[test]
+fn dynamic_rendering_galerkin_cannot_draw_in_is_refused() {
+    let gpu = common::gpu();
+    for format in [vk::Format::B8G8R8A8_SRGB, vk::Format::R16G16B16A16_SFLOAT] {
+        match RenderPass::dynamic(&gpu, format, None) {
+            Err(GpuError::Unsupported(m)) => assert!(m.contains(&format!("{format:?}")), "{m}"),
+            other => panic!("{format:?} accepted: {other:?}"),
+        }
+    }
+    let pass = RenderPass::dynamic(&gpu, vk::Format::R8G8B8A8_UNORM, None).unwrap();
+    let mesh = Arc::new(quad_grid(2, 2, 0.0, 3, NodeSet::GaussLobatto).unwrap());
+    let mut spectral = SpectralRenderer::new(&gpu, mesh, &Colormap::viridis()).unwrap();
+    let host = HostCommands::new(&gpu);
+    // SAFETY: as in the first test; nothing is recorded, the buffer is never submitted.
+    let mut rec = unsafe { Recorder::from_host(&gpu, host.cmd) };
+    let target = DrawTarget::new(&pass, VIEWPORT).unwrap();
+    match spectral.record_draw_into(&mut rec, target, &SpectralView::default()) {
+        Err(SpectralError::Device { cause: GpuError::Unsupported(m), .. }) => {
+            assert!(m.contains("depth attachment"), "{m}")
+        }
+        other => panic!("rendering without depth was accepted: {other:?}"),
+    }
+    drop(rec.finish());
+    // A framebuffer cannot be made for a host's dynamic rendering.
+    let image = Image::new(&gpu, "c", ImageDesc::color_target(8, 8, vk::Format::R8G8B8A8_UNORM)).unwrap();
+    assert!(galerkin::gpu::Framebuffer::new(&gpu, &pass, &[&image], vk::Extent2D { width: 8, height: 8 })
+        .is_err());
+}
