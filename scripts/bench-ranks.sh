@@ -1,9 +1,11 @@
 #!/usr/bin/env bash
 # Strong scaling of the precompute over MPI ranks on this machine (BENCHMARKS.md, "Training
-# over ranks"): the 1,298-face radiosity training and the cavity's fluid training (Table 1's
-# basis sizes on four short cavity runs) at 1, 2 and 4 ranks, against one process without MPI.
-# Every rank runs one rayon thread (RAYON_NUM_THREADS=1), so 2 ranks use the machine's two
-# cores and 4 are oversubscribed; the process without MPI uses both cores through rayon.
+# over ranks"): the radiosity training of the 496-face scene with the default model (exact
+# near field, operator correction; RANKS_SCENE to choose another) and the cavity's fluid
+# training (Table 1's basis sizes on four short cavity runs) at 1, 2 and 4 ranks, against one
+# process without MPI. Every rank runs one rayon thread (RAYON_NUM_THREADS=1), so 2 ranks use
+# the machine's two cores and 4 are oversubscribed; the process without MPI uses both cores
+# through rayon. About 25 minutes on 2 cores.
 #
 #   scripts/bench-ranks.sh            # writes out/bench-ranks/*.log and prints the tables
 #
@@ -33,7 +35,7 @@ timed() {
 
 mpi=(mpirun --oversubscribe --mca btl_vader_single_copy_mechanism none -x RAYON_NUM_THREADS=1 -x GALERKIN_LOG)
 
-scene=scenes/radiosity/two_rooms_medium.toml
+scene=${RANKS_SCENE:-scenes/radiosity/two_rooms_small.toml}
 echo "radiosity train $scene (540 samples)"
 printf '  %-22s ' "one process, 2 threads"
 timed radiosity-alone "$BIN" radiosity train "$scene" --out "$OUT/radiosity-alone"
