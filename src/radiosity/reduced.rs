@@ -229,7 +229,7 @@ impl ReducedRadiosity {
         receiving: &[usize],
     ) -> Result<CrossValidation, RadiosityError> {
         use rayon::prelude::*;
-        let err = |e: crate::reduce::ReduceError| RadiosityError::Solve(e.to_string());
+        let err = RadiosityError::from;
         let basis = self.model.basis("b").ok_or_else(|| RadiosityError::Solve("no basis `b`".into()))?;
         let results: Vec<(f64, f64)> = configurations
             .par_iter()
@@ -347,7 +347,7 @@ impl ReducedRadiosity {
         mesh: &SceneMesh,
         times: &mut ReducedTimes,
     ) -> Result<(Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>), RadiosityError> {
-        let err = |e: crate::reduce::ReduceError| RadiosityError::Solve(e.to_string());
+        let err = RadiosityError::from;
         self.check_faces(mesh)?;
         let t0 = Instant::now();
         let ghat = self.model.project_input("g", &mesh.g()).map_err(err)?;
@@ -364,7 +364,7 @@ impl ReducedRadiosity {
     /// Radiosity per face of `mesh` (the scene's topology at some parameters), and where the
     /// time went.
     pub fn evaluate(&self, mesh: &SceneMesh) -> Result<(Vec<Rgb>, ReducedTimes), RadiosityError> {
-        let err = |e: crate::reduce::ReduceError| RadiosityError::Solve(e.to_string());
+        let err = RadiosityError::from;
         let mut times = ReducedTimes::default();
         let (ghat, vhat, x, ehat) = self.reduced_inputs(mesh, &mut times)?;
         let t2 = Instant::now();
@@ -407,7 +407,7 @@ impl ReducedRadiosity {
     /// [`Self::evaluate`] inverts — `B_bᵀ (I − ρF̂) B_b` with `F̂` the reduced chain's form
     /// factors (Table 2) — for checking it against the exact operator projected on `B_b`.
     pub fn reduced_operator(&self, mesh: &SceneMesh) -> Result<Tensor, RadiosityError> {
-        let err = |e: crate::reduce::ReduceError| RadiosityError::Solve(e.to_string());
+        let err = RadiosityError::from;
         let ghat = self.model.project_input("g", &mesh.g()).map_err(err)?;
         let (vhat, x) = self.visibility.predict(&ghat);
         let expr = super::chain::radiosity_operator(self.has_operator_correction());
@@ -433,7 +433,7 @@ impl ReducedRadiosity {
         x: &[f64],
         ehat: &[f64],
     ) -> Result<(Vec<f64>, Tensor), RadiosityError> {
-        let err = |e: crate::reduce::ReduceError| RadiosityError::Solve(e.to_string());
+        let err = RadiosityError::from;
         let tensor_err = |e: crate::tensor::TensorError| RadiosityError::Solve(e.to_string());
         let inputs = self.chain_inputs(ghat, vhat, x);
         let phat = self.model.evaluate_expression(&super::chain::form_factors(), &inputs).map_err(err)?;
@@ -464,7 +464,7 @@ impl ReducedRadiosity {
         &self,
         mesh: &SceneMesh,
     ) -> Result<(Vec<Rgb>, ReducedTimes, Estimate), RadiosityError> {
-        let err = |e: crate::reduce::ReduceError| RadiosityError::Solve(e.to_string());
+        let err = RadiosityError::from;
         let mut times = ReducedTimes::default();
         let (ghat, vhat, x, ehat) = self.reduced_inputs(mesh, &mut times)?;
         let t2 = Instant::now();
