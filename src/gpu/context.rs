@@ -183,7 +183,8 @@ impl DeviceShared {
 impl Drop for DeviceShared {
     fn drop(&mut self) {
         // Every Submission holds an Arc to this, so none is in flight except timed-out ones
-        // (waited for here). Release their objects and those of orphaned host recordings.
+        // (waited for here). Release their objects and those of orphaned host recordings, then
+        // run what is left retired.
         let (abandoned_slots, uses) = self.drain_abandoned();
         drop(uses);
         drop(self.tracker.get_mut().map(|t| std::mem::take(&mut t.orphans)));
@@ -191,8 +192,8 @@ impl Drop for DeviceShared {
         // destructors, unable to reach this device any more, queue for it: run until none is
         // left (bounded: every object is destroyed once).
         loop {
-            let leftovers: Vec<Retirement> =
-                self.graveyard.lock().unwrap_or_else(|p| p.into_inner()).drain(..).collect();
+            let mut leftovers = self.tracker.get_mut().map(|t| t.take_all()).unwrap_or_default();
+            leftovers.extend(self.graveyard.lock().unwrap_or_else(|p| p.into_inner()).drain(..));
             if leftovers.is_empty() {
                 break;
             }
