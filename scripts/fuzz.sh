@@ -87,9 +87,8 @@ run() {
     # caps what a file can ask for); -timeout: 20 s for one input is a finding (fluid scenes
     # build their meshes within the harness's budget of 20,000 cells: about a second under
     # AddressSanitizer).
-    timeout=20
     cargo +nightly fuzz run -O --debug-assertions "$1" "corpus/$1" -- \
-        -max_total_time="$SECONDS_EACH" ${RUNS:+-runs=$RUNS} -rss_limit_mb=2048 -timeout=$timeout -max_len=262144 \
+        -max_total_time="$SECONDS_EACH" ${RUNS:+-runs=$RUNS} -rss_limit_mb=2048 -timeout=20 -max_len=262144 \
         -print_final_stats=1 > "logs/$1.log" 2>&1 || echo "fuzz: $1 stopped with a finding: see fuzz/logs/$1.log" >&2
     runs=$(grep -o 'Done [0-9]* runs in [0-9]* second' "logs/$1.log" | tail -1)
     echo "fuzz: $1: ${runs:-no summary (see fuzz/logs/$1.log)}"

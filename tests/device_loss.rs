@@ -12,26 +12,36 @@ use std::sync::Arc;
 use galerkin::gpu::{Gpu, GpuError, GpuFailure};
 use galerkin::render::{ColorFormat, Colormap, RenderTarget};
 
-/// Runs `work` on a Gpu whose first submission wait reports the device lost and returns the
-/// capability's error (each capability must fail, and fail typed).
-fn lost<E: GpuFailure + std::fmt::Display>(what: &str, work: impl FnOnce(&Gpu) -> Result<(), E>) {
-    let gpu = common::gpu_with(|d| d.lose_device = Some(1));
-    let e = match work(&gpu) {
-        Ok(()) => panic!("{what}: succeeded on a lost device"),
-        Err(e) => e,
-    };
-    assert!(e.is_device_lost(), "{what}: {e} is not a device loss to a host ({:?})", e.gpu_error());
-    assert!(!e.is_out_of_memory(), "{what}: {e}");
+/// The fault a test Gpu injects.
+#[derive(Clone, Copy, Debug)]
+enum Fault {
+    /// The first submission wait reports the device lost.
+    DeviceLost,
+    /// The first allocation fails as out of memory.
+    OutOfMemory,
 }
 
-/// Runs `work` on a Gpu whose first allocation fails as out of memory.
-fn out_of_memory<E: GpuFailure + std::fmt::Display>(what: &str, work: impl FnOnce(&Gpu) -> Result<(), E>) {
-    let gpu = common::gpu_with(|d| d.fail_allocation = Some(1));
+/// Runs `work` on a Gpu that injects `fault` and checks that the capability fails, and fails
+/// typed: its error answers `is_device_lost()` or `is_out_of_memory()` as the fault says.
+fn fails_typed<E: GpuFailure + std::fmt::Display>(
+    what: &str,
+    fault: Fault,
+    work: impl FnOnce(&Gpu) -> Result<(), E>,
+) {
+    let gpu = common::gpu_with(|d| match fault {
+        Fault::DeviceLost => d.lose_device = Some(1),
+        Fault::OutOfMemory => d.fail_allocation = Some(1),
+    });
     let e = match work(&gpu) {
-        Ok(()) => panic!("{what}: succeeded with no device memory"),
+        Ok(()) => panic!("{what}: succeeded despite {fault:?}"),
         Err(e) => e,
     };
-    assert!(e.is_out_of_memory(), "{what}: {e} is not out-of-memory to a host ({:?})", e.gpu_error());
+    let (lost, oom) = (e.is_device_lost(), e.is_out_of_memory());
+    let typed = match fault {
+        Fault::DeviceLost => lost && !oom,
+        Fault::OutOfMemory => oom,
+    };
+    assert!(typed, "{what}: {e} is not {fault:?} to a host ({:?})", e.gpu_error());
 }
 
 fn spectral(gpu: &Gpu) -> Result<(), galerkin::spectral::SpectralError> {
@@ -87,20 +97,22 @@ fn premultiply(gpu: &Gpu) -> Result<(), galerkin::reduce::ReduceError> {
 
 #[test]
 fn device_loss_reaches_the_caller_typed_from_every_capability() {
-    lost("spectral render", spectral);
-    lost("spacetime render", spacetime);
-    lost("fluid device particles", fluid_particles);
-    lost("radiosity form factors on the device", radiosity);
-    lost("premultiplication on the device", premultiply);
+    let f = Fault::DeviceLost;
+    fails_typed("spectral render", f, spectral);
+    fails_typed("spacetime render", f, spacetime);
+    fails_typed("fluid device particles", f, fluid_particles);
+    fails_typed("radiosity form factors on the device", f, radiosity);
+    fails_typed("premultiplication on the device", f, premultiply);
 }
 
 #[test]
 fn out_of_memory_reaches_the_caller_typed_from_every_capability() {
-    out_of_memory("spectral render", spectral);
-    out_of_memory("spacetime render", spacetime);
-    out_of_memory("fluid device particles", fluid_particles);
-    out_of_memory("radiosity form factors on the device", radiosity);
-    out_of_memory("premultiplication on the device", premultiply);
+    let f = Fault::OutOfMemory;
+    fails_typed("spectral render", f, spectral);
+    fails_typed("spacetime render", f, spacetime);
+    fails_typed("fluid device particles", f, fluid_particles);
+    fails_typed("radiosity form factors on the device", f, radiosity);
+    fails_typed("premultiplication on the device", f, premultiply);
 }
 
 /// The trait's answers for the device layer's own error.

@@ -11,7 +11,7 @@ mod common;
 
 use std::sync::Arc;
 
-use common::host::HostCommands;
+use common::host::{differing_from_offscreen, HostCommands};
 use galerkin::gpu::{
     record_image_barrier, vk, Buffer, GpuError, Image, ImageDesc, MemoryKind, Recorder, RenderPass, Viewport,
 };
@@ -133,35 +133,6 @@ fn host_frame(
     got
 }
 
-/// Pixels of the host's frame that differ from `want` (the offscreen render of the viewport,
-/// its background the host's clear) inside the viewport, or from the clear outside it; and
-/// how many covered pixels were compared.
-fn differing(got: &[u8], want: &[u8], viewport: Viewport) -> (usize, usize) {
-    let uncovered = want[..4].to_vec();
-    let (mut covered, mut differing) = (0, 0);
-    for y in 0..FB.height {
-        for x in 0..FB.width {
-            let i = 4 * (y * FB.width + x) as usize;
-            let inside = (viewport.x..viewport.x + viewport.width).contains(&x)
-                && (viewport.y..viewport.y + viewport.height).contains(&y);
-            let expected = if inside {
-                let j = 4 * ((y - viewport.y) * viewport.width + (x - viewport.x)) as usize;
-                let w = &want[j..j + 4];
-                if w == uncovered.as_slice() {
-                    [GREY, GREY, GREY, 255]
-                } else {
-                    covered += 1;
-                    [w[0], w[1], w[2], w[3]]
-                }
-            } else {
-                [GREY, GREY, GREY, 255]
-            };
-            differing += usize::from(got[i..i + 4] != expected);
-        }
-    }
-    (covered, differing)
-}
-
 #[test]
 fn spectral_elements_draw_inside_a_host_dynamic_rendering_in_its_viewport() {
     let gpu = common::gpu();
@@ -185,7 +156,7 @@ fn spectral_elements_draw_inside_a_host_dynamic_rendering_in_its_viewport() {
     let Pixels::Rgba8(want) = spectral.borrow_mut().render(&offscreen, &view).unwrap() else {
         panic!("RGBA8 target")
     };
-    let (covered, differing) = differing(&got, &want, VIEWPORT);
+    let (covered, differing) = differing_from_offscreen(&got, &want, FB, VIEWPORT, GREY);
     assert!(covered > 5_000, "the elements cover most of the viewport: {covered}");
     assert_eq!(differing, 0, "pixels that differ from the offscreen render or the host's clear");
 }
@@ -217,7 +188,7 @@ fn a_spacetime_slice_draws_inside_a_host_dynamic_rendering() {
     let Pixels::Rgba8(want) = renderer.borrow_mut().render(&offscreen, &view).unwrap() else {
         panic!("RGBA8 target")
     };
-    let (covered, differing) = differing(&got, &want, corner);
+    let (covered, differing) = differing_from_offscreen(&got, &want, FB, corner, GREY);
     assert!(covered > 2_000, "the slice covers much of the viewport: {covered}");
     assert_eq!(differing, 0, "pixels that differ from the offscreen render or the host's clear");
 }

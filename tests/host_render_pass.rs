@@ -9,7 +9,7 @@ mod common;
 
 use std::sync::Arc;
 
-use common::host::{HostCommands, HostPass};
+use common::host::{differing_from_offscreen, HostCommands, HostPass};
 use galerkin::gpu::{
     vk, Buffer, GpuError, HostRenderPass, Image, ImageDesc, MemoryKind, Recorder, RenderPass, Viewport,
 };
@@ -83,35 +83,16 @@ fn spectral_elements_draw_inside_a_host_render_pass_in_its_viewport() {
     let recording = rec.finish();
     host.submit_and_wait();
     drop(recording);
-    let got = readback.mapped().unwrap().to_vec();
+    // The host's attachment is BGRA: swap to RGBA.
+    let mut got = readback.mapped().unwrap().to_vec();
+    for px in got.chunks_exact_mut(4) {
+        px.swap(0, 2);
+    }
 
     let offscreen =
         RenderTarget::new(&gpu, "reference", VIEWPORT.width, VIEWPORT.height, ColorFormat::Rgba8).unwrap();
     let Pixels::Rgba8(want) = spectral.render(&offscreen, &view).unwrap() else { panic!("RGBA8 target") };
-    let uncovered = want[..4].to_vec();
-    let (mut covered, mut differing) = (0, 0);
-    for y in 0..FB.height {
-        for x in 0..FB.width {
-            let i = 4 * (y * FB.width + x) as usize;
-            // The host's attachment is BGRA: swap back to RGBA.
-            let px = [got[i + 2], got[i + 1], got[i], got[i + 3]];
-            let inside = (VIEWPORT.x..VIEWPORT.x + VIEWPORT.width).contains(&x)
-                && (VIEWPORT.y..VIEWPORT.y + VIEWPORT.height).contains(&y);
-            let expected = if inside {
-                let j = 4 * ((y - VIEWPORT.y) * VIEWPORT.width + (x - VIEWPORT.x)) as usize;
-                let w = &want[j..j + 4];
-                if w == uncovered.as_slice() {
-                    [GREY, GREY, GREY, 255]
-                } else {
-                    covered += 1;
-                    [w[0], w[1], w[2], w[3]]
-                }
-            } else {
-                [GREY, GREY, GREY, 255]
-            };
-            differing += usize::from(px != expected);
-        }
-    }
+    let (covered, differing) = differing_from_offscreen(&got, &want, FB, VIEWPORT, GREY);
     assert!(covered > 5_000, "the elements cover most of the viewport: {covered}");
     assert_eq!(differing, 0, "pixels that differ from the offscreen render or the host's clear");
 }

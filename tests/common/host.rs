@@ -2,7 +2,7 @@
 //! the tests that play the host: a command pool with one primary command buffer and a fence,
 //! and a render pass with its framebuffer over the host's images.
 
-use galerkin::gpu::{vk, Gpu};
+use galerkin::gpu::{vk, Gpu, Viewport};
 
 /// A command pool, one primary command buffer and a fence made by the "host" on the engine's
 /// device, as an embedding application would.
@@ -276,4 +276,42 @@ impl Drop for HostSubmitter<'_> {
         // SAFETY: every command buffer of the pool has completed and been freed.
         unsafe { self.gpu.device().destroy_command_pool(self.pool, None) };
     }
+}
+
+/// Compares a host's RGBA8 frame of `fb` (`got`, row-major) with galerkin's offscreen render of
+/// `viewport` (`want`, its top-left pixel uncovered): inside the viewport a pixel must equal
+/// the render's where the render covers it and the host's clear (`grey`, opaque) elsewhere;
+/// outside it, the clear. Returns how many covered pixels were compared and how many pixels
+/// differ.
+pub fn differing_from_offscreen(
+    got: &[u8],
+    want: &[u8],
+    fb: vk::Extent2D,
+    viewport: Viewport,
+    grey: u8,
+) -> (usize, usize) {
+    let uncovered = &want[..4];
+    let clear = [grey, grey, grey, 255];
+    let (mut covered, mut differing) = (0, 0);
+    for y in 0..fb.height {
+        for x in 0..fb.width {
+            let i = 4 * (y * fb.width + x) as usize;
+            let inside = (viewport.x..viewport.x + viewport.width).contains(&x)
+                && (viewport.y..viewport.y + viewport.height).contains(&y);
+            let expected = if inside {
+                let j = 4 * ((y - viewport.y) * viewport.width + (x - viewport.x)) as usize;
+                let w = &want[j..j + 4];
+                if w == uncovered {
+                    clear
+                } else {
+                    covered += 1;
+                    [w[0], w[1], w[2], w[3]]
+                }
+            } else {
+                clear
+            };
+            differing += usize::from(got[i..i + 4] != expected);
+        }
+    }
+    (covered, differing)
 }
