@@ -27,7 +27,7 @@ demo: build
 # the viewer test starts its own Xvfb.
 test: deps
 	VK_DRIVER_FILES=$(LAVAPIPE_ICD) VK_ICD_FILENAMES=$(LAVAPIPE_ICD) GALERKIN_VALIDATION=1 \
-		$(CARGO) test --release
+		$(CARGO) test --release --features fault-injection
 
 # The trainings under mpirun (1, 2, 4 ranks, oversubscribed) against one process: needs the
 # `mpi` feature and OpenMPI (installed by install-deps.sh --mpi).

@@ -13,9 +13,9 @@ use std::sync::Arc;
 
 use common::host::{differing_from_offscreen, HostCommands};
 use galerkin::gpu::{
-    record_image_barrier, vk, Buffer, GpuError, Image, ImageDesc, MemoryKind, Recorder, RenderPass, Viewport,
+    vk, Access, Buffer, GpuError, Image, ImageDesc, MemoryKind, Recorder, RenderPass, Viewport,
 };
-use galerkin::render::{ColorFormat, Colormap, DrawTarget, Pixels, RenderTarget};
+use galerkin::render::{ColorFormat, Colormap, Draw, DrawTarget, Pixels, RenderTarget};
 use galerkin::spectral::generate::quad_grid;
 use galerkin::spectral::{NodeSet, SpectralError, SpectralRenderer, SpectralView, View2d};
 
@@ -35,8 +35,9 @@ fn host_frame(
 ) -> Vec<u8> {
     let bgra = vk::Format::B8G8R8A8_UNORM;
     let d32 = vk::Format::D32_SFLOAT;
-    let colour = Image::new(gpu, "host colour", ImageDesc::color_target(FB.width, FB.height, bgra)).unwrap();
-    let depth = Image::new(gpu, "host depth", ImageDesc::depth_target(FB.width, FB.height, d32)).unwrap();
+    let mut colour =
+        Image::new(gpu, "host colour", ImageDesc::color_target(FB.width, FB.height, bgra)).unwrap();
+    let mut depth = Image::new(gpu, "host depth", ImageDesc::depth_target(FB.width, FB.height, d32)).unwrap();
     let pass = RenderPass::dynamic(gpu, bgra, Some(d32)).unwrap();
     assert!(pass.is_dynamic() && pass.is_host());
     let target = DrawTarget::new(&pass, viewport).unwrap();
@@ -53,33 +54,20 @@ fn host_frame(
     // Recording is kept until its fence was waited for.
     let mut rec = unsafe { Recorder::from_host(gpu, host.cmd) };
     pre(&mut rec, target);
-    // SAFETY: the host's images are live engine images with one level and layer, kept alive
-    // until the recording finishes (they outlive it).
-    unsafe {
-        record_image_barrier(
-            &mut rec,
-            colour.raw(),
-            vk::ImageAspectFlags::COLOR,
-            (vk::ImageLayout::UNDEFINED, vk::PipelineStageFlags::TOP_OF_PIPE, vk::AccessFlags::empty()),
-            (
-                vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
-                vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT,
-                vk::AccessFlags::COLOR_ATTACHMENT_WRITE,
-            ),
-        );
-        record_image_barrier(
-            &mut rec,
-            depth.raw(),
-            vk::ImageAspectFlags::DEPTH,
-            (vk::ImageLayout::UNDEFINED, vk::PipelineStageFlags::TOP_OF_PIPE, vk::AccessFlags::empty()),
-            (
-                vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL,
-                vk::PipelineStageFlags::EARLY_FRAGMENT_TESTS | vk::PipelineStageFlags::LATE_FRAGMENT_TESTS,
-                vk::AccessFlags::DEPTH_STENCIL_ATTACHMENT_READ
-                    | vk::AccessFlags::DEPTH_STENCIL_ATTACHMENT_WRITE,
-            ),
-        );
-    }
+    // The host's attachments go to their layouts through the recorder's tracked transitions.
+    let fragment_tests =
+        vk::PipelineStageFlags2::EARLY_FRAGMENT_TESTS | vk::PipelineStageFlags2::LATE_FRAGMENT_TESTS;
+    let colour_write = Access {
+        stages: vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT,
+        access: vk::AccessFlags2::COLOR_ATTACHMENT_WRITE,
+    };
+    let depth_write = Access {
+        stages: fragment_tests,
+        access: vk::AccessFlags2::DEPTH_STENCIL_ATTACHMENT_READ
+            | vk::AccessFlags2::DEPTH_STENCIL_ATTACHMENT_WRITE,
+    };
+    rec.transition(&mut colour, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL, colour_write);
+    rec.transition(&mut depth, vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL, depth_write);
     let g = f32::from(GREY) / 255.0;
     let colour_attachment = [vk::RenderingAttachmentInfo::default()
         .image_view(colour.view())
@@ -101,25 +89,11 @@ fn host_frame(
     // SAFETY: the host's own dynamic rendering on its images, in the layouts just set.
     unsafe { gpu.device().cmd_begin_rendering(host.cmd, &rendering) };
     draw(&mut rec, target);
-    // SAFETY: ends the rendering begun above; then the colour image goes to TRANSFER_SRC with
-    // its attachment writes visible to the copy.
+    // SAFETY: ends the rendering begun above, which wrote the colour image in
+    // COLOR_ATTACHMENT_OPTIMAL; the recorder then moves it to TRANSFER_SRC for the copy.
     unsafe {
         gpu.device().cmd_end_rendering(host.cmd);
-        record_image_barrier(
-            &mut rec,
-            colour.raw(),
-            vk::ImageAspectFlags::COLOR,
-            (
-                vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
-                vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT,
-                vk::AccessFlags::COLOR_ATTACHMENT_WRITE,
-            ),
-            (
-                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                vk::PipelineStageFlags::TRANSFER,
-                vk::AccessFlags::TRANSFER_READ,
-            ),
-        );
+        rec.image_written_externally(&colour, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL, colour_write);
     }
     colour.record_copy_to_buffer(&mut rec, &readback);
     let recording = rec.finish();
@@ -220,4 +194,119 @@ fn dynamic_rendering_galerkin_cannot_draw_in_is_refused() {
     let image = Image::new(&gpu, "c", ImageDesc::color_target(8, 8, vk::Format::R8G8B8A8_UNORM)).unwrap();
     assert!(galerkin::gpu::Framebuffer::new(&gpu, &pass, &[&image], vk::Extent2D { width: 8, height: 8 })
         .is_err());
+}
+
+/// Draws `drawable` through the one draw trait (`galerkin::render::Draw`) into the host's
+/// dynamic rendering in `viewport`, and into galerkin's offscreen target of the viewport's
+/// size with `offscreen` (a renderer of the same content made for that target's pass);
+/// returns the number of covered pixels after checking that none differs.
+fn host_and_offscreen_agree<D: Draw>(
+    gpu: &galerkin::gpu::Gpu,
+    host: &mut D,
+    offscreen: &mut D,
+    reference: &RenderTarget,
+    view: &D::View<'_>,
+    viewport: Viewport,
+) -> usize {
+    let host = std::cell::RefCell::new(host);
+    let got = host_frame(
+        gpu,
+        |rec, target| host.borrow_mut().record_prepass(rec, target, view).unwrap_or_else(|e| panic!("{e}")),
+        |rec, target| host.borrow_mut().record_draw_into(rec, target, view).unwrap_or_else(|e| panic!("{e}")),
+        viewport,
+    );
+    let Pixels::Rgba8(want) =
+        reference.draw(gpu, offscreen, view, [0.0, 0.0, 0.0, 1.0]).unwrap_or_else(|e| panic!("{e}"))
+    else {
+        panic!("RGBA8 target")
+    };
+    let (covered, differing) = differing_from_offscreen(&got, &want, FB, viewport, GREY);
+    assert_eq!(differing, 0, "pixels that differ from the offscreen render or the host's clear");
+    covered
+}
+
+/// Fluid cells (a 2D triangle stream with per-cell speeds) and radiosity faces (a lit scene)
+/// through the same trait as the spectral and spacetime draws, inside a host's dynamic
+/// rendering, pixel for pixel against the offscreen renders; and a renderer made for one
+/// render pass refuses a target of another.
+#[test]
+fn fluid_and_radiosity_draw_inside_a_host_dynamic_rendering() {
+    use galerkin::fluid::render::{
+        CellVertex, DrawStyle, FluidRenderer, FluidView, Output as FluidOutput, Projection, View2d,
+    };
+    use galerkin::radiosity::render::{Output as SceneOutput, SceneRenderer, SceneVertex, SceneView};
+    use galerkin::render::Camera;
+    let gpu = common::gpu();
+    let corner = Viewport { x: 0, y: 0, width: 120, height: 90 };
+    let dynamic =
+        RenderPass::dynamic(&gpu, vk::Format::B8G8R8A8_UNORM, Some(vk::Format::D32_SFLOAT)).unwrap();
+    let reference =
+        RenderTarget::new(&gpu, "reference", corner.width, corner.height, ColorFormat::Rgba8).unwrap();
+
+    // Eight triangles of a 2×2 grid of squares, each its own cell and speed.
+    let mut cells = Vec::new();
+    for (k, (x, y)) in [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0)].into_iter().enumerate() {
+        let corners = [[x, y], [x + 1.0, y], [x + 1.0, y + 1.0], [x, y + 1.0]];
+        for (t, tri) in [[0, 1, 2], [0, 2, 3]].into_iter().enumerate() {
+            let cell = (2 * k + t) as u32;
+            for i in tri {
+                let [px, py]: [f32; 2] = corners[i];
+                cells.push(CellVertex { position: [px, py, 0.0], value: 0.1 * (cell + 1) as f32, cell });
+            }
+        }
+    }
+    let speeds: Vec<f64> = (0..8).map(|c| 0.1 * f64::from(c + 1)).collect();
+    let style = DrawStyle {
+        colormap: Colormap::viridis(),
+        range: (0.0, 1.0),
+        log: false,
+        colour_cells: true,
+        sprite_px: 0.0,
+    };
+    let fluid = |pass: &RenderPass| {
+        let mut r =
+            FluidRenderer::new(&gpu, pass, FluidOutput::Colour, &style.colormap, cells.len() / 3, 8).unwrap();
+        r.update(&cells, &speeds).unwrap();
+        r
+    };
+    let projection =
+        Projection::Plane(View2d::fit([0.0, 0.0], [2.0, 2.0], (corner.width, corner.height), 0.05));
+    let view = FluidView { projection, style: &style, particles: None };
+    let (mut host, mut offscreen) = (fluid(&dynamic), fluid(reference.render_pass()));
+    let covered = host_and_offscreen_agree(&gpu, &mut host, &mut offscreen, &reference, &view, corner);
+    assert!(covered > 5_000, "the cells cover most of the viewport: {covered}");
+
+    // A room's wall: two quads facing the camera, both windings (back faces are culled).
+    let quad = |x0: f32, x1: f32, radiance: [f32; 3], face: u32| {
+        let (a, b, c, d) = ([x0, 0.0, 0.0], [x1, 0.0, 0.0], [x1, 0.0, 1.0], [x0, 0.0, 1.0]);
+        let v = |position| SceneVertex { position, radiance, face };
+        vec![v(a), v(b), v(c), v(a), v(c), v(d), v(a), v(c), v(b), v(a), v(d), v(c)]
+    };
+    let mut faces = quad(-1.0, 0.0, [0.8, 0.3, 0.1], 0);
+    faces.extend(quad(0.0, 1.0, [0.1, 0.4, 0.9], 1));
+    let scene = |pass: &RenderPass| {
+        let mut r = SceneRenderer::new(&gpu, pass, SceneOutput::Colour, faces.len() / 3).unwrap();
+        r.update(&faces).unwrap();
+        r
+    };
+    let camera = Camera {
+        eye: [0.0, -2.5, 0.5],
+        target: [0.0, 0.0, 0.5],
+        up: [0.0, 0.0, 1.0],
+        fov_y_degrees: 60.0,
+        near: 0.05,
+        far: 50.0,
+    };
+    let view = SceneView { camera, exposure: 1.0 };
+    let (mut host, mut offscreen) = (scene(&dynamic), scene(reference.render_pass()));
+    let covered = host_and_offscreen_agree(&gpu, &mut host, &mut offscreen, &reference, &view, corner);
+    // The wall (2 × 1 at 2.5 from a 60° camera) spans about 62 × 31 of the 120 × 90 pixels.
+    assert!(covered > 1_500, "the wall covers its share of the viewport: {covered}");
+
+    // Pipelines made for the dynamic rendering cannot draw in galerkin's own pass.
+    let other = reference.draw(&gpu, &mut host, &view, [0.0; 4]);
+    match other {
+        Err(e) => assert!(e.to_string().contains("were not made for"), "{e}"),
+        Ok(_) => panic!("a renderer drew into a render pass of another class"),
+    }
 }

@@ -11,7 +11,8 @@ use std::sync::Arc;
 
 use common::host::{differing_from_offscreen, HostCommands, HostPass};
 use galerkin::gpu::{
-    vk, Buffer, GpuError, HostRenderPass, Image, ImageDesc, MemoryKind, Recorder, RenderPass, Viewport,
+    vk, Access, Buffer, GpuError, HostRenderPass, Image, ImageDesc, MemoryKind, Recorder, RenderPass,
+    Viewport,
 };
 use galerkin::render::{ColorFormat, Colormap, DrawTarget, Pixels, RenderTarget};
 use galerkin::spectral::generate::quad_grid;
@@ -76,9 +77,16 @@ fn spectral_elements_draw_inside_a_host_render_pass_in_its_viewport() {
     // SAFETY: outside any render pass, then inside the host's.
     unsafe { host_pass.begin(host.cmd, [g, g, g, 1.0]) };
     spectral.record_draw_into(&mut rec, target, &view).unwrap();
-    // SAFETY: inside the host's pass; it leaves the colour image in TRANSFER_SRC_OPTIMAL with
-    // its writes visible to transfers (its external dependency).
-    unsafe { host_pass.end(host.cmd) };
+    // SAFETY: inside the host's pass; it leaves the colour image in TRANSFER_SRC_OPTIMAL, last
+    // written as a colour attachment (the recorder adds the barrier to the copy).
+    unsafe {
+        host_pass.end(host.cmd);
+        let written = Access {
+            stages: vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT,
+            access: vk::AccessFlags2::COLOR_ATTACHMENT_WRITE,
+        };
+        rec.image_written_externally(&colour, vk::ImageLayout::TRANSFER_SRC_OPTIMAL, written);
+    }
     colour.record_copy_to_buffer(&mut rec, &readback);
     let recording = rec.finish();
     host.submit_and_wait();

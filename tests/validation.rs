@@ -4,7 +4,7 @@
 
 mod common;
 
-use galerkin::gpu::{vk, Buffer, Gpu, GpuDesc, MemoryKind};
+use galerkin::gpu::{vk, Access, Buffer, Gpu, GpuDesc, MemoryKind};
 
 fn validated() -> Gpu {
     Gpu::new(&GpuDesc { validation: true, ..GpuDesc::default() }).expect("gpu")
@@ -41,8 +41,13 @@ fn synchronization_validation_catches_a_missing_barrier() {
         // Read-after-write with no barrier between the fill and the copy: a hazard that only
         // synchronization validation reports.
         let region = vk::BufferCopy { src_offset: 0, dst_offset: 0, size: a.size_bytes() };
-        // SAFETY: valid buffers; the missing barrier is the point of the test.
-        unsafe { gpu.device().cmd_copy_buffer(rec.raw(), a.raw(), b.raw(), &[region]) };
+        // SAFETY: valid buffers, kept; the undeclared access (so no barrier) is the point of the
+        // test.
+        unsafe {
+            rec.keep(&a);
+            rec.keep(&b);
+            gpu.device().cmd_copy_buffer(rec.raw(), a.raw(), b.raw(), &[region])
+        };
     })
     .unwrap();
     drop((a, b, gpu));
@@ -102,8 +107,12 @@ fn asynchronous_submission_keeps_dropped_resources_alive() {
     let (submission, ()) = gpu
         .submit(|rec| {
             let region = vk::BufferCopy { src_offset: 0, dst_offset: 0, size: src.size_bytes() };
-            // SAFETY: both buffers are alive at recording; `src` is dropped below while the
-            // copy may still run, which deferred destruction must make safe.
+            // A raw command keeps and declares what it names (Recorder::raw's contract): `src`
+            // is dropped below while the copy may still run, and the recording's use of it
+            // must keep it alive.
+            rec.access(&src, Access::TRANSFER_READ);
+            rec.access(&out, Access::TRANSFER_WRITE);
+            // SAFETY: both buffers are kept and declared above.
             unsafe { gpu.device().cmd_copy_buffer(rec.raw(), src.raw(), out.raw(), &[region]) };
         })
         .unwrap();

@@ -270,6 +270,8 @@ pub fn run_host(require_validation: bool) -> Result<HostReport, String> {
                 enabled_features: features_enabled,
                 // This host draws in render-pass objects only.
                 dynamic_rendering: false,
+                // A Vulkan 1.0-style host: galerkin records Vulkan 1.0 barriers.
+                synchronization2: false,
             },
             &GpuDesc { validation: false, ..GpuDesc::default() },
         )

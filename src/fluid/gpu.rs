@@ -15,7 +15,7 @@ use super::particles::{AdvectReport, GridHash, Particle};
 use super::reduced::particles::ReducedParticles;
 use super::FluidError;
 use crate::gpu::{
-    BindingKind, Buffer, ComputePipeline, ComputePipelineDesc, DescriptorSet, Gpu, Recorder, Resource,
+    Access, BindingKind, Buffer, ComputePipeline, ComputePipelineDesc, DescriptorSet, Gpu, Recorder, Resource,
 };
 use crate::mesh::{FaceKind, Point, SimplexMesh, Topology};
 
@@ -392,11 +392,9 @@ impl GpuParticles {
                 coefficients.len()
             )));
         }
-        let cs = vk::PipelineStageFlags::COMPUTE_SHADER;
-        let transfer = vk::PipelineStageFlags::TRANSFER;
-        rec.memory_barrier((cs, vk::AccessFlags::empty()), (transfer, vk::AccessFlags::empty()));
+        // The update waits for the last advection's reads of `g1`, and the next advection for
+        // the update (declared accesses).
         rec.update_buffer(&self.g1, 0, &coefficients);
-        rec.memory_barrier((transfer, vk::AccessFlags::TRANSFER_WRITE), (cs, vk::AccessFlags::SHADER_READ));
         Ok(())
     }
 
@@ -425,9 +423,8 @@ impl GpuParticles {
     /// Records the advection through one frame of `frame_time` in `substeps` steps, from the
     /// frame [`Self::prepare`] uploaded. Outside a render pass. Before: the prepared buffers'
     /// transfers are finished (they were waited for). It records the reset of its counters (a
-    /// transfer) and a barrier to the dispatch itself; after it, a barrier makes the particle
-    /// writes visible to compute, vertex and fragment shaders (a sprite draw) and to transfers
-    /// (a readback). An error if nothing was prepared.
+    /// transfer) and the dispatch, and declares the sprite draw's reads of the particles (so a
+    /// draw may follow in the frame's render pass). An error if nothing was prepared.
     pub fn record_advect(
         &self,
         rec: &mut Recorder<'_>,
@@ -454,31 +451,17 @@ impl GpuParticles {
                 Mode::Reduced { split, .. } => split as u32,
             },
         };
-        let cs = vk::PipelineStageFlags::COMPUTE_SHADER;
-        let rw = vk::AccessFlags::SHADER_READ | vk::AccessFlags::SHADER_WRITE;
         rec.fill_buffer(&self.counts, 0);
-        rec.memory_barrier(
-            (
-                vk::PipelineStageFlags::TRANSFER | cs | vk::PipelineStageFlags::VERTEX_SHADER,
-                vk::AccessFlags::TRANSFER_WRITE | vk::AccessFlags::SHADER_WRITE,
-            ),
-            (cs, rw),
-        );
         self.pipeline.record_dispatch(
             rec,
             set,
             &push,
             [(self.count as u32).div_ceil(self.pipeline.local_size()[0]), 1, 1],
         );
-        rec.memory_barrier(
-            (cs, vk::AccessFlags::SHADER_WRITE),
-            (
-                cs | vk::PipelineStageFlags::VERTEX_SHADER
-                    | vk::PipelineStageFlags::FRAGMENT_SHADER
-                    | vk::PipelineStageFlags::TRANSFER,
-                vk::AccessFlags::SHADER_READ | vk::AccessFlags::TRANSFER_READ,
-            ),
-        );
+        // The sprite draw that follows in the frame reads the particles and their speeds
+        // (draws declare before their render pass begins).
+        rec.access(&self.particles, Access::GRAPHICS_READ);
+        rec.access(&self.speeds, Access::GRAPHICS_READ);
         Ok(())
     }
 

@@ -16,11 +16,13 @@ use super::gpu::GpuParticles;
 use super::operators::CellOperators;
 use super::FluidError;
 use crate::gpu::{
-    BindingKind, Buffer, DescriptorSet, Gpu, GraphicsPipeline, GraphicsPipelineDesc, MemoryKind, Recorder,
-    RenderPass, Resource,
+    BindingKind, Buffer, DescriptorSet, Gpu, GraphicsPipeline, GraphicsPipelineDesc, MemoryKind, PassKey,
+    Recorder, RenderPass, Resource, Viewport,
 };
 use crate::mesh::{SimplexMesh, Topology};
-use crate::render::{ColorFormat, Colormap, ColormapTexture, Pixels, RenderTarget, BACKGROUND};
+use crate::render::{
+    check_pass, ColorFormat, Colormap, ColormapTexture, Draw, DrawTarget, Pixels, RenderTarget, BACKGROUND,
+};
 
 /// The visible rectangle of the plane: the mesh's bounds with a margin, widened to the
 /// image's aspect ratio. Maps world (x, y) to clip space (y down, Vulkan) and pixel centres
@@ -225,6 +227,8 @@ impl Projection {
 
 /// The cell, surface and sprite pipelines for one render pass.
 pub struct FluidRenderer {
+    /// The render passes its pipelines can draw in.
+    key: PassKey,
     cells: GraphicsPipeline,
     surface: GraphicsPipeline,
     sprites: GraphicsPipeline,
@@ -303,6 +307,7 @@ impl FluidRenderer {
         )
         .map_err(FluidError::from)?;
         Ok(Self {
+            key: pass.key(),
             cells: cell_pipeline,
             surface,
             sprites,
@@ -368,11 +373,13 @@ impl FluidRenderer {
     pub fn record(
         &self,
         rec: &mut Recorder<'_>,
-        extent: vk::Extent2D,
+        viewport: impl Into<Viewport>,
         projection: &Projection,
         style: &DrawStyle,
         particles: Option<(&ParticleSet, usize)>,
     ) {
+        let viewport: Viewport = viewport.into();
+        let extent = viewport.extent();
         let half = [
             (2.0 * style.sprite_px / f64::from(extent.width.max(1))) as f32,
             (2.0 * style.sprite_px / f64::from(extent.height.max(1))) as f32,
@@ -390,13 +397,49 @@ impl FluidRenderer {
             sprite: [half[0], half[1], mode, f32::from(u8::from(style.colour_cells && !surface))],
         };
         let pipeline = if surface { &self.surface } else { &self.cells };
-        pipeline.record_draw(rec, extent, &self.cell_set, &push, Some(self.vertices.whole()), self.count);
+        pipeline.record_draw(rec, viewport, &self.cell_set, &push, Some(self.vertices.whole()), self.count);
         if let Some((set, count)) = particles {
             if style.sprite_px > 0.0 && count > 0 {
                 let pipeline = if set.own_speeds { &self.sprites_own } else { &self.sprites };
-                pipeline.record_draw(rec, extent, &set.set, &push, None, (3 * count) as u32);
+                pipeline.record_draw(rec, viewport, &set.set, &push, None, (3 * count) as u32);
             }
         }
+    }
+}
+
+/// What fluid cells and particles are drawn with ([`Draw`] for [`FluidRenderer`]).
+#[derive(Clone, Copy)]
+pub struct FluidView<'a> {
+    /// The plane (2D) or a camera (3D).
+    pub projection: Projection,
+    /// Colours, range and sprite size.
+    pub style: &'a DrawStyle,
+    /// The particles' sprite resources and how many particles to draw.
+    pub particles: Option<(&'a ParticleSet, usize)>,
+}
+
+impl Draw for FluidRenderer {
+    type View<'v> = FluidView<'v>;
+    type Error = FluidError;
+
+    fn device_error(_: &'static str, cause: crate::gpu::GpuError) -> FluidError {
+        FluidError::Gpu(cause)
+    }
+
+    /// The cells (2D) or surface (3D) from [`FluidRenderer::update`], then the particles, in
+    /// the target's viewport. Refused if the target's render pass is not of the class the
+    /// renderer was made for ([`FluidRenderer::new`]'s `pass`). The particles' advection,
+    /// recorded before the render pass, declares the sprites' reads
+    /// ([`super::gpu::GpuParticles::record_advect`]).
+    fn record_draw_into(
+        &mut self,
+        rec: &mut Recorder<'_>,
+        target: DrawTarget<'_>,
+        view: &FluidView<'_>,
+    ) -> Result<(), FluidError> {
+        check_pass(self.key, &target, "fluid cells")?;
+        self.record(rec, target.viewport(), &view.projection, view.style, view.particles);
+        Ok(())
     }
 }
 
@@ -516,12 +559,12 @@ pub fn draw_triangles(
         )?;
         r.update(vertices, speeds)?;
         let set = particles.map(|p| r.particle_set(gpu, p)).transpose()?;
-        let pset = set.as_ref().zip(particles.map(GpuParticles::count));
-        out.push(
-            target
-                .render(gpu, clear, |rec| r.record(rec, target.extent(), projection, style, pset))
-                .map_err(FluidError::from)?,
-        );
+        let view = FluidView {
+            projection: *projection,
+            style,
+            particles: set.as_ref().zip(particles.map(GpuParticles::count)),
+        };
+        out.push(target.draw(gpu, &mut r, &view, clear)?);
     }
     let raw_pixels = match out.pop() {
         Some(Pixels::Rgba32F(v)) => v,

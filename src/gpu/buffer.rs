@@ -11,6 +11,7 @@ use std::sync::Arc;
 use ash::vk;
 use bytemuck::Pod;
 
+use super::access::Access;
 use super::context::{DeviceShared, Gpu};
 use super::error::{vk_error, GpuError, GpuResult, VkContext};
 use super::lifetime::{Lifetime, Tracked};
@@ -330,15 +331,8 @@ impl<T: Pod> Buffer<T> {
             let stage = &mut staging[k];
             stage.mapped_mut()?[..part.len()].copy_from_slice(part);
             let dst_offset = first * elem + (i as u64) * chunk;
-            let region = vk::BufferCopy { src_offset: 0, dst_offset, size: part.len() as u64 };
             let stage = &staging[k];
-            let (s, ()) = gpu.submit(|rec| {
-                rec.keep(stage);
-                rec.keep(self);
-                // SAFETY: recording on this device; both buffers are kept alive by the
-                // recording and the region lies inside each.
-                unsafe { rec.device().cmd_copy_buffer(rec.raw(), stage.raw, self.raw, &[region]) };
-            })?;
+            let (s, ()) = gpu.submit(|rec| rec.copy_bytes(stage, 0, self, dst_offset, part.len() as u64))?;
             in_flight[k] = Some(s);
         }
         for s in in_flight.into_iter().flatten() {
@@ -401,15 +395,11 @@ impl<T: Pod> Buffer<T> {
             let k = i % 2;
             drain(&mut in_flight[k], &mut parts, k)?;
             let size = parts[i].as_ref().map_or(0, |p| p.len()) as u64;
-            let region =
-                vk::BufferCopy { src_offset: range.first * elem + (i as u64) * chunk, dst_offset: 0, size };
+            let src_offset = range.first * elem + (i as u64) * chunk;
             let stage = &staging[k];
             let (s, ()) = gpu.submit(|rec| {
-                rec.keep(self);
-                rec.keep(stage);
-                // SAFETY: recording on this device; both buffers are kept alive by the
-                // recording and the region lies inside each.
-                unsafe { rec.device().cmd_copy_buffer(rec.raw(), self.raw, stage.raw, &[region]) };
+                rec.copy_bytes(self, src_offset, stage, 0, size);
+                rec.access(stage, Access::HOST_READ);
             })?;
             in_flight[k] = Some((s, i));
         }

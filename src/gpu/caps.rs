@@ -63,6 +63,9 @@ pub struct Capabilities {
     /// `VK_KHR_dynamic_rendering`): galerkin's pipelines can then be built for a host's
     /// `vkCmdBeginRendering` ([`crate::gpu::RenderPass::dynamic`]).
     pub dynamic_rendering: bool,
+    /// Synchronization2 was enabled (Vulkan 1.3's `synchronization2`): barriers are recorded
+    /// with `vkCmdPipelineBarrier2` ([`crate::gpu::Access`]), otherwise with Vulkan 1.0's call.
+    pub synchronization2: bool,
     /// Memory types: (property flags, heap index).
     pub memory_types: Vec<(vk::MemoryPropertyFlags, u32)>,
     /// Memory heaps: (size in bytes, flags).
@@ -71,14 +74,15 @@ pub struct Capabilities {
 
 impl Capabilities {
     /// Reads everything from `physical`. `enabled` is the feature set the device was created
-    /// with and `dynamic_rendering` whether dynamic rendering was enabled (for an adopted
-    /// device, what the host says it enabled).
+    /// with, `dynamic_rendering` and `synchronization2` whether those Vulkan 1.3 features were
+    /// enabled (for an adopted device, what the host says it enabled).
     pub(crate) fn read(
         instance: &ash::Instance,
         physical: vk::PhysicalDevice,
         queue_family: u32,
         enabled: &vk::PhysicalDeviceFeatures,
         dynamic_rendering: bool,
+        synchronization2: bool,
     ) -> Self {
         let mut driver = vk::PhysicalDeviceDriverProperties::default();
         let mut subgroup = vk::PhysicalDeviceSubgroupProperties::default();
@@ -150,6 +154,7 @@ impl Capabilities {
             tessellation_shader: enabled.tessellation_shader == vk::TRUE,
             fill_mode_non_solid: enabled.fill_mode_non_solid == vk::TRUE,
             dynamic_rendering,
+            synchronization2,
             memory_types: memory
                 .memory_types_as_slice()
                 .iter()

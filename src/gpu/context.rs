@@ -30,8 +30,10 @@ use super::retire::{Retirement, Tracker};
 /// `GALERKIN_VALIDATION=1` turns on the Khronos validation layer,
 /// `GALERKIN_SYNC_VALIDATION=0` leaves out its synchronization checks,
 /// `GALERKIN_DEVICE=<substring>` picks a device by name,
-/// `GALERKIN_VULKAN_LIBRARY=<path>` loads a specific Vulkan loader, and the fault injection of
-/// the tests (`GALERKIN_FAIL_ALLOCATION=N`, `GALERKIN_LOSE_DEVICE=N`).
+/// `GALERKIN_VULKAN_LIBRARY=<path>` loads a specific Vulkan loader,
+/// `GALERKIN_SYNCHRONIZATION2=0` records Vulkan 1.0 barriers on a 1.3 device, and, in a build
+/// with the `fault-injection` feature, the fault injection of the tests
+/// (`GALERKIN_FAIL_ALLOCATION=N`, `GALERKIN_LOSE_DEVICE=N`).
 #[derive(Clone, Debug)]
 pub struct GpuDesc {
     /// Application name given to the driver.
@@ -57,15 +59,21 @@ pub struct GpuDesc {
     /// this description) instead of a new one per `Gpu`, so that a caller can check once,
     /// after all of them are dropped and their leak reports are in (the command line does).
     pub validation_log: Option<Arc<ValidationLog>>,
-    /// Fault injection for tests: the device allocation with this number (1 = the first, counted
+    /// Enable Vulkan 1.3's `synchronization2` where the device has it, and record barriers with
+    /// `vkCmdPipelineBarrier2` (default); false keeps Vulkan 1.0's `vkCmdPipelineBarrier` (the
+    /// path of older devices, kept tested).
+    pub synchronization2: bool,
+    /// Fault injection for tests (feature `fault-injection`): the device allocation with this number (1 = the first, counted
     /// per [`Gpu`]) fails as out of memory, and so does every one after it
     /// (`GALERKIN_FAIL_ALLOCATION=N`): every command must then fail with an error, leaving
     /// nothing behind and leaking no Vulkan object.
+    #[cfg(feature = "fault-injection")]
     pub fail_allocation: Option<u64>,
-    /// Fault injection for tests: the wait for the submission with this number (1 = the
+    /// Fault injection for tests (feature `fault-injection`): the wait for the submission with this number (1 = the
     /// first, counted per [`Gpu`]) reports the device lost once the work has really finished,
     /// and every later submission fails as lost (`GALERKIN_LOSE_DEVICE=N`): every command must
     /// then fail with an error, leaving nothing behind and leaking no Vulkan object.
+    #[cfg(feature = "fault-injection")]
     pub lose_device: Option<u64>,
 }
 
@@ -84,7 +92,10 @@ impl Default for GpuDesc {
             max_binding_bytes: None,
             loader_path: None,
             validation_log: None,
+            synchronization2: true,
+            #[cfg(feature = "fault-injection")]
             fail_allocation: None,
+            #[cfg(feature = "fault-injection")]
             lose_device: None,
         }
     }
@@ -104,7 +115,10 @@ impl GpuDesc {
             loader_path: std::env::var_os("GALERKIN_VULKAN_LIBRARY")
                 .filter(|p| !p.is_empty())
                 .map(PathBuf::from),
+            synchronization2: var("GALERKIN_SYNCHRONIZATION2").map_or(d.synchronization2, |v| v != "0"),
+            #[cfg(feature = "fault-injection")]
             fail_allocation: var("GALERKIN_FAIL_ALLOCATION").and_then(|v| v.trim().parse().ok()),
+            #[cfg(feature = "fault-injection")]
             lose_device: var("GALERKIN_LOSE_DEVICE").and_then(|v| v.trim().parse().ok()),
             ..d
         }
@@ -133,6 +147,10 @@ pub struct RawDevice {
     /// `VK_KHR_dynamic_rendering`): galerkin's draws can then be recorded inside the host's
     /// `vkCmdBeginRendering` ([`super::RenderPass::dynamic`]).
     pub dynamic_rendering: bool,
+    /// True if the host enabled Vulkan 1.3's `synchronization2` (then the engine records its
+    /// barriers with `vkCmdPipelineBarrier2`; `VK_KHR_synchronization2` on a 1.2 device is not
+    /// used: say false, and the Vulkan 1.0 barrier is recorded).
+    pub synchronization2: bool,
 }
 
 /// State shared by the context and every resource made on it.
@@ -146,7 +164,7 @@ pub(crate) struct DeviceShared {
     pub caps: Capabilities,
     pub max_binding_bytes: u64,
     pub fence_timeout: Duration,
-    /// [`GpuDesc::fail_allocation`] and [`GpuDesc::lose_device`] with their counts.
+    /// The faults the description asks for (feature `fault-injection`), with their counts.
     pub(crate) fault: FaultInjection,
     pub(crate) allocator: Mutex<ManuallyDrop<Allocator>>,
     pub(crate) tracker: Mutex<Tracker>,
@@ -183,8 +201,7 @@ impl DeviceShared {
 impl Drop for DeviceShared {
     fn drop(&mut self) {
         // Every Submission holds an Arc to this, so none is in flight except timed-out ones
-        // (waited for here). Release their objects and those of orphaned host recordings, then
-        // run what is left retired.
+        // (waited for here). Release their objects and those of orphaned host recordings.
         let (abandoned_slots, uses) = self.drain_abandoned();
         drop(uses);
         drop(self.tracker.get_mut().map(|t| std::mem::take(&mut t.orphans)));
@@ -192,8 +209,8 @@ impl Drop for DeviceShared {
         // destructors, unable to reach this device any more, queue for it: run until none is
         // left (bounded: every object is destroyed once).
         loop {
-            let mut leftovers = self.tracker.get_mut().map(|t| t.take_all()).unwrap_or_default();
-            leftovers.extend(self.graveyard.lock().unwrap_or_else(|p| p.into_inner()).drain(..));
+            let leftovers: Vec<Retirement> =
+                self.graveyard.lock().unwrap_or_else(|p| p.into_inner()).drain(..).collect();
             if leftovers.is_empty() {
                 break;
             }
@@ -275,7 +292,8 @@ impl Gpu {
         let inst = &guard.0.as_ref().expect("guard holds the instance").instance;
         let choice = instance::choose_device(inst, desc)?;
         let api = guard.0.as_ref().expect("guard holds the instance").api;
-        let (device, enabled, dynamic_rendering) = instance::create_device(inst, api, &choice, desc)?;
+        let (device, enabled, dynamic_rendering, synchronization2) =
+            instance::create_device(inst, api, &choice, desc)?;
         // SAFETY: queue 0 of the family was requested in `create_device`.
         let queue = unsafe { device.get_device_queue(choice.queue_family, 0) };
         let created = guard.0.take().expect("guard holds the instance");
@@ -290,6 +308,7 @@ impl Gpu {
             queue,
             enabled,
             dynamic_rendering,
+            synchronization2,
             messenger: created.messenger,
             debug_names,
             log,
@@ -326,6 +345,7 @@ impl Gpu {
             queue: raw.queue,
             enabled: raw.enabled_features,
             dynamic_rendering: raw.dynamic_rendering,
+            synchronization2: raw.synchronization2,
             messenger: None,
             debug_names: None,
             log: None,
@@ -335,8 +355,14 @@ impl Gpu {
     }
 
     fn assemble(p: Parts<'_>) -> GpuResult<Self> {
-        let caps =
-            Capabilities::read(&p.instance, p.physical, p.queue_family, &p.enabled, p.dynamic_rendering);
+        let caps = Capabilities::read(
+            &p.instance,
+            p.physical,
+            p.queue_family,
+            &p.enabled,
+            p.dynamic_rendering,
+            p.synchronization2,
+        );
         let mut debug = gpu_allocator::AllocatorDebugSettings::default();
         debug.log_leaks_on_shutdown = true;
         let allocator = match Allocator::new(&AllocatorCreateDesc {
@@ -381,7 +407,7 @@ impl Gpu {
                 caps,
                 max_binding_bytes,
                 fence_timeout: p.desc.fence_timeout,
-                fault: FaultInjection::new(p.desc.fail_allocation, p.desc.lose_device),
+                fault: FaultInjection::from_desc(p.desc),
                 allocator: Mutex::new(ManuallyDrop::new(allocator)),
                 tracker: Mutex::new(Tracker::default()),
                 graveyard: Arc::default(),
@@ -460,6 +486,7 @@ struct Parts<'a> {
     queue: vk::Queue,
     enabled: vk::PhysicalDeviceFeatures,
     dynamic_rendering: bool,
+    synchronization2: bool,
     messenger: Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>,
     debug_names: Option<ash::ext::debug_utils::Device>,
     log: Option<Arc<ValidationLog>>,

@@ -61,6 +61,14 @@ impl Resource<'_> {
         }
     }
 
+    /// The object a shader accesses through it (the buffer, or the image).
+    fn accessed(&self) -> &Arc<Lifetime> {
+        match self {
+            Self::Storage(b) | Self::Uniform(b) => b.lifetime(),
+            Self::Texture { image, .. } => image.lifetime(),
+        }
+    }
+
     /// The lifetimes a set binding this must keep.
     fn lifetimes(&self) -> Vec<Arc<Lifetime>> {
         match self {
@@ -120,6 +128,8 @@ pub struct DescriptorSet {
     life: Arc<Lifetime>,
     _device: Arc<DeviceShared>,
     pub(crate) raw: vk::DescriptorSet,
+    /// The buffer or image each binding names, by binding number (for declared access).
+    bound: Vec<Arc<Lifetime>>,
 }
 
 impl Tracked for DescriptorSet {
@@ -134,6 +144,7 @@ impl DescriptorSet {
     pub fn new(gpu: &Gpu, layout: &DescriptorSetLayout, resources: &[Resource]) -> GpuResult<Self> {
         assert_eq!(resources.len(), layout.kinds.len(), "descriptor set needs one resource per binding");
         let mut held: Vec<Arc<Lifetime>> = resources.iter().flat_map(Resource::lifetimes).collect();
+        let bound: Vec<Arc<Lifetime>> = resources.iter().map(Resource::accessed).cloned().collect();
         if let Some(other) = held.iter().find(|l| !l.is_on(&gpu.shared)) {
             return Err(GpuError::WrongDevice { name: other.name().to_string() });
         }
@@ -220,7 +231,12 @@ impl DescriptorSet {
             unsafe { dev.raw.destroy_descriptor_pool(pool, None) };
             drop(held);
         });
-        Ok(Self { _device: gpu.shared.clone(), life, raw })
+        Ok(Self { _device: gpu.shared.clone(), life, raw, bound })
+    }
+
+    /// The buffer or image each binding names, by binding number.
+    pub(crate) fn bound(&self) -> &[Arc<Lifetime>] {
+        &self.bound
     }
 
     /// The Vulkan handle.

@@ -1,10 +1,13 @@
 //! Images, their views, and samplers: render-target attachments, colour-map textures, and
 //! readback of rendered pixels. Uploads and readbacks go through staging buffers.
 
-use std::sync::Arc;
+use std::sync::{Arc, Mutex};
 
 use ash::vk;
 
+use super::access::Key;
+
+use super::access::Access;
 use super::buffer::Buffer;
 use super::context::{DeviceShared, Gpu};
 use super::error::{vk_error, GpuError, GpuResult, VkContext};
@@ -55,7 +58,8 @@ impl ImageDesc {
         Self { width, height: 1, format, usage: vk::ImageUsageFlags::SAMPLED, dim: vk::ImageType::TYPE_1D }
     }
 
-    fn aspect(&self) -> vk::ImageAspectFlags {
+    /// The aspects of its format (colour, or depth and stencil).
+    pub fn aspect(&self) -> vk::ImageAspectFlags {
         match self.format {
             vk::Format::D16_UNORM | vk::Format::D32_SFLOAT | vk::Format::X8_D24_UNORM_PACK32 => {
                 vk::ImageAspectFlags::DEPTH
@@ -91,6 +95,8 @@ pub struct Image {
     view: vk::ImageView,
     desc: ImageDesc,
     name: String,
+    /// The layout the last recorded command leaves it in.
+    layout: Mutex<vk::ImageLayout>,
 }
 
 impl Tracked for Image {
@@ -178,7 +184,15 @@ impl Image {
             }
             dev.free(allocation);
         });
-        Ok(Self { _device: shared, life, raw, view, desc, name: name.to_string() })
+        Ok(Self {
+            _device: shared,
+            life,
+            raw,
+            view,
+            desc,
+            name: name.to_string(),
+            layout: Mutex::new(vk::ImageLayout::UNDEFINED),
+        })
     }
 
     /// The Vulkan image.
@@ -201,101 +215,37 @@ impl Image {
         &self.name
     }
 
-    /// Records a layout transition with a full barrier between the given stages.
-    pub fn record_transition(
-        &self,
-        rec: &mut Recorder<'_>,
-        from: (vk::ImageLayout, vk::PipelineStageFlags, vk::AccessFlags),
-        to: (vk::ImageLayout, vk::PipelineStageFlags, vk::AccessFlags),
-    ) {
-        rec.keep(self);
-        // SAFETY: recording on this device; the image is live and kept by the recording.
-        unsafe { record_image_barrier(rec, self.raw, self.desc.aspect(), from, to) };
-    }
-
-    /// Uploads tightly packed texels and leaves the image in `SHADER_READ_ONLY_OPTIMAL`,
-    /// visible to fragment and compute shaders.
-    pub fn upload(&self, gpu: &Gpu, texels: &[u8]) -> GpuResult<()> {
+    /// Uploads tightly packed texels and leaves the image in `SHADER_READ_ONLY_OPTIMAL`.
+    pub fn upload(&mut self, gpu: &Gpu, texels: &[u8]) -> GpuResult<()> {
         let expected = texel_bytes(self.desc.format)
             .map(|b| b * u64::from(self.desc.width) * u64::from(self.desc.height));
         assert_eq!(Some(texels.len() as u64), expected, "texel data size for image `{}`", self.name);
-        let staging = Buffer::<u8>::new(
+        let mut staging = Buffer::<u8>::new(
             gpu,
             &format!("{} (staging)", self.name),
             texels.len() as u64,
             vk::BufferUsageFlags::empty(),
             MemoryKind::CpuToGpu,
         )?;
-        let mut staging = staging;
         staging.mapped_mut()?.copy_from_slice(texels);
+        let extent = self.extent();
         gpu.run(|rec| {
-            self.record_transition(
-                rec,
-                (vk::ImageLayout::UNDEFINED, vk::PipelineStageFlags::TOP_OF_PIPE, vk::AccessFlags::empty()),
-                (
-                    vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                    vk::PipelineStageFlags::TRANSFER,
-                    vk::AccessFlags::TRANSFER_WRITE,
-                ),
-            );
-            let region = self.copy_region();
-            rec.keep(&staging);
-            // SAFETY: staging holds exactly the image's texels and is kept by the recording;
-            // the image is in TRANSFER_DST.
-            unsafe {
-                rec.device().cmd_copy_buffer_to_image(
-                    rec.raw(),
-                    staging.raw(),
-                    self.raw,
-                    vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                    &[region],
-                )
-            };
-            self.record_transition(
-                rec,
-                (
-                    vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                    vk::PipelineStageFlags::TRANSFER,
-                    vk::AccessFlags::TRANSFER_WRITE,
-                ),
-                (
-                    vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
-                    vk::PipelineStageFlags::FRAGMENT_SHADER | vk::PipelineStageFlags::COMPUTE_SHADER,
-                    vk::AccessFlags::SHADER_READ,
-                ),
-            );
+            rec.copy_buffer_to_image(&staging, self, vk::Offset2D::default(), extent);
+            let readers = Access::COMPUTE_READ.and(Access::GRAPHICS_READ);
+            rec.transition(self, vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL, readers);
         })
     }
 
-    /// Records a copy of the whole image (which must be in `TRANSFER_SRC_OPTIMAL`) into `dst`,
-    /// tightly packed. Panics if `dst` is smaller than the image's texels.
+    /// Records a copy of the whole image into `dst`, tightly packed (the recorder moves the
+    /// image to `TRANSFER_SRC_OPTIMAL` if it is not there). Panics if `dst` is smaller than
+    /// the image's texels.
     pub fn record_copy_to_buffer<T: bytemuck::Pod>(&self, rec: &mut Recorder<'_>, dst: &Buffer<T>) {
-        let needed = texel_bytes(self.desc.format)
-            .map_or(0, |b| b * u64::from(self.desc.width) * u64::from(self.desc.height));
-        assert!(dst.size_bytes() >= needed, "`{}` cannot hold image `{}`", dst.name(), self.name);
-        rec.keep(self);
-        rec.keep(dst);
-        let region = self.copy_region();
-        // SAFETY: recording on this device; both objects are kept by the recording, the
-        // image's layout is the caller's documented precondition (a validation error, not
-        // memory unsafety, if wrong) and `dst` holds the texels (checked above).
-        unsafe {
-            rec.device().cmd_copy_image_to_buffer(
-                rec.raw(),
-                self.raw,
-                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                dst.raw(),
-                &[region],
-            )
-        };
+        rec.copy_image_to_buffer(self, dst);
     }
 
-    /// The single full-image buffer/image copy region.
-    fn copy_region(&self) -> vk::BufferImageCopy {
-        full_copy_region(
-            self.desc.aspect(),
-            vk::Extent2D { width: self.desc.width, height: self.desc.height },
-        )
+    /// Its extent.
+    pub fn extent(&self) -> vk::Extent2D {
+        vk::Extent2D { width: self.desc.width, height: self.desc.height }
     }
 }
 
@@ -326,42 +276,6 @@ pub(crate) fn subresource(aspect: vk::ImageAspectFlags) -> vk::ImageSubresourceR
         base_array_layer: 0,
         layer_count: 1,
     }
-}
-
-/// Records an image memory barrier with a layout transition (also used on images the engine
-/// does not own, such as a host's or a swapchain's).
-///
-/// # Safety
-/// `image` is a live image of the recorder's device with `aspect`, one mip level and one
-/// layer, and stays alive until the recording's work has finished.
-pub unsafe fn record_image_barrier(
-    rec: &mut Recorder<'_>,
-    image: vk::Image,
-    aspect: vk::ImageAspectFlags,
-    from: (vk::ImageLayout, vk::PipelineStageFlags, vk::AccessFlags),
-    to: (vk::ImageLayout, vk::PipelineStageFlags, vk::AccessFlags),
-) {
-    let barrier = vk::ImageMemoryBarrier::default()
-        .old_layout(from.0)
-        .new_layout(to.0)
-        .src_access_mask(from.2)
-        .dst_access_mask(to.2)
-        .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-        .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-        .image(image)
-        .subresource_range(subresource(aspect));
-    // SAFETY: recording on this device; `image` per this function's contract.
-    unsafe {
-        rec.device().cmd_pipeline_barrier(
-            rec.raw(),
-            from.1,
-            to.1,
-            vk::DependencyFlags::empty(),
-            &[],
-            &[],
-            &[barrier],
-        )
-    };
 }
 
 /// A sampler.
@@ -402,5 +316,113 @@ impl Sampler {
     /// The Vulkan handle.
     pub fn raw(&self) -> vk::Sampler {
         self.raw
+    }
+}
+
+/// An image a recorder can record transfers and layout changes of: an engine [`Image`], or
+/// a [`ForeignImage`] (a host's or a swapchain's). The recorder tracks its layout and derives
+/// the barriers its commands need.
+pub trait ImageResource {
+    /// The Vulkan image.
+    fn handle(&self) -> vk::Image;
+    /// Its format.
+    fn format(&self) -> vk::Format;
+    /// Its extent (one mip level, one layer).
+    fn extent(&self) -> vk::Extent2D;
+    /// Its aspects.
+    fn aspect(&self) -> vk::ImageAspectFlags;
+    /// How the recorder tracks it (not for use outside the engine).
+    #[doc(hidden)]
+    fn tracking(&self) -> ImageTracking<'_>;
+}
+
+/// How a recorder tracks one image: its key, the lifetime a recording keeps (an engine
+/// image's), and the layout its last recorded command leaves it in.
+#[doc(hidden)]
+pub struct ImageTracking<'a> {
+    pub(crate) key: Key,
+    pub(crate) life: Option<&'a Arc<Lifetime>>,
+    pub(crate) layout: &'a Mutex<vk::ImageLayout>,
+}
+
+impl ImageResource for Image {
+    fn handle(&self) -> vk::Image {
+        self.raw
+    }
+    fn format(&self) -> vk::Format {
+        self.desc.format
+    }
+    fn extent(&self) -> vk::Extent2D {
+        Image::extent(self)
+    }
+    fn aspect(&self) -> vk::ImageAspectFlags {
+        self.desc.aspect()
+    }
+    fn tracking(&self) -> ImageTracking<'_> {
+        ImageTracking {
+            key: Key::Object(Arc::as_ptr(&self.life) as usize),
+            life: Some(&self.life),
+            layout: &self.layout,
+        }
+    }
+}
+
+/// An image galerkin does not own — a swapchain's, or a host's — described so that a
+/// [`Recorder`] can record safe, layout-tracked transfers and layout changes of it.
+///
+/// ```compile_fail,E0133
+/// # use galerkin::gpu::{vk, ForeignImage};
+/// # fn f(handle: vk::Image) {
+/// // Wrapping a raw handle promises that it is alive and in the stated layout: `unsafe`.
+/// let image = ForeignImage::new(handle, vk::Format::B8G8R8A8_UNORM, vk::Extent2D { width: 4, height: 4 }, vk::ImageLayout::UNDEFINED);
+/// # }
+/// ```
+#[derive(Debug)]
+pub struct ForeignImage {
+    raw: vk::Image,
+    format: vk::Format,
+    extent: vk::Extent2D,
+    layout: Mutex<vk::ImageLayout>,
+}
+
+impl ForeignImage {
+    /// Describes `image`.
+    ///
+    /// # Safety
+    /// `image` is a colour image of the recorder's device with one mip level and one layer, of
+    /// `format` and `extent`, created with the transfer usages the recorded commands need; it
+    /// is in `layout` when the first command recorded for it executes, and it stays alive until
+    /// every recording that records it has finished.
+    pub unsafe fn new(
+        image: vk::Image,
+        format: vk::Format,
+        extent: vk::Extent2D,
+        layout: vk::ImageLayout,
+    ) -> Self {
+        Self { raw: image, format, extent, layout: Mutex::new(layout) }
+    }
+
+    /// The layout its last recorded command leaves it in.
+    pub fn layout(&self) -> vk::ImageLayout {
+        *self.layout.lock().unwrap_or_else(|p| p.into_inner())
+    }
+}
+
+impl ImageResource for ForeignImage {
+    fn handle(&self) -> vk::Image {
+        self.raw
+    }
+    fn format(&self) -> vk::Format {
+        self.format
+    }
+    fn extent(&self) -> vk::Extent2D {
+        self.extent
+    }
+    fn aspect(&self) -> vk::ImageAspectFlags {
+        vk::ImageAspectFlags::COLOR
+    }
+    fn tracking(&self) -> ImageTracking<'_> {
+        use ash::vk::Handle;
+        ImageTracking { key: Key::Foreign(self.raw.as_raw()), life: None, layout: &self.layout }
     }
 }

@@ -218,13 +218,14 @@ pub(crate) fn has_device_extension(
 /// Creates the logical device with one queue of `choice.queue_family`, enabling the optional
 /// core features galerkin uses when the device has them (f64 in shaders, geometry and
 /// tessellation shaders, wireframe fill, and on Vulkan 1.3 dynamic rendering). Returns the
-/// device, the core features actually enabled and whether dynamic rendering was.
+/// device, the core features actually enabled and whether dynamic rendering and
+/// synchronization2 were.
 pub(crate) fn create_device(
     instance: &ash::Instance,
     instance_api: u32,
     choice: &Choice,
     desc: &GpuDesc,
-) -> GpuResult<(ash::Device, vk::PhysicalDeviceFeatures, bool)> {
+) -> GpuResult<(ash::Device, vk::PhysicalDeviceFeatures, bool, bool)> {
     // SAFETY: plain instance query.
     let supported = unsafe { instance.get_physical_device_features(choice.physical) };
     // Vulkan 1.3's features, on a 1.3 device under a 1.3 instance (create_instance asks for 1.3
@@ -239,7 +240,10 @@ pub(crate) fn create_device(
         unsafe { instance.get_physical_device_features2(choice.physical, &mut features2) };
     }
     let dynamic_rendering = has_13 && supported13.dynamic_rendering == vk::TRUE;
-    let mut enabled13 = vk::PhysicalDeviceVulkan13Features::default().dynamic_rendering(dynamic_rendering);
+    let synchronization2 = desc.synchronization2 && has_13 && supported13.synchronization2 == vk::TRUE;
+    let mut enabled13 = vk::PhysicalDeviceVulkan13Features::default()
+        .dynamic_rendering(dynamic_rendering)
+        .synchronization2(synchronization2);
     let enabled = vk::PhysicalDeviceFeatures {
         shader_float64: supported.shader_float64,
         geometry_shader: supported.geometry_shader,
@@ -265,5 +269,5 @@ pub(crate) fn create_device(
     }
     // SAFETY: `info` points at locals that outlive the call; `choice.physical` is of `instance`.
     let device = unsafe { instance.create_device(choice.physical, &info, None) }.vk("vkCreateDevice")?;
-    Ok((device, enabled, dynamic_rendering))
+    Ok((device, enabled, dynamic_rendering, synchronization2))
 }

@@ -4,8 +4,8 @@
 //! the object holds another until the recording's work is known to be finished (its fence was
 //! seen signalled, or the host released the [`Recording`]); a descriptor set holds one for
 //! every resource it binds. The destructor runs when the last reference goes — after which
-//! nothing recorded can still use the object — through [`DeviceShared::retire`], which also
-//! waits for the engine's own in-flight submissions.
+//! nothing recorded can still use the object — at once, through [`DeviceShared::retire`]. This
+//! is the one retirement mechanism: nothing else defers a destructor.
 //!
 //! A lifetime also counts the recordings that are still pending (recorded, not yet known to be
 //! finished): a buffer's mapped memory may be written from the host only when that count is

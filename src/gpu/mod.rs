@@ -14,10 +14,13 @@
 //! - Every object frees itself when it and every recording and descriptor set that use it are
 //!   gone ([`Lifetime`]): a recording keeps what it recorded until its work is known to be
 //!   finished, so no safe code can destroy an object the device may still use.
+//! - Every command states what it reads and writes ([`Access`]) and the recorder derives the
+//!   barriers (with synchronization2 where the device has it); images' layouts are tracked.
 //! - Objects remember their device; using one with another [`Gpu`] is an error or a panic.
 //! - Device limits are read once ([`Capabilities`]) and respected: arrays larger than one
 //!   storage binding (128 MiB on lavapipe) are bound in chunks ([`Buffer::binding_chunks`]).
 
+mod access;
 mod buffer;
 mod caps;
 mod commands;
@@ -27,6 +30,7 @@ mod descriptors;
 mod error;
 mod fault;
 mod image;
+mod image_ops;
 mod instance;
 mod lifetime;
 mod memory;
@@ -44,6 +48,7 @@ mod submitter;
 #[cfg(feature = "viewer")]
 mod swapchain;
 
+pub use access::Access;
 pub use ash::vk;
 pub use buffer::{chunk_elements, Buffer, BufferBinding, Chunk, STAGING_CHUNK_BYTES};
 /// Re-exported for [`crate::push_constants!`].
@@ -54,8 +59,7 @@ pub use context::{Gpu, GpuDesc, RawDevice};
 pub use debug::ValidationLog;
 pub use descriptors::{BindingKind, DescriptorSet, DescriptorSetLayout, Resource};
 pub use error::{GpuError, GpuFailure, GpuResult};
-pub(crate) use image::full_copy_region;
-pub use image::{record_image_barrier, texel_bytes, Image, ImageDesc, Sampler};
+pub use image::{texel_bytes, ForeignImage, Image, ImageDesc, ImageResource, ImageTracking, Sampler};
 pub use lifetime::{Lifetime, Tracked};
 pub use memory::MemoryKind;
 pub use pipeline::{

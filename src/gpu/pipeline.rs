@@ -6,6 +6,7 @@ use std::sync::Arc;
 
 use ash::vk;
 
+use super::access::Access;
 use super::buffer::BufferBinding;
 use super::context::{DeviceShared, Gpu};
 use super::descriptors::{BindingKind, DescriptorSet, DescriptorSetLayout, Resource};
@@ -108,6 +109,25 @@ struct PipelineCore {
     layout: PipelineLayout,
     bind_point: vk::PipelineBindPoint,
     name: String,
+    /// How its shaders use each binding (by binding number), from their SPIR-V.
+    accesses: Vec<Access>,
+}
+
+/// How the shaders of a pipeline with `stages` (compute or graphics) use each of `bindings`:
+/// storage buffers in `writable` are read and written, everything else read.
+fn binding_accesses(
+    bindings: &[BindingKind],
+    writable: &std::collections::BTreeSet<u32>,
+    compute: bool,
+) -> Vec<Access> {
+    (0..bindings.len() as u32)
+        .map(|b| match (compute, writable.contains(&b)) {
+            (true, true) => Access::COMPUTE_READ_WRITE,
+            (true, false) => Access::COMPUTE_READ,
+            (false, true) => Access::GRAPHICS_READ_WRITE,
+            (false, false) => Access::GRAPHICS_READ,
+        })
+        .collect()
 }
 
 impl PipelineCore {
@@ -117,6 +137,7 @@ impl PipelineCore {
         layout: PipelineLayout,
         bind_point: vk::PipelineBindPoint,
         name: &str,
+        accesses: Vec<Access>,
     ) -> Self {
         gpu.shared.set_name(raw, name);
         let layout_life = layout.life.clone();
@@ -125,7 +146,20 @@ impl PipelineCore {
             unsafe { dev.raw.destroy_pipeline(raw, None) };
             drop(layout_life);
         });
-        Self { life, raw, layout, bind_point, name: name.to_string() }
+        Self { life, raw, layout, bind_point, name: name.to_string(), accesses }
+    }
+
+    /// The accesses of a command using `set`, merged per object (a buffer bound twice is one
+    /// access).
+    fn set_accesses(&self, set: &DescriptorSet) -> Vec<(Arc<Lifetime>, Access)> {
+        let mut merged: Vec<(Arc<Lifetime>, Access)> = Vec::new();
+        for (life, access) in set.bound().iter().zip(&self.accesses) {
+            match merged.iter_mut().find(|(l, _)| Arc::ptr_eq(l, life)) {
+                Some((_, a)) => *a = a.and(*access),
+                None => merged.push((life.clone(), *access)),
+            }
+        }
+        merged
     }
 
     fn bind(&self, gpu: &Gpu, resources: &[Resource]) -> GpuResult<DescriptorSet> {
@@ -147,7 +181,7 @@ impl PipelineCore {
         let push: &[u8] = bytemuck::bytes_of(push);
         rec.keep_lifetime(&self.life);
         rec.keep(set);
-        let (d, cmd) = (rec.device(), rec.raw());
+        let (d, cmd) = (rec.device(), rec.cmd());
         // SAFETY: recording on this device (checked by `keep`); the set matches this pipeline's
         // layout (made by its `bind`) and both are kept alive by the recording.
         unsafe {
@@ -218,7 +252,14 @@ impl ComputePipeline {
         let raw = unsafe { gpu.device().create_compute_pipelines(vk::PipelineCache::null(), &[info], None) }
             .map_err(|(_, e)| vk_error("vkCreateComputePipelines", e))?[0];
         Ok(Self {
-            core: PipelineCore::new(gpu, raw, layout, vk::PipelineBindPoint::COMPUTE, desc.name),
+            core: PipelineCore::new(
+                gpu,
+                raw,
+                layout,
+                vk::PipelineBindPoint::COMPUTE,
+                desc.name,
+                binding_accesses(desc.bindings, &shader.writable, true),
+            ),
             local_size,
         })
     }
@@ -235,7 +276,9 @@ impl ComputePipeline {
     }
 
     /// Records: bind the pipeline and `set`, push `push` (of the struct the pipeline was built
-    /// with), dispatch `groups` workgroups.
+    /// with), dispatch `groups` workgroups. The dispatch declares its accesses — each bound
+    /// buffer read, and written where the shader does not declare it `readonly` — so the
+    /// barriers after earlier commands are recorded before it.
     pub fn record_dispatch<P: PushConstants + 'static>(
         &self,
         rec: &mut Recorder<'_>,
@@ -243,9 +286,13 @@ impl ComputePipeline {
         push: &P,
         groups: [u32; 3],
     ) {
+        for (life, access) in self.core.set_accesses(set) {
+            rec.declare_lifetime(&life, access);
+        }
+        rec.flush();
         self.core.record_bind(rec, set, push);
         // SAFETY: recording with this pipeline bound.
-        unsafe { rec.device().cmd_dispatch(rec.raw(), groups[0], groups[1], groups[2]) };
+        unsafe { rec.device().cmd_dispatch(rec.cmd(), groups[0], groups[1], groups[2]) };
     }
 }
 
@@ -533,12 +580,38 @@ impl GraphicsPipeline {
         // SAFETY: every pointer in `info` refers to locals alive during the call.
         let raw = unsafe { device.create_graphics_pipelines(vk::PipelineCache::null(), &[info], None) }
             .map_err(|(_, e)| vk_error("vkCreateGraphicsPipelines", e))?[0];
-        Ok(Self { core: PipelineCore::new(gpu, raw, layout, vk::PipelineBindPoint::GRAPHICS, desc.name) })
+        let accesses = binding_accesses(desc.bindings, &shaders.writable, false);
+        Ok(Self {
+            core: PipelineCore::new(gpu, raw, layout, vk::PipelineBindPoint::GRAPHICS, desc.name, accesses),
+        })
     }
 
     /// Binds resources to this pipeline's bindings.
     pub fn bind(&self, gpu: &Gpu, resources: &[Resource]) -> GpuResult<DescriptorSet> {
         self.core.bind(gpu, resources)
+    }
+
+    /// Declares, before the render pass begins, what a draw of this pipeline with `set`,
+    /// `vertices` and `indirect` reads and writes (no barrier can be recorded inside a render
+    /// pass, so the pass that draws states its accesses first; the draw itself then checks
+    /// them and panics if an earlier write of the recording was not declared).
+    pub fn declare_draw(
+        &self,
+        rec: &mut Recorder<'_>,
+        set: &DescriptorSet,
+        vertices: Option<BufferBinding<'_>>,
+        indirect: Option<BufferBinding<'_>>,
+    ) {
+        for (life, access) in self.core.set_accesses(set) {
+            rec.declare_lifetime(&life, access);
+        }
+        if let Some(v) = vertices {
+            rec.declare_lifetime(v.lifetime(), Access::VERTEX_INPUT);
+        }
+        if let Some(i) = indirect {
+            rec.declare_lifetime(i.lifetime(), Access::INDIRECT);
+        }
+        rec.flush();
     }
 
     /// Records, inside a render pass: bind the pipeline, `set` and the vertex buffer (if any),
@@ -556,7 +629,7 @@ impl GraphicsPipeline {
         self.record_state(rec, viewport.into(), set, push, vertices);
         // SAFETY: recording inside a render pass (the caller's documented state) with this
         // pipeline and its resources bound and kept alive.
-        unsafe { rec.device().cmd_draw(rec.raw(), vertex_count, 1, 0, 0) };
+        unsafe { rec.device().cmd_draw(rec.cmd(), vertex_count, 1, 0, 0) };
     }
 
     /// Like [`GraphicsPipeline::record_draw`], with the draw's parameters read by the device
@@ -573,11 +646,12 @@ impl GraphicsPipeline {
         indirect: BufferBinding<'_>,
     ) {
         assert!(indirect.range >= 16, "an indirect draw reads 16 bytes");
+        rec.access_in_pass(indirect.lifetime(), Access::INDIRECT);
         self.record_state(rec, viewport.into(), set, push, vertices);
         let buffer = rec.bound(&indirect);
         // SAFETY: recording inside a render pass with this pipeline bound; `indirect` is kept
         // alive and holds at least one draw command at its offset.
-        unsafe { rec.device().cmd_draw_indirect(rec.raw(), buffer, indirect.offset, 1, 16) };
+        unsafe { rec.device().cmd_draw_indirect(rec.cmd(), buffer, indirect.offset, 1, 16) };
     }
 
     fn record_state<P: PushConstants + 'static>(
@@ -588,6 +662,12 @@ impl GraphicsPipeline {
         push: &P,
         vertices: Option<BufferBinding<'_>>,
     ) {
+        for (life, access) in self.core.set_accesses(set) {
+            rec.access_in_pass(&life, access);
+        }
+        if let Some(v) = &vertices {
+            rec.access_in_pass(v.lifetime(), Access::VERTEX_INPUT);
+        }
         self.core.record_bind(rec, set, push);
         let viewport = vk::Viewport {
             x: area.x as f32,
@@ -599,7 +679,7 @@ impl GraphicsPipeline {
         };
         let scissor = area.rect();
         let vertex_buffer = vertices.map(|v| (rec.bound(&v), v.offset));
-        let (d, cmd) = (rec.device(), rec.raw());
+        let (d, cmd) = (rec.device(), rec.cmd());
         // SAFETY: recording with this pipeline bound; the vertex buffer is kept alive.
         unsafe {
             d.cmd_set_viewport(cmd, 0, &[viewport]);

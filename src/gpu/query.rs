@@ -55,7 +55,7 @@ impl Profiler {
         rec.keep(&*self);
         // SAFETY: recording on this device (checked by `keep`), outside a render pass; the pool
         // is kept alive.
-        unsafe { rec.device().cmd_reset_query_pool(rec.raw(), self.pool, 0, 2 * self.capacity) };
+        unsafe { rec.device().cmd_reset_query_pool(rec.cmd(), self.pool, 0, 2 * self.capacity) };
     }
 
     /// Records `record` between two timestamps named `name`. Panics past the capacity.
@@ -72,13 +72,13 @@ impl Profiler {
         // SAFETY: recording on this device; the queries were reset in this recording and the
         // pool is kept alive.
         unsafe {
-            rec.device().cmd_write_timestamp(rec.raw(), vk::PipelineStageFlags::TOP_OF_PIPE, self.pool, 2 * i)
+            rec.device().cmd_write_timestamp(rec.cmd(), vk::PipelineStageFlags::TOP_OF_PIPE, self.pool, 2 * i)
         };
         let r = record(rec);
         // SAFETY: as above.
         unsafe {
             rec.device().cmd_write_timestamp(
-                rec.raw(),
+                rec.cmd(),
                 vk::PipelineStageFlags::BOTTOM_OF_PIPE,
                 self.pool,
                 2 * i + 1,

@@ -18,11 +18,13 @@
 //! Objects remember their device: recording one made on another [`Gpu`] is a bug and panics
 //! naming it (fallible entry points such as uploads return [`GpuError::WrongDevice`] instead).
 
+use std::collections::HashMap;
 use std::sync::Arc;
 
 use ash::vk;
 use bytemuck::Pod;
 
+use super::access::{Access, Key, State, Tracker};
 use super::buffer::{Buffer, BufferBinding};
 use super::context::Gpu;
 use super::error::GpuError;
@@ -33,6 +35,11 @@ pub struct Recorder<'g> {
     gpu: &'g Gpu,
     cmd: vk::CommandBuffer,
     uses: Vec<Use>,
+    /// How many of `uses` each object has (by lifetime), to tell its uses by other pending
+    /// recordings from this one's.
+    kept: HashMap<usize, usize>,
+    /// Declared accesses and the barriers they still need ([`super::access`]).
+    pub(crate) tracker: Tracker,
     host: bool,
 }
 
@@ -61,7 +68,7 @@ impl Recording {
 impl<'g> Recorder<'g> {
     /// A recorder over the engine's own command buffer (begun by [`Gpu::submit`]).
     pub(crate) fn engine(gpu: &'g Gpu, cmd: vk::CommandBuffer) -> Self {
-        Self { gpu, cmd, uses: Vec::new(), host: false }
+        Self::new(gpu, cmd, false)
     }
 
     /// A recorder over a host application's command buffer.
@@ -75,7 +82,11 @@ impl<'g> Recorder<'g> {
     ///   reset or freed without being submitted. A recorder dropped without `finish` keeps its
     ///   objects until the [`Gpu`] is dropped.
     pub unsafe fn from_host(gpu: &'g Gpu, cmd: vk::CommandBuffer) -> Self {
-        Self { gpu, cmd, uses: Vec::new(), host: true }
+        Self::new(gpu, cmd, true)
+    }
+
+    fn new(gpu: &'g Gpu, cmd: vk::CommandBuffer, host: bool) -> Self {
+        Self { gpu, cmd, uses: Vec::new(), kept: HashMap::new(), tracker: Tracker::default(), host }
     }
 
     /// Ends recording through this recorder (the command buffer itself stays in the recording
@@ -100,9 +111,26 @@ impl<'g> Recorder<'g> {
         self.gpu.device()
     }
 
-    /// The command buffer (recording into it directly is `unsafe`, and the caller must
-    /// [`Recorder::keep`] every object it records).
-    pub fn raw(&self) -> vk::CommandBuffer {
+    /// The command buffer, for a command the recorder has no method for.
+    ///
+    /// # Safety
+    /// Whatever the caller records into it must keep the recorder's promises, which the
+    /// engine's destruction relies on:
+    /// - every engine object a command names is passed to [`Recorder::keep`] (an object is
+    ///   destroyed as soon as its last reference goes; a recording holds a reference only to
+    ///   what it was told about, so an unkept object can be destroyed while the command that
+    ///   names it still runs);
+    /// - every engine buffer or image it reads or writes is declared with
+    ///   [`Recorder::access`] before the command (the recorder derives the barriers of later
+    ///   commands from the declared accesses).
+    pub unsafe fn raw(&mut self) -> vk::CommandBuffer {
+        self.flush();
+        self.cmd
+    }
+
+    /// The command buffer, for the engine's own recording methods (which keep and declare
+    /// what they record).
+    pub(crate) fn cmd(&self) -> vk::CommandBuffer {
         self.cmd
     }
 
@@ -115,15 +143,83 @@ impl<'g> Recorder<'g> {
     pub(crate) fn keep_lifetime(&mut self, life: &Arc<Lifetime>) {
         assert!(life.is_on(&self.gpu.shared), "{}", GpuError::WrongDevice { name: life.name().to_string() });
         self.uses.push(Use::new(life));
+        *self.kept.entry(Arc::as_ptr(life) as usize).or_default() += 1;
     }
 
-    /// Records a global memory barrier (the common case between passes: one pass writes a
-    /// buffer, the next reads it).
+    /// Declares that the commands that follow use `object` (a buffer, or an image already in
+    /// the layout they need) as `access`, and keeps it alive: the recorder records now the
+    /// barrier the access needs after what this recording (or an earlier, unfinished one) did
+    /// to it. For commands recorded through [`Recorder::raw`] or by a host, and for the draws
+    /// of a render pass, which declare before the pass begins.
+    pub fn access(&mut self, object: &impl Tracked, access: Access) {
+        self.declare_lifetime(object.lifetime(), access);
+        self.flush();
+    }
+
+    /// Declares an access, leaving its barrier pending until [`Self::flush`].
+    pub(crate) fn declare_lifetime(&mut self, life: &Arc<Lifetime>, access: Access) {
+        let key = Key::Object(Arc::as_ptr(life) as usize);
+        let state = self.state(key, Some(life));
+        if let Some((src, dst)) = state.access(access, false) {
+            self.tracker.pending.memory(src, dst);
+        }
+        self.keep_lifetime(life);
+    }
+
+    /// The tracked state of `key`, first met now if it is not yet known.
+    pub(crate) fn state(&mut self, key: Key, life: Option<&Arc<Lifetime>>) -> &mut State {
+        let own = life.map_or(0, |l| self.kept.get(&(Arc::as_ptr(l) as usize)).copied().unwrap_or(0));
+        // A foreign image's earlier recordings are the host's business (its layout says where
+        // they left it); an engine object used by other pending recordings waits for them.
+        let elsewhere = life.is_some_and(|l| l.pending() > own);
+        self.tracker.states.entry(key).or_insert_with(|| State::first(elsewhere))
+    }
+
+    /// Declares a use by a draw inside a render pass, where no barrier can be recorded: the
+    /// pass that drew must have declared it before the render pass began. Panics if it did
+    /// not (a missing declaration is a bug in the pass).
+    pub(crate) fn access_in_pass(&mut self, life: &Arc<Lifetime>, access: Access) {
+        let key = Key::Object(Arc::as_ptr(life) as usize);
+        let ok = self.state(key, Some(life)).access_in_pass(access);
+        assert!(
+            ok,
+            "`{}` is read by a draw after a write that no barrier made visible to it: declare the \
+             draw's access (Recorder::access) before the render pass begins",
+            life.name()
+        );
+        self.keep_lifetime(life);
+    }
+
+    /// Records the barriers the declared accesses need (before a command, outside a render
+    /// pass).
+    pub(crate) fn flush(&mut self) {
+        if self.tracker.pending.is_empty() {
+            return;
+        }
+        let caps = self.gpu.caps();
+        let mut enabled = vk::PipelineStageFlags2::from_raw(u64::MAX);
+        if !caps.tessellation_shader {
+            enabled &= !(vk::PipelineStageFlags2::TESSELLATION_CONTROL_SHADER
+                | vk::PipelineStageFlags2::TESSELLATION_EVALUATION_SHADER);
+        }
+        if !caps.geometry_shader {
+            enabled &= !vk::PipelineStageFlags2::GEOMETRY_SHADER;
+        }
+        // SAFETY: recording on this device outside a render pass (every caller records a
+        // transfer or dispatch next, or declares before a render pass); the images named are
+        // kept by this recording.
+        unsafe { self.tracker.pending.record(self.gpu.device(), self.cmd, caps.synchronization2, enabled) };
+    }
+
+    /// Records a global memory barrier by hand, after the barriers declared accesses need. The
+    /// engine's passes do not use it (their declared accesses derive their barriers); it is for
+    /// commands recorded through [`Recorder::raw`] that need an ordering no declaration states.
     pub fn memory_barrier(
         &mut self,
         src: (vk::PipelineStageFlags, vk::AccessFlags),
         dst: (vk::PipelineStageFlags, vk::AccessFlags),
     ) {
+        self.flush();
         let barrier = vk::MemoryBarrier::default().src_access_mask(src.1).dst_access_mask(dst.1);
         // SAFETY: `cmd` is recording on this device (the recorder's invariant).
         unsafe {
@@ -139,21 +235,11 @@ impl<'g> Recorder<'g> {
         };
     }
 
-    /// Compute shader writes → compute shader reads and writes.
-    pub fn compute_to_compute_barrier(&mut self) {
-        self.memory_barrier(
-            (vk::PipelineStageFlags::COMPUTE_SHADER, vk::AccessFlags::SHADER_WRITE),
-            (
-                vk::PipelineStageFlags::COMPUTE_SHADER,
-                vk::AccessFlags::SHADER_READ | vk::AccessFlags::SHADER_WRITE,
-            ),
-        );
-    }
-
     /// Records `vkCmdFillBuffer` of the whole of `buffer` with the 32-bit pattern `word`
     /// (outside a render pass; a transfer write).
     pub fn fill_buffer<T: Pod>(&mut self, buffer: &Buffer<T>, word: u32) {
-        self.keep(buffer);
+        self.declare_lifetime(buffer.lifetime(), Access::TRANSFER_WRITE);
+        self.flush();
         // SAFETY: recording on this device; a whole-size fill of a live buffer is valid.
         unsafe { self.device().cmd_fill_buffer(self.cmd, buffer.raw(), 0, vk::WHOLE_SIZE, word) };
     }
@@ -179,7 +265,8 @@ impl<'g> Recorder<'g> {
             bytes.len(),
             buffer.name()
         );
-        self.keep(buffer);
+        self.declare_lifetime(buffer.lifetime(), Access::TRANSFER_WRITE);
+        self.flush();
         // SAFETY: recording on this device; the range lies inside the live buffer.
         unsafe { self.device().cmd_update_buffer(self.cmd, buffer.raw(), offset, bytes) };
     }
@@ -203,8 +290,9 @@ impl<'g> Recorder<'g> {
         if len == 0 {
             return;
         }
-        self.keep(src);
-        self.keep(dst);
+        self.declare_lifetime(src.lifetime(), Access::TRANSFER_READ);
+        self.declare_lifetime(dst.lifetime(), Access::TRANSFER_WRITE);
+        self.flush();
         let elem = std::mem::size_of::<T>() as u64;
         let region =
             vk::BufferCopy { src_offset: src_first * elem, dst_offset: dst_first * elem, size: len * elem };
@@ -231,8 +319,9 @@ impl<'g> Recorder<'g> {
         if bytes == 0 {
             return;
         }
-        self.keep(src);
-        self.keep(dst);
+        self.declare_lifetime(src.lifetime(), Access::TRANSFER_READ);
+        self.declare_lifetime(dst.lifetime(), Access::TRANSFER_WRITE);
+        self.flush();
         let region = vk::BufferCopy { src_offset, dst_offset, size: bytes };
         // SAFETY: recording on this device; both ranges lie inside live buffers (kept alive).
         unsafe { self.device().cmd_copy_buffer(self.cmd, src.raw(), dst.raw(), &[region]) };

@@ -30,6 +30,9 @@ pub struct ShaderLayout {
     pub push_members: Vec<BlockMember>,
     /// Bytes of workgroup (`shared`) memory it declares.
     pub shared_bytes: u32,
+    /// The storage-buffer bindings it may write (those not declared `readonly`, i.e. not
+    /// decorated `NonWritable` as a variable or in every member of their block).
+    pub writable: std::collections::BTreeSet<u32>,
 }
 
 /// One member of a push-constant block as a shader's SPIR-V lays it out.
@@ -86,6 +89,7 @@ pub fn reflect(pipeline: &str, spirv: &[u32]) -> GpuResult<ShaderLayout> {
     let types = Types::new(&module);
     let mut push_members = Vec::new();
     let mut shared_bytes = 0u32;
+    let mut writable = std::collections::BTreeSet::new();
     for var in module.types_global_values.iter().filter(|i| i.class.opcode == Op::Variable) {
         let (Some(ptr), Some(Operand::StorageClass(class))) = (var.result_type, var.operands.first()) else {
             continue;
@@ -96,10 +100,19 @@ pub fn reflect(pipeline: &str, spirv: &[u32]) -> GpuResult<ShaderLayout> {
             StorageClass::Workgroup => {
                 shared_bytes = shared_bytes.saturating_add(types.size_of(pointee, None).map_or(0, |t| t.0))
             }
+            StorageClass::StorageBuffer | StorageClass::Uniform => {
+                let Some(id) = var.result_id else { continue };
+                let Some(binding) = types.decoration(id, u32::MAX, Decoration::Binding) else { continue };
+                if bindings.get(&binding) == Some(&BindingKind::StorageBuffer)
+                    && !types.read_only(id, pointee)
+                {
+                    writable.insert(binding);
+                }
+            }
             _ => {}
         }
     }
-    Ok(ShaderLayout { push_bytes, bindings, local_size, push_members, shared_bytes })
+    Ok(ShaderLayout { push_bytes, bindings, local_size, push_members, shared_bytes, writable })
 }
 
 /// The type declarations and decorations of a module, for sizes and layouts.
@@ -148,6 +161,20 @@ impl<'m> Types<'m> {
             Some(Operand::LiteralInt32(v)) => Some(*v),
             _ => None,
         }
+    }
+
+    /// True if the buffer variable `var` (of block type `block`) is declared `readonly`.
+    fn read_only(&self, var: Word, block: Word) -> bool {
+        let non_writable = |t, m| {
+            self.decorations
+                .get(&(t, m))
+                .is_some_and(|d| d.iter().any(|(d, _)| *d == Decoration::NonWritable))
+        };
+        if non_writable(var, u32::MAX) {
+            return true;
+        }
+        let members = self.by_id.get(&block).map_or(0, |i| i.operands.len() as u32);
+        members > 0 && (0..members).all(|m| non_writable(block, m))
     }
 
     /// The type a pointer type points to.
@@ -243,6 +270,7 @@ pub fn merge(pipeline: &str, stages: &[ShaderLayout]) -> GpuResult<ShaderLayout>
             }
         }
         out.shared_bytes = out.shared_bytes.max(s.shared_bytes);
+        out.writable.extend(&s.writable);
         for (&b, &k) in &s.bindings {
             if let Some(&other) = out.bindings.get(&b) {
                 if other != k {

@@ -303,9 +303,11 @@ impl RenderPass {
             .framebuffer(framebuffer.raw)
             .render_area(vk::Rect2D { offset: vk::Offset2D::default(), extent: framebuffer.extent })
             .clear_values(&clears[..n]);
+        // The barriers declared for the draws (their reads of earlier writes) go before it.
+        rec.flush();
         // SAFETY: recording on this device; the framebuffer matches this pass (checked) and
         // both are kept alive.
-        unsafe { rec.device().cmd_begin_render_pass(rec.raw(), &info, vk::SubpassContents::INLINE) };
+        unsafe { rec.device().cmd_begin_render_pass(rec.cmd(), &info, vk::SubpassContents::INLINE) };
     }
 
     /// Records `vkCmdEndRenderPass`.
@@ -313,7 +315,7 @@ impl RenderPass {
         assert!(!self.is_host(), "a host's render pass is ended by the host");
         // SAFETY: recording on this device, inside this render pass (the caller's documented
         // state; a validation error, not memory unsafety, otherwise).
-        unsafe { rec.device().cmd_end_render_pass(rec.raw()) };
+        unsafe { rec.device().cmd_end_render_pass(rec.cmd()) };
     }
 }
 

@@ -1,7 +1,9 @@
-//! Deferred destruction. Every engine submission gets a serial that is "in flight" from the
-//! moment its recording begins until its fence is seen signalled. A resource whose last
-//! reference goes while any serial is in flight is not destroyed at once: its destructor is
-//! queued with the newest serial and runs when no serial at or below it is in flight.
+//! Retirement: when an object may be destroyed is decided by its [`super::Lifetime`] alone. A
+//! recording holds a use of every object it records until its work is known to be finished
+//! (its fence seen signalled, or the host's [`super::Recording`] dropped), so the last
+//! reference to an object goes only when no recorded work can still use it, and it is
+//! destroyed then, at once. The device counts its submissions in flight (serials, for
+//! [`super::Gpu::pending_submissions`]) and keeps the slots they free for reuse.
 //!
 //! A submission that times out is not forgotten: dropping it hands its fence, serial and
 //! objects to the device, which polls the fence at every later submission and retires them
@@ -16,15 +18,14 @@ use super::context::DeviceShared;
 use super::lifetime::Use;
 use super::slot::Slot;
 
-/// A destructor waiting for in-flight work.
+/// An object's destructor (run when its [`super::Lifetime`] ends).
 pub(crate) type Retirement = Box<dyn FnOnce(&DeviceShared) + Send>;
 
-/// Submission serials in flight and the destructors waiting for them.
+/// Submission serials in flight, free slots, timed-out submissions and orphaned uses.
 #[derive(Default)]
 pub(crate) struct Tracker {
     pub(crate) next_serial: u64,
     pub(crate) in_flight: BTreeSet<u64>,
-    retired: Vec<(u64, Retirement)>,
     /// Reusable slots, each with an unsignalled fence and a reset pool.
     pub(crate) free: Vec<Slot>,
     /// Timed-out submissions: their slot, serial and objects, until their fence signals.
@@ -33,32 +34,11 @@ pub(crate) struct Tracker {
     pub(crate) orphans: Vec<Use>,
 }
 
-impl Tracker {
-    /// Everything still waiting (used at teardown, when nothing can be in flight).
-    pub(crate) fn take_all(&mut self) -> Vec<Retirement> {
-        self.retired.drain(..).map(|(_, f)| f).collect()
-    }
-
-    /// Marks `serial` finished and returns the destructors that may now run.
-    fn complete(&mut self, serial: u64) -> Vec<Retirement> {
-        self.in_flight.remove(&serial);
-        let oldest = self.in_flight.first().copied().unwrap_or(u64::MAX);
-        let (ready, keep): (Vec<_>, Vec<_>) = self.retired.drain(..).partition(|(s, _)| *s < oldest);
-        self.retired = keep;
-        ready.into_iter().map(|(_, f)| f).collect()
-    }
-}
-
 impl DeviceShared {
-    /// Destroys an object now, or after the engine's in-flight work if there is any.
+    /// Destroys an object whose last reference went: no recorded work can use it any more
+    /// (every recording holds a use of what it records until its work has finished).
     pub(crate) fn retire(&self, destroy: impl FnOnce(&DeviceShared) + Send + 'static) {
-        let mut t = self.tracker.lock().unwrap_or_else(|p| p.into_inner());
-        if let Some(&newest) = t.in_flight.last() {
-            t.retired.push((newest, Box::new(destroy)));
-        } else {
-            drop(t);
-            destroy(self);
-        }
+        destroy(self);
     }
 
     /// Keeps a host recording's objects until the device goes.
@@ -116,18 +96,12 @@ impl DeviceShared {
         (slots, released)
     }
 
-    /// Marks `serial` finished (returning `reuse` to the free slots) and runs the destructors
-    /// that were waiting for it.
+    /// Marks `serial` finished, returning `reuse` to the free slots.
     pub(crate) fn finish(&self, serial: u64, reuse: Option<Slot>) {
-        let ready = {
-            let mut t = self.tracker.lock().unwrap_or_else(|p| p.into_inner());
-            if let Some(pair) = reuse {
-                t.free.push(pair);
-            }
-            t.complete(serial)
-        };
-        for f in ready {
-            f(self);
+        let mut t = self.tracker.lock().unwrap_or_else(|p| p.into_inner());
+        t.in_flight.remove(&serial);
+        if let Some(slot) = reuse {
+            t.free.push(slot);
         }
     }
 }

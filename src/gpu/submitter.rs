@@ -9,15 +9,17 @@
 //!
 //! Between steps the job moves data with [`dyn Submitter::upload`] and
 //! [`dyn Submitter::download`] (recorded staging copies, so a host's submitter carries them
-//! too) and orders its steps through [`dyn Submitter::submit`], which starts every recording
-//! with a full memory barrier: each step sees everything the earlier steps wrote, in
-//! submission order on one queue.
+//! too) and submits its steps through [`dyn Submitter::submit`]. Steps are ordered by their
+//! declared accesses ([`super::Access`]): the first command of a step that uses an object an
+//! earlier, unfinished step also used waits for all earlier commands, so each step sees
+//! everything the earlier steps wrote, in submission order on one queue.
 
 use std::collections::VecDeque;
 
 use ash::vk;
 use bytemuck::Pod;
 
+use super::access::Access;
 use super::buffer::{Buffer, STAGING_CHUNK_BYTES};
 use super::commands::Submission;
 use super::context::Gpu;
@@ -36,7 +38,7 @@ pub trait Submitter: Send {
     fn gpu(&self) -> &Gpu;
 
     /// Records `record` into a command buffer and submits it. Jobs call
-    /// [`dyn Submitter::submit`], which adds the leading barrier.
+    /// [`dyn Submitter::submit`].
     fn record_and_submit(&mut self, record: &mut dyn FnMut(&mut Recorder<'_>)) -> GpuResult<()>;
 
     /// Waits until everything submitted has completed and its recordings are released.
@@ -44,24 +46,16 @@ pub trait Submitter: Send {
 }
 
 impl dyn Submitter + '_ {
-    /// Submits one step of a job: a full memory barrier (every earlier write, from every stage,
-    /// made visible to every later access) and then `record`.
+    /// Submits one step of a job, `record` (ordered after the earlier steps by its declared
+    /// accesses).
     pub fn submit(&mut self, record: &mut dyn FnMut(&mut Recorder<'_>)) -> GpuResult<()> {
-        self.record_and_submit(&mut |rec| {
-            rec.memory_barrier(
-                (vk::PipelineStageFlags::ALL_COMMANDS, vk::AccessFlags::MEMORY_WRITE),
-                (
-                    vk::PipelineStageFlags::ALL_COMMANDS,
-                    vk::AccessFlags::MEMORY_READ | vk::AccessFlags::MEMORY_WRITE,
-                ),
-            );
-            record(rec)
-        })
+        self.record_and_submit(record)
     }
 
     /// Copies `data` into elements `first ..` of `dst` through host-visible staging buffers
     /// of at most [`STAGING_CHUNK_BYTES`], one submission per chunk (ordered after earlier
-    /// steps, and before later ones, by [`Self::submit`]'s barriers). Panics if the range is
+    /// steps, and before later ones, by the declared accesses: an object of an unfinished
+    /// submission is waited for by the first command that uses it). Panics if the range is
     /// outside `dst`.
     pub fn upload<T: Pod>(&mut self, dst: &Buffer<T>, first: u64, data: &[T]) -> GpuResult<()> {
         assert!(
@@ -150,10 +144,7 @@ impl dyn Submitter + '_ {
         };
         self.submit(&mut |rec| {
             rec.copy_bytes(src, first * elem, &staging, 0, bytes);
-            rec.memory_barrier(
-                (vk::PipelineStageFlags::TRANSFER, vk::AccessFlags::TRANSFER_WRITE),
-                (vk::PipelineStageFlags::HOST, vk::AccessFlags::HOST_READ),
-            );
+            rec.access(&staging, Access::HOST_READ);
         })?;
         Ok(Readback { staging: Some(staging), len: len as usize, gpu, _t: std::marker::PhantomData })
     }

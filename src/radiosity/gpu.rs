@@ -228,33 +228,18 @@ impl GpuRadiosity {
         })
     }
 
-    /// Records the form-factor rows of `pass` (outside a render pass): a barrier that orders
-    /// them after earlier compute and transfer reads of the rows (the previous frame's sweeps
-    /// or readback), one dispatch per block of rows, then a barrier that makes the rows
-    /// visible to compute shaders (the Jacobi sweeps) and transfers (a readback).
+    /// Records the form-factor rows of `pass` (outside a render pass), one dispatch per block
+    /// of rows; the dispatches' declared accesses order them after earlier reads of the rows
+    /// (the previous frame's sweeps or readback) and later sweeps and readbacks after them.
     pub fn record_form_factors(&self, rec: &mut Recorder<'_>, pass: &FormFactorPass) {
         let pipeline = &self.form_factors[usize::from(pass.near == NearField::Regularised)];
         let n = pass.rows.n;
-        rec.memory_barrier(
-            (
-                vk::PipelineStageFlags::COMPUTE_SHADER | vk::PipelineStageFlags::TRANSFER,
-                vk::AccessFlags::empty(),
-            ),
-            (vk::PipelineStageFlags::COMPUTE_SHADER, vk::AccessFlags::empty()),
-        );
         for (&(row0, count), set) in pass.rows.blocks.iter().zip(&pass.sets) {
             let push = Push { n: n as u32, row0, rows: count, extra: pass.bvh_nodes };
             let [wx, wy, _] = pipeline.local_size();
             let groups = [(n as u32).div_ceil(wx), count.div_ceil(wy), 1];
             pipeline.record_dispatch(rec, set, &push, groups);
         }
-        rec.memory_barrier(
-            (vk::PipelineStageFlags::COMPUTE_SHADER, vk::AccessFlags::SHADER_WRITE),
-            (
-                vk::PipelineStageFlags::COMPUTE_SHADER | vk::PipelineStageFlags::TRANSFER,
-                vk::AccessFlags::SHADER_READ | vk::AccessFlags::TRANSFER_READ,
-            ),
-        );
     }
 
     /// Eq. 14 by Jacobi sweeps on the device from `b = e`, in batches of 8 sweeps, until the
@@ -342,10 +327,9 @@ impl GpuRadiosity {
     }
 
     /// Records `count` Jacobi sweeps (Eq. 14) numbered from `first` (sweep k reads iterate
-    /// k mod 2 and writes the other; outside a render pass), each followed by a compute-to-
-    /// compute barrier; after an even `first + count` the newest iterate is `b[0]`. Before:
-    /// the form-factor rows' writes are visible to compute shaders
-    /// ([`Self::record_form_factors`] ends with that barrier).
+    /// k mod 2 and writes the other; outside a render pass; each sweep's dispatches wait for
+    /// the last one's writes through their declared accesses); after an even `first + count`
+    /// the newest iterate is `b[0]`.
     pub fn record_jacobi_sweeps(
         &self,
         rec: &mut Recorder<'_>,
@@ -360,7 +344,6 @@ impl GpuRadiosity {
                 let push = Push { n: f.n as u32, row0, rows, extra: 0 };
                 self.jacobi.record_dispatch(rec, &pair[k % 2], &push, [rows.div_ceil(wx), 1, 1]);
             }
-            rec.compute_to_compute_barrier();
         }
     }
 }

@@ -20,10 +20,10 @@ use super::mesh::{FaceGeometry, FaceKind, SceneMesh};
 use super::scene::{LightMode, Lights, SceneSpec};
 use super::solve::Rgb;
 use crate::gpu::{
-    Buffer, DescriptorSet, Gpu, GpuResult, GraphicsPipeline, GraphicsPipelineDesc, MemoryKind, Recorder,
-    RenderPass,
+    Buffer, DescriptorSet, Gpu, GpuError, GpuResult, GraphicsPipeline, GraphicsPipelineDesc, MemoryKind,
+    PassKey, Recorder, RenderPass, Viewport,
 };
-use crate::render::Camera;
+use crate::render::{check_pass, Camera, Draw, DrawTarget};
 
 /// How radiance varies over a face.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
@@ -125,6 +125,8 @@ pub enum Output {
 
 /// The resident renderer: pipeline and a host-visible vertex buffer rewritten per frame.
 pub struct SceneRenderer {
+    /// The render passes its pipeline can draw in.
+    key: PassKey,
     pipeline: GraphicsPipeline,
     set: DescriptorSet,
     vertices: Buffer<SceneVertex>,
@@ -166,7 +168,7 @@ impl SceneRenderer {
             vk::BufferUsageFlags::VERTEX_BUFFER,
             MemoryKind::CpuToGpu,
         )?;
-        Ok(Self { pipeline, set, vertices, count: 0 })
+        Ok(Self { key: pass.key(), pipeline, set, vertices, count: 0 })
     }
 
     /// Replaces the vertex stream (at most `3 · faces` vertices; the rest is dropped). The
@@ -180,14 +182,53 @@ impl SceneRenderer {
         Ok(())
     }
 
-    /// Records the draw (inside the target's render pass).
-    pub fn record(&self, rec: &mut Recorder<'_>, extent: vk::Extent2D, camera: &Camera, exposure: f64) {
-        let aspect = f64::from(extent.width) / f64::from(extent.height.max(1));
+    /// Records the draw (inside the target's render pass) in `viewport`.
+    pub fn record(
+        &self,
+        rec: &mut Recorder<'_>,
+        viewport: impl Into<Viewport>,
+        camera: &Camera,
+        exposure: f64,
+    ) {
+        let extent: Viewport = viewport.into();
+        let aspect = extent.aspect();
         let push = Push {
             view_proj: camera.view_proj_f32(aspect).to_cols_array(),
             tone: [exposure as f32, 0.0, 0.0, 0.0],
         };
         self.pipeline.record_draw(rec, extent, &self.set, &push, Some(self.vertices.whole()), self.count);
+    }
+}
+
+/// What a radiosity scene is drawn with ([`Draw`] for [`SceneRenderer`]).
+#[derive(Clone, Copy, Debug)]
+pub struct SceneView {
+    /// The camera.
+    pub camera: Camera,
+    /// The tone map's exposure (radiance at white).
+    pub exposure: f64,
+}
+
+impl Draw for SceneRenderer {
+    type View<'v> = SceneView;
+    type Error = super::RadiosityError;
+
+    fn device_error(_: &'static str, cause: GpuError) -> Self::Error {
+        super::RadiosityError::Gpu(cause)
+    }
+
+    /// The scene's faces (their vertices, uploaded by [`SceneRenderer::update`]) in the
+    /// target's viewport. Refused if the target's render pass is not of the class the renderer
+    /// was made for ([`SceneRenderer::new`]'s `pass`).
+    fn record_draw_into(
+        &mut self,
+        rec: &mut Recorder<'_>,
+        target: DrawTarget<'_>,
+        view: &SceneView,
+    ) -> Result<(), Self::Error> {
+        check_pass(self.key, &target, "a radiosity scene")?;
+        self.record(rec, target.viewport(), &view.camera, view.exposure);
+        Ok(())
     }
 }
 
@@ -255,15 +296,12 @@ pub fn draw_picture(
     let mut raw_pass = SceneRenderer::new(gpu, raw.render_pass(), Output::Raw, faces)?;
     colour_pass.update(vertices)?;
     raw_pass.update(vertices)?;
-    let rgba = match colour
-        .render(gpu, BACKGROUND, |rec| colour_pass.record(rec, colour.extent(), camera, exposure))?
-    {
+    let view = SceneView { camera: *camera, exposure };
+    let rgba = match colour.draw(gpu, &mut colour_pass, &view, BACKGROUND)? {
         Pixels::Rgba8(v) => v,
         Pixels::Rgba32F(_) => unreachable!("an RGBA8 target reads back bytes"),
     };
-    let raw = match raw
-        .render(gpu, [0.0, 0.0, 0.0, -1.0], |rec| raw_pass.record(rec, raw.extent(), camera, exposure))?
-    {
+    let raw = match raw.draw(gpu, &mut raw_pass, &view, [0.0, 0.0, 0.0, -1.0])? {
         Pixels::Rgba32F(v) => v,
         Pixels::Rgba8(_) => unreachable!("a float target reads back floats"),
     };

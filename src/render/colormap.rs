@@ -131,7 +131,7 @@ impl Colormap {
 
     /// Uploads the ramp as a 1D RGBA8 texture with a linear sampler.
     pub fn upload(&self, gpu: &Gpu) -> GpuResult<ColormapTexture> {
-        let image = Image::new(
+        let mut image = Image::new(
             gpu,
             &format!("colormap {}", self.name),
             ImageDesc::texture_1d(self.texels.len() as u32, vk::Format::R8G8B8A8_UNORM),

@@ -4,6 +4,7 @@
 mod camera;
 mod colormap;
 mod colormap_data;
+mod draw;
 mod draw_target;
 mod error;
 mod image_io;
@@ -18,6 +19,7 @@ pub const BACKGROUND: [f32; 4] = [0.12, 0.12, 0.14, 1.0];
 
 pub use camera::{camera_for_box, Camera, Orbit};
 pub use colormap::{ramp_coordinate, ramp_texcoord, Colormap, ColormapTexture, RAMP_TEXELS};
+pub use draw::{check_pass, Draw};
 pub use draw_target::DrawTarget;
 pub use error::RenderError;
 pub use image_io::{

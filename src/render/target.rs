@@ -6,8 +6,8 @@ use ash::vk;
 use super::draw_target::DrawTarget;
 
 use crate::gpu::{
-    Attachment, Buffer, ForeignView, Framebuffer, Gpu, GpuResult, Image, ImageDesc, MemoryKind, Recorder,
-    RenderPass,
+    Attachment, Buffer, ForeignImage, ForeignView, Framebuffer, Gpu, GpuResult, Image, ImageDesc,
+    ImageResource, MemoryKind, Recorder, RenderPass,
 };
 
 /// Colour formats of a render target.
@@ -56,7 +56,16 @@ pub enum Pixels {
 
 enum ColorAttachment {
     Owned(Image),
-    Foreign { image: vk::Image, view: ForeignView },
+    Foreign { image: ForeignImage, view: ForeignView },
+}
+
+impl ColorAttachment {
+    fn image(&self) -> &dyn ImageResource {
+        match self {
+            Self::Owned(i) => i,
+            Self::Foreign { image, .. } => image,
+        }
+    }
 }
 
 /// Where a pass draws: colour (+ depth) attachments with their render pass and framebuffer.
@@ -98,6 +107,9 @@ impl RenderTarget {
     ) -> GpuResult<Self> {
         // SAFETY: forwarded from this function's contract.
         let view = unsafe { ForeignView::new(gpu, image, format.vk()) }?;
+        let extent = vk::Extent2D { width, height };
+        // SAFETY: as above; its prior contents are discarded by the pass (UNDEFINED).
+        let image = unsafe { ForeignImage::new(image, format.vk(), extent, vk::ImageLayout::UNDEFINED) };
         let color = ColorAttachment::Foreign { image, view };
         Self::around(gpu, name, color, format, width, height)
     }
@@ -150,16 +162,13 @@ impl RenderTarget {
         self.format
     }
 
-    /// The colour image (in `TRANSFER_SRC_OPTIMAL` after a pass).
-    pub fn color_image(&self) -> vk::Image {
-        match &self.color {
-            ColorAttachment::Owned(i) => i.raw(),
-            ColorAttachment::Foreign { image, .. } => *image,
-        }
+    /// The colour image (in `TRANSFER_SRC_OPTIMAL` after a pass), for the recorder's image
+    /// operations ([`Recorder::blit`], [`Recorder::copy_image_to_buffer`]).
+    pub fn color_image(&self) -> &dyn ImageResource {
+        self.color.image()
     }
 
-    /// Keeps every object of the target alive until `rec`'s work has finished (for passes
-    /// that record its colour image directly).
+    /// Keeps every object of the target alive until `rec`'s work has finished.
     pub fn keep(&self, rec: &mut Recorder<'_>) {
         match &self.color {
             ColorAttachment::Owned(image) => rec.keep(image),
@@ -175,35 +184,27 @@ impl RenderTarget {
         self.pass.record_begin(rec, &self.framebuffer, clear);
     }
 
-    /// Records the end of the render pass.
+    /// Records the end of the render pass: the colour image is then in
+    /// `TRANSFER_SRC_OPTIMAL`, its writes visible to transfers (the pass's external
+    /// dependency).
     pub fn record_end(&self, rec: &mut Recorder<'_>) {
         self.pass.record_end(rec);
+        rec.attachment_written(
+            self.color.image(),
+            vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+            vk::PipelineStageFlags2::TRANSFER,
+        );
     }
 
     /// Records a copy of the colour image (after a pass) into `dst`, tightly packed. Panics
     /// if `dst` is smaller than [`RenderTarget::readback_bytes`].
     pub fn record_readback<T: bytemuck::Pod>(&self, rec: &mut Recorder<'_>, dst: &Buffer<T>) {
         assert!(dst.size_bytes() >= self.readback_bytes(), "`{}` cannot hold the target", dst.name());
-        match &self.color {
-            ColorAttachment::Owned(image) => image.record_copy_to_buffer(rec, dst),
-            ColorAttachment::Foreign { image, view } => {
-                rec.keep(view);
-                rec.keep(dst);
-                let region = crate::gpu::full_copy_region(vk::ImageAspectFlags::COLOR, self.extent);
-                // SAFETY: the host's image is live for the target's life and its recordings
-                // (`from_host_image`'s contract), in TRANSFER_SRC_OPTIMAL after the pass; `dst`
-                // is kept alive and large enough (checked above).
-                unsafe {
-                    rec.device().cmd_copy_image_to_buffer(
-                        rec.raw(),
-                        *image,
-                        vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                        dst.raw(),
-                        &[region],
-                    )
-                };
-            }
+        if let ColorAttachment::Foreign { view, .. } = &self.color {
+            rec.keep(view);
         }
+        rec.copy_image_to_buffer(self.color.image(), dst);
+        rec.access(dst, crate::gpu::Access::HOST_READ);
     }
 
     /// Bytes of one full readback.
@@ -233,13 +234,7 @@ impl RenderTarget {
         gpu: &Gpu,
         draw: Option<([f32; 4], Box<dyn FnOnce(&mut Recorder<'_>) + '_>)>,
     ) -> GpuResult<Pixels> {
-        let staging = Buffer::<u8>::new(
-            gpu,
-            "render target readback",
-            self.readback_bytes(),
-            vk::BufferUsageFlags::empty(),
-            MemoryKind::GpuToCpu,
-        )?;
+        let staging = self.readback_staging(gpu)?;
         gpu.run(|rec| {
             if let Some((clear, draw)) = draw {
                 self.record_begin(rec, clear);
@@ -248,6 +243,22 @@ impl RenderTarget {
             }
             self.record_readback(rec, &staging);
         })?;
+        self.read_staging(&staging)
+    }
+
+    /// A host-visible buffer for one readback.
+    pub(crate) fn readback_staging(&self, gpu: &Gpu) -> GpuResult<Buffer<u8>> {
+        Buffer::<u8>::new(
+            gpu,
+            "render target readback",
+            self.readback_bytes(),
+            vk::BufferUsageFlags::empty(),
+            MemoryKind::GpuToCpu,
+        )
+    }
+
+    /// The pixels of a finished readback into `staging`.
+    pub(crate) fn read_staging(&self, staging: &Buffer<u8>) -> GpuResult<Pixels> {
         let bytes = staging.mapped().ok_or_else(|| crate::gpu::GpuError::NotMappable {
             name: staging.name().to_string(),
             reason: "readback staging is not host-visible",

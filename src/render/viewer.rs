@@ -23,7 +23,7 @@ use winit::window::{Window, WindowId};
 
 use super::{write_png_rgba8, Camera, ColorFormat, RenderTarget};
 use crate::gpu::{
-    record_image_barrier, surface_extensions, Buffer, Gpu, GpuDesc, MemoryKind, Recorder, Submission,
+    surface_extensions, Access, Buffer, ForeignImage, Gpu, GpuDesc, MemoryKind, Recorder, Submission,
     Surface, Swapchain,
 };
 use crate::plot::{colour_bar_rgba, ColourBar, BAR_WIDTH};
@@ -305,118 +305,32 @@ impl State {
             target.record_begin(rec, crate::render::BACKGROUND);
             let recorded = prepared.and_then(|()| content.record(rec, target, camera));
             target.record_end(rec);
-            let dev = gpu.device();
-            let color = vk::ImageAspectFlags::COLOR;
             target.keep(rec);
-            // SAFETY: the swapchain image is live until the swapchain is recreated, which
-            // waits for this frame's submission first.
-            unsafe {
-                record_image_barrier(
-                    rec,
-                    image,
-                    color,
-                    (vk::ImageLayout::UNDEFINED, vk::PipelineStageFlags::TRANSFER, vk::AccessFlags::empty()),
-                    (
-                        vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                        vk::PipelineStageFlags::TRANSFER,
-                        vk::AccessFlags::TRANSFER_WRITE,
-                    ),
-                )
-            };
-            let te = target.extent();
-            let corner =
-                |w: u32, h: u32| [vk::Offset3D::default(), vk::Offset3D { x: w as i32, y: h as i32, z: 1 }];
-            let layers = vk::ImageSubresourceLayers {
-                aspect_mask: color,
-                mip_level: 0,
-                base_array_layer: 0,
-                layer_count: 1,
-            };
-            let blit = vk::ImageBlit {
-                src_subresource: layers,
-                src_offsets: corner(te.width, te.height),
-                dst_subresource: layers,
-                dst_offsets: corner(picture.width, picture.height),
-            };
-            // SAFETY: the target is in TRANSFER_SRC after its pass; the swapchain image was
-            // just moved to TRANSFER_DST; both are alive until the fence.
-            unsafe {
-                dev.cmd_blit_image(
-                    rec.raw(),
-                    target.color_image(),
-                    vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                    image,
-                    vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                    &[blit],
-                    vk::Filter::NEAREST,
-                )
-            };
-            let mut layout = (
-                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                vk::PipelineStageFlags::TRANSFER,
-                vk::AccessFlags::TRANSFER_WRITE,
-            );
+            // SAFETY: the swapchain image is a live colour image of this device with one level
+            // and layer, in the swapchain's format and extent, made with transfer-destination
+            // (and, when readable, transfer-source) usage; it stays alive until the swapchain is
+            // recreated, which waits for this frame's submission first. Its contents are not
+            // kept (UNDEFINED).
+            let mut screen = unsafe { ForeignImage::new(image, format, extent, vk::ImageLayout::UNDEFINED) };
+            // The acquire's semaphore is waited for at the transfer stage: the layout change
+            // must come after it.
+            let acquired =
+                Access { stages: vk::PipelineStageFlags2::TRANSFER, access: vk::AccessFlags2::empty() };
+            // SAFETY: the submission waits for `image_available` at TRANSFER before this.
+            unsafe { rec.image_written_externally(&screen, vk::ImageLayout::UNDEFINED, acquired) };
+            rec.blit(target.color_image(), &mut screen, picture);
             if let Some(strip) = legend {
-                // SAFETY: as above; the blit's write is ordered before the copy's.
-                unsafe { record_image_barrier(rec, image, color, layout, layout) };
-                rec.keep(&strip.texels);
-                let region = vk::BufferImageCopy {
-                    buffer_offset: 0,
-                    buffer_row_length: 0,
-                    buffer_image_height: 0,
-                    image_subresource: layers,
-                    image_offset: vk::Offset3D { x: picture.width as i32, y: 0, z: 0 },
-                    image_extent: vk::Extent3D { width: BAR_WIDTH, height: strip.height, depth: 1 },
-                };
-                // SAFETY: the image is in TRANSFER_DST; the strip is BAR_WIDTH × height texels
-                // of the swapchain's format and lies inside the image (update_legend checked
-                // both against this extent and format).
-                unsafe {
-                    dev.cmd_copy_buffer_to_image(
-                        rec.raw(),
-                        strip.texels.raw(),
-                        image,
-                        vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                        &[region],
-                    )
-                };
+                let at = vk::Offset2D { x: picture.width as i32, y: 0 };
+                let size = vk::Extent2D { width: BAR_WIDTH, height: strip.height };
+                rec.copy_buffer_to_image(&strip.texels, &mut screen, at, size);
             }
             if let (true, Some(buf)) = (readable, readback) {
-                let next = (
-                    vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                    vk::PipelineStageFlags::TRANSFER,
-                    vk::AccessFlags::TRANSFER_READ,
-                );
-                // SAFETY: as above.
-                unsafe { record_image_barrier(rec, image, color, layout, next) };
-                rec.keep(buf);
-                layout = next;
-                let region = crate::gpu::full_copy_region(color, extent);
-                // SAFETY: the image is in TRANSFER_SRC; the buffer holds the whole image.
-                unsafe {
-                    dev.cmd_copy_image_to_buffer(
-                        rec.raw(),
-                        image,
-                        vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                        buf.raw(),
-                        &[region],
-                    )
-                };
+                rec.copy_image_to_buffer(&screen, buf);
+                rec.access(buf, Access::HOST_READ);
             }
-            // SAFETY: as above.
-            unsafe {
-                record_image_barrier(
-                    rec,
-                    image,
-                    color,
-                    layout,
-                    (
-                        vk::ImageLayout::PRESENT_SRC_KHR,
-                        vk::PipelineStageFlags::BOTTOM_OF_PIPE,
-                        vk::AccessFlags::empty(),
-                    ),
-                )
-            };
+            let present =
+                Access { stages: vk::PipelineStageFlags2::empty(), access: vk::AccessFlags2::empty() };
+            rec.transition(&mut screen, vk::ImageLayout::PRESENT_SRC_KHR, present);
             recorded
         };
         // SAFETY: the swapchain's semaphores are live until the swapchain is recreated, which

@@ -43,5 +43,6 @@ pub use error::SpacetimeError;
 pub use mesh::{ElementField, SpacetimeMesh};
 pub use record::ElementRecord;
 pub use render::{
-    FrameTimes, SliceLine, SlicePlan, SliceStats, SliceTriangle, SpacetimeRenderer, SpacetimeView,
+    FrameTimes, SliceLine, SlicePlan, SliceStats, SliceTriangle, SpacetimeDraw, SpacetimeRenderer,
+    SpacetimeView,
 };

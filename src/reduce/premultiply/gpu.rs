@@ -300,10 +300,6 @@ impl Ctx<'_> {
             let dst_first = (g0 * size * block) as u64;
             self.submit(&mut |rec| {
                 self.k.stage.record_dispatch(rec, &set, &push, [wg, 1, 1]);
-                rec.memory_barrier(
-                    (vk::PipelineStageFlags::COMPUTE_SHADER, vk::AccessFlags::SHADER_WRITE),
-                    (vk::PipelineStageFlags::TRANSFER, vk::AccessFlags::TRANSFER_READ),
-                );
                 rec.copy_buffer(&out_b, 0, &out, dst_first, n as u64);
             })
             .map_err(ReduceError::device("running a stage"))?;
@@ -552,10 +548,6 @@ impl Ctx<'_> {
             self.submit(&mut |rec| {
                 if let Some(gather) = &gathered {
                     self.record_gather(rec, gather, n_rows, block);
-                    rec.memory_barrier(
-                        (vk::PipelineStageFlags::COMPUTE_SHADER, vk::AccessFlags::SHADER_WRITE),
-                        (vk::PipelineStageFlags::COMPUTE_SHADER, vk::AccessFlags::SHADER_READ),
-                    );
                 }
                 self.k.fused.record_dispatch(rec, &set, &push, groups);
             })

@@ -169,17 +169,8 @@ impl SpacetimeRenderer {
             data.record_end(rec);
             data.record_readback(rec, pix);
             rec.fill_buffer(result, 0);
-            let cs = vk::PipelineStageFlags::COMPUTE_SHADER;
-            rec.memory_barrier(
-                (vk::PipelineStageFlags::TRANSFER, vk::AccessFlags::TRANSFER_WRITE),
-                (cs, vk::AccessFlags::SHADER_READ | vk::AccessFlags::SHADER_WRITE),
-            );
             let n = pixels as u32;
             reducer.record_dispatch(rec, set, &MaxUPush { n }, [64, 1, 1]);
-            rec.memory_barrier(
-                (cs, vk::AccessFlags::SHADER_WRITE),
-                (vk::PipelineStageFlags::TRANSFER, vk::AccessFlags::TRANSFER_READ),
-            );
         })
         .map_err(dev("the U_max pass"))?;
         let bits = self.umax_result.download(&self.gpu).map_err(dev("reading U_max"))?;
@@ -352,5 +343,46 @@ impl SpacetimeRenderer {
                 return Ok((stats, times));
             }
         }
+    }
+}
+
+/// What a spacetime slice is drawn with ([`crate::render::Draw`] for [`SpacetimeRenderer`]):
+/// the view and the colour ramp's `U_max` (from [`SpacetimeRenderer::u_max_for`], or fixed).
+#[derive(Clone, Copy, Debug)]
+pub struct SpacetimeDraw {
+    /// How the slice is shown.
+    pub view: SpacetimeView,
+    /// The colour ramp's top.
+    pub u_max: f64,
+}
+
+impl crate::render::Draw for SpacetimeRenderer {
+    type View<'v> = SpacetimeDraw;
+    type Error = SpacetimeError;
+
+    fn device_error(context: &'static str, cause: crate::gpu::GpuError) -> SpacetimeError {
+        SpacetimeError::device(context)(cause)
+    }
+
+    /// Nothing: the slice is recorded by [`SpacetimeRenderer::record_slice_into`], which
+    /// needs the engine's transfers first ([`SpacetimeRenderer::prepare_slice`]), or made by
+    /// [`SpacetimeRenderer::slice`].
+    fn record_prepass(
+        &mut self,
+        _: &mut Recorder<'_>,
+        _: DrawTarget<'_>,
+        _: &SpacetimeDraw,
+    ) -> Result<(), SpacetimeError> {
+        Ok(())
+    }
+
+    /// [`SpacetimeRenderer::record_draw_into`] of the current slice.
+    fn record_draw_into(
+        &mut self,
+        rec: &mut Recorder<'_>,
+        target: DrawTarget<'_>,
+        draw: &SpacetimeDraw,
+    ) -> Result<(), SpacetimeError> {
+        SpacetimeRenderer::record_draw_into(self, rec, target, &draw.view, draw.u_max)
     }
 }

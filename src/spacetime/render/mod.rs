@@ -36,6 +36,7 @@ mod derived;
 mod draw;
 mod slicing;
 
+pub use draw::SpacetimeDraw;
 pub use slicing::SlicePlan;
 
 #[repr(C)]

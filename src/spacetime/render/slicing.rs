@@ -2,7 +2,7 @@
 //! records streamed as `t` moves, and the two compute passes — the cut (`slice.comp`) and the
 //! quadrisection (`subdivide.comp`) — with their output buffers grown on overflow.
 
-use crate::gpu::Recorder;
+use crate::gpu::{Access, Recorder};
 use std::ops::Range;
 
 use ash::vk;
@@ -159,14 +159,10 @@ impl SpacetimeRenderer {
     ) {
         let (slice_set, subdivide_set) = self.slice_sets.as_ref().expect("bound before recording");
         let reset: [u32; COUNTERS as usize] = [0, 1, 0, 0, 0, 1, 0, 0, 0, 0];
-        let rw = vk::AccessFlags::SHADER_READ | vk::AccessFlags::SHADER_WRITE;
-        let cs = vk::PipelineStageFlags::COMPUTE_SHADER;
         let cut = |rec: &mut Recorder<'_>| {
             rec.update_buffer(&self.draws, 0, &reset);
-            rec.memory_barrier((vk::PipelineStageFlags::TRANSFER, vk::AccessFlags::TRANSFER_WRITE), (cs, rw));
             let groups = self.gpu.caps().groups_1d(u64::from(push.count.max(1)), self.slicer.local_size()[0]);
             self.slicer.record_dispatch(rec, slice_set, push, [groups, 1, 1]);
-            rec.memory_barrier((cs, vk::AccessFlags::SHADER_WRITE), (cs, rw));
         };
         match profiler.as_deref_mut() {
             Some(p) => p.scope(rec, "slice", cut),
@@ -177,21 +173,14 @@ impl SpacetimeRenderer {
             let wg = self.subdivider.local_size()[0];
             let groups = self.gpu.caps().groups_1d(u64::from(push.count.max(1)) * 2, wg);
             self.subdivider.record_dispatch(rec, subdivide_set, push, [groups, 1, 1]);
-            // Later commands and submissions draw from these buffers (vertex input; the restricted
-            // cubics in the fragment stage) and read the counters.
-            rec.memory_barrier(
-                (cs, vk::AccessFlags::SHADER_WRITE),
-                (
-                    vk::PipelineStageFlags::DRAW_INDIRECT
-                        | vk::PipelineStageFlags::VERTEX_INPUT
-                        | vk::PipelineStageFlags::FRAGMENT_SHADER
-                        | vk::PipelineStageFlags::TRANSFER,
-                    vk::AccessFlags::INDIRECT_COMMAND_READ
-                        | vk::AccessFlags::VERTEX_ATTRIBUTE_READ
-                        | vk::AccessFlags::SHADER_READ
-                        | vk::AccessFlags::TRANSFER_READ,
-                ),
-            );
+            // The slice's draws follow (declared here, before their render pass): indirect
+            // parameters and vertices, and the restricted cubics in the fragment stage.
+            rec.access(&self.draws, Access::INDIRECT);
+            rec.access(&self.tris, Access::VERTEX_INPUT);
+            rec.access(&self.lines, Access::VERTEX_INPUT);
+            if let Some(window) = &self.window {
+                rec.access(&window.cubics, Access::GRAPHICS_READ);
+            }
         };
         match profiler {
             Some(p) => p.scope(rec, "subdivide", subdivide),
@@ -277,26 +266,11 @@ impl SpacetimeRenderer {
         Ok(SlicePlan { t, subdivide, active, streamed, push })
     }
 
-    /// Records the two slicing passes of `plan` (outside a render pass). It starts with an
-    /// execution barrier after every earlier read of the slice buffers (a previous frame's
-    /// indirect draw, vertex input, fragment shading or readback, in this or an earlier
-    /// submission on the queue) and ends with a barrier that makes the slice visible to
-    /// indirect draws, vertex input, fragment shaders and transfers; draw it with
-    /// [`Self::record_draw_into`].
+    /// Records the two slicing passes of `plan` (outside a render pass). Their declared
+    /// accesses order them after every earlier use of the slice buffers (a previous frame's
+    /// draw or readback, in this or an unfinished earlier recording), and they declare the
+    /// draw's reads; draw it with [`Self::record_draw_into`].
     pub fn record_slice_into(&self, rec: &mut Recorder<'_>, plan: &SlicePlan) {
-        rec.memory_barrier(
-            (
-                vk::PipelineStageFlags::DRAW_INDIRECT
-                    | vk::PipelineStageFlags::VERTEX_INPUT
-                    | vk::PipelineStageFlags::FRAGMENT_SHADER
-                    | vk::PipelineStageFlags::TRANSFER,
-                vk::AccessFlags::empty(),
-            ),
-            (
-                vk::PipelineStageFlags::TRANSFER | vk::PipelineStageFlags::COMPUTE_SHADER,
-                vk::AccessFlags::empty(),
-            ),
-        );
         self.record_slice(rec, &plan.push, None);
     }
 

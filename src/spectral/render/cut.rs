@@ -209,33 +209,15 @@ impl SpectralRenderer {
             points_per_element: self.mesh.points_per_element() as u32,
         };
         let pre = move |rec: &mut Recorder<'_>| {
-            let cs = vk::PipelineStageFlags::COMPUTE_SHADER;
-            let fs = vk::PipelineStageFlags::FRAGMENT_SHADER;
-            // The last frame has read what this pass rewrites.
-            rec.memory_barrier(
-                (
-                    vk::PipelineStageFlags::VERTEX_INPUT | vk::PipelineStageFlags::DRAW_INDIRECT | fs,
-                    vk::AccessFlags::empty(),
-                ),
-                (vk::PipelineStageFlags::TRANSFER | cs, vk::AccessFlags::empty()),
-            );
+            // The updates wait for the last frame's reads (declared accesses).
             let header: [u32; 4] = [0, 1, 0, 0];
             rec.update_buffer(&c.draw, 0, &header);
             // At most MAX_CUT_PLANES planes (checked in cut_planes): inside the buffer.
             rec.update_buffer(&c.planes, 0, &planes);
-            rec.memory_barrier(
-                (vk::PipelineStageFlags::TRANSFER, vk::AccessFlags::TRANSFER_WRITE),
-                (cs | fs, vk::AccessFlags::SHADER_READ | vk::AccessFlags::SHADER_WRITE),
-            );
             let groups = (cut_push.elements.div_ceil(c.pass.local_size()[0]), planes.len() as u32, 1);
             c.pass.record_dispatch(rec, &c.pass_set, &cut_push, [groups.0, groups.1, groups.2]);
-            rec.memory_barrier(
-                (cs, vk::AccessFlags::SHADER_WRITE),
-                (
-                    vk::PipelineStageFlags::DRAW_INDIRECT | vk::PipelineStageFlags::VERTEX_INPUT,
-                    vk::AccessFlags::INDIRECT_COMMAND_READ | vk::AccessFlags::VERTEX_ATTRIBUTE_READ,
-                ),
-            );
+            // The draw's reads, declared before its render pass.
+            pipeline.declare_draw(rec, set, Some(c.vertices.whole()), Some(c.draw.whole()));
         };
         let draw = move |rec: &mut Recorder<'_>| {
             let bytes = &push;

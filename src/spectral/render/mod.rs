@@ -34,7 +34,7 @@ use super::error::SpectralError;
 use super::mesh::SpectralMesh;
 use super::proxy::{self, DrawVertex};
 use crate::gpu::{
-    BindingKind, Buffer, ComputePipeline, ComputePipelineDesc, DescriptorSet, Gpu, GraphicsPipeline,
+    Access, BindingKind, Buffer, ComputePipeline, ComputePipelineDesc, DescriptorSet, Gpu, GraphicsPipeline,
     GraphicsPipelineDesc, MemoryKind, PassKey, Profiler, Recorder, Resource,
 };
 use crate::render::{
@@ -508,9 +508,8 @@ impl SpectralRenderer {
     /// Records the passes a frame needs before its render pass (the surface tessellation or
     /// the cut planes' sections; for planar meshes and per-vertex mode nothing) — for
     /// applications that record the frame themselves, outside any render pass, before
-    /// [`Self::record_draw_into`]. It orders itself after the previous frame's draws (a
-    /// barrier from vertex input and indirect reads) and makes its writes visible to the
-    /// draw's vertex input and indirect reads.
+    /// [`Self::record_draw_into`]. Its declared accesses order it after the previous frame's
+    /// draws and declare the draw's vertex-input and indirect reads of what it writes.
     pub fn record_prepass(
         &mut self,
         rec: &mut Recorder<'_>,
@@ -559,34 +558,20 @@ impl SpectralRenderer {
                 // The stream already holds this view's tessellation (e.g. a new time step).
                 return;
             }
-            let cs = vk::PipelineStageFlags::COMPUTE_SHADER;
-            // The last frame's draw has read the buffers this pass rewrites.
-            rec.memory_barrier(
-                (
-                    vk::PipelineStageFlags::VERTEX_INPUT | vk::PipelineStageFlags::DRAW_INDIRECT,
-                    vk::AccessFlags::empty(),
-                ),
-                (vk::PipelineStageFlags::TRANSFER | cs, vk::AccessFlags::empty()),
-            );
+            // The update waits for the last frame's draw (declared accesses).
             let header: [u32; 6] = [0, 1, 0, 0, capacity, 0];
             rec.update_buffer(&t.draw, 0, &header);
-            rec.memory_barrier(
-                (vk::PipelineStageFlags::TRANSFER, vk::AccessFlags::TRANSFER_WRITE),
-                (cs, vk::AccessFlags::SHADER_READ | vk::AccessFlags::SHADER_WRITE),
-            );
             // One invocation per element, 64 per workgroup.
             let groups = elements.div_ceil(u64::from(t.pipeline.local_size()[0])).max(1);
             let x = groups.min(65_535);
             let y = groups.div_ceil(x);
             let set = t.set.as_ref().expect("bound in tessellator_for");
             t.pipeline.record_dispatch(rec, set, &push, [x as u32, y as u32, 1]);
-            rec.memory_barrier(
-                (cs, vk::AccessFlags::SHADER_WRITE),
-                (
-                    vk::PipelineStageFlags::DRAW_INDIRECT | vk::PipelineStageFlags::VERTEX_INPUT,
-                    vk::AccessFlags::INDIRECT_COMMAND_READ | vk::AccessFlags::VERTEX_ATTRIBUTE_READ,
-                ),
-            );
+            // The draw's reads, declared before its render pass.
+            rec.access(&t.draw, Access::INDIRECT);
+            if let Some(vertices) = &t.vertices {
+                rec.access(vertices, Access::VERTEX_INPUT);
+            }
             key_cell.set(Some(key));
         };
         let (faces, face_count) = if view.per_vertex {
@@ -670,5 +655,34 @@ impl SpectralRenderer {
         let (pre, draw) = self.prepare(&target.draw_target(), view)?;
         gpu.run(|rec| pre(rec)).map_err(dev("tessellating the surface"))?;
         target.render(&gpu, clear, |rec| draw(rec)).map_err(dev("drawing the spectral elements"))
+    }
+}
+
+impl crate::render::Draw for SpectralRenderer {
+    type View<'v> = SpectralView;
+    type Error = SpectralError;
+
+    fn device_error(context: &'static str, cause: crate::gpu::GpuError) -> SpectralError {
+        SpectralError::device(context)(cause)
+    }
+
+    /// [`SpectralRenderer::record_prepass`].
+    fn record_prepass(
+        &mut self,
+        rec: &mut Recorder<'_>,
+        target: DrawTarget<'_>,
+        view: &SpectralView,
+    ) -> Result<()> {
+        SpectralRenderer::record_prepass(self, rec, target, view)
+    }
+
+    /// [`SpectralRenderer::record_draw_into`].
+    fn record_draw_into(
+        &mut self,
+        rec: &mut Recorder<'_>,
+        target: DrawTarget<'_>,
+        view: &SpectralView,
+    ) -> Result<()> {
+        SpectralRenderer::record_draw_into(self, rec, target, view)
     }
 }
