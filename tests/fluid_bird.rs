@@ -184,7 +184,14 @@ fn a_bird_trains_with_its_folded_cells_reported_and_an_indefinite_volume_matrix_
     // 24 animation frames: six steps are a whole wingbeat.
     std::fs::write(&scene, scene_text(24, 6)).expect("scene written");
     let options = SceneTraining {
-        sizes: BasisSizes { energy: 0.9999, m_f: Some(5), m_u: Some(6), m_g: Some(2), m_h: Some(4) },
+        sizes: BasisSizes {
+            energy: 0.9999,
+            m_f: Some(5),
+            m_u: Some(6),
+            m_g: Some(2),
+            m_h: Some(4),
+            mid_step: false,
+        },
         frames: Some(6),
         runs: None,
         work: dir.path().join("work"),

@@ -22,8 +22,12 @@ const SCENE: &str = "scenes/fluid/cavity_small.toml";
 const DRIVE: &str = "0=0/0/0,6=0.25/0.25/0";
 
 fn model(work: &Path, out: &Path) -> ReducedFluidModel {
+    model_with(work, out, false, Some(16))
+}
+
+fn model_with(work: &Path, out: &Path, mid_step: bool, m_u: Option<usize>) -> ReducedFluidModel {
     let options = SceneTraining {
-        sizes: BasisSizes { energy: 1.0 - 1e-12, m_f: Some(12), m_u: Some(16), m_g: Some(5), m_h: Some(8) },
+        sizes: BasisSizes { energy: 1.0 - 1e-12, m_f: Some(12), m_u, m_g: Some(5), m_h: Some(8), mid_step },
         frames: Some(6),
         runs: Some(vec![0, 1, 2]),
         work: work.to_path_buf(),
@@ -176,4 +180,41 @@ fn runs_of_another_mesh_or_pace_and_bad_drives_are_refused_naming_them() {
         .to_string();
     assert!(e.contains("cavity"), "{e}");
     assert!(!dir.path().join("x").exists(), "nothing written for a refused drive");
+}
+
+/// `B_u` spanning the training frames' mid-step (advected, unprojected) velocities as well
+/// (`--mid-step`): at the same number of columns, the reduced run of the held-out drive is
+/// closer to the full run than with velocities and momenta alone (measured at larger sizes in
+/// BENCHMARKS.md), and the basis report says what it holds.
+#[test]
+fn mid_step_velocities_in_the_basis_bring_a_held_out_run_closer() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let driven = dir.path().join("driven");
+    let mut scene = FluidScene::load(Path::new(SCENE)).unwrap();
+    let schedule: CompressionSchedule = DRIVE.parse().unwrap();
+    simulate_driven(&mut scene, &schedule, 6, &driven, false, &mut |_, _, _, _| {}).unwrap();
+    let mut mean = Vec::new();
+    for mid_step in [false, true] {
+        let tag = if mid_step { "mid" } else { "base" };
+        let model = model_with(
+            &dir.path().join(tag),
+            &dir.path().join(format!("{tag}.safetensors")),
+            mid_step,
+            Some(24),
+        );
+        let u = model.provenance.bases.iter().find(|r| r.name == "u").expect("a B_u report");
+        assert_eq!(u.columns, 24, "{tag}: {}", u.note);
+        assert_eq!(u.note.contains("mid-step"), mid_step, "{}", u.note);
+        let c =
+            compare(&model, &scene, &ComparedMotion::Recorded { full: driven.clone() }, 6, 1, &mut |_| {})
+                .unwrap();
+        assert!(c.error.iter().all(|e| e.is_finite()));
+        mean.push(c.error[1..].iter().sum::<f64>() / 6.0);
+    }
+    assert!(
+        mean[1] < mean[0],
+        "mid-step basis {:.2} % against {:.2} % without",
+        100.0 * mean[1],
+        100.0 * mean[0]
+    );
 }

@@ -16,7 +16,14 @@ const SCENE: &str = "scenes/fluid/cavity_small.toml";
 
 fn options(work: &Path) -> SceneTraining {
     SceneTraining {
-        sizes: BasisSizes { energy: 0.9999, m_f: Some(8), m_u: Some(12), m_g: Some(4), m_h: Some(6) },
+        sizes: BasisSizes {
+            energy: 0.9999,
+            m_f: Some(8),
+            m_u: Some(12),
+            m_g: Some(4),
+            m_h: Some(6),
+            mid_step: false,
+        },
         frames: Some(6),
         runs: Some(vec![0, 3]),
         work: work.to_path_buf(),
@@ -124,7 +131,14 @@ fn the_cavity_is_driven_by_any_compressions_exactly_as_its_full_deformation() {
     // to 1 − 1e-12 of the energy) spans the map's five fields.
     let mut opts = options(&dir.path().join("work"));
     opts.runs = Some(vec![0, 1, 2]);
-    opts.sizes = BasisSizes { energy: 1.0 - 1e-12, m_f: Some(6), m_u: Some(8), m_g: Some(5), m_h: Some(6) };
+    opts.sizes = BasisSizes {
+        energy: 1.0 - 1e-12,
+        m_f: Some(6),
+        m_u: Some(8),
+        m_g: Some(5),
+        m_h: Some(6),
+        mid_step: false,
+    };
     let model = train_scene(Path::new(SCENE), &model_path, &opts, &mut |_| {}).expect("training");
     let motion = model.cavity.clone().expect("a cavity model has its motion model");
     assert_eq!(model.dim_of("g"), 5, "B_g spans g₀, the three compressions and the inflation");
@@ -217,7 +231,14 @@ fn a_reduced_cavity_run_is_compared_with_the_full_run_of_the_same_motion() {
     let dir = tempfile::tempdir().expect("temp dir");
     let mut opts = options(&dir.path().join("work"));
     opts.runs = Some(vec![0, 1, 2]);
-    opts.sizes = BasisSizes { energy: 1.0 - 1e-12, m_f: Some(12), m_u: Some(16), m_g: Some(5), m_h: Some(8) };
+    opts.sizes = BasisSizes {
+        energy: 1.0 - 1e-12,
+        m_f: Some(12),
+        m_u: Some(16),
+        m_g: Some(5),
+        m_h: Some(8),
+        mid_step: false,
+    };
     let model = train_scene(Path::new(SCENE), &dir.path().join("m.safetensors"), &opts, &mut |_| {}).unwrap();
     // The scene says 12 frames; the model's runs were trained with 6. Training run 0 is
     // simulated again at the pace it was trained at (its compressions peak at frame 3, not 6):

@@ -298,7 +298,14 @@ fn a_scene_trains_over_ranks_each_simulating_its_runs() {
     let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/fluid/cavity_small.toml");
     let dir = tempfile::tempdir().unwrap();
     let options = SceneTraining {
-        sizes: BasisSizes { energy: 0.9999, m_f: Some(8), m_u: Some(12), m_g: Some(4), m_h: Some(6) },
+        sizes: BasisSizes {
+            energy: 0.9999,
+            m_f: Some(8),
+            m_u: Some(12),
+            m_g: Some(4),
+            m_h: Some(6),
+            mid_step: false,
+        },
         frames: Some(6),
         runs: Some(vec![0, 3]),
         work: dir.path().join("work"),

@@ -44,11 +44,22 @@ pub struct SizeArgs {
     /// Cap on the induced-flux basis B_h.
     #[arg(long)]
     pub m_h: Option<usize>,
+    /// B_u = B_p also spans each training frame's mid-step velocity (advected and diffused,
+    /// before the projection), recomputed from the snapshots: one full advection per frame.
+    #[arg(long)]
+    pub mid_step: bool,
 }
 
 impl SizeArgs {
     fn sizes(&self) -> BasisSizes {
-        BasisSizes { energy: self.energy, m_f: self.m_f, m_u: self.m_u, m_g: self.m_g, m_h: self.m_h }
+        BasisSizes {
+            energy: self.energy,
+            m_f: self.m_f,
+            m_u: self.m_u,
+            m_g: self.m_g,
+            m_h: self.m_h,
+            mid_step: self.mid_step,
+        }
     }
 }
 
@@ -211,7 +222,14 @@ pub fn error_study(args: &StudyArgs) -> Result<()> {
     let start = Instant::now();
     let largest = args.sizes.iter().copied().max().unwrap_or(0);
     let set = TrainingSet::open(&args.runs)?;
-    let sizes = BasisSizes { energy: 1.0, m_f: Some(largest), m_u: Some(largest), m_g: None, m_h: None };
+    let sizes = BasisSizes {
+        energy: 1.0,
+        m_f: Some(largest),
+        m_u: Some(largest),
+        m_g: None,
+        m_h: None,
+        mid_step: false,
+    };
     let bar = crate::progress_bar(7, "training the largest basis");
     let model = ReducedFluidModel::fit(&set, &sizes, &mut |_| bar.inc(1))?;
     bar.finish_and_clear();

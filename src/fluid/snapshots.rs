@@ -434,6 +434,14 @@ pub struct FrameSnapshots {
     frames: usize,
 }
 
+impl FrameSnapshots {
+    /// `frames` frames of `len` values each, frame after frame, in the open `file` at `path`
+    /// (derived snapshots written by the training itself).
+    pub(crate) fn over(path: PathBuf, file: File, len: usize, frames: usize) -> Self {
+        Self { path, file, len, frames }
+    }
+}
+
 impl SnapshotSource for FrameSnapshots {
     fn dim(&self) -> usize {
         self.len

@@ -55,11 +55,16 @@ pub struct BasisSizes {
     pub m_g: Option<usize>,
     /// Cap of `B_h`.
     pub m_h: Option<usize>,
+    /// `B_u = B_p` also spans the **mid-step** velocities: each training frame's velocity
+    /// advected and diffused over the frame, before its projection ([`advected_velocities`]),
+    /// a third basis interleaved with the velocities' and momenta's. The reduced step holds
+    /// its advected state in `B_u`; without these the basis has only projected states.
+    pub mid_step: bool,
 }
 
 impl Default for BasisSizes {
     fn default() -> Self {
-        Self { energy: 0.9999, m_f: None, m_u: None, m_g: None, m_h: None }
+        Self { energy: 0.9999, m_f: None, m_u: None, m_g: None, m_h: None, mid_step: false }
     }
 }
 
@@ -171,9 +176,11 @@ impl FluidBases {
             return Err(FluidError::State(format!("energy {}: must be in (0, 1]", sizes.energy)));
         }
         let k: usize = set.frames().iter().sum();
-        for (name, cap) in [("f", sizes.m_f), ("u", sizes.m_u), ("g", sizes.m_g), ("h", sizes.m_h)] {
+        for (name, cap) in [("f", sizes.m_f), ("g", sizes.m_g), ("h", sizes.m_h)] {
             check_cap(name, cap, k)?;
         }
+        // B_u merges the velocities' and momenta's modes (and the mid-step velocities').
+        check_cap("u", sizes.m_u, k * if sizes.mid_step { 3 } else { 2 })?;
         let mut reports = Vec::new();
         let (mesh, topo) = (set.mesh(), set.topology());
 
@@ -208,19 +215,37 @@ impl FluidBases {
             .map_err(FluidError::from)?;
         let pp = pca_across("p", &mut set.source("p")?, truncation(sizes, sizes.m_u, false), ranks)
             .map_err(FluidError::from)?;
-        let u = interleave_merge("u", &pu.basis, &pp.basis, sizes.m_u)?;
+        let mid = if sizes.mid_step {
+            stage("u (mid-step)");
+            let (mut source, _file) = advected_velocities(set)?;
+            Some(
+                pca_across("u mid-step", &mut source, truncation(sizes, sizes.m_u, false), ranks)
+                    .map_err(FluidError::from)?,
+            )
+        } else {
+            None
+        };
+        let mut parts = vec![&pu.basis, &pp.basis];
+        parts.extend(mid.as_ref().map(|m| &m.basis));
+        let u = interleave_merge("u", &parts, sizes.m_u)?;
+        let energy = mid.as_ref().map_or(1.0, |m| m.energy).min(pu.energy).min(pp.energy);
+        let mut note = format!(
+            "B_u = B_p: {} velocity and {} momentum modes (energy {:.6} and {:.6})",
+            pu.basis.reduced_dim(),
+            pp.basis.reduced_dim(),
+            pu.energy,
+            pp.energy
+        );
+        if let Some(m) = &mid {
+            note += &format!(" and {} mid-step modes (energy {:.6})", m.basis.reduced_dim(), m.energy);
+        }
+        note += " interleaved";
         reports.push(BasisReport {
             name: "u".into(),
             full: u.full_dim(),
             columns: u.reduced_dim(),
-            energy: pu.energy.min(pp.energy),
-            note: format!(
-                "B_u = B_p: {} velocity and {} momentum modes (energy {:.6} and {:.6}) interleaved",
-                pu.basis.reduced_dim(),
-                pp.basis.reduced_dim(),
-                pu.energy,
-                pp.energy
-            ),
+            energy,
+            note,
         });
 
         stage("h");
@@ -323,16 +348,18 @@ pub fn remove_divergence(topo: &Topology, b: &Basis) -> Result<Basis, FluidError
 }
 
 /// Columns of `a` and `b` interleaved (a₁, b₁, a₂, b₂, …), orthonormalised, at most `cap`.
-fn interleave_merge(name: &str, a: &Basis, b: &Basis, cap: Option<usize>) -> Result<Basis, FluidError> {
-    let (n, ma, mb) = (a.full_dim(), a.reduced_dim(), b.reduced_dim());
-    let order: Vec<(bool, usize)> = (0..ma.max(mb))
-        .flat_map(|j| [(true, j), (false, j)])
-        .filter(|&(first, j)| if first { j < ma } else { j < mb })
+fn interleave_merge(name: &str, parts: &[&Basis], cap: Option<usize>) -> Result<Basis, FluidError> {
+    let n = parts[0].full_dim();
+    let widest = parts.iter().map(|b| b.reduced_dim()).max().unwrap_or(0);
+    // Column j of every part, then column j + 1 of every part, …
+    let order: Vec<(usize, usize)> = (0..widest)
+        .flat_map(|j| (0..parts.len()).map(move |p| (p, j)))
+        .filter(|&(p, j)| j < parts[p].reduced_dim())
         .collect();
     let k = order.len();
     let mut data = vec![0.0; n * k];
-    for (c, &(first, j)) in order.iter().enumerate() {
-        let (src, m) = if first { (a.matrix().data(), ma) } else { (b.matrix().data(), mb) };
+    for (c, &(p, j)) in order.iter().enumerate() {
+        let (src, m) = (parts[p].matrix().data(), parts[p].reduced_dim());
         for i in 0..n {
             data[i * k + c] = src[i * m + j];
         }
@@ -340,6 +367,47 @@ fn interleave_merge(name: &str, a: &Basis, b: &Basis, cap: Option<usize>) -> Res
     // Gram–Schmidt stops at the cap: the first m columns of the whole merged basis.
     let columns = Tensor::from_vec(&[n, k], data).expect("n×k");
     Basis::orthonormalize_at_most(name, &columns, cap.unwrap_or(usize::MAX)).map_err(FluidError::from)
+}
+
+/// Every training frame's mid-step velocity — the full solver's advection and diffusion of the
+/// frame's velocity over the frame, from its geometry to the next frame's, before the
+/// projection ([`crate::fluid::FluidSolver::advect`]) — written frame after frame to a
+/// temporary file (returned with the source: the file lives while it does) and streamed to
+/// the PCA from there. One advection per training frame but a run's last.
+pub fn advected_velocities(
+    set: &TrainingSet,
+) -> Result<(crate::fluid::snapshots::FrameSnapshots, tempfile::NamedTempFile), FluidError> {
+    use std::io::Write;
+    let mut solver =
+        crate::fluid::FluidSolver::new(set.mesh().clone(), set.topology().clone(), *set.params())?;
+    let mut file = tempfile::NamedTempFile::new()
+        .map_err(|e| FluidError::State(format!("a temporary file for the mid-step velocities: {e}")))?;
+    let path = file.path().to_path_buf();
+    let write_error = |e: std::io::Error| FluidError::File { path: path.clone(), message: e.to_string() };
+    let (mut frames, mut len) = (0, 0);
+    for run in set.runs() {
+        let n = run.meta().frames;
+        for k in 0..n.saturating_sub(1) {
+            let state = crate::fluid::FluidState {
+                g: run.frame("g", k)?,
+                u: run.frame("u", k)?,
+                f: run.frame("f", k)?,
+            };
+            let advected = solver.advect(&state, &run.frame("g", k + 1)?, k)?;
+            len = advected.u.len();
+            let bytes: Vec<u8> = advected.u.iter().flat_map(|v| v.to_le_bytes()).collect();
+            file.write_all(&bytes).map_err(write_error)?;
+            frames += 1;
+        }
+    }
+    file.flush().map_err(write_error)?;
+    if frames == 0 {
+        return Err(FluidError::State(
+            "mid-step velocities need training runs of at least two frames".into(),
+        ));
+    }
+    let reader = file.reopen().map_err(write_error)?;
+    Ok((crate::fluid::snapshots::FrameSnapshots::over(path, reader, len, frames), file))
 }
 
 /// How well a geometry basis holds the training frames: the worst relative geometry error
