@@ -396,11 +396,18 @@ fn bad_training_input_is_refused_naming_the_run_frame_or_basis() {
     // Runs from different meshes.
     let err = TrainingSet::open(&[tunnel.clone(), wavy[0].clone()]).unwrap_err().to_string();
     assert!(err.contains("wavy2-0") && err.contains("tunnel-1"), "{err}");
-    // A basis larger than the snapshots.
+    // A basis larger than the snapshots: B_u merges 6 velocity and 6 momentum snapshots (and
+    // with mid-step velocities 5 more, one per frame but the last).
     let set = TrainingSet::open(std::slice::from_ref(&tunnel)).unwrap();
-    let sizes = BasisSizes { m_u: Some(7), ..BasisSizes::default() };
+    let sizes = BasisSizes { m_u: Some(13), ..BasisSizes::default() };
     let err = FluidBases::build(&set, &sizes, &mut |_| {}, &SingleRank).unwrap_err().to_string();
-    assert!(err.contains("basis u") && err.contains("6 snapshots"), "{err}");
+    assert!(err.contains("basis u") && err.contains("12 snapshots"), "{err}");
+    let sizes = BasisSizes { m_u: Some(18), mid_step: true, ..BasisSizes::default() };
+    let err = FluidBases::build(&set, &sizes, &mut |_| {}, &SingleRank).unwrap_err().to_string();
+    assert!(err.contains("basis u") && err.contains("17 snapshots"), "{err}");
+    let sizes = BasisSizes { m_f: Some(7), ..BasisSizes::default() };
+    let err = FluidBases::build(&set, &sizes, &mut |_| {}, &SingleRank).unwrap_err().to_string();
+    assert!(err.contains("basis f") && err.contains("6 snapshots"), "{err}");
     // NaN in a snapshot: the run, frame and row are named.
     let u_path = tunnel.join("u.f64");
     let mut bytes = std::fs::read(&u_path).unwrap();

@@ -179,8 +179,10 @@ impl FluidBases {
         for (name, cap) in [("f", sizes.m_f), ("g", sizes.m_g), ("h", sizes.m_h)] {
             check_cap(name, cap, k)?;
         }
-        // B_u merges the velocities' and momenta's modes (and the mid-step velocities').
-        check_cap("u", sizes.m_u, k * if sizes.mid_step { 3 } else { 2 })?;
+        // B_u merges the velocities' and momenta's modes (and the mid-step velocities', one per
+        // frame but each run's last).
+        let mid_step_frames = if sizes.mid_step { k - set.frames().len().min(k) } else { 0 };
+        check_cap("u", sizes.m_u, 2 * k + mid_step_frames)?;
         let mut reports = Vec::new();
         let (mesh, topo) = (set.mesh(), set.topology());
 
