@@ -349,3 +349,19 @@ pub fn check_layout(
     }
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::reflect;
+
+    /// `readonly buffer` bindings are read only; the others may be written (the declared
+    /// accesses of a dispatch follow this). The GEMM reads A (0) and B (1) and writes C (2).
+    #[test]
+    fn readonly_buffers_are_told_from_written_ones() {
+        let gemm = reflect("gemm", crate::tensor::shaders::GEMM).expect("reflects");
+        assert_eq!(gemm.writable.iter().copied().collect::<Vec<_>>(), vec![2]);
+        let axpy = reflect("axpy", crate::demo::shaders::AXPY).expect("reflects");
+        assert!(!axpy.writable.is_empty(), "AXPY writes its output");
+        assert!(axpy.writable.len() < axpy.bindings.len(), "and only reads its inputs: {:?}", axpy.writable);
+    }
+}
