@@ -95,9 +95,8 @@ fn premultiply(gpu: &Gpu) -> Result<(), galerkin::reduce::ReduceError> {
     Ok(())
 }
 
-#[test]
-fn device_loss_reaches_the_caller_typed_from_every_capability() {
-    let f = Fault::DeviceLost;
+/// `f` injected into each capability's device work.
+fn every_capability_fails_typed(f: Fault) {
     fails_typed("spectral render", f, spectral);
     fails_typed("spacetime render", f, spacetime);
     fails_typed("fluid device particles", f, fluid_particles);
@@ -106,13 +105,13 @@ fn device_loss_reaches_the_caller_typed_from_every_capability() {
 }
 
 #[test]
+fn device_loss_reaches_the_caller_typed_from_every_capability() {
+    every_capability_fails_typed(Fault::DeviceLost);
+}
+
+#[test]
 fn out_of_memory_reaches_the_caller_typed_from_every_capability() {
-    let f = Fault::OutOfMemory;
-    fails_typed("spectral render", f, spectral);
-    fails_typed("spacetime render", f, spacetime);
-    fails_typed("fluid device particles", f, fluid_particles);
-    fails_typed("radiosity form factors on the device", f, radiosity);
-    fails_typed("premultiplication on the device", f, premultiply);
+    every_capability_fails_typed(Fault::OutOfMemory);
 }
 
 /// The trait's answers for the device layer's own error.

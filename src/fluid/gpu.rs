@@ -460,8 +460,7 @@ impl GpuParticles {
         );
         // The sprite draw that follows in the frame reads the particles and their speeds
         // (draws declare before their render pass begins).
-        rec.access(&self.particles, Access::GRAPHICS_READ);
-        rec.access(&self.speeds, Access::GRAPHICS_READ);
+        rec.access_all(&[(&self.particles, Access::GRAPHICS_READ), (&self.speeds, Access::GRAPHICS_READ)]);
         Ok(())
     }
 

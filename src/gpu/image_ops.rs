@@ -242,11 +242,8 @@ impl Recorder<'_> {
         layout: vk::ImageLayout,
         written: Access,
     ) {
-        let t = image.tracking();
-        *t.layout.lock().unwrap_or_else(|p| p.into_inner()) = layout;
-        let state = self.state(t.key, t.life);
-        *state = super::access::State::written(written);
-        if let Some(life) = t.life {
+        self.set_image_state(image, layout, super::access::State::written(written));
+        if let Some(life) = image.tracking().life {
             self.keep_lifetime(life);
         }
     }
@@ -259,9 +256,18 @@ impl Recorder<'_> {
         layout: vk::ImageLayout,
         visible: vk::PipelineStageFlags2,
     ) {
+        self.set_image_state(image, layout, super::access::State::attachment_written(visible));
+    }
+
+    /// What commands outside the recorder's sight left `image` as: its layout and state.
+    fn set_image_state(
+        &mut self,
+        image: &(impl ImageResource + ?Sized),
+        layout: vk::ImageLayout,
+        state: super::access::State,
+    ) {
         let t = image.tracking();
         *t.layout.lock().unwrap_or_else(|p| p.into_inner()) = layout;
-        let state = self.state(t.key, t.life);
-        *state = super::access::State::attachment_written(visible);
+        *self.state(t.key, t.life) = state;
     }
 }

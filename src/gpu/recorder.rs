@@ -152,7 +152,14 @@ impl<'g> Recorder<'g> {
     /// to it. For commands recorded through [`Recorder::raw`] or by a host, and for the draws
     /// of a render pass, which declare before the pass begins.
     pub fn access(&mut self, object: &impl Tracked, access: Access) {
-        self.declare_lifetime(object.lifetime(), access);
+        self.access_all(&[(object, access)]);
+    }
+
+    /// [`Recorder::access`] of several objects, their barriers recorded as one.
+    pub fn access_all(&mut self, objects: &[(&dyn Tracked, Access)]) {
+        for (object, access) in objects {
+            self.declare_lifetime(object.lifetime(), *access);
+        }
         self.flush();
     }
 

@@ -389,13 +389,16 @@ pub fn advected_velocities(
     let (mut frames, mut len) = (0, 0);
     for run in set.runs() {
         let n = run.meta().frames;
-        for k in 0..n.saturating_sub(1) {
-            let state = crate::fluid::FluidState {
-                g: run.frame("g", k)?,
-                u: run.frame("u", k)?,
-                f: run.frame("f", k)?,
-            };
-            let advected = solver.advect(&state, &run.frame("g", k + 1)?, k)?;
+        if n < 2 {
+            continue;
+        }
+        // Each geometry is read once: frame k's next is frame k + 1's own.
+        let mut g = run.frame("g", 0)?;
+        for k in 0..n - 1 {
+            let g_next = run.frame("g", k + 1)?;
+            let state = crate::fluid::FluidState { g, u: run.frame("u", k)?, f: run.frame("f", k)? };
+            let advected = solver.advect(&state, &g_next, k)?;
+            g = g_next;
             len = advected.u.len();
             let bytes: Vec<u8> = advected.u.iter().flat_map(|v| v.to_le_bytes()).collect();
             file.write_all(&bytes).map_err(write_error)?;

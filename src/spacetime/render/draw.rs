@@ -348,6 +348,9 @@ impl SpacetimeRenderer {
 
 /// What a spacetime slice is drawn with ([`crate::render::Draw`] for [`SpacetimeRenderer`]):
 /// the view and the colour ramp's `U_max` (from [`SpacetimeRenderer::u_max_for`], or fixed).
+/// The trait's prepass records nothing: the slice is recorded by
+/// [`SpacetimeRenderer::record_slice_into`], which needs the engine's transfers first
+/// ([`SpacetimeRenderer::prepare_slice`]), or made by [`SpacetimeRenderer::slice`].
 #[derive(Clone, Copy, Debug)]
 pub struct SpacetimeDraw {
     /// How the slice is shown.
@@ -362,18 +365,6 @@ impl crate::render::Draw for SpacetimeRenderer {
 
     fn device_error(context: &'static str, cause: crate::gpu::GpuError) -> SpacetimeError {
         SpacetimeError::device(context)(cause)
-    }
-
-    /// Nothing: the slice is recorded by [`SpacetimeRenderer::record_slice_into`], which
-    /// needs the engine's transfers first ([`SpacetimeRenderer::prepare_slice`]), or made by
-    /// [`SpacetimeRenderer::slice`].
-    fn record_prepass(
-        &mut self,
-        _: &mut Recorder<'_>,
-        _: DrawTarget<'_>,
-        _: &SpacetimeDraw,
-    ) -> Result<(), SpacetimeError> {
-        Ok(())
     }
 
     /// [`SpacetimeRenderer::record_draw_into`] of the current slice.

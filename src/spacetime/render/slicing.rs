@@ -175,12 +175,15 @@ impl SpacetimeRenderer {
             self.subdivider.record_dispatch(rec, subdivide_set, push, [groups, 1, 1]);
             // The slice's draws follow (declared here, before their render pass): indirect
             // parameters and vertices, and the restricted cubics in the fragment stage.
-            rec.access(&self.draws, Access::INDIRECT);
-            rec.access(&self.tris, Access::VERTEX_INPUT);
-            rec.access(&self.lines, Access::VERTEX_INPUT);
+            let mut reads: Vec<(&dyn crate::gpu::Tracked, Access)> = vec![
+                (&self.draws, Access::INDIRECT),
+                (&self.tris, Access::VERTEX_INPUT),
+                (&self.lines, Access::VERTEX_INPUT),
+            ];
             if let Some(window) = &self.window {
-                rec.access(&window.cubics, Access::GRAPHICS_READ);
+                reads.push((&window.cubics, Access::GRAPHICS_READ));
             }
+            rec.access_all(&reads);
         };
         match profiler {
             Some(p) => p.scope(rec, "subdivide", subdivide),

@@ -568,9 +568,9 @@ impl SpectralRenderer {
             let set = t.set.as_ref().expect("bound in tessellator_for");
             t.pipeline.record_dispatch(rec, set, &push, [x as u32, y as u32, 1]);
             // The draw's reads, declared before its render pass.
-            rec.access(&t.draw, Access::INDIRECT);
-            if let Some(vertices) = &t.vertices {
-                rec.access(vertices, Access::VERTEX_INPUT);
+            match &t.vertices {
+                Some(v) => rec.access_all(&[(&t.draw, Access::INDIRECT), (v, Access::VERTEX_INPUT)]),
+                None => rec.access(&t.draw, Access::INDIRECT),
             }
             key_cell.set(Some(key));
         };
