@@ -120,9 +120,15 @@ fn a_model_follows_and_is_compared_on_a_driven_run_it_was_not_trained_on() {
 
     // The step split: its whole step is compare's one-step error, computed the same way along
     // another path (1e-9: summation order only); each stage's error finite and at most 1.
-    let splits =
-        galerkin::fluid::reduced::diagnose::split_steps(&model, &scene, &driven, 6, false, &mut |_| {})
-            .unwrap();
+    let splits = galerkin::fluid::reduced::diagnose::split_steps(
+        &model,
+        &scene,
+        &driven,
+        6,
+        Default::default(),
+        &mut |_| {},
+    )
+    .unwrap();
     assert_eq!(splits.len(), 6);
     for s in &splits {
         let one_step = c.one_step_error[s.frame];

@@ -273,6 +273,12 @@ fn advection_and_projection_never_increase_the_energy() {
     {
         let mut fluid = ReducedFluid::new(model).unwrap();
         fluid.combination = combination;
+        // The projection is narrowed to the flux directions B_u sees (what follows checks
+        // that the narrowed projection keeps the energy argument); the fractions are those of
+        // N ≤ M, in [0, 1] to rounding.
+        let seen = fluid.seen_flux().expect("a trained model narrows its projection");
+        assert!(seen.kept >= 1 && seen.kept <= seen.of(), "{seen:?}");
+        assert!(seen.fractions.iter().all(|&x| (-1e-9..=1.0 + 1e-9).contains(&x)), "{:?}", seen.fractions);
         let exact = ReducedFluid::new(model).unwrap().with_exact_projection(model).unwrap();
         let (mu, mf, _, mh) = fluid.dims();
         let g = model.trajectories[0].g.data()[..model.dim_of("g")].to_vec();
@@ -376,6 +382,8 @@ fn the_model_file_round_trips_and_refuses_another_mesh() {
     }
     assert_eq!(back.trajectories, model.trajectories);
     assert_eq!(back.provenance, model.provenance);
+    assert!(model.flux_grams.is_some(), "training measures the flux velocity Gram matrices");
+    assert_eq!(back.flux_grams, model.flux_grams);
     // Another mesh is refused, naming both.
     let (mesh, topo) = common::wavy::channel(2, 6);
     let other = galerkin::fluid::reduced::MeshFingerprint::of(&mesh, &topo, Some(0));

@@ -160,6 +160,16 @@ pub fn positive_number(s: &str) -> Result<f64, String> {
     }
 }
 
+/// A fraction in [0, 1] (clap value parser).
+pub fn fraction(s: &str) -> Result<f64, String> {
+    let v: f64 = s.trim().parse().map_err(|_| format!("`{s}` is not a number"))?;
+    if (0.0..=1.0).contains(&v) {
+        Ok(v)
+    } else {
+        Err(format!("{v} is not a fraction from 0 to 1"))
+    }
+}
+
 /// A parser for `A,B,C,D`: exactly four counts (comma-separated), e.g. basis sizes
 /// m_u,m_f,m_g,m_h.
 pub fn four_counts(s: &str) -> Result<[usize; 4], String> {

@@ -63,10 +63,16 @@ impl SizeArgs {
     }
 }
 
-/// Prints a trained model's bases, one line each.
+/// Prints a trained model's bases, one line each, and the flux directions its projection
+/// solves for.
 fn print_bases(model: &ReducedFluidModel) {
     for r in &model.provenance.bases {
         println!("  B_{:<2} {:>8} × {:<4} energy {:.6}  {}", r.name, r.full, r.columns, r.energy, r.note);
+    }
+    if let Ok(Some(seen)) =
+        galerkin::fluid::reduced::step::ReducedFluid::new(model).map(|f| f.seen_flux().cloned())
+    {
+        println!("  {}", seen.line());
     }
 }
 
@@ -140,6 +146,13 @@ pub struct CompareArgs {
     /// tunnel), every frame on a moving one at full-space cost.
     #[arg(long)]
     pub exact_projection: bool,
+    /// Leave out of the reduced projection the flux directions with less than this fraction
+    /// of their velocity energy inside the velocity basis (measured at training on the
+    /// training geometries; the projection cannot identify them from a reduced velocity and
+    /// gives them coefficients that advect wrongly). 0 keeps every direction; models trained
+    /// before the measure existed are not narrowed.
+    #[arg(long, value_name = "FRACTION", value_parser = crate::cli::args::fraction, default_value_t = galerkin::fluid::reduced::step::SEEN_FLUX_THRESHOLD)]
+    pub seen_flux: f64,
 }
 
 /// Arguments of `galerkin fluid reduced`.
@@ -182,6 +195,13 @@ pub struct ReducedArgs {
     /// --exact-projection`).
     #[arg(long)]
     pub exact_projection: bool,
+    /// Leave out of the reduced projection the flux directions with less than this fraction
+    /// of their velocity energy inside the velocity basis (measured at training on the
+    /// training geometries; the projection cannot identify them from a reduced velocity and
+    /// gives them coefficients that advect wrongly). 0 keeps every direction; models trained
+    /// before the measure existed are not narrowed.
+    #[arg(long, value_name = "FRACTION", value_parser = crate::cli::args::fraction, default_value_t = galerkin::fluid::reduced::step::SEEN_FLUX_THRESHOLD)]
+    pub seen_flux: f64,
     /// Snapshot directory to write, lifted to the full space (for `fluid render`).
     #[arg(long, default_value = "out/fluid-reduced")]
     pub out: PathBuf,
@@ -428,7 +448,7 @@ pub fn compare(desc: &galerkin::gpu::GpuDesc, args: &CompareArgs) -> Result<()> 
         &model,
         &scene,
         &motion,
-        (frames, args.refine, args.exact_projection),
+        (frames, args.refine, projection(args.exact_projection, args.seen_flux)),
         &mut |k| bar.set_position(k as u64),
     )?;
     bar.finish_and_clear();
@@ -453,6 +473,9 @@ pub fn compare(desc: &galerkin::gpu::GpuDesc, args: &CompareArgs) -> Result<()> 
     } else {
         format!("reduced step {:.3} ms (the full run read back)", 1e3 * c.seconds.1)
     };
+    if let Some(seen) = &c.seen_flux {
+        println!("{}", seen.line());
+    }
     println!(
         "fluid compare: {title}, {frames} frames: relative velocity error in the energy norm mean {:.2} %, worst {:.2} % (the best fit in B_u: mean {:.2} %, worst {:.2} %; one reduced step from the full run's previous frame: mean {:.2} %, worst {:.2} %; the full flux's truncation in B_f: mean {:.2} %, worst {:.2} %); energy at the end full {:.4e}, reduced {:.4e}; {speed} → {}",
         100.0 * mean,
@@ -483,9 +506,14 @@ pub fn compare(desc: &galerkin::gpu::GpuDesc, args: &CompareArgs) -> Result<()> 
     if let (true, Some(full)) = (args.split, &args.full) {
         use galerkin::fluid::reduced::diagnose::{split_means, split_steps, StepSplit};
         let bar = crate::progress_bar(frames as u64, "split steps");
-        let splits = split_steps(&model, &scene, full, frames, args.exact_projection, &mut |k| {
-            bar.set_position(k as u64)
-        })?;
+        let splits = split_steps(
+            &model,
+            &scene,
+            full,
+            frames,
+            projection(args.exact_projection, args.seen_flux),
+            &mut |k| bar.set_position(k as u64),
+        )?;
         bar.finish_and_clear();
         let mut csv = String::from(StepSplit::CSV_HEADER);
         for s in &splits {
@@ -495,7 +523,7 @@ pub fn compare(desc: &galerkin::gpu::GpuDesc, args: &CompareArgs) -> Result<()> 
         csv += "\n";
         let path = args.out.join("split.csv");
         galerkin::atomic_file::write(&path, csv.as_bytes())?;
-        let [adv, trunc, proj, step, in_basis] = split_means(&splits);
+        let [adv, trunc, proj, step, in_basis, flux, adv_own] = split_means(&splits);
         let (mut lost_full_adv, mut lost_red_adv, mut lost_full_proj, mut lost_red_proj, mut lost_start) =
             (0.0, 0.0, 0.0, 0.0, 0.0);
         for s in &splits {
@@ -507,21 +535,31 @@ pub fn compare(desc: &galerkin::gpu::GpuDesc, args: &CompareArgs) -> Result<()> 
             lost_red_proj += e[3] - e[5];
         }
         println!(
-            "fluid compare --split: one step from each full frame, means over {frames} frames: advection {:.2} %, the advected velocity outside B_u {:.2} %, projection {:.2} %, whole step {:.2} % ({:.2} % of it inside B_u, what a run carries on); energy lost, summed over the steps (each from the full frame): projecting the full frame into the bases {lost_start:.4e}; advection full {lost_full_adv:.4e}, reduced {lost_red_adv:.4e}; projection full {lost_full_proj:.4e}, reduced {lost_red_proj:.4e} → {}",
+            "fluid compare --split: one step from each full frame, means over {frames} frames: advection {:.2} %, the advected velocity outside B_u {:.2} %, projection {:.2} %, whole step {:.2} % ({:.2} % of it inside B_u, what a run carries on), the step's flux {:.2} % off the full one, advection from the flux the step made {:.2} %; energy lost, summed over the steps (each from the full frame): projecting the full frame into the bases {lost_start:.4e}; advection full {lost_full_adv:.4e}, reduced {lost_red_adv:.4e}; projection full {lost_full_proj:.4e}, reduced {lost_red_proj:.4e} → {}",
             100.0 * adv,
             100.0 * trunc,
             100.0 * proj,
             100.0 * step,
             100.0 * in_basis,
+            100.0 * flux,
+            100.0 * adv_own,
             path.display()
         );
     }
     Ok(())
 }
 
+/// The reduced projection the flags ask for.
+fn projection(exact: bool, seen_flux: f64) -> galerkin::fluid::reduced::compare::Projection {
+    galerkin::fluid::reduced::compare::Projection { exact, seen_flux }
+}
+
 pub fn reduced(args: &ReducedArgs) -> Result<()> {
     let model = ReducedFluidModel::load(&args.model)?;
-    let fluid = galerkin::fluid::reduced::compare::reduced_fluid(&model, args.exact_projection)?;
+    let fluid = galerkin::fluid::reduced::compare::reduced_fluid(
+        &model,
+        &projection(args.exact_projection, args.seen_flux),
+    )?;
     let k = args.motion.run();
     let recorded = match &args.geometry {
         Some(dir) => {
@@ -577,6 +615,9 @@ pub fn reduced(args: &ReducedArgs) -> Result<()> {
         fluid.energy(&first.u, &first.g),
         fluid.energy(&last.u, &last.g)
     );
+    if let Some(seen) = fluid.seen_flux() {
+        println!("{}", seen.line());
+    }
     write_lifted(&model, &run, &args.out, args.force)?;
     println!("lifted to the full space → {}", args.out.display());
     if let Some(every) = args.indicator_every {

@@ -84,8 +84,10 @@ pub struct Comparison {
     pub estimate: Vec<f64>,
     /// The reduced run compared.
     pub reduced: Option<ReducedRun>,
-    /// Whether its step took the projection from the full space.
-    pub exact_projection: bool,
+    /// How its step projected.
+    pub projection: Projection,
+    /// The flux directions its projection kept, where the model narrows it.
+    pub seen_flux: Option<super::step::SeenFlux>,
     /// Median seconds of a full frame (NaN where the full run was read back, not simulated)
     /// and of a reduced step.
     pub seconds: (f64, f64),
@@ -130,7 +132,7 @@ impl Comparison {
     ) -> Result<Vec<super::indicator::IndicatorFrame>, FluidError> {
         let run =
             self.reduced.as_ref().ok_or_else(|| FluidError::State("no reduced run to indicate".into()))?;
-        let fluid = reduced_fluid(model, self.exact_projection)?;
+        let fluid = reduced_fluid(model, &self.projection)?;
         let frames = super::indicator::indicate(model, &fluid, run, every, on_frame)?;
         self.estimate = frames.iter().map(|f| f.estimate).collect();
         Ok(frames)
@@ -197,16 +199,15 @@ pub fn compare(
     refine: usize,
     on_frame: &mut dyn FnMut(usize),
 ) -> Result<Comparison, FluidError> {
-    compare_with(model, scene, motion, (frames, refine, false), on_frame)
+    compare_with(model, scene, motion, (frames, refine, Projection::default()), on_frame)
 }
 
-/// [`compare`] with the reduced step's projection from the full space when `exact_projection`
-/// ([`super::exact_projection`]).
+/// [`compare`] with the reduced step's projection as `projection` says.
 pub fn compare_with(
     model: &ReducedFluidModel,
     scene: &FluidScene,
     motion: &ComparedMotion,
-    (frames, refine, exact_projection): (usize, usize, bool),
+    (frames, refine, projection): (usize, usize, Projection),
     on_frame: &mut dyn FnMut(usize),
 ) -> Result<Comparison, FluidError> {
     if refine == 0 || refine > MAX_REFINE {
@@ -219,7 +220,7 @@ pub fn compare_with(
     }
     let fingerprint = super::model::MeshFingerprint::of(&scene.mesh, &scene.topology, scene.periodic_axis);
     model.check_mesh(&fingerprint)?;
-    let fluid = reduced_fluid(model, exact_projection)?;
+    let fluid = reduced_fluid(model, &projection)?;
     let reduced = match motion {
         ComparedMotion::Training(k) => {
             run_reduced(model, &fluid, ReducedMotion::Replay(*k), frames, &mut |_| {})?
@@ -237,7 +238,12 @@ pub fn compare_with(
     let bh = model.basis("h");
     let mut full = FullRun::new(scene, model, motion, frames, refine, bh.is_some())?;
     let d = scene.mesh.dim();
-    let mut out = Comparison { frame_time: model.frame_time, exact_projection, ..Comparison::default() };
+    let mut out = Comparison {
+        frame_time: model.frame_time,
+        projection,
+        seen_flux: fluid.seen_flux().cloned(),
+        ..Comparison::default()
+    };
     let mut full_seconds = Vec::new();
     // The previous full frame projected into the bases: the one-step error's start.
     let mut previous: Option<ReducedState> = None;
@@ -301,10 +307,31 @@ pub fn compare_with(
     Ok(out)
 }
 
-/// The reduced step of `model`, its projection from the full space when `exact_projection`.
-pub fn reduced_fluid(model: &ReducedFluidModel, exact_projection: bool) -> Result<ReducedFluid, FluidError> {
-    let fluid = ReducedFluid::new(model)?;
-    if exact_projection {
+/// How the reduced step's projection (Eq. 12) is made.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Projection {
+    /// Its normal matrix from the full space ([`super::exact_projection::ExactProjection`]).
+    pub exact: bool,
+    /// The seen-flux threshold ([`ReducedFluid::with_seen_flux`]; used where the model
+    /// carries the measure).
+    pub seen_flux: f64,
+}
+
+impl Default for Projection {
+    fn default() -> Self {
+        Self { exact: false, seen_flux: super::step::SEEN_FLUX_THRESHOLD }
+    }
+}
+
+/// The reduced step of `model`, its projection made as `projection` says.
+pub fn reduced_fluid(model: &ReducedFluidModel, projection: &Projection) -> Result<ReducedFluid, FluidError> {
+    let mut fluid = ReducedFluid::new(model)?;
+    if let Some(grams) = &model.flux_grams {
+        if projection.seen_flux != super::step::SEEN_FLUX_THRESHOLD {
+            fluid = fluid.with_seen_flux(grams, projection.seen_flux)?;
+        }
+    }
+    if projection.exact {
         fluid.with_exact_projection(model)
     } else {
         Ok(fluid)

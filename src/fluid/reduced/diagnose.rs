@@ -43,6 +43,13 @@ pub struct StepSplit {
     /// basis, which a run carries on to the next step (the rest, the truncation, it does not
     /// accumulate).
     pub step_error_in_basis: f64,
+    /// The whole reduced step's flux against the full frame t + 1's, `‖B_f f̂_{t+1} −
+    /// f_{t+1}‖ / ‖f_{t+1}‖` (Euclidean over faces; compare the flux truncation in B_f).
+    pub flux_error: f64,
+    /// The advection error when the reduced advection starts from the flux the reduced step
+    /// itself made for frame t (the previous frame's whole step) instead of `B_fᵀ f_t`: how
+    /// much the flux a run carries, not the truth's, costs advection (0 at the first frame).
+    pub advection_error_own_flux: f64,
     /// Energies: the full frame t, its projection (the reduced start), full advected, reduced
     /// advected, full frame t + 1, reduced step's result.
     pub energy: [f64; 6],
@@ -50,19 +57,21 @@ pub struct StepSplit {
 
 impl StepSplit {
     /// CSV header of [`Self::csv_row`].
-    pub const CSV_HEADER: &'static str = "frame,advection_error,advected_truncation,projection_error,step_error,step_error_in_basis,energy_full_start,energy_reduced_start,energy_full_advected,energy_reduced_advected,energy_full_next,energy_reduced_next";
+    pub const CSV_HEADER: &'static str = "frame,advection_error,advected_truncation,projection_error,step_error,step_error_in_basis,flux_error,advection_error_own_flux,energy_full_start,energy_reduced_start,energy_full_advected,energy_reduced_advected,energy_full_next,energy_reduced_next";
 
     /// One CSV row.
     pub fn csv_row(&self) -> String {
         let e = self.energy;
         format!(
-            "{},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e}",
+            "{},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e}",
             self.frame,
             self.advection_error,
             self.advected_truncation,
             self.projection_error,
             self.step_error,
             self.step_error_in_basis,
+            self.flux_error,
+            self.advection_error_own_flux,
             e[0],
             e[1],
             e[2],
@@ -75,14 +84,14 @@ impl StepSplit {
 
 /// Splits the reduced step on every frame 1..=`frames` of the recorded full run `full` (a
 /// snapshot directory of `scene`'s mesh) into its stages (see the module docs); `on_frame(t)`
-/// hears the progress; `exact_projection` as [`super::compare::compare_with`]. Costs one full
+/// hears the progress; `projection` as [`super::compare::compare_with`]. Costs one full
 /// advection and projection per frame.
 pub fn split_steps(
     model: &ReducedFluidModel,
     scene: &FluidScene,
     full: &std::path::Path,
     frames: usize,
-    exact_projection: bool,
+    projection: super::compare::Projection,
     on_frame: &mut dyn FnMut(usize),
 ) -> Result<Vec<StepSplit>, FluidError> {
     let reader = SnapshotReader::open(full)?;
@@ -95,7 +104,7 @@ pub fn split_steps(
             traj.frames()
         )));
     }
-    let fluid = super::compare::reduced_fluid(model, exact_projection)?;
+    let fluid = super::compare::reduced_fluid(model, &projection)?;
     let basis =
         |n: &str| model.basis(n).ok_or_else(|| FluidError::State(format!("the model has no basis {n}")));
     let (bu, bf, bg) = (basis("u")?, basis("f")?, basis("g")?);
@@ -103,6 +112,7 @@ pub fn split_steps(
     let mut solver = FluidSolver::new(scene.mesh.clone(), scene.topology.clone(), scene.params)?;
     let d = scene.mesh.dim();
     let mut out = Vec::with_capacity(frames);
+    let mut own_flux: Option<Vec<f64>> = None;
     for t in 0..frames {
         let (u, f, g) = (reader.frame("u", t)?, reader.frame("f", t)?, reader.frame("g", t)?);
         let (u1, g1) = (reader.frame("u", t + 1)?, reader.frame("g", t + 1)?);
@@ -133,7 +143,19 @@ pub fn split_steps(
         let projection_error = relative(distance(&u1, &bu.lift(&u_proj), &vols1), e1);
         // The whole reduced step: its own advection, then its projection (what
         // `ReducedFluid::step` does).
-        let (next_u, _) = fluid.project(&u_adv, &g1_hat, &h_hat, &mut report)?;
+        let (next_u, next_f) = fluid.project(&u_adv, &g1_hat, &h_hat, &mut report)?;
+        let f1 = reader.frame("f", t + 1)?;
+        let f1_norm = f1.iter().map(|x| x * x).sum::<f64>().sqrt();
+        let flux_diff = bf.lift(&next_f).iter().zip(&f1).map(|(a, b)| (a - b).powi(2)).sum::<f64>().sqrt();
+        let flux_error = if f1_norm > 0.0 { flux_diff / f1_norm } else { 0.0 };
+        let advection_error_own_flux = match own_flux.replace(next_f) {
+            Some(f_own) => {
+                let u_own =
+                    fluid.advect(&start.u, &f_own, &start.g, &h_hat, model.frame_time, &mut report)?;
+                relative(distance(&bu.lift(&adv_fit), &bu.lift(&u_own), &vols0), ea)
+            }
+            None => 0.0,
+        };
         let u_next = bu.lift(&next_u);
         let step_error = relative(distance(&u1, &u_next, &vols1), e1);
         let next_fit = bu.lift(&best_fit(&u1, &vols1, &g1_hat)?);
@@ -145,6 +167,8 @@ pub fn split_steps(
             projection_error,
             step_error,
             step_error_in_basis,
+            flux_error,
+            advection_error_own_flux,
             energy: [
                 energy(&u, &vols0),
                 energy(&bu.lift(&start.u), &vols0),
@@ -160,10 +184,11 @@ pub fn split_steps(
 }
 
 /// Means over frames of each error of `splits` (advection, advected truncation, projection,
-/// whole step, whole step inside the basis).
-pub fn split_means(splits: &[StepSplit]) -> [f64; 5] {
+/// whole step, whole step inside the basis, the step's flux, advection from the step's own
+/// flux — the last over the frames after the first).
+pub fn split_means(splits: &[StepSplit]) -> [f64; 7] {
     let n = splits.len().max(1) as f64;
-    let mut m = [0.0; 5];
+    let mut m = [0.0; 7];
     for s in splits {
         let errors = [
             s.advection_error,
@@ -171,10 +196,12 @@ pub fn split_means(splits: &[StepSplit]) -> [f64; 5] {
             s.projection_error,
             s.step_error,
             s.step_error_in_basis,
+            s.flux_error,
         ];
         for (k, v) in errors.into_iter().enumerate() {
             m[k] += v / n;
         }
+        m[6] += s.advection_error_own_flux / (n - 1.0).max(1.0);
     }
     m
 }

@@ -77,8 +77,19 @@ impl ExactProjection {
                 }
             }
         }
-        let g = self.bg.lift(g_hat);
-        let ops = CellOperators::new(&self.mesh, &self.topo, &g);
+        let m = self.gram_of_geometry(&self.bg.lift(g_hat))?;
+        if let Ok(mut cache) = self.cache.lock() {
+            *cache = Some((g_hat.to_vec(), m.clone()));
+        }
+        if let Ok(mut c) = self.computed.lock() {
+            *c += 1;
+        }
+        Ok(m)
+    }
+
+    /// `M(g)` (m_f × m_f) at a full-space geometry `g` (vertex positions).
+    pub fn gram_of_geometry(&self, g: &[f64]) -> Result<Mat<f64>, FluidError> {
+        let ops = CellOperators::new(&self.mesh, &self.topo, g);
         crate::mesh::refuse_inverted(&ops.volumes, None)?;
         let mf = self.bf.reduced_dim();
         let d = self.mesh.dim();
@@ -93,13 +104,123 @@ impl ExactProjection {
                 sigma[(i, j)] = x * scale[i / d];
             }
         }
-        let m = sigma.transpose() * &sigma;
-        if let Ok(mut cache) = self.cache.lock() {
-            *cache = Some((g_hat.to_vec(), m.clone()));
+        Ok(sigma.transpose() * &sigma)
+    }
+}
+
+/// How much of each flux direction's velocity the velocity basis sees, measured on full-space
+/// geometries at training: the mean over the geometries `g_k` of `M(g_k)` (the flux modes'
+/// velocity Gram matrix, [`ExactProjection`]) and of its part inside `B_u`,
+/// `N(g_k) = Qᵀ V̂(g_k)⁻¹ Q` with `Q = B_uᵀ P(g_k) B_f` and `V̂(g_k) = B_uᵀ V(g_k) B_u` — the
+/// Gram matrix the reduced projection `P̂ᵀV̂⁻¹P̂` stands for. Both m_f × m_f; `N ≤ M`.
+///
+/// The generalized eigenvalues of `(N, M)` lie in [0, 1]: the fraction of a flux direction's
+/// velocity energy inside `B_u`. A direction with a small one is one the reduced projection
+/// cannot identify from a velocity in `B_u`, and the step narrows its projection to the
+/// others ([`super::step::ReducedFluid::with_seen_flux`]; why: docs/fluids.md, "Flux
+/// directions the velocity basis sees").
+#[derive(Clone, Debug, PartialEq)]
+pub struct FluxVelocityGrams {
+    /// `M`, m_f × m_f.
+    pub full: crate::tensor::Tensor,
+    /// `N`, m_f × m_f.
+    pub seen: crate::tensor::Tensor,
+}
+
+impl FluxVelocityGrams {
+    /// Measures both matrices on the full-space geometries `geometries` (each the mesh's
+    /// vertex positions, with a name for errors) for `model`'s bases.
+    pub fn measure(model: &ReducedFluidModel, geometries: &[(String, Vec<f64>)]) -> Result<Self, FluidError> {
+        let (m, n) = Self::grams(model, geometries)?;
+        let mf = m.nrows();
+        let tensor = |a: &Mat<f64>| {
+            crate::tensor::Tensor::from_vec(
+                &[mf, mf],
+                (0..mf * mf).map(|k| 0.5 * (a[(k / mf, k % mf)] + a[(k % mf, k / mf)])).collect(),
+            )
+            .map_err(|e| FluidError::State(e.to_string()))
+        };
+        Ok(Self { full: tensor(&m)?, seen: tensor(&n)? })
+    }
+
+    /// `M` and `N` as matrices.
+    pub fn matrices(&self) -> (Mat<f64>, Mat<f64>) {
+        let mat = |t: &crate::tensor::Tensor| {
+            let n = t.shape()[0];
+            Mat::from_fn(n, n, |i, j| t.data()[i * n + j])
+        };
+        (mat(&self.full), mat(&self.seen))
+    }
+
+    /// The leading `m_f × m_f` blocks (the flux basis cut to its first `m_f` modes, the
+    /// velocity basis unchanged).
+    pub fn leading(&self, m_f: usize) -> Result<Self, FluidError> {
+        let cut =
+            |t: &crate::tensor::Tensor| t.leading(&[m_f, m_f]).map_err(|e| FluidError::State(e.to_string()));
+        Ok(Self { full: cut(&self.full)?, seen: cut(&self.seen)? })
+    }
+
+    /// The mean over `geometries` of `M(g)` and of its part inside `B_u`, `Qᵀ V̂(g)⁻¹ Q`.
+    fn grams(
+        model: &ReducedFluidModel,
+        geometries: &[(String, Vec<f64>)],
+    ) -> Result<(Mat<f64>, Mat<f64>), FluidError> {
+        use faer::linalg::matmul::matmul;
+        use faer::{Accum, MatRef, Par};
+        if geometries.is_empty() {
+            return Err(FluidError::State(
+                "the flux velocity Gram matrices need at least one geometry".into(),
+            ));
         }
-        if let Ok(mut c) = self.computed.lock() {
-            *c += 1;
+        let exact = ExactProjection::new(model)?;
+        let bu = model.basis("u").ok_or_else(|| FluidError::State("the model has no basis u".into()))?;
+        let (rows, mu) = (bu.full_dim(), bu.reduced_dim());
+        let bu = MatRef::from_row_major_slice(bu.matrix().data(), rows, mu);
+        let (mf, d) = (exact.bf.reduced_dim(), exact.mesh.dim());
+        let mut m_mean = Mat::<f64>::zeros(mf, mf);
+        let mut n_mean = Mat::<f64>::zeros(mf, mf);
+        for (name, g) in geometries {
+            let ops = CellOperators::new(&exact.mesh, &exact.topo, g);
+            crate::mesh::refuse_inverted(&ops.volumes, None)
+                .map_err(|e| FluidError::State(format!("the flux velocities at {name}: {e}")))?;
+            if ops.volumes.len() * d != rows {
+                return Err(FluidError::State(format!(
+                    "the flux velocity Gram matrices: B_u has {rows} rows, the mesh {} velocity values",
+                    ops.volumes.len() * d
+                )));
+            }
+            // Momenta of the flux modes, P(g) B_f (rows × m_f).
+            let mut p = Mat::<f64>::zeros(rows, mf);
+            for j in 0..mf {
+                let mut e = vec![0.0; mf];
+                e[j] = 1.0;
+                for (i, x) in ops.flux_to_momentum(&exact.topo, &exact.bf.lift(&e)).iter().enumerate() {
+                    p[(i, j)] = *x;
+                }
+            }
+            // M = Pᵀ V⁻¹ P; Q = B_uᵀ P; V̂ = B_uᵀ V B_u.
+            let vinv_p = Mat::from_fn(rows, mf, |i, j| p[(i, j)] / ops.volumes[i / d]);
+            let v_bu = Mat::from_fn(rows, mu, |i, j| bu[(i, j)] * ops.volumes[i / d]);
+            let mut m = Mat::<f64>::zeros(mf, mf);
+            matmul(m.as_mut(), Accum::Replace, p.transpose(), vinv_p.as_ref(), 1.0, Par::rayon(0));
+            let mut q = Mat::<f64>::zeros(mu, mf);
+            matmul(q.as_mut(), Accum::Replace, bu.transpose(), p.as_ref(), 1.0, Par::rayon(0));
+            let mut vhat = Mat::<f64>::zeros(mu, mu);
+            matmul(vhat.as_mut(), Accum::Replace, bu.transpose(), v_bu.as_ref(), 1.0, Par::rayon(0));
+            let l = super::dense::cholesky(&vhat, "V̂(g) of the flux velocity Gram matrices")?;
+            let y = {
+                let mut y = q.clone();
+                faer::linalg::triangular_solve::solve_lower_triangular_in_place(
+                    l.as_ref(),
+                    y.as_mut(),
+                    Par::Seq,
+                );
+                y
+            };
+            let n = y.transpose() * &y;
+            m_mean += m * faer::Scale(1.0 / geometries.len() as f64);
+            n_mean += n * faer::Scale(1.0 / geometries.len() as f64);
         }
-        Ok(m)
+        Ok((m_mean, n_mean))
     }
 }

@@ -187,6 +187,34 @@ pub struct ReducedFluidModel {
     pub cells: Vec<u32>,
     /// For the cavity: ĝ as a function of its compressions, to drive it at run time.
     pub cavity: Option<CavityMotion>,
+    /// How much of each flux direction's velocity `B_u` sees, measured on training geometries
+    /// ([`super::exact_projection::FluxVelocityGrams`]); the step narrows its projection by it.
+    /// `None` for models trained before it was measured.
+    pub flux_grams: Option<super::exact_projection::FluxVelocityGrams>,
+}
+
+/// Most training geometries [`ReducedFluidModel::train`] measures the flux velocity Gram
+/// matrices on (spread evenly over the runs' frames): each costs about as much as a few full
+/// steps.
+pub const FLUX_GRAM_GEOMETRIES: usize = 9;
+
+/// Up to `most` full-space geometries of `set`'s runs, spread evenly over all their frames
+/// (frame 0 of the first run first), each with its run and frame named.
+fn training_geometries(set: &TrainingSet, most: usize) -> Result<Vec<(String, Vec<f64>)>, FluidError> {
+    let frames: Vec<(usize, usize)> = set
+        .runs()
+        .iter()
+        .enumerate()
+        .flat_map(|(r, run)| (0..run.meta().frames).map(move |k| (r, k)))
+        .collect();
+    let n = frames.len().min(most.max(1));
+    let mut out = Vec::with_capacity(n);
+    for i in 0..n {
+        let (r, k) = frames[i * frames.len() / n];
+        let name = format!("training run {r} ({}) frame {k}", set.paths()[r].display());
+        out.push((name, set.runs()[r].frame("g", k)?));
+    }
+    Ok(out)
 }
 
 /// One training run's reduced motion and initial state.
@@ -324,8 +352,13 @@ impl ReducedFluidModel {
         stage("premultiply");
         let mesh =
             MeshOf { mesh: set.mesh(), topology: set.topology(), periodic_axis: set.meta().periodic_axis };
-        let model = Self::from_bases(mesh, set.params(), true, bases, sizes, runs, trajectories, ranks)?;
+        let mut model = Self::from_bases(mesh, set.params(), true, bases, sizes, runs, trajectories, ranks)?;
         model.check_trajectories()?;
+        stage("flux velocities");
+        model.flux_grams = Some(super::exact_projection::FluxVelocityGrams::measure(
+            &model,
+            &training_geometries(set, FLUX_GRAM_GEOMETRIES)?,
+        )?);
         Ok(model)
     }
 
@@ -411,6 +444,7 @@ impl ReducedFluidModel {
             trajectories,
             cells: mesh.cells().to_vec(),
             cavity: None,
+            flux_grams: None,
         };
         out.check_shapes()?;
         Ok(out)
@@ -513,6 +547,11 @@ impl ReducedFluidModel {
         }
         let mut out = self.clone();
         out.core = core;
+        // N depends on the whole of B_u: kept only while B_u is.
+        out.flux_grams = match &self.flux_grams {
+            Some(g) if m_u == self.dim_of("u") => Some(g.leading(m_f)?),
+            _ => None,
+        };
         let mh = out.dim_of("h");
         for t in &mut out.trajectories {
             t.h = t.h.leading(&[t.h.shape()[0], mh]).map_err(|e| FluidError::State(e.to_string()))?;

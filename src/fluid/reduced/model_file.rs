@@ -38,6 +38,10 @@ impl ReducedFluidModel {
             extras.arrays.insert("cavity/volume".into(), c.volume.clone());
             extras.metadata.insert("cavity_rest_volume".into(), json(&c.rest_volume)?);
         }
+        if let Some(g) = &self.flux_grams {
+            extras.arrays.insert("flux/M".into(), g.full.clone());
+            extras.arrays.insert("flux/N".into(), g.seen.clone());
+        }
         self.core.save_with(path, &extras).map_err(FluidError::from)
     }
 
@@ -127,7 +131,28 @@ impl ReducedFluidModel {
             }
             _ => None,
         };
-        let model = Self { core, dim, viscosity, frame_time, provenance, trajectories, cells, cavity };
+        let flux_grams = match (extras.arrays.get("flux/M"), extras.arrays.get("flux/N")) {
+            (Some(m), Some(n)) => {
+                let mf = provenance_dim(&core, "f");
+                if m.shape() != [mf, mf] || n.shape() != [mf, mf] {
+                    return Err(fail(format!(
+                        "`data/flux/M` and `data/flux/N` have shapes {:?} and {:?}; the flux basis has {mf} modes",
+                        m.shape(),
+                        n.shape()
+                    )));
+                }
+                if m.data().iter().chain(n.data()).any(|x| !x.is_finite()) {
+                    return Err(fail(
+                        "`data/flux/M` or `data/flux/N` holds a value that is not finite".into(),
+                    ));
+                }
+                Some(super::exact_projection::FluxVelocityGrams { full: m.clone(), seen: n.clone() })
+            }
+            (None, None) => None,
+            _ => return Err(fail("one of `data/flux/M` and `data/flux/N` without the other".into())),
+        };
+        let model =
+            Self { core, dim, viscosity, frame_time, provenance, trajectories, cells, cavity, flux_grams };
         model.check_shapes().map_err(|e| fail(e.to_string()))?;
         Ok(model)
     }

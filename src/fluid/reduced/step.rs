@@ -36,7 +36,7 @@ use crate::tensor::expm_krylov;
 use super::dense::{
     cholesky, cholesky_solve, fold_symmetric, matvec, matvec_f32_split, row_major, transpose_times,
 };
-use super::exact_projection::ExactProjection;
+use super::exact_projection::{ExactProjection, FluxVelocityGrams};
 use super::model::ReducedFluidModel;
 
 /// How the induced flux enters advection (see the module docs).
@@ -61,6 +61,41 @@ pub enum Exponential {
 impl Default for Exponential {
     fn default() -> Self {
         Exponential::Krylov(1e-12)
+    }
+}
+
+/// The default of [`ReducedFluid::with_seen_flux`]'s threshold: flux directions with less
+/// than this fraction of their velocity energy inside `B_u` are left out of the projection
+/// (chosen on the bird: BENCHMARKS.md, "Flux directions the velocity basis sees").
+pub const SEEN_FLUX_THRESHOLD: f64 = 0.1;
+
+/// What [`ReducedFluid::with_seen_flux`] kept.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SeenFlux {
+    /// The threshold.
+    pub threshold: f64,
+    /// Flux directions kept.
+    pub kept: usize,
+    /// The fraction of each free flux direction's velocity energy inside `B_u`, ascending.
+    pub fractions: Vec<f64>,
+}
+
+impl SeenFlux {
+    /// Free flux directions there were (the constraint's null space).
+    pub fn of(&self) -> usize {
+        self.fractions.len()
+    }
+
+    /// One line for a log: what was kept and why.
+    pub fn line(&self) -> String {
+        let median = self.fractions.get(self.fractions.len() / 2).copied().unwrap_or(0.0);
+        format!(
+            "the projection solves for {} of {} free flux directions, those with at least {:.0} % of their velocity energy inside B_u (median over all {:.1} %; --seen-flux sets the threshold)",
+            self.kept,
+            self.of(),
+            100.0 * self.threshold,
+            100.0 * median
+        )
     }
 }
 
@@ -170,6 +205,12 @@ pub struct ReducedFluid {
     /// The projection's normal matrix from the full space ([`super::exact_projection`])
     /// instead of `P̂ᵀV̂⁻¹P̂`.
     exact: Option<std::sync::Arc<ExactProjection>>,
+    /// The flux directions the projection solves for, when narrowed to those whose velocity
+    /// the velocity basis sees ([`Self::with_seen_flux`]): m_f × r orthonormal columns inside
+    /// the constraint's null space.
+    seen_flux: Option<std::sync::Arc<Mat<f64>>>,
+    /// What [`Self::with_seen_flux`] kept.
+    seen_report: Option<SeenFlux>,
     /// The last Cholesky factor of V̂(ĝ) and its ĝ: a step's end geometry is the next step's
     /// start.
     factor: FactorCache,
@@ -197,7 +238,9 @@ fn state_err(m: String) -> FluidError {
 }
 
 impl ReducedFluid {
-    /// Lays out `model`'s tensors for the step.
+    /// Lays out `model`'s tensors for the step, its projection narrowed to the flux
+    /// directions the velocity basis sees when the model carries their measure
+    /// ([`Self::with_seen_flux`] at [`SEEN_FLUX_THRESHOLD`]).
     pub fn new(model: &ReducedFluidModel) -> Result<Self, FluidError> {
         let (mu, mf, mg, mh, md) =
             (model.dim_of("u"), model.dim_of("f"), model.dim_of("g"), model.dim_of("h"), model.dim_of("d"));
@@ -276,7 +319,13 @@ impl ReducedFluid {
             combination: FluxCombination::default(),
             exponential: Exponential::default(),
             exact: None,
+            seen_flux: None,
+            seen_report: None,
             factor: FactorCache::default(),
+        })
+        .and_then(|fluid| match &model.flux_grams {
+            Some(grams) => fluid.with_seen_flux(grams, SEEN_FLUX_THRESHOLD),
+            None => Ok(fluid),
         })
     }
 
@@ -285,6 +334,67 @@ impl ReducedFluid {
     pub fn with_exact_projection(mut self, model: &ReducedFluidModel) -> Result<Self, FluidError> {
         self.exact = Some(std::sync::Arc::new(ExactProjection::new(model)?));
         Ok(self)
+    }
+
+    /// The step with the projection's free flux directions narrowed to those whose velocity
+    /// the velocity basis sees: with `M` and `N` the model's [`FluxVelocityGrams`] (the flux
+    /// modes' velocity Gram matrix in the full space and its part inside `B_u`), the
+    /// generalized eigenvectors of `Zᵀ N Z v = λ Zᵀ M Z v` (Z the boundary constraint's null
+    /// space, or I) with `λ ≥ threshold` — λ ∈ [0, 1] is the fraction of the direction's
+    /// velocity energy inside `B_u`. Directions below it are ones Eq. 12's reduced projection
+    /// cannot identify from a velocity in `B_u`: it gives them coefficients that barely change
+    /// the velocity but advect with their whole flux (docs/fluids.md, "Flux directions the
+    /// velocity basis sees"). Restricting `f̂` to a subspace keeps §A's energy argument (with
+    /// `ĥ = 0` the result is still the V̂-orthogonal projection onto a subspace). A threshold
+    /// of 0 keeps every direction (the projection as without narrowing).
+    pub fn with_seen_flux(mut self, grams: &FluxVelocityGrams, threshold: f64) -> Result<Self, FluidError> {
+        if !(0.0..=1.0).contains(&threshold) {
+            return Err(state_err(format!("the seen-flux threshold {threshold}: give 0 to 1")));
+        }
+        let (m, n) = grams.matrices();
+        if m.nrows() != self.mf || n.nrows() != self.mf {
+            return Err(state_err(format!(
+                "the flux velocity Gram matrices are {}×{}, the flux basis has {} modes",
+                m.nrows(),
+                m.ncols(),
+                self.mf
+            )));
+        }
+        let base = match &self.constraint {
+            Some(con) => con.null.clone(),
+            None => Mat::<f64>::identity(self.mf, self.mf),
+        };
+        let k = base.ncols();
+        let sym = |a: Mat<f64>| Mat::from_fn(k, k, |i, j| 0.5 * (a[(i, j)] + a[(j, i)]));
+        let mz = sym(base.transpose() * &m * &base);
+        let nz = sym(base.transpose() * &n * &base);
+        let l = cholesky(
+            &mz,
+            "the flux modes' velocity Gram matrix ZᵀMZ (--seen-flux 0 turns the narrowing off)",
+        )?;
+        // C = L⁻¹ (ZᵀNZ) L⁻ᵀ: its eigenvalues are the generalized ones.
+        let mut c = nz;
+        solve_lower_triangular_in_place(l.as_ref(), c.as_mut(), Par::Seq);
+        let mut c = c.transpose().to_owned();
+        solve_lower_triangular_in_place(l.as_ref(), c.as_mut(), Par::Seq);
+        let eig = sym(c)
+            .self_adjoint_eigen(faer::Side::Lower)
+            .map_err(|e| state_err(format!("the seen flux directions' eigenvalues: {e:?}")))?;
+        let (u, values) = (eig.U(), eig.S());
+        let fractions: Vec<f64> = (0..k).map(|i| values[i]).collect();
+        let keep: Vec<usize> = (0..k).filter(|&i| fractions[i] >= threshold).collect();
+        // v = L⁻ᵀ (eigenvectors kept), then orthonormal columns spanning Z v.
+        let mut v = Mat::from_fn(k, keep.len(), |i, j| u[(i, keep[j])]);
+        solve_upper_triangular_in_place(l.transpose(), v.as_mut(), Par::Seq);
+        let w = (&base * &v).qr().compute_thin_Q();
+        self.seen_flux = Some(std::sync::Arc::new(w));
+        self.seen_report = Some(SeenFlux { threshold, kept: keep.len(), fractions });
+        Ok(self)
+    }
+
+    /// The narrowing [`Self::with_seen_flux`] applied, if any.
+    pub fn seen_flux(&self) -> Option<&SeenFlux> {
+        self.seen_report.as_ref()
     }
 
     /// The full-space projection, when on.
@@ -549,32 +659,36 @@ impl ReducedFluid {
         };
         let uc = Mat::from_fn(self.mu, 1, |i, _| u[i]);
         let rhs = p.transpose() * &uc;
-        let f = match &self.constraint {
+        // f̂ = f̂_c + W y: f̂_c meets the boundary constraint, W spans the free directions
+        // (the constraint's null space, or the part of it the velocity basis sees).
+        let target = self.constraint.as_ref().map(|con| match &con.dh {
+            Some(dh) if self.mh > 0 => dh * Mat::from_fn(self.mh, 1, |i, _| h[i]),
+            _ => Mat::zeros(con.d.nrows(), 1),
+        });
+        let fc = match (&self.constraint, &target) {
+            (Some(con), Some(target)) => &con.pinv * target,
+            _ => Mat::zeros(self.mf, 1),
+        };
+        let free = self.seen_flux.as_deref().or(self.constraint.as_ref().map(|c| &c.null));
+        let f = match free {
             None => {
                 let c = cholesky(&n, "the reduced projection PᵀV̂⁻¹P (basis f)")?;
                 cholesky_solve(&c, &rhs)
             }
-            Some(con) => {
-                let target = match &con.dh {
-                    Some(dh) if self.mh > 0 => dh * Mat::from_fn(self.mh, 1, |i, _| h[i]),
-                    _ => Mat::zeros(con.d.nrows(), 1),
-                };
-                let fc = &con.pinv * &target;
-                let nz = con.null.transpose() * &n * &con.null;
-                let bz = con.null.transpose() * (&rhs - &n * &fc);
-                let f = if con.null.ncols() > 0 {
-                    let c = cholesky(&nz, "the reduced projection Zᵀ PᵀV̂⁻¹P Z (basis f, constrained)")?;
-                    &fc + &con.null * cholesky_solve(&c, &bz)
-                } else {
-                    fc
-                };
-                let r = &con.d * &f - &target;
-                let norm = |m: &Mat<f64>| (0..m.nrows()).map(|i| m[(i, 0)].powi(2)).sum::<f64>().sqrt();
-                report.constraint_residual = norm(&r);
-                report.constraint_target = norm(&target);
-                f
+            Some(w) if w.ncols() > 0 => {
+                let nz = w.transpose() * &n * w;
+                let bz = w.transpose() * (&rhs - &n * &fc);
+                let c = cholesky(&nz, "the reduced projection Zᵀ PᵀV̂⁻¹P Z (basis f, constrained)")?;
+                &fc + w * cholesky_solve(&c, &bz)
             }
+            Some(_) => fc,
         };
+        if let (Some(con), Some(target)) = (&self.constraint, &target) {
+            let r = &con.d * &f - target;
+            let norm = |m: &Mat<f64>| (0..m.nrows()).map(|i| m[(i, 0)].powi(2)).sum::<f64>().sqrt();
+            report.constraint_residual = norm(&r);
+            report.constraint_target = norm(target);
+        }
         // û = L⁻ᵀ (Y f), and Y f = Lᵀû gives its energy.
         let mut x = &y * &f;
         report.energy[2] = 0.5 * (0..x.nrows()).map(|i| x[(i, 0)].powi(2)).sum::<f64>();
@@ -657,14 +771,10 @@ mod tests {
     use super::super::induced::sorted_tuples;
     use super::*;
 
-    /// A flux basis whose two columns carry the same momentum makes the reduced projection's
-    /// normal matrix singular: refused naming the flux basis, not solved into NaN.
-    #[test]
-    fn a_singular_reduced_projection_is_refused_naming_the_flux_basis() {
-        // m_u = 2, m_f = 2, m_g = 1 (2D): V̂(ĝ) = ĝ² I, P̂ ⊗ ĝ = ĝ [[1, 1], [0, 0]].
+    /// m_u = 2, m_f = 2, m_g = 1 (2D), no constraint: V̂(ĝ) = ĝ² I, P̂ ⊗ ĝ = ĝ `p` (row-major).
+    fn two_mode_fluid(p: [f64; 4]) -> ReducedFluid {
         let (mu, mf, mg) = (2, 2, 1);
-        let monomials = sorted_tuples(mg, 2);
-        let fluid = ReducedFluid {
+        ReducedFluid {
             dim: 2,
             mu,
             mf,
@@ -676,9 +786,9 @@ mod tests {
             a_skew: true,
             ah: Vec::new(),
             lap: vec![0.0; mu * mu],
-            p: vec![1.0, 1.0, 0.0, 0.0],
+            p: p.to_vec(),
             v: vec![1.0, 0.0, 1.0],
-            monomials,
+            monomials: sorted_tuples(mg, 2),
             induced: Vec::new(),
             induced_monomials: Vec::new(),
             bf_bh: None,
@@ -686,8 +796,52 @@ mod tests {
             combination: FluxCombination::Separate,
             exponential: Exponential::default(),
             exact: None,
+            seen_flux: None,
+            seen_report: None,
             factor: FactorCache::default(),
+        }
+    }
+
+    /// Flux mode 2 carries unit velocity energy in the full space (M = I) but only 10⁻⁴ of it
+    /// inside B_u (N = diag(1, 10⁻⁴), P̂ = diag(1, 10⁻²)): the unnarrowed projection gives it
+    /// coefficient 1 to make a velocity component of 10⁻²; narrowed at 0.1 it keeps mode 1
+    /// only (coefficient 0 on mode 2, mode 1's coefficient unchanged), and at 0 both, as
+    /// without narrowing. The kept fractions are the generalized eigenvalues, 10⁻⁴ and 1.
+    #[test]
+    fn the_projection_leaves_out_flux_directions_the_velocity_basis_barely_sees() {
+        let fluid = two_mode_fluid([1.0, 0.0, 0.0, 1e-2]);
+        let tensor = |d: [f64; 4]| crate::tensor::Tensor::from_vec(&[2, 2], d.to_vec()).unwrap();
+        let grams =
+            FluxVelocityGrams { full: tensor([1.0, 0.0, 0.0, 1.0]), seen: tensor([1.0, 0.0, 0.0, 1e-4]) };
+        let (u, g) = ([1.0, 1e-2], [1.0]);
+        let mut report = ReducedStepReport::default();
+        let (_, f_all) = fluid.project(&u, &g, &[], &mut report).unwrap();
+        assert!((f_all[0] - 1.0).abs() < 1e-12 && (f_all[1] - 1.0).abs() < 1e-9, "{f_all:?}");
+        let narrowed = fluid.clone().with_seen_flux(&grams, 0.1).unwrap();
+        let seen = narrowed.seen_flux().unwrap();
+        assert_eq!((seen.kept, seen.of()), (1, 2));
+        assert!((seen.fractions[0] - 1e-4).abs() < 1e-15 && (seen.fractions[1] - 1.0).abs() < 1e-15);
+        let (u1, f) = narrowed.project(&u, &g, &[], &mut report).unwrap();
+        assert!((f[0] - 1.0).abs() < 1e-12 && f[1].abs() < 1e-12, "{f:?}");
+        assert!(narrowed.energy(&u1, &g) <= narrowed.energy(&u, &g));
+        let all = fluid.clone().with_seen_flux(&grams, 0.0).unwrap();
+        let (_, f0) = all.project(&u, &g, &[], &mut report).unwrap();
+        assert!(f0.iter().zip(&f_all).all(|(a, b)| (a - b).abs() < 1e-9), "{f0:?} vs {f_all:?}");
+        // Matrices of another flux basis, or a threshold outside [0, 1], are refused.
+        let small = FluxVelocityGrams {
+            full: crate::tensor::Tensor::from_vec(&[1, 1], vec![1.0]).unwrap(),
+            seen: crate::tensor::Tensor::from_vec(&[1, 1], vec![1.0]).unwrap(),
         };
+        assert!(fluid.clone().with_seen_flux(&small, 0.1).unwrap_err().to_string().contains("2 modes"));
+        assert!(fluid.clone().with_seen_flux(&grams, 1.5).unwrap_err().to_string().contains("0 to 1"));
+    }
+
+    /// A flux basis whose two columns carry the same momentum makes the reduced projection's
+    /// normal matrix singular: refused naming the flux basis, not solved into NaN.
+    #[test]
+    fn a_singular_reduced_projection_is_refused_naming_the_flux_basis() {
+        // m_u = 2, m_f = 2, m_g = 1 (2D): V̂(ĝ) = ĝ² I, P̂ ⊗ ĝ = ĝ [[1, 1], [0, 0]].
+        let fluid = two_mode_fluid([1.0, 1.0, 0.0, 0.0]);
         let state = ReducedState { u: vec![1.0, 0.5], f: vec![0.0, 0.0], g: vec![1.0] };
         let err = fluid.step(&state, &[1.0], &[]).unwrap_err().to_string();
         assert!(err.contains("reduced projection") && err.contains("basis f"), "{err}");
