@@ -32,6 +32,7 @@ pub mod picture;
 pub mod proxy;
 pub mod pvtu;
 pub mod reference;
+pub mod simplex;
 pub mod render;
 #[cfg(feature = "viewer")]
 pub mod viewer;

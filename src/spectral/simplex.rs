@@ -1,0 +1,194 @@
+//! Lagrange triangles and tetrahedra of order 1–10 on equispaced nodes, as VTK writes them
+//! (`VTK_LAGRANGE_TRIANGLE` = 69, `VTK_LAGRANGE_TETRAHEDRON` = 71): the nodes in VTK's point
+//! order and the basis with its reference gradient, in f64 — the CPU reference for drawing
+//! high-order simplices per pixel like the quadrilaterals and hexahedra of seed 002.
+//!
+//! **Reference element.** The triangle `r₀, r₁ ≥ 0, r₀ + r₁ ≤ 1`, the tetrahedron
+//! `r₀, r₁, r₂ ≥ 0, r₀ + r₁ + r₂ ≤ 1` (VTK's parametric coordinates). A node of order n is a
+//! multi-index `b` of barycentric integers summing to n; its point is `r_a = b_a / n` for
+//! the first `d` entries, the last entry being the remainder `n − Σ` (the weight of vertex 0).
+//!
+//! **VTK's order** is recursive in shells: the shell's vertices (vertex 0 at the origin, then
+//! one per axis), the points inside each edge from its first vertex to its second, then — on a
+//! tetrahedron — the points inside each face, ordered as a triangle of order n − 3 placed on
+//! the face's vertices, and finally the interior, which is the same element of order
+//! n − 3 (triangle) or n − 4 (tetrahedron) one layer in. Edges (vertex pairs) and faces (vertex
+//! triples, in the order the inner triangle's vertices 0, 1, 2 take) are VTK's tetrahedron's.
+//! `tests/spectral_simplex.rs` checks every point of orders 1–10 against the parametric
+//! coordinates VTK 9.7 itself gives (`scripts/vtk-simplex-fixtures.py`).
+//!
+//! **Basis** (Silvester's formula): the node `b` has `L_b(λ) = Π_a R_{b_a}(λ_a)` with
+//! `R_k(λ) = Π_{m<k} (nλ − m)/(m + 1)` of the barycentric coordinates λ; `R_k(j/n)` is the
+//! binomial `C(j, k)` (0 for j < k), so `L_b` is 1 at its node and 0 at every other.
+
+use super::error::SpectralError;
+
+/// The highest order of a simplex read or drawn.
+pub const MAX_SIMPLEX_ORDER: usize = 10;
+
+/// A simplex shape.
+#[derive(Copy, Clone, Debug, PartialEq, Eq, Hash)]
+pub enum SimplexShape {
+    /// The triangle (d = 2).
+    Triangle,
+    /// The tetrahedron (d = 3).
+    Tetrahedron,
+}
+
+impl SimplexShape {
+    /// Reference dimension d.
+    pub fn dim(self) -> usize {
+        match self {
+            Self::Triangle => 2,
+            Self::Tetrahedron => 3,
+        }
+    }
+
+    /// Nodes of order `n`: (n+1)(n+2)/2 or (n+1)(n+2)(n+3)/6.
+    pub fn node_count(self, n: usize) -> usize {
+        match self {
+            Self::Triangle => (n + 1) * (n + 2) / 2,
+            Self::Tetrahedron => (n + 1) * (n + 2) * (n + 3) / 6,
+        }
+    }
+}
+
+/// The vertices of the reference tetrahedron by the barycentric entry they carry: vertex 0 is
+/// the remainder (entry 3), vertices 1–3 the axes (entries 0–2); the triangle's likewise with
+/// entries 2, 0, 1.
+const TETRA_VERTEX_ENTRY: [usize; 4] = [3, 0, 1, 2];
+const TRIANGLE_VERTEX_ENTRY: [usize; 3] = [2, 0, 1];
+/// VTK's tetrahedron edges (vertex pairs, traversed first to second).
+const TETRA_EDGES: [[usize; 2]; 6] = [[0, 1], [1, 2], [2, 0], [0, 3], [1, 3], [2, 3]];
+/// VTK's tetrahedron faces, as the vertices the inner triangle's vertices 0, 1, 2 sit on.
+const TETRA_FACES: [[usize; 3]; 4] = [[0, 1, 3], [2, 3, 1], [0, 3, 2], [0, 2, 1]];
+
+/// The barycentric multi-indices of the nodes of order `n` in VTK's point order (entries past
+/// the shape's d + 1 are 0); refuses orders outside 1 to [`MAX_SIMPLEX_ORDER`].
+pub fn vtk_nodes(shape: SimplexShape, n: usize) -> Result<Vec<[usize; 4]>, SpectralError> {
+    if n == 0 || n > MAX_SIMPLEX_ORDER {
+        return Err(SpectralError::Order {
+            what: format!("Lagrange {shape:?}"),
+            order: n,
+            max: MAX_SIMPLEX_ORDER,
+        });
+    }
+    let mut out = Vec::with_capacity(shape.node_count(n));
+    match shape {
+        SimplexShape::Triangle => triangle_shell(n as isize, 0, &mut out),
+        SimplexShape::Tetrahedron => tetra_shell(n as isize, 0, &mut out),
+    }
+    Ok(out)
+}
+
+/// A point of a shell: every entry `low`, plus `extra[v]` on vertex v's entry.
+fn shell_point(entries: &[usize], low: isize, extra: &[(usize, isize)]) -> [usize; 4] {
+    let mut b = [0isize; 4];
+    for &e in entries {
+        b[e] = low;
+    }
+    for &(v, x) in extra {
+        b[entries[v]] += x;
+    }
+    b.map(|x| x.max(0) as usize)
+}
+
+/// The triangle's shell of order `s` whose entries start at `low`, then the shells inside.
+fn triangle_shell(s: isize, low: isize, out: &mut Vec<[usize; 4]>) {
+    let e = &TRIANGLE_VERTEX_ENTRY;
+    if s == 0 {
+        out.push(shell_point(e, low, &[]));
+        return;
+    }
+    for v in 0..3 {
+        out.push(shell_point(e, low, &[(v, s)]));
+    }
+    for (a, b) in [(0, 1), (1, 2), (2, 0)] {
+        for k in 1..s {
+            out.push(shell_point(e, low, &[(a, s - k), (b, k)]));
+        }
+    }
+    if s >= 3 {
+        triangle_shell(s - 3, low + 1, out);
+    }
+}
+
+/// The tetrahedron's shell of order `s` whose entries start at `low`, then the shells inside.
+fn tetra_shell(s: isize, low: isize, out: &mut Vec<[usize; 4]>) {
+    let e = &TETRA_VERTEX_ENTRY;
+    if s == 0 {
+        out.push(shell_point(e, low, &[]));
+        return;
+    }
+    for v in 0..4 {
+        out.push(shell_point(e, low, &[(v, s)]));
+    }
+    for [a, b] in TETRA_EDGES {
+        for k in 1..s {
+            out.push(shell_point(e, low, &[(a, s - k), (b, k)]));
+        }
+    }
+    if s >= 3 {
+        // Each face's inside: a triangle of order s − 3 whose vertex i sits on face vertex i,
+        // every one of its points one step in from the face's edges.
+        let mut inner = Vec::new();
+        triangle_shell(s - 3, 0, &mut inner);
+        for face in TETRA_FACES {
+            for p in &inner {
+                let weight = |i: usize| p[TRIANGLE_VERTEX_ENTRY[i]] as isize + 1;
+                out.push(shell_point(e, low, &[(face[0], weight(0)), (face[1], weight(1)), (face[2], weight(2))]));
+            }
+        }
+    }
+    if s >= 4 {
+        tetra_shell(s - 4, low + 1, out);
+    }
+}
+
+/// The reference point of node `b` of order `n` (the first d entries over n).
+pub fn node_point(shape: SimplexShape, n: usize, b: &[usize; 4]) -> [f64; 3] {
+    let mut r = [0.0; 3];
+    for (a, x) in r.iter_mut().enumerate().take(shape.dim()) {
+        *x = b[a] as f64 / n as f64;
+    }
+    r
+}
+
+/// `R_k(λ)` and its derivative in λ for order `n` (Silvester's factor, see the module docs).
+fn silvester(n: usize, k: usize, lambda: f64) -> (f64, f64) {
+    let (mut value, mut derivative) = (1.0, 0.0);
+    for m in 0..k {
+        let factor = (n as f64 * lambda - m as f64) / (m + 1) as f64;
+        let dfactor = n as f64 / (m + 1) as f64;
+        derivative = derivative * factor + value * dfactor;
+        value *= factor;
+    }
+    (value, derivative)
+}
+
+/// The basis of order `n` at reference point `r` for the nodes `nodes` (from [`vtk_nodes`]):
+/// each node's value and its gradient in r (d entries used).
+pub fn basis(shape: SimplexShape, n: usize, nodes: &[[usize; 4]], r: &[f64; 3]) -> Vec<(f64, [f64; 3])> {
+    let d = shape.dim();
+    // λ_a = r_a for a < d, λ_d = 1 − Σ r (∂λ_d/∂r_j = −1).
+    let mut lambda = [0.0; 4];
+    lambda[..d].copy_from_slice(&r[..d]);
+    lambda[d] = 1.0 - r[..d].iter().sum::<f64>();
+    nodes
+        .iter()
+        .map(|b| {
+            let factors: Vec<(f64, f64)> = (0..=d).map(|a| silvester(n, b[a], lambda[a])).collect();
+            let value: f64 = factors.iter().map(|f| f.0).product();
+            // ∂L/∂λ_a = R'_a Π_{c≠a} R_c.
+            let dl = |a: usize| -> f64 {
+                factors.iter().enumerate().map(|(c, f)| if c == a { f.1 } else { f.0 }).product()
+            };
+            let last = dl(d);
+            let mut gradient = [0.0; 3];
+            for (j, g) in gradient.iter_mut().enumerate().take(d) {
+                *g = dl(j) - last;
+            }
+            (value, gradient)
+        })
+        .collect()
+}
