@@ -8,6 +8,7 @@ parametric derivatives (InterpolateDerivs) at the first; values to 13 significan
 basis against them. Run from the repository root: python3 scripts/vtk-simplex-fixtures.py
 """
 import json
+import math
 import os
 
 import vtk
@@ -65,6 +66,79 @@ def main():
     with open(OUT, "w") as f:
         json.dump(out, f, separators=(",", ":"))
     print(OUT, os.path.getsize(OUT), "bytes")
+    curved_file("triangle", "tri_curved")
+    curved_file("tetrahedron", "tet_curved")
+
+
+def field(x, y, z):
+    return math.sin(1.3 * x) + y * y - 0.5 * x * z + 0.25
+
+
+def bend(p, planar):
+    """A smooth curving of the straight cells (keeps the shared face shared; the triangles
+    stay in the plane z = 0)."""
+    x, y, z = p
+    return (x + 0.08 * math.sin(2.0 * y), y + 0.06 * math.sin(1.7 * x + 0.5 * z), z + (0.0 if planar else 0.05 * x * y))
+
+
+def curved_file(kind, name):
+    order = 3
+    if kind == "triangle":
+        corners = [[(0.0, 0.0, 0.0), (1.0, 0.0, 0.0), (0.0, 1.0, 0.0)],
+                   [(1.0, 0.0, 0.0), (1.0, 1.0, 0.0), (0.0, 1.0, 0.0)]]
+        cell_type = vtk.VTK_LAGRANGE_TRIANGLE
+    else:
+        corners = [[(0.0, 0.0, 0.0), (1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0)],
+                   [(1.0, 0.0, 0.0), (1.0, 1.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0)]]
+        cell_type = vtk.VTK_LAGRANGE_TETRAHEDRON
+    grid = vtk.vtkUnstructuredGrid()
+    points = vtk.vtkPoints()
+    points.SetDataTypeToDouble()
+    values = vtk.vtkDoubleArray()
+    values.SetName("u")
+    cells = []
+    for c in corners:
+        cell, n, dim = cell_of(kind, order)
+        pc = cell.GetParametricCoords()
+        ids = []
+        for i in range(n):
+            r = [pc[3 * i + a] for a in range(3)]
+            # The straight cell's point at r (vertex 0 plus r along the axes), then curved.
+            straight = [c[0][a] + sum(r[k] * (c[k + 1][a] - c[0][a]) for k in range(dim)) for a in range(3)]
+            x = bend(straight, kind == "triangle")
+            ids.append(points.InsertNextPoint(*x))
+            values.InsertNextValue(field(*x))
+        cells.append(ids)
+    grid.SetPoints(points)
+    for ids in cells:
+        idl = vtk.vtkIdList()
+        for i in ids:
+            idl.InsertNextId(i)
+        grid.InsertNextCell(cell_type, idl)
+    grid.GetPointData().AddArray(values)
+    writer = vtk.vtkXMLUnstructuredGridWriter()
+    writer.SetFileName(os.path.join(os.path.dirname(OUT), name + ".vtu"))
+    writer.SetInputData(grid)
+    writer.SetDataModeToAscii()
+    writer.Write()
+    # VTK's evaluation of what it wrote, read back.
+    reader = vtk.vtkXMLUnstructuredGridReader()
+    reader.SetFileName(os.path.join(os.path.dirname(OUT), name + ".vtu"))
+    reader.Update()
+    back = reader.GetOutput()
+    u = back.GetPointData().GetArray("u")
+    samples = []
+    for e in range(back.GetNumberOfCells()):
+        cell = back.GetCell(e)
+        n = cell.GetNumberOfPoints()
+        for r in SAMPLES[kind] + ([[0.1, 0.1, 0.7]] if kind == "tetrahedron" else [[0.1, 0.8, 0.0]]):
+            x = [0.0, 0.0, 0.0]
+            weights = [0.0] * n
+            cell.EvaluateLocation(vtk.reference(0), r, x, weights)
+            value = sum(weights[i] * u.GetValue(cell.GetPointId(i)) for i in range(n))
+            samples.append({"element": e, "r": r[: 2 if kind == "triangle" else 3], "x": x, "u": value})
+    with open(os.path.join(os.path.dirname(OUT), name + ".json"), "w") as f:
+        json.dump({"vtk": vtk.vtkVersion.GetVTKVersion(), "samples": samples}, f, indent=1)
 
 
 if __name__ == "__main__":

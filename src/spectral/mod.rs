@@ -32,8 +32,9 @@ pub mod picture;
 pub mod proxy;
 pub mod pvtu;
 pub mod reference;
-pub mod simplex;
 pub mod render;
+pub mod simplex;
+pub mod simplex_mesh;
 #[cfg(feature = "viewer")]
 pub mod viewer;
 pub mod vtu;

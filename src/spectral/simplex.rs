@@ -136,7 +136,11 @@ fn tetra_shell(s: isize, low: isize, out: &mut Vec<[usize; 4]>) {
         for face in TETRA_FACES {
             for p in &inner {
                 let weight = |i: usize| p[TRIANGLE_VERTEX_ENTRY[i]] as isize + 1;
-                out.push(shell_point(e, low, &[(face[0], weight(0)), (face[1], weight(1)), (face[2], weight(2))]));
+                out.push(shell_point(
+                    e,
+                    low,
+                    &[(face[0], weight(0)), (face[1], weight(1)), (face[2], weight(2))],
+                ));
             }
         }
     }

@@ -1,0 +1,206 @@
+//! High-order triangles and tetrahedra read from VTK files (`VTK_LAGRANGE_TRIANGLE` = 69,
+//! `VTK_LAGRANGE_TETRAHEDRON` = 71), with the f64 reference evaluation the per-pixel renderer
+//! of simplices is to be tested against: the geometry map `x(r) = Σ_b X_b L_b(r)` and its
+//! Jacobian, each point field `f(r) = Σ_b F_b L_b(r)`, and the inverse map by Newton's method
+//! (the basis and node order: [`super::simplex`]). Checked against VTK's own evaluation
+//! (`EvaluateLocation`) of files VTK wrote, `tests/spectral_simplex.rs`.
+
+use std::path::Path;
+
+use super::error::SpectralError;
+use super::mesh::{Field, NEWTON_ITERATIONS};
+use super::simplex::{basis, vtk_nodes, SimplexShape, MAX_SIMPLEX_ORDER};
+
+/// VTK's cell type numbers of the shapes read here.
+const VTK_LAGRANGE_TRIANGLE: u8 = 69;
+const VTK_LAGRANGE_TETRAHEDRON: u8 = 71;
+
+/// Lagrange simplices of one shape and order with their point fields (one step each).
+#[derive(Clone, Debug, PartialEq)]
+pub struct SimplexElements {
+    /// The shape of every element.
+    pub shape: SimplexShape,
+    /// The order of every element (geometry and fields).
+    pub order: usize,
+    /// The nodes' barycentric multi-indices, in VTK's point order.
+    pub nodes: Vec<[usize; 4]>,
+    /// Geometry nodes: elements × nodes, element e's node i at `e · nodes + i`.
+    pub points: Vec<[f64; 3]>,
+    /// One-component point fields, laid out as the points.
+    pub fields: Vec<Field>,
+}
+
+impl SimplexElements {
+    /// Reads a `.vtu` of Lagrange triangles or tetrahedra (one shape and order per file, every
+    /// one-component point array a field). Errors name the file and the element or array.
+    pub fn read(path: &Path) -> Result<Self, SpectralError> {
+        let file = |detail: String| SpectralError::File { path: path.to_path_buf(), detail };
+        let grid = crate::vtk::read(path)?;
+        let cells = grid.cells;
+        if cells == 0 {
+            return Err(file("no cells".into()));
+        }
+        let points = grid.require("Points", "Points", 3, grid.points)?;
+        let types = grid.require("Cells", "types", 1, cells)?;
+        let offsets = grid.require("Cells", "offsets", 1, cells)?;
+        let conn = grid
+            .array("Cells", "connectivity")
+            .ok_or_else(|| file("no Cells array \"connectivity\"".into()))?;
+        let shape = match types[0] {
+            t if t == f64::from(VTK_LAGRANGE_TRIANGLE) => SimplexShape::Triangle,
+            t if t == f64::from(VTK_LAGRANGE_TETRAHEDRON) => SimplexShape::Tetrahedron,
+            t => {
+                return Err(file(format!(
+                    "element 0: cell type {t} (high-order simplices are VTK_LAGRANGE_TRIANGLE = 69 and VTK_LAGRANGE_TETRAHEDRON = 71)"
+                )))
+            }
+        };
+        let per_cell = offsets[0] as usize;
+        let order = (1..=MAX_SIMPLEX_ORDER).find(|&n| shape.node_count(n) == per_cell).ok_or_else(|| {
+            file(format!(
+                "element 0: {per_cell} points is no Lagrange {shape:?} of order 1..={MAX_SIMPLEX_ORDER}"
+            ))
+        })?;
+        for e in 0..cells {
+            if types[e] != types[0] {
+                return Err(file(format!(
+                    "element {e}: cell type {} differs from element 0's ({}); one shape per file",
+                    types[e], types[0]
+                )));
+            }
+            if offsets[e] != ((e + 1) * per_cell) as f64 {
+                return Err(file(format!(
+                    "element {e}: offset {} (every cell has {per_cell} points, as element 0)",
+                    offsets[e]
+                )));
+            }
+        }
+        if conn.values.len() != cells * per_cell {
+            return Err(file(format!(
+                "connectivity has {} entries, expected {}",
+                conn.values.len(),
+                cells * per_cell
+            )));
+        }
+        let mut index = crate::limits::vec_for(cells * per_cell, "the cells' nodes").map_err(file)?;
+        for (k, &c) in conn.values.iter().enumerate() {
+            if !(c >= 0.0 && c < grid.points as f64 && c.fract() == 0.0) {
+                return Err(file(format!(
+                    "element {}: point index {c} is out of range ({} points)",
+                    k / per_cell,
+                    grid.points
+                )));
+            }
+            index.push(c as usize);
+        }
+        let geometry: Vec<[f64; 3]> =
+            index.iter().map(|&p| [points[3 * p], points[3 * p + 1], points[3 * p + 2]]).collect();
+        if let Some(k) = geometry.iter().position(|x| x.iter().any(|v| !v.is_finite())) {
+            return Err(file(format!("element {}: point {} is not finite", k / per_cell, k % per_cell)));
+        }
+        let mut fields = Vec::new();
+        for a in grid.arrays.iter().filter(|a| a.section == "PointData" && a.components == 1) {
+            if a.values.len() != grid.points {
+                return Err(file(format!(
+                    "array {}: {} values for {} points",
+                    a.name,
+                    a.values.len(),
+                    grid.points
+                )));
+            }
+            let values: Vec<f64> = index.iter().map(|&p| a.values[p]).collect();
+            if let Some(k) = values.iter().position(|v| !v.is_finite()) {
+                return Err(file(format!(
+                    "array {}: element {}'s value {} is not finite",
+                    a.name,
+                    k / per_cell,
+                    k % per_cell
+                )));
+            }
+            let time = grid.time_value().unwrap_or(0.0);
+            fields.push(Field { name: a.name.clone(), times: vec![time], steps: vec![values] });
+        }
+        Ok(Self { shape, order, nodes: vtk_nodes(shape, order)?, points: geometry, fields })
+    }
+
+    /// Elements.
+    pub fn len(&self) -> usize {
+        self.points.len() / self.nodes.len().max(1)
+    }
+
+    /// Whether there are none.
+    pub fn is_empty(&self) -> bool {
+        self.points.is_empty()
+    }
+
+    /// `x(r)` of element `e` and its Jacobian's columns `∂x/∂r_a` (d of them used).
+    pub fn map(&self, e: usize, r: &[f64; 3]) -> ([f64; 3], [[f64; 3]; 3]) {
+        let m = self.nodes.len();
+        let (mut x, mut jac) = ([0.0; 3], [[0.0; 3]; 3]);
+        for (i, (l, g)) in basis(self.shape, self.order, &self.nodes, r).into_iter().enumerate() {
+            let p = self.points[e * m + i];
+            for c in 0..3 {
+                x[c] += l * p[c];
+                for a in 0..3 {
+                    jac[a][c] += g[a] * p[c];
+                }
+            }
+        }
+        (x, jac)
+    }
+
+    /// Field `field`'s value on element `e` at `r`.
+    pub fn value(&self, e: usize, field: usize, r: &[f64; 3]) -> f64 {
+        let m = self.nodes.len();
+        let coefficients = &self.fields[field].steps[0][e * m..(e + 1) * m];
+        basis(self.shape, self.order, &self.nodes, r).iter().zip(coefficients).map(|((l, _), f)| l * f).sum()
+    }
+
+    /// The reference point of element `e` that maps to `x` (planar triangles: its x and y),
+    /// by Newton's method from the centroid with steps at most half the element long; `None`
+    /// when it does not converge to 1e-13 of the element's size.
+    pub fn inverse(&self, e: usize, x: &[f64; 3]) -> Option<[f64; 3]> {
+        let d = self.shape.dim();
+        let m = self.nodes.len();
+        let (lo, hi) = super::mesh::bounds_of(&self.points[e * m..(e + 1) * m]);
+        let size = (0..3).map(|c| hi[c] - lo[c]).fold(0.0f64, f64::max).max(f64::MIN_POSITIVE);
+        let mut r = [1.0 / (d + 1) as f64; 3];
+        if d == 2 {
+            r[2] = 0.0;
+        }
+        for _ in 0..NEWTON_ITERATIONS * 2 {
+            let (y, jac) = self.map(e, &r);
+            let res: Vec<f64> = (0..d).map(|c| x[c] - y[c]).collect();
+            if res.iter().map(|v| v * v).sum::<f64>().sqrt() <= 1e-13 * size {
+                return Some(r);
+            }
+            // Solve J s = res (J[c][a] = ∂x_c/∂r_a) by Cramer's rule (d ≤ 3).
+            let a = |c: usize, k: usize| jac[k][c];
+            let step: Vec<f64> = if d == 2 {
+                let det = a(0, 0) * a(1, 1) - a(0, 1) * a(1, 0);
+                if det == 0.0 {
+                    return None;
+                }
+                vec![(res[0] * a(1, 1) - a(0, 1) * res[1]) / det, (a(0, 0) * res[1] - res[0] * a(1, 0)) / det]
+            } else {
+                let det3 = |col: usize, b: &[f64]| {
+                    let m = |c: usize, k: usize| if k == col { b[c] } else { a(c, k) };
+                    m(0, 0) * (m(1, 1) * m(2, 2) - m(1, 2) * m(2, 1))
+                        - m(0, 1) * (m(1, 0) * m(2, 2) - m(1, 2) * m(2, 0))
+                        + m(0, 2) * (m(1, 0) * m(2, 1) - m(1, 1) * m(2, 0))
+                };
+                let det = det3(usize::MAX, &[0.0; 3]);
+                if det == 0.0 {
+                    return None;
+                }
+                (0..3).map(|k| det3(k, &res) / det).collect()
+            };
+            let longest = step.iter().fold(0.0f64, |l, s| l.max(s.abs()));
+            let scale = if longest > 0.5 { 0.5 / longest } else { 1.0 };
+            for k in 0..d {
+                r[k] += scale * step[k];
+            }
+        }
+        None
+    }
+}
