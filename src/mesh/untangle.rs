@@ -168,8 +168,9 @@ fn corners(mesh: &SimplexMesh, g: &[f64], c: usize) -> [Point; 4] {
     p
 }
 
-/// Solves the d×d system (d ≤ 3) by Gaussian elimination with partial pivoting.
-fn solve_small(d: usize, mut a: [[f64; 3]; 3], mut b: [f64; 3]) -> Option<[f64; 3]> {
+/// Solves the d×d system (d ≤ 3) by Gaussian elimination with partial pivoting (`None` when
+/// singular).
+pub(crate) fn solve_small(d: usize, mut a: [[f64; 3]; 3], mut b: [f64; 3]) -> Option<[f64; 3]> {
     for col in 0..d {
         let pivot = (col..d).max_by(|&i, &j| a[i][col].abs().total_cmp(&a[j][col].abs()))?;
         if a[pivot][col].abs() < 1e-300 {

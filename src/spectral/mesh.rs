@@ -89,7 +89,7 @@ fn near_box(points: &[[f64; 3]], p: &[f64], dims: usize) -> bool {
 /// A Newton step of the inverse map at most half the reference element long per axis: far
 /// from the solution a strongly curved (e.g. rational) map can send a full step out of the
 /// basin; near it steps are tiny and Newton's quadratic convergence is kept.
-fn damped<const D: usize>(s: [f64; D]) -> [f64; D] {
+pub(super) fn damped<const D: usize>(s: [f64; D]) -> [f64; D] {
     let longest = s.iter().fold(0.0f64, |a, c| a.max(c.abs()));
     if longest > 0.5 {
         s.map(|c| c * 0.5 / longest)

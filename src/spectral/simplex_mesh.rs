@@ -100,15 +100,8 @@ impl SimplexElements {
         }
         let mut fields = Vec::new();
         for a in grid.arrays.iter().filter(|a| a.section == "PointData" && a.components == 1) {
-            if a.values.len() != grid.points {
-                return Err(file(format!(
-                    "array {}: {} values for {} points",
-                    a.name,
-                    a.values.len(),
-                    grid.points
-                )));
-            }
-            let values: Vec<f64> = index.iter().map(|&p| a.values[p]).collect();
+            let all = grid.require("PointData", &a.name, 1, grid.points)?;
+            let values: Vec<f64> = index.iter().map(|&p| all[p]).collect();
             if let Some(k) = values.iter().position(|v| !v.is_finite()) {
                 return Err(file(format!(
                     "array {}: element {}'s value {} is not finite",
@@ -170,35 +163,23 @@ impl SimplexElements {
         }
         for _ in 0..NEWTON_ITERATIONS * 2 {
             let (y, jac) = self.map(e, &r);
-            let res: Vec<f64> = (0..d).map(|c| x[c] - y[c]).collect();
+            let mut res = [0.0; 3];
+            for c in 0..d {
+                res[c] = x[c] - y[c];
+            }
             if res.iter().map(|v| v * v).sum::<f64>().sqrt() <= 1e-13 * size {
                 return Some(r);
             }
-            // Solve J s = res (J[c][a] = ∂x_c/∂r_a) by Cramer's rule (d ≤ 3).
-            let a = |c: usize, k: usize| jac[k][c];
-            let step: Vec<f64> = if d == 2 {
-                let det = a(0, 0) * a(1, 1) - a(0, 1) * a(1, 0);
-                if det == 0.0 {
-                    return None;
+            // Solve J s = res (J[c][a] = ∂x_c/∂r_a), the step at most half the element long.
+            let mut jm = [[0.0; 3]; 3];
+            for (c, row) in jm.iter_mut().enumerate().take(d) {
+                for (k, v) in row.iter_mut().enumerate().take(d) {
+                    *v = jac[k][c];
                 }
-                vec![(res[0] * a(1, 1) - a(0, 1) * res[1]) / det, (a(0, 0) * res[1] - res[0] * a(1, 0)) / det]
-            } else {
-                let det3 = |col: usize, b: &[f64]| {
-                    let m = |c: usize, k: usize| if k == col { b[c] } else { a(c, k) };
-                    m(0, 0) * (m(1, 1) * m(2, 2) - m(1, 2) * m(2, 1))
-                        - m(0, 1) * (m(1, 0) * m(2, 2) - m(1, 2) * m(2, 0))
-                        + m(0, 2) * (m(1, 0) * m(2, 1) - m(1, 1) * m(2, 0))
-                };
-                let det = det3(usize::MAX, &[0.0; 3]);
-                if det == 0.0 {
-                    return None;
-                }
-                (0..3).map(|k| det3(k, &res) / det).collect()
-            };
-            let longest = step.iter().fold(0.0f64, |l, s| l.max(s.abs()));
-            let scale = if longest > 0.5 { 0.5 / longest } else { 1.0 };
+            }
+            let step = super::mesh::damped(crate::mesh::untangle::solve_small(d, jm, res)?);
             for k in 0..d {
-                r[k] += scale * step[k];
+                r[k] += step[k];
             }
         }
         None

@@ -325,12 +325,7 @@ impl Default for Projection {
 
 /// The reduced step of `model`, its projection made as `projection` says.
 pub fn reduced_fluid(model: &ReducedFluidModel, projection: &Projection) -> Result<ReducedFluid, FluidError> {
-    let mut fluid = ReducedFluid::new(model)?;
-    if let Some(grams) = &model.flux_grams {
-        if projection.seen_flux != super::step::SEEN_FLUX_THRESHOLD {
-            fluid = fluid.with_seen_flux(grams, projection.seen_flux)?;
-        }
-    }
+    let fluid = ReducedFluid::with_seen_flux_threshold(model, projection.seen_flux)?;
     if projection.exact {
         fluid.with_exact_projection(model)
     } else {

@@ -91,20 +91,29 @@ impl ExactProjection {
     pub fn gram_of_geometry(&self, g: &[f64]) -> Result<Mat<f64>, FluidError> {
         let ops = CellOperators::new(&self.mesh, &self.topo, g);
         crate::mesh::refuse_inverted(&ops.volumes, None)?;
+        Ok(self.gram_of_momenta(&self.flux_momenta(&ops), &ops.volumes))
+    }
+
+    /// The flux modes' momenta `P(g) B_f` (d·cells × m_f) under the operators `ops`.
+    fn flux_momenta(&self, ops: &CellOperators) -> Mat<f64> {
         let mf = self.bf.reduced_dim();
-        let d = self.mesh.dim();
-        // Column j: flux mode j's momentum P B_f e_j scaled by V^{-1/2}, so that M = ΣᵀΣ.
-        let scale: Vec<f64> = ops.volumes.iter().map(|v| v.sqrt().recip()).collect();
-        let mut sigma = Mat::<f64>::zeros(d * ops.volumes.len(), mf);
+        let mut p = Mat::<f64>::zeros(self.mesh.dim() * ops.volumes.len(), mf);
         for j in 0..mf {
             let mut e = vec![0.0; mf];
             e[j] = 1.0;
-            let p = ops.flux_to_momentum(&self.topo, &self.bf.lift(&e));
-            for (i, x) in p.iter().enumerate() {
-                sigma[(i, j)] = x * scale[i / d];
+            for (i, x) in ops.flux_to_momentum(&self.topo, &self.bf.lift(&e)).iter().enumerate() {
+                p[(i, j)] = *x;
             }
         }
-        Ok(sigma.transpose() * &sigma)
+        p
+    }
+
+    /// `M = Pᵀ V⁻¹ P` of the momenta `p` (from [`Self::flux_momenta`]) with cell volumes
+    /// `volumes`: `ΣᵀΣ` with `Σ = V^{-1/2} P`.
+    fn gram_of_momenta(&self, p: &Mat<f64>, volumes: &[f64]) -> Mat<f64> {
+        let d = self.mesh.dim();
+        let sigma = Mat::from_fn(p.nrows(), p.ncols(), |i, j| p[(i, j)] / volumes[i / d].sqrt());
+        sigma.transpose() * &sigma
     }
 }
 
@@ -189,34 +198,18 @@ impl FluxVelocityGrams {
                     ops.volumes.len() * d
                 )));
             }
-            // Momenta of the flux modes, P(g) B_f (rows × m_f).
-            let mut p = Mat::<f64>::zeros(rows, mf);
-            for j in 0..mf {
-                let mut e = vec![0.0; mf];
-                e[j] = 1.0;
-                for (i, x) in ops.flux_to_momentum(&exact.topo, &exact.bf.lift(&e)).iter().enumerate() {
-                    p[(i, j)] = *x;
-                }
-            }
-            // M = Pᵀ V⁻¹ P; Q = B_uᵀ P; V̂ = B_uᵀ V B_u.
-            let vinv_p = Mat::from_fn(rows, mf, |i, j| p[(i, j)] / ops.volumes[i / d]);
+            // M = Pᵀ V⁻¹ P of the flux modes' momenta P = P(g) B_f; Q = B_uᵀ P; V̂ = B_uᵀ V B_u.
+            let p = exact.flux_momenta(&ops);
+            let m = exact.gram_of_momenta(&p, &ops.volumes);
             let v_bu = Mat::from_fn(rows, mu, |i, j| bu[(i, j)] * ops.volumes[i / d]);
-            let mut m = Mat::<f64>::zeros(mf, mf);
-            matmul(m.as_mut(), Accum::Replace, p.transpose(), vinv_p.as_ref(), 1.0, Par::rayon(0));
             let mut q = Mat::<f64>::zeros(mu, mf);
             matmul(q.as_mut(), Accum::Replace, bu.transpose(), p.as_ref(), 1.0, Par::rayon(0));
             let mut vhat = Mat::<f64>::zeros(mu, mu);
             matmul(vhat.as_mut(), Accum::Replace, bu.transpose(), v_bu.as_ref(), 1.0, Par::rayon(0));
             let l = super::dense::cholesky(&vhat, "V̂(g) of the flux velocity Gram matrices")?;
-            let y = {
-                let mut y = q.clone();
-                faer::linalg::triangular_solve::solve_lower_triangular_in_place(
-                    l.as_ref(),
-                    y.as_mut(),
-                    Par::Seq,
-                );
-                y
-            };
+            // N = Qᵀ V̂⁻¹ Q = YᵀY with Y = L⁻¹Q.
+            let mut y = q;
+            faer::linalg::triangular_solve::solve_lower_triangular_in_place(l.as_ref(), y.as_mut(), Par::Seq);
             let n = y.transpose() * &y;
             m_mean += m * faer::Scale(1.0 / geometries.len() as f64);
             n_mean += n * faer::Scale(1.0 / geometries.len() as f64);

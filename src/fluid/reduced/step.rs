@@ -242,6 +242,12 @@ impl ReducedFluid {
     /// directions the velocity basis sees when the model carries their measure
     /// ([`Self::with_seen_flux`] at [`SEEN_FLUX_THRESHOLD`]).
     pub fn new(model: &ReducedFluidModel) -> Result<Self, FluidError> {
+        Self::with_seen_flux_threshold(model, SEEN_FLUX_THRESHOLD)
+    }
+
+    /// [`Self::new`] with the seen-flux threshold `threshold` (used where the model carries
+    /// the measure).
+    pub fn with_seen_flux_threshold(model: &ReducedFluidModel, threshold: f64) -> Result<Self, FluidError> {
         let (mu, mf, mg, mh, md) =
             (model.dim_of("u"), model.dim_of("f"), model.dim_of("g"), model.dim_of("h"), model.dim_of("d"));
         let t = |n: &str| model.tensor(n).ok_or_else(|| state_err(format!("the model has no tensor {n}")));
@@ -324,7 +330,7 @@ impl ReducedFluid {
             factor: FactorCache::default(),
         })
         .and_then(|fluid| match &model.flux_grams {
-            Some(grams) => fluid.with_seen_flux(grams, SEEN_FLUX_THRESHOLD),
+            Some(grams) => fluid.with_seen_flux(grams, threshold),
             None => Ok(fluid),
         })
     }
