@@ -68,6 +68,9 @@ def main():
     print(OUT, os.path.getsize(OUT), "bytes")
     curved_file("triangle", "tri_curved")
     curved_file("tetrahedron", "tet_curved")
+    # Per-pixel drawing: higher orders on more cells (shared curved edges).
+    curved_file("triangle", "tri_curved_o6", order=6, side=2)
+    curved_file("triangle", "tri_curved_o10", order=10, side=1)
 
 
 def field(x, y, z):
@@ -81,11 +84,25 @@ def bend(p, planar):
     return (x + 0.08 * math.sin(2.0 * y), y + 0.06 * math.sin(1.7 * x + 0.5 * z), z + (0.0 if planar else 0.05 * x * y))
 
 
-def curved_file(kind, name):
-    order = 3
+def triangle_grid(side):
+    """The unit square cut into side x side squares, each split into two triangles along its
+    diagonal (counter-clockwise corners)."""
+    h = 1.0 / side
+    out = []
+    for j in range(side):
+        for i in range(side):
+            a, b = (i * h, j * h, 0.0), ((i + 1) * h, j * h, 0.0)
+            c, d = ((i + 1) * h, (j + 1) * h, 0.0), (i * h, (j + 1) * h, 0.0)
+            out += [[a, b, d], [b, c, d]]
+    return out
+
+
+def curved_file(kind, name, order=3, side=1):
+    """Curved Lagrange cells of `order` written by VTK as `name`.vtu (ascii), with VTK's own
+    evaluation of them at sample points in `name`.json. Triangles: the unit square in
+    side x side squares of two triangles each."""
     if kind == "triangle":
-        corners = [[(0.0, 0.0, 0.0), (1.0, 0.0, 0.0), (0.0, 1.0, 0.0)],
-                   [(1.0, 0.0, 0.0), (1.0, 1.0, 0.0), (0.0, 1.0, 0.0)]]
+        corners = triangle_grid(side)
         cell_type = vtk.VTK_LAGRANGE_TRIANGLE
     else:
         corners = [[(0.0, 0.0, 0.0), (1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0)],

@@ -40,7 +40,7 @@ fn worst_field_error(mesh: &SpectralMesh) -> f64 {
                             let (x, _) = mesh.map_hex(e, [a, b, c]);
                             (mesh.value_hex(field, 0, e, [a, b, c]) - hex_u(x)).abs()
                         }
-                        Shape::Quadrilateral => {
+                        Shape::Quadrilateral | Shape::Triangle => {
                             let (x, _) = mesh.map(e, a, b);
                             (mesh.value(field, 0, e, a, b) - quad_u(x)).abs()
                         }
@@ -167,15 +167,18 @@ fn hostile_variants_are_refused_naming_the_file_and_array_before_inflating() {
     }
 }
 
-/// A cell type the renderer does not draw — here VTK's quadratic Lagrange triangle, written by
-/// VTK — is refused naming the file, the element and the type by its VTK name.
+/// A cell type the renderer does not draw — here VTK's cubic Lagrange tetrahedron, written by
+/// VTK — is refused naming the file, the element and the type by its VTK name; VTK's quadratic
+/// Lagrange triangle (drawn since triangles joined the spectral meshes) reads as one.
 #[test]
 fn a_cell_type_the_renderer_does_not_draw_is_refused_by_name() {
-    let e = galerkin::spectral::load(&fixture("tri_lagrange.vtu"), &[]).expect_err("a triangle").to_string();
+    let e = galerkin::spectral::load(&fixture("tet_curved.vtu"), &[]).expect_err("a tetrahedron").to_string();
     assert!(
-        e.contains("tri_lagrange.vtu") && e.contains("element 0") && e.contains("VTK_LAGRANGE_TRIANGLE"),
+        e.contains("tet_curved.vtu") && e.contains("element 0") && e.contains("VTK_LAGRANGE_TETRAHEDRON"),
         "{e}"
     );
+    let tri = galerkin::spectral::load(&fixture("tri_lagrange.vtu"), &[]).expect("a triangle");
+    assert_eq!((tri.shape, tri.geometry.order), (Shape::Triangle, 2));
 }
 
 /// VTK's time convention for one file: the grid's field data `TimeValue` (written by VTK,

@@ -46,6 +46,8 @@ layout(constant_id = 26) const float SPECTRAL_FW11 = 0.0;
 layout(constant_id = 27) const float SPECTRAL_FW12 = 0.0;
 // Reference dimension: 2 (quadrilaterals) or 3 (hexahedra), id 56.
 layout(constant_id = 56) const uint SPECTRAL_DIM = 2u;
+// Lagrange triangles (spectral_simplex.glsl) instead of tensor-product elements, id 59.
+layout(constant_id = 59) const bool SPECTRAL_SIMPLEX = false;
 // Field and geometry share one basis (isoparametric elements), id 57.
 layout(constant_id = 57) const bool SPECTRAL_SHARED_BASIS = false;
 // Rational cells (SpectralMesh::weights, mesh.rs): spectral_points hold (w x, w y, w z, w), the
@@ -83,6 +85,41 @@ layout(constant_id = 55) const float SPECTRAL_GW12 = 0.0;
 #define SPECTRAL_FIELD_WEIGHTS float[SPECTRAL_MAX_NODES](SPECTRAL_FW0, SPECTRAL_FW1, SPECTRAL_FW2, SPECTRAL_FW3, SPECTRAL_FW4, SPECTRAL_FW5, SPECTRAL_FW6, SPECTRAL_FW7, SPECTRAL_FW8, SPECTRAL_FW9, SPECTRAL_FW10, SPECTRAL_FW11, SPECTRAL_FW12)
 #define SPECTRAL_GEOMETRY_NODES float[SPECTRAL_MAX_NODES](SPECTRAL_GN0, SPECTRAL_GN1, SPECTRAL_GN2, SPECTRAL_GN3, SPECTRAL_GN4, SPECTRAL_GN5, SPECTRAL_GN6, SPECTRAL_GN7, SPECTRAL_GN8, SPECTRAL_GN9, SPECTRAL_GN10, SPECTRAL_GN11, SPECTRAL_GN12)
 #define SPECTRAL_GEOMETRY_WEIGHTS float[SPECTRAL_MAX_NODES](SPECTRAL_GW0, SPECTRAL_GW1, SPECTRAL_GW2, SPECTRAL_GW3, SPECTRAL_GW4, SPECTRAL_GW5, SPECTRAL_GW6, SPECTRAL_GW7, SPECTRAL_GW8, SPECTRAL_GW9, SPECTRAL_GW10, SPECTRAL_GW11, SPECTRAL_GW12)
+
+// Whole vec4s of one element's coefficients.
+#define SPECTRAL_VALUES_PER_ELEMENT (SPECTRAL_SIMPLEX ? (SPECTRAL_FIELD_ORDER + 1u) * (SPECTRAL_FIELD_ORDER + 2u) / 2u : (SPECTRAL_FIELD_ORDER + 1u) * (SPECTRAL_FIELD_ORDER + 1u) * (SPECTRAL_DIM == 3u ? SPECTRAL_FIELD_ORDER + 1u : 1u))
+#define SPECTRAL_VALUE_VEC4S ((SPECTRAL_VALUES_PER_ELEMENT + 3u) / 4u)
+// Fields per element in spectral_values: 1 for the shipped shaders; a derived-field shader
+// (src/expression, compiled at run time) defines more — each element's run is then the shown
+// field's vec4s followed by those of every other field the expression names.
+#ifndef SPECTRAL_FIELDS
+#define SPECTRAL_FIELDS 1u
+#endif
+#define SPECTRAL_ELEMENT_VEC4S (SPECTRAL_FIELDS * SPECTRAL_VALUE_VEC4S)
+
+// Elements whose coefficients fit four vec4s (quadrilaterals up to order 3) can hand them from
+// the vertex stage to the fragment stage as flat varyings: on a CPU rasteriser a per-fragment
+// read of the coefficient buffer (a gather per vec4) costs more than the evaluation itself.
+#define SPECTRAL_FLAT_VEC4S 4u
+#define SPECTRAL_FLAT_VALUES (SPECTRAL_DIM == 2u && SPECTRAL_VALUE_VEC4S <= SPECTRAL_FLAT_VEC4S)
+
+// Lagrange triangles (SPECTRAL_SIMPLEX): the simplex map and sums.
+#include "spectral_simplex.glsl"
+
+// How far reference point r lies outside the element (negative inside): the largest of -xi,
+// xi - 1, -eta, eta - 1 on the square, of -xi, -eta, xi + eta - 1 on the triangle.
+// Twin of Shape::outside (mesh.rs).
+float spectral_outside(vec2 r) {
+    float low = max(-r.x, -r.y);
+    return SPECTRAL_SIMPLEX ? max(low, r.x + r.y - 1.0) : max(low, max(r.x - 1.0, r.y - 1.0));
+}
+
+// The point values are taken at once a fragment is accepted: each coordinate into [0, 1], and
+// on the triangle xi + eta scaled back to 1. Twin of Shape::clamp (mesh.rs).
+vec2 spectral_clamp(vec2 r) {
+    vec2 c = clamp(r, 0.0, 1.0);
+    return SPECTRAL_SIMPLEX && c.x + c.y > 1.0 ? c / (c.x + c.y) : c;
+}
 
 // The field's and the geometry's 1D bases at x.
 void spectral_field_eval(float x, bool want_derivatives, out float v[SPECTRAL_MAX_NODES], out float d[SPECTRAL_MAX_NODES]) {
@@ -154,28 +191,13 @@ float spectral_weight_sum(uint e, float a[SPECTRAL_MAX_NODES], float b[SPECTRAL_
 
 // The geometry map x(xi, eta) of element e and its derivatives along xi and eta.
 vec3 spectral_map(uint e, vec2 r, out vec3 dxi, out vec3 deta) {
+    if (SPECTRAL_SIMPLEX) return simplex_triangle_map(e, r, dxi, deta);
     float a[SPECTRAL_MAX_NODES], da[SPECTRAL_MAX_NODES], b[SPECTRAL_MAX_NODES], db[SPECTRAL_MAX_NODES];
     spectral_geometry_eval(r.x, true, a, da);
     spectral_geometry_eval(r.y, true, b, db);
     return spectral_map_bases(e, a, da, b, db, dxi, deta);
 }
 
-// Whole vec4s of one element's coefficients.
-#define SPECTRAL_VALUES_PER_ELEMENT ((SPECTRAL_FIELD_ORDER + 1u) * (SPECTRAL_FIELD_ORDER + 1u) * (SPECTRAL_DIM == 3u ? SPECTRAL_FIELD_ORDER + 1u : 1u))
-#define SPECTRAL_VALUE_VEC4S ((SPECTRAL_VALUES_PER_ELEMENT + 3u) / 4u)
-// Fields per element in spectral_values: 1 for the shipped shaders; a derived-field shader
-// (src/expression, compiled at run time) defines more — each element's run is then the shown
-// field's vec4s followed by those of every other field the expression names.
-#ifndef SPECTRAL_FIELDS
-#define SPECTRAL_FIELDS 1u
-#endif
-#define SPECTRAL_ELEMENT_VEC4S (SPECTRAL_FIELDS * SPECTRAL_VALUE_VEC4S)
-
-// Elements whose coefficients fit four vec4s (quadrilaterals up to order 3) can hand them from
-// the vertex stage to the fragment stage as flat varyings: on a CPU rasteriser a per-fragment
-// read of the coefficient buffer (a gather per vec4) costs more than the evaluation itself.
-#define SPECTRAL_FLAT_VEC4S 4u
-#define SPECTRAL_FLAT_VALUES (SPECTRAL_DIM == 2u && SPECTRAL_VALUE_VEC4S <= SPECTRAL_FLAT_VEC4S)
 
 // Element e's coefficients as the flat varyings carry them (zeros for larger elements, which
 // read the buffer instead).
@@ -212,6 +234,8 @@ float spectral_tensor_sum(uint e, vec4 given[SPECTRAL_FLAT_VEC4S], float a[SPECT
 // The field value of element e at reference point r, sum_ij l_i(xi) l_j(eta) F_ij, with the
 // coefficients `given` as spectral_flat_coefficients makes them.
 float spectral_value_given(uint e, vec2 r, vec4 given[SPECTRAL_FLAT_VEC4S]) {
+    vec2 unused_gradient;
+    if (SPECTRAL_SIMPLEX) return simplex_triangle_sum(e, 0u, SPECTRAL_FLAT_VALUES, given, r, false, unused_gradient);
     float a[SPECTRAL_MAX_NODES], b[SPECTRAL_MAX_NODES], unused[SPECTRAL_MAX_NODES];
     spectral_field_eval(r.x, false, a, unused);
     spectral_field_eval(r.y, false, b, unused);
@@ -230,6 +254,10 @@ float spectral_value(uint e, vec2 r) {
 // needs. When field and geometry share one basis (isoparametric elements, the common case) the
 // 1D bases are evaluated once for both.
 float spectral_value_and_map(uint e, vec2 r, vec4 given[SPECTRAL_FLAT_VEC4S], out vec3 x, out vec3 dxi, out vec3 deta) {
+    if (SPECTRAL_SIMPLEX) {
+        x = simplex_triangle_map(e, r, dxi, deta);
+        return spectral_value_given(e, r, given);
+    }
     float a[SPECTRAL_MAX_NODES], da[SPECTRAL_MAX_NODES], b[SPECTRAL_MAX_NODES], db[SPECTRAL_MAX_NODES];
     spectral_geometry_eval(r.x, true, a, da);
     spectral_geometry_eval(r.y, true, b, db);
@@ -241,6 +269,12 @@ float spectral_value_and_map(uint e, vec2 r, vec4 given[SPECTRAL_FLAT_VEC4S], ou
 // f_eta). Slot 0 is the shown field; a derived-field shader has SPECTRAL_FIELDS slots.
 // Twin of SpectralMesh::value_gradient (mesh.rs).
 vec3 spectral_slot_value_gradient(uint e, uint k, vec2 r) {
+    if (SPECTRAL_SIMPLEX) {
+        vec4 none[SPECTRAL_FLAT_VEC4S];
+        vec2 g;
+        float f = simplex_triangle_sum(e, k, false, none, r, true, g);
+        return vec3(f, g);
+    }
     float a[SPECTRAL_MAX_NODES], da[SPECTRAL_MAX_NODES], b[SPECTRAL_MAX_NODES], db[SPECTRAL_MAX_NODES];
     spectral_field_eval(r.x, true, a, da);
     spectral_field_eval(r.y, true, b, db);
@@ -320,10 +354,12 @@ float spectral_expression_at(float values[SPECTRAL_FIELDS], vec3 gradients[SPECT
 // Field slot k's value of element e at r (no derivatives), from the buffer (a derived-field
 // shader's flat varyings hold only the shipped vertex stage's single-field view).
 float spectral_slot_value(uint e, uint k, vec2 r) {
+    vec4 none[SPECTRAL_FLAT_VEC4S];
+    vec2 unused_gradient;
+    if (SPECTRAL_SIMPLEX) return simplex_triangle_sum(e, k, false, none, r, false, unused_gradient);
     float a[SPECTRAL_MAX_NODES], b[SPECTRAL_MAX_NODES], unused[SPECTRAL_MAX_NODES];
     spectral_field_eval(r.x, false, a, unused);
     spectral_field_eval(r.y, false, b, unused);
-    vec4 none[SPECTRAL_FLAT_VEC4S];
     return spectral_slot_tensor_sum(e, k, false, none, a, b);
 }
 

@@ -2,8 +2,8 @@
 // Pixel-exact spectral elements (seed 002, done per fragment).
 // Planar: the fragment's world point is taken from its pixel centre, Newton's method on the
 // element's geometry map finds the reference point (xi, eta) that maps there (starting from the
-// interpolated proxy coordinates), fragments whose point leaves the reference square are
-// discarded — so curved edges are exact — and the element's tensor-product polynomial is
+// interpolated proxy coordinates), fragments whose point leaves the reference square (or
+// triangle) are discarded — so curved edges are exact — and the element's tensor-product polynomial is
 // evaluated there and colour-mapped.
 // Surface: the reference point is the one interpolated across the adaptively tessellated
 // element (within the error budget of the true surface on screen); the value is evaluated
@@ -43,14 +43,13 @@ void main() {
     if (mode == SPECTRAL_MODE_PER_PIXEL && !surface) {
         vec2 p = pc.pixel_to_world.xy + (gl_FragCoord.xy - pc.misc.zw) * pc.pixel_to_world.zw;
         float tol = pc.misc.y;
-        inside = spectral_inverse_map(element, p, r)
-              && all(greaterThanEqual(r, vec2(-tol))) && all(lessThanEqual(r, vec2(1.0 + tol)));
-        outside = max(0.0, max(max(-r.x, r.x - 1.0), max(-r.y, r.y - 1.0)));
+        inside = spectral_inverse_map(element, p, r) && spectral_outside(r) <= tol;
+        outside = max(0.0, spectral_outside(r));
     }
 #ifdef SPECTRAL_EDGE_OWNERSHIP
     gl_FragDepth = gl_FragCoord.z + outside;
 #endif
-    r = clamp(r, 0.0, 1.0);
+    r = spectral_clamp(r);
     // A surface fragment is lit with the geometry's tangents, evaluated with the value (the
     // data output takes the same path, so the tests check the code that draws the colours).
     bool lit = surface && mode != SPECTRAL_MODE_EDGE_LINES;

@@ -33,7 +33,9 @@ fn cpu_ms(mesh: &SpectralMesh, d: &DerivedField, pixels: &[f32]) -> f64 {
         .map(|t| {
             let e = t[3] as usize;
             match mesh.shape {
-                Shape::Quadrilateral => d.value_at(mesh, 0, 0, e, [f64::from(t[1]), f64::from(t[2])]),
+                Shape::Quadrilateral | Shape::Triangle => {
+                    d.value_at(mesh, 0, 0, e, [f64::from(t[1]), f64::from(t[2])])
+                }
                 // Cut planes report (value, plane, ζ, element): ξ and η are not in the image;
                 // the cell centre stands in (the same cost per point).
                 Shape::Hexahedron => d.value_at_hex(mesh, 0, 0, e, [0.5, 0.5, f64::from(t[2])]),

@@ -113,7 +113,7 @@ impl DerivedField {
         let mut range: Option<(f64, f64)> = None;
         mesh.for_each_sample(|e, r| {
             let v = match mesh.shape {
-                Shape::Quadrilateral => self.value_at(mesh, shown, step, e, [r[0], r[1]]),
+                Shape::Quadrilateral | Shape::Triangle => self.value_at(mesh, shown, step, e, [r[0], r[1]]),
                 Shape::Hexahedron => self.value_at_hex(mesh, shown, step, e, r),
             };
             if v.is_finite() {

@@ -214,7 +214,8 @@ fn with_fields(
 }
 
 /// The coefficients of `f(e, x)` on every element of `mesh` in its field basis: values at the
-/// nodes, or for Bernstein the coefficients of the interpolant at the GLL points.
+/// nodes (a triangle's equispaced lattice), or for Bernstein the coefficients of the
+/// interpolant at the GLL points.
 pub fn sample(mesh: &SpectralMesh, f: impl Fn(usize, [f64; 3]) -> f64) -> Vec<f64> {
     let b = &mesh.basis;
     let m = b.len();
@@ -226,13 +227,25 @@ pub fn sample(mesh: &SpectralMesh, f: impl Fn(usize, [f64; 3]) -> f64) -> Vec<f6
     };
     let per = mesh.values_per_element();
     let mut out = Vec::with_capacity(mesh.elements() * per);
+    if mesh.shape == Shape::Triangle {
+        // Equispaced nodes (i/n, j/n) in simplex::triangle_index's order.
+        let n = b.order;
+        for e in 0..mesh.elements() {
+            for j in 0..=n {
+                for i in 0..=n - j {
+                    out.push(f(e, mesh.map(e, i as f64 / n as f64, j as f64 / n as f64).0));
+                }
+            }
+        }
+        return out;
+    }
     for e in 0..mesh.elements() {
         let mut v: Vec<f64> = Vec::with_capacity(per);
         for flat in 0..per {
             let (i, j, k) = (flat % m, (flat / m) % m, flat / (m * m));
             let x = match mesh.shape {
-                Shape::Quadrilateral => mesh.map(e, at[i], at[j]).0,
                 Shape::Hexahedron => mesh.map_hex(e, [at[i], at[j], at[k]]).0,
+                Shape::Quadrilateral | Shape::Triangle => mesh.map(e, at[i], at[j]).0,
             };
             v.push(f(e, x));
         }

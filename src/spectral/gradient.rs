@@ -6,8 +6,8 @@ use super::mesh::{rational, SpectralMesh};
 impl SpectralMesh {
     /// The value of `field` at `step` in element `e` at reference point `r` and its
     /// derivatives along each reference axis (quotient rule on rational cells): D = 2 for
-    /// quadrilaterals (node (i, j) at j(n+1) + i), 3 for hexahedra (node (i, j, k) at
-    /// (k(n+1) + j)(n+1) + i). Twin of `spectral_slot_value_gradient` and
+    /// quadrilaterals (node (i, j) at j(n+1) + i) and triangles, 3 for hexahedra (node
+    /// (i, j, k) at (k(n+1) + j)(n+1) + i). Twin of `spectral_slot_value_gradient` and
     /// `spectral_slot_value_gradient_hex` (spectral_element.glsl).
     pub fn value_gradient_at<const D: usize>(
         &self,
@@ -16,6 +16,18 @@ impl SpectralMesh {
         e: usize,
         r: [f64; D],
     ) -> (f64, [f64; D]) {
+        if self.shape == super::mesh::Shape::Triangle {
+            // Silvester's basis (node (i, j) at simplex::triangle_index), D = 2.
+            let f = self.element_values(field, step, e);
+            let (mut v, mut dv) = (0.0, [0.0; D]);
+            super::simplex::triangle_terms(self.basis.order, [r[0], r[1]], |k, l, dl| {
+                v += l * f[k];
+                for a in 0..D.min(2) {
+                    dv[a] += dl[a] * f[k];
+                }
+            });
+            return (v, dv);
+        }
         let m = self.basis.len();
         let mut v = [[0.0; 16]; D];
         let mut d = [[0.0; 16]; D];

@@ -1,4 +1,5 @@
-//! A spectral-element data set (seed 002) of quadrilaterals or hexahedra: per element a
+//! A spectral-element data set (seed 002) of quadrilaterals, hexahedra or Lagrange triangles
+//! (node order and basis in [`super::simplex`]): per element a
 //! tensor-product geometry map x(ξ, η) = Σ_ij X_ij g_i(ξ) g_j(η) (hexahedra: x(ξ, η, ζ) =
 //! Σ_ijk X_ijk g_i(ξ) g_j(η) g_k(ζ)) of its own order and node set, and any number of scalar
 //! fields, each with any number of time steps, as tensor-product polynomials
@@ -31,15 +32,55 @@ pub enum Shape {
     Quadrilateral,
     /// Hexahedra, (ξ, η, ζ) ∈ [0, 1]³.
     Hexahedron,
+    /// Lagrange triangles on equispaced nodes (VTK's `VTK_LAGRANGE_TRIANGLE`), ξ, η ≥ 0,
+    /// ξ + η ≤ 1, in the plane; node (i, j) at [`super::simplex::triangle_index`], the basis
+    /// Silvester's ([`super::simplex::triangle_terms`]).
+    Triangle,
 }
 
 impl Shape {
     /// Reference dimension: 2 or 3.
     pub fn dim(self) -> u32 {
         match self {
-            Self::Quadrilateral => 2,
+            Self::Quadrilateral | Self::Triangle => 2,
             Self::Hexahedron => 3,
         }
+    }
+
+    /// Nodes per element of a basis of `order`: (n + 1)², (n + 1)³ or (n + 1)(n + 2)/2.
+    pub fn nodes(self, order: usize) -> usize {
+        match self {
+            Self::Quadrilateral => (order + 1).pow(2),
+            Self::Hexahedron => (order + 1).pow(3),
+            Self::Triangle => (order + 1) * (order + 2) / 2,
+        }
+    }
+
+    /// How far reference point `r` (its first [`Shape::dim`] entries) lies outside the
+    /// reference element, in reference units, negative inside: the largest of −ξ, ξ − 1, … for
+    /// the square and cube, of −ξ, −η, ξ + η − 1 (the barycentric coordinates negated) for the
+    /// triangle. Twin of `spectral_outside` (spectral_element.glsl), which decides which
+    /// fragments an element keeps.
+    pub fn outside(self, r: &[f64]) -> f64 {
+        let d = self.dim() as usize;
+        let low = r[..d].iter().fold(f64::NEG_INFINITY, |m, &c| m.max(-c));
+        match self {
+            Self::Triangle => low.max(r[0] + r[1] - 1.0),
+            _ => r[..d].iter().fold(low, |m, &c| m.max(c - 1.0)),
+        }
+    }
+
+    /// The point of the reference element nearest-ish `r` that values are taken at once a
+    /// fragment is accepted (within the inside tolerance): each coordinate into [0, 1], and on
+    /// the triangle ξ + η scaled back to 1. Twin of `spectral_clamp` (spectral_element.glsl).
+    pub fn clamp<const D: usize>(self, r: [f64; D]) -> [f64; D] {
+        let mut c = r.map(|x| x.clamp(0.0, 1.0));
+        if self == Self::Triangle && c[0] + c[1] > 1.0 {
+            let s = c[0] + c[1];
+            c[0] /= s;
+            c[1] /= s;
+        }
+        c
     }
 }
 
@@ -113,7 +154,7 @@ impl SpectralMesh {
         points: Vec<[f64; 3]>,
         fields: Vec<Field>,
     ) -> Result<Self, SpectralError> {
-        let gm = geometry.len().pow(shape.dim());
+        let gm = shape.nodes(geometry.order);
         if points.is_empty() || !points.len().is_multiple_of(gm) {
             return Err(SpectralError::Length {
                 what: format!("geometry points (order {} has {gm} per element)", geometry.order),
@@ -130,7 +171,7 @@ impl SpectralMesh {
                 });
             }
         }
-        let fm = basis.len().pow(shape.dim());
+        let fm = shape.nodes(basis.order);
         for f in &fields {
             if f.steps.is_empty() || f.steps.len() != f.times.len() {
                 return Err(SpectralError::Length {
@@ -172,6 +213,11 @@ impl SpectralMesh {
                 expected: self.points.len(),
             });
         }
+        if self.shape == Shape::Triangle {
+            return Err(SpectralError::Missing(
+                "rational weights are read for Bézier quadrilaterals and hexahedra only".into(),
+            ));
+        }
         if self.geometry != self.basis || self.geometry.set != super::basis::NodeSet::Bernstein {
             return Err(SpectralError::Missing(
                 "rational weights need the geometry and the fields on one Bernstein basis".into(),
@@ -201,7 +247,7 @@ impl SpectralMesh {
 
     /// Number of elements.
     pub fn elements(&self) -> usize {
-        self.points.len() / self.geometry.len().pow(self.shape.dim())
+        self.points.len() / self.points_per_element()
     }
 
     /// The box [lo, hi] of every geometry point.
@@ -209,19 +255,20 @@ impl SpectralMesh {
         bounds_of(&self.points)
     }
 
-    /// Whether this is a quadrilateral mesh with z = 0 at every geometry point (drawn in 2D).
+    /// Whether this is a quadrilateral or triangle mesh with z = 0 at every geometry point
+    /// (drawn in 2D).
     pub fn is_planar(&self) -> bool {
-        self.shape == Shape::Quadrilateral && self.points.iter().all(|p| p[2] == 0.0)
+        self.shape != Shape::Hexahedron && self.points.iter().all(|p| p[2] == 0.0)
     }
 
     /// Geometry points per element.
     pub fn points_per_element(&self) -> usize {
-        self.geometry.len().pow(self.shape.dim())
+        self.shape.nodes(self.geometry.order)
     }
 
     /// Field coefficients per element.
     pub fn values_per_element(&self) -> usize {
-        self.basis.len().pow(self.shape.dim())
+        self.shape.nodes(self.basis.order)
     }
 
     /// The geometry points of element `e`.
@@ -248,9 +295,22 @@ impl SpectralMesh {
         &self.fields[field].steps[step][e * fm..(e + 1) * fm]
     }
 
-    /// The geometry map of quadrilateral `e` at (ξ, η): the point and its derivatives ∂x/∂ξ,
-    /// ∂x/∂η.
+    /// The geometry map of quadrilateral or triangle `e` at (ξ, η): the point and its
+    /// derivatives ∂x/∂ξ, ∂x/∂η. Twin of `spectral_map` (spectral_element.glsl) and, for
+    /// triangles, `simplex_triangle_map` (spectral_simplex.glsl).
     pub fn map(&self, e: usize, xi: f64, eta: f64) -> ([f64; 3], [[f64; 3]; 2]) {
+        if self.shape == Shape::Triangle {
+            let pts = self.element_points(e);
+            let (mut x, mut dx, mut dy) = ([0.0; 3], [0.0; 3], [0.0; 3]);
+            super::simplex::triangle_terms(self.geometry.order, [xi, eta], |k, l, [lx, ly]| {
+                for c in 0..3 {
+                    x[c] += l * pts[k][c];
+                    dx[c] += lx * pts[k][c];
+                    dy[c] += ly * pts[k][c];
+                }
+            });
+            return (x, [dx, dy]);
+        }
         let m = self.geometry.len();
         let (mut a, mut da, mut b, mut db) = ([0.0; 16], [0.0; 16], [0.0; 16], [0.0; 16]);
         self.geometry.eval(xi, &mut a, Some(&mut da));
@@ -281,8 +341,15 @@ impl SpectralMesh {
         (per.map(|p| p.0), [per.map(|p| p.1[0]), per.map(|p| p.1[1])])
     }
 
-    /// The value of `field` at `step` in quadrilateral `e` at reference point (ξ, η).
+    /// The value of `field` at `step` in quadrilateral or triangle `e` at reference point
+    /// (ξ, η).
     pub fn value(&self, field: usize, step: usize, e: usize, xi: f64, eta: f64) -> f64 {
+        if self.shape == Shape::Triangle {
+            let v = self.element_values(field, step, e);
+            let mut sum = 0.0;
+            super::simplex::triangle_terms(self.basis.order, [xi, eta], |k, l, _| sum += l * v[k]);
+            return sum;
+        }
         let m = self.basis.len();
         let (mut a, mut b) = ([0.0; 16], [0.0; 16]);
         self.basis.eval(xi, &mut a, None);
@@ -328,15 +395,17 @@ impl SpectralMesh {
     }
 
     /// The element of a planar mesh containing `p` and its reference point (the first one, in
-    /// element order, whose inverse map lands in [−tol, 1 + tol]²), searching only elements
+    /// element order, whose inverse map lands within `tol` of the reference square or
+    /// triangle, [`Shape::outside`]), searching only elements
     /// whose bounding box (grown by `tol` of its size) contains `p`.
     pub fn locate(&self, p: [f64; 2], tol: f64) -> Option<(usize, [f64; 2])> {
         (0..self.elements()).find_map(|e| {
             if !near_box(self.element_points(e), &p, 2) {
                 return None;
             }
-            let r = self.inverse_map(e, p, [0.5, 0.5])?;
-            (r.iter().all(|&c| (-tol..=1.0 + tol).contains(&c))).then_some((e, r))
+            let guess = if self.shape == Shape::Triangle { [1.0 / 3.0; 2] } else { [0.5; 2] };
+            let r = self.inverse_map(e, p, guess)?;
+            (self.shape.outside(&r) <= tol).then_some((e, r))
         })
     }
 
@@ -346,7 +415,7 @@ impl SpectralMesh {
         let mut range = (f64::MAX, f64::MIN);
         self.for_each_sample(|e, r| {
             let v = match self.shape {
-                Shape::Quadrilateral => self.value(field, step, e, r[0], r[1]),
+                Shape::Quadrilateral | Shape::Triangle => self.value(field, step, e, r[0], r[1]),
                 Shape::Hexahedron => self.value_hex(field, step, e, r),
             };
             range = (range.0.min(v), range.1.max(v));
@@ -355,15 +424,16 @@ impl SpectralMesh {
     }
 
     /// Calls `visit(e, r)` at the points of a (2n + 1)ᴰ grid on every element's reference
-    /// square or cube (n the fields' order; r's third coordinate 0 on quadrilaterals): where
-    /// colour ranges are sampled.
+    /// square or cube, or of the grid's half with ξ + η ≤ 1 on a triangle (n the fields'
+    /// order; r's third coordinate 0 in 2D): where colour ranges are sampled.
     pub fn for_each_sample(&self, mut visit: impl FnMut(usize, [f64; 3])) {
         let s = 2 * self.basis.order.max(1);
         let layers = if self.shape == Shape::Hexahedron { s } else { 0 };
         for e in 0..self.elements() {
             for k in 0..=layers {
                 for j in 0..=s {
-                    for i in 0..=s {
+                    let row = if self.shape == Shape::Triangle { s - j } else { s };
+                    for i in 0..=row {
                         visit(e, [i, j, k].map(|c| c as f64 / s as f64));
                     }
                 }
@@ -524,9 +594,9 @@ impl SpectralMesh {
     fn check_orientations(&self) -> Result<(), SpectralError> {
         for e in 0..self.elements() {
             match self.shape {
-                Shape::Quadrilateral if self.is_planar() => self.check_orientation(e)?,
+                Shape::Quadrilateral | Shape::Triangle if self.is_planar() => self.check_orientation(e)?,
                 Shape::Hexahedron => self.check_orientation_hex(e)?,
-                Shape::Quadrilateral => {}
+                Shape::Quadrilateral | Shape::Triangle => {}
             }
         }
         Ok(())
@@ -536,7 +606,8 @@ impl SpectralMesh {
         let s = 2 * self.geometry.order + 1;
         let mut sign = 0.0;
         for j in 0..=s {
-            for i in 0..=s {
+            let row = if self.shape == Shape::Triangle { s - j } else { s };
+            for i in 0..=row {
                 let (_, [dx, dy]) = self.map(e, i as f64 / s as f64, j as f64 / s as f64);
                 let det = dx[0] * dy[1] - dy[0] * dx[1];
                 if det == 0.0 || (sign != 0.0 && det.signum() != sign) {

@@ -4,8 +4,12 @@
 //!
 //! - [`basis`]: the 1D bases (Lagrange on GLL, equispaced or Gauss points; Bernstein), the
 //!   twin of `shaders-glsl/include/lagrange.glsl`.
-//! - [`mesh`]: quadrilateral elements with curved geometry and fields over time steps; the CPU
-//!   f64 reference (map, inverse map, values), twin of `spectral_element.glsl`.
+//! - [`mesh`]: quadrilateral, hexahedral and (planar) Lagrange triangle elements with curved
+//!   geometry and fields over time steps; the CPU f64 reference (map, inverse map, values),
+//!   twin of `spectral_element.glsl`.
+//! - [`simplex`]: Lagrange triangles and tetrahedra of orders 1–10 (VTK's node order,
+//!   Silvester's basis), twin of `spectral_simplex.glsl`; [`simplex_mesh`]: the plain f64
+//!   evaluation of `.vtu` simplices the tests compare against.
 //! - [`generate`]: synthetic data sets (straight and curved planar meshes, analytic fields).
 //! - [`proxy`]: what is drawn — proxies that contain each curved element, node grids, edges.
 //! - [`render`]: the Vulkan renderer: planar meshes by per-fragment Newton inversion of the

@@ -12,16 +12,16 @@
 //!   stages and the one that contains it wins by depth (`element.frag`), instead of whichever
 //!   the rasteriser's tie rule (at 1/256 of a pixel) handed it to.
 //! - **Node grids** (per-vertex mode, the seed's baseline): the element's nodes joined into an
-//!   n × n grid of quads (two triangles each), the field evaluated at the vertices and
-//!   interpolated across.
-//! - **Edges**: each element's four edges sampled at 2g segments on the true curve, drawn as
+//!   n × n grid of quads (two triangles each; on a triangle its lattice's n² small triangles),
+//!   the field evaluated at the vertices and interpolated across.
+//! - **Edges**: each element's four (a triangle's three) edges sampled at 2g segments on the true curve, drawn as
 //!   lines (edge overdraw behind the faces; or in front, dark, to show the mesh).
 
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec4};
 
 use super::basis::{Basis1d, NodeSet, MAX_ORDER};
-use super::mesh::SpectralMesh;
+use super::mesh::{Shape, SpectralMesh};
 
 /// One vertex of the spectral draws: world position, reference coordinates, element.
 #[repr(C)]
@@ -66,13 +66,34 @@ fn vertex(mesh: &SpectralMesh, e: usize, r: [f64; 2]) -> DrawVertex {
 }
 
 /// The reference point at parameter s ∈ [0, 1] along edge `k` of the boundary, walked
-/// counter-clockwise in the reference square: η = 0, ξ = 1, η = 1 (reversed), ξ = 0 (reversed).
-fn boundary(k: usize, s: f64) -> [f64; 2] {
-    match k {
-        0 => [s, 0.0],
-        1 => [1.0, s],
-        2 => [1.0 - s, 1.0],
+/// counter-clockwise: on the reference square η = 0, ξ = 1, η = 1 (reversed), ξ = 0
+/// (reversed); on the triangle η = 0, ξ + η = 1, ξ = 0 (reversed).
+fn boundary(shape: Shape, k: usize, s: f64) -> [f64; 2] {
+    match (shape, k) {
+        (_, 0) => [s, 0.0],
+        (Shape::Triangle, 1) => [1.0 - s, s],
+        (Shape::Triangle, _) => [0.0, 1.0 - s],
+        (_, 1) => [1.0, s],
+        (_, 2) => [1.0 - s, 1.0],
         _ => [0.0, 1.0 - s],
+    }
+}
+
+/// Edges of a 2D element: 3 for triangles, 4 for quadrilaterals.
+fn edge_count(shape: Shape) -> usize {
+    if shape == Shape::Triangle {
+        3
+    } else {
+        4
+    }
+}
+
+/// The reference centre: (1/3, 1/3) on the triangle, (1/2, 1/2) on the square.
+fn centre_of(shape: Shape) -> [f64; 2] {
+    if shape == Shape::Triangle {
+        [1.0 / 3.0; 2]
+    } else {
+        [0.5; 2]
     }
 }
 
@@ -83,8 +104,13 @@ fn edge_curvature_bound(mesh: &SpectralMesh, bernstein: &Basis1d, e: usize, k: u
         return 0.0;
     }
     let nodes = &mesh.geometry.nodes;
-    let along: Vec<[f64; 3]> =
-        nodes.iter().map(|&s| mesh.map(e, boundary(k, s)[0], boundary(k, s)[1]).0).collect();
+    let along: Vec<[f64; 3]> = nodes
+        .iter()
+        .map(|&s| {
+            let r = boundary(mesh.shape, k, s);
+            mesh.map(e, r[0], r[1]).0
+        })
+        .collect();
     let control: Vec<[f64; 3]> = {
         let per: Vec<Vec<f64>> = (0..3)
             .map(|c| bernstein.interpolate(nodes, &along.iter().map(|p| p[c]).collect::<Vec<_>>()))
@@ -147,10 +173,14 @@ fn proxy(mesh: &SpectralMesh, bernstein: &Basis1d, e: usize, out: &mut Vec<DrawV
         let (ring, points) = rational_ring(mesh, e);
         (ring, points, 0.0)
     } else {
-        let dilation =
-            (0..4).map(|k| h * h / 8.0 * edge_curvature_bound(mesh, bernstein, e, k)).fold(0.0, f64::max);
+        let shape = mesh.shape;
+        let edge_list = 0..edge_count(shape);
+        let dilation = edge_list
+            .clone()
+            .map(|k| h * h / 8.0 * edge_curvature_bound(mesh, bernstein, e, k))
+            .fold(0.0, f64::max);
         let ring: Vec<[f64; 2]> =
-            (0..4).flat_map(|k| (0..per_edge).map(move |i| boundary(k, i as f64 * h))).collect();
+            edge_list.flat_map(|k| (0..per_edge).map(move |i| boundary(shape, k, i as f64 * h))).collect();
         let points: Vec<[f64; 2]> = ring
             .iter()
             .map(|r| {
@@ -195,7 +225,7 @@ fn proxy(mesh: &SpectralMesh, bernstein: &Basis1d, e: usize, out: &mut Vec<DrawV
             .collect();
         points = moved;
     }
-    let centre = vertex(mesh, e, [0.5, 0.5]);
+    let centre = vertex(mesh, e, centre_of(mesh.shape));
     for i in 0..n {
         let j = (i + 1) % n;
         out.push(centre);
@@ -210,6 +240,20 @@ fn proxy(mesh: &SpectralMesh, bernstein: &Basis1d, e: usize, out: &mut Vec<DrawV
 }
 
 fn node_grid(mesh: &SpectralMesh, e: usize, out: &mut Vec<DrawVertex>) {
+    if mesh.shape == Shape::Triangle {
+        // The equispaced lattice's n² small triangles (n(n+1)/2 upright, n(n−1)/2 inverted).
+        let n = mesh.basis.order;
+        let v = |i: usize, j: usize| vertex(mesh, e, [i as f64 / n as f64, j as f64 / n as f64]);
+        for j in 0..n {
+            for i in 0..n - j {
+                out.extend([v(i, j), v(i + 1, j), v(i, j + 1)]);
+                if i + j + 1 < n {
+                    out.extend([v(i + 1, j), v(i + 1, j + 1), v(i, j + 1)]);
+                }
+            }
+        }
+        return;
+    }
     let nodes = &mesh.basis.nodes;
     let m = nodes.len();
     for j in 0..m - 1 {
@@ -224,10 +268,10 @@ fn node_grid(mesh: &SpectralMesh, e: usize, out: &mut Vec<DrawVertex>) {
 fn edges(mesh: &SpectralMesh, e: usize, out: &mut Vec<DrawVertex>) {
     let g = mesh.geometry.order;
     let segments = if g == 1 { 1 } else { 2 * g };
-    for k in 0..4 {
+    for k in 0..edge_count(mesh.shape) {
         for s in 0..segments {
-            let a = boundary(k, s as f64 / segments as f64);
-            let b = boundary(k, (s + 1) as f64 / segments as f64);
+            let a = boundary(mesh.shape, k, s as f64 / segments as f64);
+            let b = boundary(mesh.shape, k, (s + 1) as f64 / segments as f64);
             out.push(vertex(mesh, e, a));
             out.push(vertex(mesh, e, b));
         }
@@ -245,6 +289,11 @@ fn edges(mesh: &SpectralMesh, e: usize, out: &mut Vec<DrawVertex>) {
 /// [`MAX_ORDER`]; an estimate of K, which sets the tessellation level, not a bound), with the
 /// sphere widened to contain the control points, whose convex hull contains the element.
 pub fn surface_patches(mesh: &SpectralMesh) -> Vec<[f32; 8]> {
+    if mesh.shape == Shape::Triangle {
+        // Triangles are drawn in the plane only (no tessellation, no height): no bounds to
+        // take, and a zero height scale for the shaders that read it.
+        return vec![[0.0; 8]; mesh.elements()];
+    }
     if mesh.weights.is_none() {
         return patches_of(mesh, mesh.geometry.order, 0.0, |e, xi, eta| mesh.map(e, xi, eta).0);
     }

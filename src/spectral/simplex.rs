@@ -196,3 +196,57 @@ pub fn basis(shape: SimplexShape, n: usize, nodes: &[[usize; 4]], r: &[f64; 3]) 
         })
         .collect()
 }
+
+/// The 1D factors of Silvester's basis at one barycentric coordinate: `v[k] = R_k(λ)` for
+/// k = 0..=n and, when asked, `d[k] = R_k′(λ)` (the recurrence
+/// `R_k = R_{k−1} (nλ − k + 1)/k`). A triangle's basis is a product of three such rows
+/// ([`triangle_terms`]), as a quadrilateral's is of two 1D bases. Twin of `simplex_silvester`
+/// (shaders-glsl/include/spectral_simplex.glsl).
+pub fn silvester_row(n: usize, lambda: f64, v: &mut [f64], mut d: Option<&mut [f64]>) {
+    v[0] = 1.0;
+    if let Some(d) = d.as_deref_mut() {
+        d[0] = 0.0;
+    }
+    for k in 1..=n {
+        let factor = (n as f64 * lambda - (k - 1) as f64) / k as f64;
+        if let Some(d) = d.as_deref_mut() {
+            d[k] = d[k - 1] * factor + v[k - 1] * n as f64 / k as f64;
+        }
+        v[k] = v[k - 1] * factor;
+    }
+}
+
+/// Where node (i, j) of a triangle of order `n` (i + j ≤ n; its point (i/n, j/n)) sits in an
+/// element's run of a [`super::SpectralMesh`]: rows of constant j, i fastest, so
+/// `j (n + 1) − j (j − 1)/2 + i`. Loaders reorder VTK's order into this one.
+pub fn triangle_index(n: usize, i: usize, j: usize) -> usize {
+    j * (n + 1) - j * j.saturating_sub(1) / 2 + i
+}
+
+/// For each of VTK's points of a triangle of order `n` (VTK's order), its position in our
+/// layout ([`triangle_index`]).
+pub fn triangle_from_vtk(n: usize) -> Result<Vec<usize>, SpectralError> {
+    Ok(vtk_nodes(SimplexShape::Triangle, n)?.iter().map(|b| triangle_index(n, b[0], b[1])).collect())
+}
+
+/// Calls `visit(k, L, [∂L/∂ξ, ∂L/∂η])` for every node k (our layout) of a triangle of order
+/// `n` at r = (ξ, η): `L_ij = R_i(ξ) R_j(η) R_{n−i−j}(1 − ξ − η)` (Silvester), the sums of a
+/// geometry map, a field or their derivatives. Twin of the sums in spectral_simplex.glsl.
+pub fn triangle_terms(n: usize, r: [f64; 2], mut visit: impl FnMut(usize, f64, [f64; 2])) {
+    let (mut a, mut da, mut b, mut db, mut c, mut dc) =
+        ([0.0; 16], [0.0; 16], [0.0; 16], [0.0; 16], [0.0; 16], [0.0; 16]);
+    silvester_row(n, r[0], &mut a, Some(&mut da));
+    silvester_row(n, r[1], &mut b, Some(&mut db));
+    silvester_row(n, 1.0 - r[0] - r[1], &mut c, Some(&mut dc));
+    let mut k = 0;
+    for j in 0..=n {
+        for i in 0..=n - j {
+            let l = n - i - j;
+            let value = a[i] * b[j] * c[l];
+            let dxi = da[i] * b[j] * c[l] - a[i] * b[j] * dc[l];
+            let deta = a[i] * db[j] * c[l] - a[i] * b[j] * dc[l];
+            visit(k, value, [dxi, deta]);
+            k += 1;
+        }
+    }
+}

@@ -25,6 +25,7 @@ use std::path::Path;
 use super::basis::{Basis1d, NodeSet};
 use super::error::SpectralError;
 use super::mesh::{Field, Shape, SpectralMesh};
+use super::simplex;
 use crate::vtk::{self, OutArray, Values, VtkError};
 
 /// `VTK_BEZIER_QUADRILATERAL`.
@@ -37,6 +38,8 @@ pub const VTK_QUAD: u8 = 9;
 pub const VTK_HEXAHEDRON: u8 = 12;
 /// `VTK_LAGRANGE_QUADRILATERAL`.
 pub const VTK_LAGRANGE_QUADRILATERAL: u8 = 70;
+/// `VTK_LAGRANGE_TRIANGLE`.
+pub const VTK_LAGRANGE_TRIANGLE: u8 = 69;
 /// `VTK_LAGRANGE_HEXAHEDRON`.
 pub const VTK_LAGRANGE_HEXAHEDRON: u8 = 72;
 
@@ -155,20 +158,20 @@ fn read_grid(path: &Path, grid: &vtk::UnstructuredGrid) -> Result<SpectralMesh, 
     let shape = match first as u8 {
         VTK_QUAD | VTK_LAGRANGE_QUADRILATERAL | VTK_BEZIER_QUADRILATERAL => Shape::Quadrilateral,
         VTK_HEXAHEDRON | VTK_LAGRANGE_HEXAHEDRON | VTK_BEZIER_HEXAHEDRON => Shape::Hexahedron,
+        VTK_LAGRANGE_TRIANGLE => Shape::Triangle,
         _ => {
             return Err(file(format!(
-                "element 0: cell type {first}{} (spectral elements are VTK_LAGRANGE_QUADRILATERAL = 70, VTK_LAGRANGE_HEXAHEDRON = 72, VTK_BEZIER_QUADRILATERAL = 77, VTK_BEZIER_HEXAHEDRON = 79, VTK_QUAD = 9 or VTK_HEXAHEDRON = 12)",
+                "element 0: cell type {first}{} (spectral elements are VTK_LAGRANGE_QUADRILATERAL = 70, VTK_LAGRANGE_HEXAHEDRON = 72, VTK_LAGRANGE_TRIANGLE = 69, VTK_BEZIER_QUADRILATERAL = 77, VTK_BEZIER_HEXAHEDRON = 79, VTK_QUAD = 9 or VTK_HEXAHEDRON = 12)",
                 vtk_cell_name(first).map_or(String::new(), |n| format!(", {n}, which the renderer does not draw"))
             )))
         }
     };
     let dim = shape.dim();
     let per_cell = offsets[0] as usize;
-    let n = (1..=crate::spectral::MAX_ORDER).find(|n| (n + 1).pow(dim) == per_cell).ok_or_else(|| {
-        file(format!(
-            "element 0: {per_cell} points is no {shape:?} of order 1..={}",
-            crate::spectral::MAX_ORDER
-        ))
+    let max_order =
+        if shape == Shape::Triangle { simplex::MAX_SIMPLEX_ORDER } else { crate::spectral::MAX_ORDER };
+    let n = (1..=max_order).find(|&n| shape.nodes(n) == per_cell).ok_or_else(|| {
+        file(format!("element 0: {per_cell} points is no {shape:?} of order 1..={max_order}"))
     })?;
     let m = n + 1;
     for e in 0..cells {
@@ -178,6 +181,7 @@ fn read_grid(path: &Path, grid: &vtk::UnstructuredGrid) -> Result<SpectralMesh, 
             (Shape::Hexahedron, false) => &[VTK_HEXAHEDRON, VTK_LAGRANGE_HEXAHEDRON],
             (Shape::Quadrilateral, true) => &[VTK_BEZIER_QUADRILATERAL],
             (Shape::Hexahedron, true) => &[VTK_BEZIER_HEXAHEDRON],
+            (Shape::Triangle, _) => &[VTK_LAGRANGE_TRIANGLE],
         };
         if !same_shape.contains(&(types[e] as u8)) || types[e].fract() != 0.0 {
             return Err(file(format!(
@@ -210,13 +214,25 @@ fn read_grid(path: &Path, grid: &vtk::UnstructuredGrid) -> Result<SpectralMesh, 
             cells * per_cell
         )));
     }
-    // Our lexicographic node (i, j, k) of cell e ← VTK's point at vtk_point_index.
+    // Our lexicographic node (i, j, k) of cell e ← VTK's point at vtk_point_index; a
+    // triangle's node (i, j) at simplex::triangle_index ← VTK's recursive shells.
     let edges = HexEdgeOrder::of_version(grid.version);
+    let from_vtk: Vec<usize> = if shape == Shape::Triangle {
+        let ours = simplex::triangle_from_vtk(n)?;
+        let mut back = vec![0; per_cell];
+        for (v, &o) in ours.iter().enumerate() {
+            back[o] = v;
+        }
+        back
+    } else {
+        (0..per_cell)
+            .map(|flat| vtk_point_index(shape, n, flat % m, (flat / m) % m, flat / (m * m), edges))
+            .collect()
+    };
     let mut order = crate::limits::vec_for(cells * per_cell, "the cells' nodes").map_err(file)?;
     for e in 0..cells {
-        for flat in 0..per_cell {
-            let (i, j, k) = (flat % m, (flat / m) % m, flat / (m * m));
-            let c = conn.values[e * per_cell + vtk_point_index(shape, n, i, j, k, edges)];
+        for &vtk_point in &from_vtk {
+            let c = conn.values[e * per_cell + vtk_point];
             if !(c >= 0.0 && c < grid.points as f64 && c.fract() == 0.0) {
                 return Err(file(format!(
                     "element {e}: point index {c} is out of range ({} points)",
@@ -364,20 +380,26 @@ pub fn write(path: &Path, mesh: &SpectralMesh) -> Result<(), SpectralError> {
     let nodes = Basis1d::new(NodeSet::Equispaced, n)?.nodes;
     let m = n + 1;
     let dim = mesh.shape.dim();
-    let per_cell = m.pow(dim);
+    let per_cell = mesh.shape.nodes(n);
     let cells = mesh.elements();
     // Reference points in VTK's order.
-    let mut refs = vec![[0.0; 3]; per_cell];
-    for flat in 0..per_cell {
-        let (i, j, k) = (flat % m, (flat / m) % m, flat / (m * m));
-        refs[vtk_point_index(mesh.shape, n, i, j, k, HexEdgeOrder::Current)] =
-            [nodes[i], nodes[j], if dim == 3 { nodes[k] } else { 0.0 }];
-    }
+    let refs: Vec<[f64; 3]> = if mesh.shape == Shape::Triangle {
+        let vtk = simplex::vtk_nodes(simplex::SimplexShape::Triangle, n)?;
+        vtk.iter().map(|b| simplex::node_point(simplex::SimplexShape::Triangle, n, b)).collect()
+    } else {
+        let mut refs = vec![[0.0; 3]; per_cell];
+        for flat in 0..per_cell {
+            let (i, j, k) = (flat % m, (flat / m) % m, flat / (m * m));
+            refs[vtk_point_index(mesh.shape, n, i, j, k, HexEdgeOrder::Current)] =
+                [nodes[i], nodes[j], if dim == 3 { nodes[k] } else { 0.0 }];
+        }
+        refs
+    };
     let mut points = Vec::with_capacity(3 * cells * per_cell);
     for e in 0..cells {
         for r in &refs {
             let x = match mesh.shape {
-                Shape::Quadrilateral => mesh.map(e, r[0], r[1]).0,
+                Shape::Quadrilateral | Shape::Triangle => mesh.map(e, r[0], r[1]).0,
                 Shape::Hexahedron => mesh.map_hex(e, *r).0,
             };
             points.extend(x);
@@ -386,6 +408,7 @@ pub fn write(path: &Path, mesh: &SpectralMesh) -> Result<(), SpectralError> {
     let cell_type = match mesh.shape {
         Shape::Quadrilateral => VTK_LAGRANGE_QUADRILATERAL,
         Shape::Hexahedron => VTK_LAGRANGE_HEXAHEDRON,
+        Shape::Triangle => VTK_LAGRANGE_TRIANGLE,
     };
     let mut arrays = grid_arrays(points, cells, per_cell, cell_type);
     for (fi, f) in mesh.fields.iter().enumerate() {
@@ -394,7 +417,7 @@ pub fn write(path: &Path, mesh: &SpectralMesh) -> Result<(), SpectralError> {
             for e in 0..cells {
                 for r in &refs {
                     v.push(match mesh.shape {
-                        Shape::Quadrilateral => mesh.value(fi, step, e, r[0], r[1]),
+                        Shape::Quadrilateral | Shape::Triangle => mesh.value(fi, step, e, r[0], r[1]),
                         Shape::Hexahedron => mesh.value_hex(fi, step, e, *r),
                     });
                 }
@@ -465,6 +488,9 @@ fn write_rational(path: &Path, mesh: &SpectralMesh, weights: &[f64]) -> Result<(
     let cell_type = match mesh.shape {
         Shape::Quadrilateral => VTK_BEZIER_QUADRILATERAL,
         Shape::Hexahedron => VTK_BEZIER_HEXAHEDRON,
+        Shape::Triangle => {
+            return Err(SpectralError::Missing("rational triangles are not written (none are read)".into()))
+        }
     };
     let mut arrays = grid_arrays(points, cells, per_cell, cell_type);
     arrays.push(OutArray {

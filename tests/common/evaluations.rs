@@ -23,7 +23,7 @@ pub fn worst_differences(mesh: &SpectralMesh, field: usize, records: &[Record]) 
     let (mut worst_x, mut worst_u) = (0.0f64, 0.0f64);
     for r in records {
         let (x, u) = match mesh.shape {
-            Shape::Quadrilateral => {
+            Shape::Quadrilateral | Shape::Triangle => {
                 let (x, _) = mesh.map(r.element, r.reference[0], r.reference[1]);
                 (x, mesh.value(field, 0, r.element, r.reference[0], r.reference[1]))
             }

@@ -96,6 +96,8 @@ pub fn basis_specialization(mesh: &SpectralMesh) -> Vec<u32> {
     v.push(u32::from(mesh.basis == mesh.geometry));
     // Id 58: rational cells (homogeneous points and coefficients, see `geometry_points`).
     v.push(u32::from(mesh.weights.is_some()));
+    // Id 59: Lagrange triangles (spectral_simplex.glsl).
+    v.push(u32::from(mesh.shape == super::mesh::Shape::Triangle));
     v
 }
 
@@ -197,8 +199,8 @@ struct Tessellator {
     set: Option<DescriptorSet>,
 }
 
-/// A quadrilateral spectral-element mesh (planar or a surface in 3D) resident on the device,
-/// drawn per pixel (seed 002).
+/// A spectral-element mesh resident on the device, drawn per pixel (seed 002): quadrilaterals
+/// (planar or a surface in 3D), Lagrange triangles (planar), hexahedra (cut planes).
 pub struct SpectralRenderer {
     gpu: Gpu,
     mesh: Arc<SpectralMesh>,
@@ -242,6 +244,11 @@ impl SpectralRenderer {
     pub fn new(gpu: &Gpu, mesh: Arc<SpectralMesh>, colormap: &Colormap) -> Result<Self> {
         let hex = mesh.shape == super::mesh::Shape::Hexahedron;
         let planar = mesh.is_planar();
+        if mesh.shape == super::mesh::Shape::Triangle && !planar {
+            return Err(SpectralError::Missing(
+                "Lagrange triangles are drawn in the plane (z = 0 at every point); triangles forming a surface in 3D are not drawn yet".into(),
+            ));
+        }
         if mesh.fields.is_empty() {
             return Err(SpectralError::Missing("the data set has no fields to show".into()));
         }
@@ -531,6 +538,11 @@ impl SpectralRenderer {
             return self.prepare_cuts(target, view);
         }
         self.check_derived_view(view)?;
+        if self.mesh.shape == super::mesh::Shape::Triangle && view.height.is_some() {
+            return Err(SpectralError::Missing(
+                "height fields of Lagrange triangles are not drawn yet".into(),
+            ));
+        }
         self.show(view)?;
         self.pipelines_for(target, view)?;
         self.patches_for_view(view)?;
