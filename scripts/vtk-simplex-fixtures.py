@@ -71,6 +71,8 @@ def main():
     # Per-pixel drawing: higher orders on more cells (shared curved edges).
     curved_file("triangle", "tri_curved_o6", order=6, side=2)
     curved_file("triangle", "tri_curved_o10", order=10, side=1)
+    curved_file("tetrahedron", "tet_cube_o6", order=6, side=2)
+    curved_file("tetrahedron", "tet_cube_o3", order=3, side=2)
 
 
 def field(x, y, z):
@@ -97,13 +99,34 @@ def triangle_grid(side):
     return out
 
 
+def kuhn_cube():
+    """The unit cube in six tetrahedra around its diagonal (Kuhn's subdivision), each from
+    (0, 0, 0) to (1, 1, 1) along one order of the axes, positively oriented."""
+    out = []
+    for perm, even in (((0, 1, 2), True), ((1, 2, 0), True), ((2, 0, 1), True),
+                       ((0, 2, 1), False), ((2, 1, 0), False), ((1, 0, 2), False)):
+        v = [0.0, 0.0, 0.0]
+        verts = [tuple(v)]
+        for axis in perm:
+            v[axis] = 1.0
+            verts.append(tuple(v))
+        if not even:
+            verts[1], verts[2] = verts[2], verts[1]
+        out.append(verts)
+    return out
+
+
 def curved_file(kind, name, order=3, side=1):
     """Curved Lagrange cells of `order` written by VTK as `name`.vtu (ascii), with VTK's own
     evaluation of them at sample points in `name`.json. Triangles: the unit square in
-    side x side squares of two triangles each."""
+    side x side squares of two triangles each; tetrahedra: two (side 1) or the unit cube in
+    six (side 2)."""
     if kind == "triangle":
         corners = triangle_grid(side)
         cell_type = vtk.VTK_LAGRANGE_TRIANGLE
+    elif side == 2:
+        corners = kuhn_cube()
+        cell_type = vtk.VTK_LAGRANGE_TETRAHEDRON
     else:
         corners = [[(0.0, 0.0, 0.0), (1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0)],
                    [(1.0, 0.0, 0.0), (1.0, 1.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0)]]

@@ -36,7 +36,7 @@ fn worst_field_error(mesh: &SpectralMesh) -> f64 {
             for &b in &samples {
                 for &c in &samples {
                     let err = match mesh.shape {
-                        Shape::Hexahedron => {
+                        Shape::Hexahedron | Shape::Tetrahedron => {
                             let (x, _) = mesh.map_hex(e, [a, b, c]);
                             (mesh.value_hex(field, 0, e, [a, b, c]) - hex_u(x)).abs()
                         }
@@ -167,18 +167,24 @@ fn hostile_variants_are_refused_naming_the_file_and_array_before_inflating() {
     }
 }
 
-/// A cell type the renderer does not draw — here VTK's cubic Lagrange tetrahedron, written by
-/// VTK — is refused naming the file, the element and the type by its VTK name; VTK's quadratic
-/// Lagrange triangle (drawn since triangles joined the spectral meshes) reads as one.
+/// A cell type the renderer does not draw — here VTK's cubic triangles relabelled as Bézier
+/// triangles (76) — is refused naming the file, the element and the type by its VTK name;
+/// VTK's quadratic Lagrange triangle and cubic Lagrange tetrahedra (drawn since simplices
+/// joined the spectral meshes) read as such.
 #[test]
 fn a_cell_type_the_renderer_does_not_draw_is_refused_by_name() {
-    let e = galerkin::spectral::load(&fixture("tet_curved.vtu"), &[]).expect_err("a tetrahedron").to_string();
+    let (_d, path) = edited("tri_curved.vtu", |b| {
+        *b = String::from_utf8_lossy(b).replace("          69 69\n", "          76 76\n").into_bytes()
+    });
+    let e = galerkin::spectral::load(&path, &[]).expect_err("a Bézier triangle").to_string();
     assert!(
-        e.contains("tet_curved.vtu") && e.contains("element 0") && e.contains("VTK_LAGRANGE_TETRAHEDRON"),
+        e.contains("tri_curved.vtu") && e.contains("element 0") && e.contains("VTK_BEZIER_TRIANGLE"),
         "{e}"
     );
     let tri = galerkin::spectral::load(&fixture("tri_lagrange.vtu"), &[]).expect("a triangle");
     assert_eq!((tri.shape, tri.geometry.order), (Shape::Triangle, 2));
+    let tet = galerkin::spectral::load(&fixture("tet_curved.vtu"), &[]).expect("a tetrahedron");
+    assert_eq!((tet.shape, tet.geometry.order), (Shape::Tetrahedron, 3));
 }
 
 /// VTK's time convention for one file: the grid's field data `TimeValue` (written by VTK,

@@ -1,12 +1,13 @@
 // The section of a hexahedral spectral element by a cut plane, pixel-exact: the fragment's
 // point on the plane (interpolated across the bounding rectangle cut.comp drew) is pulled back
-// by Newton's method in (xi, eta, zeta); points outside the reference cube are discarded, so
+// by Newton's method in (xi, eta, zeta); points outside the reference cube (or tetrahedron) are
+// discarded, so
 // the section's curved outline is exact; the element's polynomial is evaluated there,
 // colour-mapped and lit with the plane's normal.
 //
 // Ownership at element faces: where two elements' rectangles overlap, both may accept a point
 // within the inside tolerance (1e-5) of their common face. The fragment lies deeper by how far
-// its reference point is outside [0, 1]³, so the element that contains the point wins whatever
+// its reference point is outside the reference element (spectral_outside_3d), so the element that contains the point wins whatever
 // the draw order (the rule of element_planar.frag's edges; a cut plane's fragments are few, so
 // writing the depth costs little here).
 // With SPECTRAL_EXPRESSION defined (a derived field, src/expression, compiled at run time) the
@@ -28,13 +29,12 @@ layout(depth_greater) out float gl_FragDepth;
 
 void main() {
     uint plane = uint(in_reference.x + 0.5);
-    vec3 r = vec3(0.5);
+    // Newton from the element's centre: (1/2)^3 on the cube, (1/4)^3 on the tetrahedron.
+    vec3 r = vec3(SPECTRAL_SIMPLEX ? 0.25 : 0.5);
     float tol = pc.misc.y;
-    bool inside = spectral_inverse_map_hex(element, world, r)
-               && all(greaterThanEqual(r, vec3(-tol))) && all(lessThanEqual(r, vec3(1.0 + tol)));
-    vec3 beyond = max(max(-r, r - 1.0), vec3(0.0));
-    gl_FragDepth = gl_FragCoord.z + max(beyond.x, max(beyond.y, beyond.z));
-    r = clamp(r, 0.0, 1.0);
+    bool inside = spectral_inverse_map_hex(element, world, r) && spectral_outside_3d(r) <= tol;
+    gl_FragDepth = gl_FragCoord.z + max(spectral_outside_3d(r), 0.0);
+    r = spectral_clamp_3d(r);
 #ifdef SPECTRAL_EXPRESSION
     float v = spectral_derived_value_hex(element, r);
 #else

@@ -87,7 +87,7 @@ layout(constant_id = 55) const float SPECTRAL_GW12 = 0.0;
 #define SPECTRAL_GEOMETRY_WEIGHTS float[SPECTRAL_MAX_NODES](SPECTRAL_GW0, SPECTRAL_GW1, SPECTRAL_GW2, SPECTRAL_GW3, SPECTRAL_GW4, SPECTRAL_GW5, SPECTRAL_GW6, SPECTRAL_GW7, SPECTRAL_GW8, SPECTRAL_GW9, SPECTRAL_GW10, SPECTRAL_GW11, SPECTRAL_GW12)
 
 // Whole vec4s of one element's coefficients.
-#define SPECTRAL_VALUES_PER_ELEMENT (SPECTRAL_SIMPLEX ? (SPECTRAL_FIELD_ORDER + 1u) * (SPECTRAL_FIELD_ORDER + 2u) / 2u : (SPECTRAL_FIELD_ORDER + 1u) * (SPECTRAL_FIELD_ORDER + 1u) * (SPECTRAL_DIM == 3u ? SPECTRAL_FIELD_ORDER + 1u : 1u))
+#define SPECTRAL_VALUES_PER_ELEMENT (SPECTRAL_SIMPLEX ? (SPECTRAL_FIELD_ORDER + 1u) * (SPECTRAL_FIELD_ORDER + 2u) * (SPECTRAL_DIM == 3u ? SPECTRAL_FIELD_ORDER + 3u : 3u) / 6u : (SPECTRAL_FIELD_ORDER + 1u) * (SPECTRAL_FIELD_ORDER + 1u) * (SPECTRAL_DIM == 3u ? SPECTRAL_FIELD_ORDER + 1u : 1u))
 #define SPECTRAL_VALUE_VEC4S ((SPECTRAL_VALUES_PER_ELEMENT + 3u) / 4u)
 // Fields per element in spectral_values: 1 for the shipped shaders; a derived-field shader
 // (src/expression, compiled at run time) defines more — each element's run is then the shown
@@ -112,6 +112,20 @@ layout(constant_id = 55) const float SPECTRAL_GW12 = 0.0;
 float spectral_outside(vec2 r) {
     float low = max(-r.x, -r.y);
     return SPECTRAL_SIMPLEX ? max(low, r.x + r.y - 1.0) : max(low, max(r.x - 1.0, r.y - 1.0));
+}
+
+// spectral_outside in 3D: the cube's, or -xi, -eta, -zeta, xi + eta + zeta - 1 on the
+// tetrahedron.
+float spectral_outside_3d(vec3 r) {
+    float low = max(-r.x, max(-r.y, -r.z));
+    return SPECTRAL_SIMPLEX ? max(low, r.x + r.y + r.z - 1.0) : max(low, max(r.x - 1.0, max(r.y - 1.0, r.z - 1.0)));
+}
+
+// spectral_clamp in 3D.
+vec3 spectral_clamp_3d(vec3 r) {
+    vec3 c = clamp(r, 0.0, 1.0);
+    float s = c.x + c.y + c.z;
+    return SPECTRAL_SIMPLEX && s > 1.0 ? c / s : c;
 }
 
 // The point values are taken at once a fragment is accepted: each coordinate into [0, 1], and
@@ -389,6 +403,7 @@ float spectral_derived_value(uint e, vec2 r) {
 // The geometry map x(xi, eta, zeta) of hexahedron e and its Jacobian (columns d/dxi, d/deta,
 // d/dzeta).
 vec3 spectral_map_hex(uint e, vec3 r, out mat3 jacobian) {
+    if (SPECTRAL_SIMPLEX) return simplex_tetra_map(e, r, jacobian);
     float a[SPECTRAL_MAX_NODES], da[SPECTRAL_MAX_NODES], b[SPECTRAL_MAX_NODES], db[SPECTRAL_MAX_NODES];
     float c[SPECTRAL_MAX_NODES], dc[SPECTRAL_MAX_NODES];
     spectral_geometry_eval(r.x, true, a, da);
@@ -447,6 +462,8 @@ vec3 spectral_map_hex(uint e, vec3 r, out mat3 jacobian) {
 
 // Field slot k's value of hexahedron e at r: sum_ijk l_i(xi) l_j(eta) l_k(zeta) F_ijk.
 float spectral_value_hex_slot(uint e, uint slot, vec3 r) {
+    vec3 unused_gradient;
+    if (SPECTRAL_SIMPLEX) return simplex_tetra_sum(e, slot, r, false, unused_gradient);
     float a[SPECTRAL_MAX_NODES], b[SPECTRAL_MAX_NODES], c[SPECTRAL_MAX_NODES], unused[SPECTRAL_MAX_NODES];
     spectral_field_eval(r.x, false, a, unused);
     spectral_field_eval(r.y, false, b, unused);
@@ -477,6 +494,11 @@ float spectral_value_hex(uint e, vec3 r) {
 // Field slot k's value of hexahedron e at r and its derivatives along xi, eta, zeta:
 // (f, f_xi, f_eta, f_zeta). Twin of SpectralMesh::value_gradient_at (gradient.rs).
 vec4 spectral_slot_value_gradient_hex(uint e, uint k, vec3 r) {
+    if (SPECTRAL_SIMPLEX) {
+        vec3 g;
+        float f = simplex_tetra_sum(e, k, r, true, g);
+        return vec4(f, g);
+    }
     float a[SPECTRAL_MAX_NODES], da[SPECTRAL_MAX_NODES], b[SPECTRAL_MAX_NODES], db[SPECTRAL_MAX_NODES];
     float c[SPECTRAL_MAX_NODES], dc[SPECTRAL_MAX_NODES];
     spectral_field_eval(r.x, true, a, da);

@@ -38,7 +38,9 @@ fn cpu_ms(mesh: &SpectralMesh, d: &DerivedField, pixels: &[f32]) -> f64 {
                 }
                 // Cut planes report (value, plane, ζ, element): ξ and η are not in the image;
                 // the cell centre stands in (the same cost per point).
-                Shape::Hexahedron => d.value_at_hex(mesh, 0, 0, e, [0.5, 0.5, f64::from(t[2])]),
+                Shape::Hexahedron | Shape::Tetrahedron => {
+                    d.value_at_hex(mesh, 0, 0, e, [0.5, 0.5, f64::from(t[2])])
+                }
             }
         })
         .filter(|v| v.is_finite())
@@ -76,7 +78,7 @@ pub fn report(gpu: &Gpu, frames: usize, emit: &mut dyn FnMut(&str)) -> Result<()
         let target = RenderTarget::new(gpu, "bench derived", w, h, ColorFormat::Rgba8)?;
         let data = RenderTarget::new(gpu, "bench derived data", w, h, ColorFormat::Rgba32F)?;
         let kind = match (mesh.shape, mesh.is_planar()) {
-            (Shape::Hexahedron, _) => DerivedShader::CutPlanes,
+            (Shape::Hexahedron | Shape::Tetrahedron, _) => DerivedShader::CutPlanes,
             (_, true) => DerivedShader::Planar,
             _ => DerivedShader::Surface,
         };

@@ -114,7 +114,7 @@ impl DerivedField {
         mesh.for_each_sample(|e, r| {
             let v = match mesh.shape {
                 Shape::Quadrilateral | Shape::Triangle => self.value_at(mesh, shown, step, e, [r[0], r[1]]),
-                Shape::Hexahedron => self.value_at_hex(mesh, shown, step, e, r),
+                Shape::Hexahedron | Shape::Tetrahedron => self.value_at_hex(mesh, shown, step, e, r),
             };
             if v.is_finite() {
                 range = Some(range.map_or((v, v), |(lo, hi)| (lo.min(v), hi.max(v))));

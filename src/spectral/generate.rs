@@ -227,14 +227,23 @@ pub fn sample(mesh: &SpectralMesh, f: impl Fn(usize, [f64; 3]) -> f64) -> Vec<f6
     };
     let per = mesh.values_per_element();
     let mut out = Vec::with_capacity(mesh.elements() * per);
-    if mesh.shape == Shape::Triangle {
-        // Equispaced nodes (i/n, j/n) in simplex::triangle_index's order.
+    if mesh.shape.is_simplex() {
+        // Equispaced nodes in simplex::triangle_index's or tetra_index's order.
         let n = b.order;
+        let shape = if mesh.shape == Shape::Triangle {
+            super::simplex::SimplexShape::Triangle
+        } else {
+            super::simplex::SimplexShape::Tetrahedron
+        };
         for e in 0..mesh.elements() {
-            for j in 0..=n {
-                for i in 0..=n - j {
-                    out.push(f(e, mesh.map(e, i as f64 / n as f64, j as f64 / n as f64).0));
-                }
+            for node in super::simplex::lattice(shape, n) {
+                let r = node.map(|c| c as f64 / n as f64);
+                let x = if shape == super::simplex::SimplexShape::Triangle {
+                    mesh.map(e, r[0], r[1]).0
+                } else {
+                    mesh.map_hex(e, [r[0], r[1], r[2]]).0
+                };
+                out.push(f(e, x));
             }
         }
         return out;
@@ -244,7 +253,7 @@ pub fn sample(mesh: &SpectralMesh, f: impl Fn(usize, [f64; 3]) -> f64) -> Vec<f6
         for flat in 0..per {
             let (i, j, k) = (flat % m, (flat / m) % m, flat / (m * m));
             let x = match mesh.shape {
-                Shape::Hexahedron => mesh.map_hex(e, [at[i], at[j], at[k]]).0,
+                Shape::Hexahedron | Shape::Tetrahedron => mesh.map_hex(e, [at[i], at[j], at[k]]).0,
                 Shape::Quadrilateral | Shape::Triangle => mesh.map(e, at[i], at[j]).0,
             };
             v.push(f(e, x));

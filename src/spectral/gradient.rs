@@ -7,7 +7,7 @@ impl SpectralMesh {
     /// The value of `field` at `step` in element `e` at reference point `r` and its
     /// derivatives along each reference axis (quotient rule on rational cells): D = 2 for
     /// quadrilaterals (node (i, j) at j(n+1) + i) and triangles, 3 for hexahedra (node
-    /// (i, j, k) at (k(n+1) + j)(n+1) + i). Twin of `spectral_slot_value_gradient` and
+    /// (i, j, k) at (k(n+1) + j)(n+1) + i) and tetrahedra. Twin of `spectral_slot_value_gradient` and
     /// `spectral_slot_value_gradient_hex` (spectral_element.glsl).
     pub fn value_gradient_at<const D: usize>(
         &self,
@@ -16,6 +16,22 @@ impl SpectralMesh {
         e: usize,
         r: [f64; D],
     ) -> (f64, [f64; D]) {
+        if self.shape == super::mesh::Shape::Tetrahedron {
+            // Silvester's basis (node (i, j, k) at simplex::tetra_index), D = 3.
+            let f = self.element_values(field, step, e);
+            let (mut v, mut dv) = (0.0, [0.0; D]);
+            super::simplex::tetra_terms(
+                self.basis.order,
+                std::array::from_fn(|a| r[a.min(D - 1)]),
+                |k, l, dl| {
+                    v += l * f[k];
+                    for a in 0..D.min(3) {
+                        dv[a] += dl[a] * f[k];
+                    }
+                },
+            );
+            return (v, dv);
+        }
         if self.shape == super::mesh::Shape::Triangle {
             // Silvester's basis (node (i, j) at simplex::triangle_index), D = 2.
             let f = self.element_values(field, step, e);

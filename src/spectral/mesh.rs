@@ -36,6 +36,10 @@ pub enum Shape {
     /// ξ + η ≤ 1, in the plane; node (i, j) at [`super::simplex::triangle_index`], the basis
     /// Silvester's ([`super::simplex::triangle_terms`]).
     Triangle,
+    /// Lagrange tetrahedra on equispaced nodes (VTK's `VTK_LAGRANGE_TETRAHEDRON`), ξ, η, ζ ≥ 0,
+    /// ξ + η + ζ ≤ 1; node (i, j, k) at [`super::simplex::tetra_index`], drawn by cut planes
+    /// like hexahedra ([`super::simplex::tetra_terms`]).
+    Tetrahedron,
 }
 
 impl Shape {
@@ -43,8 +47,18 @@ impl Shape {
     pub fn dim(self) -> u32 {
         match self {
             Self::Quadrilateral | Self::Triangle => 2,
-            Self::Hexahedron => 3,
+            Self::Hexahedron | Self::Tetrahedron => 3,
         }
+    }
+
+    /// Whether the elements are solids (hexahedra or tetrahedra, shown by cut planes).
+    pub fn is_volume(self) -> bool {
+        self.dim() == 3
+    }
+
+    /// Whether the elements are simplices (triangles or tetrahedra).
+    pub fn is_simplex(self) -> bool {
+        matches!(self, Self::Triangle | Self::Tetrahedron)
     }
 
     /// Nodes per element of a basis of `order`: (n + 1)², (n + 1)³ or (n + 1)(n + 2)/2.
@@ -53,6 +67,7 @@ impl Shape {
             Self::Quadrilateral => (order + 1).pow(2),
             Self::Hexahedron => (order + 1).pow(3),
             Self::Triangle => (order + 1) * (order + 2) / 2,
+            Self::Tetrahedron => (order + 1) * (order + 2) * (order + 3) / 6,
         }
     }
 
@@ -66,19 +81,22 @@ impl Shape {
         let low = r[..d].iter().fold(f64::NEG_INFINITY, |m, &c| m.max(-c));
         match self {
             Self::Triangle => low.max(r[0] + r[1] - 1.0),
+            Self::Tetrahedron => low.max(r[0] + r[1] + r[2] - 1.0),
             _ => r[..d].iter().fold(low, |m, &c| m.max(c - 1.0)),
         }
     }
 
     /// The point of the reference element nearest-ish `r` that values are taken at once a
     /// fragment is accepted (within the inside tolerance): each coordinate into [0, 1], and on
-    /// the triangle ξ + η scaled back to 1. Twin of `spectral_clamp` (spectral_element.glsl).
+    /// the triangle ξ + η (the tetrahedron ξ + η + ζ) scaled back to 1. Twin of `spectral_clamp` (spectral_element.glsl).
     pub fn clamp<const D: usize>(self, r: [f64; D]) -> [f64; D] {
         let mut c = r.map(|x| x.clamp(0.0, 1.0));
-        if self == Self::Triangle && c[0] + c[1] > 1.0 {
-            let s = c[0] + c[1];
-            c[0] /= s;
-            c[1] /= s;
+        let d = (self.dim() as usize).min(D);
+        let s: f64 = c[..d].iter().sum();
+        if self.is_simplex() && s > 1.0 {
+            for x in c.iter_mut().take(d) {
+                *x /= s;
+            }
         }
         c
     }
@@ -213,7 +231,7 @@ impl SpectralMesh {
                 expected: self.points.len(),
             });
         }
-        if self.shape == Shape::Triangle {
+        if self.shape.is_simplex() {
             return Err(SpectralError::Missing(
                 "rational weights are read for Bézier quadrilaterals and hexahedra only".into(),
             ));
@@ -258,7 +276,7 @@ impl SpectralMesh {
     /// Whether this is a quadrilateral or triangle mesh with z = 0 at every geometry point
     /// (drawn in 2D).
     pub fn is_planar(&self) -> bool {
-        self.shape != Shape::Hexahedron && self.points.iter().all(|p| p[2] == 0.0)
+        !self.shape.is_volume() && self.points.iter().all(|p| p[2] == 0.0)
     }
 
     /// Geometry points per element.
@@ -416,7 +434,7 @@ impl SpectralMesh {
         self.for_each_sample(|e, r| {
             let v = match self.shape {
                 Shape::Quadrilateral | Shape::Triangle => self.value(field, step, e, r[0], r[1]),
-                Shape::Hexahedron => self.value_hex(field, step, e, r),
+                Shape::Hexahedron | Shape::Tetrahedron => self.value_hex(field, step, e, r),
             };
             range = (range.0.min(v), range.1.max(v));
         });
@@ -428,11 +446,13 @@ impl SpectralMesh {
     /// order; r's third coordinate 0 in 2D): where colour ranges are sampled.
     pub fn for_each_sample(&self, mut visit: impl FnMut(usize, [f64; 3])) {
         let s = 2 * self.basis.order.max(1);
-        let layers = if self.shape == Shape::Hexahedron { s } else { 0 };
+        let layers = if self.shape.is_volume() { s } else { 0 };
         for e in 0..self.elements() {
             for k in 0..=layers {
-                for j in 0..=s {
-                    let row = if self.shape == Shape::Triangle { s - j } else { s };
+                // Simplices: the grid's points with Σ r ≤ 1.
+                let rows = if self.shape == Shape::Tetrahedron { s - k } else { s };
+                for j in 0..=rows {
+                    let row = if self.shape.is_simplex() { rows - j } else { s };
                     for i in 0..=row {
                         visit(e, [i, j, k].map(|c| c as f64 / s as f64));
                     }
@@ -441,9 +461,22 @@ impl SpectralMesh {
         }
     }
 
-    /// The geometry map of hexahedron `e` at r = (ξ, η, ζ): the point and its derivatives
-    /// along ξ, η and ζ.
+    /// The geometry map of hexahedron or tetrahedron `e` at r = (ξ, η, ζ): the point and its
+    /// derivatives along ξ, η and ζ.
     pub fn map_hex(&self, e: usize, r: [f64; 3]) -> ([f64; 3], [[f64; 3]; 3]) {
+        if self.shape == Shape::Tetrahedron {
+            let pts = self.element_points(e);
+            let (mut x, mut d) = ([0.0; 3], [[0.0; 3]; 3]);
+            super::simplex::tetra_terms(self.geometry.order, r, |k, l, dl| {
+                for c in 0..3 {
+                    x[c] += l * pts[k][c];
+                    for a in 0..3 {
+                        d[a][c] += dl[a] * pts[k][c];
+                    }
+                }
+            });
+            return (x, d);
+        }
         debug_assert_eq!(self.shape, Shape::Hexahedron);
         let m = self.geometry.len();
         let mut v = [[0.0; 16]; 3];
@@ -487,8 +520,14 @@ impl SpectralMesh {
         (per.map(|p| p.0), std::array::from_fn(|a| per.map(|p| p.1[a])))
     }
 
-    /// The value of `field` at `step` in hexahedron `e` at r = (ξ, η, ζ).
+    /// The value of `field` at `step` in hexahedron or tetrahedron `e` at r = (ξ, η, ζ).
     pub fn value_hex(&self, field: usize, step: usize, e: usize, r: [f64; 3]) -> f64 {
+        if self.shape == Shape::Tetrahedron {
+            let v = self.element_values(field, step, e);
+            let mut sum = 0.0;
+            super::simplex::tetra_terms(self.basis.order, r, |k, l, _| sum += l * v[k]);
+            return sum;
+        }
         let m = self.basis.len();
         let mut v = [[0.0; 16]; 3];
         for a in 0..3 {
@@ -519,7 +558,7 @@ impl SpectralMesh {
         }
     }
 
-    /// The reference point of hexahedron `e` that maps to `p`, by Newton's method in f64 from
+    /// The reference point of hexahedron or tetrahedron `e` that maps to `p`, by Newton's method in f64 from
     /// `guess`: `None` when it does not converge.
     pub fn inverse_map_hex(&self, e: usize, p: [f64; 3], guess: [f64; 3]) -> Option<[f64; 3]> {
         let mut r = guess;
@@ -549,25 +588,27 @@ impl SpectralMesh {
         ((0..3).map(|c| (x[c] - p[c]).powi(2)).sum::<f64>().sqrt() < 1e-12 * scale).then_some(r)
     }
 
-    /// The hexahedron containing `p` and its reference point (the first, in element order,
-    /// whose inverse map lands in [−tol, 1 + tol]³), searching only elements whose control-point
+    /// The hexahedron or tetrahedron containing `p` and its reference point (the first, in
+    /// element order, whose inverse map lands within `tol` of the reference element), searching only elements whose control-point
     /// box (grown by half its size) contains `p`.
     pub fn locate_hex(&self, p: [f64; 3], tol: f64) -> Option<(usize, [f64; 3])> {
         (0..self.elements()).find_map(|e| {
             if !near_box(self.element_points(e), &p, 3) {
                 return None;
             }
-            let r = self.inverse_map_hex(e, p, [0.5; 3])?;
-            (r.iter().all(|&c| (-tol..=1.0 + tol).contains(&c))).then_some((e, r))
+            let guess = if self.shape == Shape::Tetrahedron { [0.25; 3] } else { [0.5; 3] };
+            let r = self.inverse_map_hex(e, p, guess)?;
+            (self.shape.outside(&r) <= tol).then_some((e, r))
         })
     }
 
     fn check_orientation_hex(&self, e: usize) -> Result<(), SpectralError> {
         let s = 2 * self.geometry.order + 1;
         let mut sign = 0.0;
+        let tetra = self.shape == Shape::Tetrahedron;
         for k in 0..=s {
-            for j in 0..=s {
-                for i in 0..=s {
+            for j in 0..=(if tetra { s - k } else { s }) {
+                for i in 0..=(if tetra { s - k - j } else { s }) {
                     let r = [i, j, k].map(|c| c as f64 / s as f64);
                     let (_, d) = self.map_hex(e, r);
                     let det = d[0][0] * (d[1][1] * d[2][2] - d[1][2] * d[2][1])
@@ -595,7 +636,7 @@ impl SpectralMesh {
         for e in 0..self.elements() {
             match self.shape {
                 Shape::Quadrilateral | Shape::Triangle if self.is_planar() => self.check_orientation(e)?,
-                Shape::Hexahedron => self.check_orientation_hex(e)?,
+                Shape::Hexahedron | Shape::Tetrahedron => self.check_orientation_hex(e)?,
                 Shape::Quadrilateral | Shape::Triangle => {}
             }
         }

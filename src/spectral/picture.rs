@@ -84,10 +84,11 @@ pub fn check_view(mesh: &SpectralMesh, view: &SpectralView) -> Result<(), Spectr
     Ok(())
 }
 
-/// "hexahedral", "planar" or "surface": how `mesh` is shown.
+/// "hexahedral", "tetrahedral", "planar" or "surface": how `mesh` is shown.
 pub fn kind(mesh: &SpectralMesh) -> &'static str {
     match (mesh.shape, mesh.is_planar()) {
         (Shape::Hexahedron, _) => "hexahedral",
+        (Shape::Tetrahedron, _) => "tetrahedral",
         (_, true) => "planar",
         (_, false) => "surface",
     }
@@ -150,7 +151,7 @@ pub fn write_picture(
             picture::write_png(out, size, &rgba, legend.as_ref())?;
         }
         ImageFormat::Exr => {
-            let hex = mesh.shape == Shape::Hexahedron;
+            let hex = mesh.shape.is_volume();
             let data = RenderTarget::new(gpu, "spectral values", w, h, ColorFormat::Rgba32F)
                 .map_err(dev("the data target"))?;
             let Pixels::Rgba32F(v) = renderer.render(&data, view)? else {
@@ -162,7 +163,7 @@ pub fn write_picture(
         }
     }
     let [proxies, grids, lines] = renderer.primitive_counts();
-    let triangle_kind = if mesh.shape == Shape::Hexahedron {
+    let triangle_kind = if mesh.shape.is_volume() {
         "cut planes: section rectangles cut out per pixel"
     } else if view.per_vertex {
         "node grids"

@@ -432,16 +432,30 @@ pub fn tessellation_level(patch: &[f32; 8], view_proj: &Mat4, focal: f32, budget
     l.clamp(1.0, cap) as u32
 }
 
-/// Per hexahedron, the Bernstein control points of its geometry ((g + 1)³, ξ fastest): their
-/// convex hull contains the element, so a plane that does not separate them misses it
+/// Per hexahedron, the Bernstein control points of its geometry ((g + 1)³, ξ fastest; per
+/// tetrahedron its simplex Bernstein points, [`super::simplex::ToBernstein`]):
+/// their convex hull contains the element, so a plane that does not separate them misses it
 /// (`cut.comp`).
-pub fn bernstein_hull(mesh: &SpectralMesh) -> Vec<[f32; 4]> {
+pub fn bernstein_hull(mesh: &SpectralMesh) -> Result<Vec<[f32; 4]>, super::SpectralError> {
     let g = mesh.geometry.order;
+    if mesh.shape == Shape::Tetrahedron {
+        // The simplex's Bernstein control points (as many as its Lagrange nodes).
+        let convert = super::simplex::ToBernstein::new(super::simplex::SimplexShape::Tetrahedron, g)
+            .ok_or_else(|| {
+                super::SpectralError::Missing(format!("no Bernstein form of order {g} tetrahedra"))
+            })?;
+        let mut out = Vec::with_capacity(mesh.points.len());
+        for e in 0..mesh.elements() {
+            let control = convert.control_points(mesh.element_points(e));
+            out.extend(control.iter().map(|p| [p[0] as f32, p[1] as f32, p[2] as f32, 0.0]));
+        }
+        return Ok(out);
+    }
     let bernstein = Basis1d::new(NodeSet::Bernstein, g).expect("same order as the geometry");
     let dim = mesh.shape.dim() as usize;
     if mesh.geometry.set == NodeSet::Bernstein {
         // Bézier cells (rational ones too): the points are the control points already.
-        return mesh.points.iter().map(|p| [p[0] as f32, p[1] as f32, p[2] as f32, 0.0]).collect();
+        return Ok(mesh.points.iter().map(|p| [p[0] as f32, p[1] as f32, p[2] as f32, 0.0]).collect());
     }
     let mut out = Vec::with_capacity(mesh.points.len());
     for e in 0..mesh.elements() {
@@ -454,5 +468,5 @@ pub fn bernstein_hull(mesh: &SpectralMesh) -> Vec<[f32; 4]> {
             .collect();
         out.extend((0..pts.len()).map(|k| [per[0][k] as f32, per[1][k] as f32, per[2][k] as f32, 0.0]));
     }
-    out
+    Ok(out)
 }

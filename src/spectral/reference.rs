@@ -222,6 +222,9 @@ fn check_pixels_of(
 /// f32 point on the cut plane causes, |∇_r f| ‖J⁻¹‖ (64 |x| + 12(g + 1) Σ|g g g X|) ε (the
 /// point is interpolated across the drawn rectangle: tens of ulps), times 4.
 pub fn rounding_bound_hex(mesh: &SpectralMesh, field: usize, step: usize, e: usize, r: [f64; 3]) -> f64 {
+    if mesh.shape == super::mesh::Shape::Tetrahedron {
+        return rounding_bound_tetra(mesh, field, step, e, r);
+    }
     let eps = f64::from(f32::EPSILON);
     let (fb, gb) = (&mesh.basis, &mesh.geometry);
     let (m, gm) = (fb.len(), gb.len());
@@ -288,6 +291,34 @@ pub fn rounding_bound_hex(mesh: &SpectralMesh, field: usize, step: usize, e: usi
     4.0 * (12.0 * m as f64 * eps * s + gradient * norm * position * eps)
 }
 
+/// [`rounding_bound_hex`] on a Lagrange tetrahedron of order n: the same terms with Silvester's
+/// basis (products of n factors, summed as one run of (n + 1)(n + 2)(n + 3)/6 terms in layers:
+/// within 12(n + 1) ε Σ|L F| as for a hexahedron of m = n + 1), times 4.
+fn rounding_bound_tetra(mesh: &SpectralMesh, field: usize, step: usize, e: usize, r: [f64; 3]) -> f64 {
+    let eps = f64::from(f32::EPSILON);
+    let f = mesh.element_values(field, step, e);
+    let (mut s, mut grad) = (0.0, [0.0; 3]);
+    super::simplex::tetra_terms(mesh.basis.order, r, |k, l, dl| {
+        s += (l * f[k]).abs();
+        for a in 0..3 {
+            grad[a] += dl[a] * f[k];
+        }
+    });
+    let pts = mesh.element_points(e);
+    let mut gs = 0.0;
+    super::simplex::tetra_terms(mesh.geometry.order, r, |k, l, _| {
+        gs += l.abs() * pts[k][0].abs().max(pts[k][1].abs()).max(pts[k][2].abs())
+    });
+    let (x, j) = mesh.map_hex(e, r);
+    let jinv = glam::DMat3::from_cols(j[0].into(), j[1].into(), j[2].into()).inverse();
+    let norm =
+        (jinv.x_axis.length_squared() + jinv.y_axis.length_squared() + jinv.z_axis.length_squared()).sqrt();
+    let position =
+        64.0 * x[0].abs().max(x[1].abs()).max(x[2].abs()) + 12.0 * (mesh.geometry.order + 1) as f64 * gs;
+    let gradient = (grad[0] * grad[0] + grad[1] * grad[1] + grad[2] * grad[2]).sqrt();
+    4.0 * (12.0 * (mesh.basis.order + 1) as f64 * eps * s + gradient * norm * position * eps)
+}
+
 /// The point of cut plane `plane` (n · x = d, any normal length) that the camera sees through
 /// the centre of pixel (`px`, `py`) of a `width` × `height` image: the f64 ray met with the
 /// plane, as a cut-plane fragment interpolates it.
@@ -304,11 +335,11 @@ pub fn plane_point(
     (o + s * d).to_array()
 }
 
-/// [`check_pixels`] for cut planes through hexahedra (`cut.frag`): every covered pixel of a
+/// [`check_pixels`] for cut planes through hexahedra or tetrahedra (`cut.frag`): every covered pixel of a
 /// `(value, plane, ζ, element)` image shows its element's polynomial at the reference point of
 /// the pixel's point on its plane ([`plane_point`], pulled back in f64) within
 /// [`rounding_bound_hex`]; with a single plane, every pixel whose point lies inside an element
-/// (by 10⁻³ of its reference cube) is covered. Edge overdraw does not apply to cut planes.
+/// (by 10⁻³ of its reference cube or tetrahedron) is covered. Edge overdraw does not apply to cut planes.
 pub fn check_cut_pixels(
     mesh: &SpectralMesh,
     field: usize,
@@ -371,14 +402,13 @@ fn check_cut_pixels_of(
                 continue;
             };
             let p = plane_point(camera, plane, px, py, size);
-            let Some(r) = mesh
-                .inverse_map_hex(e, p, [0.5; 3])
-                .filter(|r| r.iter().all(|&c| (-slack..=1.0 + slack).contains(&c)))
+            let centre = if mesh.shape == super::mesh::Shape::Tetrahedron { [0.25; 3] } else { [0.5; 3] };
+            let Some(r) = mesh.inverse_map_hex(e, p, centre).filter(|r| mesh.shape.outside(r) <= slack)
             else {
                 report.wrong_element += 1;
                 continue;
             };
-            let r = r.map(|c| c.clamp(0.0, 1.0));
+            let r = mesh.shape.clamp(r);
             let (value, bound) = reference(e, r);
             if !bound.is_finite() || !value.is_finite() {
                 report.uncomparable += 1;

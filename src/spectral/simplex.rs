@@ -250,3 +250,117 @@ pub fn triangle_terms(n: usize, r: [f64; 2], mut visit: impl FnMut(usize, f64, [
         }
     }
 }
+
+/// Where node (i, j, k) of a tetrahedron of order `n` (i + j + k ≤ n; its point
+/// (i, j, k)/n) sits in an element's run of a [`super::SpectralMesh`]: layers of constant k,
+/// each a triangle of order n − k in [`triangle_index`]'s rows.
+pub fn tetra_index(n: usize, i: usize, j: usize, k: usize) -> usize {
+    (0..k).map(|l| SimplexShape::Triangle.node_count(n - l)).sum::<usize>() + triangle_index(n - k, i, j)
+}
+
+/// For each of VTK's points of a tetrahedron of order `n` (VTK's order), its position in our
+/// layout ([`tetra_index`]).
+pub fn tetra_from_vtk(n: usize) -> Result<Vec<usize>, SpectralError> {
+    Ok(vtk_nodes(SimplexShape::Tetrahedron, n)?.iter().map(|b| tetra_index(n, b[0], b[1], b[2])).collect())
+}
+
+/// [`triangle_terms`] for a tetrahedron of order `n` at r = (ξ, η, ζ): every node k (our
+/// layout) with `L = R_i(ξ) R_j(η) R_k(ζ) R_{n−i−j−k}(1 − ξ − η − ζ)` and its gradient.
+pub fn tetra_terms(n: usize, r: [f64; 3], mut visit: impl FnMut(usize, f64, [f64; 3])) {
+    let mut v = [[0.0; 16]; 4];
+    let mut d = [[0.0; 16]; 4];
+    let lambda = [r[0], r[1], r[2], 1.0 - r[0] - r[1] - r[2]];
+    for a in 0..4 {
+        silvester_row(n, lambda[a], &mut v[a], Some(&mut d[a]));
+    }
+    let mut index = 0;
+    for k in 0..=n {
+        for j in 0..=n - k {
+            for i in 0..=n - k - j {
+                let l = n - i - j - k;
+                let (a, b, c, w) = (v[0][i], v[1][j], v[2][k], v[3][l]);
+                let dw = d[3][l];
+                let value = a * b * c * w;
+                let gradient = [
+                    d[0][i] * b * c * w - a * b * c * dw,
+                    a * d[1][j] * c * w - a * b * c * dw,
+                    a * b * d[2][k] * w - a * b * c * dw,
+                ];
+                visit(index, value, gradient);
+                index += 1;
+            }
+        }
+    }
+}
+
+/// From a simplex's values at its Lagrange nodes to its Bernstein coefficients, for one shape
+/// and order: the inverse of the collocation matrix `V[node][b] = B_b(node)`, with
+/// `B_b = n!/Π b_a! Π λ_a^{b_a}`, formed once and applied to every element. The control points
+/// it gives have a convex hull that contains the element (the Bernstein polynomials are
+/// non-negative and sum to 1), which is what the cut pass tests planes against.
+pub struct ToBernstein {
+    count: usize,
+    /// The inverse, row-major.
+    inverse: Vec<f64>,
+}
+
+impl ToBernstein {
+    /// The conversion for `shape` of order `n` (nodes in our layout, [`lattice`]); `None` if
+    /// the collocation matrix is singular (it is not, for distinct equispaced nodes).
+    pub fn new(shape: SimplexShape, n: usize) -> Option<Self> {
+        use faer::linalg::solvers::Solve;
+        let lattice = lattice(shape, n);
+        let count = lattice.len();
+        let factorial = |m: usize| (1..=m).map(|x| x as f64).product::<f64>();
+        let bernstein = |b: &[usize; 4], lambda: &[f64; 4]| {
+            let mut v = factorial(n);
+            for a in 0..=shape.dim() {
+                v *= lambda[a].powi(b[a] as i32) / factorial(b[a]);
+            }
+            v
+        };
+        let matrix = faer::Mat::from_fn(count, count, |row, col| {
+            let node = &lattice[row];
+            let lambda: [f64; 4] = std::array::from_fn(|a| node[a] as f64 / n as f64);
+            bernstein(&lattice[col], &lambda)
+        });
+        let inverse = matrix.partial_piv_lu().solve(faer::Mat::<f64>::identity(count, count));
+        let inverse: Vec<f64> = (0..count * count).map(|k| inverse[(k / count, k % count)]).collect();
+        inverse.iter().all(|x| x.is_finite()).then_some(Self { count, inverse })
+    }
+
+    /// The Bernstein control points of an element whose nodes (our layout) are at `points`.
+    pub fn control_points(&self, points: &[[f64; 3]]) -> Vec<[f64; 3]> {
+        (0..self.count)
+            .map(|row| {
+                let line = &self.inverse[row * self.count..(row + 1) * self.count];
+                std::array::from_fn(|c| line.iter().zip(points).map(|(w, p)| w * p[c]).sum())
+            })
+            .collect()
+    }
+}
+
+/// The barycentric multi-indices (entries 0..d the node's (i, j[, k]), entry d the remainder)
+/// of every node of order `n` in our layout.
+pub fn lattice(shape: SimplexShape, n: usize) -> Vec<[usize; 4]> {
+    let mut out = Vec::with_capacity(shape.node_count(n));
+    match shape {
+        SimplexShape::Triangle => {
+            for j in 0..=n {
+                for i in 0..=n - j {
+                    out.push([i, j, n - i - j, 0]);
+                }
+            }
+        }
+        SimplexShape::Tetrahedron => {
+            for k in 0..=n {
+                for j in 0..=n - k {
+                    for i in 0..=n - k - j {
+                        out.push([i, j, k, n - i - j - k]);
+                    }
+                }
+            }
+        }
+    }
+    out
+}

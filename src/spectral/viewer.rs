@@ -63,7 +63,7 @@ impl SpectralContent {
         let centre: [f64; 3] = std::array::from_fn(|c| 0.5 * (lo[c] + hi[c]));
         let extent = (0..3).map(|c| hi[c] - lo[c]).fold(0.0, f64::max).max(1e-12);
         let mut view = view;
-        if mesh.shape == super::Shape::Hexahedron && view.cuts.is_empty() {
+        if mesh.shape.is_volume() && view.cuts.is_empty() {
             view.cuts.push([0.0, 0.0, 1.0, centre[2]]);
         }
         Self {

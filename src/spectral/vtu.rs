@@ -40,6 +40,8 @@ pub const VTK_HEXAHEDRON: u8 = 12;
 pub const VTK_LAGRANGE_QUADRILATERAL: u8 = 70;
 /// `VTK_LAGRANGE_TRIANGLE`.
 pub const VTK_LAGRANGE_TRIANGLE: u8 = 69;
+/// `VTK_LAGRANGE_TETRAHEDRON`.
+pub const VTK_LAGRANGE_TETRAHEDRON: u8 = 71;
 /// `VTK_LAGRANGE_HEXAHEDRON`.
 pub const VTK_LAGRANGE_HEXAHEDRON: u8 = 72;
 
@@ -159,17 +161,17 @@ fn read_grid(path: &Path, grid: &vtk::UnstructuredGrid) -> Result<SpectralMesh, 
         VTK_QUAD | VTK_LAGRANGE_QUADRILATERAL | VTK_BEZIER_QUADRILATERAL => Shape::Quadrilateral,
         VTK_HEXAHEDRON | VTK_LAGRANGE_HEXAHEDRON | VTK_BEZIER_HEXAHEDRON => Shape::Hexahedron,
         VTK_LAGRANGE_TRIANGLE => Shape::Triangle,
+        VTK_LAGRANGE_TETRAHEDRON => Shape::Tetrahedron,
         _ => {
             return Err(file(format!(
-                "element 0: cell type {first}{} (spectral elements are VTK_LAGRANGE_QUADRILATERAL = 70, VTK_LAGRANGE_HEXAHEDRON = 72, VTK_LAGRANGE_TRIANGLE = 69, VTK_BEZIER_QUADRILATERAL = 77, VTK_BEZIER_HEXAHEDRON = 79, VTK_QUAD = 9 or VTK_HEXAHEDRON = 12)",
+                "element 0: cell type {first}{} (spectral elements are VTK_LAGRANGE_QUADRILATERAL = 70, VTK_LAGRANGE_HEXAHEDRON = 72, VTK_LAGRANGE_TRIANGLE = 69, VTK_LAGRANGE_TETRAHEDRON = 71, VTK_BEZIER_QUADRILATERAL = 77, VTK_BEZIER_HEXAHEDRON = 79, VTK_QUAD = 9 or VTK_HEXAHEDRON = 12)",
                 vtk_cell_name(first).map_or(String::new(), |n| format!(", {n}, which the renderer does not draw"))
             )))
         }
     };
     let dim = shape.dim();
     let per_cell = offsets[0] as usize;
-    let max_order =
-        if shape == Shape::Triangle { simplex::MAX_SIMPLEX_ORDER } else { crate::spectral::MAX_ORDER };
+    let max_order = if shape.is_simplex() { simplex::MAX_SIMPLEX_ORDER } else { crate::spectral::MAX_ORDER };
     let n = (1..=max_order).find(|&n| shape.nodes(n) == per_cell).ok_or_else(|| {
         file(format!("element 0: {per_cell} points is no {shape:?} of order 1..={max_order}"))
     })?;
@@ -182,6 +184,7 @@ fn read_grid(path: &Path, grid: &vtk::UnstructuredGrid) -> Result<SpectralMesh, 
             (Shape::Quadrilateral, true) => &[VTK_BEZIER_QUADRILATERAL],
             (Shape::Hexahedron, true) => &[VTK_BEZIER_HEXAHEDRON],
             (Shape::Triangle, _) => &[VTK_LAGRANGE_TRIANGLE],
+            (Shape::Tetrahedron, _) => &[VTK_LAGRANGE_TETRAHEDRON],
         };
         if !same_shape.contains(&(types[e] as u8)) || types[e].fract() != 0.0 {
             return Err(file(format!(
@@ -217,8 +220,12 @@ fn read_grid(path: &Path, grid: &vtk::UnstructuredGrid) -> Result<SpectralMesh, 
     // Our lexicographic node (i, j, k) of cell e ← VTK's point at vtk_point_index; a
     // triangle's node (i, j) at simplex::triangle_index ← VTK's recursive shells.
     let edges = HexEdgeOrder::of_version(grid.version);
-    let from_vtk: Vec<usize> = if shape == Shape::Triangle {
-        let ours = simplex::triangle_from_vtk(n)?;
+    let from_vtk: Vec<usize> = if shape.is_simplex() {
+        let ours = if shape == Shape::Triangle {
+            simplex::triangle_from_vtk(n)?
+        } else {
+            simplex::tetra_from_vtk(n)?
+        };
         let mut back = vec![0; per_cell];
         for (v, &o) in ours.iter().enumerate() {
             back[o] = v;
@@ -383,9 +390,14 @@ pub fn write(path: &Path, mesh: &SpectralMesh) -> Result<(), SpectralError> {
     let per_cell = mesh.shape.nodes(n);
     let cells = mesh.elements();
     // Reference points in VTK's order.
-    let refs: Vec<[f64; 3]> = if mesh.shape == Shape::Triangle {
-        let vtk = simplex::vtk_nodes(simplex::SimplexShape::Triangle, n)?;
-        vtk.iter().map(|b| simplex::node_point(simplex::SimplexShape::Triangle, n, b)).collect()
+    let refs: Vec<[f64; 3]> = if mesh.shape.is_simplex() {
+        let shape = if mesh.shape == Shape::Triangle {
+            simplex::SimplexShape::Triangle
+        } else {
+            simplex::SimplexShape::Tetrahedron
+        };
+        let vtk = simplex::vtk_nodes(shape, n)?;
+        vtk.iter().map(|b| simplex::node_point(shape, n, b)).collect()
     } else {
         let mut refs = vec![[0.0; 3]; per_cell];
         for flat in 0..per_cell {
@@ -400,7 +412,7 @@ pub fn write(path: &Path, mesh: &SpectralMesh) -> Result<(), SpectralError> {
         for r in &refs {
             let x = match mesh.shape {
                 Shape::Quadrilateral | Shape::Triangle => mesh.map(e, r[0], r[1]).0,
-                Shape::Hexahedron => mesh.map_hex(e, *r).0,
+                Shape::Hexahedron | Shape::Tetrahedron => mesh.map_hex(e, *r).0,
             };
             points.extend(x);
         }
@@ -409,6 +421,7 @@ pub fn write(path: &Path, mesh: &SpectralMesh) -> Result<(), SpectralError> {
         Shape::Quadrilateral => VTK_LAGRANGE_QUADRILATERAL,
         Shape::Hexahedron => VTK_LAGRANGE_HEXAHEDRON,
         Shape::Triangle => VTK_LAGRANGE_TRIANGLE,
+        Shape::Tetrahedron => VTK_LAGRANGE_TETRAHEDRON,
     };
     let mut arrays = grid_arrays(points, cells, per_cell, cell_type);
     for (fi, f) in mesh.fields.iter().enumerate() {
@@ -418,7 +431,7 @@ pub fn write(path: &Path, mesh: &SpectralMesh) -> Result<(), SpectralError> {
                 for r in &refs {
                     v.push(match mesh.shape {
                         Shape::Quadrilateral | Shape::Triangle => mesh.value(fi, step, e, r[0], r[1]),
-                        Shape::Hexahedron => mesh.value_hex(fi, step, e, *r),
+                        Shape::Hexahedron | Shape::Tetrahedron => mesh.value_hex(fi, step, e, *r),
                     });
                 }
             }
@@ -488,8 +501,8 @@ fn write_rational(path: &Path, mesh: &SpectralMesh, weights: &[f64]) -> Result<(
     let cell_type = match mesh.shape {
         Shape::Quadrilateral => VTK_BEZIER_QUADRILATERAL,
         Shape::Hexahedron => VTK_BEZIER_HEXAHEDRON,
-        Shape::Triangle => {
-            return Err(SpectralError::Missing("rational triangles are not written (none are read)".into()))
+        Shape::Triangle | Shape::Tetrahedron => {
+            return Err(SpectralError::Missing("rational simplices are not written (none are read)".into()))
         }
     };
     let mut arrays = grid_arrays(points, cells, per_cell, cell_type);

@@ -27,7 +27,7 @@ pub fn worst_differences(mesh: &SpectralMesh, field: usize, records: &[Record]) 
                 let (x, _) = mesh.map(r.element, r.reference[0], r.reference[1]);
                 (x, mesh.value(field, 0, r.element, r.reference[0], r.reference[1]))
             }
-            Shape::Hexahedron => {
+            Shape::Hexahedron | Shape::Tetrahedron => {
                 let at = [r.reference[0], r.reference[1], r.reference[2]];
                 (mesh.map_hex(r.element, at).0, mesh.value_hex(field, 0, r.element, at))
             }

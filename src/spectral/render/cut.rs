@@ -27,7 +27,7 @@ impl Cutter {
         specialization: &[u32],
     ) -> Result<Self> {
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
-        let hull = Buffer::from_slice(gpu, "spectral hulls", &proxy::bernstein_hull(mesh), storage)
+        let hull = Buffer::from_slice(gpu, "spectral hulls", &proxy::bernstein_hull(mesh)?, storage)
             .map_err(dev("uploading"))?;
         let planes = Buffer::new(
             gpu,

@@ -96,8 +96,8 @@ pub fn basis_specialization(mesh: &SpectralMesh) -> Vec<u32> {
     v.push(u32::from(mesh.basis == mesh.geometry));
     // Id 58: rational cells (homogeneous points and coefficients, see `geometry_points`).
     v.push(u32::from(mesh.weights.is_some()));
-    // Id 59: Lagrange triangles (spectral_simplex.glsl).
-    v.push(u32::from(mesh.shape == super::mesh::Shape::Triangle));
+    // Id 59: Lagrange triangles and tetrahedra (spectral_simplex.glsl).
+    v.push(u32::from(mesh.shape.is_simplex()));
     v
 }
 
@@ -242,7 +242,7 @@ impl SpectralRenderer {
     /// `colormap`. Quadrilateral meshes: planar, or surfaces in 3D; hexahedral meshes: by cut
     /// planes ([`SpectralView::cuts`]).
     pub fn new(gpu: &Gpu, mesh: Arc<SpectralMesh>, colormap: &Colormap) -> Result<Self> {
-        let hex = mesh.shape == super::mesh::Shape::Hexahedron;
+        let hex = mesh.shape.is_volume();
         let planar = mesh.is_planar();
         if mesh.shape == super::mesh::Shape::Triangle && !planar {
             return Err(SpectralError::Missing(
