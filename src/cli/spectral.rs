@@ -152,6 +152,11 @@ pub struct RenderArgs {
     /// A x + B y + C z = D); repeat for several (at most 8). Default: z through the middle.
     #[arg(long = "cut", value_name = "PLANE", value_parser = parse_plane)]
     pub cuts: Vec<[f64; 4]>,
+    /// Hexahedral and tetrahedral meshes: draw the isosurfaces f = C1, C2, … (comma-separated,
+    /// at most 8) per pixel instead of cut planes, each coloured by its value and lit with the
+    /// field's exact normal.
+    #[arg(long, value_name = "C1,C2,…", value_delimiter = ',', allow_negative_numbers = true, value_parser = finite)]
+    pub iso: Vec<f64>,
     /// Surfaces: the tessellation's screen-space error budget in pixels.
     #[arg(long, default_value_t = 0.5)]
     pub max_error: f64,
@@ -261,6 +266,7 @@ pub fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
         per_vertex: args.per_vertex,
         max_error_px: args.max_error,
         cuts: args.cuts.clone(),
+        iso: args.iso.clone(),
         height: args.height,
         expression,
         camera: args.view_from.orbit(args.image.size()).map(|orbit| {

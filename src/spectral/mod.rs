@@ -30,6 +30,7 @@ pub mod collection;
 pub mod error;
 pub mod generate;
 pub mod gradient;
+pub mod iso_reference;
 pub mod mesh;
 pub mod mfem;
 pub mod picture;

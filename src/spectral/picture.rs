@@ -163,7 +163,9 @@ pub fn write_picture(
         }
     }
     let [proxies, grids, lines] = renderer.primitive_counts();
-    let triangle_kind = if mesh.shape.is_volume() {
+    let triangle_kind = if !view.iso.is_empty() {
+        "isosurfaces: a ray cast per pixel through each element's box"
+    } else if mesh.shape.is_volume() {
         "cut planes: section rectangles cut out per pixel"
     } else if view.per_vertex {
         "node grids"

@@ -43,11 +43,13 @@ use crate::render::{
 
 mod cut;
 mod derived;
+mod iso;
 mod tessellate;
 mod view;
 
 pub use crate::render::camera_for_box;
 pub use cut::plane_span;
+pub use iso::{element_boxes, MAX_ISO_VALUES};
 pub use view::{fit_camera, SpectralView, View2d};
 
 /// How a spectral picture maps the world onto its pixels ([`SpectralRenderer::picture_view`]).
@@ -230,6 +232,8 @@ pub struct SpectralRenderer {
     derived_shaders: HashMap<String, Vec<u32>>,
     tessellator: Option<Tessellator>,
     cutter: Option<Cutter>,
+    /// The isosurface pass, made on the first view that asks for isosurfaces.
+    iso: Option<iso::IsoPass>,
     /// Vertices the last surface frame reserved room for (the CPU bound of its tessellation).
     tessellated: u64,
     /// The inputs of the tessellation the vertex stream holds (view, scale, budget, cap,
@@ -311,6 +315,7 @@ impl SpectralRenderer {
             derived_shaders: HashMap::new(),
             tessellator: None,
             cutter,
+            iso: None,
             tessellated: 0,
             tessellation_key: std::cell::Cell::new(None),
         })
@@ -534,6 +539,9 @@ impl SpectralRenderer {
         target: &DrawTarget<'_>,
         view: &SpectralView,
     ) -> Result<(Box<dyn FnOnce(&mut Recorder<'_>) + '_>, Box<dyn FnOnce(&mut Recorder<'_>) + '_>)> {
+        if !view.iso.is_empty() {
+            return self.prepare_iso(target, view);
+        }
         if self.cutter.is_some() {
             return self.prepare_cuts(target, view);
         }

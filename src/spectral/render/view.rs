@@ -121,6 +121,10 @@ pub struct SpectralView {
     /// A derived field to show instead of the field itself (`--expr`; the field is its `u`),
     /// evaluated per pixel by a fragment shader compiled at run time.
     pub expression: Option<std::sync::Arc<crate::expression::spectral::DerivedField>>,
+    /// Isosurfaces of solid meshes (hexahedra, tetrahedra): the field's values whose surfaces
+    /// are drawn per pixel instead of cut planes (at most [`super::MAX_ISO_VALUES`]; empty:
+    /// none). See `iso.frag`.
+    pub iso: Vec<f64>,
 }
 
 impl SpectralView {
@@ -149,6 +153,7 @@ impl Default for SpectralView {
             height: None,
             cuts: Vec::new(),
             expression: None,
+            iso: Vec::new(),
         }
     }
 }

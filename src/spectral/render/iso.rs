@@ -1,0 +1,194 @@
+//! Isosurfaces of solid meshes (hexahedra and tetrahedra), per pixel: each element's box is
+//! drawn (`iso.vert`), and each fragment on the box's far side casts the pixel's ray through the
+//! element, finds the first root of f − c for the view's iso values and draws it at its own
+//! depth with the exact normal (`iso.frag`). The f64 reference is
+//! [`crate::spectral::reference::iso_reference`].
+
+use std::collections::HashMap;
+
+use ash::vk;
+
+use super::*;
+use crate::gpu::Recorder;
+
+/// The most iso values one view can have.
+pub const MAX_ISO_VALUES: usize = 8;
+
+/// Bindings of the isosurface pipeline: geometry, coefficients, colour map, element boxes,
+/// iso values.
+const ISO_BINDINGS: [BindingKind; 5] = [
+    BindingKind::StorageBuffer,
+    BindingKind::StorageBuffer,
+    BindingKind::Texture,
+    BindingKind::StorageBuffer,
+    BindingKind::StorageBuffer,
+];
+
+/// The isosurface pass's buffers and pipelines.
+pub(super) struct IsoPass {
+    /// Per element its box's 12 triangles.
+    vertices: Buffer<DrawVertex>,
+    count: u32,
+    /// Per element (lo, 0), (hi, 0).
+    boxes: Buffer<[f32; 4]>,
+    /// The count, then up to [`MAX_ISO_VALUES`] values (f32 bits).
+    values: Buffer<u32>,
+    pipelines: HashMap<PassKey, (GraphicsPipeline, DescriptorSet)>,
+}
+
+/// Per element of a solid mesh, the box of its Bernstein control points (which contains it),
+/// grown by 8 f32 ulps of the coordinates' size: (lo, 0), (hi, 0).
+pub fn element_boxes(mesh: &SpectralMesh) -> Result<Vec<[f32; 4]>> {
+    let hull = proxy::bernstein_hull(mesh)?;
+    let per = mesh.points_per_element();
+    let mut out = Vec::with_capacity(2 * mesh.elements());
+    for e in 0..mesh.elements() {
+        let points: Vec<[f64; 3]> =
+            hull[e * per..(e + 1) * per].iter().map(|p| [p[0], p[1], p[2]].map(f64::from)).collect();
+        let (lo, hi) = super::super::mesh::bounds_of(&points);
+        let size = lo.iter().chain(&hi).fold(0.0f64, |a, c| a.max(c.abs()));
+        let slack = 8.0 * f64::from(f32::EPSILON) * size;
+        out.push([(lo[0] - slack) as f32, (lo[1] - slack) as f32, (lo[2] - slack) as f32, 0.0]);
+        out.push([(hi[0] + slack) as f32, (hi[1] + slack) as f32, (hi[2] + slack) as f32, 0.0]);
+    }
+    Ok(out)
+}
+
+/// The 12 triangles of each element's box, every vertex tagged with its element.
+fn box_triangles(boxes: &[[f32; 4]]) -> Vec<DrawVertex> {
+    const FACES: [[usize; 4]; 6] =
+        [[0, 1, 3, 2], [4, 6, 7, 5], [0, 4, 5, 1], [2, 3, 7, 6], [0, 2, 6, 4], [1, 5, 7, 3]];
+    let mut out = Vec::with_capacity(boxes.len() / 2 * 36);
+    for (e, b) in boxes.chunks_exact(2).enumerate() {
+        let corner = |k: usize| -> [f32; 3] {
+            std::array::from_fn(|a| if k >> a & 1 == 1 { b[1][a] } else { b[0][a] })
+        };
+        for f in FACES {
+            for k in [f[0], f[1], f[2], f[0], f[2], f[3]] {
+                out.push(DrawVertex { position: corner(k), reference: [0.0; 2], element: e as u32 });
+            }
+        }
+    }
+    out
+}
+
+impl SpectralRenderer {
+    /// Checks an isosurface view: a solid mesh, 1 to [`MAX_ISO_VALUES`] finite values, no
+    /// derived field, no cut planes.
+    fn check_iso_view(&self, view: &SpectralView) -> Result<()> {
+        if !self.mesh.shape.is_volume() {
+            return Err(SpectralError::Missing(format!(
+                "isosurfaces are drawn for hexahedral and tetrahedral meshes; this one is of {:?}s",
+                self.mesh.shape
+            )));
+        }
+        if view.iso.len() > MAX_ISO_VALUES {
+            return Err(SpectralError::Missing(format!(
+                "{} iso values; at most {MAX_ISO_VALUES}",
+                view.iso.len()
+            )));
+        }
+        if let Some(v) = view.iso.iter().find(|v| !v.is_finite()) {
+            return Err(SpectralError::Missing(format!("iso value {v} is not a finite number")));
+        }
+        if view.expression.is_some() || !view.cuts.is_empty() {
+            return Err(SpectralError::Missing(
+                "isosurfaces of derived fields, and isosurfaces together with cut planes, are not drawn yet"
+                    .into(),
+            ));
+        }
+        Ok(())
+    }
+
+    fn iso_pipeline_for(&mut self, target: &DrawTarget<'_>) -> Result<()> {
+        if self.iso.is_none() {
+            let boxes = element_boxes(&self.mesh)?;
+            let triangles = box_triangles(&boxes);
+            let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
+            let vertices = Buffer::from_slice(
+                &self.gpu,
+                "spectral iso boxes",
+                &triangles,
+                vk::BufferUsageFlags::VERTEX_BUFFER,
+            )
+            .map_err(dev("uploading the element boxes"))?;
+            let box_buffer =
+                Buffer::from_slice(&self.gpu, "spectral boxes", &boxes, storage).map_err(dev("uploading"))?;
+            let values = Buffer::new(
+                &self.gpu,
+                "spectral iso values",
+                (1 + MAX_ISO_VALUES) as u64,
+                storage | vk::BufferUsageFlags::TRANSFER_DST,
+                MemoryKind::GpuOnly,
+            )
+            .map_err(dev("the isosurface pass"))?;
+            self.iso = Some(IsoPass {
+                vertices,
+                count: triangles.len() as u32,
+                boxes: box_buffer,
+                values,
+                pipelines: HashMap::new(),
+            });
+        }
+        let key = target.key();
+        if self.iso.as_ref().is_some_and(|i| i.pipelines.contains_key(&key)) {
+            return Ok(());
+        }
+        target.require_depth("isosurfaces").map_err(dev("building the isosurface pipeline"))?;
+        let mut desc = self.draw_desc(
+            "spectral isosurfaces",
+            crate::spectral::shaders::ISO_VERT,
+            crate::spectral::shaders::ISO_FRAG,
+            target,
+        );
+        desc.bindings = &ISO_BINDINGS;
+        // Both sides: the fragment stage keeps the box's far side itself (eye inside a box too).
+        desc.cull_mode = vk::CullModeFlags::NONE;
+        let pipeline =
+            GraphicsPipeline::new(&self.gpu, &desc).map_err(dev("building the isosurface pipeline"))?;
+        let r = self.resources()?;
+        let Some(iso) = self.iso.as_ref() else { return Ok(()) };
+        let resources = [
+            r[0],
+            r[1],
+            r[2],
+            Resource::Storage(iso.boxes.binding().map_err(dev("binding"))?),
+            Resource::Storage(iso.values.binding().map_err(dev("binding"))?),
+        ];
+        let set = pipeline.bind(&self.gpu, &resources).map_err(dev("binding the isosurface pipeline"))?;
+        if let Some(iso) = self.iso.as_mut() {
+            iso.pipelines.insert(key, (pipeline, set));
+        }
+        Ok(())
+    }
+
+    #[allow(clippy::type_complexity)]
+    pub(super) fn prepare_iso(
+        &mut self,
+        target: &DrawTarget<'_>,
+        view: &SpectralView,
+    ) -> Result<(Box<dyn FnOnce(&mut Recorder<'_>) + '_>, Box<dyn FnOnce(&mut Recorder<'_>) + '_>)> {
+        self.check_iso_view(view)?;
+        self.show(view)?;
+        self.iso_pipeline_for(target)?;
+        let push = self.push(target, view);
+        let mut values = vec![0u32; 1 + MAX_ISO_VALUES];
+        values[0] = view.iso.len() as u32;
+        for (v, &c) in values[1..].iter_mut().zip(&view.iso) {
+            *v = (c as f32).to_bits();
+        }
+        let extent = target.viewport();
+        let Some(iso) = self.iso.as_ref() else {
+            return Err(SpectralError::Missing("the isosurface pass was not made".into()));
+        };
+        let (pipeline, set) = &iso.pipelines[&target.key()];
+        let pre = move |rec: &mut Recorder<'_>| {
+            rec.update_buffer(&iso.values, 0, &values);
+            pipeline.declare_draw(rec, set, Some(iso.vertices.whole()), None);
+        };
+        let draw = move |rec: &mut Recorder<'_>| {
+            pipeline.record_draw(rec, extent, set, &push, Some(iso.vertices.whole()), iso.count);
+        };
+        Ok((Box::new(pre), Box::new(draw)))
+    }
+}
