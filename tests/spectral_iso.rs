@@ -114,3 +114,39 @@ fn isosurfaces_match_the_f64_ray_caster() {
         assert!(mismatched.len() * 200 <= shown, "{name}: {} mismatched of {shown}", mismatched.len());
     }
 }
+
+/// Bad iso views: a value outside the field's range is a warning (and the picture has no
+/// surface pixel), not an error; a quadrilateral mesh, a NaN value, more than eight values and
+/// isosurfaces together with cut planes are refused by name.
+#[test]
+fn iso_views_that_cannot_be_drawn_are_refused_or_warned() {
+    use galerkin::spectral::picture::view_warnings;
+    let gpu = common::gpu();
+    let mesh = Arc::new(load("tet_cube_o3.vtu"));
+    let (lo, hi) = mesh.value_range(0, 0);
+    let outside = SpectralView { iso: vec![hi + 1.0], ..SpectralView::default() };
+    let warnings = view_warnings(&mesh, &outside);
+    assert!(warnings.len() == 1 && warnings[0].contains("outside the field's range"), "{warnings:?}");
+    assert!(view_warnings(&mesh, &SpectralView { iso: vec![0.5 * (lo + hi)], ..SpectralView::default() })
+        .is_empty());
+    let target = RenderTarget::new(&gpu, "iso", 64, 48, ColorFormat::Rgba32F).expect("target");
+    let mut r = SpectralRenderer::new(&gpu, mesh.clone(), &Colormap::viridis()).expect("renderer");
+    let Pixels::Rgba32F(px) = r.render(&target, &outside).expect("drawn") else { panic!("bytes") };
+    assert!(px.chunks_exact(4).all(|t| t[3].is_nan()), "no surface outside the range");
+    for (view, what) in [
+        (SpectralView { iso: vec![f64::NAN], ..SpectralView::default() }, "not a finite number"),
+        (SpectralView { iso: vec![0.5; 9], ..SpectralView::default() }, "at most 8"),
+        (
+            SpectralView { iso: vec![0.5], cuts: vec![[0.0, 0.0, 1.0, 0.5]], ..SpectralView::default() },
+            "cut planes",
+        ),
+    ] {
+        let err = r.render(&target, &view).expect_err("refused").to_string();
+        assert!(err.contains(what), "{err}");
+    }
+    let quads = Arc::new(load("quad_default.vtu"));
+    let mut q = SpectralRenderer::new(&gpu, quads, &Colormap::viridis()).expect("renderer");
+    let err =
+        q.render(&target, &SpectralView { iso: vec![0.5], ..SpectralView::default() }).expect_err("refused");
+    assert!(err.to_string().contains("hexahedral and tetrahedral meshes"), "{err}");
+}

@@ -246,7 +246,7 @@ pub fn generate_file(args: &GenArgs) -> Result<()> {
 
 /// `galerkin spectral render` ([`galerkin::spectral::picture::write_picture`]).
 pub fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
-    use galerkin::spectral::picture::{check_view, kind, write_picture};
+    use galerkin::spectral::picture::{check_view, kind, view_warnings, write_picture};
     let loaded = Instant::now();
     let mesh = Arc::new(args.source.mesh(args.file.as_deref(), &args.grid_functions)?);
     let load_ms = loaded.elapsed().as_secs_f64() * 1e3;
@@ -276,6 +276,9 @@ pub fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
         ..SpectralView::default()
     };
     check_view(&mesh, &view)?;
+    for w in view_warnings(&mesh, &view) {
+        eprintln!("warning: {w}");
+    }
     if args.viewer.view {
         return open_viewer(desc, mesh, view, args);
     }

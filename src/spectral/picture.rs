@@ -29,6 +29,24 @@ pub struct PictureReport {
     pub lines: u64,
 }
 
+/// Warnings about `view` that do not stop a picture: iso values outside the field's sampled
+/// range (their surfaces are empty; the picture is drawn, empty where nothing else is).
+pub fn view_warnings(mesh: &SpectralMesh, view: &SpectralView) -> Vec<String> {
+    if view.iso.is_empty() || view.field >= mesh.fields.len() {
+        return Vec::new();
+    }
+    let (lo, hi) = mesh.value_range(view.field, view.step);
+    view.iso
+        .iter()
+        .filter(|&&c| c < lo || c > hi)
+        .map(|c| {
+            format!(
+                "iso value {c} is outside the field's range [{lo}, {hi}] (sampled on a (2n + 1)-point grid per element): its surface is empty or nearly"
+            )
+        })
+        .collect()
+}
+
 /// Checks `view` against `mesh` before any work: the step exists, a log scale has a positive
 /// range (given, or the field's own), the tessellation budget is a positive number of pixels.
 pub fn check_view(mesh: &SpectralMesh, view: &SpectralView) -> Result<(), SpectralError> {
