@@ -252,7 +252,8 @@ fn malformed_vtu_names_file_and_element() {
             ),
             "array p: 28 values for 27 points",
         ),
-        (good.replace(">70 70 70<", ">71 71 71<"), "element 0: cell type 71"),
+        (good.replace(">70 70 70<", ">68 68 68<"), "element 0: cell type 68"),
+        (good.replace(">70 70 70<", ">71 71 71<"), "element 0: 9 points is no Tetrahedron"),
         (good[..good.len() / 2].to_string(), "XML"),
     ];
     for (k, (text, expect)) in cases.iter().enumerate() {
