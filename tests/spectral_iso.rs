@@ -1,24 +1,24 @@
 //! Isosurfaces of solid meshes drawn per pixel (`iso.frag`) against the f64 ray caster
-//! (`spectral::iso_reference`): curved tetrahedra VTK wrote (orders 3 and 6 on a cube of six)
-//! and VTK's Lagrange hexahedra (order 3), two iso values each. Per pixel where both find a
-//! surface: the same iso value, and the device's point within its bound of the f64 root along
-//! the ray — |Δt| ≤ 4 (δf / |∂f/∂t| + 2⁻²² ℓ + 16 ε t), δf the f32 rounding bound of the
-//! value there (`rounding_bound_hex`), ℓ the element box's diagonal (the bisection's
-//! resolution), ε t the f32 position's; pixels where one side finds a surface and the other
-//! none (or another one) are counted, and allowed only where the ray grazes the surface
-//! (|cos| between ray and normal below 0.1: a root the samples straddle only barely) or
-//! within half a pixel of another element's surface (silhouettes and element faces, where
-//! rasterisation and the reference may pick either side) — at most 0.5 % of the pixels that
-//! show a surface.
+//! (`spectral::iso_reference`): curved tetrahedra VTK wrote (orders 3 and 6 on a cube of six),
+//! VTK's Lagrange hexahedra (order 3), two iso values each, and curved hexahedra of orders 6
+//! and 9 (scripts/vtk-iso-fixtures.py) whose field has a saddle: a level set whose two sheets
+//! touch, and nested ones around it (four values). Compared by `iso_reference::compare`: per
+//! pixel where both find a surface, the same iso value, and the device's point within its
+//! bound of the f64 root along the ray — |Δt| ≤ 4 (δf / |∂f/∂t| + 2⁻²² ℓ + 16 ε t), δf the f32
+//! rounding bound of the value there (`rounding_bound_hex`), ℓ the mesh's diagonal (the
+//! bisection's resolution), ε t the f32 position's; pixels where one side finds a surface and
+//! the other none (or another one) are counted, and allowed only where the ray grazes the
+//! surface (|cos| between ray and normal below 0.1: a root the samples straddle only barely)
+//! — at most 0.5 % of the pixels that show a surface, for silhouettes and element faces where
+//! rasterisation and the reference may pick either side.
 
 mod common;
 
 use std::path::Path;
 use std::sync::Arc;
 
-use galerkin::render::{ColorFormat, Colormap, Pixels, RenderTarget};
-use galerkin::spectral::iso_reference::iso_reference;
-use galerkin::spectral::reference::rounding_bound_hex;
+use galerkin::render::{Camera, ColorFormat, Colormap, Pixels, RenderTarget};
+use galerkin::spectral::iso_reference::{compare, iso_reference};
 use galerkin::spectral::render::fit_camera;
 use galerkin::spectral::{SpectralMesh, SpectralRenderer, SpectralView};
 
@@ -27,91 +27,65 @@ fn load(name: &str) -> SpectralMesh {
     galerkin::spectral::load(&path, &[]).unwrap_or_else(|e| panic!("{name}: {e}"))
 }
 
-/// |∂f/∂t| along unit ray `d` at element `e`'s reference point `r`, and |∇f|.
-fn slope(mesh: &SpectralMesh, e: usize, r: [f64; 3], d: [f64; 3]) -> (f64, f64) {
-    let (_, g) = mesh.value_gradient_at(0, 0, e, r);
-    let (_, j) = mesh.map_hex(e, r);
-    let jm = glam::DMat3::from_cols(j[0].into(), j[1].into(), j[2].into());
-    let grad = jm.inverse().transpose() * glam::DVec3::from(g);
-    (grad.dot(glam::DVec3::from(d)).abs(), grad.length())
-}
-
 #[test]
 fn isosurfaces_match_the_f64_ray_caster() {
     let gpu = common::gpu();
     let size = (160u32, 120u32);
     let target =
         RenderTarget::new(&gpu, "isosurfaces", size.0, size.1, ColorFormat::Rgba32F).expect("target");
-    for name in ["tet_cube_o3.vtu", "tet_cube_o6.vtu", "hex_ascii.vtu"] {
+    // The saddle fixtures' u = 0 is a double cone whose sheets touch at the shared face's
+    // centre; 0.04 and 0.12 are nested around it, −0.04 on the other side.
+    let saddle: &[f64] = &[0.0, 0.04, 0.12, -0.04];
+    // Straight down onto the saddle (the bent grid moves the face centre (1, ½, ½) to
+    // (1.06, 0.55, 0.6)): the cone u = 0 alone, its upper sheet seen down to where the two
+    // sheets touch.
+    let above = Camera {
+        eye: [1.06, 0.55, 2.2],
+        target: [1.06, 0.55, 0.6],
+        up: [0.0, 1.0, 0.0],
+        fov_y_degrees: 40.0,
+        near: 0.01,
+        far: 100.0,
+    };
+    for (name, values, camera) in [
+        ("tet_cube_o3.vtu", None, None),
+        ("tet_cube_o6.vtu", None, None),
+        ("hex_ascii.vtu", None, None),
+        ("hex_saddle_o6.vtu", Some(saddle), None),
+        ("hex_saddle_o9.vtu", Some(saddle), None),
+        ("hex_saddle_o9.vtu", Some(&[0.0][..]), Some(above)),
+    ] {
         let mesh = Arc::new(load(name));
         let (lo, hi) = mesh.value_range(0, 0);
-        let values = vec![lo + 0.3 * (hi - lo), lo + 0.6 * (hi - lo)];
-        let camera = fit_camera(&mesh);
+        let values = values.map_or(vec![lo + 0.3 * (hi - lo), lo + 0.6 * (hi - lo)], |v| v.to_vec());
+        let view = SpectralView { iso: values.clone(), overdraw: false, camera, ..SpectralView::default() };
+        let camera_given = camera;
+        let camera = camera.unwrap_or_else(|| fit_camera(&mesh));
         let mut renderer = SpectralRenderer::new(&gpu, mesh.clone(), &Colormap::viridis()).expect("renderer");
-        let view = SpectralView { iso: values.clone(), overdraw: false, ..SpectralView::default() };
         let Pixels::Rgba32F(px) = renderer.render(&target, &view).expect("rendered") else {
             panic!("a float target returned bytes")
         };
         let reference = iso_reference(&mesh, (0, 0), &camera, &values, size);
-        let (mut both, mut worst, mut excused, mut mismatched) = (0usize, 0.0f64, 0usize, Vec::new());
-        let mut worst_abs = 0.0f64;
-        for (k, want) in reference.iter().enumerate() {
-            let t = &px[4 * k..4 * k + 4];
-            let got =
-                (!t[3].is_nan()).then(|| (t[3] as usize, t[2] as usize, f64::from(t[1]), f64::from(t[0])));
-            match (got, want) {
-                (None, None) => {}
-                (Some((e, vk, dist, value)), Some(h)) if vk == h.value_index => {
-                    let (ft, grad) = slope(&mesh, h.element, h.reference, h.direction);
-                    let (blo, bhi) = mesh.bounds();
-                    let diag = (0..3).map(|a| (bhi[a] - blo[a]).powi(2)).sum::<f64>().sqrt();
-                    let delta_f = rounding_bound_hex(&mesh, 0, 0, h.element, h.reference);
-                    let bound = 4.0
-                        * (delta_f / ft.max(1e-12 * grad)
-                            + diag * 2f64.powi(-22)
-                            + 16.0 * f64::from(f32::EPSILON) * h.distance);
-                    let err = (dist - h.distance).abs();
-                    both += 1;
-                    worst = worst.max(err / bound);
-                    worst_abs = worst_abs.max(err);
-                    if err > bound {
-                        // A different element's surface at the same point is the same surface
-                        // (shared faces); another layer is a mismatch.
-                        mismatched.push((
-                            k,
-                            format!(
-                                "element {e} at {dist} vs {} at {} (bound {bound:e})",
-                                h.element, h.distance
-                            ),
-                        ));
-                    }
-                    let _ = value;
-                }
-                (got, want) => {
-                    // Grazing rays and silhouettes.
-                    let grazing = want.is_some_and(|h| {
-                        let (ft, grad) = slope(&mesh, h.element, h.reference, h.direction);
-                        ft < 0.1 * grad
-                    });
-                    if grazing {
-                        excused += 1;
-                    } else {
-                        mismatched.push((k, format!("device {got:?}, reference {want:?}")));
-                    }
-                }
-            }
-        }
-        let shown = reference.iter().filter(|h| h.is_some()).count();
+        let agreement = compare(&mesh, (0, 0), &px, &reference);
+        let shown = agreement.shown;
         eprintln!(
-            "{name}: {shown} reference pixels, {both} matched (worst {worst:.3} of the bound, {worst_abs:.2e} along the ray), {excused} grazing, {} mismatched",
-            mismatched.len()
+            "{name}: {shown} reference pixels, {} matched (worst {:.3} of the bound, {:.2e} along the ray), {} grazing, {} mismatched",
+            agreement.matched,
+            agreement.worst_of_bound,
+            agreement.worst_along_ray,
+            agreement.grazing,
+            agreement.mismatched.len()
         );
-        for m in mismatched.iter().take(8) {
+        for m in agreement.mismatched.iter().take(8) {
             eprintln!("  pixel ({}, {}): {}", m.0 as u32 % size.0, m.0 as u32 / size.0, m.1);
         }
+        let mismatched = agreement.mismatched;
         // Two hexahedra's surfaces cover ~600 pixels of 160 × 120; the cubes' ~2,800.
         assert!(shown > 500, "{name}: the surfaces cover {shown} pixels");
         assert!(mismatched.len() * 200 <= shown, "{name}: {} mismatched of {shown}", mismatched.len());
+        // Looking down onto the touching point, the rays near it meet two roots between the
+        // same two samples: none of them may be missed.
+        assert!(camera_given.is_none() || mismatched.is_empty(), "{name} from above: {mismatched:?}");
     }
 }
 
@@ -149,4 +123,54 @@ fn iso_views_that_cannot_be_drawn_are_refused_or_warned() {
     let err =
         q.render(&target, &SpectralView { iso: vec![0.5], ..SpectralView::default() }).expect_err("refused");
     assert!(err.to_string().contains("hexahedral and tetrahedral meshes"), "{err}");
+}
+
+/// VTK's own evaluation of the saddle fixtures (geometry and field at parametric points, in
+/// the `.json` the script wrote beside them) is ours to 1e-11 (values of size 1); and the
+/// value bounds the isosurface pass culls elements by contain the field wherever it is
+/// sampled, and overestimate its sampled spread at most fourfold.
+#[test]
+fn saddle_fixtures_and_value_bounds_agree_with_vtk_and_the_samples() {
+    for name in ["hex_saddle_o6", "hex_saddle_o9"] {
+        let mesh = load(&format!("{name}.vtu"));
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/vtk").join(format!("{name}.json"));
+        let data: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(path).expect("VTK's samples")).expect("json");
+        let samples = data["evaluations"].as_array().expect("evaluations");
+        assert_eq!(samples.len(), 6);
+        for s in samples {
+            let f = |v: &serde_json::Value| -> Vec<f64> {
+                v.as_array().expect("array").iter().map(|x| x.as_f64().expect("number")).collect()
+            };
+            let (e, r, x) = (s["element"].as_u64().expect("element") as usize, f(&s["ref"]), f(&s["x"]));
+            let r = [r[0], r[1], r[2]];
+            let (ours, _) = mesh.map_hex(e, r);
+            for a in 0..3 {
+                assert!((ours[a] - x[a]).abs() < 1e-11, "{name} e {e} at {r:?}: x {ours:?} vs VTK's {x:?}");
+            }
+            let (u, want) = (mesh.value_hex(0, 0, e, r), s["value"].as_f64().expect("value"));
+            assert!((u - want).abs() < 1e-11, "{name} e {e} at {r:?}: u {u} vs VTK's {want}");
+        }
+    }
+    for name in ["tet_cube_o6.vtu", "hex_saddle_o9.vtu", "hex_ascii.vtu"] {
+        let mesh = load(name);
+        let bounds = galerkin::spectral::proxy::value_bounds(&mesh, 0, 0).expect("bounds");
+        let mut sampled = vec![[f64::MAX, f64::MIN]; mesh.elements()];
+        mesh.for_each_sample(|e, r| {
+            let v = mesh.value_hex(0, 0, e, r);
+            sampled[e] = [sampled[e][0].min(v), sampled[e][1].max(v)];
+        });
+        for (e, (b, s)) in bounds.iter().zip(&sampled).enumerate() {
+            let slack = 1e-12 * (1.0 + s[0].abs().max(s[1].abs()));
+            assert!(
+                b[0] <= s[0] + slack && s[1] <= b[1] + slack,
+                "{name} element {e}: bounds {b:?}, sampled {s:?}"
+            );
+            // Bernstein bounds overestimate by at most the interior control values' reach.
+            assert!(
+                b[1] - b[0] <= 4.0 * (s[1] - s[0]) + slack,
+                "{name} element {e}: bounds {b:?}, sampled {s:?}"
+            );
+        }
+    }
 }

@@ -9,8 +9,10 @@
 // parameter to f32 resolution (each step pulled back again), and the first root inside the
 // element is drawn at its own depth, lit with the exact normal ∇f/|∇f| = J⁻ᵀ∇_r f/|·| and
 // coloured by its iso value. Twin of reference::iso_reference (the f64 ray caster), which
-// samples finer. Roots closer together along the ray than one sample interval, whose sign does
-// not change between samples, are missed (no polynomial bounds yet).
+// samples finer. Two roots between the same two samples (no sign change there) are caught where
+// three samples' parabola turns toward zero between them (touching sheets, a surface the ray
+// barely enters); closer pairs the parabola does not foresee are missed (no polynomial bounds
+// of the field along the ray yet).
 #include "spectral_element.glsl"
 #include "spectral_push.glsl"
 #include "colormap.glsl"
@@ -19,7 +21,7 @@
 layout(location = 1) flat in uint element;
 layout(location = 3) in vec3 world;
 layout(set = 0, binding = 2) uniform sampler1D colormap;
-// Per element: (box lo, 0), (box hi, 0) — binding 3 of the spectral draws.
+// Per element: (box lo, f lo), (box hi, f hi) — binding 3 of the spectral draws (iso.vert).
 layout(std430, set = 0, binding = 3) readonly buffer Boxes { vec4 boxes[]; };
 // The iso values: count, then the values.
 layout(std430, set = 0, binding = 4) readonly buffer IsoValues { uint iso_count; float iso_values[]; };
@@ -76,10 +78,12 @@ void main() {
     uint count = min(iso_count, 8u);
     vec3 r = vec3(SPECTRAL_SIMPLEX ? 0.25 : 0.5);
     float step_t = (t_exit - t_entry) / float(SPECTRAL_ISO_SAMPLES);
-    bool usable_prev = false;
-    float g_prev[8];
-    float t_prev = t_entry;
-    vec3 r_prev = r;
+    // The last two usable samples: g = f - c per value, their ray parameters and reference
+    // points.
+    bool usable_prev = false, usable_prev2 = false;
+    float g_prev[8], g_prev2[8];
+    float t_prev = t_entry, t_prev2 = t_entry;
+    vec3 r_prev = r, r_prev2 = r;
     bool found = false;
     uint hit_k = 0u;
     float t_root = 0.0;
@@ -102,20 +106,70 @@ void main() {
                     }
                 }
             }
-            if (best <= 1.0) {
+            // A pair of roots between samples (a surface the ray barely enters, or two sheets
+            // that touch): three samples of one sign whose parabola turns toward zero between
+            // them and reaches it, or nearly (a quarter of the smallest sample); the value at
+            // the parabola's turning point is then taken, and a sign there brackets the pair's
+            // first root.
+            float pair_lo = 0.0, pair_hi = 0.0, pair_g = 0.0;
+            uint pair_k = 0u;
+            bool pair = false;
+            vec3 pair_r = r_prev2;
+            for (uint k = 0u; k < count && usable_prev && usable_prev2 && !pair; ++k) {
+                float a0 = g_prev2[k], a1 = g_prev[k], a2 = f - iso_values[k];
+                float sgn = a1 < 0.0 ? -1.0 : 1.0;
+                if (a0 * sgn <= 0.0 || a2 * sgn <= 0.0) continue;
+                // p(u) = a0 + B u + A u², u in sample intervals from t_prev2.
+                float A = 0.5 * (a0 - 2.0 * a1 + a2), B = 0.5 * (4.0 * a1 - 3.0 * a0 - a2);
+                if (A * sgn <= 0.0) continue;
+                float u = -B / (2.0 * A);
+                if (!(u > 0.0 && u < 2.0)) continue;
+                float q = a0 + u * (B + A * u);
+                if (q * sgn >= 0.25 * min(abs(a0), min(abs(a1), abs(a2)))) continue;
+                float tv = t_prev2 + u * step_t;
+                bool later = u >= 1.0;
+                vec3 rv = later ? r_prev : r_prev2;
+                if (!iso_pull(eye + tv * d, rv) || spectral_outside_3d(rv) > SPECTRAL_ISO_MARGIN) continue;
+                if ((spectral_value_hex(element, rv) - iso_values[k]) * sgn < 0.0) {
+                    pair = true;
+                    pair_k = k;
+                    pair_lo = later ? t_prev : t_prev2;
+                    pair_hi = tv;
+                    pair_g = later ? a1 : a0;
+                    pair_r = later ? r_prev : r_prev2;
+                }
+            }
+            // Bisect the candidates; the nearest root inside the element is the pixel's.
+            if (pair) {
+                vec3 q = pair_r;
+                float tr = iso_bisect(eye, d, pair_lo, pair_hi, iso_values[pair_k], pair_g, q);
+                if (spectral_outside_3d(q) <= pc.misc.y) {
+                    found = true;
+                    hit_k = pair_k;
+                    t_root = tr;
+                    r_root = q;
+                }
+            }
+            if (best <= 1.0 && !(found && t_root <= t_prev)) {
                 vec3 q = r_prev;
                 float tr = iso_bisect(eye, d, t_prev, t, iso_values[k_best], g_prev[k_best], q);
                 // A root outside the element is its neighbour's.
-                if (spectral_outside_3d(q) <= pc.misc.y) {
+                if (spectral_outside_3d(q) <= pc.misc.y && !(found && t_root <= tr)) {
                     found = true;
                     hit_k = k_best;
                     t_root = tr;
                     r_root = q;
                 }
             }
-            for (uint k = 0u; k < count; ++k) g_prev[k] = f - iso_values[k];
+            for (uint k = 0u; k < count; ++k) {
+                g_prev2[k] = g_prev[k];
+                g_prev[k] = f - iso_values[k];
+            }
         }
+        usable_prev2 = usable && usable_prev;
         usable_prev = usable;
+        t_prev2 = t_prev;
+        r_prev2 = r_prev;
         t_prev = t;
         r_prev = r;
     }

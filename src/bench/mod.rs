@@ -19,6 +19,7 @@ pub mod report;
 pub mod spacetime;
 pub mod spectral;
 pub mod spectral_derived;
+pub mod spectral_iso;
 
 use std::time::{Duration, Instant};
 

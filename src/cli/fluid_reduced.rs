@@ -46,8 +46,13 @@ pub struct SizeArgs {
     pub m_h: Option<usize>,
     /// B_u = B_p also spans each training frame's mid-step velocity (advected and diffused,
     /// before the projection), recomputed from the snapshots: one full advection per frame.
-    #[arg(long)]
+    /// The default: it brings reduced runs closer to the full ones in every case measured
+    /// (BENCHMARKS.md, "Mid-step velocities in B_u").
+    #[arg(long, overrides_with = "no_mid_step")]
     pub mid_step: bool,
+    /// B_u = B_p from the frames' velocities and momenta only (the paper's §6 bases).
+    #[arg(long, overrides_with = "mid_step")]
+    pub no_mid_step: bool,
 }
 
 impl SizeArgs {
@@ -58,7 +63,7 @@ impl SizeArgs {
             m_u: self.m_u,
             m_g: self.m_g,
             m_h: self.m_h,
-            mid_step: self.mid_step,
+            mid_step: !self.no_mid_step,
         }
     }
 }

@@ -341,6 +341,14 @@ pub struct BenchArgs {
     /// `runtime-shaderc` build feature).
     #[arg(long)]
     pub derived: bool,
+    /// Instead: what isosurfaces (--iso) cost against a cut plane of the same mesh and image
+    /// (device time, interleaved), and their accuracy against the f64 ray caster. Meshes:
+    /// the generated shell at orders 3 and 6, or the files given with --mesh.
+    #[arg(long, conflicts_with = "derived")]
+    pub iso: bool,
+    /// With --iso: a hexahedral or tetrahedral mesh file to measure (repeatable).
+    #[arg(long, value_name = "FILE", requires = "iso")]
+    pub mesh: Vec<std::path::PathBuf>,
 }
 
 /// `galerkin spectral bench`: seed 002's table on this device
@@ -349,6 +357,17 @@ pub fn bench(desc: &GpuDesc, args: &BenchArgs) -> Result<()> {
     let gpu = Gpu::new(desc)?;
     if args.derived {
         return galerkin::bench::spectral_derived::report(&gpu, args.frames, &mut |s| print!("{s}"));
+    }
+    if args.iso {
+        let meshes = if args.mesh.is_empty() {
+            galerkin::bench::spectral_iso::default_meshes()?
+        } else {
+            args.mesh
+                .iter()
+                .map(|p| Ok((p.display().to_string(), galerkin::spectral::load(p, &[])?)))
+                .collect::<Result<Vec<_>>>()?
+        };
+        return galerkin::bench::spectral_iso::report(&gpu, meshes, args.frames, &mut |s| print!("{s}"));
     }
     galerkin::bench::spectral::report(&gpu, args.quick, args.frames, &mut |s| print!("{s}"))
 }

@@ -3,8 +3,10 @@
 //! (of its Bernstein control points) it crosses, [`REFERENCE_SAMPLES_PER_ORDER`] × (n + 1)
 //! uniform samples along the crossing (four times the device's density), each pulled back by
 //! Newton's method in f64; every sign change of f − c between two samples within the margin
-//! of the element is bisected to 10⁻¹⁵ of the segment, and the nearest root inside an
-//! element, over elements and iso values, is the pixel's.
+//! of the element is bisected to 10⁻¹⁵ of the segment, as is a pair of roots between two
+//! samples that the parabola through three samples foresees (the device's test, at four times
+//! its density), and the nearest root inside an element, over elements and iso values, is the
+//! pixel's.
 
 use rayon::prelude::*;
 
@@ -100,17 +102,67 @@ fn first_root(
         mesh.inverse_map_hex(e, at(t), guess).or_else(|| mesh.inverse_map_hex(e, at(t), centre))
     };
     let samples = REFERENCE_SAMPLES_PER_ORDER * (mesh.basis.order.max(mesh.geometry.order) + 1);
-    let mut previous: Option<(f64, [f64; 3], f64)> = None;
+    let value = |r: [f64; 3]| mesh.value_hex(field, step, e, r);
+    // The first root of f − c in [lo, hi] (f − c of sign `lo_negative` at lo), bisected from
+    // reference point q: its ray parameter and reference point, if inside the element.
+    let bisect = |mut lo: f64, mut hi: f64, lo_negative: bool, c: f64, mut q: [f64; 3]| {
+        for _ in 0..60 {
+            let mid = 0.5 * (lo + hi);
+            if let Some(r) = pull(mid, q) {
+                q = r;
+            }
+            if (value(q) - c < 0.0) == lo_negative {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+            if hi - lo <= 1e-15 * (t1 - t0) {
+                break;
+            }
+        }
+        let root = 0.5 * (lo + hi);
+        pull(root, q).filter(|r| mesh.shape.outside(r) <= 1e-9).map(|r| (root, r))
+    };
+    // The last two usable samples: (t, r, f).
+    let mut previous: [Option<(f64, [f64; 3], f64)>; 2] = [None, None];
     let mut guess = centre;
     for s in 0..=samples {
         let t = t0 + (t1 - t0) * s as f64 / samples as f64;
         let Some(r) = pull(t, guess).filter(|r| mesh.shape.outside(r) <= MARGIN) else {
-            previous = None;
+            previous = [None, None];
             continue;
         };
         guess = r;
-        let f = mesh.value_hex(field, step, e, r);
-        if let Some((tp, rp, fp)) = previous {
+        let f = value(r);
+        let mut hits: Vec<(f64, [f64; 3], usize)> = Vec::new();
+        // A pair of roots between samples without a sign change (touching sheets, a surface
+        // the ray barely enters): the parabola through the last three samples of one sign
+        // turns toward zero between them and reaches a quarter of the smallest; the value at
+        // its turning point decides.
+        if let [Some((ta, ra, fa)), Some((tb, rb, fb))] = previous {
+            for (k, &c) in values.iter().enumerate() {
+                let (a0, a1, a2) = (fa - c, fb - c, f - c);
+                let sgn = if a1 < 0.0 { -1.0 } else { 1.0 };
+                let (a, b) = (0.5 * (a0 - 2.0 * a1 + a2), 0.5 * (4.0 * a1 - 3.0 * a0 - a2));
+                if a0 * sgn <= 0.0 || a2 * sgn <= 0.0 || a * sgn <= 0.0 {
+                    continue;
+                }
+                let u = -b / (2.0 * a);
+                let q = a0 + u * (b + a * u);
+                if !(u > 0.0 && u < 2.0) || q * sgn >= 0.25 * a0.abs().min(a1.abs()).min(a2.abs()) {
+                    continue;
+                }
+                let (lo, rlo) = if u >= 1.0 { (tb, rb) } else { (ta, ra) };
+                let tv = ta + u * (tb - ta);
+                let Some(rv) = pull(tv, rlo).filter(|r| mesh.shape.outside(r) <= MARGIN) else { continue };
+                if (value(rv) - c) * sgn < 0.0 {
+                    if let Some((root, r)) = bisect(lo, tv, sgn < 0.0, c, rlo) {
+                        hits.push((root, r, k));
+                    }
+                }
+            }
+        }
+        if let Some((tp, rp, fp)) = previous[1] {
             // The value crossed first in this interval (linear estimate), then bisected.
             let first = values
                 .iter()
@@ -118,35 +170,110 @@ fn first_root(
                 .filter(|(_, &c)| (fp - c < 0.0) != (f - c < 0.0))
                 .min_by(|a, b| ((fp - a.1) / (fp - f)).total_cmp(&((fp - b.1) / (fp - f))));
             if let Some((k, &c)) = first {
-                let (mut lo, mut hi, mut q) = (tp, t, rp);
-                let lo_negative = fp - c < 0.0;
-                for _ in 0..60 {
-                    let mid = 0.5 * (lo + hi);
-                    if let Some(r) = pull(mid, q) {
-                        q = r;
-                    }
-                    if (mesh.value_hex(field, step, e, q) - c < 0.0) == lo_negative {
-                        lo = mid;
-                    } else {
-                        hi = mid;
-                    }
-                    if hi - lo <= 1e-15 * (t1 - t0) {
-                        break;
-                    }
-                }
-                let root = 0.5 * (lo + hi);
-                if let Some(r) = pull(root, q).filter(|r| mesh.shape.outside(r) <= 1e-9) {
-                    return Some(IsoHit {
-                        element: e,
-                        value_index: k,
-                        distance: root,
-                        reference: r,
-                        direction: d,
-                    });
+                if let Some((root, r)) = bisect(tp, t, fp - c < 0.0, c, rp) {
+                    hits.push((root, r, k));
                 }
             }
         }
-        previous = Some((t, r, f));
+        if let Some(&(distance, reference, value_index)) = hits.iter().min_by(|a, b| a.0.total_cmp(&b.0)) {
+            return Some(IsoHit { element: e, value_index, distance, reference, direction: d });
+        }
+        previous = [previous[1], Some((t, r, f))];
     }
     None
+}
+
+/// How a device picture of isosurfaces agrees with [`iso_reference`] ([`compare`]).
+#[derive(Clone, Debug, Default)]
+pub struct IsoAgreement {
+    /// Pixels where the reference finds a surface.
+    pub shown: usize,
+    /// Pixels where both find the same iso value's surface.
+    pub matched: usize,
+    /// The largest distance along the ray between the two points of a matched pixel, as a
+    /// fraction of its bound.
+    pub worst_of_bound: f64,
+    /// The largest and the mean distance along the ray of matched pixels (world units).
+    pub worst_along_ray: f64,
+    /// See `worst_along_ray`.
+    pub mean_along_ray: f64,
+    /// Pixels where one side finds a surface and the other none or another value's, where the
+    /// ray grazes the reference's surface (|cos| between ray and normal below 0.1).
+    pub grazing: usize,
+    /// Every other disagreement, and matched pixels past their bound: (pixel, what).
+    pub mismatched: Vec<(usize, String)>,
+}
+
+/// |∂f/∂t| along unit ray `d` at element `e`'s reference point `r`, and |∇f|.
+fn slope(
+    mesh: &SpectralMesh,
+    (field, step): (usize, usize),
+    e: usize,
+    r: [f64; 3],
+    d: [f64; 3],
+) -> (f64, f64) {
+    let (_, g) = mesh.value_gradient_at(field, step, e, r);
+    let (_, j) = mesh.map_hex(e, r);
+    let jm = glam::DMat3::from_cols(j[0].into(), j[1].into(), j[2].into());
+    let grad = jm.inverse().transpose() * glam::DVec3::from(g);
+    (grad.dot(glam::DVec3::from(d)).abs(), grad.length())
+}
+
+/// Compares a data picture of isosurfaces (per pixel, row-major: the value at the root, its
+/// distance from the eye, the iso value's index, the element; NaN in the fourth where none —
+/// what `iso.frag` writes into a float target) with the reference of the same view. A matched
+/// pixel's distance along the ray must be within |Δt| ≤ 4 (δf / |∂f/∂t| + 2⁻²² ℓ + 16 ε t):
+/// δf the f32 rounding bound of the value there ([`super::reference::rounding_bound_hex`]), ℓ
+/// the mesh's bounding-box diagonal (the bisection's resolution is 2⁻²⁴ of a segment inside
+/// it), ε t the f32 position's rounding.
+pub fn compare(
+    mesh: &SpectralMesh,
+    (field, step): (usize, usize),
+    pixels: &[f32],
+    reference: &[Option<IsoHit>],
+) -> IsoAgreement {
+    let (blo, bhi) = mesh.bounds();
+    let diag = (0..3).map(|a| (bhi[a] - blo[a]).powi(2)).sum::<f64>().sqrt();
+    let mut out = IsoAgreement::default();
+    let mut sum = 0.0;
+    for (k, want) in reference.iter().enumerate() {
+        let Some(t) = pixels.get(4 * k..4 * k + 4) else { break };
+        let got = (!t[3].is_nan()).then(|| (t[3] as usize, t[2] as usize, f64::from(t[1])));
+        out.shown += usize::from(want.is_some());
+        match (got, want) {
+            (None, None) => {}
+            (Some((e, vk, dist)), Some(h)) if vk == h.value_index => {
+                let (ft, grad) = slope(mesh, (field, step), h.element, h.reference, h.direction);
+                let delta_f = super::reference::rounding_bound_hex(mesh, field, step, h.element, h.reference);
+                let bound = 4.0
+                    * (delta_f / ft.max(1e-12 * grad)
+                        + diag * 2f64.powi(-22)
+                        + 16.0 * f64::from(f32::EPSILON) * h.distance);
+                let err = (dist - h.distance).abs();
+                out.matched += 1;
+                out.worst_of_bound = out.worst_of_bound.max(err / bound);
+                out.worst_along_ray = out.worst_along_ray.max(err);
+                sum += err;
+                if err > bound {
+                    out.mismatched.push((
+                        k,
+                        format!("element {e} at {dist} vs {} at {} (bound {bound:e})", h.element, h.distance),
+                    ));
+                }
+            }
+            (got, want) => {
+                let grazing = want.is_some_and(|h| {
+                    let (ft, grad) = slope(mesh, (field, step), h.element, h.reference, h.direction);
+                    ft < 0.1 * grad
+                });
+                if grazing {
+                    out.grazing += 1;
+                } else {
+                    out.mismatched.push((k, format!("device {got:?}, reference {want:?}")));
+                }
+            }
+        }
+    }
+    out.mean_along_ray = if out.matched > 0 { sum / out.matched as f64 } else { 0.0 };
+    out
 }

@@ -470,3 +470,48 @@ pub fn bernstein_hull(mesh: &SpectralMesh) -> Result<Vec<[f32; 4]>, super::Spect
     }
     Ok(out)
 }
+
+/// Per element of a solid mesh (hexahedra, tetrahedra), an interval [lo, hi] that contains
+/// `field` at `step` everywhere in the element: the least and greatest of its Bernstein
+/// coefficients. The Bernstein polynomials are non-negative and sum to one, so the field is a
+/// convex combination of them — of rational cells' too, whose value Σ w F B / Σ w B weighs the
+/// control values F by w B / Σ w B > 0. The isosurface pass draws only the elements whose
+/// interval holds an iso value (`iso.vert`): no other element can contain a root.
+pub fn value_bounds(
+    mesh: &SpectralMesh,
+    field: usize,
+    step: usize,
+) -> Result<Vec<[f64; 2]>, super::SpectralError> {
+    let n = mesh.basis.order;
+    let span = |c: &[f64]| c.iter().fold([f64::MAX, f64::MIN], |[lo, hi], &v| [lo.min(v), hi.max(v)]);
+    match mesh.shape {
+        Shape::Tetrahedron => {
+            let convert = super::simplex::ToBernstein::new(super::simplex::SimplexShape::Tetrahedron, n)
+                .ok_or_else(|| {
+                    super::SpectralError::Missing(format!("no Bernstein form of order {n} tetrahedra"))
+                })?;
+            Ok((0..mesh.elements())
+                .map(|e| span(&convert.control_values(mesh.element_values(field, step, e))))
+                .collect())
+        }
+        Shape::Hexahedron => {
+            if mesh.basis.set == NodeSet::Bernstein {
+                return Ok((0..mesh.elements()).map(|e| span(mesh.element_values(field, step, e))).collect());
+            }
+            let bernstein = Basis1d::new(NodeSet::Bernstein, n)?;
+            Ok((0..mesh.elements())
+                .map(|e| {
+                    span(&bernstein.tensor_interpolate(
+                        &mesh.basis.nodes,
+                        mesh.element_values(field, step, e),
+                        3,
+                    ))
+                })
+                .collect())
+        }
+        Shape::Quadrilateral | Shape::Triangle => Err(super::SpectralError::Missing(format!(
+            "value bounds are made for solid elements; this mesh is of {:?}s",
+            mesh.shape
+        ))),
+    }
+}

@@ -329,6 +329,20 @@ impl ToBernstein {
         inverse.iter().all(|x| x.is_finite()).then_some(Self { count, inverse })
     }
 
+    /// The Bernstein coefficients of a scalar whose values at the nodes (our layout) are
+    /// `values`.
+    pub fn control_values(&self, values: &[f64]) -> Vec<f64> {
+        (0..self.count)
+            .map(|row| {
+                self.inverse[row * self.count..(row + 1) * self.count]
+                    .iter()
+                    .zip(values)
+                    .map(|(w, v)| w * v)
+                    .sum()
+            })
+            .collect()
+    }
+
     /// The Bernstein control points of an element whose nodes (our layout) are at `points`.
     pub fn control_points(&self, points: &[[f64; 3]]) -> Vec<[f64; 3]> {
         (0..self.count)

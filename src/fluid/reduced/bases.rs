@@ -59,6 +59,8 @@ pub struct BasisSizes {
     /// advected and diffused over the frame, before its projection ([`advected_velocities`]),
     /// a third basis interleaved with the velocities' and momenta's. The reduced step holds
     /// its advected state in `B_u`; without these the basis has only projected states.
+    /// `Default` leaves it off (the paper's §6 bases, what the library's tests pin down); the
+    /// command line turns it on unless `--no-mid-step` is given.
     pub mid_step: bool,
 }
 

@@ -29,15 +29,21 @@ pub(super) struct IsoPass {
     /// Per element its box's 12 triangles.
     vertices: Buffer<DrawVertex>,
     count: u32,
-    /// Per element (lo, 0), (hi, 0).
+    /// Per element (lo, f_lo), (hi, f_hi): its box, and an interval holding its field's values
+    /// ([`proxy::value_bounds`]) for the field and step in `bounds_of`.
     boxes: Buffer<[f32; 4]>,
+    /// The box corners without the value bounds.
+    corners: Vec<[f32; 4]>,
+    /// The (field, step) whose value bounds `boxes` holds.
+    bounds_of: Option<(usize, usize)>,
     /// The count, then up to [`MAX_ISO_VALUES`] values (f32 bits).
     values: Buffer<u32>,
     pipelines: HashMap<PassKey, (GraphicsPipeline, DescriptorSet)>,
 }
 
 /// Per element of a solid mesh, the box of its Bernstein control points (which contains it),
-/// grown by 8 f32 ulps of the coordinates' size: (lo, 0), (hi, 0).
+/// grown by 8 f32 ulps of the coordinates' size: (lo, 0), (hi, 0) (the isosurface pass puts
+/// the element's value bounds in the zeros).
 pub fn element_boxes(mesh: &SpectralMesh) -> Result<Vec<[f32; 4]>> {
     let hull = proxy::bernstein_hull(mesh)?;
     let per = mesh.points_per_element();
@@ -126,6 +132,8 @@ impl SpectralRenderer {
                 vertices,
                 count: triangles.len() as u32,
                 boxes: box_buffer,
+                corners: boxes,
+                bounds_of: None,
                 values,
                 pipelines: HashMap::new(),
             });
@@ -162,6 +170,28 @@ impl SpectralRenderer {
         Ok(())
     }
 
+    /// Writes the value bounds of `field` at `step` into the element boxes' fourth components
+    /// (when another field or step was drawn last), each widened outward by two f32 ulps of
+    /// its size: `iso.vert` drops the boxes of elements whose bounds hold no iso value.
+    fn iso_value_bounds(&mut self, field: usize, step: usize) -> Result<()> {
+        if self.iso.as_ref().is_none_or(|i| i.bounds_of == Some((field, step))) {
+            return Ok(());
+        }
+        let bounds = proxy::value_bounds(&self.mesh, field, step)?;
+        let Some(iso) = self.iso.as_mut() else { return Ok(()) };
+        let widen = |v: f64, side: f64| {
+            (v + side * 2.0 * f64::from(f32::EPSILON) * v.abs().max(f64::from(f32::MIN_POSITIVE))) as f32
+        };
+        let mut boxes = iso.corners.clone();
+        for (e, b) in bounds.iter().enumerate() {
+            boxes[2 * e][3] = widen(b[0], -1.0);
+            boxes[2 * e + 1][3] = widen(b[1], 1.0);
+        }
+        iso.boxes.upload(&self.gpu, 0, &boxes).map_err(dev("uploading the element value bounds"))?;
+        iso.bounds_of = Some((field, step));
+        Ok(())
+    }
+
     #[allow(clippy::type_complexity)]
     pub(super) fn prepare_iso(
         &mut self,
@@ -171,6 +201,7 @@ impl SpectralRenderer {
         self.check_iso_view(view)?;
         self.show(view)?;
         self.iso_pipeline_for(target)?;
+        self.iso_value_bounds(view.field, view.step)?;
         let push = self.push(target, view);
         let mut values = vec![0u32; 1 + MAX_ISO_VALUES];
         values[0] = view.iso.len() as u32;

@@ -1,0 +1,112 @@
+//! `galerkin spectral bench --iso`: what an isosurface frame (`--iso`, per pixel: `iso.frag`)
+//! costs against the cut-plane frame of the same mesh, image and camera (the yardstick:
+//! at most 4×), interleaved frame by frame, and how exact it is: the same view at a smaller
+//! size against the f64 ray caster ([`crate::spectral::iso_reference`]), the distance along
+//! each pixel's ray between the device's point and the f64 root.
+
+use std::sync::Arc;
+
+use anyhow::{bail, Result};
+
+use crate::gpu::Gpu;
+use crate::render::{ColorFormat, Colormap, Pixels, RenderTarget};
+use crate::spectral::iso_reference::{compare, iso_reference};
+use crate::spectral::proxy::value_bounds;
+use crate::spectral::render::fit_camera;
+use crate::spectral::{generate, NodeSet, SpectralMesh, SpectralRenderer, SpectralView};
+
+/// The image the frames are timed at.
+pub const TIMED_SIZE: (u32, u32) = (640, 480);
+/// The image the accuracy is checked at (the f64 ray caster's cost grows with the pixels).
+pub const CHECKED_SIZE: (u32, u32) = (200, 150);
+
+/// The default meshes: the generated shell (72 curved hexahedra) at orders 3 and 6.
+pub fn default_meshes() -> Result<Vec<(String, SpectralMesh)>> {
+    [3, 6]
+        .into_iter()
+        .map(|n| Ok((format!("shell, order {n}"), generate::by_name("shell", 3, n, NodeSet::GaussLobatto)?)))
+        .collect()
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    crate::bench::median_f64(&mut v)
+}
+
+/// The isosurface table on `gpu` as Markdown through `emit`, per mesh (name, mesh): iso values
+/// at 30 % and 60 % of the field's range, the median device time of `frames` isosurface
+/// frames and of as many cut-plane frames (the plane z through the mesh's middle), the
+/// elements the value bounds cull, and the accuracy against the f64 ray caster at
+/// [`CHECKED_SIZE`].
+pub fn report(
+    gpu: &Gpu,
+    meshes: Vec<(String, SpectralMesh)>,
+    frames: usize,
+    emit: &mut dyn FnMut(&str),
+) -> Result<()> {
+    macro_rules! say {
+        ($($t:tt)*) => { emit(&format!("{}\n", format_args!($($t)*))) };
+    }
+    let frames = frames.max(1);
+    let c = gpu.caps();
+    let (w, h) = TIMED_SIZE;
+    let (cw, ch) = CHECKED_SIZE;
+    say!(
+        "Device: {} ({}); {w}×{h}, median device time of {frames} frames, isosurfaces and the cut plane z = middle interleaved frame by frame; iso values at 30 % and 60 % of the field's range; accuracy at {cw}×{ch} against the f64 ray caster (distances along the ray, in units of the mesh's diagonal).\n",
+        c.device_name, c.driver
+    );
+    say!("| data | elements drawn / all | cut ms | iso ms | iso ÷ cut | pixels shown | matched | worst (of bound) | worst distance | mean distance | grazing | mismatched |");
+    say!("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
+    let mut profiler = crate::gpu::Profiler::new(gpu, 1)?;
+    let colormap = Colormap::viridis();
+    for (name, mesh) in meshes {
+        if !mesh.shape.is_volume() {
+            bail!("{name}: isosurfaces need a hexahedral or tetrahedral mesh, not {:?}s", mesh.shape);
+        }
+        let mesh = Arc::new(mesh);
+        let (lo, hi) = mesh.value_range(0, 0);
+        let values = vec![lo + 0.3 * (hi - lo), lo + 0.6 * (hi - lo)];
+        let drawn = value_bounds(&mesh, 0, 0)?
+            .iter()
+            .filter(|b| values.iter().any(|&v| v >= b[0] && v <= b[1]))
+            .count();
+        let (blo, bhi) = mesh.bounds();
+        let diag = (0..3).map(|a| (bhi[a] - blo[a]).powi(2)).sum::<f64>().sqrt();
+        let mut renderer = SpectralRenderer::new(gpu, mesh.clone(), &colormap)?;
+        let target = RenderTarget::new(gpu, "bench iso", w, h, ColorFormat::Rgba8)?;
+        let iso = SpectralView { iso: values.clone(), overdraw: false, ..SpectralView::default() };
+        let cut = SpectralView {
+            cuts: vec![[0.0, 0.0, 1.0, 0.5 * (blo[2] + bhi[2])]],
+            overdraw: false,
+            ..SpectralView::default()
+        };
+        let (mut cut_ms, mut iso_ms) = (Vec::new(), Vec::new());
+        for round in 0..frames + 1 {
+            let a = renderer.frame(&target, &cut, &mut profiler)?;
+            let b = renderer.frame(&target, &iso, &mut profiler)?;
+            if round >= 1 {
+                cut_ms.push(a);
+                iso_ms.push(b);
+            }
+        }
+        let (a, b) = (median(cut_ms), median(iso_ms));
+        let data = RenderTarget::new(gpu, "bench iso data", cw, ch, ColorFormat::Rgba32F)?;
+        let Pixels::Rgba32F(pixels) = renderer.render(&data, &iso)? else {
+            bail!("a float target returned bytes")
+        };
+        let reference = iso_reference(&mesh, (0, 0), &fit_camera(&mesh), &values, CHECKED_SIZE);
+        let g = compare(&mesh, (0, 0), &pixels, &reference);
+        say!(
+            "| {name} | {drawn} / {} | {a:.1} | {b:.1} | {:.1}× | {} | {} | {:.3} | {:.1e} | {:.1e} | {} | {} |",
+            mesh.elements(),
+            b / a,
+            g.shown,
+            g.matched,
+            g.worst_of_bound,
+            g.worst_along_ray / diag,
+            g.mean_along_ray / diag,
+            g.grazing,
+            g.mismatched.len()
+        );
+    }
+    Ok(())
+}
