@@ -15,6 +15,28 @@ fn median(mut v: Vec<f64>) -> f64 {
     crate::bench::median_f64(&mut v)
 }
 
+/// The median device times (ms) of two views drawn in turn, frame by frame, `frames` times
+/// after `warmup` unmeasured rounds, so the machine's drift hits both alike.
+pub(crate) fn interleaved_medians(
+    renderer: &mut SpectralRenderer,
+    target: &RenderTarget,
+    views: [&SpectralView; 2],
+    frames: usize,
+    warmup: usize,
+    profiler: &mut crate::gpu::Profiler,
+) -> Result<(f64, f64)> {
+    let (mut a, mut b) = (Vec::new(), Vec::new());
+    for round in 0..frames + warmup {
+        let ta = renderer.frame(target, views[0], profiler)?;
+        let tb = renderer.frame(target, views[1], profiler)?;
+        if round >= warmup {
+            a.push(ta);
+            b.push(tb);
+        }
+    }
+    Ok((median(a), median(b)))
+}
+
 /// Covered pixels of `view` (a data pass): the fragments the per-pixel path shades.
 fn covered(
     renderer: &mut SpectralRenderer,

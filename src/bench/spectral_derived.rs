@@ -89,16 +89,14 @@ pub fn report(gpu: &Gpu, frames: usize, emit: &mut dyn FnMut(&str)) -> Result<()
             d.compile_fragment(kind, mesh.elements())?;
             let compile_ms = start.elapsed().as_secs_f64() * 1e3;
             let derived = SpectralView { expression: Some(d.clone()), ..plain.clone() };
-            let (mut field_ms, mut derived_ms) = (Vec::new(), Vec::new());
-            for round in 0..frames + 2 {
-                let a = renderer.frame(&target, &plain, &mut profiler)?;
-                let b = renderer.frame(&target, &derived, &mut profiler)?;
-                if round >= 2 {
-                    field_ms.push(a);
-                    derived_ms.push(b);
-                }
-            }
-            let (f, dv) = (median(field_ms), median(derived_ms));
+            let (f, dv) = super::spectral::interleaved_medians(
+                &mut renderer,
+                &target,
+                [&plain, &derived],
+                frames,
+                2,
+                &mut profiler,
+            )?;
             let Pixels::Rgba32F(pixels) = renderer.render(&data, &derived)? else {
                 bail!("a float target returned bytes")
             };

@@ -28,10 +28,6 @@ pub fn default_meshes() -> Result<Vec<(String, SpectralMesh)>> {
         .collect()
 }
 
-fn median(mut v: Vec<f64>) -> f64 {
-    crate::bench::median_f64(&mut v)
-}
-
 /// The isosurface table on `gpu` as Markdown through `emit`, per mesh (name, mesh): iso values
 /// at 30 % and 60 % of the field's range, the median device time of `frames` isosurface
 /// frames and of as many cut-plane frames (the plane z through the mesh's middle), the
@@ -70,7 +66,7 @@ pub fn report(
             .filter(|b| values.iter().any(|&v| v >= b[0] && v <= b[1]))
             .count();
         let (blo, bhi) = mesh.bounds();
-        let diag = (0..3).map(|a| (bhi[a] - blo[a]).powi(2)).sum::<f64>().sqrt();
+        let diag = mesh.diagonal();
         let mut renderer = SpectralRenderer::new(gpu, mesh.clone(), &colormap)?;
         let target = RenderTarget::new(gpu, "bench iso", w, h, ColorFormat::Rgba8)?;
         let iso = SpectralView { iso: values.clone(), overdraw: false, ..SpectralView::default() };
@@ -79,16 +75,14 @@ pub fn report(
             overdraw: false,
             ..SpectralView::default()
         };
-        let (mut cut_ms, mut iso_ms) = (Vec::new(), Vec::new());
-        for round in 0..frames + 1 {
-            let a = renderer.frame(&target, &cut, &mut profiler)?;
-            let b = renderer.frame(&target, &iso, &mut profiler)?;
-            if round >= 1 {
-                cut_ms.push(a);
-                iso_ms.push(b);
-            }
-        }
-        let (a, b) = (median(cut_ms), median(iso_ms));
+        let (a, b) = super::spectral::interleaved_medians(
+            &mut renderer,
+            &target,
+            [&cut, &iso],
+            frames,
+            1,
+            &mut profiler,
+        )?;
         let data = RenderTarget::new(gpu, "bench iso data", cw, ch, ColorFormat::Rgba32F)?;
         let Pixels::Rgba32F(pixels) = renderer.render(&data, &iso)? else {
             bail!("a float target returned bytes")

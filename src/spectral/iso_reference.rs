@@ -232,8 +232,7 @@ pub fn compare(
     pixels: &[f32],
     reference: &[Option<IsoHit>],
 ) -> IsoAgreement {
-    let (blo, bhi) = mesh.bounds();
-    let diag = (0..3).map(|a| (bhi[a] - blo[a]).powi(2)).sum::<f64>().sqrt();
+    let diag = mesh.diagonal();
     let mut out = IsoAgreement::default();
     let mut sum = 0.0;
     for (k, want) in reference.iter().enumerate() {

@@ -273,6 +273,12 @@ impl SpectralMesh {
         bounds_of(&self.points)
     }
 
+    /// The length of the diagonal of [`SpectralMesh::bounds`]: the mesh's size.
+    pub fn diagonal(&self) -> f64 {
+        let (lo, hi) = self.bounds();
+        (0..3).map(|a| (hi[a] - lo[a]).powi(2)).sum::<f64>().sqrt()
+    }
+
     /// Whether this is a quadrilateral or triangle mesh with z = 0 at every geometry point
     /// (drawn in 2D).
     pub fn is_planar(&self) -> bool {

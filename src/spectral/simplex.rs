@@ -345,12 +345,9 @@ impl ToBernstein {
 
     /// The Bernstein control points of an element whose nodes (our layout) are at `points`.
     pub fn control_points(&self, points: &[[f64; 3]]) -> Vec<[f64; 3]> {
-        (0..self.count)
-            .map(|row| {
-                let line = &self.inverse[row * self.count..(row + 1) * self.count];
-                std::array::from_fn(|c| line.iter().zip(points).map(|(w, p)| w * p[c]).sum())
-            })
-            .collect()
+        let per: [Vec<f64>; 3] =
+            std::array::from_fn(|c| self.control_values(&points.iter().map(|p| p[c]).collect::<Vec<_>>()));
+        (0..self.count).map(|k| [per[0][k], per[1][k], per[2][k]]).collect()
     }
 }
 
