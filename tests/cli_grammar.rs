@@ -211,3 +211,32 @@ fn redirected_training_output_has_progress_lines_and_no_escape_codes() {
     );
     assert!(err.contains("radiosity train: "), "no stage lines: {err}");
 }
+
+/// `--volume`'s bad inputs are refused before any picture is written, each naming what is
+/// wrong: a quadrilateral mesh, an inverted or empty opacity ramp, a transfer file's bad line,
+/// and the ramp flags without `--volume` (a usage error).
+#[test]
+fn bad_volume_views_and_transfer_functions_are_refused_by_name() {
+    let dir = tempfile::Builder::new().prefix("galerkin-").tempdir().expect("scratch");
+    let data = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/vtk");
+    let quads = data.join("quad_default.vtu");
+    let tets = data.join("tet_cube_o3.vtu");
+    let out_png = dir.path().join("v.png");
+    let bad_file = dir.path().join("tf.txt");
+    std::fs::write(&bad_file, "0 0\n1 one\n").expect("written");
+    let (q, t, o, b) = (quads.to_str(), tets.to_str(), out_png.to_str(), bad_file.to_str());
+    let (Some(q), Some(t), Some(o), Some(b)) = (q, t, o, b) else { panic!("non-UTF-8 paths") };
+    for (args, what) in [
+        (vec!["spectral", "render", q, "--volume", "--out", o], "hexahedral and tetrahedral meshes"),
+        (vec!["spectral", "render", t, "--volume", "--opacity", "1:0,0:1", "--out", o], "inverted"),
+        (vec!["spectral", "render", t, "--volume", "--opacity", "0:0,1:0", "--out", o], "empty"),
+        (vec!["spectral", "render", t, "--volume", "--transfer", b, "--out", o], "tf.txt:2"),
+    ] {
+        let out = galerkin(&args);
+        assert!(!out.status.success(), "{args:?} succeeded");
+        assert!(stderr(&out).contains(what), "{args:?}: {}", stderr(&out));
+        assert!(!out_png.exists(), "{args:?} wrote a picture");
+    }
+    let out = galerkin(&["spectral", "render", t, "--opacity", "0:0,1:1", "--out", o]);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+}

@@ -20,6 +20,7 @@ pub mod spacetime;
 pub mod spectral;
 pub mod spectral_derived;
 pub mod spectral_iso;
+pub mod spectral_volume;
 
 use std::time::{Duration, Instant};
 

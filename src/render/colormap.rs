@@ -91,6 +91,39 @@ impl Colormap {
         Ok(Self { name: path.display().to_string(), texels })
     }
 
+    /// A ramp through colour points (x, [r, g, b] in [0, 1]) — ParaView's `RGBPoints` — with x
+    /// strictly increasing: its first and last x span the ramp, colours linear between points,
+    /// sampled to [`RAMP_TEXELS`] texels.
+    pub fn from_points(name: &str, points: &[(f64, [f64; 3])]) -> Result<Self, String> {
+        if points.len() < 2 {
+            return Err(format!("{} colour points; a ramp needs at least 2", points.len()));
+        }
+        for (k, w) in points.windows(2).enumerate() {
+            if !(w[0].0.is_finite() && w[1].0.is_finite()) || w[1].0 <= w[0].0 {
+                return Err(format!(
+                    "colour point {}'s x {} does not follow {} (x must increase)",
+                    k + 1,
+                    w[1].0,
+                    w[0].0
+                ));
+            }
+        }
+        if let Some(k) = points.iter().position(|p| p.1.iter().any(|c| !(0.0..=1.0).contains(c))) {
+            return Err(format!("colour point {k}: {:?} is not in [0, 1]", points[k].1));
+        }
+        let (x0, x1) = (points[0].0, points[points.len() - 1].0);
+        let texels = (0..RAMP_TEXELS)
+            .map(|k| {
+                let x = x0 + (x1 - x0) * k as f64 / (RAMP_TEXELS - 1) as f64;
+                let i = points.windows(2).position(|w| x <= w[1].0).unwrap_or(points.len() - 2);
+                let (a, b) = (points[i], points[i + 1]);
+                let f = ((x - a.0) / (b.0 - a.0)).clamp(0.0, 1.0);
+                quantise(std::array::from_fn(|c| a.1[c] * (1.0 - f) + b.1[c] * f))
+            })
+            .collect();
+        Ok(Self { name: name.to_string(), texels })
+    }
+
     /// By name (`viridis`, `cool-warm`, `grey`) or, failing that, as the path of a ramp PNG.
     pub fn by_name(name: &str) -> Result<Self, RenderError> {
         match name.to_ascii_lowercase().as_str() {

@@ -44,10 +44,7 @@ pub fn iso_reference(
     values: &[f64],
     (width, height): (u32, u32),
 ) -> Vec<Option<IsoHit>> {
-    let boxes: Vec<([f64; 3], [f64; 3])> = match super::render::element_boxes(mesh) {
-        Ok(b) => b.chunks_exact(2).map(|p| (p[0], p[1])).map(|(a, b)| (f3(a), f3(b))).collect(),
-        Err(_) => return vec![None; (width * height) as usize],
-    };
+    let Some(boxes) = reference_boxes(mesh) else { return vec![None; (width * height) as usize] };
     let eye = camera.eye;
     (0..width * height)
         .into_par_iter()
@@ -71,12 +68,16 @@ pub fn iso_reference(
         .collect()
 }
 
-fn f3(p: [f32; 4]) -> [f64; 3] {
-    [p[0], p[1], p[2]].map(f64::from)
+/// Each element's box ([`super::render::element_boxes`]) in f64: (lo, hi); `None` when the
+/// mesh has none (the ray casters then see nothing).
+pub(super) fn reference_boxes(mesh: &SpectralMesh) -> Option<Vec<([f64; 3], [f64; 3])>> {
+    let f3 = |p: [f32; 4]| [p[0], p[1], p[2]].map(f64::from);
+    let boxes = super::render::element_boxes(mesh).ok()?;
+    Some(boxes.chunks_exact(2).map(|p| (f3(p[0]), f3(p[1]))).collect())
 }
 
 /// The ray's parameters (from `o` along unit `d`, t ≥ 0) inside the box [lo, hi].
-fn slab(o: [f64; 3], d: [f64; 3], lo: [f64; 3], hi: [f64; 3]) -> Option<(f64, f64)> {
+pub(super) fn slab(o: [f64; 3], d: [f64; 3], lo: [f64; 3], hi: [f64; 3]) -> Option<(f64, f64)> {
     let (mut t0, mut t1) = (0.0f64, f64::INFINITY);
     for a in 0..3 {
         let (ta, tb) = ((lo[a] - o[a]) / d[a], (hi[a] - o[a]) / d[a]);

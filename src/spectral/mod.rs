@@ -40,8 +40,10 @@ pub mod reference;
 pub mod render;
 pub mod simplex;
 pub mod simplex_mesh;
+pub mod transfer;
 #[cfg(feature = "viewer")]
 pub mod viewer;
+pub mod volume_reference;
 pub mod vtu;
 
 pub use basis::{Basis1d, NodeSet, MAX_ORDER};

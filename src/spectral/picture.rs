@@ -71,6 +71,17 @@ pub fn check_view(mesh: &SpectralMesh, view: &SpectralView) -> Result<(), Spectr
     if let Some(d) = &view.expression {
         d.check_step(mesh, view.field, view.step)?;
     }
+    if view.volume.is_some() && !mesh.shape.is_volume() {
+        return Err(SpectralError::View(format!(
+            "--volume: volume rendering is for hexahedral and tetrahedral meshes; this one is of {:?}s",
+            mesh.shape
+        )));
+    }
+    if view.volume.is_some() && (!view.iso.is_empty() || !view.cuts.is_empty() || view.expression.is_some()) {
+        return Err(SpectralError::View(
+            "--volume cannot be combined with --iso, --cut or --expr yet".into(),
+        ));
+    }
     if view.log {
         match view.range {
             Some((lo, _)) if lo <= 0.0 => {
@@ -175,13 +186,22 @@ pub fn write_picture(
             let Pixels::Rgba32F(v) = renderer.render(&data, view)? else {
                 return Err(SpectralError::Missing("a float target returned bytes".into()));
             };
-            let names =
-                if hex { ["value", "plane", "zeta", "element"] } else { ["value", "xi", "eta", "element"] };
+            let names = if view.volume.is_some() {
+                ["red", "green", "blue", "transmittance"]
+            } else if !view.iso.is_empty() {
+                ["value", "distance", "iso_index", "element"]
+            } else if hex {
+                ["value", "plane", "zeta", "element"]
+            } else {
+                ["value", "xi", "eta", "element"]
+            };
             picture::write_exr(out, size, Some(&rgba), picture::float_channels(&v, &names))?;
         }
     }
     let [proxies, grids, lines] = renderer.primitive_counts();
-    let triangle_kind = if !view.iso.is_empty() {
+    let triangle_kind = if view.volume.is_some() {
+        "volume: a ray cast per pixel through the elements of its screen tile"
+    } else if !view.iso.is_empty() {
         "isosurfaces: a ray cast per pixel through each element's box"
     } else if mesh.shape.is_volume() {
         "cut planes: section rectangles cut out per pixel"

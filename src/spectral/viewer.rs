@@ -6,8 +6,11 @@
 //! colour range to its middle half, `R` restores it. Cut planes (hexahedral meshes): `n` adds
 //! a plane (through the middle, the next axis), `c` selects the next plane, `j`/`k` move the
 //! selected plane along its normal by 1/50 of the mesh, `o`/`O` turn its normal by 15° about
-//! z, `u`/`U` tilt it by 15° towards z, `x` deletes it. Surfaces and cut planes orbit with the
-//! viewer's camera; planar meshes stay fitted to the window.
+//! z, `u`/`U` tilt it by 15° towards z, `x` deletes it. Isosurfaces: `j`/`k` move the selected
+//! value by 1/50 of the field's range, `c` selects the next, `n` adds one in the middle of the
+//! range, `x` deletes it. Volumes: `k` more opaque, `j` less (the opacity unit distance ÷ or ×
+//! 1.25). Surfaces, cut planes, isosurfaces and volumes orbit with the viewer's camera; planar
+//! meshes stay fitted to the window.
 
 use std::sync::Arc;
 
@@ -63,7 +66,7 @@ impl SpectralContent {
         let centre: [f64; 3] = std::array::from_fn(|c| 0.5 * (lo[c] + hi[c]));
         let extent = (0..3).map(|c| hi[c] - lo[c]).fold(0.0, f64::max).max(1e-12);
         let mut view = view;
-        if mesh.shape.is_volume() && view.cuts.is_empty() {
+        if mesh.shape.is_volume() && view.cuts.is_empty() && view.iso.is_empty() && view.volume.is_none() {
             view.cuts.push([0.0, 0.0, 1.0, centre[2]]);
         }
         Self {
@@ -149,7 +152,16 @@ impl ViewerContent for SpectralContent {
             self.view.isolines,
             if self.view.edges { ", edges" } else { "" },
             if self.view.per_vertex { ", per-vertex colour" } else { ", per-pixel colour" },
-        ) + &if self.view.cuts.is_empty() {
+        ) + &if let Some(tf) = &self.view.volume {
+            format!(" — volume, opacity unit distance {:.4}", tf.unit_distance)
+        } else if !self.view.iso.is_empty() {
+            let values: Vec<String> = self.view.iso.iter().map(|v| format!("{v:.4}")).collect();
+            format!(
+                " — isosurfaces {}, value {} selected",
+                values.join(", "),
+                self.selected.min(values.len() - 1)
+            )
+        } else if self.view.cuts.is_empty() {
             String::new()
         } else {
             let c = self.view.cuts[self.selected];
@@ -227,7 +239,33 @@ impl ViewerContent for SpectralContent {
 
     fn key(&mut self, key: &str) -> bool {
         let steps = self.steps();
+        let iso = !self.view.iso.is_empty();
         match key {
+            // Isosurfaces: the selected value moves by 1/50 of the field's range, within it.
+            "j" | "k" if iso => {
+                let (lo, hi) = self.mesh.value_range(self.view.field, self.view.step);
+                let k = self.selected.min(self.view.iso.len() - 1);
+                let moved = self.view.iso[k] + if key == "k" { 1.0 } else { -1.0 } * (hi - lo) / 50.0;
+                self.view.iso[k] = moved.clamp(lo, hi);
+            }
+            "c" if iso => self.selected = (self.selected + 1) % self.view.iso.len(),
+            "n" if iso && self.view.iso.len() < super::render::MAX_ISO_VALUES => {
+                let (lo, hi) = self.mesh.value_range(self.view.field, self.view.step);
+                self.view.iso.push(0.5 * (lo + hi));
+                self.selected = self.view.iso.len() - 1;
+            }
+            "x" if iso && self.view.iso.len() > 1 => {
+                let k = self.selected.min(self.view.iso.len() - 1);
+                self.view.iso.remove(k);
+                self.selected = k.min(self.view.iso.len() - 1);
+            }
+            // A volume: more (k) or less (j) opaque, the unit distance divided or multiplied by
+            // 1.25.
+            "j" | "k" if self.view.volume.is_some() => {
+                if let Some(tf) = self.view.volume.as_mut() {
+                    tf.unit_distance *= if key == "k" { 0.8 } else { 1.25 };
+                }
+            }
             " " => self.playing = !self.playing,
             "." => self.view.step = (self.view.step + 1) % steps,
             "," => self.view.step = (self.view.step + steps - 1) % steps,
@@ -327,5 +365,37 @@ mod tests {
             "{:?} within {hi}",
             c.view.cuts[0]
         );
+    }
+
+    #[test]
+    fn iso_and_volume_keys_move_values_and_opacity() {
+        let mesh = Arc::new(hex_shell(1, 2, 1, 2, 2, NodeSet::GaussLobatto).unwrap());
+        let (lo, hi) = mesh.value_range(0, 0);
+        let view = SpectralView { iso: vec![0.5 * (lo + hi)], ..SpectralView::default() };
+        let mut c = SpectralContent::new(mesh.clone(), view, "viridis", (64, 64), false);
+        assert!(c.view.cuts.is_empty(), "no cut plane is added to an isosurface view");
+        assert!(c.key("k"));
+        assert!((c.view.iso[0] - (0.5 * (lo + hi) + (hi - lo) / 50.0)).abs() < 1e-12);
+        assert!(c.key("n") && c.view.iso.len() == 2 && c.selected == 1);
+        for _ in 0..100 {
+            c.key("j");
+        }
+        assert_eq!(c.view.iso[1], lo, "a value stops at the bottom of the range");
+        assert!(c.key("x") && c.view.iso.len() == 1 && c.selected == 0);
+        assert!(!c.key("x"), "the last value stays");
+        assert!(c.title().contains("isosurfaces"), "{}", c.title());
+        let tf = crate::spectral::transfer::TransferFunction::new(vec![(lo, 0.0), (hi, 0.5)], 1.0).unwrap();
+        let mut v = SpectralContent::new(
+            mesh,
+            SpectralView { volume: Some(tf), ..SpectralView::default() },
+            "viridis",
+            (64, 64),
+            false,
+        );
+        assert!(v.view.cuts.is_empty(), "no cut plane is added to a volume view");
+        assert!(v.key("k") && v.key("k"));
+        let unit = v.view.volume.as_ref().map(|t| t.unit_distance);
+        assert!(unit.is_some_and(|u| (u - 0.64).abs() < 1e-12), "{unit:?}");
+        assert!(v.title().contains("unit distance 0.64"), "{}", v.title());
     }
 }

@@ -38,7 +38,7 @@ pub(super) struct IsoPass {
     bounds_of: Option<(usize, usize)>,
     /// The count, then up to [`MAX_ISO_VALUES`] values (f32 bits).
     values: Buffer<u32>,
-    pipelines: HashMap<PassKey, (GraphicsPipeline, DescriptorSet)>,
+    pub(super) pipelines: HashMap<PassKey, (GraphicsPipeline, DescriptorSet)>,
 }
 
 /// Per element of a solid mesh, the box of its Bernstein control points (which contains it),

@@ -46,11 +46,13 @@ mod derived;
 mod iso;
 mod tessellate;
 mod view;
+mod volume;
 
 pub use crate::render::camera_for_box;
 pub use cut::plane_span;
 pub use iso::{element_boxes, MAX_ISO_VALUES};
 pub use view::{fit_camera, SpectralView, View2d};
+pub use volume::{tile_lists, VOLUME_TILE};
 
 /// How a spectral picture maps the world onto its pixels ([`SpectralRenderer::picture_view`]).
 #[derive(Clone, Copy, Debug)]
@@ -234,6 +236,8 @@ pub struct SpectralRenderer {
     cutter: Option<Cutter>,
     /// The isosurface pass, made on the first view that asks for isosurfaces.
     iso: Option<iso::IsoPass>,
+    /// The volume pass, made on the first view that asks for a volume.
+    volume: Option<volume::VolumePass>,
     /// Vertices the last surface frame reserved room for (the CPU bound of its tessellation).
     tessellated: u64,
     /// The inputs of the tessellation the vertex stream holds (view, scale, budget, cap,
@@ -316,6 +320,7 @@ impl SpectralRenderer {
             tessellator: None,
             cutter,
             iso: None,
+            volume: None,
             tessellated: 0,
             tessellation_key: std::cell::Cell::new(None),
         })
@@ -330,6 +335,12 @@ impl SpectralRenderer {
         }
         if let Some(c) = self.cutter.as_mut() {
             c.pipelines.clear();
+        }
+        if let Some(i) = self.iso.as_mut() {
+            i.pipelines.clear();
+        }
+        if let Some(v) = self.volume.as_mut() {
+            v.pipelines.clear();
         }
         Ok(())
     }
@@ -539,6 +550,9 @@ impl SpectralRenderer {
         target: &DrawTarget<'_>,
         view: &SpectralView,
     ) -> Result<(Box<dyn FnOnce(&mut Recorder<'_>) + '_>, Box<dyn FnOnce(&mut Recorder<'_>) + '_>)> {
+        if let Some(tf) = &view.volume {
+            return self.prepare_volume(target, view, tf);
+        }
         if !view.iso.is_empty() {
             return self.prepare_iso(target, view);
         }

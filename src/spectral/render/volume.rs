@@ -1,0 +1,344 @@
+//! Volume rendering of solid meshes (hexahedra and tetrahedra), per pixel: one triangle over the
+//! viewport (`volume.vert`); each fragment integrates emission–absorption along its ray through
+//! the elements its screen tile lists and composites them front to back (`volume.frag`). The
+//! tiles are binned here on the host every frame: each element's box (of its Bernstein control
+//! points) projected to the screen, and elements whose opacity is zero over their value bounds
+//! ([`proxy::value_bounds`]) left out. The f64 reference is
+//! [`crate::spectral::volume_reference`].
+
+use std::collections::HashMap;
+
+use ash::vk;
+use glam::{DMat4, DVec4};
+
+use super::*;
+use crate::gpu::Recorder;
+use crate::spectral::transfer::TransferFunction;
+
+/// Screen tile edge in pixels.
+pub const VOLUME_TILE: u32 = 16;
+
+/// Words before the per-tile ranges in the tile buffer (`volume.frag`'s header).
+const TILE_HEADER: usize = 8;
+
+/// Bindings of the volume pipeline: geometry, coefficients, colour map, element boxes,
+/// transfer function, tiles.
+const VOLUME_BINDINGS: [BindingKind; 6] = [
+    BindingKind::StorageBuffer,
+    BindingKind::StorageBuffer,
+    BindingKind::Texture,
+    BindingKind::StorageBuffer,
+    BindingKind::StorageBuffer,
+    BindingKind::StorageBuffer,
+];
+
+/// The volume pass's buffers and pipelines.
+pub(super) struct VolumePass {
+    /// Per element (lo, 0), (hi, 0): its box ([`super::element_boxes`]).
+    boxes: Buffer<[f32; 4]>,
+    corners: Vec<[f32; 4]>,
+    /// [`TransferFunction::device_words`].
+    transfer: Buffer<u32>,
+    /// The tile ranges and element lists of the last frame (grown when a frame needs more).
+    tiles: Buffer<u32>,
+    /// Per element its value bounds, for the (field, step) in `bounds_of`.
+    bounds: Vec<[f64; 2]>,
+    bounds_of: Option<(usize, usize)>,
+    /// Per target: the pipeline and its set (rebound when `tiles` grows).
+    pub(super) pipelines: HashMap<PassKey, (GraphicsPipeline, Option<DescriptorSet>)>,
+}
+
+/// The tile buffer of a `width` × `height` viewport whose corner is (`x`, `y`) in the
+/// framebuffer, for elements whose boxes (lo, hi pairs) `view_proj` projects: the header
+/// (tiles across and down, tile size, corner, padding), (first, count) per tile, then the
+/// element lists. An element is listed in every tile its box's projected rectangle (one pixel
+/// wider each side) touches; a box reaching behind the eye is listed everywhere; `keep`
+/// selects the elements at all.
+pub fn tile_lists(
+    boxes: &[[f32; 4]],
+    view_proj: &DMat4,
+    (x, y, width, height): (u32, u32, u32, u32),
+    keep: impl Fn(usize) -> bool,
+) -> Vec<u32> {
+    let (tx, ty) = (width.div_ceil(VOLUME_TILE).max(1), height.div_ceil(VOLUME_TILE).max(1));
+    let tiles = (tx * ty) as usize;
+    let mut lists: Vec<Vec<u32>> = vec![Vec::new(); tiles];
+    for (e, b) in boxes.chunks_exact(2).enumerate() {
+        if !keep(e) {
+            continue;
+        }
+        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+        let (mut behind, mut all_behind) = (false, true);
+        for k in 0..8 {
+            let c = std::array::from_fn::<f64, 3, _>(|a| {
+                f64::from(if k >> a & 1 == 1 { b[1][a] } else { b[0][a] })
+            });
+            let clip = *view_proj * DVec4::new(c[0], c[1], c[2], 1.0);
+            if clip.w <= 1e-9 {
+                behind = true;
+                continue;
+            }
+            all_behind = false;
+            let px = [
+                (clip.x / clip.w + 1.0) * 0.5 * f64::from(width),
+                (clip.y / clip.w + 1.0) * 0.5 * f64::from(height),
+            ];
+            for a in 0..2 {
+                lo[a] = lo[a].min(px[a]);
+                hi[a] = hi[a].max(px[a]);
+            }
+        }
+        if all_behind {
+            continue;
+        }
+        let (x0, x1, y0, y1) = if behind {
+            (0, tx - 1, 0, ty - 1)
+        } else {
+            let tile = |v: f64, n: u32, limit: u32| {
+                ((v / f64::from(VOLUME_TILE)).floor().clamp(0.0, f64::from(n - 1)) as u32).min(limit)
+            };
+            if hi[0] < -1.0
+                || hi[1] < -1.0
+                || lo[0] > f64::from(width) + 1.0
+                || lo[1] > f64::from(height) + 1.0
+            {
+                continue;
+            }
+            (
+                tile(lo[0] - 1.0, tx, tx - 1),
+                tile(hi[0] + 1.0, tx, tx - 1),
+                tile(lo[1] - 1.0, ty, ty - 1),
+                tile(hi[1] + 1.0, ty, ty - 1),
+            )
+        };
+        for j in y0..=y1 {
+            for i in x0..=x1 {
+                lists[(j * tx + i) as usize].push(e as u32);
+            }
+        }
+    }
+    let total: usize = lists.iter().map(Vec::len).sum();
+    let mut out = Vec::with_capacity(TILE_HEADER + 2 * tiles + total);
+    out.extend([tx, ty, VOLUME_TILE, x, y, 0, 0, 0]);
+    let mut first = (TILE_HEADER + 2 * tiles) as u32;
+    for l in &lists {
+        out.extend([first, l.len() as u32]);
+        first += l.len() as u32;
+    }
+    for l in lists {
+        out.extend(l);
+    }
+    out
+}
+
+/// The largest opacity `tf` takes over [lo, hi] (at the ends or a point between).
+fn max_alpha(tf: &TransferFunction, lo: f64, hi: f64) -> f64 {
+    let inner = tf.opacity.iter().filter(|p| p.0 > lo && p.0 < hi).map(|p| p.1);
+    inner.fold(tf.alpha(lo).max(tf.alpha(hi)), f64::max)
+}
+
+impl SpectralRenderer {
+    /// Checks a volume view: a solid mesh, no iso values, derived field or cut planes.
+    fn check_volume_view(&self, view: &SpectralView) -> Result<()> {
+        if !self.mesh.shape.is_volume() {
+            return Err(SpectralError::Missing(format!(
+                "volume rendering is for hexahedral and tetrahedral meshes; this one is of {:?}s",
+                self.mesh.shape
+            )));
+        }
+        if !view.iso.is_empty() || view.expression.is_some() || !view.cuts.is_empty() {
+            return Err(SpectralError::Missing(
+                "volume rendering together with isosurfaces, cut planes or a derived field is not drawn yet"
+                    .into(),
+            ));
+        }
+        Ok(())
+    }
+
+    fn volume_pipeline_for(&mut self, target: &DrawTarget<'_>) -> Result<()> {
+        if self.volume.is_none() {
+            let corners = element_boxes(&self.mesh)?;
+            let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
+            let boxes = Buffer::from_slice(&self.gpu, "spectral volume boxes", &corners, storage)
+                .map_err(dev("uploading"))?;
+            let words = 8 + 2 * crate::spectral::transfer::MAX_TRANSFER_POINTS as u64;
+            let transfer =
+                Buffer::new(&self.gpu, "spectral transfer function", words, storage, MemoryKind::GpuOnly)
+                    .map_err(dev("the volume pass"))?;
+            let tiles = Buffer::new(&self.gpu, "spectral volume tiles", 4096, storage, MemoryKind::GpuOnly)
+                .map_err(dev("the volume pass"))?;
+            self.volume = Some(VolumePass {
+                boxes,
+                corners,
+                transfer,
+                tiles,
+                bounds: Vec::new(),
+                bounds_of: None,
+                pipelines: HashMap::new(),
+            });
+        }
+        let key = target.key();
+        if self.volume.as_ref().is_some_and(|v| v.pipelines.contains_key(&key)) {
+            return Ok(());
+        }
+        target.require_depth("volume rendering").map_err(dev("building the volume pipeline"))?;
+        let mut desc = GraphicsPipelineDesc::new(
+            "spectral volume",
+            crate::spectral::shaders::VOLUME_VERT,
+            crate::spectral::shaders::VOLUME_FRAG,
+            target.render_pass(),
+        );
+        desc.bindings = &VOLUME_BINDINGS;
+        desc.specialization = &self.specialization;
+        desc.push = crate::gpu::PushLayout::of::<SpectralPush>();
+        let pipeline =
+            GraphicsPipeline::new(&self.gpu, &desc).map_err(dev("building the volume pipeline"))?;
+        if let Some(v) = self.volume.as_mut() {
+            v.pipelines.insert(key, (pipeline, None));
+        }
+        Ok(())
+    }
+
+    /// Bins this frame's tiles, uploads them (growing the buffer, which rebinds every set) and
+    /// the transfer function, and binds the target's pipeline.
+    fn volume_upload(
+        &mut self,
+        target: &DrawTarget<'_>,
+        view: &SpectralView,
+        tf: &TransferFunction,
+    ) -> Result<()> {
+        let (field, step) = (view.field, view.step);
+        if self.volume.as_ref().is_some_and(|v| v.bounds_of != Some((field, step))) {
+            let bounds = proxy::value_bounds(&self.mesh, field, step)?;
+            if let Some(v) = self.volume.as_mut() {
+                v.bounds = bounds;
+                v.bounds_of = Some((field, step));
+            }
+        }
+        let e = target.extent();
+        let camera = match self.picture_view(view, e.width, e.height) {
+            PictureView::Camera(c) => c,
+            PictureView::Plane(_) => return Err(SpectralError::Missing("a volume needs a camera".into())),
+        };
+        let vp = camera.view_proj(target.aspect());
+        let port = target.viewport();
+        let Some(v) = self.volume.as_mut() else { return Ok(()) };
+        let bounds = &v.bounds;
+        let words = tile_lists(&v.corners, &vp, (port.x, port.y, e.width, e.height), |k| {
+            bounds.get(k).is_none_or(|b| max_alpha(tf, b[0], b[1]) > 0.0)
+        });
+        let limit = self.gpu.caps().max_storage_buffer_range / 4;
+        if words.len() as u64 > limit {
+            return Err(SpectralError::Missing(format!(
+                "the volume's tile lists need {} words, over the device's storage binding of {limit}; draw a smaller picture",
+                words.len()
+            )));
+        }
+        if (words.len() as u64) > v.tiles.len() {
+            let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
+            let len = (words.len() as u64).next_power_of_two().min(limit);
+            v.tiles = Buffer::new(&self.gpu, "spectral volume tiles", len, storage, MemoryKind::GpuOnly)
+                .map_err(dev("the volume's tile lists"))?;
+            for p in v.pipelines.values_mut() {
+                p.1 = None;
+            }
+        }
+        v.tiles.upload(&self.gpu, 0, &words).map_err(dev("uploading the volume's tiles"))?;
+        let bg = crate::render::BACKGROUND;
+        v.transfer
+            .upload(&self.gpu, 0, &tf.device_words([bg[0], bg[1], bg[2]]))
+            .map_err(dev("uploading the transfer function"))?;
+        let key = target.key();
+        if self.volume.as_ref().is_some_and(|v| v.pipelines.get(&key).is_some_and(|p| p.1.is_none())) {
+            let r = self.resources()?;
+            let Some(v) = self.volume.as_ref() else { return Ok(()) };
+            let resources = [
+                r[0],
+                r[1],
+                r[2],
+                Resource::Storage(v.boxes.binding().map_err(dev("binding"))?),
+                Resource::Storage(v.transfer.binding().map_err(dev("binding"))?),
+                Resource::Storage(v.tiles.binding().map_err(dev("binding"))?),
+            ];
+            let set = v.pipelines[&key]
+                .0
+                .bind(&self.gpu, &resources)
+                .map_err(dev("binding the volume pipeline"))?;
+            if let Some(v) = self.volume.as_mut() {
+                if let Some(p) = v.pipelines.get_mut(&key) {
+                    p.1 = Some(set);
+                }
+            }
+        }
+        Ok(())
+    }
+
+    #[allow(clippy::type_complexity)]
+    pub(super) fn prepare_volume(
+        &mut self,
+        target: &DrawTarget<'_>,
+        view: &SpectralView,
+        tf: &TransferFunction,
+    ) -> Result<(Box<dyn FnOnce(&mut Recorder<'_>) + '_>, Box<dyn FnOnce(&mut Recorder<'_>) + '_>)> {
+        self.check_volume_view(view)?;
+        self.show(view)?;
+        self.volume_pipeline_for(target)?;
+        self.volume_upload(target, view, tf)?;
+        let push = self.push(target, view);
+        let extent = target.viewport();
+        let Some(v) = self.volume.as_ref() else {
+            return Err(SpectralError::Missing("the volume pass was not made".into()));
+        };
+        let (pipeline, Some(set)) = &v.pipelines[&target.key()] else {
+            return Err(SpectralError::Missing("the volume pipeline was not bound".into()));
+        };
+        let pre = move |rec: &mut Recorder<'_>| {
+            pipeline.declare_draw(rec, set, None, None);
+        };
+        let draw = move |rec: &mut Recorder<'_>| {
+            pipeline.record_draw(rec, extent, set, &push, None, 3);
+        };
+        Ok((Box::new(pre), Box::new(draw)))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A box in front of the camera is listed in the tiles its projection covers and no
+    /// others; one behind the eye nowhere; one reaching behind the eye everywhere.
+    #[test]
+    fn tiles_list_the_boxes_they_see() {
+        let camera = crate::render::Camera {
+            eye: [0.0, 0.0, 5.0],
+            target: [0.0, 0.0, 0.0],
+            up: [0.0, 1.0, 0.0],
+            fov_y_degrees: 45.0,
+            near: 0.1,
+            far: 100.0,
+        };
+        let vp = camera.view_proj(1.0);
+        let boxes = [
+            [-0.1, -0.1, -0.1, 0.0],
+            [0.1, 0.1, 0.1, 0.0],
+            [-0.1, -0.1, 6.0, 0.0],
+            [0.1, 0.1, 7.0, 0.0],
+            [-0.1, -0.1, 4.0, 0.0],
+            [0.1, 0.1, 6.0, 0.0],
+        ];
+        let w = tile_lists(&boxes, &vp, (0, 0, 64, 64), |_| true);
+        assert_eq!(&w[..5], &[4, 4, VOLUME_TILE, 0, 0]);
+        let listed = |tile: usize| -> Vec<u32> {
+            let (first, count) = (w[TILE_HEADER + 2 * tile] as usize, w[TILE_HEADER + 2 * tile + 1] as usize);
+            w[first..first + count].to_vec()
+        };
+        // The small box sits at the centre: the four middle tiles; the straddling one: all.
+        for tile in 0..16 {
+            let centre = matches!(tile, 5 | 6 | 9 | 10);
+            assert_eq!(listed(tile), if centre { vec![0, 2] } else { vec![2] }, "tile {tile}");
+        }
+        let none = tile_lists(&boxes, &vp, (0, 0, 64, 64), |_| false);
+        assert!((0..16).all(|t| none[TILE_HEADER + 2 * t + 1] == 0));
+    }
+}
