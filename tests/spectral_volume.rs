@@ -216,3 +216,27 @@ fn volume_views_that_cannot_be_drawn_are_refused() {
         assert!(err.contains(what), "{err}");
     }
 }
+
+/// A picture whose tile lists outgrow one buffer is drawn in bands of tile rows: with the
+/// budget cut to a few rows' worth, the same pixels as drawn whole, bit for bit (each pixel's
+/// ray is cast by the same code over the same elements).
+#[test]
+fn a_picture_over_the_tile_budget_is_drawn_in_bands() {
+    let gpu = common::gpu();
+    let mesh = Arc::new(load("tet_cube_o3.vtu"));
+    let tf = transfer(&mesh);
+    let view = SpectralView { volume: Some(tf), ..SpectralView::default() };
+    let target = RenderTarget::new(&gpu, "volume", 64, 48, ColorFormat::Rgba32F).expect("target");
+    let mut renderer = SpectralRenderer::new(&gpu, mesh, &Colormap::viridis()).expect("renderer");
+    let Pixels::Rgba32F(whole) = renderer.render(&target, &view).expect("rendered") else { panic!("bytes") };
+    // 4 × 3 tiles of 16 pixels, each listing at most the 6 tetrahedra: 8 + 2·4 + 24 words a row
+    // at most; 50 words hold one row, so three bands.
+    renderer.set_volume_tile_budget(50);
+    let Pixels::Rgba32F(banded) = renderer.render(&target, &view).expect("rendered") else { panic!("bytes") };
+    let same = whole.iter().zip(&banded).all(|(a, b)| a.to_bits() == b.to_bits());
+    assert!(same, "banded and whole pictures differ");
+    assert!(whole.chunks_exact(4).filter(|p| !p[3].is_nan()).count() > 300);
+    renderer.set_volume_tile_budget(10);
+    let err = renderer.render(&target, &view).expect_err("refused").to_string();
+    assert!(err.contains("one row of 4 screen tiles"), "{err}");
+}

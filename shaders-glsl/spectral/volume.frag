@@ -34,8 +34,9 @@ layout(std430, set = 0, binding = 4) readonly buffer Transfer {
     uint tf_pad[3];
     vec2 tf_points[];
 };
-// Screen tiles: tiles across, tiles down, tile size in pixels, the viewport's corner (x, y),
-// padding; then (first, count) per tile into the element list that follows.
+// Screen tiles of one band of rows: tiles across, tiles down, tile size in pixels, the
+// viewport's corner (x, y), the band's first row and the row after its last, padding; then
+// (first, count) per tile of the band into the element lists that follow (tile_bands).
 layout(std430, set = 0, binding = 5) readonly buffer Tiles { uint tiles[]; };
 layout(location = 0) out vec4 out_colour;
 
@@ -249,8 +250,9 @@ void main() {
     uint tile_size = tiles[2];
     uvec2 pixel = uvec2(gl_FragCoord.xy) - uvec2(tiles[3], tiles[4]);
     uvec2 tile = pixel / tile_size;
-    if (tile.x >= tiles[0] || tile.y >= tiles[1]) discard;
-    uint at = 8u + 2u * (tile.y * tiles[0] + tile.x);
+    // This band's rows only (a picture whose lists outgrow one buffer is drawn band by band).
+    if (tile.x >= tiles[0] || tile.y < tiles[5] || tile.y >= tiles[6]) discard;
+    uint at = 8u + 2u * ((tile.y - tiles[5]) * tiles[0] + tile.x);
     uint first = tiles[at], count = tiles[at + 1u];
     vec3 inv = 1.0 / d;
     vec3 C_total = vec3(0.0);

@@ -52,7 +52,7 @@ pub use crate::render::camera_for_box;
 pub use cut::plane_span;
 pub use iso::{element_boxes, MAX_ISO_VALUES};
 pub use view::{fit_camera, SpectralView, View2d};
-pub use volume::{tile_lists, VOLUME_TILE};
+pub use volume::{tile_bands, VOLUME_TILE};
 
 /// How a spectral picture maps the world onto its pixels ([`SpectralRenderer::picture_view`]).
 #[derive(Clone, Copy, Debug)]
@@ -238,6 +238,9 @@ pub struct SpectralRenderer {
     iso: Option<iso::IsoPass>,
     /// The volume pass, made on the first view that asks for a volume.
     volume: Option<volume::VolumePass>,
+    /// The most words one of the volume's tile buffers may hold
+    /// ([`Self::set_volume_tile_budget`]).
+    volume_budget: u64,
     /// Vertices the last surface frame reserved room for (the CPU bound of its tessellation).
     tessellated: u64,
     /// The inputs of the tessellation the vertex stream holds (view, scale, budget, cap,
@@ -321,6 +324,7 @@ impl SpectralRenderer {
             cutter,
             iso: None,
             volume: None,
+            volume_budget: u64::MAX,
             tessellated: 0,
             tessellation_key: std::cell::Cell::new(None),
         })

@@ -39,30 +39,34 @@ pub(super) struct VolumePass {
     corners: Vec<[f32; 4]>,
     /// [`TransferFunction::device_words`].
     transfer: Buffer<u32>,
-    /// The tile ranges and element lists of the last frame (grown when a frame needs more).
-    tiles: Buffer<u32>,
+    /// The tile ranges and element lists of the last frame, one buffer per band (grown when a
+    /// frame needs more).
+    tiles: Vec<Buffer<u32>>,
     /// Per element its value bounds, for the (field, step) in `bounds_of`.
     bounds: Vec<[f64; 2]>,
     bounds_of: Option<(usize, usize)>,
-    /// Per target: the pipeline and its set (rebound when `tiles` grows).
-    pub(super) pipelines: HashMap<PassKey, (GraphicsPipeline, Option<DescriptorSet>)>,
+    /// Per target: the pipeline and a set per band (bound anew when `tiles` changes).
+    pub(super) pipelines: HashMap<PassKey, (GraphicsPipeline, Vec<DescriptorSet>)>,
 }
 
-/// The tile buffer of a `width` × `height` viewport whose corner is (`x`, `y`) in the
-/// framebuffer, for elements whose boxes (lo, hi pairs) `view_proj` projects: the header
-/// (tiles across and down, tile size, corner, padding), (first, count) per tile, then the
-/// element lists. An element is listed in every tile its box's projected rectangle (one pixel
-/// wider each side) touches; a box reaching behind the eye is listed everywhere; `keep`
-/// selects the elements at all.
-pub fn tile_lists(
+/// The tile buffers of a `width` × `height` viewport whose corner is (`x`, `y`) in the
+/// framebuffer, for elements whose boxes (lo, hi pairs) `view_proj` projects, in bands of
+/// whole tile rows each at most `budget` words long (a device binds at most
+/// `maxStorageBufferRange` bytes of one buffer: a picture whose lists need more is drawn band
+/// by band). Each band: the header (tiles across and down, tile size, corner, its first row and
+/// the row after its last, padding), (first, count) per tile of its rows, then their element
+/// lists. An element is listed in every tile its box's projected rectangle (one pixel wider
+/// each side) touches; a box reaching behind the eye is listed everywhere; `keep` selects the
+/// elements at all. An error when one row of tiles alone is over the budget.
+pub fn tile_bands(
     boxes: &[[f32; 4]],
     view_proj: &DMat4,
     (x, y, width, height): (u32, u32, u32, u32),
     keep: impl Fn(usize) -> bool,
-) -> Vec<u32> {
+    budget: u64,
+) -> std::result::Result<Vec<Vec<u32>>, String> {
     let (tx, ty) = (width.div_ceil(VOLUME_TILE).max(1), height.div_ceil(VOLUME_TILE).max(1));
-    let tiles = (tx * ty) as usize;
-    let mut lists: Vec<Vec<u32>> = vec![Vec::new(); tiles];
+    let mut lists: Vec<Vec<u32>> = vec![Vec::new(); (tx * ty) as usize];
     for (e, b) in boxes.chunks_exact(2).enumerate() {
         if !keep(e) {
             continue;
@@ -94,9 +98,6 @@ pub fn tile_lists(
         let (x0, x1, y0, y1) = if behind {
             (0, tx - 1, 0, ty - 1)
         } else {
-            let tile = |v: f64, n: u32, limit: u32| {
-                ((v / f64::from(VOLUME_TILE)).floor().clamp(0.0, f64::from(n - 1)) as u32).min(limit)
-            };
             if hi[0] < -1.0
                 || hi[1] < -1.0
                 || lo[0] > f64::from(width) + 1.0
@@ -104,12 +105,9 @@ pub fn tile_lists(
             {
                 continue;
             }
-            (
-                tile(lo[0] - 1.0, tx, tx - 1),
-                tile(hi[0] + 1.0, tx, tx - 1),
-                tile(lo[1] - 1.0, ty, ty - 1),
-                tile(hi[1] + 1.0, ty, ty - 1),
-            )
+            let tile =
+                |v: f64, n: u32| (v / f64::from(VOLUME_TILE)).floor().clamp(0.0, f64::from(n - 1)) as u32;
+            (tile(lo[0] - 1.0, tx), tile(hi[0] + 1.0, tx), tile(lo[1] - 1.0, ty), tile(hi[1] + 1.0, ty))
         };
         for j in y0..=y1 {
             for i in x0..=x1 {
@@ -117,18 +115,40 @@ pub fn tile_lists(
             }
         }
     }
-    let total: usize = lists.iter().map(Vec::len).sum();
-    let mut out = Vec::with_capacity(TILE_HEADER + 2 * tiles + total);
-    out.extend([tx, ty, VOLUME_TILE, x, y, 0, 0, 0]);
-    let mut first = (TILE_HEADER + 2 * tiles) as u32;
-    for l in &lists {
-        out.extend([first, l.len() as u32]);
-        first += l.len() as u32;
+    // Rows into bands, greedily.
+    let row_words = |j: u32| -> u64 {
+        let row = &lists[(j * tx) as usize..((j + 1) * tx) as usize];
+        2 * u64::from(tx) + row.iter().map(|l| l.len() as u64).sum::<u64>()
+    };
+    let mut bands = Vec::new();
+    let mut row0 = 0;
+    while row0 < ty {
+        let mut words = TILE_HEADER as u64 + row_words(row0);
+        if words > budget {
+            return Err(format!(
+                "one row of {tx} screen tiles lists {words} words of elements, over the {budget} one buffer may hold; draw a smaller picture"
+            ));
+        }
+        let mut row1 = row0 + 1;
+        while row1 < ty && words + row_words(row1) <= budget {
+            words += row_words(row1);
+            row1 += 1;
+        }
+        let band = &lists[(row0 * tx) as usize..(row1 * tx) as usize];
+        let mut out = Vec::with_capacity(words as usize);
+        out.extend([tx, ty, VOLUME_TILE, x, y, row0, row1, 0]);
+        let mut first = (TILE_HEADER + 2 * band.len()) as u32;
+        for l in band {
+            out.extend([first, l.len() as u32]);
+            first += l.len() as u32;
+        }
+        for l in band {
+            out.extend_from_slice(l);
+        }
+        bands.push(out);
+        row0 = row1;
     }
-    for l in lists {
-        out.extend(l);
-    }
-    out
+    Ok(bands)
 }
 
 /// The largest opacity `tf` takes over [lo, hi] (at the ends or a point between).
@@ -138,6 +158,14 @@ fn max_alpha(tf: &TransferFunction, lo: f64, hi: f64) -> f64 {
 }
 
 impl SpectralRenderer {
+    /// Caps the words one of the volume's tile buffers may hold (default: what the device binds
+    /// at once, `maxStorageBufferRange`): a frame whose tile lists need more is drawn in bands
+    /// of tile rows, one buffer and one draw each. For embedders that share a memory budget,
+    /// and for the tests, which draw a picture in bands and whole and compare.
+    pub fn set_volume_tile_budget(&mut self, words: u64) {
+        self.volume_budget = words;
+    }
+
     /// Checks a volume view: a solid mesh, no iso values, derived field or cut planes.
     fn check_volume_view(&self, view: &SpectralView) -> Result<()> {
         if !self.mesh.shape.is_volume() {
@@ -165,13 +193,11 @@ impl SpectralRenderer {
             let transfer =
                 Buffer::new(&self.gpu, "spectral transfer function", words, storage, MemoryKind::GpuOnly)
                     .map_err(dev("the volume pass"))?;
-            let tiles = Buffer::new(&self.gpu, "spectral volume tiles", 4096, storage, MemoryKind::GpuOnly)
-                .map_err(dev("the volume pass"))?;
             self.volume = Some(VolumePass {
                 boxes,
                 corners,
                 transfer,
-                tiles,
+                tiles: Vec::new(),
                 bounds: Vec::new(),
                 bounds_of: None,
                 pipelines: HashMap::new(),
@@ -194,7 +220,7 @@ impl SpectralRenderer {
         let pipeline =
             GraphicsPipeline::new(&self.gpu, &desc).map_err(dev("building the volume pipeline"))?;
         if let Some(v) = self.volume.as_mut() {
-            v.pipelines.insert(key, (pipeline, None));
+            v.pipelines.insert(key, (pipeline, Vec::new()));
         }
         Ok(())
     }
@@ -224,50 +250,67 @@ impl SpectralRenderer {
         let port = target.viewport();
         let Some(v) = self.volume.as_mut() else { return Ok(()) };
         let bounds = &v.bounds;
-        let words = tile_lists(&v.corners, &vp, (port.x, port.y, e.width, e.height), |k| {
-            bounds.get(k).is_none_or(|b| max_alpha(tf, b[0], b[1]) > 0.0)
-        });
-        let limit = self.gpu.caps().max_storage_buffer_range / 4;
-        if words.len() as u64 > limit {
-            return Err(SpectralError::Missing(format!(
-                "the volume's tile lists need {} words, over the device's storage binding of {limit}; draw a smaller picture",
-                words.len()
-            )));
+        let limit = (self.gpu.caps().max_storage_buffer_range / 4).min(self.volume_budget);
+        let bands = tile_bands(
+            &v.corners,
+            &vp,
+            (port.x, port.y, e.width, e.height),
+            |k| bounds.get(k).is_none_or(|b| max_alpha(tf, b[0], b[1]) > 0.0),
+            limit,
+        )
+        .map_err(SpectralError::Missing)?;
+        let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
+        let mut rebind = bands.len() != v.tiles.len();
+        v.tiles.truncate(bands.len());
+        for (k, words) in bands.iter().enumerate() {
+            if v.tiles.get(k).is_none_or(|b| (words.len() as u64) > b.len()) {
+                // Room to grow (a power of two, at least 4,096 words), within the budget.
+                let need = words.len() as u64;
+                let len = need.next_power_of_two().max(4096).min(limit).max(need);
+                let buffer =
+                    Buffer::new(&self.gpu, "spectral volume tiles", len, storage, MemoryKind::GpuOnly)
+                        .map_err(dev("the volume's tile lists"))?;
+                if k < v.tiles.len() {
+                    v.tiles[k] = buffer;
+                } else {
+                    v.tiles.push(buffer);
+                }
+                rebind = true;
+            }
+            v.tiles[k].upload(&self.gpu, 0, words).map_err(dev("uploading the volume's tiles"))?;
         }
-        if (words.len() as u64) > v.tiles.len() {
-            let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
-            let len = (words.len() as u64).next_power_of_two().min(limit);
-            v.tiles = Buffer::new(&self.gpu, "spectral volume tiles", len, storage, MemoryKind::GpuOnly)
-                .map_err(dev("the volume's tile lists"))?;
+        if rebind {
             for p in v.pipelines.values_mut() {
-                p.1 = None;
+                p.1.clear();
             }
         }
-        v.tiles.upload(&self.gpu, 0, &words).map_err(dev("uploading the volume's tiles"))?;
         let bg = crate::render::BACKGROUND;
         v.transfer
             .upload(&self.gpu, 0, &tf.device_words([bg[0], bg[1], bg[2]]))
             .map_err(dev("uploading the transfer function"))?;
         let key = target.key();
-        if self.volume.as_ref().is_some_and(|v| v.pipelines.get(&key).is_some_and(|p| p.1.is_none())) {
+        if self.volume.as_ref().is_some_and(|v| v.pipelines.get(&key).is_some_and(|p| p.1.is_empty())) {
             let r = self.resources()?;
             let Some(v) = self.volume.as_ref() else { return Ok(()) };
-            let resources = [
-                r[0],
-                r[1],
-                r[2],
-                Resource::Storage(v.boxes.binding().map_err(dev("binding"))?),
-                Resource::Storage(v.transfer.binding().map_err(dev("binding"))?),
-                Resource::Storage(v.tiles.binding().map_err(dev("binding"))?),
-            ];
-            let set = v.pipelines[&key]
-                .0
-                .bind(&self.gpu, &resources)
-                .map_err(dev("binding the volume pipeline"))?;
-            if let Some(v) = self.volume.as_mut() {
-                if let Some(p) = v.pipelines.get_mut(&key) {
-                    p.1 = Some(set);
-                }
+            let mut sets = Vec::with_capacity(v.tiles.len());
+            for tiles in &v.tiles {
+                let resources = [
+                    r[0],
+                    r[1],
+                    r[2],
+                    Resource::Storage(v.boxes.binding().map_err(dev("binding"))?),
+                    Resource::Storage(v.transfer.binding().map_err(dev("binding"))?),
+                    Resource::Storage(tiles.binding().map_err(dev("binding"))?),
+                ];
+                sets.push(
+                    v.pipelines[&key]
+                        .0
+                        .bind(&self.gpu, &resources)
+                        .map_err(dev("binding the volume pipeline"))?,
+                );
+            }
+            if let Some(p) = self.volume.as_mut().and_then(|v| v.pipelines.get_mut(&key)) {
+                p.1 = sets;
             }
         }
         Ok(())
@@ -289,14 +332,21 @@ impl SpectralRenderer {
         let Some(v) = self.volume.as_ref() else {
             return Err(SpectralError::Missing("the volume pass was not made".into()));
         };
-        let (pipeline, Some(set)) = &v.pipelines[&target.key()] else {
+        let (pipeline, sets) = &v.pipelines[&target.key()];
+        if sets.is_empty() {
             return Err(SpectralError::Missing("the volume pipeline was not bound".into()));
-        };
+        }
         let pre = move |rec: &mut Recorder<'_>| {
-            pipeline.declare_draw(rec, set, None, None);
+            for set in sets {
+                pipeline.declare_draw(rec, set, None, None);
+            }
         };
+        // One triangle over the viewport per band; each band's fragments outside its rows
+        // return at once.
         let draw = move |rec: &mut Recorder<'_>| {
-            pipeline.record_draw(rec, extent, set, &push, None, 3);
+            for set in sets {
+                pipeline.record_draw(rec, extent, set, &push, None, 3);
+            }
         };
         Ok((Box::new(pre), Box::new(draw)))
     }
@@ -327,8 +377,10 @@ mod tests {
             [-0.1, -0.1, 4.0, 0.0],
             [0.1, 0.1, 6.0, 0.0],
         ];
-        let w = tile_lists(&boxes, &vp, (0, 0, 64, 64), |_| true);
-        assert_eq!(&w[..5], &[4, 4, VOLUME_TILE, 0, 0]);
+        let bands = tile_bands(&boxes, &vp, (0, 0, 64, 64), |_| true, u64::MAX).expect("binned");
+        assert_eq!(bands.len(), 1);
+        let w = &bands[0];
+        assert_eq!(&w[..7], &[4, 4, VOLUME_TILE, 0, 0, 0, 4]);
         let listed = |tile: usize| -> Vec<u32> {
             let (first, count) = (w[TILE_HEADER + 2 * tile] as usize, w[TILE_HEADER + 2 * tile + 1] as usize);
             w[first..first + count].to_vec()
@@ -338,7 +390,20 @@ mod tests {
             let centre = matches!(tile, 5 | 6 | 9 | 10);
             assert_eq!(listed(tile), if centre { vec![0, 2] } else { vec![2] }, "tile {tile}");
         }
-        let none = tile_lists(&boxes, &vp, (0, 0, 64, 64), |_| false);
-        assert!((0..16).all(|t| none[TILE_HEADER + 2 * t + 1] == 0));
+        let none = tile_bands(&boxes, &vp, (0, 0, 64, 64), |_| false, u64::MAX).expect("binned");
+        assert!((0..16).all(|t| none[0][TILE_HEADER + 2 * t + 1] == 0));
+        // A budget of two rows' worth: two bands of two rows, the same lists; one row over
+        // the budget is an error.
+        let row = TILE_HEADER as u64 + 2 * 4 + 4 + 2;
+        let split = tile_bands(&boxes, &vp, (0, 0, 64, 64), |_| true, row + 2 * 4 + 4 + 2).expect("binned");
+        assert_eq!(split.len(), 2);
+        assert_eq!((split[0][5], split[0][6], split[1][5], split[1][6]), (0, 2, 2, 4));
+        let rows: Vec<u32> = split
+            .iter()
+            .flat_map(|b| b[TILE_HEADER..TILE_HEADER + 16].iter().skip(1).step_by(2).copied())
+            .collect();
+        let whole: Vec<u32> = w[TILE_HEADER..TILE_HEADER + 32].iter().skip(1).step_by(2).copied().collect();
+        assert_eq!(rows, whole, "the same counts per tile");
+        assert!(tile_bands(&boxes, &vp, (0, 0, 64, 64), |_| true, row - 1).is_err());
     }
 }
