@@ -174,3 +174,76 @@ fn saddle_fixtures_and_value_bounds_agree_with_vtk_and_the_samples() {
         }
     }
 }
+
+/// Isosurfaces coloured by a second field (`--colour-by`, `iso_colour.frag`): the field v is the
+/// node interpolant of x + 2y − z, which on isoparametric elements is that linear function
+/// exactly (the geometry is interpolated by the same basis). At every pixel where the device
+/// draws a surface, the colouring value it reports must be v at its own root, x = eye + t d:
+/// within 4 (δv + √6 · 10⁻⁶ ℓ) — δv the f32 rounding bound of v there, 10⁻⁶ ℓ the point's error
+/// when Newton stops (10⁻⁶ in reference units, elements at most the diagonal ℓ across), √6 = |∇v|.
+/// The surfaces themselves are those of u: compared with the f64 ray caster as above.
+#[test]
+fn isosurfaces_coloured_by_a_second_field() {
+    use galerkin::spectral::reference::rounding_bound_hex;
+    use galerkin::spectral::Field;
+    let gpu = common::gpu();
+    let size = (64u32, 48u32);
+    let target = RenderTarget::new(&gpu, "iso colour", size.0, size.1, ColorFormat::Rgba32F).expect("target");
+    for name in ["tet_cube_o3.vtu", "hex_saddle_o6.vtu"] {
+        let mut mesh = load(name);
+        assert_eq!(mesh.values_per_element(), mesh.points_per_element(), "{name}: isoparametric");
+        let v: Vec<f64> = mesh.points.iter().map(|p| p[0] + 2.0 * p[1] - p[2]).collect();
+        mesh.fields.push(Field { name: "v".into(), times: vec![0.0], steps: vec![v] });
+        let mesh = Arc::new(mesh);
+        let (lo, hi) = mesh.value_range(0, 0);
+        let values = vec![lo + 0.3 * (hi - lo), lo + 0.6 * (hi - lo)];
+        let view = SpectralView {
+            iso: values.clone(),
+            colour_by: Some(1),
+            overdraw: false,
+            ..SpectralView::default()
+        };
+        let camera = fit_camera(&mesh);
+        let mut renderer = SpectralRenderer::new(&gpu, mesh.clone(), &Colormap::viridis()).expect("renderer");
+        let Pixels::Rgba32F(px) = renderer.render(&target, &view).expect("rendered") else { panic!("bytes") };
+        let reference = iso_reference(&mesh, (0, 0), &camera, &values, size);
+        let agreement = compare(&mesh, (0, 0), &px, &reference);
+        assert!(
+            agreement.shown > 300 && agreement.mismatched.len() * 200 <= agreement.shown,
+            "{name}: {agreement:?}"
+        );
+        let diag = mesh.diagonal();
+        let (mut checked, mut worst) = (0usize, 0.0f64);
+        for (k, hit) in reference.iter().enumerate() {
+            let p = &px[4 * k..4 * k + 4];
+            let Some(h) = hit else { continue };
+            if p[3].is_nan() {
+                continue;
+            }
+            let (_, d) = camera.pixel_ray(k as u32 % size.0, k as u32 / size.0, size.0, size.1);
+            let x: [f64; 3] = std::array::from_fn(|a| camera.eye[a] + f64::from(p[1]) * d[a]);
+            let exact = x[0] + 2.0 * x[1] - x[2];
+            let bound =
+                4.0 * (rounding_bound_hex(&mesh, 1, 0, h.element, h.reference) + 6f64.sqrt() * 1e-6 * diag);
+            let err = (f64::from(p[0]) - exact).abs();
+            worst = worst.max(err / bound);
+            assert!(err <= bound, "{name} pixel {k}: v {} vs {exact} (bound {bound:e})", p[0]);
+            checked += 1;
+        }
+        eprintln!("{name}: {checked} pixels coloured by v, worst {worst:.3} of the bound");
+        assert!(checked > 200, "{name}: {checked}");
+    }
+    // Without --iso there is nothing to colour; a field that does not exist is refused.
+    let mesh = Arc::new(load("tet_cube_o3.vtu"));
+    let err = galerkin::spectral::picture::check_view(
+        &mesh,
+        &SpectralView { colour_by: Some(0), ..SpectralView::default() },
+    )
+    .expect_err("refused");
+    assert!(err.to_string().contains("give --iso"), "{err}");
+    let mut r = SpectralRenderer::new(&gpu, mesh, &Colormap::viridis()).expect("renderer");
+    let err = r
+        .render(&target, &SpectralView { iso: vec![0.5], colour_by: Some(3), ..SpectralView::default() })
+        .expect_err("refused");
+    assert!(err.to_string().contains("no such field"), "{err}");
+}

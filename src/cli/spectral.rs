@@ -157,6 +157,10 @@ pub struct RenderArgs {
     /// field's exact normal.
     #[arg(long, value_name = "C1,C2,…", value_delimiter = ',', allow_negative_numbers = true, value_parser = finite)]
     pub iso: Vec<f64>,
+    /// With --iso: colour the isosurfaces by this field's value on them (a point-data array of
+    /// the file, at the same step) instead of by their iso values.
+    #[arg(long, value_name = "FIELD", requires = "iso")]
+    pub colour_by: Option<String>,
     /// Hexahedral and tetrahedral meshes: volume rendering instead of cut planes — emission
     /// and absorption integrated along every pixel's ray through the curved elements, coloured
     /// by the colour map, opaque by the transfer function (--opacity or --transfer; default:
@@ -292,7 +296,12 @@ pub fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
     } else {
         None
     };
+    let colour_by = match &args.colour_by {
+        Some(name) => Some(mesh.field_index(Some(name)).context("--colour-by")?),
+        None => None,
+    };
     let view = SpectralView {
+        colour_by,
         volume,
         field,
         step: args.step,

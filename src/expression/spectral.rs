@@ -127,18 +127,7 @@ impl DerivedField {
     /// run (as [`crate::spectral::render::padded_values`] pads one field), then one vec4
     /// holding the time.
     pub fn padded_values(&self, mesh: &SpectralMesh, shown: usize, step: usize) -> Vec<f32> {
-        let runs: Vec<Vec<f32>> = self
-            .fields(shown)
-            .iter()
-            .map(|&f| crate::spectral::render::padded_values(mesh, f, step))
-            .collect();
-        let stride = mesh.values_per_element().div_ceil(4) * 4;
-        let mut out = Vec::with_capacity(runs.len() * stride * mesh.elements() + 4);
-        for e in 0..mesh.elements() {
-            for run in &runs {
-                out.extend_from_slice(&run[e * stride..(e + 1) * stride]);
-            }
-        }
+        let mut out = crate::spectral::render::padded_slots(mesh, &self.fields(shown), step);
         out.extend_from_slice(&[Self::time(mesh, shown, step) as f32, 0.0, 0.0, 0.0]);
         out
     }

@@ -71,6 +71,21 @@ pub fn check_view(mesh: &SpectralMesh, view: &SpectralView) -> Result<(), Spectr
     if let Some(d) = &view.expression {
         d.check_step(mesh, view.field, view.step)?;
     }
+    if view.colour_by.is_some() && view.iso.is_empty() {
+        return Err(SpectralError::View("--colour-by colours isosurfaces: give --iso too".into()));
+    }
+    if let Some(k) = view.colour_by {
+        let f =
+            mesh.fields.get(k).ok_or_else(|| SpectralError::Missing(format!("--colour-by: no field {k}")))?;
+        if view.step >= f.steps.len() {
+            return Err(SpectralError::Missing(format!(
+                "--colour-by {:?} has {} time steps; step {} does not exist",
+                f.name,
+                f.steps.len(),
+                view.step
+            )));
+        }
+    }
     if view.volume.is_some() && !mesh.shape.is_volume() {
         return Err(SpectralError::View(format!(
             "--volume: volume rendering is for hexahedral and tetrahedral meshes; this one is of {:?}s",
@@ -131,6 +146,9 @@ pub fn colour_bar<'a>(colormap: &'a Colormap, range: (f64, f64), log: bool, fiel
 
 /// What `view` colours: its derived field's expression, or the field's name.
 pub fn shown_label(mesh: &SpectralMesh, view: &SpectralView) -> String {
+    if let Some(k) = view.colour_by.filter(|_| !view.iso.is_empty()) {
+        return mesh.fields.get(k).map_or_else(String::new, |f| f.name.clone());
+    }
     match &view.expression {
         Some(d) => d.expression.text.clone(),
         None => mesh.fields.get(view.field).map_or_else(String::new, |f| f.name.clone()),

@@ -36,11 +36,20 @@ impl SpectralRenderer {
             return Ok(());
         }
         let data = d.padded_values(&self.mesh, view.field, view.step);
+        self.upload_values(&data)?;
+        self.shown = want;
+        Ok(())
+    }
+
+    /// Uploads `data` as the coefficient buffer (several field slots per element, or one),
+    /// growing the buffer when it does not fit; a new buffer drops every pipeline's descriptor
+    /// sets (the compiled shaders are kept).
+    pub(super) fn upload_values(&mut self, data: &[f32]) -> Result<()> {
         if data.len() as u64 > self.values.len() {
             let values =
-                Buffer::from_slice(&self.gpu, "spectral values", &data, vk::BufferUsageFlags::STORAGE_BUFFER)
-                    .map_err(dev("uploading the derived field's coefficients"))?;
-            values.binding().map_err(dev("binding the derived field's coefficients"))?;
+                Buffer::from_slice(&self.gpu, "spectral values", data, vk::BufferUsageFlags::STORAGE_BUFFER)
+                    .map_err(dev("uploading the fields' coefficients"))?;
+            values.binding().map_err(dev("binding the fields' coefficients"))?;
             self.values = values;
             self.pipelines.clear();
             if let Some(c) = self.cutter.as_mut() {
@@ -49,12 +58,17 @@ impl SpectralRenderer {
             if let Some(t) = self.tessellator.as_mut() {
                 t.set = None;
             }
+            if let Some(i) = self.iso.as_mut() {
+                i.pipelines.clear();
+            }
+            if let Some(v) = self.volume.as_mut() {
+                for p in v.pipelines.values_mut() {
+                    p.1.clear();
+                }
+            }
         } else {
-            self.values
-                .upload(&self.gpu, 0, &data)
-                .map_err(dev("uploading the derived field's coefficients"))?;
+            self.values.upload(&self.gpu, 0, data).map_err(dev("uploading the fields' coefficients"))?;
         }
-        self.shown = want;
         Ok(())
     }
 

@@ -38,7 +38,8 @@ pub(super) struct IsoPass {
     bounds_of: Option<(usize, usize)>,
     /// The count, then up to [`MAX_ISO_VALUES`] values (f32 bits).
     values: Buffer<u32>,
-    pub(super) pipelines: HashMap<PassKey, (GraphicsPipeline, DescriptorSet)>,
+    /// Per target and whether it colours by a second field (`iso_colour.frag`).
+    pub(super) pipelines: HashMap<(PassKey, bool), (GraphicsPipeline, DescriptorSet)>,
 }
 
 /// Per element of a solid mesh, the box of its Bernstein control points (which contains it),
@@ -97,6 +98,14 @@ impl SpectralRenderer {
         if let Some(v) = view.iso.iter().find(|v| !v.is_finite()) {
             return Err(SpectralError::Missing(format!("iso value {v} is not a finite number")));
         }
+        if let Some(k) = view.colour_by {
+            if k >= self.mesh.fields.len() || view.step >= self.mesh.fields[k].steps.len() {
+                return Err(SpectralError::Missing(format!(
+                    "isosurfaces coloured by field {k}: there is no such field with step {}",
+                    view.step
+                )));
+            }
+        }
         if view.expression.is_some() || !view.cuts.is_empty() {
             return Err(SpectralError::Missing(
                 "isosurfaces of derived fields, and isosurfaces together with cut planes, are not drawn yet"
@@ -106,7 +115,7 @@ impl SpectralRenderer {
         Ok(())
     }
 
-    fn iso_pipeline_for(&mut self, target: &DrawTarget<'_>) -> Result<()> {
+    fn iso_pipeline_for(&mut self, target: &DrawTarget<'_>, coloured: bool) -> Result<()> {
         if self.iso.is_none() {
             let boxes = element_boxes(&self.mesh)?;
             let triangles = box_triangles(&boxes);
@@ -138,7 +147,7 @@ impl SpectralRenderer {
                 pipelines: HashMap::new(),
             });
         }
-        let key = target.key();
+        let key = (target.key(), coloured);
         if self.iso.as_ref().is_some_and(|i| i.pipelines.contains_key(&key)) {
             return Ok(());
         }
@@ -146,7 +155,11 @@ impl SpectralRenderer {
         let mut desc = self.draw_desc(
             "spectral isosurfaces",
             crate::spectral::shaders::ISO_VERT,
-            crate::spectral::shaders::ISO_FRAG,
+            if coloured {
+                crate::spectral::shaders::ISO_COLOUR_FRAG
+            } else {
+                crate::spectral::shaders::ISO_FRAG
+            },
             target,
         );
         desc.bindings = &ISO_BINDINGS;
@@ -200,7 +213,8 @@ impl SpectralRenderer {
     ) -> Result<(Box<dyn FnOnce(&mut Recorder<'_>) + '_>, Box<dyn FnOnce(&mut Recorder<'_>) + '_>)> {
         self.check_iso_view(view)?;
         self.show(view)?;
-        self.iso_pipeline_for(target)?;
+        let coloured = view.colour_by.is_some();
+        self.iso_pipeline_for(target, coloured)?;
         self.iso_value_bounds(view.field, view.step)?;
         let push = self.push(target, view);
         let mut values = vec![0u32; 1 + MAX_ISO_VALUES];
@@ -212,7 +226,7 @@ impl SpectralRenderer {
         let Some(iso) = self.iso.as_ref() else {
             return Err(SpectralError::Missing("the isosurface pass was not made".into()));
         };
-        let (pipeline, set) = &iso.pipelines[&target.key()];
+        let (pipeline, set) = &iso.pipelines[&(target.key(), coloured)];
         let pre = move |rec: &mut Recorder<'_>| {
             rec.update_buffer(&iso.values, 0, &values);
             pipeline.declare_draw(rec, set, Some(iso.vertices.whole()), None);

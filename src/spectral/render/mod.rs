@@ -135,6 +135,21 @@ pub fn padded_values(mesh: &SpectralMesh, field: usize, step: usize) -> Vec<f32>
     out
 }
 
+/// The coefficients of several `fields` at `step`, element by element: each element's padded
+/// run ([`padded_values`]) of every field in turn — the field slots of `spectral_element.glsl`
+/// (`SPECTRAL_FIELDS`), slot k being `fields[k]`.
+pub fn padded_slots(mesh: &SpectralMesh, fields: &[usize], step: usize) -> Vec<f32> {
+    let runs: Vec<Vec<f32>> = fields.iter().map(|&f| padded_values(mesh, f, step)).collect();
+    let stride = mesh.values_per_element().div_ceil(4) * 4;
+    let mut out = Vec::with_capacity(runs.len() * stride * mesh.elements() + 4);
+    for e in 0..mesh.elements() {
+        for run in &runs {
+            out.extend_from_slice(&run[e * stride..(e + 1) * stride]);
+        }
+    }
+    out
+}
+
 /// The attributes of a [`DrawVertex`]: position, reference coordinates, element.
 const DRAW_VERTEX_ATTRIBUTES: [crate::gpu::VertexAttribute; 3] =
     [(0, vk::Format::R32G32B32_SFLOAT, 0), (1, vk::Format::R32G32_SFLOAT, 12), (2, vk::Format::R32_UINT, 20)];
@@ -362,17 +377,21 @@ impl SpectralRenderer {
         [per_pixel, u64::from(self.counts[1]) / 3, u64::from(self.counts[2]) / 2]
     }
 
-    /// The colour range `view` uses: its own, or the sampled range of the field (or of the
+    /// The colour range `view` uses: its own, or the sampled range of the field (isosurfaces
+    /// coloured by another field: that field's; or of the
     /// derived field, [`DerivedField::range`]; (0, 1) when it has no finite value) at its step.
     pub fn range(&mut self, view: &SpectralView) -> (f64, f64) {
         if let Some(r) = view.range {
             return r;
         }
-        let key = (view.field, view.step, view.expression_key());
+        // Isosurfaces coloured by another field: that field's range.
+        let shown = view.colour_by.filter(|_| !view.iso.is_empty()).unwrap_or(view.field);
+        let expression = view.expression.as_ref().filter(|_| shown == view.field);
+        let key = (shown, view.step, expression.map(|d| d.expression.text.clone()));
         let mesh = &self.mesh;
-        *self.ranges.entry(key).or_insert_with(|| match &view.expression {
+        *self.ranges.entry(key).or_insert_with(|| match expression {
             Some(d) => d.range(mesh, view.field, view.step).unwrap_or((0.0, 1.0)),
-            None => mesh.value_range(view.field, view.step),
+            None => mesh.value_range(shown, view.step),
         })
     }
 
@@ -393,10 +412,22 @@ impl SpectralRenderer {
                 f.steps.len()
             )));
         }
-        if self.shown != (field, step, None) {
-            let v = padded_values(&self.mesh, field, step);
-            self.values.upload(&self.gpu, 0, &v).map_err(dev("uploading a time step"))?;
-            self.shown = (field, step, None);
+        // Isosurfaces coloured by another field: both fields' slots (the key cannot be an
+        // expression's text).
+        let colour_by = view.colour_by.filter(|_| !view.iso.is_empty());
+        let key = colour_by.map(|k| format!("\u{0}colour-by {k}"));
+        if self.shown != (field, step, key.clone()) {
+            match colour_by {
+                Some(k) => {
+                    let v = padded_slots(&self.mesh, &[field, k], step);
+                    self.upload_values(&v)?;
+                }
+                None => {
+                    let v = padded_values(&self.mesh, field, step);
+                    self.values.upload(&self.gpu, 0, &v).map_err(dev("uploading a time step"))?;
+                }
+            }
+            self.shown = (field, step, key);
         }
         Ok(())
     }

@@ -125,6 +125,9 @@ pub struct SpectralView {
     /// are drawn per pixel instead of cut planes (at most [`super::MAX_ISO_VALUES`]; empty:
     /// none). See `iso.frag`.
     pub iso: Vec<f64>,
+    /// Isosurfaces coloured by this field's value at each surface point instead of by their
+    /// iso values (`--colour-by`; `iso_colour.frag`).
+    pub colour_by: Option<usize>,
     /// Volume rendering of a solid mesh (hexahedra, tetrahedra) with this transfer function
     /// instead of cut planes: emission–absorption along each pixel's ray (`volume.frag`).
     pub volume: Option<crate::spectral::transfer::TransferFunction>,
@@ -157,6 +160,7 @@ impl Default for SpectralView {
             cuts: Vec::new(),
             expression: None,
             iso: Vec::new(),
+            colour_by: None,
             volume: None,
         }
     }
