@@ -17,6 +17,7 @@
 // The body of iso.frag and iso_colour.frag; the latter defines SPECTRAL_ISO_COLOUR_BY and two
 // field slots: the roots are slot 0's, the colour is slot 1's value there (--colour-by).
 #include "spectral_element.glsl"
+#include "spectral_ray.glsl"
 #include "spectral_push.glsl"
 #include "colormap.glsl"
 #include "phong.glsl"
@@ -41,28 +42,17 @@ layout(depth_any) out float gl_FragDepth;
 // sits between two usable samples; roots found outside the element are left to its neighbour.
 #define SPECTRAL_ISO_MARGIN 0.25
 
-// Pulls x back from r (warm start; once more from the centre if that fails): true when
-// Newton converged.
-bool iso_pull(vec3 x, inout vec3 r) {
-    vec3 start = r;
-    if (spectral_inverse_map_hex(element, x, r)) return true;
-    r = vec3(SPECTRAL_SIMPLEX ? 0.25 : 0.5);
-    if (spectral_inverse_map_hex(element, x, r)) return true;
-    r = start;
-    return false;
-}
-
 // Bisection of [t_lo, t_hi] for f - c = 0 along the ray (f continued past the element),
 // pulled back each step from r: the root's ray parameter, its reference point in r.
 float iso_bisect(vec3 eye, vec3 d, float t_lo, float t_hi, float c, float g_lo, inout vec3 r) {
     for (int i = 0; i < SPECTRAL_ISO_BISECTIONS; ++i) {
         float t = 0.5 * (t_lo + t_hi);
-        iso_pull(eye + t * d, r);
+        spectral_pull_hex(element, eye + t * d, r);
         float g = spectral_value_hex(element, r) - c;
         if ((g < 0.0) == (g_lo < 0.0)) t_lo = t; else t_hi = t;
     }
     float t = 0.5 * (t_lo + t_hi);
-    iso_pull(eye + t * d, r);
+    spectral_pull_hex(element, eye + t * d, r);
     return t;
 }
 
@@ -71,11 +61,8 @@ void main() {
     vec3 d = normalize(world - eye);
     float t_exit = dot(world - eye, d);
     vec3 lo = boxes[2u * element].xyz, hi = boxes[2u * element + 1u].xyz;
-    vec3 inv = 1.0 / d;
-    vec3 ta = (lo - eye) * inv, tb = (hi - eye) * inv;
-    vec3 tmin = min(ta, tb), tmax = max(ta, tb);
-    float t_entry = max(0.0, max(tmin.x, max(tmin.y, tmin.z)));
-    float t_far = min(tmax.x, min(tmax.y, tmax.z));
+    vec2 crossing = spectral_ray_box(eye, d, lo, hi);
+    float t_entry = crossing.x, t_far = crossing.y;
     // Only the box's far side casts (both sides are drawn: the eye may be inside a box).
     if (!(t_entry < t_exit) || t_exit - t_entry < 0.5 * (t_far - t_entry)) discard;
     uint count = min(iso_count, 8u);
@@ -93,7 +80,7 @@ void main() {
     vec3 r_root = r;
     for (uint s = 0u; s <= SPECTRAL_ISO_SAMPLES && !found; ++s) {
         float t = t_entry + float(s) * step_t;
-        bool usable = iso_pull(eye + t * d, r) && spectral_outside_3d(r) <= SPECTRAL_ISO_MARGIN;
+        bool usable = spectral_pull_hex(element, eye + t * d, r) && spectral_outside_3d(r) <= SPECTRAL_ISO_MARGIN;
         if (usable) {
             float f = spectral_value_hex(element, r);
             // The value crossed first in this interval (linear estimate), if any.
@@ -132,7 +119,7 @@ void main() {
                 float tv = t_prev2 + u * step_t;
                 bool later = u >= 1.0;
                 vec3 rv = later ? r_prev : r_prev2;
-                if (!iso_pull(eye + tv * d, rv) || spectral_outside_3d(rv) > SPECTRAL_ISO_MARGIN) continue;
+                if (!spectral_pull_hex(element, eye + tv * d, rv) || spectral_outside_3d(rv) > SPECTRAL_ISO_MARGIN) continue;
                 if ((spectral_value_hex(element, rv) - iso_values[k]) * sgn < 0.0) {
                     pair = true;
                     pair_k = k;

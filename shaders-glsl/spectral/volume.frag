@@ -18,6 +18,7 @@
 // Twin of spectral::volume_reference (the f64 ray caster), which samples finer.
 #extension GL_EXT_control_flow_attributes : require
 #include "spectral_element.glsl"
+#include "spectral_ray.glsl"
 #include "spectral_push.glsl"
 #include "colormap.glsl"
 
@@ -73,22 +74,9 @@ vec3 volume_colour(float f) {
     return texture(colormap, ramp_texcoord(tc, pc.range.z)).rgb;
 }
 
-// Pulls x back into element e from r (warm start; once more from the centre if that fails):
-// true when Newton converged.
-bool volume_pull(uint e, vec3 x, inout vec3 r) {
-    vec3 start = r;
-    // One call site of the Newton loop (each inlined copy costs lavapipe a compile).
-    [[dont_unroll]] for (int attempt = 0; attempt < 2; ++attempt) {
-        if (spectral_inverse_map_hex(e, x, r)) return true;
-        r = vec3(SPECTRAL_SIMPLEX ? 0.25 : 0.5);
-    }
-    r = start;
-    return false;
-}
-
-// volume_pull, and the point lies inside the element.
+// spectral_pull_hex, and the point lies inside the element.
 bool volume_inside(uint e, vec3 x, inout vec3 r) {
-    return volume_pull(e, x, r) && spectral_outside_3d(r) <= pc.misc.y;
+    return spectral_pull_hex(e, x, r) && spectral_outside_3d(r) <= pc.misc.y;
 }
 
 // Clips [u0, u1] to where g, linear from ga at u = 0 to gb at u = 1, is not positive.
@@ -180,7 +168,7 @@ bool volume_element(uint e, vec3 eye, vec3 d, float t0, float t1, out vec3 C, ou
     vec3 r_prev = r;
     for (uint s = 0u; s <= SPECTRAL_VOLUME_SAMPLES && T > SPECTRAL_VOLUME_OPAQUE; ++s) {
         float t = t0 + float(s) * step_t;
-        bool pulled = volume_pull(e, eye + t * d, r);
+        bool pulled = spectral_pull_hex(e, eye + t * d, r);
         bool inside = pulled && spectral_outside_3d(r) <= pc.misc.y;
         // Both outside: where the reference chord between them crosses the element, the ray
         // may clip a corner or edge; the ray's point at the chord's middle decides.
@@ -254,7 +242,6 @@ void main() {
     if (tile.x >= tiles[0] || tile.y < tiles[5] || tile.y >= tiles[6]) discard;
     uint at = 8u + 2u * ((tile.y - tiles[5]) * tiles[0] + tile.x);
     uint first = tiles[at], count = tiles[at + 1u];
-    vec3 inv = 1.0 / d;
     vec3 C_total = vec3(0.0);
     float T_total = 1.0;
     bool any = false;
@@ -267,10 +254,8 @@ void main() {
         for (uint k = 0u; k < count; ++k) {
             uint e = tiles[first + k];
             vec3 lo = boxes[2u * e].xyz, hi = boxes[2u * e + 1u].xyz;
-            vec3 ta = (lo - eye) * inv, tb = (hi - eye) * inv;
-            vec3 tmin = min(ta, tb), tmax = max(ta, tb);
-            float t0 = max(0.0, max(tmin.x, max(tmin.y, tmin.z)));
-            float t1 = min(tmax.x, min(tmax.y, tmax.z));
+            vec2 crossing = spectral_ray_box(eye, d, lo, hi);
+            float t0 = crossing.x, t1 = crossing.y;
             if (!(t0 < t1) || t1 <= t_floor) continue;
             // The ray enters the element no earlier than its box: past the last slot, later.
             if (n == SPECTRAL_VOLUME_SLOTS && t0 >= slot_t[n - 1u]) {

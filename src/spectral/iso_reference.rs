@@ -76,7 +76,23 @@ pub(super) fn reference_boxes(mesh: &SpectralMesh) -> Option<Vec<([f64; 3], [f64
     Some(boxes.chunks_exact(2).map(|p| (f3(p[0]), f3(p[1]))).collect())
 }
 
-/// The ray's parameters (from `o` along unit `d`, t ≥ 0) inside the box [lo, hi].
+/// The centre of the reference cube or tetrahedron: where a pull-back starts afresh.
+pub(super) fn reference_centre(shape: super::Shape) -> [f64; 3] {
+    if shape == super::Shape::Tetrahedron {
+        [0.25; 3]
+    } else {
+        [0.5; 3]
+    }
+}
+
+/// The reference point of element `e` that maps to `x`, by Newton's method from `guess`, once
+/// more from the centre if that fails. Twin of `spectral_pull_hex` (spectral_ray.glsl).
+pub(super) fn pull_back(mesh: &SpectralMesh, e: usize, x: [f64; 3], guess: [f64; 3]) -> Option<[f64; 3]> {
+    mesh.inverse_map_hex(e, x, guess).or_else(|| mesh.inverse_map_hex(e, x, reference_centre(mesh.shape)))
+}
+
+/// The ray's parameters (from `o` along unit `d`, t ≥ 0) inside the box [lo, hi]. Twin of
+/// `spectral_ray_box` (spectral_ray.glsl).
 pub(super) fn slab(o: [f64; 3], d: [f64; 3], lo: [f64; 3], hi: [f64; 3]) -> Option<(f64, f64)> {
     let (mut t0, mut t1) = (0.0f64, f64::INFINITY);
     for a in 0..3 {
@@ -98,10 +114,8 @@ fn first_root(
     values: &[f64],
 ) -> Option<IsoHit> {
     let at = |t: f64| -> [f64; 3] { std::array::from_fn(|a| o[a] + t * d[a]) };
-    let centre = if mesh.shape == super::Shape::Tetrahedron { [0.25; 3] } else { [0.5; 3] };
-    let pull = |t: f64, guess: [f64; 3]| -> Option<[f64; 3]> {
-        mesh.inverse_map_hex(e, at(t), guess).or_else(|| mesh.inverse_map_hex(e, at(t), centre))
-    };
+    let centre = reference_centre(mesh.shape);
+    let pull = |t: f64, guess: [f64; 3]| pull_back(mesh, e, at(t), guess);
     let samples = REFERENCE_SAMPLES_PER_ORDER * (mesh.basis.order.max(mesh.geometry.order) + 1);
     let value = |r: [f64; 3]| mesh.value_hex(field, step, e, r);
     // The first root of f − c in [lo, hi] (f − c of sign `lo_negative` at lo), bisected from

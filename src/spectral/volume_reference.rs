@@ -11,7 +11,7 @@
 
 use rayon::prelude::*;
 
-use super::iso_reference::{reference_boxes, slab};
+use super::iso_reference::{pull_back, reference_boxes, reference_centre, slab};
 use super::mesh::SpectralMesh;
 use super::transfer::TransferFunction;
 use crate::render::{ramp_coordinate, Camera, Colormap};
@@ -110,12 +110,10 @@ fn element_part(
     samples_per_order: usize,
 ) -> Option<(f64, [f64; 3], f64)> {
     let at = |t: f64| -> [f64; 3] { std::array::from_fn(|a| ray.eye[a] + t * ray.d[a]) };
-    let centre = if mesh.shape == super::Shape::Tetrahedron { [0.25; 3] } else { [0.5; 3] };
+    let centre = reference_centre(mesh.shape);
     let inside_tol = super::render::INSIDE_TOLERANCE;
     // The reference point of t, if Newton converges.
-    let pull = |t: f64, guess: [f64; 3]| -> Option<[f64; 3]> {
-        mesh.inverse_map_hex(e, at(t), guess).or_else(|| mesh.inverse_map_hex(e, at(t), centre))
-    };
+    let pull = |t: f64, guess: [f64; 3]| pull_back(mesh, e, at(t), guess);
     // The reference point of t, if inside the element.
     let inside = |t: f64, guess: [f64; 3]| pull(t, guess).filter(|r| mesh.shape.outside(r) <= inside_tol);
     let clamp = |r: [f64; 3]| mesh.shape.clamp(r);
