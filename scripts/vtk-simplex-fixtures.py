@@ -5,11 +5,16 @@ with VTK 9.7): for vtkLagrangeTriangle (VTK_LAGRANGE_TRIANGLE = 69) and vtkLagra
 each point of the cell in its own point order (GetParametricCoords), and VTK's shape
 functions (InterpolateFunctions) at two parametric points inside the cell, with their
 parametric derivatives (InterpolateDerivs) at the first; values to 13 significant digits. tests/spectral_simplex.rs checks our node order and
-basis against them. Run from the repository root: python3 scripts/vtk-simplex-fixtures.py
+basis against them. Beside it, curved cells VTK wrote as .vtu files with VTK's own evaluation
+of them read back (.json): Lagrange triangles and tetrahedra, and Bézier ones
+(vtkBezierTriangle, VTK_BEZIER_TRIANGLE = 76; vtkBezierTetra, VTK_BEZIER_TETRAHEDRON = 78;
+one rational) for tests/spectral_bezier_simplices.rs. Run from the repository root:
+python3 scripts/vtk-simplex-fixtures.py (everything) or ... bezier (the Bézier files only).
 """
 import json
 import math
 import os
+import sys
 
 import vtk
 
@@ -45,6 +50,9 @@ def cell_of(kind, order):
 
 
 def main():
+    if sys.argv[1:] == ["bezier"]:
+        bezier_files()
+        return
     out = {"vtk": vtk.vtkVersion.GetVTKVersion(), "cells": []}
     for kind in ("triangle", "tetrahedron"):
         for order in range(1, MAX_ORDER + 1):
@@ -73,6 +81,16 @@ def main():
     curved_file("triangle", "tri_curved_o10", order=10, side=1)
     curved_file("tetrahedron", "tet_cube_o6", order=6, side=2)
     curved_file("tetrahedron", "tet_cube_o3", order=3, side=2)
+    bezier_files()
+
+
+def bezier_files():
+    """Bézier simplices: the control points are the bent lattice points of the straight cells
+    and the field's control values the field there (a curved cell that interpolates neither)."""
+    curved_file("triangle", "bezier_tri_o5", order=5, side=2, bezier=True)
+    curved_file("tetrahedron", "bezier_tet_o4", order=4, side=2, bezier=True)
+    # Rational: weights 1 + 0.4 x y on one order-2 triangle (not drawn; refused by name).
+    curved_file("triangle", "bezier_tri_rational", order=2, side=1, bezier=True, rational=True)
 
 
 def field(x, y, z):
@@ -116,22 +134,26 @@ def kuhn_cube():
     return out
 
 
-def curved_file(kind, name, order=3, side=1):
-    """Curved Lagrange cells of `order` written by VTK as `name`.vtu (ascii), with VTK's own
-    evaluation of them at sample points in `name`.json. Triangles: the unit square in
-    side x side squares of two triangles each; tetrahedra: two (side 1) or the unit cube in
-    six (side 2)."""
+def curved_file(kind, name, order=3, side=1, bezier=False, rational=False):
+    """Curved Lagrange (or, with `bezier`, Bézier) cells of `order` written by VTK as
+    `name`.vtu (ascii), with VTK's own evaluation of them at sample points in `name`.json.
+    Triangles: the unit square in side x side squares of two triangles each (side 1: only the
+    first, when rational); tetrahedra: two (side 1) or the unit cube in six (side 2). Bézier
+    cells take the bent lattice points as control points, and `rational` ones RationalWeights
+    1 + 0.4 x y."""
     if kind == "triangle":
-        corners = triangle_grid(side)
-        cell_type = vtk.VTK_LAGRANGE_TRIANGLE
+        corners = triangle_grid(side)[: 1 if rational else None]
+        cell_type = vtk.VTK_BEZIER_TRIANGLE if bezier else vtk.VTK_LAGRANGE_TRIANGLE
     elif side == 2:
         corners = kuhn_cube()
-        cell_type = vtk.VTK_LAGRANGE_TETRAHEDRON
+        cell_type = vtk.VTK_BEZIER_TETRAHEDRON if bezier else vtk.VTK_LAGRANGE_TETRAHEDRON
     else:
         corners = [[(0.0, 0.0, 0.0), (1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0)],
                    [(1.0, 0.0, 0.0), (1.0, 1.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0)]]
         cell_type = vtk.VTK_LAGRANGE_TETRAHEDRON
     grid = vtk.vtkUnstructuredGrid()
+    weights_array = vtk.vtkDoubleArray()
+    weights_array.SetName("RationalWeights")
     points = vtk.vtkPoints()
     points.SetDataTypeToDouble()
     values = vtk.vtkDoubleArray()
@@ -148,6 +170,7 @@ def curved_file(kind, name, order=3, side=1):
             x = bend(straight, kind == "triangle")
             ids.append(points.InsertNextPoint(*x))
             values.InsertNextValue(field(*x))
+            weights_array.InsertNextValue(1.0 + 0.4 * x[0] * x[1])
         cells.append(ids)
     grid.SetPoints(points)
     for ids in cells:
@@ -156,6 +179,8 @@ def curved_file(kind, name, order=3, side=1):
             idl.InsertNextId(i)
         grid.InsertNextCell(cell_type, idl)
     grid.GetPointData().AddArray(values)
+    if rational:
+        grid.GetPointData().SetRationalWeights(weights_array)
     writer = vtk.vtkXMLUnstructuredGridWriter()
     writer.SetFileName(os.path.join(os.path.dirname(OUT), name + ".vtu"))
     writer.SetInputData(grid)

@@ -167,18 +167,18 @@ fn hostile_variants_are_refused_naming_the_file_and_array_before_inflating() {
     }
 }
 
-/// A cell type the renderer does not draw — here VTK's cubic triangles relabelled as Bézier
-/// triangles (76) — is refused naming the file, the element and the type by its VTK name;
+/// A cell type the renderer does not draw — here VTK's cubic triangles relabelled as Lagrange
+/// wedges (73) — is refused naming the file, the element and the type by its VTK name;
 /// VTK's quadratic Lagrange triangle and cubic Lagrange tetrahedra (drawn since simplices
 /// joined the spectral meshes) read as such.
 #[test]
 fn a_cell_type_the_renderer_does_not_draw_is_refused_by_name() {
     let (_d, path) = edited("tri_curved.vtu", |b| {
-        *b = String::from_utf8_lossy(b).replace("          69 69\n", "          76 76\n").into_bytes()
+        *b = String::from_utf8_lossy(b).replace("          69 69\n", "          73 73\n").into_bytes()
     });
-    let e = galerkin::spectral::load(&path, &[]).expect_err("a Bézier triangle").to_string();
+    let e = galerkin::spectral::load(&path, &[]).expect_err("a wedge").to_string();
     assert!(
-        e.contains("tri_curved.vtu") && e.contains("element 0") && e.contains("VTK_BEZIER_TRIANGLE"),
+        e.contains("tri_curved.vtu") && e.contains("element 0") && e.contains("VTK_LAGRANGE_WEDGE"),
         "{e}"
     );
     let tri = galerkin::spectral::load(&fixture("tri_lagrange.vtu"), &[]).expect("a triangle");

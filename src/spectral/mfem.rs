@@ -1,7 +1,8 @@
 //! MFEM data (so MFEM users can view their output): meshes in the "MFEM mesh v1.0" text format
 //! with straight (`vertices`) or curved (`nodes`) geometry, GridFunction files, and the GLVis
 //! "solution" stream that concatenates a mesh and a GridFunction. Quadrilateral (geometry 3)
-//! and hexahedral (5) meshes; H1 and L2 finite element collections, with the basis type read
+//! and hexahedral (5) meshes, and triangular (2) and tetrahedral (4) ones
+//! ([`super::mfem_simplex`]); H1 and L2 finite element collections, with the basis type read
 //! from the collection's name (`H1_2D_P3`: Gauss–Lobatto; `H1Pos_…` / `H1@P_…`: Bernstein;
 //! `L2_2D_P3`: Gauss–Legendre; `L2_T1_…`: Gauss–Lobatto; …).
 //!
@@ -21,6 +22,10 @@ use super::mesh::{Field, Shape, SpectralMesh};
 pub const GEOMETRY_SQUARE: u32 = 3;
 /// MFEM's geometry id of a hexahedron (`Geometry::CUBE`).
 pub const GEOMETRY_CUBE: u32 = 5;
+/// MFEM's geometry id of a triangle (`Geometry::TRIANGLE`).
+pub const GEOMETRY_TRIANGLE: u32 = 2;
+/// MFEM's geometry id of a tetrahedron (`Geometry::TETRAHEDRON`).
+pub const GEOMETRY_TETRAHEDRON: u32 = 4;
 
 /// A finite element collection as named in MFEM files.
 #[derive(Clone, Debug, PartialEq)]
@@ -68,7 +73,10 @@ pub struct MfemMesh {
     pub path: PathBuf,
     /// Reference dimension (2 or 3).
     pub dim: u32,
-    /// Each element's vertices (4 or 8), in MFEM's order.
+    /// Every element's MFEM geometry id (one per mesh): [`GEOMETRY_SQUARE`], [`GEOMETRY_CUBE`],
+    /// [`GEOMETRY_TRIANGLE`] or [`GEOMETRY_TETRAHEDRON`].
+    pub geometry: u32,
+    /// Each element's vertices (4 or 8; 3 or 4 for simplices), in MFEM's order.
     pub elements: Vec<Vec<usize>>,
     /// Vertex coordinates (space dimension 2 or 3, padded to 3); empty when `nodes` holds the
     /// geometry.
@@ -252,12 +260,19 @@ fn read_mesh_lines(path: &Path, lines: &mut Lines<'_>) -> Result<MfemMesh, Spect
         return Err(err(
             path,
             lines.line_number(),
-            format!("dimension {dim}: quadrilateral (2) and hexahedral (3) meshes only"),
+            format!("dimension {dim}: meshes of dimension 2 (quadrilaterals, triangles) and 3 (hexahedra, tetrahedra) only"),
         ));
     }
     lines.expect("elements")?;
     let count = lines.count("the element count")?;
-    let (want_geometry, corners) = if dim == 2 { (GEOMETRY_SQUARE, 4) } else { (GEOMETRY_CUBE, 8) };
+    let corners_of = |g: u32| match (dim, g) {
+        (2, GEOMETRY_SQUARE) => Some(4),
+        (2, GEOMETRY_TRIANGLE) => Some(3),
+        (3, GEOMETRY_CUBE) => Some(8),
+        (3, GEOMETRY_TETRAHEDRON) => Some(4),
+        _ => None,
+    };
+    let mut geometry = None;
     let at = lines.line_number();
     let mut elements = crate::limits::vec_for(count, "the elements").map_err(|e| err(path, at, e))?;
     for e in 0..count {
@@ -269,12 +284,35 @@ fn read_mesh_lines(path: &Path, lines: &mut Lines<'_>) -> Result<MfemMesh, Spect
                     .map_err(|_| err(path, n, format!("element {e}: {t:?} is not a non-negative integer")))
             })
             .collect::<Result<_, _>>()?;
-        if w.len() < 2 || w[1] as u32 != want_geometry || w.len() != 2 + corners {
-            return Err(err(
-                path,
-                n,
-                format!("element {e}: geometry {} with {} vertices (a {dim}D mesh needs geometry {want_geometry} with {corners})", w.get(1).copied().unwrap_or(0), w.len().saturating_sub(2)),
-            ));
+        let g = w.get(1).map_or(u32::MAX, |&g| u32::try_from(g).unwrap_or(u32::MAX));
+        let want = if dim == 2 {
+            "geometry 3 (square) with 4 or 2 (triangle) with 3"
+        } else {
+            "geometry 5 (cube) with 8 or 4 (tetrahedron) with 4"
+        };
+        let corners = match corners_of(g) {
+            Some(c) if w.len() == 2 + c => c,
+            _ => {
+                return Err(err(
+                    path,
+                    n,
+                    format!(
+                        "element {e}: geometry {} with {} vertices (a {dim}D mesh needs {want})",
+                        w.get(1).copied().unwrap_or(0),
+                        w.len().saturating_sub(2)
+                    ),
+                ))
+            }
+        };
+        match geometry {
+            Some(first) if first != g => {
+                return Err(err(
+                    path,
+                    n,
+                    format!("element {e}: geometry {g} differs from element 0's ({first}); one element geometry per mesh"),
+                ))
+            }
+            _ => geometry = Some(g),
         }
         let vertices = &w[2..];
         if let Some(k) = (1..corners).find(|&k| vertices[..k].contains(&vertices[k])) {
@@ -337,7 +375,8 @@ fn read_mesh_lines(path: &Path, lines: &mut Lines<'_>) -> Result<MfemMesh, Spect
             vertices.push(std::array::from_fn(|k| c.get(k).copied().unwrap_or(0.0)));
         }
     }
-    Ok(MfemMesh { path: path.to_path_buf(), dim, elements, vertices, vertex_count, nodes })
+    let geometry = geometry.unwrap_or(if dim == 2 { GEOMETRY_SQUARE } else { GEOMETRY_CUBE });
+    Ok(MfemMesh { path: path.to_path_buf(), dim, geometry, elements, vertices, vertex_count, nodes })
 }
 
 /// Reads an MFEM mesh file.
@@ -382,8 +421,54 @@ fn corners_lexicographic(element: &[usize]) -> Vec<usize> {
     out
 }
 
+/// Refuses a `nodes` GridFunction unless it has 2 or 3 components for each of `dofs` DOFs;
+/// the components otherwise.
+pub(super) fn check_nodes(nodes: &GridFunction, dofs: usize) -> Result<usize, SpectralError> {
+    let sdim = nodes.space.vdim;
+    if !(2..=3).contains(&sdim) || nodes.values.len() != dofs * sdim {
+        return Err(SpectralError::File {
+            path: nodes.path.clone(),
+            detail: format!(
+                "nodes: {} values for {dofs} DOFs × VDim {sdim} of {}",
+                nodes.values.len(),
+                nodes.space.collection.name
+            ),
+        });
+    }
+    Ok(sdim)
+}
+
+/// Refuses step `k` of field `name` unless it is scalar (VDim 1) with `dofs` values, naming
+/// its file.
+pub(super) fn check_scalar_step(
+    gf: &GridFunction,
+    name: &str,
+    k: usize,
+    dofs: usize,
+) -> Result<(), SpectralError> {
+    let file = |detail: String| SpectralError::File { path: gf.path.clone(), detail };
+    if gf.space.vdim != 1 {
+        return Err(file(format!("field {name:?} step {k}: VDim {} (scalar fields only)", gf.space.vdim)));
+    }
+    if gf.values.len() != dofs {
+        return Err(file(format!(
+            "field {name:?} step {k}: {} values for {dofs} DOFs of {}",
+            gf.values.len(),
+            gf.space.collection.name
+        )));
+    }
+    Ok(())
+}
+
+impl MfemMesh {
+    /// Whether its elements are triangles or tetrahedra.
+    pub fn is_simplex(&self) -> bool {
+        matches!(self.geometry, GEOMETRY_TRIANGLE | GEOMETRY_TETRAHEDRON)
+    }
+}
+
 /// The values of `gf`'s component `c` at global DOF `dof`.
-fn component(gf: &GridFunction, dofs: usize, dof: usize, c: usize) -> f64 {
+pub(super) fn component(gf: &GridFunction, dofs: usize, dof: usize, c: usize) -> f64 {
     if gf.space.by_vdim {
         gf.values[dof * gf.space.vdim + c]
     } else {
@@ -397,6 +482,9 @@ pub fn to_spectral(
     mesh: &MfemMesh,
     fields: &[(String, Vec<GridFunction>)],
 ) -> Result<SpectralMesh, SpectralError> {
+    if mesh.is_simplex() {
+        return super::mfem_simplex::to_spectral(mesh, fields);
+    }
     let path = &mesh.path;
     let file = |detail: String| SpectralError::File { path: path.clone(), detail };
     let shape = if mesh.dim == 2 { Shape::Quadrilateral } else { Shape::Hexahedron };
@@ -421,14 +509,7 @@ pub fn to_spectral(
                 )));
             }
             let dofs = topology.dof_count(c)?;
-            let sdim = nodes.space.vdim;
-            if !(2..=3).contains(&sdim) || nodes.values.len() != dofs * sdim {
-                return Err(file(format!(
-                    "nodes: {} values for {dofs} DOFs × VDim {sdim} of {}",
-                    nodes.values.len(),
-                    c.name
-                )));
-            }
+            let sdim = check_nodes(nodes, dofs)?;
             let per_element = (c.order + 1).pow(mesh.dim);
             let mut points =
                 crate::limits::vec_for(mesh.elements.len() * per_element, "the geometry's nodes")
@@ -455,12 +536,6 @@ pub fn to_spectral(
         for (k, gf) in steps.iter().enumerate() {
             let file = |detail: String| SpectralError::File { path: gf.path.clone(), detail };
             let c = &gf.space.collection;
-            if gf.space.vdim != 1 {
-                return Err(file(format!(
-                    "field {name:?} step {k}: VDim {} (scalar fields only)",
-                    gf.space.vdim
-                )));
-            }
             if c.dim != mesh.dim {
                 return Err(file(format!(
                     "field {name:?}: collection {} is {}D on a {}D mesh",
@@ -478,13 +553,7 @@ pub fn to_spectral(
                 _ => basis = Some(b),
             }
             let dofs = topology.dof_count(c)?;
-            if gf.values.len() != dofs {
-                return Err(file(format!(
-                    "field {name:?} step {k}: {} values for {dofs} DOFs of {}",
-                    gf.values.len(),
-                    c.name
-                )));
-            }
+            check_scalar_step(gf, name, k, dofs)?;
             let per_element = (c.order + 1).pow(mesh.dim);
             let mut v = crate::limits::vec_for(mesh.elements.len() * per_element, "the field's values")
                 .map_err(file)?;

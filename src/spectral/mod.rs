@@ -33,6 +33,7 @@ pub mod gradient;
 pub mod iso_reference;
 pub mod mesh;
 pub mod mfem;
+pub mod mfem_simplex;
 pub mod picture;
 pub mod proxy;
 pub mod pvtu;

@@ -20,6 +20,12 @@
 //! **Basis** (Silvester's formula): the node `b` has `L_b(λ) = Π_a R_{b_a}(λ_a)` with
 //! `R_k(λ) = Π_{m<k} (nλ − m)/(m + 1)` of the barycentric coordinates λ; `R_k(j/n)` is the
 //! binomial `C(j, k)` (0 for j < k), so `L_b` is 1 at its node and 0 at every other.
+//!
+//! **Bézier simplices** (`VTK_BEZIER_TRIANGLE` = 76, `VTK_BEZIER_TETRAHEDRON` = 78) number
+//! their control points as the Lagrange ones; their basis is Bernstein's,
+//! `B_b = n!/Π b_a! Π λ_a^{b_a}` ([`bernstein_basis`]). They span the same polynomials, so
+//! [`FromBernstein`] turns one into the Lagrange element that equals it, and [`ToBernstein`]
+//! goes back.
 
 use super::error::SpectralError;
 
@@ -170,14 +176,21 @@ fn silvester(n: usize, k: usize, lambda: f64) -> (f64, f64) {
     (value, derivative)
 }
 
+/// The barycentric coordinates of reference point `r`: `λ_a = r_a` for a < d and
+/// `λ_d = 1 − Σ r` (so `∂λ_d/∂r_j = −1`); entries past d are 0.
+fn barycentric(shape: SimplexShape, r: &[f64; 3]) -> [f64; 4] {
+    let d = shape.dim();
+    let mut lambda = [0.0; 4];
+    lambda[..d].copy_from_slice(&r[..d]);
+    lambda[d] = 1.0 - r[..d].iter().sum::<f64>();
+    lambda
+}
+
 /// The basis of order `n` at reference point `r` for the nodes `nodes` (from [`vtk_nodes`]):
 /// each node's value and its gradient in r (d entries used).
 pub fn basis(shape: SimplexShape, n: usize, nodes: &[[usize; 4]], r: &[f64; 3]) -> Vec<(f64, [f64; 3])> {
     let d = shape.dim();
-    // λ_a = r_a for a < d, λ_d = 1 − Σ r (∂λ_d/∂r_j = −1).
-    let mut lambda = [0.0; 4];
-    lambda[..d].copy_from_slice(&r[..d]);
-    lambda[d] = 1.0 - r[..d].iter().sum::<f64>();
+    let lambda = barycentric(shape, r);
     nodes
         .iter()
         .map(|b| {
@@ -309,21 +322,8 @@ impl ToBernstein {
     /// the collocation matrix is singular (it is not, for distinct equispaced nodes).
     pub fn new(shape: SimplexShape, n: usize) -> Option<Self> {
         use faer::linalg::solvers::Solve;
-        let lattice = lattice(shape, n);
-        let count = lattice.len();
-        let factorial = |m: usize| (1..=m).map(|x| x as f64).product::<f64>();
-        let bernstein = |b: &[usize; 4], lambda: &[f64; 4]| {
-            let mut v = factorial(n);
-            for a in 0..=shape.dim() {
-                v *= lambda[a].powi(b[a] as i32) / factorial(b[a]);
-            }
-            v
-        };
-        let matrix = faer::Mat::from_fn(count, count, |row, col| {
-            let node = &lattice[row];
-            let lambda: [f64; 4] = std::array::from_fn(|a| node[a] as f64 / n as f64);
-            bernstein(&lattice[col], &lambda)
-        });
+        let (count, collocation) = collocation(shape, n);
+        let matrix = faer::Mat::from_fn(count, count, |row, col| collocation[row * count + col]);
         let inverse = matrix.partial_piv_lu().solve(faer::Mat::<f64>::identity(count, count));
         let inverse: Vec<f64> = (0..count * count).map(|k| inverse[(k / count, k % count)]).collect();
         inverse.iter().all(|x| x.is_finite()).then_some(Self { count, inverse })
@@ -332,22 +332,112 @@ impl ToBernstein {
     /// The Bernstein coefficients of a scalar whose values at the nodes (our layout) are
     /// `values`.
     pub fn control_values(&self, values: &[f64]) -> Vec<f64> {
-        (0..self.count)
-            .map(|row| {
-                self.inverse[row * self.count..(row + 1) * self.count]
-                    .iter()
-                    .zip(values)
-                    .map(|(w, v)| w * v)
-                    .sum()
-            })
-            .collect()
+        apply(self.count, &self.inverse, values)
     }
 
     /// The Bernstein control points of an element whose nodes (our layout) are at `points`.
     pub fn control_points(&self, points: &[[f64; 3]]) -> Vec<[f64; 3]> {
-        let per: [Vec<f64>; 3] =
-            std::array::from_fn(|c| self.control_values(&points.iter().map(|p| p[c]).collect::<Vec<_>>()));
-        (0..self.count).map(|k| [per[0][k], per[1][k], per[2][k]]).collect()
+        per_component(points, |v| self.control_values(v))
+    }
+}
+
+/// `B_b(λ) = n!/Π b_a! Π λ_a^{b_a}`, the Bernstein polynomial of multi-index `b` (entries
+/// 0..=d used; order n = Σ b) at barycentric coordinates λ.
+fn bernstein(d: usize, b: &[usize; 4], lambda: &[f64; 4]) -> f64 {
+    let factorial = |m: usize| (1..=m).map(|x| x as f64).product::<f64>();
+    let n: usize = b[..=d].iter().sum();
+    let mut v = factorial(n);
+    for a in 0..=d {
+        v *= lambda[a].powi(b[a] as i32) / factorial(b[a]);
+    }
+    v
+}
+
+/// The Bernstein basis of order `n` at reference point `r` for the multi-indices `nodes`
+/// (from [`vtk_nodes`]: a Bézier simplex's control points in VTK's point order), each with its
+/// gradient in r: `∂B_b/∂λ_a = n B^{n−1}_{b−e_a}` and `∂/∂r_j = ∂/∂λ_j − ∂/∂λ_d`. The plain
+/// evaluation of VTK's `vtkBezierTriangle` / `vtkBezierTetra` (types 76 and 78).
+pub fn bernstein_basis(
+    shape: SimplexShape,
+    n: usize,
+    nodes: &[[usize; 4]],
+    r: &[f64; 3],
+) -> Vec<(f64, [f64; 3])> {
+    let d = shape.dim();
+    let lambda = barycentric(shape, r);
+    nodes
+        .iter()
+        .map(|b| {
+            let dl = |a: usize| -> f64 {
+                if b[a] == 0 {
+                    return 0.0;
+                }
+                let mut lower = *b;
+                lower[a] -= 1;
+                n as f64 * bernstein(d, &lower, &lambda)
+            };
+            let last = dl(d);
+            let mut gradient = [0.0; 3];
+            for (j, g) in gradient.iter_mut().enumerate().take(d) {
+                *g = dl(j) - last;
+            }
+            (bernstein(d, b, &lambda), gradient)
+        })
+        .collect()
+}
+
+/// The collocation matrix of order `n`, row-major: `V[node][b] = B_b(node)` over the nodes of
+/// our layout ([`lattice`]) and the Bernstein polynomials of the same multi-indices.
+fn collocation(shape: SimplexShape, n: usize) -> (usize, Vec<f64>) {
+    let lattice = lattice(shape, n);
+    let count = lattice.len();
+    let mut matrix = Vec::with_capacity(count * count);
+    for node in &lattice {
+        let lambda: [f64; 4] = std::array::from_fn(|a| node[a] as f64 / n as f64);
+        matrix.extend(lattice.iter().map(|b| bernstein(shape.dim(), b, &lambda)));
+    }
+    (count, matrix)
+}
+
+/// A linear map of scalars per node (`convert`) applied to each coordinate of `points`, and
+/// the results zipped back into points (as many as `convert` returns).
+pub fn per_component(points: &[[f64; 3]], convert: impl Fn(&[f64]) -> Vec<f64>) -> Vec<[f64; 3]> {
+    let per: [Vec<f64>; 3] =
+        std::array::from_fn(|c| convert(&points.iter().map(|p| p[c]).collect::<Vec<_>>()));
+    (0..per[0].len()).map(|k| [per[0][k], per[1][k], per[2][k]]).collect()
+}
+
+/// `matrix · values` for a row-major square matrix of `count` rows.
+fn apply(count: usize, matrix: &[f64], values: &[f64]) -> Vec<f64> {
+    matrix.chunks_exact(count).map(|row| row.iter().zip(values).map(|(w, v)| w * v).sum()).collect()
+}
+
+/// From a Bézier simplex's control values to its values at the Lagrange nodes (our layout):
+/// the collocation matrix `V[node][b] = B_b(node)` itself. The same polynomial space, so a
+/// Bézier triangle or tetrahedron (VTK types 76 and 78) is drawn as the Lagrange element of
+/// its order that equals it exactly (up to rounding: entries of V lie in [0, 1], each row sums
+/// to 1). The inverse of [`ToBernstein`].
+pub struct FromBernstein {
+    count: usize,
+    matrix: Vec<f64>,
+}
+
+impl FromBernstein {
+    /// The conversion for `shape` of order `n` (1 to [`MAX_SIMPLEX_ORDER`]).
+    pub fn new(shape: SimplexShape, n: usize) -> Self {
+        let (count, matrix) = collocation(shape, n);
+        Self { count, matrix }
+    }
+
+    /// The values at the nodes (our layout) of the polynomial whose Bernstein coefficients
+    /// (our layout) are `control`.
+    pub fn nodal_values(&self, control: &[f64]) -> Vec<f64> {
+        apply(self.count, &self.matrix, control)
+    }
+
+    /// The nodes (our layout) of the element whose control points (our layout) are `control`.
+    pub fn nodal_points(&self, control: &[[f64; 3]]) -> Vec<[f64; 3]> {
+        per_component(control, |v| self.nodal_values(v))
     }
 }
 

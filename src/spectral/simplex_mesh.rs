@@ -1,19 +1,21 @@
 //! High-order triangles and tetrahedra read from VTK files (`VTK_LAGRANGE_TRIANGLE` = 69,
-//! `VTK_LAGRANGE_TETRAHEDRON` = 71), with the f64 reference evaluation the per-pixel renderer
+//! `VTK_LAGRANGE_TETRAHEDRON` = 71, and the polynomial Bézier ones, `VTK_BEZIER_TRIANGLE` = 76,
+//! `VTK_BEZIER_TETRAHEDRON` = 78), with the f64 reference evaluation the per-pixel renderer
 //! of simplices is to be tested against: the geometry map `x(r) = Σ_b X_b L_b(r)` and its
 //! Jacobian, each point field `f(r) = Σ_b F_b L_b(r)`, and the inverse map by Newton's method
-//! (the basis and node order: [`super::simplex`]). Checked against VTK's own evaluation
-//! (`EvaluateLocation`) of files VTK wrote, `tests/spectral_simplex.rs`.
+//! (the basis and node order: [`super::simplex`]); for Bézier cells `L_b` is the Bernstein
+//! polynomial `B_b` of the control point (no conversion, unlike the renderer's loader).
+//! Checked against VTK's own evaluation (`EvaluateLocation`) of files VTK wrote,
+//! `tests/spectral_simplex.rs` and `tests/spectral_bezier_simplices.rs`.
 
 use std::path::Path;
 
 use super::error::SpectralError;
 use super::mesh::{Field, NEWTON_ITERATIONS};
-use super::simplex::{basis, vtk_nodes, SimplexShape, MAX_SIMPLEX_ORDER};
-
-/// VTK's cell type numbers of the shapes read here.
-const VTK_LAGRANGE_TRIANGLE: u8 = 69;
-const VTK_LAGRANGE_TETRAHEDRON: u8 = 71;
+use super::simplex::{basis, bernstein_basis, vtk_nodes, SimplexShape, MAX_SIMPLEX_ORDER};
+use super::vtu::{
+    VTK_BEZIER_TETRAHEDRON, VTK_BEZIER_TRIANGLE, VTK_LAGRANGE_TETRAHEDRON, VTK_LAGRANGE_TRIANGLE,
+};
 
 /// Lagrange simplices of one shape and order with their point fields (one step each).
 #[derive(Clone, Debug, PartialEq)]
@@ -24,6 +26,8 @@ pub struct SimplexElements {
     pub order: usize,
     /// The nodes' barycentric multi-indices, in VTK's point order.
     pub nodes: Vec<[usize; 4]>,
+    /// Bézier cells: the points and values are Bernstein coefficients.
+    pub bernstein: bool,
     /// Geometry nodes: elements × nodes, element e's node i at `e · nodes + i`.
     pub points: Vec<[f64; 3]>,
     /// One-component point fields, laid out as the points.
@@ -46,12 +50,14 @@ impl SimplexElements {
         let conn = grid
             .array("Cells", "connectivity")
             .ok_or_else(|| file("no Cells array \"connectivity\"".into()))?;
-        let shape = match types[0] {
-            t if t == f64::from(VTK_LAGRANGE_TRIANGLE) => SimplexShape::Triangle,
-            t if t == f64::from(VTK_LAGRANGE_TETRAHEDRON) => SimplexShape::Tetrahedron,
+        let (shape, bernstein) = match types[0] {
+            t if t == f64::from(VTK_LAGRANGE_TRIANGLE) => (SimplexShape::Triangle, false),
+            t if t == f64::from(VTK_LAGRANGE_TETRAHEDRON) => (SimplexShape::Tetrahedron, false),
+            t if t == f64::from(VTK_BEZIER_TRIANGLE) => (SimplexShape::Triangle, true),
+            t if t == f64::from(VTK_BEZIER_TETRAHEDRON) => (SimplexShape::Tetrahedron, true),
             t => {
                 return Err(file(format!(
-                    "element 0: cell type {t} (high-order simplices are VTK_LAGRANGE_TRIANGLE = 69 and VTK_LAGRANGE_TETRAHEDRON = 71)"
+                    "element 0: cell type {t} (high-order simplices are VTK_LAGRANGE_TRIANGLE = 69, VTK_LAGRANGE_TETRAHEDRON = 71, VTK_BEZIER_TRIANGLE = 76 and VTK_BEZIER_TETRAHEDRON = 78)"
                 )))
             }
         };
@@ -98,8 +104,21 @@ impl SimplexElements {
         if let Some(k) = geometry.iter().position(|x| x.iter().any(|v| !v.is_finite())) {
             return Err(file(format!("element {}: point {} is not finite", k / per_cell, k % per_cell)));
         }
+        if let Some(w) = grid.optional("PointData", "RationalWeights", 1, grid.points)? {
+            if let (true, Some(k)) = (bernstein, index.iter().position(|&p| w[p] != 1.0)) {
+                return Err(file(format!(
+                    "element {}: RationalWeights {} (rational Bézier simplices are not read)",
+                    k / per_cell,
+                    w[index[k]]
+                )));
+            }
+        }
         let mut fields = Vec::new();
-        for a in grid.arrays.iter().filter(|a| a.section == "PointData" && a.components == 1) {
+        for a in grid
+            .arrays
+            .iter()
+            .filter(|a| a.section == "PointData" && a.components == 1 && a.name != "RationalWeights")
+        {
             let all = grid.require("PointData", &a.name, 1, grid.points)?;
             let values: Vec<f64> = index.iter().map(|&p| all[p]).collect();
             if let Some(k) = values.iter().position(|v| !v.is_finite()) {
@@ -113,7 +132,7 @@ impl SimplexElements {
             let time = grid.time_value().unwrap_or(0.0);
             fields.push(Field { name: a.name.clone(), times: vec![time], steps: vec![values] });
         }
-        Ok(Self { shape, order, nodes: vtk_nodes(shape, order)?, points: geometry, fields })
+        Ok(Self { shape, order, nodes: vtk_nodes(shape, order)?, bernstein, points: geometry, fields })
     }
 
     /// Elements.
@@ -126,11 +145,20 @@ impl SimplexElements {
         self.points.is_empty()
     }
 
+    /// Every node's basis function at `r` with its gradient: Lagrange, or Bernstein for Bézier
+    /// cells.
+    fn basis(&self, r: &[f64; 3]) -> Vec<(f64, [f64; 3])> {
+        match self.bernstein {
+            false => basis(self.shape, self.order, &self.nodes, r),
+            true => bernstein_basis(self.shape, self.order, &self.nodes, r),
+        }
+    }
+
     /// `x(r)` of element `e` and its Jacobian's columns `∂x/∂r_a` (d of them used).
     pub fn map(&self, e: usize, r: &[f64; 3]) -> ([f64; 3], [[f64; 3]; 3]) {
         let m = self.nodes.len();
         let (mut x, mut jac) = ([0.0; 3], [[0.0; 3]; 3]);
-        for (i, (l, g)) in basis(self.shape, self.order, &self.nodes, r).into_iter().enumerate() {
+        for (i, (l, g)) in self.basis(r).into_iter().enumerate() {
             let p = self.points[e * m + i];
             for c in 0..3 {
                 x[c] += l * p[c];
@@ -146,7 +174,7 @@ impl SimplexElements {
     pub fn value(&self, e: usize, field: usize, r: &[f64; 3]) -> f64 {
         let m = self.nodes.len();
         let coefficients = &self.fields[field].steps[0][e * m..(e + 1) * m];
-        basis(self.shape, self.order, &self.nodes, r).iter().zip(coefficients).map(|((l, _), f)| l * f).sum()
+        self.basis(r).iter().zip(coefficients).map(|((l, _), f)| l * f).sum()
     }
 
     /// The reference point of element `e` that maps to `x` (planar triangles: its x and y),

@@ -3,7 +3,9 @@
 //! `VTK_QUAD` = 9 and `VTK_HEXAHEDRON` = 12) and Bézier cells (`VTK_BEZIER_QUADRILATERAL` =
 //! 77, `VTK_BEZIER_HEXAHEDRON` = 79: the points and point data are Bernstein coefficients;
 //! `RationalWeights` other than 1 make rational cells, [`SpectralMesh::with_weights`]) with point data, as
-//! ParaView and solvers write them. VTK's Lagrange cells are isoparametric on equispaced nodes
+//! ParaView and solvers write them; Lagrange triangles and tetrahedra (69, 71) and Bézier ones
+//! (`VTK_BEZIER_TRIANGLE` = 76, `VTK_BEZIER_TETRAHEDRON` = 78, polynomial only: read as the
+//! Lagrange simplex of the same order that equals them, [`simplex::FromBernstein`]). VTK's Lagrange cells are isoparametric on equispaced nodes
 //! of [0, 1]; their points are
 //! ordered corners, then edge interiors, then face interiors, then the body
 //! (`vtkHigherOrderQuadrilateral::PointIndexFromIJK` and `vtkHigherOrderHexahedron::…`, VTK 9),
@@ -42,6 +44,10 @@ pub const VTK_LAGRANGE_QUADRILATERAL: u8 = 70;
 pub const VTK_LAGRANGE_TRIANGLE: u8 = 69;
 /// `VTK_LAGRANGE_TETRAHEDRON`.
 pub const VTK_LAGRANGE_TETRAHEDRON: u8 = 71;
+/// `VTK_BEZIER_TRIANGLE`.
+pub const VTK_BEZIER_TRIANGLE: u8 = 76;
+/// `VTK_BEZIER_TETRAHEDRON`.
+pub const VTK_BEZIER_TETRAHEDRON: u8 = 78;
 /// `VTK_LAGRANGE_HEXAHEDRON`.
 pub const VTK_LAGRANGE_HEXAHEDRON: u8 = 72;
 
@@ -156,15 +162,18 @@ fn read_grid(path: &Path, grid: &vtk::UnstructuredGrid) -> Result<SpectralMesh, 
     let conn =
         grid.array("Cells", "connectivity").ok_or_else(|| file("no Cells array \"connectivity\"".into()))?;
     let first = types[0];
-    let bezier = matches!(first as u8, VTK_BEZIER_QUADRILATERAL | VTK_BEZIER_HEXAHEDRON);
+    let bezier = matches!(
+        first as u8,
+        VTK_BEZIER_QUADRILATERAL | VTK_BEZIER_HEXAHEDRON | VTK_BEZIER_TRIANGLE | VTK_BEZIER_TETRAHEDRON
+    );
     let shape = match first as u8 {
         VTK_QUAD | VTK_LAGRANGE_QUADRILATERAL | VTK_BEZIER_QUADRILATERAL => Shape::Quadrilateral,
         VTK_HEXAHEDRON | VTK_LAGRANGE_HEXAHEDRON | VTK_BEZIER_HEXAHEDRON => Shape::Hexahedron,
-        VTK_LAGRANGE_TRIANGLE => Shape::Triangle,
-        VTK_LAGRANGE_TETRAHEDRON => Shape::Tetrahedron,
+        VTK_LAGRANGE_TRIANGLE | VTK_BEZIER_TRIANGLE => Shape::Triangle,
+        VTK_LAGRANGE_TETRAHEDRON | VTK_BEZIER_TETRAHEDRON => Shape::Tetrahedron,
         _ => {
             return Err(file(format!(
-                "element 0: cell type {first}{} (spectral elements are VTK_LAGRANGE_QUADRILATERAL = 70, VTK_LAGRANGE_HEXAHEDRON = 72, VTK_LAGRANGE_TRIANGLE = 69, VTK_LAGRANGE_TETRAHEDRON = 71, VTK_BEZIER_QUADRILATERAL = 77, VTK_BEZIER_HEXAHEDRON = 79, VTK_QUAD = 9 or VTK_HEXAHEDRON = 12)",
+                "element 0: cell type {first}{} (spectral elements are VTK_LAGRANGE_QUADRILATERAL = 70, VTK_LAGRANGE_HEXAHEDRON = 72, VTK_LAGRANGE_TRIANGLE = 69, VTK_LAGRANGE_TETRAHEDRON = 71, VTK_BEZIER_QUADRILATERAL = 77, VTK_BEZIER_HEXAHEDRON = 79, VTK_BEZIER_TRIANGLE = 76, VTK_BEZIER_TETRAHEDRON = 78, VTK_QUAD = 9 or VTK_HEXAHEDRON = 12)",
                 vtk_cell_name(first).map_or(String::new(), |n| format!(", {n}, which the renderer does not draw"))
             )))
         }
@@ -183,8 +192,10 @@ fn read_grid(path: &Path, grid: &vtk::UnstructuredGrid) -> Result<SpectralMesh, 
             (Shape::Hexahedron, false) => &[VTK_HEXAHEDRON, VTK_LAGRANGE_HEXAHEDRON],
             (Shape::Quadrilateral, true) => &[VTK_BEZIER_QUADRILATERAL],
             (Shape::Hexahedron, true) => &[VTK_BEZIER_HEXAHEDRON],
-            (Shape::Triangle, _) => &[VTK_LAGRANGE_TRIANGLE],
-            (Shape::Tetrahedron, _) => &[VTK_LAGRANGE_TETRAHEDRON],
+            (Shape::Triangle, false) => &[VTK_LAGRANGE_TRIANGLE],
+            (Shape::Tetrahedron, false) => &[VTK_LAGRANGE_TETRAHEDRON],
+            (Shape::Triangle, true) => &[VTK_BEZIER_TRIANGLE],
+            (Shape::Tetrahedron, true) => &[VTK_BEZIER_TETRAHEDRON],
         };
         if !same_shape.contains(&(types[e] as u8)) || types[e].fract() != 0.0 {
             return Err(file(format!(
@@ -249,7 +260,7 @@ fn read_grid(path: &Path, grid: &vtk::UnstructuredGrid) -> Result<SpectralMesh, 
             order.push(c as usize);
         }
     }
-    let geometry: Vec<[f64; 3]> =
+    let mut geometry: Vec<[f64; 3]> =
         order.iter().map(|&p| [points[3 * p], points[3 * p + 1], points[3 * p + 2]]).collect();
     // Fields: one-component point data and cell data, NAME_t<k> grouped into steps.
     let mut grouped: BTreeMap<String, Vec<(usize, &[f64])>> = BTreeMap::new();
@@ -267,6 +278,15 @@ fn read_grid(path: &Path, grid: &vtk::UnstructuredGrid) -> Result<SpectralMesh, 
         }
         _ => None,
     };
+    if let (Some(w), true) = (&weights, shape.is_simplex()) {
+        let k = w.iter().position(|&x| x != 1.0).unwrap_or(0);
+        return Err(file(format!(
+            "element {}: RationalWeights {} (rational Bézier {} are not drawn; rational quadrilaterals and hexahedra are, and Bézier simplices whose weights are all 1)",
+            k / per_cell,
+            w[k],
+            if shape == Shape::Triangle { "triangles" } else { "tetrahedra" }
+        )));
+    }
     for a in grid.arrays.iter().filter(|a| a.section == "PointData" && a.name != "RationalWeights") {
         if a.components != 1 {
             continue;
@@ -324,7 +344,24 @@ fn read_grid(path: &Path, grid: &vtk::UnstructuredGrid) -> Result<SpectralMesh, 
         };
         fields.push(Field { name, times, steps: steps.iter().map(|(_, v)| coefficients(v)).collect() });
     }
-    let nodes = if bezier { NodeSet::Bernstein } else { NodeSet::Equispaced };
+    // Bézier simplices: the same polynomial's values at the Lagrange nodes.
+    if bezier && shape.is_simplex() {
+        let simplex_shape = if shape == Shape::Triangle {
+            simplex::SimplexShape::Triangle
+        } else {
+            simplex::SimplexShape::Tetrahedron
+        };
+        let convert = simplex::FromBernstein::new(simplex_shape, n);
+        let mut nodal = Vec::with_capacity(geometry.len());
+        for control in geometry.chunks_exact(per_cell) {
+            nodal.extend(convert.nodal_points(control));
+        }
+        geometry = nodal;
+        for step in fields.iter_mut().flat_map(|f| f.steps.iter_mut()) {
+            *step = step.chunks_exact(per_cell).flat_map(|c| convert.nodal_values(c)).collect();
+        }
+    }
+    let nodes = if bezier && !shape.is_simplex() { NodeSet::Bernstein } else { NodeSet::Equispaced };
     let basis = Basis1d::new(nodes, n)?;
     let mesh =
         SpectralMesh::new(shape, basis.clone(), basis, geometry, fields).map_err(|e| file(e.to_string()))?;
@@ -369,8 +406,6 @@ fn vtk_cell_name(ty: f64) -> Option<&'static str> {
         71 => "VTK_LAGRANGE_TETRAHEDRON",
         73 => "VTK_LAGRANGE_WEDGE",
         75 => "VTK_BEZIER_CURVE",
-        76 => "VTK_BEZIER_TRIANGLE",
-        78 => "VTK_BEZIER_TETRAHEDRON",
         _ => return None,
     })
 }
