@@ -82,6 +82,8 @@ def main():
     curved_file("tetrahedron", "tet_cube_o6", order=6, side=2)
     curved_file("tetrahedron", "tet_cube_o3", order=3, side=2)
     bezier_files()
+    # A curved surface in 3D: order-4 triangles lifted off the plane.
+    curved_file("triangle", "tri_surface_o4", order=4, side=2, lifted=True)
 
 
 def bezier_files():
@@ -134,13 +136,13 @@ def kuhn_cube():
     return out
 
 
-def curved_file(kind, name, order=3, side=1, bezier=False, rational=False):
+def curved_file(kind, name, order=3, side=1, bezier=False, rational=False, lifted=False):
     """Curved Lagrange (or, with `bezier`, Bézier) cells of `order` written by VTK as
     `name`.vtu (ascii), with VTK's own evaluation of them at sample points in `name`.json.
     Triangles: the unit square in side x side squares of two triangles each (side 1: only the
     first, when rational); tetrahedra: two (side 1) or the unit cube in six (side 2). Bézier
     cells take the bent lattice points as control points, and `rational` ones RationalWeights
-    1 + 0.4 x y."""
+    1 + 0.4 x y; `lifted` triangles rise off the plane to z = 0.3 sin(2.2 x + 0.4) cos(1.3 y)."""
     if kind == "triangle":
         corners = triangle_grid(side)[: 1 if rational else None]
         cell_type = vtk.VTK_BEZIER_TRIANGLE if bezier else vtk.VTK_LAGRANGE_TRIANGLE
@@ -168,6 +170,8 @@ def curved_file(kind, name, order=3, side=1, bezier=False, rational=False):
             # The straight cell's point at r (vertex 0 plus r along the axes), then curved.
             straight = [c[0][a] + sum(r[k] * (c[k + 1][a] - c[0][a]) for k in range(dim)) for a in range(3)]
             x = bend(straight, kind == "triangle")
+            if lifted:
+                x = (x[0], x[1], 0.3 * math.sin(2.2 * x[0] + 0.4) * math.cos(1.3 * x[1]))
             ids.append(points.InsertNextPoint(*x))
             values.InsertNextValue(field(*x))
             weights_array.InsertNextValue(1.0 + 0.4 * x[0] * x[1])

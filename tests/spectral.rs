@@ -355,34 +355,6 @@ fn bad_input_names_the_element_or_field() {
     assert!(e.to_string().contains("step 3"), "{e}");
 }
 
-/// Of a surface's data render: the pixels covered, how far (px) the farthest one's point
-/// `surface(e, r)` projects from its centre, and the worst value error as a fraction of its
-/// pixel's f32 bound.
-fn surface_errors(
-    mesh: &SpectralMesh,
-    pixels: &[f32],
-    camera: &galerkin::render::Camera,
-    size: (u32, u32),
-    surface: impl Fn(usize, [f64; 2]) -> glam::DVec3,
-) -> (usize, f64, f64) {
-    let (mut covered, mut farthest, mut worst_value) = (0, 0.0f64, 0.0f64);
-    for py in 0..size.1 {
-        for px in 0..size.0 {
-            let t = &pixels[4 * (py * size.0 + px) as usize..][..4];
-            if t[3].is_nan() {
-                continue;
-            }
-            covered += 1;
-            let (e, r) = (t[3] as usize, [f64::from(t[1]), f64::from(t[2])]);
-            let (sx, sy) = camera.project(surface(e, r), size.0, size.1);
-            farthest = farthest.max((sx - (f64::from(px) + 0.5)).hypot(sy - (f64::from(py) + 0.5)));
-            let bound = galerkin::spectral::reference::rounding_bound(mesh, 0, 0, e, r);
-            worst_value = worst_value.max((f64::from(t[0]) - mesh.value(0, 0, e, r[0], r[1])).abs() / bound);
-        }
-    }
-    (covered, farthest, worst_value)
-}
-
 /// Surfaces in 3D: every covered pixel shows the polynomial at a reference point whose surface
 /// point projects within the ½-pixel error budget of the pixel centre (the tessellation's
 /// bound), with the value evaluated exactly there; a coarse budget visibly breaks the bound.
@@ -399,9 +371,13 @@ fn surfaces_show_the_field_within_half_a_pixel() {
     let camera = fit_camera(&mesh);
     let farthest_on = |mesh: &Arc<galerkin::spectral::SpectralMesh>, budget: f64| {
         let view = SpectralView { overdraw: false, max_error_px: budget, ..SpectralView::default() };
-        surface_errors(mesh, &render_data(&gpu, mesh, &view, size), &camera, size, |e, r| {
-            glam::DVec3::from(mesh.map(e, r[0], r[1]).0)
-        })
+        common::surfaces::surface_errors(
+            mesh,
+            &render_data(&gpu, mesh, &view, size),
+            &camera,
+            size,
+            |e, r| glam::DVec3::from(mesh.map(e, r[0], r[1]).0),
+        )
     };
     let farthest = |budget: f64| farthest_on(&mesh, budget);
     for (name, m) in [("order 4 on order-3 geometry", &mesh), ("isoparametric order 3", &iso)] {
@@ -479,10 +455,11 @@ fn height_fields_show_the_field_within_half_a_pixel() {
     a[2] = 0.2 * lo;
     b[2] = 0.2 * hi;
     let camera = galerkin::spectral::render::camera_for_box(a, b);
-    let (covered, worst, worst_value) = surface_errors(&mesh, &pixels, &camera, size, |e, q| {
-        let (x, _) = mesh.map(e, q[0], q[1]);
-        glam::DVec3::new(x[0], x[1], 0.2 * mesh.value(0, 0, e, q[0], q[1]))
-    });
+    let (covered, worst, worst_value) =
+        common::surfaces::surface_errors(&mesh, &pixels, &camera, size, |e, q| {
+            let (x, _) = mesh.map(e, q[0], q[1]);
+            glam::DVec3::new(x[0], x[1], 0.2 * mesh.value(0, 0, e, q[0], q[1]))
+        });
     eprintln!(
         "height field: {covered} pixels, farthest {worst:.3} px, value error {worst_value:.3} of its bound"
     );
@@ -532,10 +509,13 @@ fn rational_quadrilaterals_draw_an_exact_cylinder() {
     let size = (256u32, 192u32);
     let camera = fit_camera(&mesh);
     let view = SpectralView { overdraw: false, max_error_px: 0.5, ..SpectralView::default() };
-    let (covered, farthest, worst_value) =
-        surface_errors(&mesh, &render_data(&gpu, &mesh, &view, size), &camera, size, |e, r| {
-            glam::DVec3::from(mesh.map(e, r[0], r[1]).0)
-        });
+    let (covered, farthest, worst_value) = common::surfaces::surface_errors(
+        &mesh,
+        &render_data(&gpu, &mesh, &view, size),
+        &camera,
+        size,
+        |e, r| glam::DVec3::from(mesh.map(e, r[0], r[1]).0),
+    );
     eprintln!("rational cylinder: {covered} pixels, farthest {farthest:.3} px, value error {worst_value:.3} of its bound");
     assert!(covered > 3000, "{covered}");
     // As for polynomial surfaces: the budget plus f32 slack (≈ 1e-3 px).

@@ -4,7 +4,9 @@
 //! of [`Shape::Triangle`], whose evaluation (Silvester's basis in rows, the twin of
 //! `spectral_simplex.glsl`) equals VTK's own and the plain node-by-node evaluation of
 //! [`SimplexElements`]; rendered on the device, every covered pixel shows the f64 value at its
-//! centre within that pixel's f32 rounding bound, and no pixel inside an element is missed.
+//! centre within that pixel's f32 rounding bound, and no pixel inside an element is missed;
+//! lifted off the plane (a surface in 3D) or as a height field, they are tessellated on the
+//! device within the half-pixel budget.
 
 mod common;
 
@@ -168,22 +170,73 @@ fn vtk_written_triangles_render_pixel_exact() {
     assert!(report.passed() && report.covered > 60_000, "zoomed: {report:?}");
 }
 
-/// What triangles do not do yet is refused with a clear error, not drawn wrong: a surface in
-/// 3D (z ≠ 0) and a height field.
+/// Curved triangles forming a surface in 3D (`tri_surface_o4.vtu`, order 4, VTK-written,
+/// z = 0.3 sin(2.2x + 0.4) cos(1.3y) at the nodes) and the height field of the planar order-6
+/// triangles: tessellated on the device like quadrilateral surfaces, every covered pixel shows
+/// the polynomial at a reference point whose surface point projects within the ½-pixel budget
+/// of the pixel centre (plus 0.01 px of f32 slack, as for quadrilaterals), the value there
+/// within its pixel's f32 bound; the device writes as many vertices as the CPU twin of the
+/// levels says (3 L² per triangle; 2 % for levels where ceil meets rounding), none skipped; and
+/// a coarse budget visibly breaks the bound (so the check can fail).
 #[test]
-fn triangles_in_3d_and_height_fields_are_refused() {
+fn triangle_surfaces_and_height_fields_show_the_field_within_half_a_pixel() {
+    use galerkin::spectral::render::fit_camera;
     let gpu = common::gpu();
-    let mut mesh = galerkin::spectral::load(&path("tri_curved", "vtu"), &[]).expect("read");
-    let flat = Arc::new(mesh.clone());
-    let mut r = SpectralRenderer::new(&gpu, flat, &Colormap::viridis()).expect("renderer");
-    let target = RenderTarget::new(&gpu, "triangles", 64, 64, ColorFormat::Rgba32F).expect("target");
-    let err = r
-        .render(&target, &SpectralView { height: Some(0.0), ..SpectralView::default() })
-        .expect_err("refused");
-    assert!(err.to_string().contains("height fields of Lagrange triangles"), "{err}");
-    for p in &mut mesh.points {
-        p[2] = 0.1 * p[0];
-    }
-    let err = SpectralRenderer::new(&gpu, Arc::new(mesh), &Colormap::viridis()).err().expect("refused");
-    assert!(err.to_string().contains("surface in 3D"), "{err}");
+    let size = (256u32, 192u32);
+    let mesh = Arc::new(galerkin::spectral::load(&path("tri_surface_o4", "vtu"), &[]).expect("read"));
+    assert!(!mesh.is_planar());
+    let camera = fit_camera(&mesh);
+    let target =
+        RenderTarget::new(&gpu, "triangle surface", size.0, size.1, ColorFormat::Rgba32F).expect("target");
+    let mut r = SpectralRenderer::new(&gpu, mesh.clone(), &Colormap::viridis()).expect("renderer");
+    let mut farthest = |budget: f64| {
+        let view = SpectralView { overdraw: false, max_error_px: budget, ..SpectralView::default() };
+        let Pixels::Rgba32F(px) = r.render(&target, &view).expect("rendered") else {
+            panic!("a float target returned bytes")
+        };
+        let (written, skipped) = r.last_tessellation().expect("counts").expect("a surface frame");
+        let expected = r.expected_tessellation(&target, &view);
+        let report = common::surfaces::surface_errors(&mesh, &px, &camera, size, |e, q| {
+            glam::DVec3::from(mesh.map(e, q[0], q[1]).0)
+        });
+        (report, written, skipped, expected)
+    };
+    let ((covered, worst, worst_value), written, skipped, expected) = farthest(0.5);
+    eprintln!("triangle surface: {covered} pixels, farthest {worst:.3} px, value error {worst_value:.3} of its bound; {written} vertices (CPU twin {expected})");
+    // The lifted unit square, seen from the fitted camera's oblique view, covers ~5,000 pixels.
+    assert!(covered > 4_000, "{covered}");
+    assert!(worst <= 0.5 + 0.01, "a pixel shows a surface point {worst} px away");
+    assert!(worst_value <= 1.0, "value error {worst_value} of its bound");
+    assert_eq!(skipped, 0);
+    assert!(
+        (f64::from(written) - expected as f64).abs() <= 0.02 * expected as f64,
+        "{written} vs {expected}"
+    );
+    let ((_, coarse, _), ..) = farthest(16.0);
+    eprintln!("budget 16 px: farthest {coarse:.3} px");
+    assert!(coarse > 0.5, "a coarse tessellation should break the half-pixel bound ({coarse})");
+
+    let flat = Arc::new(galerkin::spectral::load(&path("tri_curved_o6", "vtu"), &[]).expect("read"));
+    let mut r = SpectralRenderer::new(&gpu, flat.clone(), &Colormap::viridis()).expect("renderer");
+    let scale = 0.2;
+    let view = SpectralView { overdraw: false, height: Some(scale), ..SpectralView::default() };
+    let Pixels::Rgba32F(px) = r.render(&target, &view).expect("rendered") else {
+        panic!("a float target returned bytes")
+    };
+    // The camera the renderer fits to the lifted box.
+    let (lo, hi) = r.range(&view);
+    let (mut a, mut b) = flat.bounds();
+    a[2] = scale * lo;
+    b[2] = scale * hi;
+    let camera = galerkin::spectral::render::camera_for_box(a, b);
+    let (covered, worst, worst_value) =
+        common::surfaces::surface_errors(&flat, &px, &camera, size, |e, q| {
+            let (x, _) = flat.map(e, q[0], q[1]);
+            glam::DVec3::new(x[0], x[1], scale * flat.value(0, 0, e, q[0], q[1]))
+        });
+    eprintln!("triangle height field: {covered} pixels, farthest {worst:.3} px, value error {worst_value:.3} of its bound");
+    // The lifted square from the fitted camera covers ~7,600 pixels.
+    assert!(covered > 5_000, "{covered}");
+    assert!(worst <= 0.5 + 0.01, "a pixel shows a point {worst} px away");
+    assert!(worst_value <= 1.0, "value error {worst_value} of its bound");
 }

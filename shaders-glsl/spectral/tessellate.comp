@@ -15,7 +15,11 @@
 // L = ceil(sqrt(P K / (4 z budget))) keeps every point within `budget` pixels, up to the level
 // cap. Twin: proxy::tessellation_level.
 //
-// One invocation per element (lanes run across elements, no barriers): it reserves 6 L²
+// Triangles (SPECTRAL_SIMPLEX): the reference triangle in L rows of right triangles with legs
+// 1/L (L² of them: row j has L - j upright and L - j - 1 inverted), so the same bound holds with
+// K from the simplex Bernstein net (proxy.rs); 3 L² vertices.
+//
+// One invocation per element (lanes run across elements, no barriers): it reserves 6 L² (3 L²)
 // vertices in the output (a compare-and-swap that never passes the capacity: an element that
 // does not fit is skipped and counted), then walks its cells row by row, evaluating each grid
 // point once per row pair (the previous column's two points carry over).
@@ -56,7 +60,7 @@ void main() {
     uint e = gl_GlobalInvocationID.y * gl_NumWorkGroups.x * gl_WorkGroupSize.x + gl_GlobalInvocationID.x;
     if (e >= patches.length()) return;
     uint l = tessellation_level(patches[e]);
-    uint n = 6u * l * l;
+    uint n = (SPECTRAL_SIMPLEX ? 3u : 6u) * l * l;
     if (n == 0u) return;
     uint base = draw.vertex_count;
     while (true) {
@@ -70,6 +74,33 @@ void main() {
     }
     float height = patches[e].curvature.y;
     uint k = base;
+    if (SPECTRAL_SIMPLEX) {
+        for (uint j = 0u; j < l; ++j) {
+            vec2 r00 = vec2(0u, j) / float(l), r01 = vec2(0u, j + 1u) / float(l);
+            vec3 x00 = surface_point(e, r00, height), x01 = surface_point(e, r01, height);
+            for (uint i = 0u; i + j < l; ++i) {
+                vec2 r10 = vec2(i + 1u, j) / float(l);
+                vec3 x10 = surface_point(e, r10, height);
+                vertices[k + 0u] = DrawVertex(x00.x, x00.y, x00.z, r00.x, r00.y, e);
+                vertices[k + 1u] = DrawVertex(x10.x, x10.y, x10.z, r10.x, r10.y, e);
+                vertices[k + 2u] = DrawVertex(x01.x, x01.y, x01.z, r01.x, r01.y, e);
+                k += 3u;
+                if (i + j + 1u < l) {
+                    vec2 r11 = vec2(i + 1u, j + 1u) / float(l);
+                    vec3 x11 = surface_point(e, r11, height);
+                    vertices[k + 0u] = DrawVertex(x10.x, x10.y, x10.z, r10.x, r10.y, e);
+                    vertices[k + 1u] = DrawVertex(x11.x, x11.y, x11.z, r11.x, r11.y, e);
+                    vertices[k + 2u] = DrawVertex(x01.x, x01.y, x01.z, r01.x, r01.y, e);
+                    k += 3u;
+                    x01 = x11;
+                    r01 = r11;
+                }
+                x00 = x10;
+                r00 = r10;
+            }
+        }
+        return;
+    }
     for (uint j = 0u; j < l; ++j) {
         vec2 r00 = vec2(0u, j) / float(l), r01 = vec2(0u, j + 1u) / float(l);
         vec3 x00 = surface_point(e, r00, height), x01 = surface_point(e, r01, height);

@@ -92,8 +92,9 @@ pub fn run(desc: &GpuDesc, verb: &Verb) -> Result<()> {
 #[derive(Args, Clone)]
 pub struct RenderArgs {
     /// Data set: a VTK `.vtu` file of Lagrange or Bézier quadrilaterals (planar or a surface in
-    /// 3D) or hexahedra (shown by cut planes), or of Lagrange or Bézier triangles (planar,
-    /// orders 1–10) or tetrahedra (cut planes, orders 1–10), in any encoding VTK writes; a
+    /// 3D) or hexahedra (shown by cut planes), or of Lagrange or Bézier triangles (planar or a
+    /// surface in 3D, orders 1–10) or tetrahedra (cut planes, orders 1–10), in any encoding VTK
+    /// writes; a
     /// `.pvtu` of such pieces (a partitioned data set, read as one); a ParaView `.pvd`
     /// collection or `.vtu.series` of such files (its files are the time steps); an MFEM mesh
     /// ("MFEM mesh v1.0" of quadrilaterals, hexahedra, triangles or tetrahedra, straight or

@@ -34,6 +34,7 @@ pub mod iso_reference;
 pub mod mesh;
 pub mod mfem;
 pub mod mfem_simplex;
+mod mfem_topology;
 pub mod picture;
 pub mod proxy;
 pub mod pvtu;

@@ -288,11 +288,11 @@ fn edges(mesh: &SpectralMesh, e: usize, out: &mut Vec<DrawVertex>) {
 /// A rational surface is bounded through its polynomial interpolant of degree 2g + 2 (at most
 /// [`MAX_ORDER`]; an estimate of K, which sets the tessellation level, not a bound), with the
 /// sphere widened to contain the control points, whose convex hull contains the element.
+///
+/// Triangles: the same from the simplex Bernstein net ([`triangle_patches_of`]).
 pub fn surface_patches(mesh: &SpectralMesh) -> Vec<[f32; 8]> {
     if mesh.shape == Shape::Triangle {
-        // Triangles are drawn in the plane only (no tessellation, no height): no bounds to
-        // take, and a zero height scale for the shaders that read it.
-        return vec![[0.0; 8]; mesh.elements()];
+        return triangle_patches_of(mesh, mesh.geometry.order, 0.0, |e, r| mesh.map(e, r[0], r[1]).0);
     }
     if mesh.weights.is_none() {
         return patches_of(mesh, mesh.geometry.order, 0.0, |e, xi, eta| mesh.map(e, xi, eta).0);
@@ -332,6 +332,9 @@ pub fn height_patches(mesh: &SpectralMesh, field: usize, step: usize, scale: f64
         let (x, _) = mesh.map(e, xi, eta);
         [x[0], x[1], scale * mesh.value(field, step, e, xi, eta)]
     };
+    if mesh.shape == Shape::Triangle {
+        return triangle_patches_of(mesh, order, scale, |e, r: [f64; 2]| surface(e, r[0], r[1]));
+    }
     if mesh.weights.is_none() {
         return patches_of(mesh, order, scale, surface);
     }
@@ -390,21 +393,81 @@ fn patches_of(
             }
             let gg = g as f64;
             let k = (gg * (gg - 1.0) * xx.max(yy)) + gg * gg * xy;
-            let count = (m * m) as f64;
-            let centre: [f64; 3] = std::array::from_fn(|c| per[c].iter().sum::<f64>() / count);
-            let radius =
-                (0..m * m).map(|t| norm(std::array::from_fn(|c| per[c][t] - centre[c]))).fold(0.0, f64::max);
-            [
-                centre[0] as f32,
-                centre[1] as f32,
-                centre[2] as f32,
-                // Rounded up so the f32 sphere still contains the element.
-                (radius * (1.0 + 1e-6)) as f32,
-                (k * (1.0 + 1e-6)) as f32,
-                scale as f32,
-                0.0,
-                0.0,
-            ]
+            let net: Vec<[f64; 3]> = (0..m * m).map(|t| [per[0][t], per[1][t], per[2][t]]).collect();
+            patch_record(&net, k, scale)
+        })
+        .collect()
+}
+
+/// A patch of `surface_patches`: the sphere around the control points `net` (centre their
+/// mean, radius the farthest), the curvature bound `k`, the height `scale`; rounded up so the
+/// f32 sphere and bound still hold.
+fn patch_record(net: &[[f64; 3]], k: f64, scale: f64) -> [f32; 8] {
+    let count = net.len() as f64;
+    let centre: [f64; 3] = std::array::from_fn(|c| net.iter().map(|p| p[c]).sum::<f64>() / count);
+    let radius = net
+        .iter()
+        .map(|p| {
+            ((p[0] - centre[0]).powi(2) + (p[1] - centre[1]).powi(2) + (p[2] - centre[2]).powi(2)).sqrt()
+        })
+        .fold(0.0, f64::max);
+    [
+        centre[0] as f32,
+        centre[1] as f32,
+        centre[2] as f32,
+        (radius * (1.0 + 1e-6)) as f32,
+        (k * (1.0 + 1e-6)) as f32,
+        scale as f32,
+        0.0,
+        0.0,
+    ]
+}
+
+/// [`patches_of`] for triangles: the surface `surface(e, r)`, a polynomial of total degree
+/// `order`, sampled at the equispaced lattice and turned into its simplex Bernstein net
+/// `b_{ijk}` (i on ξ, j on η, k on 1 − ξ − η; [`super::simplex::ToBernstein`]). Along ξ the
+/// barycentric step is e₀ − e₂, so x_ξξ = g(g − 1) Σ (b_{+2e₀} − 2b_{+e₀+e₂} + b_{+2e₂}) B over
+/// the degree-(g − 2) Bernstein polynomials, likewise x_ηη with e₁, and
+/// x_ξη = g(g − 1) Σ (b_{+e₀+e₁} − b_{+e₀+e₂} − b_{+e₁+e₂} + b_{+2e₂}) B; each is bounded by its
+/// differences' largest norm (the B sum to 1), so K ≤ g(g − 1)(max(Dξξ, Dηη) + Dξη). The
+/// tessellation's small right triangles then err by at most h²K/4 as a quadrilateral's do.
+fn triangle_patches_of(
+    mesh: &SpectralMesh,
+    order: usize,
+    scale: f64,
+    surface: impl Fn(usize, [f64; 2]) -> [f64; 3],
+) -> Vec<[f32; 8]> {
+    use super::simplex::{lattice, triangle_index, SimplexShape, ToBernstein};
+    let g = order;
+    let convert = ToBernstein::new(SimplexShape::Triangle, g).expect("equispaced nodes are unisolvent");
+    let nodes = lattice(SimplexShape::Triangle, g);
+    (0..mesh.elements())
+        .map(|e| {
+            let samples: Vec<[f64; 3]> =
+                nodes.iter().map(|b| surface(e, [b[0] as f64 / g as f64, b[1] as f64 / g as f64])).collect();
+            let net = convert.control_points(&samples);
+            // b(i, j): the control point of multi-index (i, j, g − i − j).
+            let b = |i: usize, j: usize| net[triangle_index(g, i, j)];
+            let norm = |terms: &[(f64, [f64; 3])]| {
+                let v: [f64; 3] = std::array::from_fn(|c| terms.iter().map(|(w, p)| w * p[c]).sum::<f64>());
+                (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt()
+            };
+            let (mut xx, mut yy, mut xy) = (0.0f64, 0.0f64, 0.0f64);
+            // Over the degree-(g − 2) multi-indices (i, j, k = g − 2 − i − j).
+            for j in 0..g.saturating_sub(1) {
+                for i in 0..g - 1 - j {
+                    xx = xx.max(norm(&[(1.0, b(i + 2, j)), (-2.0, b(i + 1, j)), (1.0, b(i, j))]));
+                    yy = yy.max(norm(&[(1.0, b(i, j + 2)), (-2.0, b(i, j + 1)), (1.0, b(i, j))]));
+                    xy = xy.max(norm(&[
+                        (1.0, b(i + 1, j + 1)),
+                        (-1.0, b(i + 1, j)),
+                        (-1.0, b(i, j + 1)),
+                        (1.0, b(i, j)),
+                    ]));
+                }
+            }
+            let gg = g as f64;
+            patch_record(&net, gg * (gg - 1.0) * (xx.max(yy) + xy), scale)
         })
         .collect()
 }

@@ -7,6 +7,7 @@ pub mod evaluations;
 pub mod host;
 pub mod models;
 pub mod obj_box;
+pub mod surfaces;
 pub mod tunnel;
 pub mod wavy;
 

@@ -51,6 +51,7 @@ mod volume;
 pub use crate::render::camera_for_box;
 pub use cut::plane_span;
 pub use iso::{element_boxes, MAX_ISO_VALUES};
+pub use tessellate::tessellated_vertices;
 pub use view::{fit_camera, SpectralView, View2d};
 pub use volume::{tile_bands, VOLUME_TILE};
 
@@ -219,7 +220,7 @@ struct Tessellator {
 }
 
 /// A spectral-element mesh resident on the device, drawn per pixel (seed 002): quadrilaterals
-/// (planar or a surface in 3D), Lagrange triangles (planar), hexahedra (cut planes).
+/// and triangles (planar or a surface in 3D), hexahedra and tetrahedra (cut planes).
 pub struct SpectralRenderer {
     gpu: Gpu,
     mesh: Arc<SpectralMesh>,
@@ -265,16 +266,11 @@ pub struct SpectralRenderer {
 
 impl SpectralRenderer {
     /// Uploads `mesh` (geometry, the first field's first step, bases, draw streams) and
-    /// `colormap`. Quadrilateral meshes: planar, or surfaces in 3D; hexahedral meshes: by cut
-    /// planes ([`SpectralView::cuts`]).
+    /// `colormap`. Quadrilateral and triangle meshes: planar, or surfaces in 3D; hexahedral and
+    /// tetrahedral meshes: by cut planes ([`SpectralView::cuts`]), isosurfaces and volumes.
     pub fn new(gpu: &Gpu, mesh: Arc<SpectralMesh>, colormap: &Colormap) -> Result<Self> {
         let hex = mesh.shape.is_volume();
         let planar = mesh.is_planar();
-        if mesh.shape == super::mesh::Shape::Triangle && !planar {
-            return Err(SpectralError::Missing(
-                "Lagrange triangles are drawn in the plane (z = 0 at every point); triangles forming a surface in 3D are not drawn yet".into(),
-            ));
-        }
         if mesh.fields.is_empty() {
             return Err(SpectralError::Missing("the data set has no fields to show".into()));
         }
@@ -595,11 +591,6 @@ impl SpectralRenderer {
             return self.prepare_cuts(target, view);
         }
         self.check_derived_view(view)?;
-        if self.mesh.shape == super::mesh::Shape::Triangle && view.height.is_some() {
-            return Err(SpectralError::Missing(
-                "height fields of Lagrange triangles are not drawn yet".into(),
-            ));
-        }
         self.show(view)?;
         self.pipelines_for(target, view)?;
         self.patches_for_view(view)?;

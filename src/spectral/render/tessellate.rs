@@ -101,6 +101,7 @@ impl SpectralRenderer {
             .map_err(dev("the tessellation pass"))?;
             self.tessellator = Some(Tessellator { pipeline, draw, vertices: None, set: None });
         }
+        let per_cell = tessellated_vertices(self.mesh.shape, 1);
         let need: u64 = self
             .cpu_levels(push)
             .map(|l| {
@@ -109,7 +110,7 @@ impl SpectralRenderer {
                 if l == 0 {
                     0
                 } else {
-                    6 * (l + 1) * (l + 1)
+                    per_cell * (l + 1) * (l + 1)
                 }
             })
             .sum::<u64>()
@@ -171,9 +172,17 @@ impl SpectralRenderer {
     }
 
     /// The vertices the CPU twin of the tessellation levels ([`proxy::tessellation_level`])
-    /// gives `view` in `target`: 6 L² per element.
+    /// gives `view` in `target`: [`tessellated_vertices`] per element.
     pub fn expected_tessellation(&mut self, target: &RenderTarget, view: &SpectralView) -> u64 {
         let push = self.push(&target.draw_target(), view);
-        self.cpu_levels(&push).map(|l| 6 * u64::from(l) * u64::from(l)).sum()
+        let shape = self.mesh.shape;
+        self.cpu_levels(&push).map(|l| tessellated_vertices(shape, l)).sum()
     }
+}
+
+/// The vertices `tessellate.comp` writes for an element of `shape` at level `l`: 6 L² for a
+/// quadrilateral (L² cells of two triangles), 3 L² for a triangle (L² triangles in L rows).
+pub fn tessellated_vertices(shape: crate::spectral::Shape, l: u32) -> u64 {
+    let per = if shape == crate::spectral::Shape::Triangle { 3 } else { 6 };
+    per * u64::from(l) * u64::from(l)
 }
