@@ -247,3 +247,49 @@ fn isosurfaces_coloured_by_a_second_field() {
         .expect_err("refused");
     assert!(err.to_string().contains("no such field"), "{err}");
 }
+
+/// Element edges on isosurfaces (`--edges`): the surface is darkened where it meets a face of
+/// its element. Drawn with and without, the pixels that change are those whose f64 surface
+/// point (the ray caster's) lies within the edge width of a face along the surface
+/// (`iso_reference::face_distance_px`, the twin of the shader's measure): every pixel under
+/// half the width changes and none over 1.5 widths does — except where the device's root lies
+/// in another element than the reference's or the two sides disagree by f32 rounding at the
+/// band's edge, at most 1 % of the pixels showing the surface; and some pixels do change.
+#[test]
+fn isosurface_element_edges_darken_where_the_surface_meets_element_faces() {
+    use galerkin::spectral::iso_reference::{face_distance_px, ISO_EDGE_PX};
+    let gpu = common::gpu();
+    let size = (128u32, 96u32);
+    let target = RenderTarget::new(&gpu, "iso edges", size.0, size.1, ColorFormat::Rgba8).expect("target");
+    for name in ["tet_cube_o3.vtu", "hex_saddle_o6.vtu"] {
+        let mesh = Arc::new(load(name));
+        let (lo, hi) = mesh.value_range(0, 0);
+        let values = vec![lo + 0.45 * (hi - lo)];
+        let camera = fit_camera(&mesh);
+        let mut renderer = SpectralRenderer::new(&gpu, mesh.clone(), &Colormap::viridis()).expect("renderer");
+        let mut draw = |edges: bool| {
+            let view =
+                SpectralView { iso: values.clone(), overdraw: false, edges, ..SpectralView::default() };
+            match renderer.render(&target, &view).expect("rendered") {
+                Pixels::Rgba8(px) => px,
+                Pixels::Rgba32F(_) => panic!("a colour target returned floats"),
+            }
+        };
+        let (plain, edged) = (draw(false), draw(true));
+        let reference = iso_reference(&mesh, (0, 0), &camera, &values, size);
+        let (mut shown, mut darkened, mut wrong) = (0usize, 0usize, Vec::new());
+        for (k, hit) in reference.iter().enumerate() {
+            let changed = (0..3).any(|c| plain[4 * k + c].abs_diff(edged[4 * k + c]) >= 2);
+            darkened += usize::from(changed);
+            let Some(h) = hit else { continue };
+            shown += 1;
+            let px = face_distance_px(&mesh, (0, 0), h, &camera, size.1);
+            if (px < 0.5 * ISO_EDGE_PX && !changed) || (px > 1.5 * ISO_EDGE_PX && changed) {
+                wrong.push((k, px, changed));
+            }
+        }
+        eprintln!("{name}: {shown} surface pixels, {darkened} on element edges, {} disagree", wrong.len());
+        assert!(darkened > 50 && darkened * 2 < shown, "{name}: {darkened} of {shown}");
+        assert!(wrong.len() * 100 <= shown, "{name}: {:?}", &wrong[..wrong.len().min(10)]);
+    }
+}

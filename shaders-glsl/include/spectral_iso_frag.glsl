@@ -9,7 +9,8 @@
 // every iso value c. Each sign change between two such samples is bisected in the ray
 // parameter to f32 resolution (each step pulled back again), and the first root inside the
 // element is drawn at its own depth, lit with the exact normal ∇f/|∇f| = J⁻ᵀ∇_r f/|·| and
-// coloured by its iso value. Twin of reference::iso_reference (the f64 ray caster), which
+// coloured by its iso value; with --edges, darkened where it meets its element's faces. Twin
+// of reference::iso_reference (the f64 ray caster), which
 // samples finer. Two roots between the same two samples (no sign change there) are caught where
 // three samples' parabola turns toward zero between them (touching sheets, a surface the ray
 // barely enters); closer pairs the parabola does not foresee are missed (no polynomial bounds
@@ -41,6 +42,39 @@ layout(depth_any) out float gl_FragDepth;
 // still bracket roots, with the field's polynomial continued there: a root near a face then
 // sits between two usable samples; roots found outside the element are left to its neighbour.
 #define SPECTRAL_ISO_MARGIN 0.25
+
+// Element edges on the surface (--edges): a surface point within this many pixels of a face of
+// its element, measured along the surface, is darkened — the curves where the isosurface crosses
+// the element faces, about two pixels wide (one on each side of a shared face).
+#define SPECTRAL_ISO_EDGE_PX 1.0
+
+// How far, in world units along the surface of unit normal n, a reference coordinate at
+// distance delta from its face (physical gradient g) lies from it: delta / |g - (g.n) n|.
+float iso_along_surface(float delta, vec3 g, vec3 n) {
+    vec3 gt = g - dot(g, n) * n;
+    float len = length(gt);
+    return len > 0.0 ? max(delta, 0.0) / len : 1e30;
+}
+
+// The distance in pixels, along the surface, from the point at reference r (Jacobian j, unit
+// normal n, view depth `depth`) to the nearest face of its element: each face's reference
+// coordinate (r_a or 1 - r_a; 1 - r.x - r.y - r.z on a tetrahedron's slanted face) over the
+// tangential part of its physical gradient (J^-T e_a), in pixels of world size depth / focal.
+// Twin of iso_reference::face_distance_px.
+float iso_face_distance_px(mat3 j, vec3 r, vec3 n, float depth) {
+    float best = 1e30;
+    for (uint a = 0u; a < 3u; ++a) {
+        vec3 e = vec3(0.0);
+        e[a] = 1.0;
+        float delta = SPECTRAL_SIMPLEX ? r[a] : min(r[a], 1.0 - r[a]);
+        best = min(best, iso_along_surface(delta, spectral_physical_gradient_hex(j, e), n));
+    }
+    if (SPECTRAL_SIMPLEX) {
+        vec3 g = spectral_physical_gradient_hex(j, vec3(1.0));
+        best = min(best, iso_along_surface(1.0 - r.x - r.y - r.z, g, n));
+    }
+    return best * pc.pixel_to_world.w / depth;
+}
 
 // Bisection of [t_lo, t_hi] for f - c = 0 along the ray (f continued past the element),
 // pulled back each step from r: the root's ray parameter, its reference point in r.
@@ -193,6 +227,8 @@ void main() {
     float tc = ramp_coordinate(shown, pc.range.x, pc.range.y, pc.flags.y != 0u);
     vec3 colour = texture(colormap, ramp_texcoord(tc, pc.range.z)).rgb;
     vec3 light = normalize(-d + vec3(0.2, 0.3, 0.5));
-    out_colour = vec4(phong(colour, n, light, -d), 1.0);
+    vec3 shaded = phong(colour, n, light, -d);
+    if (pc.flags.z != 0u && iso_face_distance_px(j, rr, n, clip.w) <= SPECTRAL_ISO_EDGE_PX) shaded *= 0.2;
+    out_colour = vec4(shaded, 1.0);
 }
 #endif

@@ -137,7 +137,8 @@ pub struct RenderArgs {
     /// Iso-lines: this many levels across the colour range, one pixel wide.
     #[arg(long, default_value_t = 0)]
     pub isolines: u32,
-    /// Draw the element edges (on the true curved edges).
+    /// Draw the element edges (on the true curved edges); with --iso, the curves where each
+    /// isosurface meets the element faces.
     #[arg(long)]
     pub edges: bool,
     /// Do not overdraw edges behind the faces (they fill cracks between discontinuous elements).

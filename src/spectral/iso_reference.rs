@@ -68,6 +68,50 @@ pub fn iso_reference(
         .collect()
 }
 
+/// The isosurface's element-edge width in pixels (`SPECTRAL_ISO_EDGE_PX`): a surface point
+/// this close to a face of its element, along the surface, is drawn dark with `--edges`.
+pub const ISO_EDGE_PX: f64 = 1.0;
+
+/// How far, in pixels along the isosurface, `hit` lies from the nearest face of its element
+/// when seen through `camera` in a picture `height` pixels tall: for each face, its reference
+/// coordinate's distance (r_a, 1 − r_a, or a tetrahedron's 1 − Σr) over the part of that
+/// coordinate's physical gradient J⁻ᵀe_a tangent to the surface (normal ∇f/|∇f|), in pixels of
+/// world size depth / focal (focal = height / (2 tan(fov/2))). Twin of
+/// `iso_face_distance_px` (spectral_iso_frag.glsl).
+pub fn face_distance_px(
+    mesh: &SpectralMesh,
+    (field, step): (usize, usize),
+    hit: &IsoHit,
+    camera: &Camera,
+    height: u32,
+) -> f64 {
+    let r = hit.reference;
+    let (x, jac) = mesh.map_hex(hit.element, r);
+    let inverse_t = glam::DMat3::from_cols(jac[0].into(), jac[1].into(), jac[2].into()).inverse().transpose();
+    let (_, dr) = mesh.value_gradient_at(field, step, hit.element, r);
+    let n = (inverse_t * glam::DVec3::from(dr)).normalize_or_zero();
+    let along = |delta: f64, g: glam::DVec3| {
+        let gt = g - g.dot(n) * n;
+        if gt.length() > 0.0 {
+            delta.max(0.0) / gt.length()
+        } else {
+            f64::INFINITY
+        }
+    };
+    let simplex = mesh.shape == super::Shape::Tetrahedron;
+    let mut best = f64::INFINITY;
+    for (&ra, axis) in r.iter().zip(glam::DVec3::AXES) {
+        let delta = if simplex { ra } else { ra.min(1.0 - ra) };
+        best = best.min(along(delta, inverse_t * axis));
+    }
+    if simplex {
+        best = best.min(along(1.0 - r[0] - r[1] - r[2], inverse_t * glam::DVec3::ONE));
+    }
+    let depth = -(camera.view().transform_point3(glam::DVec3::from(x))).z;
+    let focal = 0.5 * f64::from(height) / (0.5 * camera.fov_y_degrees.to_radians()).tan();
+    best * focal / depth
+}
+
 /// Each element's box ([`super::render::element_boxes`]) in f64: (lo, hi); `None` when the
 /// mesh has none (the ray casters then see nothing).
 pub(super) fn reference_boxes(mesh: &SpectralMesh) -> Option<Vec<([f64; 3], [f64; 3])>> {

@@ -216,7 +216,9 @@ impl SpectralRenderer {
         let coloured = view.colour_by.is_some();
         self.iso_pipeline_for(target, coloured)?;
         self.iso_value_bounds(view.field, view.step)?;
-        let push = self.push(target, view);
+        let mut push = self.push(target, view);
+        // The mode word is the isosurfaces' element-edge switch (spectral_iso_frag.glsl).
+        push.flags[2] = u32::from(view.edges);
         let mut values = vec![0u32; 1 + MAX_ISO_VALUES];
         values[0] = view.iso.len() as u32;
         for (v, &c) in values[1..].iter_mut().zip(&view.iso) {
