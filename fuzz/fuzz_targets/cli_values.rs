@@ -15,6 +15,7 @@ fuzz_target!(|data: &[u8]| {
     let _ = args::parse_range(s);
     let _ = args::count_up_to(1_000_000)(s);
     let _ = args::image_path(s);
+    let _ = galerkin::spectral::render::parse_plane(s);
     let _ = s.parse::<galerkin::render::viewer::ScriptedKeys>();
     let _ = s.parse::<galerkin::fluid::reduced::CompressionSchedule>();
     let _ = s.parse::<galerkin::fluid::reduced::ReducedMotion>();

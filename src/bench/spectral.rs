@@ -37,6 +37,53 @@ pub(crate) fn interleaved_medians(
     Ok((median(a), median(b)))
 }
 
+/// A ray-cast view (isosurfaces, volumes) of one solid mesh against the cut-plane frame of the
+/// same mesh, image and camera: the median device times (ms) of `frames` frames of each at
+/// `timed` (the plane z through the mesh's middle, interleaved frame by frame after one
+/// unmeasured round), then the view drawn once as data at `checked` for the accuracy check.
+/// `what` names the view in the refusal of a mesh that is not hexahedral or tetrahedral.
+pub(crate) struct AgainstCutPlane {
+    /// Median device time of the cut-plane frame.
+    pub cut_ms: f64,
+    /// Median device time of the view's frame.
+    pub view_ms: f64,
+    /// The view's data pass at `checked` (RGBA32F).
+    pub data: Vec<f32>,
+}
+
+impl AgainstCutPlane {
+    /// Measures `view` of `mesh` (see the type).
+    pub(crate) fn measure(
+        gpu: &Gpu,
+        profiler: &mut crate::gpu::Profiler,
+        (name, what): (&str, &str),
+        mesh: &Arc<crate::spectral::SpectralMesh>,
+        view: &SpectralView,
+        (timed, checked): ((u32, u32), (u32, u32)),
+        frames: usize,
+    ) -> Result<Self> {
+        if !mesh.shape.is_volume() {
+            bail!("{name}: {what} takes a hexahedral or tetrahedral mesh, not {:?}s", mesh.shape);
+        }
+        let (blo, bhi) = mesh.bounds();
+        let mut renderer = SpectralRenderer::new(gpu, mesh.clone(), &Colormap::viridis())?;
+        let target =
+            RenderTarget::new(gpu, "bench against the cut plane", timed.0, timed.1, ColorFormat::Rgba8)?;
+        let cut = SpectralView {
+            cuts: vec![[0.0, 0.0, 1.0, 0.5 * (blo[2] + bhi[2])]],
+            overdraw: false,
+            ..SpectralView::default()
+        };
+        let (cut_ms, view_ms) =
+            interleaved_medians(&mut renderer, &target, [&cut, view], frames.max(1), 1, profiler)?;
+        let data_target = RenderTarget::new(gpu, "bench data", checked.0, checked.1, ColorFormat::Rgba32F)?;
+        let Pixels::Rgba32F(data) = renderer.render(&data_target, view)? else {
+            bail!("a float target returned bytes")
+        };
+        Ok(Self { cut_ms, view_ms, data })
+    }
+}
+
 /// Covered pixels of `view` (a data pass): the fragments the per-pixel path shades.
 fn covered(
     renderer: &mut SpectralRenderer,

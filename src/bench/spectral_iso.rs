@@ -6,14 +6,14 @@
 
 use std::sync::Arc;
 
-use anyhow::{bail, Result};
+use anyhow::Result;
 
+use super::spectral::AgainstCutPlane;
 use crate::gpu::Gpu;
-use crate::render::{ColorFormat, Colormap, Pixels, RenderTarget};
 use crate::spectral::iso_reference::{compare, iso_reference};
 use crate::spectral::proxy::value_bounds;
 use crate::spectral::render::fit_camera;
-use crate::spectral::{generate, NodeSet, SpectralMesh, SpectralRenderer, SpectralView};
+use crate::spectral::{generate, NodeSet, SpectralMesh, SpectralView};
 
 /// The image the frames are timed at.
 pub const TIMED_SIZE: (u32, u32) = (640, 480);
@@ -53,42 +53,28 @@ pub fn report(
     say!("| data | elements drawn / all | cut ms | iso ms | iso ÷ cut | pixels shown | matched | worst (of bound) | worst distance | mean distance | grazing | mismatched |");
     say!("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
     let mut profiler = crate::gpu::Profiler::new(gpu, 1)?;
-    let colormap = Colormap::viridis();
     for (name, mesh) in meshes {
-        if !mesh.shape.is_volume() {
-            bail!("{name}: isosurfaces need a hexahedral or tetrahedral mesh, not {:?}s", mesh.shape);
-        }
         let mesh = Arc::new(mesh);
         let (lo, hi) = mesh.value_range(0, 0);
         let values = vec![lo + 0.3 * (hi - lo), lo + 0.6 * (hi - lo)];
+        let iso = SpectralView { iso: values.clone(), overdraw: false, ..SpectralView::default() };
+        let run = AgainstCutPlane::measure(
+            gpu,
+            &mut profiler,
+            (&name, "drawing isosurfaces"),
+            &mesh,
+            &iso,
+            (TIMED_SIZE, CHECKED_SIZE),
+            frames,
+        )?;
+        let (a, b) = (run.cut_ms, run.view_ms);
         let drawn = value_bounds(&mesh, 0, 0)?
             .iter()
             .filter(|b| values.iter().any(|&v| v >= b[0] && v <= b[1]))
             .count();
-        let (blo, bhi) = mesh.bounds();
         let diag = mesh.diagonal();
-        let mut renderer = SpectralRenderer::new(gpu, mesh.clone(), &colormap)?;
-        let target = RenderTarget::new(gpu, "bench iso", w, h, ColorFormat::Rgba8)?;
-        let iso = SpectralView { iso: values.clone(), overdraw: false, ..SpectralView::default() };
-        let cut = SpectralView {
-            cuts: vec![[0.0, 0.0, 1.0, 0.5 * (blo[2] + bhi[2])]],
-            overdraw: false,
-            ..SpectralView::default()
-        };
-        let (a, b) = super::spectral::interleaved_medians(
-            &mut renderer,
-            &target,
-            [&cut, &iso],
-            frames,
-            1,
-            &mut profiler,
-        )?;
-        let data = RenderTarget::new(gpu, "bench iso data", cw, ch, ColorFormat::Rgba32F)?;
-        let Pixels::Rgba32F(pixels) = renderer.render(&data, &iso)? else {
-            bail!("a float target returned bytes")
-        };
         let reference = iso_reference(&mesh, (0, 0), &fit_camera(&mesh), &values, CHECKED_SIZE);
-        let g = compare(&mesh, (0, 0), &pixels, &reference);
+        let g = compare(&mesh, (0, 0), &run.data, &reference);
         say!(
             "| {name} | {drawn} / {} | {a:.1} | {b:.1} | {:.1}× | {} | {} | {:.3} | {:.1e} | {:.1e} | {} | {} |",
             mesh.elements(),

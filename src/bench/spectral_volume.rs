@@ -6,14 +6,15 @@
 
 use std::sync::Arc;
 
-use anyhow::{bail, Result};
+use anyhow::Result;
 
+use super::spectral::AgainstCutPlane;
 use crate::gpu::Gpu;
-use crate::render::{ColorFormat, Colormap, Pixels, RenderTarget};
+use crate::render::Colormap;
 use crate::spectral::render::fit_camera;
 use crate::spectral::transfer::TransferFunction;
 use crate::spectral::volume_reference::{compare_volume, volume_reference, VolumeColours};
-use crate::spectral::{generate, NodeSet, SpectralMesh, SpectralRenderer, SpectralView};
+use crate::spectral::{generate, NodeSet, SpectralMesh, SpectralView};
 
 /// The image the frames are timed at (a volume frame on lavapipe takes seconds to minutes).
 pub const TIMED_SIZE: (u32, u32) = (320, 240);
@@ -60,33 +61,20 @@ pub fn report(
     let mut profiler = crate::gpu::Profiler::new(gpu, 1)?;
     let colormap = Colormap::viridis();
     for (name, mesh) in meshes {
-        if !mesh.shape.is_volume() {
-            bail!("{name}: volume rendering needs a hexahedral or tetrahedral mesh, not {:?}s", mesh.shape);
-        }
         let mesh = Arc::new(mesh);
         let range = mesh.value_range(0, 0);
         let tf = bench_transfer(range.0, range.1, mesh.diagonal())?;
-        let (blo, bhi) = mesh.bounds();
-        let mut renderer = SpectralRenderer::new(gpu, mesh.clone(), &colormap)?;
-        let target = RenderTarget::new(gpu, "bench volume", w, h, ColorFormat::Rgba8)?;
         let volume = SpectralView { volume: Some(tf.clone()), overdraw: false, ..SpectralView::default() };
-        let cut = SpectralView {
-            cuts: vec![[0.0, 0.0, 1.0, 0.5 * (blo[2] + bhi[2])]],
-            overdraw: false,
-            ..SpectralView::default()
-        };
-        let (a, b) = super::spectral::interleaved_medians(
-            &mut renderer,
-            &target,
-            [&cut, &volume],
-            frames,
-            1,
+        let run = AgainstCutPlane::measure(
+            gpu,
             &mut profiler,
+            (&name, "volume rendering"),
+            &mesh,
+            &volume,
+            (TIMED_SIZE, CHECKED_SIZE),
+            frames,
         )?;
-        let data = RenderTarget::new(gpu, "bench volume data", cw, ch, ColorFormat::Rgba32F)?;
-        let Pixels::Rgba32F(pixels) = renderer.render(&data, &volume)? else {
-            bail!("a float target returned bytes")
-        };
+        let (a, b) = (run.cut_ms, run.view_ms);
         let colours = VolumeColours { colormap: &colormap, range, log: false };
         let reference = volume_reference(
             &mesh,
@@ -97,7 +85,7 @@ pub fn report(
             CHECKED_SIZE,
             REFERENCE_SAMPLES_PER_ORDER,
         );
-        let g = compare_volume(&pixels, &reference, 1.0 / 255.0);
+        let g = compare_volume(&run.data, &reference, 1.0 / 255.0);
         say!(
             "| {name} | {} | {a:.1} | {b:.0} | {:.0}× | {} | {:.2} | {:.1e} | {} |",
             mesh.elements(),

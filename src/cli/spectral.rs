@@ -153,7 +153,7 @@ pub struct RenderArgs {
     pub height: Option<f64>,
     /// Hexahedral meshes: a cut plane, `x=V`, `y=V`, `z=V` or `A,B,C,D` (the plane
     /// A x + B y + C z = D); repeat for several (at most 8). Default: z through the middle.
-    #[arg(long = "cut", value_name = "PLANE", value_parser = parse_plane)]
+    #[arg(long = "cut", value_name = "PLANE", value_parser = galerkin::spectral::render::parse_plane)]
     pub cuts: Vec<[f64; 4]>,
     /// Hexahedral and tetrahedral meshes: draw the isosurfaces f = C1, C2, … (comma-separated,
     /// at most 8) per pixel instead of cut planes, each coloured by its value and lit with the
@@ -224,27 +224,6 @@ fn open_viewer(desc: &GpuDesc, mesh: Arc<SpectralMesh>, view: SpectralView, args
 #[cfg(not(feature = "viewer"))]
 fn open_viewer(_: &GpuDesc, _: Arc<SpectralMesh>, _: SpectralView, _: &RenderArgs) -> Result<()> {
     bail!("this build has no viewer: rebuild with the default `viewer` feature")
-}
-
-/// Parses `x=V`, `y=V`, `z=V` or `A,B,C,D`.
-fn parse_plane(s: &str) -> Result<[f64; 4], String> {
-    let num = |v: &str| v.trim().parse::<f64>().ok().filter(|v| v.is_finite());
-    if let Some((axis, v)) = s.split_once('=') {
-        let v = num(v).ok_or_else(|| format!("{s:?}: {v:?} is not a number"))?;
-        return match axis.trim() {
-            "x" => Ok([1.0, 0.0, 0.0, v]),
-            "y" => Ok([0.0, 1.0, 0.0, v]),
-            "z" => Ok([0.0, 0.0, 1.0, v]),
-            other => Err(format!("{s:?}: axis {other:?} is not x, y or z")),
-        };
-    }
-    let parts: Vec<f64> =
-        s.split(',').map(num).collect::<Option<_>>().ok_or_else(|| format!("{s:?}: not A,B,C,D"))?;
-    match parts[..] {
-        [a, b, c, d] if a != 0.0 || b != 0.0 || c != 0.0 => Ok([a, b, c, d]),
-        [_, _, _, _] => Err(format!("{s:?}: the normal (A, B, C) is zero")),
-        _ => Err(format!("{s:?}: expected x=V, y=V, z=V or A,B,C,D")),
-    }
 }
 
 /// Arguments of `galerkin spectral gen`.

@@ -116,6 +116,29 @@ impl Cutter {
     }
 }
 
+/// Parses a cut plane as the command line gives it: `x=V`, `y=V`, `z=V` (the axis plane
+/// through V) or `A,B,C,D` (the plane A x + B y + C z = D, normal not zero); the error names
+/// the text and what is wrong.
+pub fn parse_plane(s: &str) -> std::result::Result<[f64; 4], String> {
+    let num = |v: &str| v.trim().parse::<f64>().ok().filter(|v| v.is_finite());
+    if let Some((axis, v)) = s.split_once('=') {
+        let v = num(v).ok_or_else(|| format!("{s:?}: {v:?} is not a number"))?;
+        return match axis.trim() {
+            "x" => Ok([1.0, 0.0, 0.0, v]),
+            "y" => Ok([0.0, 1.0, 0.0, v]),
+            "z" => Ok([0.0, 0.0, 1.0, v]),
+            other => Err(format!("{s:?}: axis {other:?} is not x, y or z")),
+        };
+    }
+    let parts: Vec<f64> =
+        s.split(',').map(num).collect::<Option<_>>().ok_or_else(|| format!("{s:?}: not A,B,C,D"))?;
+    match parts[..] {
+        [a, b, c, d] if a != 0.0 || b != 0.0 || c != 0.0 => Ok([a, b, c, d]),
+        [_, _, _, _] => Err(format!("{s:?}: the normal (A, B, C) is zero")),
+        _ => Err(format!("{s:?}: expected x=V, y=V, z=V or A,B,C,D")),
+    }
+}
+
 /// The offsets `d` (for the unit normal of plane `c` = (n, d)) between which a cut plane can
 /// meet `mesh`: the range of n·x over the control points, widened by a twentieth of the data
 /// set's size (a curved Lagrange element can bulge past its nodes; Bernstein ones cannot).
@@ -224,5 +247,27 @@ impl SpectralRenderer {
             pipeline.record_draw_indirect(rec, extent, set, bytes, Some(c.vertices.whole()), c.draw.whole());
         };
         Ok((Box::new(pre), Box::new(draw)))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::parse_plane;
+
+    #[test]
+    fn planes_parse_as_axis_planes_or_coefficients_and_bad_ones_say_why() {
+        assert_eq!(parse_plane("z=0.5"), Ok([0.0, 0.0, 1.0, 0.5]));
+        assert_eq!(parse_plane(" x = -2"), Ok([1.0, 0.0, 0.0, -2.0]));
+        assert_eq!(parse_plane("1,0.7,2,0.9"), Ok([1.0, 0.7, 2.0, 0.9]));
+        for (bad, why) in [
+            ("w=1", "axis \"w\""),
+            ("z=nan", "not a number"),
+            ("0,0,0,1", "normal (A, B, C) is zero"),
+            ("1,2,3", "expected x=V"),
+            ("1,a,3,4", "not A,B,C,D"),
+        ] {
+            let err = parse_plane(bad).expect_err(bad);
+            assert!(err.contains(why) && err.contains(bad), "{bad}: {err}");
+        }
     }
 }
