@@ -1,7 +1,8 @@
 //! The GLSL includes and their Rust twins agree: `colormap.glsl` with `render::colormap`
 //! (`ramp_coordinate`, `ramp_texcoord`), `polynomial.glsl` with `demo::polynomial`, and
 //! `simplex.glsl` with `mesh::geometry` and the particles' barycentric coordinates, evaluated
-//! by probe compute shaders at the same inputs.
+//! by probe compute shaders at the same inputs; `spectral_transfer.glsl` (the volume pass's
+//! opacity ramp) with `spectral::transfer::TransferFunction`.
 
 mod common;
 
@@ -132,4 +133,56 @@ fn simplex_glsl_matches_the_mesh_geometry() {
             assert!((f64::from(o[3][k]) - b[k]).abs() < 1e-5, "barycentric {k}: {} vs {}", o[3][k], b[k]);
         }
     }
+}
+
+/// The volume pass's opacity ramp (`spectral_transfer.glsl`: `volume_alpha`, `volume_sigma`)
+/// against `TransferFunction::alpha` and `sigma` from the same device words, at field values
+/// below, between, on and beyond its points (a kink, a plateau, a drop and a fully opaque end).
+/// Tolerances: α within 1e-6 (f32 interpolation of values of size 1); σ within
+/// 8ε/(1 − α)/D + 1e-6 σ (−ln(1 − α) in f32 loses ε/(1 − α) of 1 − α's rounding; α is capped
+/// at 1 − 2⁻²⁰, exact in f32, so the opaque end stays finite).
+#[test]
+fn transfer_glsl_matches_the_transfer_function() {
+    use galerkin::spectral::transfer::{TransferFunction, MAX_OPACITY};
+    let gpu = common::gpu();
+    let tf =
+        TransferFunction::new(vec![(-1.0, 0.0), (-0.25, 0.6), (0.5, 0.6), (0.75, 0.05), (2.0, 1.0)], 0.37)
+            .expect("a transfer function");
+    // The device sees the f32 points: the twin evaluates those same values in f64.
+    let words = tf.device_words([0.0; 3]);
+    let f32_of = |w: u32| f64::from(f32::from_bits(w));
+    let count = words[0] as usize;
+    let tf32 = TransferFunction::new(
+        (0..count).map(|k| (f32_of(words[8 + 2 * k]), f32_of(words[9 + 2 * k]))).collect(),
+        f32_of(words[1]),
+    )
+    .expect("the device's transfer function");
+    let mut inputs: Vec<f32> = (-30..=70).map(|k| k as f32 * 0.04).collect();
+    inputs.extend([-1.0f32, -0.25, 0.5, 0.75, 2.0, -7.5, 9.0]);
+    let n = inputs.len();
+    let usage = vk::BufferUsageFlags::STORAGE_BUFFER;
+    let tb = Buffer::from_slice(&gpu, "transfer", &words, usage).unwrap();
+    let ib = Buffer::from_slice(&gpu, "field values", &inputs, usage).unwrap();
+    let ob = Buffer::<[f32; 2]>::new(&gpu, "out", n as u64, usage, MemoryKind::GpuToCpu).unwrap();
+    let bindings = [tb.binding(), ib.binding(), ob.binding()].map(|b| b.unwrap());
+    common::run_probe(
+        &gpu,
+        "transfer probe",
+        shaders::probe::TRANSFER,
+        &bindings,
+        &common::CountPush { n: n as u32 },
+        (n as u32).div_ceil(64),
+    );
+    let out = ob.download(&gpu).unwrap();
+    let eps = f64::from(f32::EPSILON);
+    for (k, &f) in inputs.iter().enumerate() {
+        let f = f64::from(f);
+        let (alpha, sigma) = (tf32.alpha(f), tf32.sigma(f));
+        let (ga, gs) = (f64::from(out[k][0]), f64::from(out[k][1]));
+        assert!((ga - alpha).abs() <= 1e-6, "α({f}): {ga} vs {alpha}");
+        let tol = 8.0 * eps / (1.0 - alpha.min(MAX_OPACITY)) / tf32.unit_distance + 1e-6 * sigma;
+        assert!((gs - sigma).abs() <= tol, "σ({f}): {gs} vs {sigma} (tolerance {tol:e})");
+    }
+    // The opaque end is capped, finite, on both sides.
+    assert!(tf32.sigma(9.0).is_finite() && f64::from(out[n - 1][1]).is_finite());
 }

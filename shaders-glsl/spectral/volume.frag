@@ -26,15 +26,9 @@ layout(location = 0) in vec4 far_point;
 layout(set = 0, binding = 2) uniform sampler1D colormap;
 // Per element: (box lo, f lo), (box hi, f hi) — as iso.vert's.
 layout(std430, set = 0, binding = 3) readonly buffer Boxes { vec4 boxes[]; };
-// The transfer function: point count, unit distance, background colour, padding; then
-// (value, opacity) per point (TransferFunction::device_words).
-layout(std430, set = 0, binding = 4) readonly buffer Transfer {
-    uint tf_count;
-    float tf_unit;
-    float tf_background[3];
-    uint tf_pad[3];
-    vec2 tf_points[];
-};
+// The transfer function and its opacity ramp (binding 4).
+#define SPECTRAL_TRANSFER_BINDING 4
+#include "spectral_transfer.glsl"
 // Screen tiles of one band of rows: tiles across, tiles down, tile size in pixels, the
 // viewport's corner (x, y), the band's first row and the row after its last, padding; then
 // (first, count) per tile of the band into the element lists that follow (tile_bands).
@@ -48,26 +42,8 @@ layout(location = 0) out vec4 out_colour;
 #define SPECTRAL_VOLUME_ROUNDS 64u
 // Bisection steps on an element's entry or exit: 2^-20 of a sample interval.
 #define SPECTRAL_VOLUME_BISECTIONS 20
-// The largest opacity in σ = −ln(1 − α)/D (transfer.rs, MAX_OPACITY).
-#define SPECTRAL_VOLUME_MAX_OPACITY (1.0 - 1.0 / 1048576.0)
 // Light left below which a ray stops (well under half of 1/255).
 #define SPECTRAL_VOLUME_OPAQUE (1.0 / 4096.0)
-
-// α(f): linear between the points, constant beyond (TransferFunction::alpha).
-float volume_alpha(float f) {
-    uint n = min(tf_count, 64u);
-    if (f <= tf_points[0].x) return tf_points[0].y;
-    for (uint k = 1u; k < n; ++k) {
-        vec2 a = tf_points[k - 1u], b = tf_points[k];
-        if (f <= b.x) return a.y + (f - a.x) / (b.x - a.x) * (b.y - a.y);
-    }
-    return tf_points[n - 1u].y;
-}
-
-// σ(f) = −ln(1 − α(f))/D (TransferFunction::sigma).
-float volume_sigma(float f) {
-    return -log(1.0 - min(volume_alpha(f), SPECTRAL_VOLUME_MAX_OPACITY)) / tf_unit;
-}
 
 vec3 volume_colour(float f) {
     float tc = ramp_coordinate(f, pc.range.x, pc.range.y, pc.flags.y != 0u);
