@@ -62,15 +62,15 @@ float iso_along_surface(float delta, vec3 g, vec3 n) {
 // tangential part of its physical gradient (J^-T e_a), in pixels of world size depth / focal.
 // Twin of iso_reference::face_distance_px.
 float iso_face_distance_px(mat3 j, vec3 r, vec3 n, float depth) {
+    // Column a of J^-T is the physical gradient of r_a (spectral_physical_gradient_hex of e_a).
+    mat3 gradients = transpose(inverse(j));
     float best = 1e30;
     for (uint a = 0u; a < 3u; ++a) {
-        vec3 e = vec3(0.0);
-        e[a] = 1.0;
         float delta = SPECTRAL_SIMPLEX ? r[a] : min(r[a], 1.0 - r[a]);
-        best = min(best, iso_along_surface(delta, spectral_physical_gradient_hex(j, e), n));
+        best = min(best, iso_along_surface(delta, gradients[a], n));
     }
     if (SPECTRAL_SIMPLEX) {
-        vec3 g = spectral_physical_gradient_hex(j, vec3(1.0));
+        vec3 g = gradients[0] + gradients[1] + gradients[2];
         best = min(best, iso_along_surface(1.0 - r.x - r.y - r.z, g, n));
     }
     return best * pc.pixel_to_world.w / depth;

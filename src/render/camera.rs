@@ -117,6 +117,12 @@ impl Camera {
         )
     }
 
+    /// Pixels per world unit at view depth 1 in a picture `height` pixels tall:
+    /// height / (2 tan(fov/2)) (a length ℓ at view depth z spans ℓ · this / z pixels).
+    pub fn pixels_per_unit(&self, height: u32) -> f64 {
+        0.5 * f64::from(height) / (0.5 * self.fov_y_degrees.to_radians()).tan()
+    }
+
     /// The f32 matrix for shaders.
     pub fn view_proj_f32(&self, aspect: f64) -> Mat4 {
         self.view_proj(aspect).as_mat4()

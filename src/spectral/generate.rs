@@ -227,14 +227,9 @@ pub fn sample(mesh: &SpectralMesh, f: impl Fn(usize, [f64; 3]) -> f64) -> Vec<f6
     };
     let per = mesh.values_per_element();
     let mut out = Vec::with_capacity(mesh.elements() * per);
-    if mesh.shape.is_simplex() {
+    if let Some(shape) = mesh.shape.simplex() {
         // Equispaced nodes in simplex::triangle_index's or tetra_index's order.
         let n = b.order;
-        let shape = if mesh.shape == Shape::Triangle {
-            super::simplex::SimplexShape::Triangle
-        } else {
-            super::simplex::SimplexShape::Tetrahedron
-        };
         for e in 0..mesh.elements() {
             for node in super::simplex::lattice(shape, n) {
                 let r = node.map(|c| c as f64 / n as f64);

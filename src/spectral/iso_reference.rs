@@ -108,8 +108,7 @@ pub fn face_distance_px(
         best = best.min(along(1.0 - r[0] - r[1] - r[2], inverse_t * glam::DVec3::ONE));
     }
     let depth = -(camera.view().transform_point3(glam::DVec3::from(x))).z;
-    let focal = 0.5 * f64::from(height) / (0.5 * camera.fov_y_degrees.to_radians()).tan();
-    best * focal / depth
+    best * camera.pixels_per_unit(height) / depth
 }
 
 /// Each element's box ([`super::render::element_boxes`]) in f64: (lo, hi); `None` when the

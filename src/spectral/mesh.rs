@@ -42,6 +42,15 @@ pub enum Shape {
     Tetrahedron,
 }
 
+impl From<super::simplex::SimplexShape> for Shape {
+    fn from(s: super::simplex::SimplexShape) -> Self {
+        match s {
+            super::simplex::SimplexShape::Triangle => Self::Triangle,
+            super::simplex::SimplexShape::Tetrahedron => Self::Tetrahedron,
+        }
+    }
+}
+
 impl Shape {
     /// Reference dimension: 2 or 3.
     pub fn dim(self) -> u32 {
@@ -59,6 +68,15 @@ impl Shape {
     /// Whether the elements are simplices (triangles or tetrahedra).
     pub fn is_simplex(self) -> bool {
         matches!(self, Self::Triangle | Self::Tetrahedron)
+    }
+
+    /// The simplex shape of triangles and tetrahedra ([`super::simplex`]); `None` otherwise.
+    pub fn simplex(self) -> Option<super::simplex::SimplexShape> {
+        match self {
+            Self::Triangle => Some(super::simplex::SimplexShape::Triangle),
+            Self::Tetrahedron => Some(super::simplex::SimplexShape::Tetrahedron),
+            _ => None,
+        }
     }
 
     /// Nodes per element of a basis of `order`: (n + 1)², (n + 1)³ or (n + 1)(n + 2)/2.

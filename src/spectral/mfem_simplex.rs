@@ -1,6 +1,6 @@
 //! MFEM's triangles (`Geometry::TRIANGLE` = 2) and tetrahedra (`Geometry::TETRAHEDRON` = 4):
 //! straight or curved meshes and H1, H1Pos and L2 GridFunctions on them, turned into this
-//! crate's Lagrange simplices ([`Shape::Triangle`], [`Shape::Tetrahedron`]) on equispaced
+//! crate's Lagrange simplices ([`super::Shape::Triangle`], [`super::Shape::Tetrahedron`]) on equispaced
 //! nodes — the same polynomials, so GLVis users see their simplex data exactly.
 //!
 //! **MFEM's local DOFs.** Every nodal DOF of an MFEM simplex element of order p is named by
@@ -34,9 +34,11 @@ use faer::linalg::solvers::Solve;
 
 use super::basis::{Basis1d, NodeSet};
 use super::error::SpectralError;
-use super::mesh::{Field, Shape, SpectralMesh};
+use super::mesh::{Field, SpectralMesh};
 use super::mfem::{check_nodes, check_scalar_step, component, Collection, GridFunction, MfemMesh};
-use super::simplex::{basis, bernstein_basis, lattice, per_component, SimplexShape, MAX_SIMPLEX_ORDER};
+use super::simplex::{
+    apply, basis, bernstein_basis, lattice, per_component, SimplexShape, MAX_SIMPLEX_ORDER,
+};
 
 /// MFEM's local edges of a triangle (`Geometry::Constants<TRIANGLE>::Edges`).
 const TRIANGLE_EDGES: [[usize; 2]; 3] = [[0, 1], [1, 2], [2, 0]];
@@ -104,6 +106,22 @@ pub fn local_dofs(shape: SimplexShape, p: usize, continuous: bool) -> Vec<[usize
     // The interior: every entry ≥ 1 (so the remainder on vertex 0 too).
     lexicographic(1, &mut out);
     out
+}
+
+/// A collection's local DOFs ([`local_dofs`]) and where the interior ones begin (H1 lists them
+/// last), formed once per collection rather than per element.
+struct LocalDofs {
+    weights: Vec<[usize; 4]>,
+    interior_from: usize,
+}
+
+impl LocalDofs {
+    fn new(shape: SimplexShape, c: &Collection) -> Self {
+        let weights = local_dofs(shape, c.order, c.continuous);
+        let d = shape.dim();
+        let interior_from = weights.iter().position(|w| (0..=d).all(|a| w[a] > 0)).unwrap_or(weights.len());
+        Self { weights, interior_from }
+    }
 }
 
 /// The reference point (r₀, r₁[, r₂]) = (λ₁, λ₂[, λ₃]) of the DOF of weights `w`, with
@@ -183,10 +201,7 @@ impl ToLattice {
 
     /// Our lattice values from the element's local `values` (MFEM's order).
     pub fn apply(&self, values: &[f64]) -> Vec<f64> {
-        self.matrix
-            .chunks_exact(self.local)
-            .map(|row| row.iter().zip(values).map(|(m, v)| m * v).sum())
-            .collect()
+        apply(self.local, &self.matrix, values)
     }
 }
 
@@ -242,26 +257,28 @@ impl Topology {
         mesh.vertex_count + self.edges.len() * (p - 1) + self.face_vertices.len() * face + elements * interior
     }
 
-    /// Element `e`'s global DOFs of collection `c`, in MFEM's local order.
-    fn element_dofs(&self, mesh: &MfemMesh, c: &Collection, e: usize) -> Vec<usize> {
-        let shape = simplex_shape(mesh);
+    /// Element `e`'s global DOFs of collection `c` (its local DOFs `local`), in MFEM's local
+    /// order.
+    fn element_dofs(&self, mesh: &MfemMesh, c: &Collection, local: &LocalDofs, e: usize) -> Vec<usize> {
         let p = c.order;
-        let local = local_dofs(shape, p, c.continuous);
+        let count = local.weights.len();
         if !c.continuous {
-            return (0..local.len()).map(|k| e * local.len() + k).collect();
+            return (e * count..(e + 1) * count).collect();
         }
-        let d = shape.dim();
+        let d = simplex_shape(mesh).dim();
         let v = &mesh.elements[e];
         let face = if p >= 3 { SimplexShape::Triangle.node_count(p - 3) } else { 0 };
         let edge_base = mesh.vertex_count;
         let face_base = edge_base + self.edges.len() * (p - 1);
         let body_base = face_base + self.face_vertices.len() * face;
-        let interior: Vec<&[usize; 4]> = local.iter().filter(|w| (0..=d).all(|a| w[a] > 0)).collect();
+        let interior = count - local.interior_from;
         // Position of the face DOF (i, j) among (j outer, i inner; i, j ≥ 1, i + j < p).
         let face_index = |i: usize, j: usize| (1..j).map(|jj| p - 1 - jj).sum::<usize>() + (i - 1);
         local
+            .weights
             .iter()
-            .map(|w| {
+            .enumerate()
+            .map(|(k, w)| {
                 let on: Vec<usize> = (0..=d).filter(|&a| w[a] > 0).collect();
                 let weight_on = |vertex: usize| on.iter().find(|&&a| v[a] == vertex).map_or(0, |&a| w[a]);
                 match on.len() {
@@ -277,10 +294,7 @@ impl Topology {
                         let frame = self.face_vertices[g];
                         face_base + g * face + face_index(weight_on(frame[1]), weight_on(frame[2]))
                     }
-                    _ => {
-                        let k = interior.iter().position(|x| *x == w).unwrap_or(0);
-                        body_base + e * interior.len() + k
-                    }
+                    _ => body_base + e * interior + (k - local.interior_from),
                 }
             })
             .collect()
@@ -350,8 +364,9 @@ pub fn to_spectral(
             let dofs = topology.dof_count(mesh, c);
             let sdim = check_nodes(nodes, dofs)?;
             let to = ToLattice::new(shape, c, order)?;
+            let local_dofs = LocalDofs::new(shape, c);
             for e in 0..elements {
-                let global = topology.element_dofs(mesh, c, e);
+                let global = topology.element_dofs(mesh, c, &local_dofs, e);
                 let local: Vec<[f64; 3]> = global
                     .iter()
                     .map(|&d| {
@@ -371,10 +386,11 @@ pub fn to_spectral(
             let c = &gf.space.collection;
             check_scalar_step(gf, name, k, topology.dof_count(mesh, c))?;
             let to = ToLattice::new(shape, c, order)?;
+            let local_dofs = LocalDofs::new(shape, c);
             let mut v = crate::limits::vec_for(elements * per_element, "the field's values").map_err(file)?;
             for e in 0..elements {
                 let local: Vec<f64> =
-                    topology.element_dofs(mesh, c, e).iter().map(|&d| gf.values[d]).collect();
+                    topology.element_dofs(mesh, c, &local_dofs, e).iter().map(|&d| gf.values[d]).collect();
                 v.extend(to.apply(&local));
             }
             values.push(v);
@@ -389,6 +405,5 @@ pub fn to_spectral(
         return Err(file("no fields".into()));
     }
     let basis = Basis1d::new(NodeSet::Equispaced, order)?;
-    let shape = if shape == SimplexShape::Triangle { Shape::Triangle } else { Shape::Tetrahedron };
-    SpectralMesh::new(shape, basis.clone(), basis, points, out_fields).map_err(|e| file(e.to_string()))
+    SpectralMesh::new(shape.into(), basis.clone(), basis, points, out_fields).map_err(|e| file(e.to_string()))
 }

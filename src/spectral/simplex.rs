@@ -407,9 +407,9 @@ pub fn per_component(points: &[[f64; 3]], convert: impl Fn(&[f64]) -> Vec<f64>) 
     (0..per[0].len()).map(|k| [per[0][k], per[1][k], per[2][k]]).collect()
 }
 
-/// `matrix · values` for a row-major square matrix of `count` rows.
-fn apply(count: usize, matrix: &[f64], values: &[f64]) -> Vec<f64> {
-    matrix.chunks_exact(count).map(|row| row.iter().zip(values).map(|(w, v)| w * v).sum()).collect()
+/// `matrix · values` for a row-major matrix of rows `columns` long.
+pub(super) fn apply(columns: usize, matrix: &[f64], values: &[f64]) -> Vec<f64> {
+    matrix.chunks_exact(columns).map(|row| row.iter().zip(values).map(|(w, v)| w * v).sum()).collect()
 }
 
 /// From a Bézier simplex's control values to its values at the Lagrange nodes (our layout):

@@ -345,12 +345,7 @@ fn read_grid(path: &Path, grid: &vtk::UnstructuredGrid) -> Result<SpectralMesh, 
         fields.push(Field { name, times, steps: steps.iter().map(|(_, v)| coefficients(v)).collect() });
     }
     // Bézier simplices: the same polynomial's values at the Lagrange nodes.
-    if bezier && shape.is_simplex() {
-        let simplex_shape = if shape == Shape::Triangle {
-            simplex::SimplexShape::Triangle
-        } else {
-            simplex::SimplexShape::Tetrahedron
-        };
+    if let (true, Some(simplex_shape)) = (bezier, shape.simplex()) {
         let convert = simplex::FromBernstein::new(simplex_shape, n);
         let mut nodal = Vec::with_capacity(geometry.len());
         for control in geometry.chunks_exact(per_cell) {
@@ -425,12 +420,7 @@ pub fn write(path: &Path, mesh: &SpectralMesh) -> Result<(), SpectralError> {
     let per_cell = mesh.shape.nodes(n);
     let cells = mesh.elements();
     // Reference points in VTK's order.
-    let refs: Vec<[f64; 3]> = if mesh.shape.is_simplex() {
-        let shape = if mesh.shape == Shape::Triangle {
-            simplex::SimplexShape::Triangle
-        } else {
-            simplex::SimplexShape::Tetrahedron
-        };
+    let refs: Vec<[f64; 3]> = if let Some(shape) = mesh.shape.simplex() {
         let vtk = simplex::vtk_nodes(shape, n)?;
         vtk.iter().map(|b| simplex::node_point(shape, n, b)).collect()
     } else {

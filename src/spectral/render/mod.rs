@@ -442,10 +442,9 @@ impl SpectralRenderer {
             PictureView::Plane(v2) => (v2.view_proj(e.width, e.height), v2.pixel_to_world(e.width, e.height)),
             PictureView::Camera(camera) => {
                 let aspect = target.aspect();
-                let tan_half = (0.5 * camera.fov_y_degrees.to_radians()).tan();
                 // Pixels per world unit at view depth 1 (the tessellation adds each element's
                 // off-axis factor).
-                let pixels = 0.5 * f64::from(e.height) / tan_half;
+                let pixels = camera.pixels_per_unit(e.height);
                 let eye = camera.eye.map(|c| c as f32);
                 (camera.view_proj_f32(aspect), [eye[0], eye[1], eye[2], pixels as f32])
             }

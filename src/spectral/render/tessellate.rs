@@ -101,18 +101,11 @@ impl SpectralRenderer {
             .map_err(dev("the tessellation pass"))?;
             self.tessellator = Some(Tessellator { pipeline, draw, vertices: None, set: None });
         }
-        let per_cell = tessellated_vertices(self.mesh.shape, 1);
+        let shape = self.mesh.shape;
+        // One level of slack against f32 rounding differences with the device.
         let need: u64 = self
             .cpu_levels(push)
-            .map(|l| {
-                let l = u64::from(l);
-                // One level of slack against f32 rounding differences with the device.
-                if l == 0 {
-                    0
-                } else {
-                    per_cell * (l + 1) * (l + 1)
-                }
-            })
+            .map(|l| if l == 0 { 0 } else { tessellated_vertices(shape, l + 1) })
             .sum::<u64>()
             .max(6);
         let max = self.gpu.max_binding_bytes() / std::mem::size_of::<DrawVertex>() as u64;
