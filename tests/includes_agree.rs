@@ -149,7 +149,7 @@ fn transfer_glsl_matches_the_transfer_function() {
         TransferFunction::new(vec![(-1.0, 0.0), (-0.25, 0.6), (0.5, 0.6), (0.75, 0.05), (2.0, 1.0)], 0.37)
             .expect("a transfer function");
     // The device sees the f32 points: the twin evaluates those same values in f64.
-    let words = tf.device_words([0.0; 3]);
+    let words = tf.device_words([0.0; 3], &galerkin::spectral::transfer::Sheets::none());
     let f32_of = |w: u32| f64::from(f32::from_bits(w));
     let count = words[0] as usize;
     let tf32 = TransferFunction::new(

@@ -16,7 +16,7 @@ use std::sync::Arc;
 
 use galerkin::render::{ColorFormat, Colormap, Pixels, RenderTarget};
 use galerkin::spectral::render::fit_camera;
-use galerkin::spectral::transfer::TransferFunction;
+use galerkin::spectral::transfer::{Sheets, TransferFunction};
 use galerkin::spectral::volume_reference::{compare_volume, volume_reference, VolumeColours};
 use galerkin::spectral::{SpectralMesh, SpectralRenderer, SpectralView};
 
@@ -56,7 +56,7 @@ fn volumes_match_the_f64_ray_caster() {
             panic!("a float target returned bytes")
         };
         let drawn = started.elapsed();
-        let reference = volume_reference(&mesh, (0, 0), &camera, &tf, &colours, size, 16);
+        let reference = volume_reference(&mesh, (0, 0), &camera, &tf, &Sheets::none(), &colours, size, 16);
         let agreement = compare_volume(&px, &reference, TOLERANCE);
         eprintln!(
             "{name}: {} pixels, worst {:.2e} ({:.2} of 1/255), mean {:.1e}, {} one-sided, {} mismatched; device {:.1} s, reference {:.1} s",
@@ -94,8 +94,8 @@ fn the_volume_reference_is_converged() {
     let colours = VolumeColours { colormap: &colormap, range: mesh.value_range(0, 0), log: false };
     let camera = fit_camera(&mesh);
     let size = (24, 18);
-    let a = volume_reference(&mesh, (0, 0), &camera, &tf, &colours, size, 16);
-    let b = volume_reference(&mesh, (0, 0), &camera, &tf, &colours, size, 32);
+    let a = volume_reference(&mesh, (0, 0), &camera, &tf, &Sheets::none(), &colours, size, 16);
+    let b = volume_reference(&mesh, (0, 0), &camera, &tf, &Sheets::none(), &colours, size, 32);
     let mut worst = 0.0f64;
     for (x, y) in a.iter().zip(&b) {
         match (x, y) {
@@ -141,7 +141,7 @@ fn rays_through_many_elements_take_rounds_in_order() {
     let mut renderer = SpectralRenderer::new(&gpu, mesh.clone(), &colormap).expect("renderer");
     let Pixels::Rgba32F(px) = renderer.render(&target, &view).expect("rendered") else { panic!("bytes") };
     let colours = VolumeColours { colormap: &colormap, range: (lo, hi), log: false };
-    let reference = volume_reference(&mesh, (0, 0), &camera, &tf, &colours, size, 16);
+    let reference = volume_reference(&mesh, (0, 0), &camera, &tf, &Sheets::none(), &colours, size, 16);
     let agreement = compare_volume(&px, &reference, TOLERANCE);
     eprintln!(
         "40 layers: {} pixels, worst {:.2} of 1/255, {} mismatched",
@@ -177,8 +177,8 @@ fn rays_through_many_elements_take_rounds_in_order() {
     );
 }
 
-/// Bad volume views are refused by name: a quadrilateral mesh, a volume together with iso
-/// values or cut planes; bad transfer functions (empty, inverted) are refused when made.
+/// Bad volume views are refused by name: a quadrilateral mesh, a volume together with cut
+/// planes; bad transfer functions (empty, inverted) are refused when made.
 #[test]
 fn volume_views_that_cannot_be_drawn_are_refused() {
     use galerkin::spectral::picture::check_view;
@@ -194,19 +194,15 @@ fn volume_views_that_cannot_be_drawn_are_refused() {
     assert!(err.contains("hexahedral and tetrahedral meshes"), "{err}");
     let tets = Arc::new(load("tet_cube_o3.vtu"));
     let mut r = SpectralRenderer::new(&gpu, tets.clone(), &Colormap::viridis()).expect("renderer");
-    for view in [
-        SpectralView { volume: Some(tf.clone()), iso: vec![0.5], ..SpectralView::default() },
-        SpectralView {
-            volume: Some(tf.clone()),
-            cuts: vec![[0.0, 0.0, 1.0, 0.5]],
-            ..SpectralView::default()
-        },
-    ] {
-        let err = check_view(&tets, &view).expect_err("refused").to_string();
-        assert!(err.contains("cannot be combined"), "{err}");
-        let err = r.render(&target, &view).expect_err("refused").to_string();
-        assert!(err.contains("not drawn yet"), "{err}");
-    }
+    let view = SpectralView {
+        volume: Some(tf.clone()),
+        cuts: vec![[0.0, 0.0, 1.0, 0.5]],
+        ..SpectralView::default()
+    };
+    let err = check_view(&tets, &view).expect_err("refused").to_string();
+    assert!(err.contains("cannot be combined"), "{err}");
+    let err = r.render(&target, &view).expect_err("refused").to_string();
+    assert!(err.contains("not drawn yet"), "{err}");
     for (points, what) in [
         (vec![], "empty"),
         (vec![(0.0, 0.0), (1.0, 0.0)], "empty"),

@@ -15,12 +15,18 @@
 // composited on its own, are sorted by where the ray enters them (elements do not overlap, so
 // this is the ray's order) and combined front to back; a ray meeting more than
 // SPECTRAL_VOLUME_SLOTS elements takes further rounds, each the next slots beyond the last.
+// Isosurfaces drawn here (transparent ones, or isosurfaces in a volume) are sheets: within each
+// interval inside an element, every sheet value c that f − c changes sign for is bisected to
+// its root, the roots are taken in ray order, and at each the sheet — the colour map at c, lit
+// with the exact normal J⁻ᵀ∇_r f/|·| — is composited with its opacity α (C += T α c, T *= 1 − α),
+// the volume integrated between them.
 // Twin of spectral::volume_reference (the f64 ray caster), which samples finer.
 #extension GL_EXT_control_flow_attributes : require
 #include "spectral_element.glsl"
 #include "spectral_ray.glsl"
 #include "spectral_push.glsl"
 #include "colormap.glsl"
+#include "phong.glsl"
 
 layout(location = 0) in vec4 far_point;
 layout(set = 0, binding = 2) uniform sampler1D colormap;
@@ -42,6 +48,8 @@ layout(location = 0) out vec4 out_colour;
 #define SPECTRAL_VOLUME_ROUNDS 64u
 // Bisection steps on an element's entry or exit: 2^-20 of a sample interval.
 #define SPECTRAL_VOLUME_BISECTIONS 20
+// Bisection steps on a sheet's root: 2^-24 of the interval, f32 resolution.
+#define SPECTRAL_SHEET_BISECTIONS 24
 // Light left below which a ray stops (well under half of 1/255).
 #define SPECTRAL_VOLUME_OPAQUE (1.0 / 4096.0)
 
@@ -115,7 +123,7 @@ void volume_piece(uint e, vec3 eye, vec3 d, float a, float b, inout vec3 r, inou
 void volume_interval(uint e, vec3 eye, vec3 d, float a, float b, float fa, float fb, inout vec3 r,
                      inout vec3 C, inout float T) {
     if (!(b > a)) return;
-    uint n = min(tf_count, 64u);
+    uint n = min(tf_count, uint(SPECTRAL_TRANSFER_POINTS));
     float lo = a;
     bool rising = fb > fa;
     for (uint j = 0u; j <= n; ++j) {
@@ -127,6 +135,74 @@ void volume_interval(uint e, vec3 eye, vec3 d, float a, float b, float fa, float
         }
         volume_piece(e, eye, d, lo, hi, r, C, T);
         lo = hi;
+    }
+}
+
+// The lit colour of the sheet of value c at reference point r of element e, seen along d: the
+// colour map at c, Phong-lit with the exact normal J⁻ᵀ∇_r f/|·| (as iso.frag lights its
+// surfaces). Twin of volume_reference's sheet colour.
+vec3 volume_sheet_colour(uint e, vec3 r, vec3 d, float c) {
+    vec3 rr = spectral_clamp_3d(r);
+    vec4 fg = spectral_slot_value_gradient_hex(e, 0u, rr);
+    mat3 j;
+    spectral_map_hex(e, rr, j);
+    vec3 n = spectral_physical_gradient_hex(j, fg.yzw);
+    n = length(n) > 0.0 ? normalize(n) : -d;
+    vec3 light = normalize(-d + vec3(0.2, 0.3, 0.5));
+    return phong(volume_colour(c), n, light, -d);
+}
+
+// Composites [a, b] inside element e (the field fa at a, reference point ra, and fb at b) with
+// its sheets: the root of f − c in [a, b] for each sheet value c with a sign change between
+// the ends, bisected, in ray order; the volume between them (volume_interval, skipped in a
+// clear medium) and each sheet at its root (one call site: see volume_interval).
+void volume_span(uint e, vec3 eye, vec3 d, float a, float b, float fa, float fb, vec3 ra,
+                 inout vec3 C, inout float T) {
+    uint m = 0u;
+    float root_t[SPECTRAL_TRANSFER_SHEETS];
+    float root_c[SPECTRAL_TRANSFER_SHEETS];
+    vec3 root_r[SPECTRAL_TRANSFER_SHEETS];
+    uint sheets = min(tf_sheet_count, uint(SPECTRAL_TRANSFER_SHEETS));
+    for (uint k = 0u; k < sheets; ++k) {
+        float c = tf_sheets[k];
+        if (!((fa - c) * (fb - c) < 0.0)) continue;
+        float lo = a, hi = b;
+        vec3 r = ra;
+        for (int i = 0; i < SPECTRAL_SHEET_BISECTIONS; ++i) {
+            float t = 0.5 * (lo + hi);
+            spectral_pull_hex(e, eye + t * d, r);
+            float g = spectral_value_hex(e, spectral_clamp_3d(r)) - c;
+            if ((g < 0.0) == (fa - c < 0.0)) lo = t; else hi = t;
+        }
+        float t = 0.5 * (lo + hi);
+        spectral_pull_hex(e, eye + t * d, r);
+        // Insertion in ray order.
+        uint i = m;
+        while (i > 0u && root_t[i - 1u] > t) {
+            root_t[i] = root_t[i - 1u];
+            root_c[i] = root_c[i - 1u];
+            root_r[i] = root_r[i - 1u];
+            i -= 1u;
+        }
+        root_t[i] = t;
+        root_c[i] = c;
+        root_r[i] = r;
+        m += 1u;
+    }
+    float lo = a, f_lo = fa;
+    vec3 r_lo = ra;
+    for (uint i = 0u; i <= m; ++i) {
+        float hi = i < m ? root_t[i] : b;
+        float f_hi = i < m ? root_c[i] : fb;
+        if (tf_clear == 0u) volume_interval(e, eye, d, lo, hi, f_lo, f_hi, r_lo, C, T);
+        if (i < m) {
+            float alpha = clamp(tf_sheet_alpha, 0.0, 1.0);
+            C += T * alpha * volume_sheet_colour(e, root_r[i], d, root_c[i]);
+            T *= 1.0 - alpha;
+            lo = hi;
+            f_lo = f_hi;
+            r_lo = root_r[i];
+        }
     }
 }
 
@@ -197,8 +273,7 @@ bool volume_element(uint e, vec3 eye, vec3 d, float t0, float t1, out vec3 C, ou
         for (uint i = 0u; i < pieces; ++i) {
             float fa = spectral_value_hex(e, spectral_clamp_3d(ra[i]));
             float fb = spectral_value_hex(e, spectral_clamp_3d(rb[i]));
-            vec3 w = ra[i];
-            volume_interval(e, eye, d, pa[i], pb[i], fa, fb, w, C, T);
+            volume_span(e, eye, d, pa[i], pb[i], fa, fb, ra[i], C, T);
         }
         inside_prev = inside;
         pulled_prev = pulled;

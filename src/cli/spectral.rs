@@ -60,8 +60,10 @@ pub enum Verb {
     /// Open the interactive viewer: space plays/pauses the time steps, `.`/`,` step, l log
     /// scale, p colour map, i/I more/fewer iso-lines, e edges, v per-vertex colour, h height
     /// field (planar meshes), r narrows the range to its middle half, R restores it; cut
-    /// planes: n adds, c selects, j/k move, o/O turn about z, u/U tilt, x deletes; arrows
-    /// orbit (surfaces, cut planes), +/- zoom, S screenshot, Esc quits.
+    /// planes: n adds, c selects, j/k move, o/O turn about z, u/U tilt, x deletes;
+    /// isosurfaces: j/k move the selected value, c selects, n adds, x deletes, t transparent;
+    /// volumes: k/j more/less opaque; arrows orbit (surfaces, cut planes, isosurfaces,
+    /// volumes), +/- zoom, S screenshot, Esc quits.
     #[command(
         mut_arg("out", |a| a.default_value("out/spectral.png").hide(true)),
         mut_arg("size", |a| a.help("Window size, WIDTHxHEIGHT [default: 1280x720]"))
@@ -164,6 +166,13 @@ pub struct RenderArgs {
     /// the file, at the same step) instead of by their iso values.
     #[arg(long, value_name = "FIELD", requires = "iso")]
     pub colour_by: Option<String>,
+    /// With --iso: the isosurfaces' opacity A in (0, 1]. Below 1 they are transparent — every
+    /// crossing of every value along each pixel's ray is composited front to back, each
+    /// letting 1 − A of the light behind it through (drawn by the volume pass; no --edges or
+    /// --colour-by). With --volume the isosurfaces are such sheets inside the volume, opaque
+    /// unless this is given.
+    #[arg(long, value_name = "A", requires = "iso", default_value_t = 1.0, value_parser = opacity)]
+    pub iso_opacity: f64,
     /// Hexahedral and tetrahedral meshes: volume rendering instead of cut planes — emission
     /// and absorption integrated along every pixel's ray through the curved elements, coloured
     /// by the colour map, opaque by the transfer function (--opacity or --transfer; default:
@@ -193,6 +202,16 @@ pub struct RenderArgs {
     pub no_legend: bool,
     #[command(flatten)]
     pub viewer: crate::cli::args::ViewerArgs,
+}
+
+/// An opacity in (0, 1].
+fn opacity(s: &str) -> Result<f64, String> {
+    let a = finite(s)?;
+    if a > 0.0 && a <= 1.0 {
+        Ok(a)
+    } else {
+        Err(format!("{a} is not an opacity in (0, 1]"))
+    }
 }
 
 /// A finite number.
@@ -296,6 +315,7 @@ pub fn render(desc: &GpuDesc, args: &RenderArgs) -> Result<()> {
         max_error_px: args.max_error,
         cuts: args.cuts.clone(),
         iso: args.iso.clone(),
+        iso_opacity: args.iso_opacity,
         height: args.height,
         expression,
         camera: args.view_from.orbit(args.image.size()).map(|orbit| {
@@ -388,6 +408,11 @@ pub struct BenchArgs {
     /// Mesh: the generated shell at order 3, or the files given with --mesh.
     #[arg(long, conflicts_with_all = ["derived", "iso"])]
     pub volume: bool,
+    /// With --iso: transparent isosurfaces (opacity ½, drawn by the volume pass) instead of
+    /// opaque ones, at the volume table's sizes, against the f64 ray caster with sheets. Mesh:
+    /// the generated shell at order 3, or the files given with --mesh.
+    #[arg(long, requires = "iso")]
+    pub transparent: bool,
     /// With --iso or --volume: a hexahedral or tetrahedral mesh file to measure (repeatable).
     #[arg(long, value_name = "FILE")]
     pub mesh: Vec<std::path::PathBuf>,
@@ -400,7 +425,7 @@ pub fn bench(desc: &GpuDesc, args: &BenchArgs) -> Result<()> {
     if args.derived {
         return galerkin::bench::spectral_derived::report(&gpu, args.frames, &mut |s| print!("{s}"));
     }
-    if args.volume {
+    if args.volume || args.transparent {
         let mut meshes = Vec::new();
         if args.mesh.is_empty() {
             meshes.push(galerkin::bench::spectral_volume::default_mesh()?);
@@ -409,7 +434,12 @@ pub fn bench(desc: &GpuDesc, args: &BenchArgs) -> Result<()> {
             let mesh = galerkin::spectral::load(f, &[]).with_context(|| f.display().to_string())?;
             meshes.push((f.file_name().map_or_else(String::new, |n| n.to_string_lossy().into_owned()), mesh));
         }
-        return galerkin::bench::spectral_volume::report(&gpu, meshes, args.frames, &mut |s| print!("{s}"));
+        let report = if args.transparent {
+            galerkin::bench::spectral_volume::report_transparent
+        } else {
+            galerkin::bench::spectral_volume::report
+        };
+        return report(&gpu, meshes, args.frames, &mut |s| print!("{s}"));
     }
     if !args.mesh.is_empty() && !args.iso {
         anyhow::bail!("--mesh goes with --iso or --volume");

@@ -92,9 +92,19 @@ pub fn check_view(mesh: &SpectralMesh, view: &SpectralView) -> Result<(), Spectr
             mesh.shape
         )));
     }
-    if view.volume.is_some() && (!view.iso.is_empty() || !view.cuts.is_empty() || view.expression.is_some()) {
+    if view.volume.is_some() && (!view.cuts.is_empty() || view.expression.is_some()) {
+        return Err(SpectralError::View("--volume cannot be combined with --cut or --expr yet".into()));
+    }
+    if !(view.iso_opacity > 0.0 && view.iso_opacity <= 1.0) {
+        return Err(SpectralError::View(format!(
+            "--iso-opacity {}: an opacity is in (0, 1]",
+            view.iso_opacity
+        )));
+    }
+    if view.uses_volume_pass() && !view.iso.is_empty() && (view.edges || view.colour_by.is_some()) {
         return Err(SpectralError::View(
-            "--volume cannot be combined with --iso, --cut or --expr yet".into(),
+            "--edges and --colour-by go with opaque isosurfaces, not transparent ones or isosurfaces in a volume"
+                .into(),
         ));
     }
     if view.log {
@@ -219,6 +229,8 @@ pub fn write_picture(
     let [proxies, grids, lines] = renderer.primitive_counts();
     let triangle_kind = if view.volume.is_some() {
         "volume: a ray cast per pixel through the elements of its screen tile"
+    } else if view.uses_volume_pass() {
+        "transparent isosurfaces: a ray cast per pixel through the elements of its screen tile"
     } else if !view.iso.is_empty() {
         "isosurfaces: a ray cast per pixel through each element's box"
     } else if mesh.shape.is_volume() {

@@ -117,20 +117,78 @@ impl TransferFunction {
         -(1.0 - self.alpha(f).min(MAX_OPACITY)).ln() / self.unit_distance
     }
 
-    /// The words `volume.frag` reads (binding 4): the point count, the unit distance and the
-    /// background colour (f32 bits), padding to 8 words, then (value, opacity) per point.
-    pub fn device_words(&self, background: [f32; 3]) -> Vec<u32> {
-        let mut w = vec![0u32; 8 + 2 * MAX_TRANSFER_POINTS];
+    /// A clear medium: opacity 0 everywhere (σ = 0). Not a ramp a user gives
+    /// ([`Self::new`] refuses it as empty); the medium of transparent isosurfaces drawn without
+    /// a volume, where only the sheets ([`Sheets`]) absorb and emit.
+    pub fn clear() -> Self {
+        Self { opacity: vec![(0.0, 0.0)], unit_distance: 1.0 }
+    }
+
+    /// Whether the ramp is 0 everywhere (only sheets show).
+    pub fn is_clear(&self) -> bool {
+        self.opacity.iter().all(|p| p.1 == 0.0)
+    }
+
+    /// The words `volume.frag` reads (binding 4; `spectral_transfer.glsl`): the point count, the
+    /// unit distance, the background colour (f32 bits), the sheets' count and opacity, 1 when
+    /// the medium is clear ([`Self::is_clear`]); then [`MAX_TRANSFER_POINTS`] (value, opacity) pairs, then
+    /// [`MAX_SHEETS`] iso values of the sheets.
+    pub fn device_words(&self, background: [f32; 3], sheets: &Sheets) -> Vec<u32> {
+        let mut w = vec![0u32; 8 + 2 * MAX_TRANSFER_POINTS + MAX_SHEETS];
         w[0] = self.opacity.len() as u32;
         w[1] = (self.unit_distance as f32).to_bits();
         for (o, c) in w[2..5].iter_mut().zip(background) {
             *o = c.to_bits();
         }
+        let count = sheets.values.len().min(MAX_SHEETS);
+        w[5] = count as u32;
+        w[6] = (sheets.opacity as f32).to_bits();
+        w[7] = u32::from(self.is_clear());
         for (k, &(v, a)) in self.opacity.iter().enumerate() {
             w[8 + 2 * k] = (v as f32).to_bits();
             w[9 + 2 * k] = (a as f32).to_bits();
         }
+        for (k, &c) in sheets.values[..count].iter().enumerate() {
+            w[8 + 2 * MAX_TRANSFER_POINTS + k] = (c as f32).to_bits();
+        }
         w
+    }
+}
+
+/// The most isosurface sheets a volume carries (as many as opaque isosurfaces,
+/// [`crate::spectral::render::MAX_ISO_VALUES`]).
+pub const MAX_SHEETS: usize = 8;
+
+/// Isosurfaces composited inside the volume pass (transparent isosurfaces, or opaque ones in a
+/// volume): wherever the field crosses one of `values` along a ray, a sheet of opacity
+/// `opacity` coloured by the colour map at that value and lit with the exact normal
+/// (`volume.frag`, [`super::volume_reference`]).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Sheets {
+    /// The iso values (at most [`MAX_SHEETS`]).
+    pub values: Vec<f64>,
+    /// Each sheet's opacity α ∈ (0, 1]: it lets 1 − α of the light behind it through.
+    pub opacity: f64,
+}
+
+impl Sheets {
+    /// No sheets.
+    pub fn none() -> Self {
+        Self { values: Vec::new(), opacity: 0.0 }
+    }
+
+    /// Checks and makes sheets: at most [`MAX_SHEETS`] finite values and an opacity in (0, 1].
+    pub fn new(values: Vec<f64>, opacity: f64) -> Result<Self, String> {
+        if values.len() > MAX_SHEETS {
+            return Err(format!("{} iso values; at most {MAX_SHEETS}", values.len()));
+        }
+        if let Some(v) = values.iter().find(|v| !v.is_finite()) {
+            return Err(format!("iso value {v} is not a finite number"));
+        }
+        if !(opacity > 0.0 && opacity <= 1.0) {
+            return Err(format!("the isosurfaces' opacity {opacity} is not in (0, 1]"));
+        }
+        Ok(Self { values, opacity })
     }
 }
 

@@ -8,7 +8,7 @@
 //! selected plane along its normal by 1/50 of the mesh, `o`/`O` turn its normal by 15° about
 //! z, `u`/`U` tilt it by 15° towards z, `x` deletes it. Isosurfaces: `j`/`k` move the selected
 //! value by 1/50 of the field's range, `c` selects the next, `n` adds one in the middle of the
-//! range, `x` deletes it. Volumes: `k` more opaque, `j` less (the opacity unit distance ÷ or ×
+//! range, `x` deletes it, `t` makes them transparent (opacity ½) and opaque again. Volumes: `k` more opaque, `j` less (the opacity unit distance ÷ or ×
 //! 1.25). Surfaces, cut planes, isosurfaces and volumes orbit with the viewer's camera; planar
 //! meshes stay fitted to the window.
 
@@ -154,14 +154,21 @@ impl ViewerContent for SpectralContent {
             if self.view.per_vertex { ", per-vertex colour" } else { ", per-pixel colour" },
         ) + &if let Some(tf) = &self.view.volume {
             format!(" — volume, opacity unit distance {:.4}", tf.unit_distance)
-        } else if !self.view.iso.is_empty() {
+        } else {
+            String::new()
+        } + &if !self.view.iso.is_empty() {
             let values: Vec<String> = self.view.iso.iter().map(|v| format!("{v:.4}")).collect();
             format!(
-                " — isosurfaces {}, value {} selected",
+                " — isosurfaces {}, value {} selected{}",
                 values.join(", "),
-                self.selected.min(values.len() - 1)
+                self.selected.min(values.len() - 1),
+                if self.view.uses_volume_pass() {
+                    format!(", opacity {}", self.view.iso_opacity)
+                } else {
+                    String::new()
+                }
             )
-        } else if self.view.cuts.is_empty() {
+        } else if self.view.volume.is_some() || self.view.cuts.is_empty() {
             String::new()
         } else {
             let c = self.view.cuts[self.selected];
@@ -254,6 +261,11 @@ impl ViewerContent for SpectralContent {
                 self.view.iso.push(0.5 * (lo + hi));
                 self.selected = self.view.iso.len() - 1;
             }
+            // Transparent isosurfaces on (opacity ½) and off; drawn without edges.
+            "t" if iso && self.view.volume.is_none() => {
+                self.view.iso_opacity = if self.view.iso_opacity < 1.0 { 1.0 } else { 0.5 };
+                self.view.edges &= !self.view.uses_volume_pass();
+            }
             "x" if iso && self.view.iso.len() > 1 => {
                 let k = self.selected.min(self.view.iso.len() - 1);
                 self.view.iso.remove(k);
@@ -276,7 +288,8 @@ impl ViewerContent for SpectralContent {
             }
             "i" => self.view.isolines += 2,
             "I" => self.view.isolines = self.view.isolines.saturating_sub(2),
-            "e" | "E" => self.view.edges = !self.view.edges,
+            // Edges are not drawn on transparent isosurfaces or in a volume.
+            "e" | "E" if !self.view.uses_volume_pass() => self.view.edges = !self.view.edges,
             "v" | "V" if self.view.expression.is_none() => self.view.per_vertex = !self.view.per_vertex,
             "r" => {
                 let (lo, hi) = match (self.view.range, self.renderer.as_mut()) {
@@ -384,6 +397,12 @@ mod tests {
         assert!(c.key("x") && c.view.iso.len() == 1 && c.selected == 0);
         assert!(!c.key("x"), "the last value stays");
         assert!(c.title().contains("isosurfaces"), "{}", c.title());
+        // t: transparent (drawn by the volume pass, edges off) and opaque again.
+        assert!(c.key("e") && c.view.edges);
+        assert!(c.key("t") && c.view.iso_opacity == 0.5 && c.view.uses_volume_pass() && !c.view.edges);
+        assert!(c.title().contains("opacity 0.5"), "{}", c.title());
+        assert!(!c.key("e") && !c.view.edges, "no edges on transparent isosurfaces");
+        assert!(c.key("t") && c.view.iso_opacity == 1.0 && !c.view.uses_volume_pass());
         let tf = crate::spectral::transfer::TransferFunction::new(vec![(lo, 0.0), (hi, 0.5)], 1.0).unwrap();
         let mut v = SpectralContent::new(
             mesh,

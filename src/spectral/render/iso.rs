@@ -82,7 +82,7 @@ fn box_triangles(boxes: &[[f32; 4]]) -> Vec<DrawVertex> {
 impl SpectralRenderer {
     /// Checks an isosurface view: a solid mesh, 1 to [`MAX_ISO_VALUES`] finite values, no
     /// derived field, no cut planes.
-    fn check_iso_view(&self, view: &SpectralView) -> Result<()> {
+    pub(super) fn check_iso_view(&self, view: &SpectralView) -> Result<()> {
         if !self.mesh.shape.is_volume() {
             return Err(SpectralError::Missing(format!(
                 "isosurfaces are drawn for hexahedral and tetrahedral meshes; this one is of {:?}s",

@@ -510,8 +510,8 @@ impl SpectralRenderer {
         target: &DrawTarget<'_>,
         view: &SpectralView,
     ) -> Result<(Box<dyn FnOnce(&mut Recorder<'_>) + '_>, Box<dyn FnOnce(&mut Recorder<'_>) + '_>)> {
-        if let Some(tf) = &view.volume {
-            return self.prepare_volume(target, view, tf);
+        if view.uses_volume_pass() {
+            return self.prepare_volume(target, view);
         }
         if !view.iso.is_empty() {
             return self.prepare_iso(target, view);

@@ -131,6 +131,12 @@ pub struct SpectralView {
     /// Volume rendering of a solid mesh (hexahedra, tetrahedra) with this transfer function
     /// instead of cut planes: emission–absorption along each pixel's ray (`volume.frag`).
     pub volume: Option<crate::spectral::transfer::TransferFunction>,
+    /// The isosurfaces' opacity α ∈ (0, 1] (`--iso-opacity`). Below 1 they are transparent:
+    /// drawn by the volume pass as sheets composited front to back along each ray (each lets
+    /// 1 − α of the light behind it through), every crossing of every value. With
+    /// [`Self::volume`] the isosurfaces are always such sheets inside the volume, at this
+    /// opacity. 1 without a volume: the opaque isosurface pass (`iso.frag`).
+    pub iso_opacity: f64,
 }
 
 impl SpectralView {
@@ -138,6 +144,20 @@ impl SpectralView {
     /// (`None`: the field itself).
     pub(crate) fn expression_key(&self) -> Option<String> {
         self.expression.as_ref().map(|d| d.expression.text.clone())
+    }
+
+    /// Whether the volume pass draws this view: a volume, or transparent isosurfaces.
+    pub fn uses_volume_pass(&self) -> bool {
+        self.volume.is_some() || (!self.iso.is_empty() && self.iso_opacity < 1.0)
+    }
+
+    /// The volume pass's sheets: the isosurfaces at their opacity when the volume pass draws
+    /// them ([`Self::uses_volume_pass`]), none otherwise.
+    pub fn sheets(&self) -> crate::spectral::transfer::Sheets {
+        if self.iso.is_empty() || !self.uses_volume_pass() {
+            return crate::spectral::transfer::Sheets::none();
+        }
+        crate::spectral::transfer::Sheets { values: self.iso.clone(), opacity: self.iso_opacity }
     }
 }
 
@@ -162,6 +182,7 @@ impl Default for SpectralView {
             iso: Vec::new(),
             colour_by: None,
             volume: None,
+            iso_opacity: 1.0,
         }
     }
 }

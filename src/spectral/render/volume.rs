@@ -3,7 +3,9 @@
 //! the elements its screen tile lists and composites them front to back (`volume.frag`). The
 //! tiles are binned here on the host every frame: each element's box (of its Bernstein control
 //! points) projected to the screen, and elements whose opacity is zero over their value bounds
-//! ([`proxy::value_bounds`]) left out. The f64 reference is
+//! ([`proxy::value_bounds`]) and that hold no sheet's value left out. Isosurfaces drawn here
+//! (transparent ones, or any in a volume: [`SpectralView::uses_volume_pass`]) are sheets
+//! composited where the ray crosses their value. The f64 reference is
 //! [`crate::spectral::volume_reference`].
 
 use std::collections::HashMap;
@@ -13,7 +15,7 @@ use glam::{DMat4, DVec4};
 
 use super::*;
 use crate::gpu::Recorder;
-use crate::spectral::transfer::TransferFunction;
+use crate::spectral::transfer::{Sheets, TransferFunction, MAX_SHEETS};
 
 /// Screen tile edge in pixels.
 pub const VOLUME_TILE: u32 = 16;
@@ -151,6 +153,12 @@ pub fn tile_bands(
     Ok(bands)
 }
 
+/// Whether an element whose field lies in [lo, hi] shows: the transfer function is not clear
+/// there, or a sheet's value lies in it.
+fn shows_between(tf: &TransferFunction, sheets: &Sheets, lo: f64, hi: f64) -> bool {
+    max_alpha(tf, lo, hi) > 0.0 || sheets.values.iter().any(|&c| c >= lo && c <= hi)
+}
+
 /// The largest opacity `tf` takes over [lo, hi] (at the ends or a point between).
 fn max_alpha(tf: &TransferFunction, lo: f64, hi: f64) -> f64 {
     let inner = tf.opacity.iter().filter(|p| p.0 > lo && p.0 < hi).map(|p| p.1);
@@ -166,19 +174,32 @@ impl SpectralRenderer {
         self.volume_budget = words;
     }
 
-    /// Checks a volume view: a solid mesh, no iso values, derived field or cut planes.
+    /// Checks a view the volume pass draws: a solid mesh, no derived field or cut planes; its
+    /// isosurfaces (sheets) as the isosurface pass checks them, at an opacity in (0, 1], neither
+    /// coloured by another field nor edged.
     fn check_volume_view(&self, view: &SpectralView) -> Result<()> {
         if !self.mesh.shape.is_volume() {
             return Err(SpectralError::Missing(format!(
-                "volume rendering is for hexahedral and tetrahedral meshes; this one is of {:?}s",
+                "volume rendering and transparent isosurfaces are for hexahedral and tetrahedral meshes; this one is of {:?}s",
                 self.mesh.shape
             )));
         }
-        if !view.iso.is_empty() || view.expression.is_some() || !view.cuts.is_empty() {
+        if view.expression.is_some() || !view.cuts.is_empty() {
             return Err(SpectralError::Missing(
-                "volume rendering together with isosurfaces, cut planes or a derived field is not drawn yet"
+                "volume rendering or transparent isosurfaces together with cut planes or a derived field are not drawn yet"
                     .into(),
             ));
+        }
+        if !view.iso.is_empty() {
+            self.check_iso_view(view)?;
+            Sheets::new(view.iso.clone(), view.iso_opacity)
+                .map_err(|e| SpectralError::Missing(format!("isosurfaces: {e}")))?;
+            if view.colour_by.is_some() || view.edges {
+                return Err(SpectralError::Missing(
+                    "transparent isosurfaces, and isosurfaces in a volume, are coloured by their values and drawn without element edges (--colour-by and --edges go with opaque isosurfaces)"
+                        .into(),
+                ));
+            }
         }
         Ok(())
     }
@@ -189,7 +210,7 @@ impl SpectralRenderer {
             let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
             let boxes = Buffer::from_slice(&self.gpu, "spectral volume boxes", &corners, storage)
                 .map_err(dev("uploading"))?;
-            let words = 8 + 2 * crate::spectral::transfer::MAX_TRANSFER_POINTS as u64;
+            let words = 8 + 2 * crate::spectral::transfer::MAX_TRANSFER_POINTS as u64 + MAX_SHEETS as u64;
             let transfer =
                 Buffer::new(&self.gpu, "spectral transfer function", words, storage, MemoryKind::GpuOnly)
                     .map_err(dev("the volume pass"))?;
@@ -232,6 +253,7 @@ impl SpectralRenderer {
         target: &DrawTarget<'_>,
         view: &SpectralView,
         tf: &TransferFunction,
+        sheets: &Sheets,
     ) -> Result<()> {
         let (field, step) = (view.field, view.step);
         if self.volume.as_ref().is_some_and(|v| v.bounds_of != Some((field, step))) {
@@ -255,7 +277,7 @@ impl SpectralRenderer {
             &v.corners,
             &vp,
             (port.x, port.y, e.width, e.height),
-            |k| bounds.get(k).is_none_or(|b| max_alpha(tf, b[0], b[1]) > 0.0),
+            |k| bounds.get(k).is_none_or(|b| shows_between(tf, sheets, b[0], b[1])),
             limit,
         )
         .map_err(SpectralError::Missing)?;
@@ -286,7 +308,7 @@ impl SpectralRenderer {
         }
         let bg = crate::render::BACKGROUND;
         v.transfer
-            .upload(&self.gpu, 0, &tf.device_words([bg[0], bg[1], bg[2]]))
+            .upload(&self.gpu, 0, &tf.device_words([bg[0], bg[1], bg[2]], sheets))
             .map_err(dev("uploading the transfer function"))?;
         let key = target.key();
         if self.volume.as_ref().is_some_and(|v| v.pipelines.get(&key).is_some_and(|p| p.1.is_empty())) {
@@ -321,12 +343,13 @@ impl SpectralRenderer {
         &mut self,
         target: &DrawTarget<'_>,
         view: &SpectralView,
-        tf: &TransferFunction,
     ) -> Result<(Box<dyn FnOnce(&mut Recorder<'_>) + '_>, Box<dyn FnOnce(&mut Recorder<'_>) + '_>)> {
         self.check_volume_view(view)?;
         self.show(view)?;
         self.volume_pipeline_for(target)?;
-        self.volume_upload(target, view, tf)?;
+        // Transparent isosurfaces alone: a clear medium, only the sheets show.
+        let tf = view.volume.clone().unwrap_or_else(TransferFunction::clear);
+        self.volume_upload(target, view, &tf, &view.sheets())?;
         let push = self.push(target, view);
         let extent = target.viewport();
         let Some(v) = self.volume.as_ref() else {
