@@ -2,8 +2,8 @@
 #define GALERKIN_SPECTRAL_ISO_FRAG_GLSL
 // Isosurfaces of a solid spectral element, per pixel (issue "isosurfaces and volume
 // rendering"; ElVis's ray-element approach): the pixel's ray from the eye crosses the element's
-// box between its entry (the slab test) and the box's far side where this fragment lies. The
-// segment is sampled at SPECTRAL_ISO_SAMPLES points; at each the reference point is found by
+// box between its entry (the slab test) and the box's far side where this fragment lies,
+// clipped to the element's hull (spectral_ray_hull). The segment is sampled at SPECTRAL_ISO_SAMPLES points; at each the reference point is found by
 // Newton's method warm-started from the previous one, and where the point lies inside the
 // element (or within SPECTRAL_ISO_MARGIN of it, the polynomial continued) f − c is taken for
 // every iso value c. Each sign change between two such samples is bisected in the ray
@@ -18,6 +18,8 @@
 // The body of iso.frag and iso_colour.frag; the latter defines SPECTRAL_ISO_COLOUR_BY and two
 // field slots: the roots are slot 0's, the colour is slot 1's value there (--colour-by).
 #include "spectral_element.glsl"
+// The element hulls' half-spaces (binding 5 of the isosurface draws).
+#define SPECTRAL_HULL_BINDING 5
 #include "spectral_ray.glsl"
 #include "spectral_push.glsl"
 #include "colormap.glsl"
@@ -99,6 +101,12 @@ void main() {
     float t_entry = crossing.x, t_far = crossing.y;
     // Only the box's far side casts (both sides are drawn: the eye may be inside a box).
     if (!(t_entry < t_exit) || t_exit - t_entry < 0.5 * (t_far - t_entry)) discard;
+    // Sampled only where the ray lies in the element's hull (most of a tetrahedron's box is
+    // outside it).
+    vec2 span = spectral_ray_hull(element, eye, d, vec2(t_entry, t_exit));
+    if (!(span.x < span.y)) discard;
+    t_entry = span.x;
+    t_exit = span.y;
     uint count = min(iso_count, 8u);
     vec3 r = vec3(SPECTRAL_SIMPLEX ? 0.25 : 0.5);
     float step_t = (t_exit - t_entry) / float(SPECTRAL_ISO_SAMPLES);

@@ -3,7 +3,8 @@
 // rendering"; ElVis's ray-element approach): emission–absorption along the pixel's ray,
 // C = ∫ c(f) σ(f) e^{−∫σ} dt and T = e^{−∫σ dt}, with c the colour map and σ the transfer
 // function's extinction (spectral::transfer). The ray meets the elements its screen tile lists
-// (binned on the host, volume.rs); for each whose box it crosses, the crossing is sampled at
+// (binned on the host, volume.rs); for each whose box it crosses, the crossing (clipped to the
+// element's hull: spectral_ray_hull) is sampled at
 // SPECTRAL_VOLUME_SAMPLES points pulled back by warm-started Newton, the element's entry and
 // exit bisected to f32 resolution where the samples go in or out (or, between two samples
 // outside, where the chord joining their reference points crosses the reference element and
@@ -23,6 +24,8 @@
 // Twin of spectral::volume_reference (the f64 ray caster), which samples finer.
 #extension GL_EXT_control_flow_attributes : require
 #include "spectral_element.glsl"
+// The element hulls' half-spaces (binding 6).
+#define SPECTRAL_HULL_BINDING 6
 #include "spectral_ray.glsl"
 #include "spectral_push.glsl"
 #include "colormap.glsl"
@@ -206,7 +209,7 @@ void volume_span(uint e, vec3 eye, vec3 d, float a, float b, float fa, float fb,
     }
 }
 
-// Element e's part of the ray within [t0, t1] (its box): colour C (composited from T = 1),
+// Element e's part of the ray within [t0, t1] (its box clipped to its hull): colour C (composited from T = 1),
 // transmittance T, and where the ray first enters it; false when it never does.
 bool volume_element(uint e, vec3 eye, vec3 d, float t0, float t1, out vec3 C, out float T, out float t_first) {
     C = vec3(0.0);
@@ -305,10 +308,10 @@ void main() {
         for (uint k = 0u; k < count; ++k) {
             uint e = tiles[first + k];
             vec3 lo = boxes[2u * e].xyz, hi = boxes[2u * e + 1u].xyz;
-            vec2 crossing = spectral_ray_box(eye, d, lo, hi);
+            vec2 crossing = spectral_ray_hull(e, eye, d, spectral_ray_box(eye, d, lo, hi));
             float t0 = crossing.x, t1 = crossing.y;
             if (!(t0 < t1) || t1 <= t_floor) continue;
-            // The ray enters the element no earlier than its box: past the last slot, later.
+            // The ray enters the element no earlier than its hull: past the last slot, later.
             if (n == SPECTRAL_VOLUME_SLOTS && t0 >= slot_t[n - 1u]) {
                 more = true;
                 continue;

@@ -1,6 +1,6 @@
 //! Isosurfaces of solid meshes (hexahedra and tetrahedra), per pixel: each element's box is
 //! drawn (`iso.vert`), and each fragment on the box's far side casts the pixel's ray through the
-//! element, finds the first root of f − c for the view's iso values and draws it at its own
+//! element (where the ray lies in its hull, [`super::element_hull_planes`]), finds the first root of f − c for the view's iso values and draws it at its own
 //! depth with the exact normal (`iso.frag`). The f64 reference is
 //! [`crate::spectral::reference::iso_reference`].
 
@@ -15,11 +15,12 @@ use crate::gpu::Recorder;
 pub const MAX_ISO_VALUES: usize = 8;
 
 /// Bindings of the isosurface pipeline: geometry, coefficients, colour map, element boxes,
-/// iso values.
-const ISO_BINDINGS: [BindingKind; 5] = [
+/// iso values, element hulls.
+const ISO_BINDINGS: [BindingKind; 6] = [
     BindingKind::StorageBuffer,
     BindingKind::StorageBuffer,
     BindingKind::Texture,
+    BindingKind::StorageBuffer,
     BindingKind::StorageBuffer,
     BindingKind::StorageBuffer,
 ];
@@ -38,6 +39,8 @@ pub(super) struct IsoPass {
     bounds_of: Option<(usize, usize)>,
     /// The count, then up to [`MAX_ISO_VALUES`] values (f32 bits).
     values: Buffer<u32>,
+    /// Per element its hull's [`super::HULL_PLANES`] half-spaces ([`super::element_hull_planes`]).
+    hulls: Buffer<[f32; 4]>,
     /// Per target and whether it colours by a second field (`iso_colour.frag`).
     pub(super) pipelines: HashMap<(PassKey, bool), (GraphicsPipeline, DescriptorSet)>,
 }
@@ -129,6 +132,9 @@ impl SpectralRenderer {
             .map_err(dev("uploading the element boxes"))?;
             let box_buffer =
                 Buffer::from_slice(&self.gpu, "spectral boxes", &boxes, storage).map_err(dev("uploading"))?;
+            let planes = super::element_hull_planes(&self.mesh)?;
+            let hulls = Buffer::from_slice(&self.gpu, "spectral element hulls", &planes, storage)
+                .map_err(dev("uploading the element hulls"))?;
             let values = Buffer::new(
                 &self.gpu,
                 "spectral iso values",
@@ -144,6 +150,7 @@ impl SpectralRenderer {
                 corners: boxes,
                 bounds_of: None,
                 values,
+                hulls,
                 pipelines: HashMap::new(),
             });
         }
@@ -175,6 +182,7 @@ impl SpectralRenderer {
             r[2],
             Resource::Storage(iso.boxes.binding().map_err(dev("binding"))?),
             Resource::Storage(iso.values.binding().map_err(dev("binding"))?),
+            Resource::Storage(iso.hulls.binding().map_err(dev("binding"))?),
         ];
         let set = pipeline.bind(&self.gpu, &resources).map_err(dev("binding the isosurface pipeline"))?;
         if let Some(iso) = self.iso.as_mut() {

@@ -42,6 +42,7 @@ use crate::render::{
 
 mod cut;
 mod derived;
+mod hull;
 mod iso;
 mod layout;
 mod tessellate;
@@ -50,6 +51,7 @@ mod volume;
 
 pub use crate::render::camera_for_box;
 pub use cut::{parse_plane, plane_span};
+pub use hull::{element_hull_planes, HULL_PLANES};
 pub use iso::{element_boxes, MAX_ISO_VALUES};
 pub use layout::{basis_specialization, geometry_points, padded_slots, padded_values};
 pub use tessellate::tessellated_vertices;

@@ -24,11 +24,12 @@ pub const VOLUME_TILE: u32 = 16;
 const TILE_HEADER: usize = 8;
 
 /// Bindings of the volume pipeline: geometry, coefficients, colour map, element boxes,
-/// transfer function, tiles.
-const VOLUME_BINDINGS: [BindingKind; 6] = [
+/// transfer function, tiles, element hulls.
+const VOLUME_BINDINGS: [BindingKind; 7] = [
     BindingKind::StorageBuffer,
     BindingKind::StorageBuffer,
     BindingKind::Texture,
+    BindingKind::StorageBuffer,
     BindingKind::StorageBuffer,
     BindingKind::StorageBuffer,
     BindingKind::StorageBuffer,
@@ -41,6 +42,8 @@ pub(super) struct VolumePass {
     corners: Vec<[f32; 4]>,
     /// [`TransferFunction::device_words`].
     transfer: Buffer<u32>,
+    /// Per element its hull's [`super::HULL_PLANES`] half-spaces ([`super::element_hull_planes`]).
+    hulls: Buffer<[f32; 4]>,
     /// The tile ranges and element lists of the last frame, one buffer per band (grown when a
     /// frame needs more).
     tiles: Vec<Buffer<u32>>,
@@ -214,10 +217,14 @@ impl SpectralRenderer {
             let transfer =
                 Buffer::new(&self.gpu, "spectral transfer function", words, storage, MemoryKind::GpuOnly)
                     .map_err(dev("the volume pass"))?;
+            let planes = super::element_hull_planes(&self.mesh)?;
+            let hulls = Buffer::from_slice(&self.gpu, "spectral element hulls", &planes, storage)
+                .map_err(dev("uploading the element hulls"))?;
             self.volume = Some(VolumePass {
                 boxes,
                 corners,
                 transfer,
+                hulls,
                 tiles: Vec::new(),
                 bounds: Vec::new(),
                 bounds_of: None,
@@ -323,6 +330,7 @@ impl SpectralRenderer {
                     Resource::Storage(v.boxes.binding().map_err(dev("binding"))?),
                     Resource::Storage(v.transfer.binding().map_err(dev("binding"))?),
                     Resource::Storage(tiles.binding().map_err(dev("binding"))?),
+                    Resource::Storage(v.hulls.binding().map_err(dev("binding"))?),
                 ];
                 sets.push(
                     v.pipelines[&key]
