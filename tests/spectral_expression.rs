@@ -353,6 +353,62 @@ mod device {
     }
 
     /// What a derived field cannot be drawn with is refused by name, before drawing.
+    /// Triangles and tetrahedra VTK wrote (curved, orders 6 and 3): derived fields per pixel —
+    /// of the triangles drawn flat, of the tetrahedra on an axis and an oblique cut plane —
+    /// each covered pixel within its propagated bound of the f64 interpreter at the pixel's
+    /// reference point (Silvester's basis in both; the bound's sums over its terms).
+    #[test]
+    fn simplices_show_derived_fields() {
+        use galerkin::spectral::reference::check_derived_cut_pixels;
+        use galerkin::spectral::render::fit_camera;
+        let gpu = common::gpu();
+        let load = |name: &str| {
+            let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/vtk").join(name);
+            Arc::new(galerkin::spectral::load(&path, &[]).unwrap_or_else(|e| panic!("{name}: {e}")))
+        };
+        let expressions = ["length(grad(u))", "u * u - x + y", "grad(u).y / (1 + u * u) + sin(u)"];
+        let size = (160u32, 120u32);
+        let triangles = load("tri_curved_o6.vtu");
+        let mut renderer = SpectralRenderer::new(&gpu, triangles.clone(), &Colormap::viridis()).unwrap();
+        let v2 = View2d::fit(&triangles, size.0, size.1);
+        for text in expressions {
+            let d = Arc::new(DerivedField::new(&triangles, text).unwrap());
+            let view =
+                SpectralView { overdraw: false, expression: Some(d.clone()), ..SpectralView::default() };
+            let pixels = render(&gpu, &mut renderer, &view, size);
+            let report = check_derived_pixels(&triangles, &d, (0, 0), &v2, size, &pixels);
+            eprintln!(
+                "triangles {text:?}: {} px, max error {:.2e}, {:.3} of the bound, {} missing",
+                report.covered, report.max_error, report.max_error_ratio, report.missing
+            );
+            assert!(report.covered > 2000, "{text}: {report:?}");
+            assert!(report.uncomparable * 100 <= report.covered, "{text}: {report:?}");
+            assert!(report.passed(), "triangles, {text:?}: {report:?}");
+        }
+        let tets = load("tet_cube_o3.vtu");
+        let camera = fit_camera(&tets);
+        let mut renderer = SpectralRenderer::new(&gpu, tets.clone(), &Colormap::viridis()).unwrap();
+        let planes = [[0.0, 0.0, 1.0, 0.45], [1.0, 1.0, 1.0, 1.6]];
+        for text in expressions {
+            let d = Arc::new(DerivedField::new(&tets, text).unwrap());
+            let view = SpectralView {
+                overdraw: false,
+                cuts: planes.to_vec(),
+                expression: Some(d.clone()),
+                ..SpectralView::default()
+            };
+            let pixels = render(&gpu, &mut renderer, &view, size);
+            let report = check_derived_cut_pixels(&tets, &d, (0, 0), (&camera, &planes), size, &pixels);
+            eprintln!(
+                "tetrahedra {text:?}: {} px, max error {:.2e}, {:.3} of the bound",
+                report.covered, report.max_error, report.max_error_ratio
+            );
+            assert!(report.covered > 2000, "{text}: {report:?}");
+            assert!(report.uncomparable * 100 <= report.covered, "{text}: {report:?}");
+            assert!(report.passed(), "tetrahedra, {text:?}: {report:?}");
+        }
+    }
+
     #[test]
     fn unsuitable_views_are_refused() {
         let gpu = common::gpu();

@@ -4,8 +4,10 @@
 
 use super::spectral::{geometry, gradient, DerivedField};
 use super::{InputErrors, Inputs};
+use crate::spectral::basis::Basis1d;
 use crate::spectral::reference::{rounding_bound as value_bound, rounding_bound_hex as value_bound_hex};
-use crate::spectral::SpectralMesh;
+use crate::spectral::simplex::{tetra_terms, triangle_terms};
+use crate::spectral::{Shape, SpectralMesh};
 
 /// The multi-index of node `k` of a tensor-product element with `m` nodes per axis.
 fn multi_index<const D: usize>(k: usize, m: usize) -> [usize; D] {
@@ -21,6 +23,33 @@ fn tensor<const D: usize>(b: &[[f64; 16]; D], db: &[[f64; 16]; D], index: [usize
     (value, derivative)
 }
 
+/// Every node's basis function of `basis` (the geometry's or the fields') at r and its
+/// derivatives along each reference axis, in node order: Silvester's basis on triangles and
+/// tetrahedra ([`crate::spectral::simplex::triangle_terms`], `tetra_terms`), tensor products
+/// of the 1D basis otherwise.
+fn node_terms<const D: usize>(mesh: &SpectralMesh, basis: &Basis1d, r: [f64; D]) -> Vec<(f64, [f64; D])> {
+    let n = basis.order;
+    let mut out = vec![(0.0, [0.0; D]); mesh.shape.nodes(n)];
+    match mesh.shape {
+        Shape::Triangle => triangle_terms(n, [r[0], r[1.min(D - 1)]], |k, l, dl| {
+            out[k] = (l, std::array::from_fn(|a| dl[a.min(1)]));
+        }),
+        Shape::Tetrahedron => tetra_terms(n, std::array::from_fn(|a| r[a.min(D - 1)]), |k, l, dl| {
+            out[k] = (l, std::array::from_fn(|a| dl[a.min(2)]));
+        }),
+        Shape::Quadrilateral | Shape::Hexahedron => {
+            let (mut b, mut db) = ([[0.0; 16]; D], [[0.0; 16]; D]);
+            for a in 0..D {
+                basis.eval(r[a], &mut b[a], Some(&mut db[a]));
+            }
+            for (k, term) in out.iter_mut().enumerate() {
+                *term = tensor(&b, &db, multi_index::<D>(k, basis.len()));
+            }
+        }
+    }
+    out
+}
+
 impl DerivedField {
     /// A bound on |device − exact| of the derived value at reference point `r` of
     /// quadrilateral `e` ([`crate::expression::Expression::rounding_bound`]) from bounds on what
@@ -32,7 +61,8 @@ impl DerivedField {
     ///   error δr = ‖J⁺‖ · position (central differences in f64);
     /// - the point: position = (2|x| + c(g + 1) Σ|γ…γ X|) ε,
     ///
-    /// with c = 8 on quadrilaterals. Polynomial cells (rational ones carry weights in every
+    /// with c = 8 on quadrilaterals and triangles (Silvester's basis summed as a quadrilateral's
+    /// of m = n + 1, as [`crate::spectral::reference::rounding_bound`]). Polynomial cells (rational ones carry weights in every
     /// sum; not derived here: the bound is then an estimate).
     pub fn rounding_bound(
         &self,
@@ -45,7 +75,7 @@ impl DerivedField {
         self.bound_n(mesh, shown, step, e, r)
     }
 
-    /// [`Self::rounding_bound`] on hexahedron `e` at r = (ξ, η, ζ), with c = 12 and the point
+    /// [`Self::rounding_bound`] on hexahedron or tetrahedron `e` at r = (ξ, η, ζ), with c = 12 and the point
     /// on the cut plane interpolated across the drawn rectangle (64|x| ε instead of 2|x| ε, as
     /// [`crate::spectral::reference::rounding_bound_hex`]).
     pub fn rounding_bound_hex(
@@ -69,17 +99,12 @@ impl DerivedField {
     ) -> f64 {
         let eps = f64::from(f32::EPSILON);
         let (c, point_factor) = if D == 3 { (12.0, 64.0) } else { (8.0, 2.0) };
-        let (fb, gb) = (&mesh.basis, &mesh.geometry);
-        let (m, gm) = (fb.len(), gb.len());
-        let (mut b, mut db, mut g, mut dg) = ([[0.0; 16]; D], [[0.0; 16]; D], [[0.0; 16]; D], [[0.0; 16]; D]);
-        for a in 0..D {
-            fb.eval(r[a], &mut b[a], Some(&mut db[a]));
-            gb.eval(r[a], &mut g[a], Some(&mut dg[a]));
-        }
+        let (m, gm) = (mesh.basis.len(), mesh.geometry.len());
+        let field_terms = node_terms(mesh, &mesh.basis, r);
+        let geometry_terms = node_terms(mesh, &mesh.geometry, r);
         let (point, tangents) = geometry(mesh, e, r);
         let (mut sum_x, mut sum_j) = (0.0, 0.0);
-        for (k, p) in mesh.element_points(e).iter().enumerate() {
-            let (value, derivative) = tensor(&g, &dg, multi_index::<D>(k, gm));
+        for (p, &(value, derivative)) in mesh.element_points(e).iter().zip(&geometry_terms) {
             let size = p.iter().fold(0.0f64, |s, c| s.max(c.abs()));
             sum_x += value.abs() * size;
             sum_j += derivative.iter().map(|d| d.abs()).sum::<f64>() * size;
@@ -113,8 +138,7 @@ impl DerivedField {
             let (v, d) = mesh.value_gradient_at(f, step, e, r);
             let grad = gradient(&tangents, &d);
             let mut sum_d = 0.0;
-            for (k, coefficient) in mesh.element_values(f, step, e).iter().enumerate() {
-                let (_, derivative) = tensor(&b, &db, multi_index::<D>(k, m));
+            for (coefficient, (_, derivative)) in mesh.element_values(f, step, e).iter().zip(&field_terms) {
                 sum_d += derivative.iter().map(|d| d.abs()).sum::<f64>() * coefficient.abs();
             }
             let gnorm = dot(grad, grad).sqrt();
