@@ -141,20 +141,7 @@ fn the_sheet_reference_is_converged() {
     let size = (24, 18);
     let a = volume_reference(&mesh, (0, 0), &camera, &tf, &sheets, &colours, size, 16);
     let b = volume_reference(&mesh, (0, 0), &camera, &tf, &sheets, &colours, size, 32);
-    let (mut worst, mut grazing) = (0.0f64, 0);
-    for (x, y) in a.iter().zip(&b) {
-        match (x, y) {
-            (Some(x), Some(y)) if x.grazing || y.grazing => grazing += 1,
-            (Some(x), Some(y)) => {
-                for c in 0..3 {
-                    worst = worst.max((x.colour[c] - y.colour[c]).abs());
-                }
-                worst = worst.max((x.transmittance - y.transmittance).abs());
-            }
-            (None, None) => {}
-            _ => panic!("the two densities disagree on which rays meet the mesh"),
-        }
-    }
+    let (worst, grazing) = common::volumes::reference_difference(&a, &b);
     eprintln!("doubling the samples changes a channel by {worst:.2e} ({grazing} grazing rays left out)");
     assert!(worst <= TOLERANCE / 8.0, "{worst}");
     assert!(grazing * 20 <= a.len(), "{grazing} grazing rays of {}", a.len());

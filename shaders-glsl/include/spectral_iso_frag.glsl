@@ -23,7 +23,6 @@
 #include "spectral_ray.glsl"
 #include "spectral_push.glsl"
 #include "colormap.glsl"
-#include "phong.glsl"
 
 layout(location = 1) flat in uint element;
 layout(location = 3) in vec3 world;
@@ -37,8 +36,6 @@ layout(depth_any) out float gl_FragDepth;
 
 // Samples along each element's segment (the fragment stage's loop bound).
 #define SPECTRAL_ISO_SAMPLES (8u + 4u * max(SPECTRAL_FIELD_ORDER, SPECTRAL_GEOMETRY_ORDER))
-// Bisection steps on a bracketing interval: 2^-24 of it, f32 resolution.
-#define SPECTRAL_ISO_BISECTIONS 24
 
 // How far outside its element (in reference units, spectral_outside_3d) a sample may lie and
 // still bracket roots, with the field's polynomial continued there: a root near a face then
@@ -76,20 +73,6 @@ float iso_face_distance_px(mat3 j, vec3 r, vec3 n, float depth) {
         best = min(best, iso_along_surface(1.0 - r.x - r.y - r.z, g, n));
     }
     return best * pc.pixel_to_world.w / depth;
-}
-
-// Bisection of [t_lo, t_hi] for f - c = 0 along the ray (f continued past the element),
-// pulled back each step from r: the root's ray parameter, its reference point in r.
-float iso_bisect(vec3 eye, vec3 d, float t_lo, float t_hi, float c, float g_lo, inout vec3 r) {
-    for (int i = 0; i < SPECTRAL_ISO_BISECTIONS; ++i) {
-        float t = 0.5 * (t_lo + t_hi);
-        spectral_pull_hex(element, eye + t * d, r);
-        float g = spectral_value_hex(element, r) - c;
-        if ((g < 0.0) == (g_lo < 0.0)) t_lo = t; else t_hi = t;
-    }
-    float t = 0.5 * (t_lo + t_hi);
-    spectral_pull_hex(element, eye + t * d, r);
-    return t;
 }
 
 void main() {
@@ -174,7 +157,7 @@ void main() {
             // Bisect the candidates; the nearest root inside the element is the pixel's.
             if (pair) {
                 vec3 q = pair_r;
-                float tr = iso_bisect(eye, d, pair_lo, pair_hi, iso_values[pair_k], pair_g, q);
+                float tr = spectral_ray_bisect(element, eye, d, pair_lo, pair_hi, iso_values[pair_k], pair_g, q);
                 if (spectral_outside_3d(q) <= pc.misc.y) {
                     found = true;
                     hit_k = pair_k;
@@ -184,7 +167,7 @@ void main() {
             }
             if (best <= 1.0 && !(found && t_root <= t_prev)) {
                 vec3 q = r_prev;
-                float tr = iso_bisect(eye, d, t_prev, t, iso_values[k_best], g_prev[k_best], q);
+                float tr = spectral_ray_bisect(element, eye, d, t_prev, t, iso_values[k_best], g_prev[k_best], q);
                 // A root outside the element is its neighbour's.
                 if (spectral_outside_3d(q) <= pc.misc.y && !(found && t_root <= tr)) {
                     found = true;
@@ -229,13 +212,10 @@ void main() {
     }
     mat3 j;
     spectral_map_hex(element, rr, j);
-    vec3 n = spectral_physical_gradient_hex(j, fg.yzw);
-    n = length(n) > 0.0 ? normalize(n) : -d;
-    if (dot(n, d) > 0.0) n = -n;
+    vec3 n = spectral_level_normal(j, fg.yzw, d);
     float tc = ramp_coordinate(shown, pc.range.x, pc.range.y, pc.flags.y != 0u);
     vec3 colour = texture(colormap, ramp_texcoord(tc, pc.range.z)).rgb;
-    vec3 light = normalize(-d + vec3(0.2, 0.3, 0.5));
-    vec3 shaded = phong(colour, n, light, -d);
+    vec3 shaded = spectral_ray_lit(colour, n, d);
     if (pc.flags.z != 0u && iso_face_distance_px(j, rr, n, clip.w) <= SPECTRAL_ISO_EDGE_PX) shaded *= 0.2;
     out_colour = vec4(shaded, 1.0);
 }

@@ -1,9 +1,11 @@
 // Rays through solid elements, shared by the isosurface and volume passes (spectral_iso_frag.glsl,
 // volume.frag): the slab test of an element's box, the clip to its hull's half-spaces (with
-// SPECTRAL_HULL_BINDING defined) and the retried pull-back of a point on the ray. Twins: iso_reference::slab and iso_reference::pull_back. Needs spectral_element.glsl
+// SPECTRAL_HULL_BINDING defined), the retried pull-back of a point on the ray, the bisection of
+// a root along it and the shading of a level set's surface. Twins: iso_reference::slab and iso_reference::pull_back. Needs spectral_element.glsl
 // and GL_EXT_control_flow_attributes (enabled by the including shader, after #version).
 #ifndef GALERKIN_SPECTRAL_RAY_GLSL
 #define GALERKIN_SPECTRAL_RAY_GLSL
+#include "phong.glsl"
 
 // The ray's parameters (from eye along unit d, t >= 0) where it enters and leaves the box
 // [lo, hi]: it crosses the box when x < y.
@@ -50,5 +52,35 @@ bool spectral_pull_hex(uint e, vec3 x, inout vec3 r) {
     }
     r = start;
     return false;
+}
+// Bisection of [t_lo, t_hi] for f − c = 0 along the ray from eye along d through element e (f
+// continued past the element; g_lo = f − c at t_lo), SPECTRAL_RAY_BISECTIONS steps, each point
+// pulled back from r: the root's ray parameter, its reference point in r. Shared by the
+// isosurface pass's roots and the volume pass's sheets.
+#define SPECTRAL_RAY_BISECTIONS 24
+float spectral_ray_bisect(uint e, vec3 eye, vec3 d, float t_lo, float t_hi, float c, float g_lo, inout vec3 r) {
+    for (int i = 0; i < SPECTRAL_RAY_BISECTIONS; ++i) {
+        float t = 0.5 * (t_lo + t_hi);
+        spectral_pull_hex(e, eye + t * d, r);
+        float g = spectral_value_hex(e, r) - c;
+        if ((g < 0.0) == (g_lo < 0.0)) t_lo = t; else t_hi = t;
+    }
+    float t = 0.5 * (t_lo + t_hi);
+    spectral_pull_hex(e, eye + t * d, r);
+    return t;
+}
+
+// The unit normal J⁻ᵀ∇_r f/|·| of a level set (Jacobian j, reference gradient g_r), −d where the
+// gradient vanishes.
+vec3 spectral_level_normal(mat3 j, vec3 g_r, vec3 d) {
+    vec3 n = spectral_physical_gradient_hex(j, g_r);
+    return length(n) > 0.0 ? normalize(n) : -d;
+}
+
+// A surface point of colour `colour` and unit normal n seen along d, Phong-lit (two-sided) by a
+// light from −d + (0.2, 0.3, 0.5): how isosurfaces and sheets are shaded (twin:
+// volume_reference's sheet colour).
+vec3 spectral_ray_lit(vec3 colour, vec3 n, vec3 d) {
+    return phong(colour, n, normalize(-d + vec3(0.2, 0.3, 0.5)), -d);
 }
 #endif

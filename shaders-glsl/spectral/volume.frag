@@ -29,7 +29,6 @@
 #include "spectral_ray.glsl"
 #include "spectral_push.glsl"
 #include "colormap.glsl"
-#include "phong.glsl"
 
 layout(location = 0) in vec4 far_point;
 layout(set = 0, binding = 2) uniform sampler1D colormap;
@@ -51,8 +50,6 @@ layout(location = 0) out vec4 out_colour;
 #define SPECTRAL_VOLUME_ROUNDS 64u
 // Bisection steps on an element's entry or exit: 2^-20 of a sample interval.
 #define SPECTRAL_VOLUME_BISECTIONS 20
-// Bisection steps on a sheet's root: 2^-24 of the interval, f32 resolution.
-#define SPECTRAL_SHEET_BISECTIONS 24
 // Light left below which a ray stops (well under half of 1/255).
 #define SPECTRAL_VOLUME_OPAQUE (1.0 / 4096.0)
 
@@ -142,17 +139,13 @@ void volume_interval(uint e, vec3 eye, vec3 d, float a, float b, float fa, float
 }
 
 // The lit colour of the sheet of value c at reference point r of element e, seen along d: the
-// colour map at c, Phong-lit with the exact normal J⁻ᵀ∇_r f/|·| (as iso.frag lights its
-// surfaces). Twin of volume_reference's sheet colour.
+// colour map at c, lit as iso.frag lights its surfaces. Twin of volume_reference's sheet colour.
 vec3 volume_sheet_colour(uint e, vec3 r, vec3 d, float c) {
     vec3 rr = spectral_clamp_3d(r);
-    vec4 fg = spectral_slot_value_gradient_hex(e, 0u, rr);
     mat3 j;
     spectral_map_hex(e, rr, j);
-    vec3 n = spectral_physical_gradient_hex(j, fg.yzw);
-    n = length(n) > 0.0 ? normalize(n) : -d;
-    vec3 light = normalize(-d + vec3(0.2, 0.3, 0.5));
-    return phong(volume_colour(c), n, light, -d);
+    vec3 n = spectral_level_normal(j, spectral_slot_value_gradient_hex(e, 0u, rr).yzw, d);
+    return spectral_ray_lit(volume_colour(c), n, d);
 }
 
 // Composites [a, b] inside element e (the field fa at a, reference point ra, and fb at b) with
@@ -169,16 +162,8 @@ void volume_span(uint e, vec3 eye, vec3 d, float a, float b, float fa, float fb,
     for (uint k = 0u; k < sheets; ++k) {
         float c = tf_sheets[k];
         if (!((fa - c) * (fb - c) < 0.0)) continue;
-        float lo = a, hi = b;
         vec3 r = ra;
-        for (int i = 0; i < SPECTRAL_SHEET_BISECTIONS; ++i) {
-            float t = 0.5 * (lo + hi);
-            spectral_pull_hex(e, eye + t * d, r);
-            float g = spectral_value_hex(e, spectral_clamp_3d(r)) - c;
-            if ((g < 0.0) == (fa - c < 0.0)) lo = t; else hi = t;
-        }
-        float t = 0.5 * (lo + hi);
-        spectral_pull_hex(e, eye + t * d, r);
+        float t = spectral_ray_bisect(e, eye, d, a, b, c, fa - c, r);
         // Insertion in ray order.
         uint i = m;
         while (i > 0u && root_t[i - 1u] > t) {

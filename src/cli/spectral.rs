@@ -204,14 +204,10 @@ pub struct RenderArgs {
     pub viewer: crate::cli::args::ViewerArgs,
 }
 
-/// An opacity in (0, 1].
+/// An opacity in (0, 1] ([`galerkin::spectral::transfer::Sheets::check_opacity`]).
 fn opacity(s: &str) -> Result<f64, String> {
     let a = finite(s)?;
-    if a > 0.0 && a <= 1.0 {
-        Ok(a)
-    } else {
-        Err(format!("{a} is not an opacity in (0, 1]"))
-    }
+    galerkin::spectral::transfer::Sheets::check_opacity(a).map(|()| a)
 }
 
 /// A finite number.

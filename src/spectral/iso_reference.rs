@@ -146,6 +146,35 @@ pub(super) fn slab(o: [f64; 3], d: [f64; 3], lo: [f64; 3], hi: [f64; 3]) -> Opti
     (t0 < t1).then_some((t0, t1))
 }
 
+/// The parabola test for a pair of roots between samples without a sign change (touching
+/// sheets, a surface the ray barely enters): three equally spaced samples a of f − c keep one
+/// sign while the parabola through them turns toward zero between the outer two and comes
+/// within a quarter of the smallest. Then its turning point u (in sample intervals from the
+/// first), where the value decides. Twin of the test in spectral_iso_frag.glsl.
+pub(super) fn parabola_pair([a0, a1, a2]: [f64; 3]) -> Option<f64> {
+    let sgn = if a1 < 0.0 { -1.0 } else { 1.0 };
+    let (a, b) = (0.5 * (a0 - 2.0 * a1 + a2), 0.5 * (4.0 * a1 - 3.0 * a0 - a2));
+    if a0 * sgn <= 0.0 || a2 * sgn <= 0.0 || a * sgn <= 0.0 {
+        return None;
+    }
+    let u = -b / (2.0 * a);
+    let q = a0 + u * (b + a * u);
+    (u > 0.0 && u < 2.0 && q * sgn < 0.25 * a0.abs().min(a1.abs()).min(a2.abs())).then_some(u)
+}
+
+/// The physical gradient J⁻ᵀ∇_r f of `field` at `step` in element `e` at reference point `r`.
+pub(super) fn physical_gradient(
+    mesh: &SpectralMesh,
+    (field, step): (usize, usize),
+    e: usize,
+    r: [f64; 3],
+) -> glam::DVec3 {
+    let (_, g) = mesh.value_gradient_at(field, step, e, r);
+    let (_, j) = mesh.map_hex(e, r);
+    let jm = glam::DMat3::from_cols(j[0].into(), j[1].into(), j[2].into());
+    jm.inverse().transpose() * glam::DVec3::from(g)
+}
+
 /// The first root inside element `e` of f − c (any c of `values`) along the ray on [t0, t1].
 fn first_root(
     mesh: &SpectralMesh,
@@ -199,17 +228,8 @@ fn first_root(
         // its turning point decides.
         if let [Some((ta, ra, fa)), Some((tb, rb, fb))] = previous {
             for (k, &c) in values.iter().enumerate() {
-                let (a0, a1, a2) = (fa - c, fb - c, f - c);
-                let sgn = if a1 < 0.0 { -1.0 } else { 1.0 };
-                let (a, b) = (0.5 * (a0 - 2.0 * a1 + a2), 0.5 * (4.0 * a1 - 3.0 * a0 - a2));
-                if a0 * sgn <= 0.0 || a2 * sgn <= 0.0 || a * sgn <= 0.0 {
-                    continue;
-                }
-                let u = -b / (2.0 * a);
-                let q = a0 + u * (b + a * u);
-                if !(u > 0.0 && u < 2.0) || q * sgn >= 0.25 * a0.abs().min(a1.abs()).min(a2.abs()) {
-                    continue;
-                }
+                let Some(u) = parabola_pair([fa - c, fb - c, f - c]) else { continue };
+                let sgn = if fb - c < 0.0 { -1.0 } else { 1.0 };
                 let (lo, rlo) = if u >= 1.0 { (tb, rb) } else { (ta, ra) };
                 let tv = ta + u * (tb - ta);
                 let Some(rv) = pull(tv, rlo).filter(|r| mesh.shape.outside(r) <= MARGIN) else { continue };
@@ -270,10 +290,7 @@ fn slope(
     r: [f64; 3],
     d: [f64; 3],
 ) -> (f64, f64) {
-    let (_, g) = mesh.value_gradient_at(field, step, e, r);
-    let (_, j) = mesh.map_hex(e, r);
-    let jm = glam::DMat3::from_cols(j[0].into(), j[1].into(), j[2].into());
-    let grad = jm.inverse().transpose() * glam::DVec3::from(g);
+    let grad = physical_gradient(mesh, (field, step), e, r);
     (grad.dot(glam::DVec3::from(d)).abs(), grad.length())
 }
 

@@ -95,12 +95,8 @@ pub fn check_view(mesh: &SpectralMesh, view: &SpectralView) -> Result<(), Spectr
     if view.volume.is_some() && (!view.cuts.is_empty() || view.expression.is_some()) {
         return Err(SpectralError::View("--volume cannot be combined with --cut or --expr yet".into()));
     }
-    if !(view.iso_opacity > 0.0 && view.iso_opacity <= 1.0) {
-        return Err(SpectralError::View(format!(
-            "--iso-opacity {}: an opacity is in (0, 1]",
-            view.iso_opacity
-        )));
-    }
+    crate::spectral::transfer::Sheets::check_opacity(view.iso_opacity)
+        .map_err(|e| SpectralError::View(format!("--iso-opacity: {e}")))?;
     if view.uses_volume_pass() && !view.iso.is_empty() && (view.edges || view.colour_by.is_some()) {
         return Err(SpectralError::View(
             "--edges and --colour-by go with opaque isosurfaces, not transparent ones or isosurfaces in a volume"

@@ -185,10 +185,17 @@ impl Sheets {
         if let Some(v) = values.iter().find(|v| !v.is_finite()) {
             return Err(format!("iso value {v} is not a finite number"));
         }
-        if !(opacity > 0.0 && opacity <= 1.0) {
-            return Err(format!("the isosurfaces' opacity {opacity} is not in (0, 1]"));
-        }
+        Self::check_opacity(opacity)?;
         Ok(Self { values, opacity })
+    }
+
+    /// Checks a sheet opacity: a number in (0, 1].
+    pub fn check_opacity(opacity: f64) -> Result<(), String> {
+        if opacity > 0.0 && opacity <= 1.0 {
+            Ok(())
+        } else {
+            Err(format!("the isosurfaces' opacity {opacity} is not in (0, 1]"))
+        }
     }
 }
 

@@ -13,7 +13,9 @@
 
 use rayon::prelude::*;
 
-use super::iso_reference::{pull_back, reference_boxes, reference_centre, slab};
+use super::iso_reference::{
+    parabola_pair, physical_gradient, pull_back, reference_boxes, reference_centre, slab,
+};
 use super::mesh::SpectralMesh;
 use super::transfer::{Sheets, TransferFunction};
 use crate::render::{phong, ramp_coordinate, Camera, Colormap};
@@ -214,11 +216,8 @@ impl Caster<'_> {
     /// Twin of `volume_sheet_colour` (volume.frag).
     fn sheet_colour(&self, r: [f64; 3], c: f64) -> [f64; 3] {
         let r = self.mesh.shape.clamp(r);
-        let (_, jac) = self.mesh.map_hex(self.e, r);
-        let (_, dr) = self.mesh.value_gradient_at(self.field, self.step, self.e, r);
-        let j = glam::DMat3::from_cols(jac[0].into(), jac[1].into(), jac[2].into());
         let d = glam::DVec3::from(self.d);
-        let mut n = (j.inverse().transpose() * glam::DVec3::from(dr)).normalize_or_zero();
+        let mut n = physical_gradient(self.mesh, (self.field, self.step), self.e, r).normalize_or_zero();
         if n == glam::DVec3::ZERO {
             n = -d;
         }
@@ -276,20 +275,7 @@ impl Caster<'_> {
     /// the outer two and comes within a quarter of the smallest (the isosurface pass's test for
     /// a pair of roots between samples): a ray that grazes the sheet.
     fn approaches(&self, f: [f64; 3]) -> bool {
-        self.sheets.values.iter().any(|&c| {
-            let [a0, a1, a2] = f.map(|v| v - c);
-            let sgn = if a1 < 0.0 { -1.0 } else { 1.0 };
-            if a0 * sgn <= 0.0 || a2 * sgn <= 0.0 {
-                return false;
-            }
-            let (qa, qb) = (0.5 * (a0 - 2.0 * a1 + a2), 0.5 * (4.0 * a1 - 3.0 * a0 - a2));
-            if qa * sgn <= 0.0 {
-                return false;
-            }
-            let u = -qb / (2.0 * qa);
-            let q = a0 + u * (qb + qa * u);
-            u > 0.0 && u < 2.0 && q * sgn < 0.25 * a0.abs().min(a1.abs()).min(a2.abs())
-        })
+        self.sheets.values.iter().any(|&c| parabola_pair(f.map(|v| v - c)).is_some())
     }
 
     /// The element's part of the ray: where the ray first enters it, and what it composites;

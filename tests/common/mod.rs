@@ -9,6 +9,7 @@ pub mod models;
 pub mod obj_box;
 pub mod surfaces;
 pub mod tunnel;
+pub mod volumes;
 pub mod wavy;
 
 use std::ops::Deref;

@@ -20,11 +20,6 @@ const EVERYWHERE: [f32; 4] = [0.0, 0.0, 0.0, 1.0];
 /// Corners of the reference tetrahedron and the faces opposite each (outward away from it).
 const TET_CORNERS: [[f64; 3]; 4] = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
 
-/// The hexahedron's faces by corner (corner k at (k & 1, k >> 1 & 1, k >> 2 & 1)), each
-/// around its boundary.
-const HEX_FACES: [[usize; 4]; 6] =
-    [[0, 2, 6, 4], [1, 3, 7, 5], [0, 1, 5, 4], [2, 3, 7, 6], [0, 1, 3, 2], [4, 5, 7, 6]];
-
 /// Per element of a solid mesh, [`HULL_PLANES`] planes (n, h) with n · x ≤ h on the whole
 /// element (see the module's documentation): h grown by 8 f32 ulps of the element's size so
 /// the f32 test keeps its boundary.
@@ -53,7 +48,7 @@ pub fn element_hull_planes(mesh: &SpectralMesh) -> Result<Vec<[f32; 4]>> {
             let v: [glam::DVec3; 8] =
                 std::array::from_fn(|k| corner([(k & 1) as f64, (k >> 1 & 1) as f64, (k >> 2 & 1) as f64]));
             let centre = v.iter().copied().sum::<glam::DVec3>() / 8.0;
-            HEX_FACES
+            super::iso::BOX_FACES
                 .iter()
                 .map(|f| (v[f[0]], (v[f[2]] - v[f[0]]).cross(v[f[3]] - v[f[1]]), centre))
                 .collect()

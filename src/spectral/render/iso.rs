@@ -64,16 +64,19 @@ pub fn element_boxes(mesh: &SpectralMesh) -> Result<Vec<[f32; 4]>> {
     Ok(out)
 }
 
+/// The six faces of a box or hexahedron by corner (corner k at (k & 1, k >> 1 & 1, k >> 2 & 1)),
+/// each around its boundary.
+pub(super) const BOX_FACES: [[usize; 4]; 6] =
+    [[0, 1, 3, 2], [4, 6, 7, 5], [0, 4, 5, 1], [2, 3, 7, 6], [0, 2, 6, 4], [1, 5, 7, 3]];
+
 /// The 12 triangles of each element's box, every vertex tagged with its element.
 fn box_triangles(boxes: &[[f32; 4]]) -> Vec<DrawVertex> {
-    const FACES: [[usize; 4]; 6] =
-        [[0, 1, 3, 2], [4, 6, 7, 5], [0, 4, 5, 1], [2, 3, 7, 6], [0, 2, 6, 4], [1, 5, 7, 3]];
     let mut out = Vec::with_capacity(boxes.len() / 2 * 36);
     for (e, b) in boxes.chunks_exact(2).enumerate() {
         let corner = |k: usize| -> [f32; 3] {
             std::array::from_fn(|a| if k >> a & 1 == 1 { b[1][a] } else { b[0][a] })
         };
-        for f in FACES {
+        for f in BOX_FACES {
             for k in [f[0], f[1], f[2], f[0], f[2], f[3]] {
                 out.push(DrawVertex { position: corner(k), reference: [0.0; 2], element: e as u32 });
             }

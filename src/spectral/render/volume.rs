@@ -195,8 +195,7 @@ impl SpectralRenderer {
         }
         if !view.iso.is_empty() {
             self.check_iso_view(view)?;
-            Sheets::new(view.iso.clone(), view.iso_opacity)
-                .map_err(|e| SpectralError::Missing(format!("isosurfaces: {e}")))?;
+            Sheets::check_opacity(view.iso_opacity).map_err(SpectralError::Missing)?;
             if view.colour_by.is_some() || view.edges {
                 return Err(SpectralError::Missing(
                     "transparent isosurfaces, and isosurfaces in a volume, are coloured by their values and drawn without element edges (--colour-by and --edges go with opaque isosurfaces)"
