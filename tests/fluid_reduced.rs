@@ -611,3 +611,95 @@ fn the_induced_flux_tensor_reproduces_the_solver_and_drives_motions() {
         }
     }
 }
+
+/// The unseen-velocity indicator's form `σ(f̂)² = f̂ᵀ(M − N)f̂` (measured on one geometry) is
+/// the squared energy-norm distance of the flux's full-space velocity `u_f = V⁻¹P B_f f̂` from
+/// its V-orthogonal projection onto `B_u`, computed here plainly: `u_f` cell by cell, the
+/// projection by solving `(B_uᵀVB_u) c = B_uᵀV u_f` with a dense LU. Tolerance 1e-8 of
+/// `‖u_f‖²_V`: the form subtracts two Gram matrices of that size, each summed over cells in
+/// another order, and `N` goes through a Cholesky of `V̂` (condition ~10⁴ here).
+#[test]
+fn the_unseen_velocity_is_the_flux_velocity_outside_the_velocity_basis() {
+    use faer::linalg::solvers::Solve;
+    use galerkin::fluid::reduced::exact_projection::FluxVelocityGrams;
+    use galerkin::fluid::reduced::unseen::{UnseenIndicator, UnseenVelocity};
+    let dir = tempfile::tempdir().expect("temp dir");
+    let runs = vec![tunnel_run(dir.path(), 0.6, 20), tunnel_run(dir.path(), 1.4, 20)];
+    let sizes = BasisSizes { m_u: Some(6), m_f: Some(8), ..BasisSizes::default() };
+    let (_, model) = train(&runs, sizes);
+    let (mesh, topo) = model.mesh_and_topology().unwrap();
+    let g_hat = model.trajectories[1].g.data()[..model.dim_of("g")].to_vec();
+    let g = basis(&model, "g").lift(&g_hat);
+    let grams = FluxVelocityGrams::measure(&model, &[("run 1, frame 0".into(), g.clone())]).unwrap();
+    let form = UnseenVelocity::new(&grams).unwrap();
+    let ops = CellOperators::new(&mesh, &topo, &g);
+    let (bu, bf, d) = (basis(&model, "u"), basis(&model, "f"), mesh.dim());
+    let mu = bu.reduced_dim();
+    let energy = |u: &[f64]| -> f64 {
+        (0..mesh.cell_count())
+            .map(|c| ops.volumes[c] * (0..d).map(|k| u[d * c + k].powi(2)).sum::<f64>())
+            .sum()
+    };
+    let inner = |a: &[f64], b: &[f64]| -> f64 {
+        (0..mesh.cell_count())
+            .map(|c| ops.volumes[c] * (0..d).map(|k| a[d * c + k] * b[d * c + k]).sum::<f64>())
+            .sum()
+    };
+    let columns: Vec<Vec<f64>> = (0..mu)
+        .map(|j| {
+            let mut e = vec![0.0; mu];
+            e[j] = 1.0;
+            bu.lift(&e)
+        })
+        .collect();
+    let vhat = faer::Mat::from_fn(mu, mu, |i, j| inner(&columns[i], &columns[j]));
+    let mut rng = Lcg(17);
+    let mut largest = 0.0f64;
+    for _ in 0..4 {
+        let f = rng.vec(bf.reduced_dim());
+        let uf = ops.flux_to_velocity(&topo, &bf.lift(&f));
+        let rhs = faer::Mat::from_fn(mu, 1, |i, _| inner(&columns[i], &uf));
+        let c = vhat.partial_piv_lu().solve(&rhs);
+        let projected = bu.lift(&(0..mu).map(|i| c[(i, 0)]).collect::<Vec<_>>());
+        let outside: Vec<f64> = uf.iter().zip(&projected).map(|(a, b)| a - b).collect();
+        let (plain, whole) = (energy(&outside), energy(&uf));
+        let sigma = form.sigma(&f);
+        assert!(
+            (sigma * sigma - plain).abs() <= 1e-8 * whole,
+            "σ² {:e} vs plain {plain:e} (‖u_f‖² {whole:e})",
+            sigma * sigma
+        );
+        largest = largest.max(plain / whole);
+    }
+    assert!(largest > 1e-6, "with 6 velocity modes some flux velocity lies outside B_u ({largest:e})");
+
+    // The running estimate: (σ(f̂_t) + Σ σ(f̂_k − f̂_{k−1}), carried terms damped) / ‖u‖_V,
+    // with ‖u‖_V = sqrt(2E).
+    let mut indicator = UnseenIndicator::with_form(form.clone());
+    let (f0, f1) = (rng.vec(bf.reduced_dim()), rng.vec(bf.reduced_dim()));
+    let first = indicator.observe(&f0, 2.0, 1.0, 0).unwrap();
+    assert!((first.estimate - form.sigma(&f0) / 2.0).abs() <= 1e-15 * first.estimate.max(1.0));
+    let second = indicator.observe(&f1, 8.0, 0.5, 1).unwrap();
+    let delta: Vec<f64> = f1.iter().zip(&f0).map(|(a, b)| a - b).collect();
+    let want = (form.sigma(&f1) + form.sigma(&delta)) / 4.0; // nothing carried yet to damp
+    assert!((second.estimate - want).abs() <= 1e-14 * want, "{} vs {want}", second.estimate);
+    // The next step carries the errors so far (σ(f̂_1 − f̂_0)) shrunk by the damping.
+    let third = indicator.observe(&f1, 8.0, 0.5, 2).unwrap();
+    let want = (form.sigma(&f1) + 0.5 * form.sigma(&delta)) / 4.0;
+    assert!((third.estimate - want).abs() <= 1e-14 * want, "{} vs {want}", third.estimate);
+    assert!(indicator.observe(&f1[1..], 8.0, 1.0, 3).is_err(), "a flux of another size is refused");
+
+    // The damping: the square root of the energy fraction the step's advection and diffusion
+    // kept, at most 1, and 1 where the step reports no energy.
+    use galerkin::fluid::reduced::indicator::damping;
+    let report = |energy: [f64; 3]| ReducedStepReport { energy, ..ReducedStepReport::default() };
+    assert_eq!(damping(&report([4.0, 1.0, 3.0])), 0.5);
+    assert_eq!(damping(&report([1.0, 2.0, 3.0])), 1.0);
+    assert_eq!(damping(&report([0.0, 0.0, 0.0])), 1.0);
+
+    // A model trained before the Gram matrices were measured is refused, naming the way out.
+    let mut old = model;
+    old.flux_grams = None;
+    let err = UnseenIndicator::new(&old).unwrap_err().to_string();
+    assert!(err.contains("--indicator-every"), "{err}");
+}

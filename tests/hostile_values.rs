@@ -288,6 +288,31 @@ fn reduced_model_values_are_checked_at_load() {
         2,
         &["--frames", "at least 1"],
     );
+    // One indicator at a time: both asked for is an argument error naming both.
+    let estimated = scratch.path().join("estimated");
+    cli_refused(
+        &[
+            "fluid",
+            "reduced",
+            text(&model),
+            "--indicator",
+            "--indicator-every",
+            "2",
+            "--out",
+            text(&estimated),
+        ],
+        2,
+        &["--indicator", "--indicator-every"],
+    );
+    // The unseen-velocity indicator writes one row per frame, every estimate finite and ≥ 0.
+    made(&["fluid", "reduced", text(&model), "--frames", "2", "--indicator", "--out", text(&estimated)]);
+    let csv = std::fs::read_to_string(estimated.join("indicator.csv")).expect("indicator.csv");
+    let mut lines = csv.lines();
+    assert_eq!(lines.next(), Some("frame,unseen_velocity,step_unseen_velocity,error_estimate"));
+    let estimates: Vec<f64> =
+        lines.map(|l| l.rsplit(',').next().and_then(|v| v.parse().ok()).expect("a number")).collect();
+    assert_eq!(estimates.len(), 3, "{csv}");
+    assert!(estimates.iter().all(|e| e.is_finite() && *e >= 0.0), "{csv}");
 }
 
 /// Values accepted that must be refused: a linear quadrilateral with 25 points, a NaN Lamé

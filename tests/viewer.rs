@@ -499,11 +499,22 @@ fn the_cavity_viewer_compresses_the_cavities_the_keys_choose() {
     assert!((a[0] - 0.1).abs() < 1e-12 && a[1] == 0.0 && (a[2] - 0.1).abs() < 1e-12, "{a:?}");
     assert!(content.title().contains("compressions 0.10/0.00/0.10"), "{}", content.title());
     assert!(content.state().u.iter().any(|&u| u != 0.0), "the compression moved the fluid");
+    // The title carries the unseen-velocity indicator's estimate (the model has its Gram
+    // matrices): a finite, non-negative percentage.
+    let title = content.title();
+    let estimate: f64 = title
+        .split("estimated error ")
+        .nth(1)
+        .and_then(|s| s.split_whitespace().next())
+        .and_then(|s| s.parse().ok())
+        .unwrap_or_else(|| panic!("no estimated error in {title}"));
+    assert!(estimate.is_finite() && estimate >= 0.0, "{title}");
     assert!(content.key("1"), "pressed again: released");
     assert_eq!(content.targets(), [0.0, 0.0, 0.5]);
     assert!(content.key("r"));
     assert_eq!((content.compressions(), content.targets()), ([0.0; 3], [0.0; 3]));
     assert!(content.state().u.iter().all(|&u| u == 0.0), "reset to rest");
+    assert!(!content.title().contains("estimated error"), "the reset starts the estimate again");
     assert!(!content.key("x"), "not a key of the cavity viewer");
 }
 

@@ -141,9 +141,15 @@ pub struct CompareArgs {
     /// projection; energies after each) → split.csv. One full step per frame.
     #[arg(long, requires = "full")]
     pub split: bool,
-    /// Also estimate the reduced run's error without the full run (the error indicator:
-    /// the full step from the lifted reduced state, measured every K-th step) and compare
-    /// the estimate with the true error: columns error_estimate and effectivity.
+    /// Also estimate the reduced run's error without the full run and compare the estimate
+    /// with the true error (columns error_estimate and effectivity): the unseen-velocity
+    /// indicator, from reduced quantities alone, every step (the velocity of the reduced flux
+    /// outside B_u and of each step's flux change; models trained before the flux velocity
+    /// Gram matrices were measured lack it).
+    #[arg(long, conflicts_with = "indicator_every")]
+    pub indicator: bool,
+    /// … or the residual indicator: the full step from the lifted reduced state, measured
+    /// every K-th step (one full step each).
     #[arg(long, value_name = "K", value_parser = crate::cli::args::count_up_to(galerkin::fluid::reduced::indicator::MAX_EVERY))]
     pub indicator_every: Option<usize>,
     /// The reduced projection's normal matrix from the full space, M(g) = B_fᵀPᵀV⁻¹PB_f,
@@ -191,9 +197,14 @@ pub struct ReducedArgs {
     /// its frame 0.
     #[arg(long, value_name = "DIR", conflicts_with_all = ["motion", "drive", "pace"])]
     pub geometry: Option<PathBuf>,
-    /// Estimate the run's error per frame without a full run (the error indicator: the full
-    /// step from the lifted reduced state, measured every K-th step; one full step each) →
-    /// indicator.csv in the output directory.
+    /// Estimate the run's error per frame without a full run → indicator.csv in the output
+    /// directory: the unseen-velocity indicator, from reduced quantities alone, every step
+    /// (the velocity of the reduced flux outside B_u and of each step's flux change; models
+    /// trained before the flux velocity Gram matrices were measured lack it).
+    #[arg(long, conflicts_with = "indicator_every")]
+    pub indicator: bool,
+    /// … or the residual indicator: the full step from the lifted reduced state, measured
+    /// every K-th step (one full step each).
     #[arg(long, value_name = "K", value_parser = crate::cli::args::count_up_to(galerkin::fluid::reduced::indicator::MAX_EVERY))]
     pub indicator_every: Option<usize>,
     /// The reduced projection's normal matrix from the full space (see `fluid compare
@@ -457,7 +468,11 @@ pub fn compare(desc: &galerkin::gpu::GpuDesc, args: &CompareArgs) -> Result<()> 
         &mut |k| bar.set_position(k as u64),
     )?;
     bar.finish_and_clear();
-    if let Some(every) = args.indicator_every {
+    let mut indicator_cost = None;
+    if args.indicator {
+        let (_, seconds) = c.add_unseen_indicator(&model, &mut |_| {})?;
+        indicator_cost = Some(seconds);
+    } else if let Some(every) = args.indicator_every {
         let bar = crate::progress_bar(frames as u64, "error indicator");
         c.add_indicator(&model, every, &mut |k| bar.set_position(k as u64))?;
         bar.finish_and_clear();
@@ -499,9 +514,11 @@ pub fn compare(desc: &galerkin::gpu::GpuDesc, args: &CompareArgs) -> Result<()> 
     if !c.estimate.is_empty() {
         let (lo, hi) = c.effectivity_range();
         println!(
-            "error indicator: estimate at the end {:.2} % (true {:.2} %); effectivity (estimate ÷ true error) from {lo:.2} to {hi:.2} over frames 1 to {frames}",
+            "{} indicator: estimate at the end {:.2} % (true {:.2} %); effectivity (estimate ÷ true error) from {lo:.2} to {hi:.2} over frames 1 to {frames}{}",
+            if indicator_cost.is_some() { "unseen-velocity" } else { "residual" },
             100.0 * c.estimate.last().copied().unwrap_or(0.0),
-            100.0 * c.error.last().copied().unwrap_or(0.0)
+            100.0 * c.error.last().copied().unwrap_or(0.0),
+            indicator_cost.map_or(String::new(), |s| cost_line(s, c.seconds.1))
         );
     }
     let (adv, proj) = c.reduced_energy_loss.iter().fold((0.0, 0.0), |(a, p), l| (a + l[0], p + l[1]));
@@ -625,10 +642,26 @@ pub fn reduced(args: &ReducedArgs) -> Result<()> {
     }
     write_lifted(&model, &run, &args.out, args.force)?;
     println!("lifted to the full space → {}", args.out.display());
-    if let Some(every) = args.indicator_every {
+    if args.indicator {
+        use galerkin::fluid::reduced::unseen::{indicate_unseen, unseen_csv};
+        let (frames_out, seconds) = indicate_unseen(&model, &fluid, &run, &mut |_| {})?;
+        let path = args.out.join("indicator.csv");
+        galerkin::atomic_file::write(&path, unseen_csv(&frames_out).as_bytes())?;
+        let last = frames_out.last().map_or(0.0, |f| f.estimate);
+        println!(
+            "unseen-velocity indicator: estimated error at frame {frames} {:.2} %{} → {}",
+            100.0 * last,
+            cost_line(seconds, run.median_step_seconds()),
+            path.display()
+        );
+    } else if let Some(every) = args.indicator_every {
         use galerkin::fluid::reduced::indicator::{indicate, indicator_csv};
         let bar = crate::progress_bar(frames as u64, "error indicator");
-        let frames_out = indicate(&model, &fluid, &run, every, &mut |k| bar.set_position(k as u64))?;
+        // A recorded motion's full-space geometry is the full step's (its velocities are not read).
+        let reader =
+            args.geometry.as_deref().map(galerkin::fluid::snapshots::SnapshotReader::open).transpose()?;
+        let frames_out =
+            indicate(&model, &fluid, &run, every, reader.as_ref(), &mut |k| bar.set_position(k as u64))?;
         bar.finish_and_clear();
         let path = args.out.join("indicator.csv");
         galerkin::atomic_file::write(&path, indicator_csv(&frames_out).as_bytes())?;
@@ -640,6 +673,16 @@ pub fn reduced(args: &ReducedArgs) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// "; X µs a step, Y % of the reduced step": what the indicator adds to a step.
+fn cost_line(indicator_seconds: f64, step_seconds: f64) -> String {
+    format!(
+        "; {:.1} µs a step ({:.2} % of the reduced step's {:.3} ms)",
+        1e6 * indicator_seconds,
+        100.0 * indicator_seconds / step_seconds.max(1e-12),
+        1e3 * step_seconds
+    )
 }
 
 /// Arguments of `galerkin fluid bench-reduced`.

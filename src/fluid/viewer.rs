@@ -3,7 +3,9 @@
 //! (§6) replaying a training run's motion, its state lifted for drawing — the particles are
 //! advected on the device (§6.5) and drawn over the cells. Keys: space plays and pauses, `c` colours the
 //! cells by speed (particles white) or not (particles coloured), `r` restarts. The title
-//! shows the frame, the step's time and the frame rate.
+//! shows the frame, the step's time and the frame rate, and for a reduced model the error the
+//! unseen-velocity indicator estimates ([`super::reduced::unseen`]; models trained before it
+//! lack it).
 
 use std::time::Instant;
 
@@ -11,6 +13,8 @@ use anyhow::{bail, Result};
 
 use super::gpu::GpuParticles;
 use super::particles::seed_particles;
+use super::reduced::indicator::damping;
+use super::reduced::unseen::{UnseenIndicator, UnseenVelocity};
 use super::reduced::{ReducedFluid, ReducedFluidModel, ReducedMotion, ReducedState};
 use super::render::{
     cell_speeds, cell_vertices, DrawStyle, FluidRenderer, Output, ParticleSet, Projection, View2d,
@@ -27,7 +31,14 @@ enum Source {
     /// The full solver on a scene.
     Full { scene: Box<FluidScene>, solver: Box<FluidSolver> },
     /// A reduced model replaying training run `run`'s motion.
-    Reduced { model: Box<ReducedFluidModel>, fluid: Box<ReducedFluid>, run: usize, state: ReducedState },
+    Reduced {
+        model: Box<ReducedFluidModel>,
+        fluid: Box<ReducedFluid>,
+        run: usize,
+        state: ReducedState,
+        /// The unseen-velocity form (where the model carries it) and the running indicator.
+        unseen: Option<Box<(UnseenVelocity, UnseenIndicator)>>,
+    },
 }
 
 /// The viewer's fluid content.
@@ -51,6 +62,8 @@ pub struct FluidContent {
     step_ms: f64,
     fps: f64,
     dirty: bool,
+    /// A reduced model's estimated error at the current frame (the unseen-velocity indicator).
+    estimate: Option<f64>,
 }
 
 impl FluidContent {
@@ -100,7 +113,11 @@ impl FluidContent {
             model.dim_of("f")
         );
         let frame_time = model.frame_time;
-        let source = Source::Reduced { model: Box::new(model), fluid: Box::new(fluid), run, state: reduced };
+        let unseen = UnseenVelocity::of_model(&model)
+            .ok()
+            .map(|form| Box::new((form.clone(), UnseenIndicator::with_form(form))));
+        let source =
+            Source::Reduced { model: Box::new(model), fluid: Box::new(fluid), run, state: reduced, unseen };
         Self::with_source(source, (mesh, topology), frame_time, description, state, particles, size, playing)
     }
 
@@ -143,6 +160,7 @@ impl FluidContent {
             step_ms: 0.0,
             fps: 0.0,
             dirty: true,
+            estimate: None,
         })
     }
 
@@ -164,7 +182,7 @@ impl FluidContent {
                 let g = scene.geometry(self.frame + 1)?;
                 solver.step(&self.state, &g, self.frame + 1)?.0
             }
-            Source::Reduced { model, fluid, run, state } => {
+            Source::Reduced { model, fluid, run, state, unseen } => {
                 let traj = &model.trajectories[*run];
                 let (mg, mh) = (traj.g.shape()[1], traj.h.shape()[1]);
                 let t = self.frame + 1;
@@ -174,7 +192,16 @@ impl FluidContent {
                     return Ok(());
                 }
                 let (g1, h1) = (&traj.g.data()[t * mg..(t + 1) * mg], &traj.h.data()[t * mh..(t + 1) * mh]);
-                *state = fluid.step(state, g1, h1)?.0;
+                let (next, report) = fluid.step(state, g1, h1)?;
+                if let Some(pair) = unseen {
+                    let indicator = &mut pair.1;
+                    if t == 1 {
+                        indicator.observe(&state.f, fluid.energy(&state.u, &state.g), 1.0, 0)?;
+                    }
+                    self.estimate =
+                        Some(indicator.observe(&next.f, report.energy[2], damping(&report), t)?.estimate);
+                }
+                *state = next;
                 lift(model, state)?
             }
         };
@@ -195,9 +222,10 @@ impl ViewerContent for FluidContent {
 
     fn title(&self) -> String {
         format!(
-            "galerkin fluid — {} — frame {} (step {:.2} ms) — {:.0} FPS{}",
+            "galerkin fluid — {} — frame {}{} (step {:.2} ms) — {:.0} FPS{}",
             self.description,
             self.frame,
+            self.estimate.map_or(String::new(), |e| format!(", estimated error {:.1} %", 100.0 * e)),
             self.step_ms,
             self.fps,
             if self.playing { "" } else { " — paused (space plays)" }
@@ -270,7 +298,8 @@ impl ViewerContent for FluidContent {
             "r" => {
                 self.state = self.initial.clone();
                 self.frame = 0;
-                if let Source::Reduced { model, run, state, .. } = &mut self.source {
+                self.estimate = None;
+                if let Source::Reduced { model, run, state, unseen, .. } = &mut self.source {
                     let traj = &model.trajectories[*run];
                     let mg = traj.g.shape()[1];
                     *state = ReducedState {
@@ -278,6 +307,9 @@ impl ViewerContent for FluidContent {
                         f: traj.f0.clone(),
                         g: traj.g.data()[..mg].to_vec(),
                     };
+                    if let Some(pair) = unseen {
+                        pair.1 = UnseenIndicator::with_form(pair.0.clone());
+                    }
                 }
                 let seeds = seed_particles(&self.mesh, self.particle_count);
                 if let (Some(p), Some(gpu)) = (&mut self.particles, &self.gpu) {

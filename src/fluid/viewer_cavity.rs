@@ -7,7 +7,9 @@
 //! reduced state alone (§6.5, [`super::gpu::GpuParticles::new_reduced`], recorded into the
 //! frame) and drawn as sprites coloured by their speed, over the domain's walls drawn as a
 //! depth-tested cutaway (far walls seen through the near ones). The title shows the frame,
-//! the compressions, the step's time and the particle pass's device time.
+//! the compressions, the error the unseen-velocity indicator estimates
+//! ([`super::reduced::unseen`]; models trained before it lack it), the step's time and the
+//! particle pass's device time.
 
 use std::time::Instant;
 
@@ -15,7 +17,9 @@ use anyhow::{anyhow, bail, Result};
 
 use super::gpu::GpuParticles;
 use super::particles::{seed_particles, Particle};
+use super::reduced::indicator::damping;
 use super::reduced::particles::ReducedParticles;
+use super::reduced::unseen::{UnseenIndicator, UnseenVelocity};
 use super::reduced::{CavityMotion, ReducedFluid, ReducedFluidModel, ReducedState};
 use super::render::{surface_vertices, DrawStyle, FluidRenderer, Output, ParticleSet, Projection};
 use crate::gpu::{Gpu, Profiler, Recorder};
@@ -60,6 +64,11 @@ pub struct CavityContent {
     /// Frames presented and their seconds, for the summary's mean rate.
     shown: (usize, f64),
     walls_dirty: bool,
+    /// The unseen-velocity form, where the model carries it, and the running indicator.
+    unseen: Option<UnseenVelocity>,
+    indicator: Option<UnseenIndicator>,
+    /// The indicator's estimate at the current frame.
+    estimate: Option<f64>,
 }
 
 impl CavityContent {
@@ -94,7 +103,11 @@ impl CavityContent {
             sprite_px: 1.5,
         };
         let trained = model.trained_compressions();
+        let unseen = UnseenVelocity::of_model(&model).ok();
         Ok(Self {
+            indicator: unseen.clone().map(UnseenIndicator::with_form),
+            unseen,
+            estimate: None,
             trained,
             model,
             fluid,
@@ -156,7 +169,15 @@ impl CavityContent {
             .fluid
             .induced_flux(&self.state.g, &g1)
             .ok_or_else(|| anyhow!("the model has no induced-flux tensor H (retrain it)"))?;
-        let (next, _) = self.fluid.step(&self.state, &g1, &h1)?;
+        let (next, report) = self.fluid.step(&self.state, &g1, &h1)?;
+        if let Some(indicator) = &mut self.indicator {
+            if self.frame == 0 {
+                indicator.observe(&self.state.f, 0.0, 1.0, 0)?;
+            }
+            self.estimate = Some(
+                indicator.observe(&next.f, report.energy[2], damping(&report), self.frame + 1)?.estimate,
+            );
+        }
         let g0 = std::mem::replace(&mut self.state, next).g;
         // The walls are lifted and rebuilt only when the geometry moved (compressions settled
         // leave ĝ unchanged).
@@ -185,7 +206,7 @@ impl ViewerContent for CavityContent {
         let a = self.amounts;
         let beyond = self.trained.and_then(|t| super::reduced::cavity_motion::beyond_training(t, a));
         format!(
-            "galerkin fluid — reduced cavity (m_u {}, m_f {}) — frame {}, compressions {:.2}/{:.2}/{:.2}{} — step {:.2} ms, {} particles {:.2} ms — {:.0} FPS{}",
+            "galerkin fluid — reduced cavity (m_u {}, m_f {}) — frame {}, compressions {:.2}/{:.2}/{:.2}{}{} — step {:.2} ms, {} particles {:.2} ms — {:.0} FPS{}",
             self.model.dim_of("u"),
             self.model.dim_of("f"),
             self.frame,
@@ -193,6 +214,7 @@ impl ViewerContent for CavityContent {
             a[1],
             a[2],
             if beyond.is_some() { " (beyond the training)" } else { "" },
+            self.estimate.map_or(String::new(), |e| format!(" — estimated error {:.1} %", 100.0 * e)),
             self.step_ms,
             self.particle_count,
             self.particle_ms,
@@ -290,6 +312,8 @@ impl ViewerContent for CavityContent {
                 self.frame = 0;
                 self.pending = None;
                 self.walls_dirty = true;
+                self.indicator = self.unseen.clone().map(UnseenIndicator::with_form);
+                self.estimate = None;
                 return self.reseed();
             }
             "p" => return self.reseed(),

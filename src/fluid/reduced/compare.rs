@@ -84,6 +84,9 @@ pub struct Comparison {
     pub estimate: Vec<f64>,
     /// The reduced run compared.
     pub reduced: Option<ReducedRun>,
+    /// The recorded full run whose motion the reduced run followed, if it was one (the
+    /// residual indicator takes its full-space geometry).
+    pub recorded: Option<PathBuf>,
     /// How its step projected.
     pub projection: Projection,
     /// The flux directions its projection kept, where the model narrows it.
@@ -133,9 +136,26 @@ impl Comparison {
         let run =
             self.reduced.as_ref().ok_or_else(|| FluidError::State("no reduced run to indicate".into()))?;
         let fluid = reduced_fluid(model, &self.projection)?;
-        let frames = super::indicator::indicate(model, &fluid, run, every, on_frame)?;
+        let reader = self.recorded.as_deref().map(SnapshotReader::open).transpose()?;
+        let frames = super::indicator::indicate(model, &fluid, run, every, reader.as_ref(), on_frame)?;
         self.estimate = frames.iter().map(|f| f.estimate).collect();
         Ok(frames)
+    }
+
+    /// Computes the unseen-velocity indicator of the reduced run ([`super::unseen`], from
+    /// reduced quantities alone) into [`Self::estimate`]; returns its frames and the median
+    /// seconds it took per frame.
+    pub fn add_unseen_indicator(
+        &mut self,
+        model: &ReducedFluidModel,
+        on_frame: &mut dyn FnMut(usize),
+    ) -> Result<(Vec<super::indicator::IndicatorFrame>, f64), FluidError> {
+        let run =
+            self.reduced.as_ref().ok_or_else(|| FluidError::State("no reduced run to indicate".into()))?;
+        let fluid = reduced_fluid(model, &self.projection)?;
+        let (frames, seconds) = super::unseen::indicate_unseen(model, &fluid, run, on_frame)?;
+        self.estimate = frames.iter().map(|f| f.estimate).collect();
+        Ok((frames, seconds))
     }
 
     /// Estimate ÷ true error per frame (0 where the true error is 0, and at frame 0).
@@ -242,6 +262,10 @@ pub fn compare_with(
         frame_time: model.frame_time,
         projection,
         seen_flux: fluid.seen_flux().cloned(),
+        recorded: match motion {
+            ComparedMotion::Recorded { full } => Some(full.clone()),
+            _ => None,
+        },
         ..Comparison::default()
     };
     let mut full_seconds = Vec::new();

@@ -12,13 +12,16 @@
 //! - the **in-basis residual** `ρ = ‖Π s − u_r‖_V`: what the reduced step gets wrong inside the
 //!   basis, which the run carries on to every later step.
 //!
-//! The estimate at frame t is `(τ_t + Σ_{k ≤ t} ρ_k) / ‖u_r,t‖_V` — the error a stable step
-//! would accumulate (each step's error carried forward undamped, the truncation of the latest
-//! step added). A full step costs what the full solver costs, so the residual is measured
+//! The estimate at frame t is `(τ_t + Σ_{k ≤ t} (Π_{k < j ≤ t} λ_j) ρ_k) / ‖u_r,t‖_V` — the
+//! error a stable step would accumulate, the truncation of the latest step added: each step's
+//! error is carried forward, shrunk by the factor `λ_j` ≤ 1 by which step j's advection and
+//! diffusion shrank the reduced state's energy norm ([`damping`]; advection alone keeps the
+//! energy, so λ is the viscous loss, and 1 where there is none). A full step costs what the full solver costs, so the residual is measured
 //! every `every`-th step only and the last measured `ρ` and `τ` stand for the steps between;
 //! `every = 1` measures every step. Effectivity (estimate ÷ true error) measured on the tunnel
 //! and the small cavity: BENCHMARKS.md.
 
+use crate::fluid::snapshots::SnapshotReader;
 use crate::fluid::{FluidError, FluidParams, FluidSolver, FluidState};
 use crate::mesh::SimplexMesh;
 use crate::reduce::Basis;
@@ -26,7 +29,21 @@ use crate::reduce::Basis;
 use super::compare::{best_fit, kinetic_energy};
 use super::model::ReducedFluidModel;
 use super::run::ReducedRun;
-use super::step::{ReducedFluid, ReducedState};
+use super::step::{ReducedFluid, ReducedState, ReducedStepReport};
+
+/// The factor `λ = sqrt(E_advected / E_start)` (at most 1) by which a step's advection and
+/// diffusion shrank the reduced state's energy norm (`ReducedStepReport::energy`'s first two):
+/// both indicators carry earlier steps' errors forward shrunk by it — advection keeps the
+/// energy, so it is the viscous loss, which damps a carried error as it damps the state. 1
+/// where the step reports no energy.
+pub fn damping(report: &ReducedStepReport) -> f64 {
+    let [start, advected, _] = report.energy;
+    if start > 0.0 && advected.is_finite() {
+        (advected / start).clamp(0.0, 1.0).sqrt()
+    } else {
+        1.0
+    }
+}
 
 /// Most steps between two measured residuals.
 pub const MAX_EVERY: usize = 1_000_000;
@@ -84,24 +101,39 @@ impl<'a> ErrorIndicator<'a> {
         self.model.basis(n).ok_or_else(|| FluidError::State(format!("the model has no basis {n}")))
     }
 
-    /// The indicator at frame `frame`, reached by the reduced step `from` → `to`.
+    /// Whether the next [`Self::observe`] measures the residual (every `every`-th step).
+    pub fn measures_next(&self) -> bool {
+        self.steps.is_multiple_of(self.every)
+    }
+
+    /// The indicator at frame `frame`, reached by the reduced step `from` → `to`; the full
+    /// step runs between the full-space geometries `geometry` where the motion's are known (a
+    /// recorded run's), else between the lifted `B_g ĝ` (which a small geometry basis may
+    /// leave unable to hold the fluid's volume: the bird's, BENCHMARKS.md).
+    /// The carried errors are first multiplied by `damping` ([`damping`]; 1: undamped).
     pub fn observe(
         &mut self,
         from: &ReducedState,
         to: &ReducedState,
         frame: usize,
+        geometry: Option<(Vec<f64>, Vec<f64>)>,
+        damping: f64,
     ) -> Result<IndicatorFrame, FluidError> {
+        self.accumulated *= damping.clamp(0.0, 1.0);
         let (bu, bf, bg) = (self.basis("u")?, self.basis("f")?, self.basis("g")?);
         let d = self.mesh.dim();
-        let g1 = bg.lift(&to.g);
+        let (g0, g1) = match geometry {
+            Some((g0, g1)) => (Some(g0), g1),
+            None => (None, bg.lift(&to.g)),
+        };
         let vols = self.mesh.volumes_at(&g1);
         let energy_norm = |u: &[f64]| (2.0 * kinetic_energy(u, &vols, d)).sqrt();
         let u_r = bu.lift(&to.u);
         let scale = energy_norm(&u_r);
-        let measured = self.steps.is_multiple_of(self.every);
+        let measured = self.measures_next();
         self.steps += 1;
         if measured {
-            let (f0, g0) = (bf.lift(&from.f), bg.lift(&from.g));
+            let (f0, g0) = (bf.lift(&from.f), g0.unwrap_or_else(|| bg.lift(&from.g)));
             // The full state the reduced flux stands for: its velocity `V⁻¹(P ⊗ g) B_f f̂`,
             // divergence-free as the full solver's states are (`B_u û` is that velocity's
             // Galerkin image, which the full projection would first have to repair: lifting
@@ -136,18 +168,28 @@ impl<'a> ErrorIndicator<'a> {
 
 /// The indicator of every frame of `run` (frame 0 first, estimate 0 there: the run starts
 /// from the motion's own initial state), measuring the residual every `every`-th step;
-/// `on_frame(t)` hears the progress.
+/// `motion` is the recorded run whose geometry the reduced run followed, when it did (its
+/// full-space geometry per frame is then the full step's; only `g` is read, never the run's
+/// velocities). `on_frame(t)` hears the progress.
 pub fn indicate(
     model: &ReducedFluidModel,
     fluid: &ReducedFluid,
     run: &ReducedRun,
     every: usize,
+    motion: Option<&SnapshotReader>,
     on_frame: &mut dyn FnMut(usize),
 ) -> Result<Vec<IndicatorFrame>, FluidError> {
     let mut indicator = ErrorIndicator::new(model, fluid, every)?;
     let mut out = vec![IndicatorFrame { measured: true, ..IndicatorFrame::default() }];
     for (t, pair) in run.states.windows(2).enumerate() {
-        out.push(indicator.observe(&pair[0], &pair[1], t + 1)?);
+        let geometry = match motion {
+            Some(reader) if indicator.measures_next() => {
+                Some((reader.frame("g", t)?, reader.frame("g", t + 1)?))
+            }
+            _ => None,
+        };
+        let carried = run.reports.get(t).map_or(1.0, damping);
+        out.push(indicator.observe(&pair[0], &pair[1], t + 1, geometry, carried)?);
         on_frame(t + 1);
     }
     Ok(out)

@@ -5,7 +5,10 @@
 //! - [`training`]: a training set, the snapshot directories of full runs on one mesh;
 //! - [`bases`]: `B_f`, `B_u = B_p`, `B_g`, `B_h` by streamed PCA, `B_d` by constraint reduction;
 //! - [`example`]: the small tunnel's training runs, for the demo, benchmarks and tests;
-//! - [`indicator`]: a per-frame error indicator of a reduced run, without the full run;
+//! - [`indicator`]: a per-frame error indicator of a reduced run, without the full run (one
+//!   full step per measured step);
+//! - [`unseen`]: a per-frame error indicator from reduced quantities alone (every step, for
+//!   `O(m_f²)`);
 //! - [`induced`]: the induced flux as a tensor in the stacked geometry, for driven motions;
 //! - [`compare`]: a reduced run against the full run of the same motion (energy, error);
 //! - [`exact_projection`]: the projection's normal matrix from the full space;
@@ -41,6 +44,7 @@ pub mod run;
 pub mod step;
 pub mod study;
 pub mod training;
+pub mod unseen;
 
 pub use bases::{BasisReport, BasisSizes, FluidBases, ProjectedGeometry};
 pub use cavity_motion::{CavityMotion, CompressionSchedule};
