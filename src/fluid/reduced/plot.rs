@@ -105,7 +105,8 @@ pub fn plot_by_size(study: &ErrorStudy, path: &Path) -> Result<(), FluidError> {
 }
 
 /// A comparison's kinetic energy over time, full and reduced runs (`energy_path`), and the
-/// relative velocity error in the energy norm over time, log scale (`error_path`).
+/// relative velocity error in the energy norm over time, log scale (`error_path`), with the
+/// error indicator's estimate beside it when the comparison has one.
 pub fn plot_comparison(
     c: &super::compare::Comparison,
     title: &str,
@@ -161,9 +162,13 @@ pub fn plot_comparison(
         root.fill(&WHITE).map_err(|e| plot_err(error_path, e))?;
         let positive =
             |v: &[f64]| -> Vec<(f64, f64)> { times(v).into_iter().filter(|(_, e)| *e > 0.0).collect() };
-        let (points, best, one) =
-            (positive(&c.error), positive(&c.projection_error), positive(&c.one_step_error));
-        let (lo, hi) = log_range(points.iter().chain(&best).chain(&one).map(|p| p.1));
+        let (points, best, one, estimate) = (
+            positive(&c.error),
+            positive(&c.projection_error),
+            positive(&c.one_step_error),
+            positive(&c.estimate),
+        );
+        let (lo, hi) = log_range(points.iter().chain(&best).chain(&one).chain(&estimate).map(|p| p.1));
         let mut chart = ChartBuilder::on(&root)
             .caption(format!("Velocity error of the reduced run — {title}"), ("sans-serif", 26))
             .margin(20)
@@ -180,11 +185,15 @@ pub fn plot_comparison(
             .y_label_formatter(&|v| format!("{v:.0e}"))
             .draw()
             .map_err(|e| plot_err(error_path, e))?;
-        for (colour, (series, label)) in [
+        let mut lines = vec![
             (SERIES[3], (points, "u = the reduced run, lifted")),
             (SERIES[2], (one, "u = one reduced step from the full run's previous frame")),
             (SERIES[1], (best, "u = the full run's best fit in B_u (truncation alone)")),
-        ] {
+        ];
+        if !estimate.is_empty() {
+            lines.push((SERIES[0], (estimate, "the error indicator's estimate (without the full run)")));
+        }
+        for (colour, (series, label)) in lines {
             chart
                 .draw_series(LineSeries::new(series, colour.stroke_width(2)))
                 .map_err(|e| plot_err(error_path, e))?
