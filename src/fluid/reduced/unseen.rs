@@ -91,7 +91,8 @@ impl UnseenVelocity {
     }
 
     /// `σ(f̂) = sqrt(max(0, f̂ᵀ(M − N)f̂))` in the energy norm's units (rounding can make the
-    /// form a hair negative for a flux the basis holds whole; it is then 0).
+    /// form a hair negative for a flux the basis holds whole; it is then 0). `f` has m_f
+    /// coefficients ([`Self::dim`]; [`UnseenIndicator::observe`] checks it).
     pub fn sigma(&self, f: &[f64]) -> f64 {
         let k = self.dim().min(f.len());
         let mut q = 0.0;
@@ -136,7 +137,6 @@ impl UnseenIndicator {
         damping: f64,
         frame: usize,
     ) -> Result<IndicatorFrame, FluidError> {
-        self.accumulated *= damping.clamp(0.0, 1.0);
         if f.len() != self.form.dim() {
             return Err(FluidError::State(format!(
                 "the unseen-velocity indicator at frame {frame}: the flux has {} coefficients, the model {}",
@@ -144,6 +144,7 @@ impl UnseenIndicator {
                 self.form.dim()
             )));
         }
+        self.accumulated *= damping.clamp(0.0, 1.0);
         let increment = match &self.last {
             Some(prev) => {
                 let delta: Vec<f64> = f.iter().zip(prev).map(|(a, b)| a - b).collect();
@@ -184,11 +185,11 @@ pub fn indicate_unseen(
     let mut out = Vec::with_capacity(run.states.len());
     let mut seconds = Vec::with_capacity(run.states.len());
     for (t, state) in run.states.iter().enumerate() {
-        let energy = match t.checked_sub(1).and_then(|k| run.reports.get(k)) {
-            Some(report) => report.energy[2],
-            None => initial_energy(fluid, state),
+        // The step into frame t reported the state's energy and its viscous loss.
+        let (energy, damping) = match t.checked_sub(1).and_then(|k| run.reports.get(k)) {
+            Some(report) => (report.energy[2], damping(report)),
+            None => (initial_energy(fluid, state), 1.0),
         };
-        let damping = t.checked_sub(1).and_then(|k| run.reports.get(k)).map_or(1.0, damping);
         let start = Instant::now();
         out.push(indicator.observe(&state.f, energy, damping, t)?);
         seconds.push(start.elapsed().as_secs_f64());
