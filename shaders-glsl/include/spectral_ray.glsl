@@ -54,13 +54,18 @@ bool spectral_pull_hex(uint e, vec3 x, inout vec3 r) {
     return false;
 }
 // Bisection of [t_lo, t_hi] for f − c = 0 along the ray from eye along d through element e (f
-// continued past the element; g_lo = f − c at t_lo), SPECTRAL_RAY_BISECTIONS steps, each point
-// pulled back from r: the root's ray parameter, its reference point in r. Shared by the
-// isosurface pass's roots and the volume pass's sheets.
+// continued past the element; g_lo = f − c at t_lo), at most SPECTRAL_RAY_BISECTIONS steps and
+// none once the bracket is two f32 ulps of t wide, each point pulled back from r: the root's ray
+// parameter, its reference point in r. Shared by the isosurface pass's roots and the volume
+// pass's sheets.
 #define SPECTRAL_RAY_BISECTIONS 24
+// f32's unit roundoff (2^-23).
+#define SPECTRAL_RAY_ULP 1.1920929e-7
 float spectral_ray_bisect(uint e, vec3 eye, vec3 d, float t_lo, float t_hi, float c, float g_lo, inout vec3 r) {
     for (int i = 0; i < SPECTRAL_RAY_BISECTIONS; ++i) {
         float t = 0.5 * (t_lo + t_hi);
+        // The bracket is two ulps of t wide: halving it again changes t by rounding only.
+        if (t_hi - t_lo <= 2.0 * SPECTRAL_RAY_ULP * abs(t)) break;
         spectral_pull_hex(e, eye + t * d, r);
         float g = spectral_value_hex(e, r) - c;
         if ((g < 0.0) == (g_lo < 0.0)) t_lo = t; else t_hi = t;
