@@ -642,18 +642,12 @@ pub fn reduced(args: &ReducedArgs) -> Result<()> {
     }
     write_lifted(&model, &run, &args.out, args.force)?;
     println!("lifted to the full space → {}", args.out.display());
-    if args.indicator {
+    // Either indicator: its CSV in the output directory and the estimate at the last frame.
+    let indicated = if args.indicator {
         use galerkin::fluid::reduced::unseen::{indicate_unseen, unseen_csv};
         let (frames_out, seconds) = indicate_unseen(&model, &fluid, &run, &mut |_| {})?;
-        let path = args.out.join("indicator.csv");
-        galerkin::atomic_file::write(&path, unseen_csv(&frames_out).as_bytes())?;
-        let last = frames_out.last().map_or(0.0, |f| f.estimate);
-        println!(
-            "unseen-velocity indicator: estimated error at frame {frames} {:.2} %{} → {}",
-            100.0 * last,
-            cost_line(seconds, run.median_step_seconds()),
-            path.display()
-        );
+        let cost = cost_line(seconds, run.median_step_seconds());
+        Some(("unseen-velocity indicator", unseen_csv(&frames_out), frames_out, cost))
     } else if let Some(every) = args.indicator_every {
         use galerkin::fluid::reduced::indicator::{indicate, indicator_csv};
         let bar = crate::progress_bar(frames as u64, "error indicator");
@@ -663,11 +657,16 @@ pub fn reduced(args: &ReducedArgs) -> Result<()> {
         let frames_out =
             indicate(&model, &fluid, &run, every, reader.as_ref(), &mut |k| bar.set_position(k as u64))?;
         bar.finish_and_clear();
+        Some(("residual indicator", indicator_csv(&frames_out), frames_out, String::new()))
+    } else {
+        None
+    };
+    if let Some((name, csv, frames_out, cost)) = indicated {
         let path = args.out.join("indicator.csv");
-        galerkin::atomic_file::write(&path, indicator_csv(&frames_out).as_bytes())?;
+        galerkin::atomic_file::write(&path, csv.as_bytes())?;
         let last = frames_out.last().map_or(0.0, |f| f.estimate);
         println!(
-            "error indicator: estimated error at frame {frames} {:.2} % → {}",
+            "{name}: estimated error at frame {frames} {:.2} %{cost} → {}",
             100.0 * last,
             path.display()
         );

@@ -13,8 +13,7 @@ use anyhow::{bail, Result};
 
 use super::gpu::GpuParticles;
 use super::particles::seed_particles;
-use super::reduced::indicator::damping;
-use super::reduced::unseen::{UnseenIndicator, UnseenVelocity};
+use super::reduced::unseen::UnseenIndicator;
 use super::reduced::{ReducedFluid, ReducedFluidModel, ReducedMotion, ReducedState};
 use super::render::{
     cell_speeds, cell_vertices, DrawStyle, FluidRenderer, Output, ParticleSet, Projection, View2d,
@@ -36,8 +35,8 @@ enum Source {
         fluid: Box<ReducedFluid>,
         run: usize,
         state: ReducedState,
-        /// The unseen-velocity form (where the model carries it) and the running indicator.
-        unseen: Option<Box<(UnseenVelocity, UnseenIndicator)>>,
+        /// The unseen-velocity indicator, where the model carries its Gram matrices.
+        unseen: Option<Box<UnseenIndicator>>,
     },
 }
 
@@ -113,9 +112,7 @@ impl FluidContent {
             model.dim_of("f")
         );
         let frame_time = model.frame_time;
-        let unseen = UnseenVelocity::of_model(&model)
-            .ok()
-            .map(|form| Box::new((form.clone(), UnseenIndicator::with_form(form))));
+        let unseen = UnseenIndicator::new(&model).ok().map(Box::new);
         let source =
             Source::Reduced { model: Box::new(model), fluid: Box::new(fluid), run, state: reduced, unseen };
         Self::with_source(source, (mesh, topology), frame_time, description, state, particles, size, playing)
@@ -193,13 +190,8 @@ impl FluidContent {
                 }
                 let (g1, h1) = (&traj.g.data()[t * mg..(t + 1) * mg], &traj.h.data()[t * mh..(t + 1) * mh]);
                 let (next, report) = fluid.step(state, g1, h1)?;
-                if let Some(pair) = unseen {
-                    let indicator = &mut pair.1;
-                    if t == 1 {
-                        indicator.observe(&state.f, fluid.energy(&state.u, &state.g), 1.0, 0)?;
-                    }
-                    self.estimate =
-                        Some(indicator.observe(&next.f, report.energy[2], damping(&report), t)?.estimate);
+                if let Some(indicator) = unseen {
+                    self.estimate = Some(indicator.observe_step(fluid, state, &next, &report, t)?.estimate);
                 }
                 *state = next;
                 lift(model, state)?
@@ -307,8 +299,8 @@ impl ViewerContent for FluidContent {
                         f: traj.f0.clone(),
                         g: traj.g.data()[..mg].to_vec(),
                     };
-                    if let Some(pair) = unseen {
-                        pair.1 = UnseenIndicator::with_form(pair.0.clone());
+                    if let Some(indicator) = unseen {
+                        indicator.restart();
                     }
                 }
                 let seeds = seed_particles(&self.mesh, self.particle_count);

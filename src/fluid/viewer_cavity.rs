@@ -17,9 +17,8 @@ use anyhow::{anyhow, bail, Result};
 
 use super::gpu::GpuParticles;
 use super::particles::{seed_particles, Particle};
-use super::reduced::indicator::damping;
 use super::reduced::particles::ReducedParticles;
-use super::reduced::unseen::{UnseenIndicator, UnseenVelocity};
+use super::reduced::unseen::UnseenIndicator;
 use super::reduced::{CavityMotion, ReducedFluid, ReducedFluidModel, ReducedState};
 use super::render::{surface_vertices, DrawStyle, FluidRenderer, Output, ParticleSet, Projection};
 use crate::gpu::{Gpu, Profiler, Recorder};
@@ -64,8 +63,7 @@ pub struct CavityContent {
     /// Frames presented and their seconds, for the summary's mean rate.
     shown: (usize, f64),
     walls_dirty: bool,
-    /// The unseen-velocity form, where the model carries it, and the running indicator.
-    unseen: Option<UnseenVelocity>,
+    /// The unseen-velocity indicator, where the model carries its Gram matrices.
     indicator: Option<UnseenIndicator>,
     /// The indicator's estimate at the current frame.
     estimate: Option<f64>,
@@ -103,10 +101,8 @@ impl CavityContent {
             sprite_px: 1.5,
         };
         let trained = model.trained_compressions();
-        let unseen = UnseenVelocity::of_model(&model).ok();
         Ok(Self {
-            indicator: unseen.clone().map(UnseenIndicator::with_form),
-            unseen,
+            indicator: UnseenIndicator::new(&model).ok(),
             estimate: None,
             trained,
             model,
@@ -171,11 +167,8 @@ impl CavityContent {
             .ok_or_else(|| anyhow!("the model has no induced-flux tensor H (retrain it)"))?;
         let (next, report) = self.fluid.step(&self.state, &g1, &h1)?;
         if let Some(indicator) = &mut self.indicator {
-            if self.frame == 0 {
-                indicator.observe(&self.state.f, 0.0, 1.0, 0)?;
-            }
             self.estimate = Some(
-                indicator.observe(&next.f, report.energy[2], damping(&report), self.frame + 1)?.estimate,
+                indicator.observe_step(&self.fluid, &self.state, &next, &report, self.frame + 1)?.estimate,
             );
         }
         let g0 = std::mem::replace(&mut self.state, next).g;
@@ -312,7 +305,9 @@ impl ViewerContent for CavityContent {
                 self.frame = 0;
                 self.pending = None;
                 self.walls_dirty = true;
-                self.indicator = self.unseen.clone().map(UnseenIndicator::with_form);
+                if let Some(indicator) = &mut self.indicator {
+                    indicator.restart();
+                }
                 self.estimate = None;
                 return self.reseed();
             }

@@ -16,10 +16,10 @@
 //! error a stable step would accumulate, the truncation of the latest step added: each step's
 //! error is carried forward, shrunk by the factor `λ_j` ≤ 1 by which step j's advection and
 //! diffusion shrank the reduced state's energy norm ([`damping`]; advection alone keeps the
-//! energy, so λ is the viscous loss, and 1 where there is none). A full step costs what the full solver costs, so the residual is measured
-//! every `every`-th step only and the last measured `ρ` and `τ` stand for the steps between;
-//! `every = 1` measures every step. Effectivity (estimate ÷ true error) measured on the tunnel
-//! and the small cavity: BENCHMARKS.md.
+//! energy, so λ is the viscous loss, and 1 where there is none). A full step costs what the
+//! full solver costs, so the residual is measured every `every`-th step only and the last
+//! measured `ρ` and `τ` stand for the steps between; `every = 1` measures every step.
+//! Effectivity (estimate ÷ true error) on the tunnel, the cavities and the bird: BENCHMARKS.md.
 
 use crate::fluid::snapshots::SnapshotReader;
 use crate::fluid::{FluidError, FluidParams, FluidSolver, FluidState};

@@ -44,7 +44,7 @@ use super::exact_projection::FluxVelocityGrams;
 use super::indicator::{damping, IndicatorFrame};
 use super::model::ReducedFluidModel;
 use super::run::ReducedRun;
-use super::step::{ReducedFluid, ReducedState};
+use super::step::{ReducedFluid, ReducedState, ReducedStepReport};
 
 /// The quadratic form `σ(f̂)² = f̂ᵀ(M − N)f̂` of the module docs.
 #[derive(Clone, Debug)]
@@ -125,6 +125,29 @@ impl UnseenIndicator {
         Self { form, accumulated: 0.0, last: None }
     }
 
+    /// Starts a new run: nothing carried, no previous flux.
+    pub fn restart(&mut self) {
+        self.accumulated = 0.0;
+        self.last = None;
+    }
+
+    /// The estimate at frame `frame`, reached by the reduced step `from` → `to` that reported
+    /// `report` (its energy after the projection and its damping,
+    /// [`super::indicator::damping`]); on a run's first step `from` starts the run first.
+    pub fn observe_step(
+        &mut self,
+        fluid: &ReducedFluid,
+        from: &ReducedState,
+        to: &ReducedState,
+        report: &ReducedStepReport,
+        frame: usize,
+    ) -> Result<IndicatorFrame, FluidError> {
+        if self.last.is_none() {
+            self.observe(&from.f, fluid.energy(&from.u, &from.g), 1.0, frame.saturating_sub(1))?;
+        }
+        self.observe(&to.f, report.energy[2], damping(report), frame)
+    }
+
     /// The estimate at frame `frame` for the flux `f` of the state reached there and the
     /// state's energy `energy = ½ ûᵀV̂û` (what the step reports after its projection,
     /// [`super::step::ReducedStepReport::energy`]), the errors carried so far first multiplied
@@ -184,23 +207,17 @@ pub fn indicate_unseen(
     let mut indicator = UnseenIndicator::new(model)?;
     let mut out = Vec::with_capacity(run.states.len());
     let mut seconds = Vec::with_capacity(run.states.len());
-    for (t, state) in run.states.iter().enumerate() {
-        // The step into frame t reported the state's energy and its viscous loss.
-        let (energy, damping) = match t.checked_sub(1).and_then(|k| run.reports.get(k)) {
-            Some(report) => (report.energy[2], damping(report)),
-            None => (initial_energy(fluid, state), 1.0),
-        };
+    if let Some(first) = run.states.first() {
+        out.push(indicator.observe(&first.f, fluid.energy(&first.u, &first.g), 1.0, 0)?);
+        on_frame(0);
+    }
+    for (t, (pair, report)) in run.states.windows(2).zip(&run.reports).enumerate() {
         let start = Instant::now();
-        out.push(indicator.observe(&state.f, energy, damping, t)?);
+        out.push(indicator.observe_step(fluid, &pair[0], &pair[1], report, t + 1)?);
         seconds.push(start.elapsed().as_secs_f64());
-        on_frame(t);
+        on_frame(t + 1);
     }
     Ok((out, crate::bench::median_f64(&mut seconds)))
-}
-
-/// `½ ûᵀV̂(ĝ)û` of a state no step reported (a run's first).
-fn initial_energy(fluid: &ReducedFluid, state: &ReducedState) -> f64 {
-    fluid.energy(&state.u, &state.g)
 }
 
 /// The unseen-velocity indicator as CSV with a header (frame; σ of the flux and of the step's
